@@ -1,0 +1,302 @@
+#include "tactile_common/parameters.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+namespace tactile_common {
+
+namespace {
+
+struct TypeNamer {
+  std::string operator()(bool) const { return "bool"; }
+  std::string operator()(int64_t) const { return "integer"; }
+  std::string operator()(double) const { return "double"; }
+  std::string operator()(const std::string&) const { return "string"; }
+  std::string operator()(const std::vector<bool>&) const { return "bool array"; }
+  std::string operator()(const std::vector<int64_t>&) const { return "integer array"; }
+  std::string operator()(const std::vector<double>&) const { return "double array"; }
+  std::string operator()(const std::vector<std::string>&) const { return "string array"; }
+};
+
+// Is `incoming` acceptable where `declared` is the default's type? Integers are
+// accepted for doubles (YAML writes 1 for 1.0), and an empty array for any array.
+bool compatible(const ParamValue& declared, const ParamValue& incoming) {
+  if (declared.index() == incoming.index()) return true;
+  if (std::holds_alternative<double>(declared) && std::holds_alternative<int64_t>(incoming)) {
+    return true;
+  }
+  if (std::holds_alternative<std::vector<double>>(declared) &&
+      std::holds_alternative<std::vector<int64_t>>(incoming)) {
+    return true;
+  }
+  return false;
+}
+
+ParamValue coerce(const ParamValue& declared, const ParamValue& incoming) {
+  if (std::holds_alternative<double>(declared) && std::holds_alternative<int64_t>(incoming)) {
+    return static_cast<double>(std::get<int64_t>(incoming));
+  }
+  if (std::holds_alternative<std::vector<double>>(declared) &&
+      std::holds_alternative<std::vector<int64_t>>(incoming)) {
+    const auto& in = std::get<std::vector<int64_t>>(incoming);
+    return std::vector<double>(in.begin(), in.end());
+  }
+  return incoming;
+}
+
+// Scalar YAML -> ParamValue, by the YAML 1.2 core schema as ROS 2 reads it:
+// true/false, integers, floats, everything else a string.
+ParamValue scalar_value(const YAML::Node& n) {
+  const std::string& s = n.Scalar();
+  if (n.Tag() == "!") return s;  // quoted: always a string
+  if (s == "true" || s == "True" || s == "TRUE") return true;
+  if (s == "false" || s == "False" || s == "FALSE") return false;
+  {
+    std::istringstream is(s);
+    long long v = 0;
+    is >> v;
+    if (!is.fail() && is.eof()) return static_cast<int64_t>(v);
+  }
+  {
+    const std::string lower = [&] {
+      std::string t = s;
+      for (auto& c : t) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      return t;
+    }();
+    if (lower == ".nan") return std::nan("");
+    if (lower == ".inf" || lower == "+.inf") return HUGE_VAL;
+    if (lower == "-.inf") return -HUGE_VAL;
+    std::istringstream is(s);
+    double v = 0;
+    is >> v;
+    if (!is.fail() && is.eof()) return v;
+  }
+  return s;
+}
+
+ParamValue yaml_value(const YAML::Node& n, const std::string& where) {
+  if (n.IsScalar()) return scalar_value(n);
+  if (n.IsSequence()) {
+    if (n.size() == 0) return std::vector<double>{};
+    std::vector<ParamValue> items;
+    for (const auto& item : n) {
+      if (!item.IsScalar()) throw ParamError(where + ": arrays must hold scalars");
+      items.push_back(scalar_value(item));
+    }
+    bool all_bool = true, all_int = true, all_num = true, all_str = true;
+    for (const auto& v : items) {
+      all_bool &= std::holds_alternative<bool>(v);
+      all_int &= std::holds_alternative<int64_t>(v);
+      all_num &= std::holds_alternative<int64_t>(v) || std::holds_alternative<double>(v);
+      all_str &= std::holds_alternative<std::string>(v);
+    }
+    if (all_bool) {
+      std::vector<bool> out;
+      for (const auto& v : items) out.push_back(std::get<bool>(v));
+      return out;
+    }
+    if (all_int) {
+      std::vector<int64_t> out;
+      for (const auto& v : items) out.push_back(std::get<int64_t>(v));
+      return out;
+    }
+    if (all_num) {
+      std::vector<double> out;
+      for (const auto& v : items) {
+        out.push_back(std::holds_alternative<double>(v) ? std::get<double>(v)
+                                                        : static_cast<double>(std::get<int64_t>(v)));
+      }
+      return out;
+    }
+    if (all_str) {
+      std::vector<std::string> out;
+      for (const auto& v : items) out.push_back(std::get<std::string>(v));
+      return out;
+    }
+    throw ParamError(where + ": array mixes types");
+  }
+  if (n.IsNull()) throw ParamError(where + ": has no value");
+  throw ParamError(where + ": unsupported YAML node");
+}
+
+void flatten(const YAML::Node& map, const std::string& prefix, const std::string& where,
+             ParamMap& out) {
+  for (const auto& kv : map) {
+    const std::string key = prefix + kv.first.as<std::string>();
+    const std::string here = where + "." + key;
+    if (kv.second.IsMap()) {
+      flatten(kv.second, key + ".", where, out);
+    } else {
+      out.set(key, yaml_value(kv.second, here));
+    }
+  }
+}
+
+}  // namespace
+
+std::string type_name(const ParamValue& value) { return std::visit(TypeNamer{}, value); }
+
+ParamMap::ParamMap(std::string node, std::string source)
+    : node_(std::move(node)), source_(std::move(source)) {}
+
+void ParamMap::set(const std::string& key, ParamValue value) { values_[key] = std::move(value); }
+
+bool ParamMap::has(const std::string& key) const { return values_.count(key) != 0; }
+
+ParamError ParamMap::error(const std::string& key, const std::string& reason) const {
+  return ParamError(source_ + ": " + node_ + ".ros__parameters." + key + ": " + reason);
+}
+
+const ParamValue& ParamMap::at(const std::string& key) const {
+  auto it = values_.find(key);
+  if (it == values_.end()) throw error(key, "missing (not declared by the node)");
+  return it->second;
+}
+
+void ParamMap::wrong_type(const std::string& key, const char* wanted) const {
+  throw error(key, std::string("expected ") + wanted + ", got " + type_name(at(key)));
+}
+
+bool ParamMap::get_bool(const std::string& key) const {
+  const auto& v = at(key);
+  if (auto p = std::get_if<bool>(&v)) return *p;
+  wrong_type(key, "bool");
+}
+
+int64_t ParamMap::get_int(const std::string& key) const {
+  const auto& v = at(key);
+  if (auto p = std::get_if<int64_t>(&v)) return *p;
+  wrong_type(key, "integer");
+}
+
+double ParamMap::get_double(const std::string& key) const {
+  const auto& v = at(key);
+  if (auto p = std::get_if<double>(&v)) return *p;
+  if (auto p = std::get_if<int64_t>(&v)) return static_cast<double>(*p);
+  wrong_type(key, "double");
+}
+
+std::string ParamMap::get_string(const std::string& key) const {
+  const auto& v = at(key);
+  if (auto p = std::get_if<std::string>(&v)) return *p;
+  wrong_type(key, "string");
+}
+
+std::vector<bool> ParamMap::get_bool_array(const std::string& key) const {
+  const auto& v = at(key);
+  if (auto p = std::get_if<std::vector<bool>>(&v)) return *p;
+  wrong_type(key, "bool array");
+}
+
+std::vector<int64_t> ParamMap::get_int_array(const std::string& key) const {
+  const auto& v = at(key);
+  if (auto p = std::get_if<std::vector<int64_t>>(&v)) return *p;
+  wrong_type(key, "integer array");
+}
+
+std::vector<double> ParamMap::get_double_array(const std::string& key) const {
+  const auto& v = at(key);
+  if (auto p = std::get_if<std::vector<double>>(&v)) return *p;
+  if (auto p = std::get_if<std::vector<int64_t>>(&v)) return {p->begin(), p->end()};
+  wrong_type(key, "double array");
+}
+
+std::vector<std::string> ParamMap::get_string_array(const std::string& key) const {
+  const auto& v = at(key);
+  if (auto p = std::get_if<std::vector<std::string>>(&v)) return *p;
+  wrong_type(key, "string array");
+}
+
+void ParamMap::merge_from(const ParamMap& other) {
+  for (const auto& [key, value] : other.values()) {
+    auto it = values_.find(key);
+    if (it == values_.end()) {
+      throw other.error(key, "unknown parameter of node '" + node_ + "'");
+    }
+    // An empty YAML list is read as an empty double array; accept it for any array.
+    const bool empty_array = std::holds_alternative<std::vector<double>>(value) &&
+                             std::get<std::vector<double>>(value).empty();
+    const bool declared_array = !(std::holds_alternative<bool>(it->second) ||
+                                  std::holds_alternative<int64_t>(it->second) ||
+                                  std::holds_alternative<double>(it->second) ||
+                                  std::holds_alternative<std::string>(it->second));
+    if (empty_array && declared_array) {
+      it->second = std::visit([](const auto& d) -> ParamValue { return std::decay_t<decltype(d)>{}; },
+                              it->second);
+      continue;
+    }
+    if (!compatible(it->second, value)) {
+      throw other.error(key, "expected " + type_name(it->second) + ", got " + type_name(value));
+    }
+    it->second = coerce(it->second, value);
+  }
+  source_ = other.source();
+}
+
+ParamMap load_node_parameters_from_string(const std::string& yaml, const std::string& source,
+                                          const std::string& node_name, const ParamMap& defaults) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml);
+  } catch (const YAML::Exception& e) {
+    throw ParamError(source + ": YAML syntax error at line " + std::to_string(e.mark.line + 1) +
+                     ", column " + std::to_string(e.mark.column + 1) + ": " + e.msg);
+  }
+  ParamMap result(node_name, source);
+  for (const auto& [k, v] : defaults.values()) result.set(k, v);
+  if (root.IsNull()) return result;
+  if (!root.IsMap()) throw ParamError(source + ": top level must be a map of node names");
+
+  // "/**" applies to every node; then the node's own section, matched by its
+  // name with or without leading slash or namespace.
+  std::vector<std::pair<std::string, YAML::Node>> sections;
+  for (const auto& kv : root) {
+    const std::string name = kv.first.as<std::string>();
+    std::string base = name;
+    if (auto slash = base.rfind('/'); slash != std::string::npos) base = base.substr(slash + 1);
+    const bool wildcard = (name == "/**" || name == "**");
+    if (!wildcard && base != node_name) continue;
+    if (!kv.second.IsMap() || !kv.second["ros__parameters"]) {
+      throw ParamError(source + ": " + name + ": expected a map with key 'ros__parameters'");
+    }
+    sections.emplace_back(name, kv.second["ros__parameters"]);
+  }
+  std::stable_sort(sections.begin(), sections.end(), [](const auto& a, const auto& b) {
+    auto wild = [](const std::string& n) { return n == "/**" || n == "**"; };
+    return wild(a.first) && !wild(b.first);
+  });
+  for (const auto& [name, params] : sections) {
+    if (params.IsNull()) continue;
+    if (!params.IsMap()) throw ParamError(source + ": " + name + ".ros__parameters: must be a map");
+    ParamMap overlay(node_name, source);
+    flatten(params, "", source + ": " + node_name + ".ros__parameters", overlay);
+    if (name == "/**" || name == "**") {
+      // Wildcard sections may carry parameters other nodes declare: apply only
+      // the ones this node knows (as ROS 2 does for undeclared parameters).
+      ParamMap known(node_name, source);
+      for (const auto& [k, v] : overlay.values()) {
+        if (result.has(k)) known.set(k, v);
+      }
+      result.merge_from(known);
+    } else {
+      result.merge_from(overlay);
+    }
+  }
+  return result;
+}
+
+ParamMap load_node_parameters(const std::string& path, const std::string& node_name,
+                              const ParamMap& defaults) {
+  std::ifstream in(path);
+  if (!in) throw ParamError(path + ": cannot open parameter file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return load_node_parameters_from_string(ss.str(), path, node_name, defaults);
+}
+
+}  // namespace tactile_common

@@ -1,0 +1,121 @@
+#include <gtest/gtest.h>
+
+#include "tactile_common/parameters.hpp"
+#include "tactile_common/time.hpp"
+
+using tactile_common::load_node_parameters_from_string;
+using tactile_common::ParamError;
+using tactile_common::ParamMap;
+
+namespace {
+
+ParamMap defaults() {
+  ParamMap d("tdorc_filter", "defaults");
+  d.set("window", int64_t{100});
+  d.set("contact_threshold", 20.0);
+  d.set("mode", std::string("tdorc"));
+  d.set("absolute_threshold", false);
+  d.set("bandpass_b", std::vector<double>{0.0564, 0.0, -0.0564});
+  d.set("kf.q", 0.01);
+  return d;
+}
+
+std::string error_of(const std::string& yaml) {
+  try {
+    load_node_parameters_from_string(yaml, "config/x.yaml", "tdorc_filter", defaults());
+  } catch (const ParamError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+struct Stamp {
+  int32_t sec = 0;
+  uint32_t nanosec = 0;
+};
+
+}  // namespace
+
+TEST(Parameters, DefaultsWhenFileHasNoSection) {
+  auto p = load_node_parameters_from_string("other:\n  ros__parameters: {a: 1}\n", "x.yaml",
+                                            "tdorc_filter", defaults());
+  EXPECT_EQ(p.get_int("window"), 100);
+  EXPECT_DOUBLE_EQ(p.get_double("contact_threshold"), 20.0);
+  EXPECT_EQ(p.get_string("mode"), "tdorc");
+}
+
+TEST(Parameters, NodeSectionOverridesWildcardWhichOverridesDefaults) {
+  const std::string yaml =
+      "/**:\n  ros__parameters:\n    window: 50\n    contact_threshold: 30.0\n    other_node_key: 1\n"
+      "/whisker/left/tdorc_filter:\n  ros__parameters:\n    window: 80\n    mode: tdoc\n"
+      "    kf:\n      q: 0.5\n    bandpass_b: [1, 0, -1]\n";
+  auto p = load_node_parameters_from_string(yaml, "x.yaml", "tdorc_filter", defaults());
+  EXPECT_EQ(p.get_int("window"), 80);
+  EXPECT_DOUBLE_EQ(p.get_double("contact_threshold"), 30.0);
+  EXPECT_EQ(p.get_string("mode"), "tdoc");
+  EXPECT_DOUBLE_EQ(p.get_double("kf.q"), 0.5);
+  EXPECT_EQ(p.get_double_array("bandpass_b"), (std::vector<double>{1.0, 0.0, -1.0}));
+  EXPECT_EQ(p.source(), "x.yaml");
+}
+
+TEST(Parameters, IntegerAcceptedForDouble) {
+  auto p = load_node_parameters_from_string(
+      "tdorc_filter:\n  ros__parameters:\n    contact_threshold: 25\n", "x.yaml", "tdorc_filter",
+      defaults());
+  EXPECT_DOUBLE_EQ(p.get_double("contact_threshold"), 25.0);
+}
+
+TEST(Parameters, UnknownKeyNamesFileKeyAndReason) {
+  const auto msg = error_of("tdorc_filter:\n  ros__parameters:\n    windw: 10\n");
+  EXPECT_NE(msg.find("config/x.yaml"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("tdorc_filter.ros__parameters.windw"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("unknown parameter"), std::string::npos) << msg;
+}
+
+TEST(Parameters, WrongTypeNamesExpectedAndActual) {
+  const auto msg = error_of("tdorc_filter:\n  ros__parameters:\n    window: ten\n");
+  EXPECT_NE(msg.find("window: expected integer, got string"), std::string::npos) << msg;
+  const auto msg2 = error_of("tdorc_filter:\n  ros__parameters:\n    absolute_threshold: 3.5\n");
+  EXPECT_NE(msg2.find("expected bool, got double"), std::string::npos) << msg2;
+}
+
+TEST(Parameters, SyntaxErrorNamesLine) {
+  const auto msg = error_of("tdorc_filter:\n  ros__parameters:\n    window: [1, 2\n");
+  EXPECT_NE(msg.find("YAML syntax error at line"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("config/x.yaml"), std::string::npos) << msg;
+}
+
+TEST(Parameters, MissingRosParametersKey) {
+  const auto msg = error_of("tdorc_filter:\n  window: 3\n");
+  EXPECT_NE(msg.find("expected a map with key 'ros__parameters'"), std::string::npos) << msg;
+}
+
+TEST(Parameters, MissingFile) {
+  try {
+    tactile_common::load_node_parameters("does/not/exist.yaml", "n", defaults());
+    FAIL();
+  } catch (const ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("does/not/exist.yaml: cannot open"), std::string::npos);
+  }
+}
+
+TEST(Parameters, GetterOfUndeclaredKeyThrows) {
+  auto p = defaults();
+  EXPECT_THROW(p.get_double("nope"), ParamError);
+  EXPECT_THROW(p.get_string("window"), ParamError);
+}
+
+TEST(Parameters, ErrorHelperFormatsLikeLoader) {
+  auto p = load_node_parameters_from_string("", "cfg.yaml", "tdorc_filter", defaults());
+  EXPECT_STREQ(p.error("window", "must be >= 2, got 1").what(),
+               "cfg.yaml: tdorc_filter.ros__parameters.window: must be >= 2, got 1");
+}
+
+TEST(Time, StampRoundTrip) {
+  Stamp s;
+  tactile_common::to_stamp(3'250'000'001LL, s);
+  EXPECT_EQ(s.sec, 3);
+  EXPECT_EQ(s.nanosec, 250'000'001u);
+  EXPECT_EQ(tactile_common::from_stamp(s), 3'250'000'001LL);
+  EXPECT_EQ(tactile_common::from_seconds(0.02), 20'000'000LL);
+}
