@@ -1,0 +1,73 @@
+"""Bench rig: the whisker deck on two serial ports -> TDORC, composed in one container.
+
+Run by path on a ROS 2 machine after building the workspace with colcon:
+
+    ros2 launch launch/bench_rig.launch.py left_device:=/dev/ttyUSB0 right_device:=/dev/ttyUSB1
+
+Whisker 1 (left) speaks the text protocol (P1:/P2:/P3:/T1:/T2:/T3: lines), whisker 2
+(right) the CSV protocol, both at 115200 baud. Parameters come from the same YAML files
+the standalone host reads (config/whisker_driver.yaml, config/tdorc_filter.yaml); the
+launch arguments override the device and protocol per whisker.
+
+Topics: /whisker/{left,right}/pressure (tactile_msgs/WhiskerPressure),
+        /whisker/{left,right}/signal   (tactile_msgs/WhiskerSignal).
+"""
+
+import os
+
+from launch import LaunchDescription
+from launch.actions import DeclareLaunchArgument
+from launch.substitutions import LaunchConfiguration
+from launch_ros.actions import ComposableNodeContainer
+from launch_ros.descriptions import ComposableNode
+
+CONFIG_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config')
+
+
+def whisker_nodes(side, whisker_id, device, protocol):
+    namespace = 'whisker/' + side
+    return [
+        ComposableNode(
+            package='whisker_driver',
+            plugin='whisker_driver::WhiskerDriverComponent',
+            name='whisker_driver',
+            namespace=namespace,
+            parameters=[
+                os.path.join(CONFIG_DIR, 'whisker_driver.yaml'),
+                {'source': 'serial', 'device': device, 'protocol': protocol,
+                 'whisker_id': whisker_id, 'frame_id': 'whisker_' + side},
+            ],
+            extra_arguments=[{'use_intra_process_comms': True}],
+        ),
+        ComposableNode(
+            package='tdorc_filter',
+            plugin='tdorc_filter::TdorcFilterComponent',
+            name='tdorc_filter',
+            namespace=namespace,
+            parameters=[os.path.join(CONFIG_DIR, 'tdorc_filter.yaml')],
+            extra_arguments=[{'use_intra_process_comms': True}],
+        ),
+    ]
+
+
+def generate_launch_description():
+    left_device = LaunchConfiguration('left_device')
+    right_device = LaunchConfiguration('right_device')
+    container = ComposableNodeContainer(
+        name='bench_rig_container',
+        namespace='',
+        package='rclcpp_components',
+        executable='component_container',
+        composable_node_descriptions=(
+            whisker_nodes('left', 0, left_device, 'text')
+            + whisker_nodes('right', 1, right_device, 'csv')
+        ),
+        output='screen',
+    )
+    return LaunchDescription([
+        DeclareLaunchArgument('left_device', default_value='/dev/ttyUSB0',
+                              description='serial device of whisker 1 (text protocol)'),
+        DeclareLaunchArgument('right_device', default_value='/dev/ttyUSB1',
+                              description='serial device of whisker 2 (CSV protocol)'),
+        container,
+    ])
