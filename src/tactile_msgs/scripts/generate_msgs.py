@@ -610,6 +610,100 @@ def emit_registry(specs: Dict[str, MsgSpec]) -> str:
     return '\n'.join(lines)
 
 
+def emit_testing(specs: Dict[str, MsgSpec]) -> str:
+    """Deterministic filler used by the tests and the rosbags peer test.
+
+    Values are derived from a counter k that starts at 1 and advances once per primitive,
+    string and sequence length, visiting fields depth first in .msg order:
+      bool -> k odd; integers -> (k * 2654435761) mod 2^bits (two's complement for signed);
+      float32/float64 -> (-1)^k * (k + 0.25); string -> "s<k>" (cut to its bound);
+      sequence length -> k % 3 + 1 (cut to its bound); fixed arrays -> N elements.
+    test/test_rosbags_peer.py implements the same rule over rosbags' type store.
+    """
+    g = guard('tactile_msgs', 'cdr', 'testing')
+    ordered = sorted(specs.values(), key=lambda x: f'{x.pkg}/msg/{x.name}')
+    lines = [HEADER_NOTE.format(src='all message files'),
+             '// Test support: fills every field of a message with deterministic, non-trivial values.',
+             f'#ifndef {g}', f'#define {g}', '',
+             '#include <cstddef>', '#include <cstdint>', '#include <string>', '#include <tuple>',
+             '#include <type_traits>', '',
+             '#include "tactile_msgs/cdr/serialization.hpp"', '',
+             'namespace tactile_msgs', '{', 'namespace cdr', '{', 'namespace testing', '{', '',
+             'struct Filler',
+             '{',
+             '  uint64_t k = 1;',
+             '  template<class T>',
+             '  void prim(T & v)',
+             '  {',
+             '    if constexpr (std::is_same<T, bool>::value) {',
+             '      v = (k % 2) == 1;',
+             '    } else if constexpr (std::is_floating_point<T>::value) {',
+             '      v = static_cast<T>(((k % 2) == 1 ? -1.0 : 1.0) * (static_cast<double>(k) + 0.25));',
+             '    } else {',
+             '      v = static_cast<T>(k * 2654435761ULL);  // modulo 2^bits',
+             '    }',
+             '    ++k;',
+             '  }',
+             '  template<class V>',
+             '  void prim_at(V & v, std::size_t i)',
+             '  {',
+             '    typename V::value_type t{};',
+             '    prim(t);',
+             '    v[i] = t;',
+             '  }',
+             '  void str(std::string & s, std::size_t bound)',
+             '  {',
+             '    s = "s" + std::to_string(k++);',
+             '    if (bound != 0 && s.size() > bound) {s.resize(bound);}',
+             '  }',
+             '  std::size_t count(std::size_t bound)',
+             '  {',
+             '    std::size_t n = static_cast<std::size_t>(k++ % 3 + 1);',
+             '    return (bound != 0 && n > bound) ? bound : n;',
+             '  }',
+             '};', '',
+             'template<class T>', 'struct Fill;', '']
+    decls: List[str] = []
+    defs: List[str] = []
+    for s in ordered:
+        cpp = f'{s.pkg}::msg::{s.name}'
+        body: List[str] = []
+        for f in s.fields:
+            t = f.type
+            m = f'msg.{f.name}'
+
+            def elem(expr: str, idx: Optional[str] = None) -> str:
+                if t.is_primitive:
+                    return f'f.prim_at({m}, {idx});' if idx else f'f.prim({expr});'
+                if t.is_string:
+                    return f'f.str({expr}, {t.string_bound});'
+                return f'Fill<{cpp_type_of_element(t)}>::fill(f, {expr});'
+            if t.array is None:
+                body.append(f'    {elem(m)}')
+            else:
+                if t.array != 'fixed':
+                    bound = t.array_size if t.array == 'bounded' else 0
+                    body.append(f'    {m}.resize(f.count({bound}));')
+                body.append(f'    for (std::size_t i = 0; i < {m}.size(); ++i) {{'
+                            f'{elem(m + "[i]", "i")}}}')
+        if not s.fields:
+            body.append('    (void)f;\n    (void)msg;')
+        decls += ['template<>', f'struct Fill<{cpp}>', '{',
+                  f'  static void fill(Filler & f, {cpp} & msg);', '};', '']
+        defs += [f'inline void Fill<{cpp}>::fill(Filler & f, {cpp} & msg)', '{'] + \
+            [x[2:] for x in body] + ['}', '']
+    lines += decls + defs
+    lines += ['/// A message of type T filled by a fresh Filler (k starts at 1).',
+              'template<class T>', 'T make_filled()', '{', '  Filler f;', '  T msg{};',
+              '  Fill<T>::fill(f, msg);', '  return msg;', '}', '',
+              '/// Every generated type.',
+              'using AllTypes = std::tuple<']
+    lines.append(',\n'.join(f'  {s.pkg}::msg::{s.name}' for s in ordered) + '>;')
+    lines += ['', '}  // namespace testing', '}  // namespace cdr', '}  // namespace tactile_msgs',
+              '', f'#endif  // {g}', '']
+    return '\n'.join(lines)
+
+
 def write_file(path: Path, content: str) -> None:
     # Always (re)writes, so the build system sees fresh outputs after every run.
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -658,6 +752,7 @@ def main(argv: Optional[List[str]] = None) -> int:
                 paths.append(out / 'src' / f'{spec.pkg}__{spec.snake}.cpp')
             paths.append(inc / 'tactile_msgs' / 'cdr' / 'serialization.hpp')
             paths.append(out / 'src' / 'registry_table.cpp')
+            paths.append(inc / 'tactile_msgs' / 'cdr' / 'testing.hpp')
             sys.stdout.write(';'.join(p.as_posix() for p in paths))
             return 0
         for spec in specs.values():
@@ -668,6 +763,7 @@ def main(argv: Optional[List[str]] = None) -> int:
                              emit_cdr_source(spec, specs))
         write_file(inc / 'tactile_msgs' / 'cdr' / 'serialization.hpp', emit_umbrella(specs))
         write_file(out / 'src' / 'registry_table.cpp', emit_registry(specs))
+        write_file(inc / 'tactile_msgs' / 'cdr' / 'testing.hpp', emit_testing(specs))
     except (MsgError, OSError, KeyError) as e:
         print(f'generate_msgs.py: error: {e}', file=sys.stderr)
         return 1

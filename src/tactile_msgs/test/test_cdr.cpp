@@ -97,3 +97,104 @@ TEST(CdrRegistry, FindType)
   EXPECT_EQ(tactile_msgs::cdr::find_type("tactile_msgs/msg/Nope"), nullptr);
   EXPECT_NE(tactile_msgs::cdr::find_type("geometry_msgs/msg/PoseStamped"), nullptr);
 }
+
+// ---------------------------------------------------------------------------
+// Error reporting
+
+TEST(CdrErrors, StringLengthPastEndNamesFieldAndOffset)
+{
+  auto bytes = serialize(make_header(1, 2, "ab"));
+  bytes[12] = 0xFF;  // frame_id length (payload offset 8, buffer offset 12) = 255
+  std_msgs::msg::Header h;
+  try {
+    deserialize(bytes.data(), bytes.size(), h);
+    FAIL() << "no DecodeError";
+  } catch (const DecodeError & e) {
+    EXPECT_EQ(e.type_name(), "std_msgs/msg/Header");
+    EXPECT_EQ(e.field(), "frame_id");
+    EXPECT_EQ(e.offset(), 12u);
+    EXPECT_NE(std::string(e.what()).find("std_msgs/msg/Header"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("frame_id"), std::string::npos);
+  }
+}
+
+TEST(CdrErrors, MissingNulTerminator)
+{
+  auto bytes = serialize(make_header(1, 2, "ab"));
+  bytes.back() = 'c';
+  std_msgs::msg::Header h;
+  try {
+    deserialize(bytes.data(), bytes.size(), h);
+    FAIL() << "no DecodeError";
+  } catch (const DecodeError & e) {
+    EXPECT_EQ(e.field(), "frame_id");
+    EXPECT_NE(std::string(e.what()).find("NUL"), std::string::npos);
+  }
+}
+
+TEST(CdrErrors, NestedFieldPathWithIndex)
+{
+  geometry_msgs::msg::PoseArray pa;
+  pa.header = make_header(0, 0, "");
+  pa.poses.resize(2);
+  auto bytes = serialize(pa);
+  // Payload: header = stamp 8 + frame_id length 4 + "\0" 1 = 13 bytes; count at 16..20;
+  // poses from 24 (float64 alignment), 56 bytes each: poses[1] at 80, its orientation.w
+  // at 80 + 48 = 128..136, i.e. buffer offsets 132..140 (140 bytes in all). The count
+  // check (2 poses need >= 112 bytes after the count) passes for any cut >= 136.
+  ASSERT_EQ(bytes.size(), 140u);
+  const std::size_t cut = 136;
+  geometry_msgs::msg::PoseArray back;
+  try {
+    deserialize(bytes.data(), cut, back);
+    FAIL() << "no DecodeError";
+  } catch (const DecodeError & e) {
+    EXPECT_EQ(e.type_name(), "geometry_msgs/msg/PoseArray");
+    EXPECT_EQ(e.field(), "poses[1].orientation.w");
+    EXPECT_EQ(e.offset(), 132u);
+  }
+  // A cut before that trips the count check, reported at the count field.
+  try {
+    deserialize(bytes.data(), 100, back);
+    FAIL() << "no DecodeError";
+  } catch (const DecodeError & e) {
+    EXPECT_EQ(e.field(), "poses");
+    EXPECT_EQ(e.offset(), 20u);
+  }
+}
+
+TEST(CdrErrors, HugeSequenceCountRejectedBeforeAllocation)
+{
+  tactile_msgs::msg::GpisMap m;
+  auto bytes = serialize(m);
+  // header (13) -> origin_x at 16, origin_y 24, resolution 32, width 40, height 44,
+  // mean count at payload 48 = buffer 52.
+  bytes[52] = 0xFF; bytes[53] = 0xFF; bytes[54] = 0xFF; bytes[55] = 0x7F;
+  tactile_msgs::msg::GpisMap back;
+  try {
+    deserialize(bytes.data(), bytes.size(), back);
+    FAIL() << "no DecodeError";
+  } catch (const DecodeError & e) {
+    EXPECT_EQ(e.field(), "mean");
+    EXPECT_EQ(e.offset(), 52u);
+  }
+  EXPECT_EQ(back.mean.capacity(), 0u);
+}
+
+TEST(CdrErrors, BadEncapsulationAndShortInput)
+{
+  std_msgs::msg::Header h;
+  const uint8_t be[] = {0x00, 0x00, 0x00, 0x00, 0, 0, 0, 0};
+  EXPECT_THROW(deserialize(be, sizeof(be), h), DecodeError);
+  const uint8_t shorty[] = {0x00, 0x01};
+  EXPECT_THROW(deserialize(shorty, sizeof(shorty), h), DecodeError);
+  EXPECT_THROW(deserialize(static_cast<const uint8_t *>(nullptr), 0, h), DecodeError);
+}
+
+TEST(CdrErrors, BoundsEnforcedWhenWriting)
+{
+  tactile_msgs::cdr::CdrWriter w;
+  EXPECT_THROW(w.write_string("abcd", 3), std::length_error);
+  EXPECT_THROW(w.write_count(5, 4), std::length_error);
+  EXPECT_NO_THROW(w.write_string("abc", 3));
+}

@@ -206,17 +206,18 @@ public:
   {
     uint32_t len = 0;
     read(len);
+    const std::size_t at = pos_ - sizeof(uint32_t);  // errors point at the length field
     if (len > remaining()) {
-      fail("string length " + std::to_string(len) + " exceeds the remaining " +
+      fail_at(at, "string length " + std::to_string(len) + " exceeds the remaining " +
         std::to_string(remaining()) + " bytes");
     }
     if (len == 0) {  // tolerated: some writers encode "" as length 0
       s.clear();
       return;
     }
-    if (data_[pos_ + len - 1] != 0) {fail("string is missing its NUL terminator");}
+    if (data_[pos_ + len - 1] != 0) {fail_at(at, "string is missing its NUL terminator");}
     if (bound != 0 && len - 1 > bound) {
-      fail("string of " + std::to_string(len - 1) + " characters exceeds its bound " +
+      fail_at(at, "string of " + std::to_string(len - 1) + " characters exceeds its bound " +
         std::to_string(bound));
     }
     s.assign(reinterpret_cast<const char *>(data_ + pos_), len - 1);
@@ -230,12 +231,14 @@ public:
   {
     uint32_t n = 0;
     read(n);
+    const std::size_t at = pos_ - sizeof(uint32_t);  // errors point at the count field
     if (bound != 0 && n > bound) {
-      fail("sequence count " + std::to_string(n) + " exceeds its bound " + std::to_string(bound));
+      fail_at(at, "sequence count " + std::to_string(n) + " exceeds its bound " +
+        std::to_string(bound));
     }
     const std::size_t per = min_element_size == 0 ? 1 : min_element_size;
     if (n > remaining() / per) {
-      fail("sequence count " + std::to_string(n) + " larger than the remaining " +
+      fail_at(at, "sequence count " + std::to_string(n) + " larger than the remaining " +
         std::to_string(remaining()) + " bytes allow");
     }
     return n;
@@ -293,9 +296,11 @@ public:
     return out;
   }
 
-  [[noreturn]] void fail(const std::string & reason) const
+  [[noreturn]] void fail(const std::string & reason) const {fail_at(pos_, reason);}
+
+  [[noreturn]] void fail_at(std::size_t offset, const std::string & reason) const
   {
-    throw DecodeError(type_name_, field_path(), pos_, reason);
+    throw DecodeError(type_name_, field_path(), offset, reason);
   }
 
 private:
