@@ -1,0 +1,50 @@
+// Test helper (not installed): runs TdorcWhisker over CSV samples so an
+// independent Python implementation can be compared sample by sample.
+//
+//   tdorc_csv <mode> <window> <contact_threshold> <absolute 0|1>
+//   stdin:  one sample per line: S_r0,S_r1,S_r2
+//   stdout: ready,contact,drift_frozen,S_c0,S_c1,S_c2,S_p0,S_p1,S_p2,contact0,contact1,contact2
+#include <cstdio>
+#include <cstdlib>
+#include <exception>
+#include <iostream>
+#include <sstream>
+#include <string>
+
+#include "tdorc_filter/tdorc.hpp"
+
+int main(int argc, char** argv) {
+  if (argc != 5) {
+    std::cerr << "usage: tdorc_csv <tdorc|tdoc|bandpass> <window> <threshold> <absolute 0|1>\n";
+    return 2;
+  }
+  try {
+    tdorc_filter::Params p;
+    p.mode = tdorc_filter::mode_from_string(argv[1]);
+    p.window = std::atoi(argv[2]);
+    p.contact_threshold = std::strtod(argv[3], nullptr);
+    p.absolute_threshold = std::atoi(argv[4]) != 0;
+    tdorc_filter::TdorcWhisker w(p);
+    std::string line;
+    while (std::getline(std::cin, line)) {
+      if (line.empty()) continue;
+      std::array<double, 3> r{};
+      std::istringstream is(line);
+      char comma = 0;
+      if (!(is >> r[0] >> comma >> r[1] >> comma >> r[2])) {
+        std::cerr << "bad line: " << line << "\n";
+        return 1;
+      }
+      const auto o = w.update(r);
+      std::printf("%d,%d,%d", o.ready ? 1 : 0, o.contact ? 1 : 0, o.drift_frozen ? 1 : 0);
+      for (const auto& c : o.channel) std::printf(",%.17g", c.calibrated);
+      for (const auto& c : o.channel) std::printf(",%.17g", c.compensated);
+      for (const auto& c : o.channel) std::printf(",%d", c.contact ? 1 : 0);
+      std::printf("\n");
+    }
+  } catch (const std::exception& e) {
+    std::cerr << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}

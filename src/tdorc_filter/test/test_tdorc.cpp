@@ -1,0 +1,417 @@
+// Core tests of TDORC (paper 000 eq. 4-11). Expected values are derived by
+// hand from the equations in the comments next to them.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "tdorc_filter/tdorc.hpp"
+
+using tdorc_filter::BandpassBiquad;
+using tdorc_filter::DriftFit;
+using tdorc_filter::LineFit;
+using tdorc_filter::Mode;
+using tdorc_filter::Params;
+using tdorc_filter::TdorcChannel;
+using tdorc_filter::TdorcWhisker;
+
+namespace {
+
+const std::array<double, 3> kB{{0.0564, 0.0, -0.0564}};
+const std::array<double, 3> kA{{1.0, -1.8865, 0.8872}};
+
+std::string error_of(const Params& p) {
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------ biquad
+
+TEST(BandpassBiquad, ParamsDefaultsArePaperCoefficients) {
+  const Params p;
+  EXPECT_EQ(p.bandpass_b, kB);
+  EXPECT_EQ(p.bandpass_a, kA);
+  EXPECT_EQ(p.window, 100);
+  EXPECT_EQ(p.contact_threshold, 20.0);
+  EXPECT_FALSE(p.absolute_threshold);
+  EXPECT_EQ(p.mode, Mode::kTdorc);
+}
+
+TEST(BandpassBiquad, ImpulseResponseByHand) {
+  // Unit impulse, zero state, eq. 9-11 by hand:
+  // k=0: S_p = b0 = 0.0564;  z0 = -a1*0.0564 = 0.1063986;  z1 = b2 - a2*0.0564 = -0.10643808
+  // k=1: S_p = z0 = 0.1063986; z0 = 1.8865*0.1063986 - 0.10643808 = 0.0942828789;
+  //      z1 = -0.8872*0.1063986 = -0.09439683792
+  // k=2: S_p = 0.0942828789; z0 = 1.8865*0.0942828789 - 0.09439683792 = 0.08346781312...
+  // k=3: S_p = 0.0834678131
+  BandpassBiquad f(kB, kA);
+  EXPECT_NEAR(f.step(1.0), 0.0564, 1e-12);
+  EXPECT_NEAR(f.z0(), 0.1063986, 1e-12);
+  EXPECT_NEAR(f.z1(), -0.10643808, 1e-12);
+  EXPECT_NEAR(f.step(0.0), 0.1063986, 1e-12);
+  EXPECT_NEAR(f.z1(), -0.09439683792, 1e-12);
+  EXPECT_NEAR(f.step(0.0), 0.0942828789, 1e-12);
+  EXPECT_NEAR(f.step(0.0), 0.0834678131, 1e-10);
+}
+
+TEST(BandpassBiquad, DcGainIsZero) {
+  // H(1) = (b0 + b1 + b2) / (1 + a1 + a2) = 0: a step decays to 0.
+  BandpassBiquad f(kB, kA);
+  double y = 0.0;
+  for (int k = 0; k < 20000; ++k) y = f.step(5.0);
+  EXPECT_NEAR(y, 0.0, 1e-9);
+}
+
+TEST(BandpassBiquad, RampSteadyState) {
+  // B(q) = 0.0564 (1 - q^2) = 0.0564 (1 - q)(1 + q), q = z^-1. A ramp x_k = c*k
+  // differenced once is c, so the output settles at
+  // c * 0.0564 * 2 / A(1) = c * 0.1128 / (1 - 1.8865 + 0.8872) = c * 161.142857...
+  BandpassBiquad f(kB, kA);
+  const double c = 0.01;
+  double y = 0.0;
+  for (int k = 0; k < 20000; ++k) y = f.step(c * k);
+  EXPECT_NEAR(y, c * 0.1128 / 0.0007, 1e-8);
+}
+
+TEST(BandpassBiquad, SteadyStateInitGivesZeroForConstantInput) {
+  BandpassBiquad f(kB, kA);
+  f.init_steady_state(101325.0);
+  // z1 = b2 x, z0 = b1 x + z1 (steady output 0): next output b0 x + z0 = 0.
+  EXPECT_DOUBLE_EQ(f.z1(), -0.0564 * 101325.0);
+  for (int k = 0; k < 10; ++k) EXPECT_EQ(f.step(101325.0), 0.0);
+}
+
+// ------------------------------------------------------------------ least squares
+
+TEST(DriftFit, ThreePointsByHand) {
+  // t = 0,1,2; S = 0,1,5: sum t = 3, sum t^2 = 5, sum S = 6, sum tS = 11.
+  // eq. 6: a = (3*11 - 3*6) / (3*5 - 9) = 15/6 = 2.5; eq. 7: b = (6 - 2.5*3)/3 = -0.5.
+  DriftFit f(3);
+  f.push(0, 0.0);
+  f.push(1, 1.0);
+  f.push(2, 5.0);
+  ASSERT_TRUE(f.full());
+  LineFit l = f.fit();
+  EXPECT_NEAR(l.slope, 2.5, 1e-12);
+  EXPECT_NEAR(l.intercept, -0.5, 1e-12);
+  EXPECT_EQ(l.first_index, 0);
+  // Slide: window S = 1,5,2 at t = 0,1,2: sum S = 8, sum tS = 9;
+  // a = (27 - 24)/6 = 0.5, b = (8 - 1.5)/3 = 13/6 (at index 1).
+  f.push(3, 2.0);
+  l = f.fit();
+  EXPECT_NEAR(l.slope, 0.5, 1e-12);
+  EXPECT_NEAR(l.intercept, 13.0 / 6.0, 1e-12);
+  EXPECT_EQ(l.first_index, 1);
+  EXPECT_NEAR(l.at(4), 13.0 / 6.0 + 1.5, 1e-12);
+}
+
+TEST(DriftFit, GapKeepsTrueTimeIndex) {
+  // Indices 0,1,5, S = 0,1,5: sum t = 6, sum t^2 = 26, sum S = 6, sum tS = 26;
+  // a = (78 - 36)/(78 - 36) = 1, b = (6 - 6)/3 = 0.
+  DriftFit f(3);
+  f.push(0, 0.0);
+  f.push(1, 1.0);
+  f.push(5, 5.0);
+  const LineFit l = f.fit();
+  EXPECT_NEAR(l.slope, 1.0, 1e-12);
+  EXPECT_NEAR(l.intercept, 0.0, 1e-12);
+}
+
+TEST(DriftFit, ExactLineGivesExactParameters) {
+  DriftFit f(100);
+  for (int k = 0; k < 250; ++k) f.push(k, 101325.0 + 0.02 * k);
+  const LineFit l = f.fit();
+  EXPECT_NEAR(l.slope, 0.02, 1e-12);
+  EXPECT_EQ(l.first_index, 150);
+  EXPECT_NEAR(l.intercept, 101325.0 + 0.02 * 150, 1e-9);
+}
+
+TEST(DriftFit, RunningSumsMatchTwoPassFitAfterMillionSamples) {
+  // Running sums over 1e6 noisy samples (many wraps) versus a fresh two-pass
+  // fit of the final window.
+  const int n = 100;
+  DriftFit f(n);
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> noise(0.0, 3.0);
+  std::vector<double> last(n);
+  const int total = 1000000;
+  for (int k = 0; k < total; ++k) {
+    const double v = 100000.0 + 1e-4 * k + 20.0 * std::sin(k * 1e-3) + noise(rng);
+    f.push(k, v);
+    if (k >= total - n) last[k - (total - n)] = v;
+  }
+  double mt = 0, my = 0;
+  for (int i = 0; i < n; ++i) {
+    mt += i;
+    my += last[i];
+  }
+  mt /= n;
+  my /= n;
+  double sxy = 0, sxx = 0;
+  for (int i = 0; i < n; ++i) {
+    sxy += (i - mt) * (last[i] - my);
+    sxx += (i - mt) * (i - mt);
+  }
+  const double a = sxy / sxx;
+  const double b = my - a * mt;
+  const LineFit l = f.fit();
+  EXPECT_NEAR(l.slope, a, 1e-10);
+  EXPECT_NEAR(l.intercept, b, 1e-8);
+}
+
+TEST(DriftFit, StateIsAllocatedOnce) {
+  DriftFit f(100);
+  const std::size_t before = f.state_size_bytes();
+  for (int k = 0; k < 1000; ++k) f.push(k, 1.0 * k);
+  EXPECT_EQ(f.state_size_bytes(), before);
+  EXPECT_EQ(before, sizeof(DriftFit) + 100 * (sizeof(double) + sizeof(int64_t)));
+}
+
+// ------------------------------------------------------------------ channel / whisker
+
+TEST(TdorcChannel, NotReadyUntilWindowFull) {
+  Params p;
+  p.window = 10;
+  TdorcChannel c(p);
+  for (int k = 0; k < 10; ++k) {
+    const auto o = c.update(k, 1000.0 + k);
+    EXPECT_FALSE(o.ready);
+    EXPECT_EQ(o.calibrated, 0.0);
+    EXPECT_EQ(o.compensated, 0.0);
+    EXPECT_FALSE(o.contact);
+  }
+  // Fitted after the n-th sample; the first output is for sample n and
+  // extrapolates the line (S_c = 1010 - (1*10 + 1000) = 0).
+  EXPECT_EQ(c.fit_count(), 1u);
+  const auto o = c.update(10, 1010.0);
+  EXPECT_TRUE(o.ready);
+  EXPECT_NEAR(o.calibrated, 0.0, 1e-9);
+  EXPECT_NEAR(o.drift_slope, 1.0, 1e-12);
+  EXPECT_NEAR(o.drift_intercept, 1000.0, 1e-9);
+  EXPECT_EQ(c.fit_count(), 2u);
+}
+
+TEST(TdorcChannel, NoiseFreeRampIsCompensatedToZero) {
+  for (Mode m : {Mode::kTdorc, Mode::kTdoc}) {
+    Params p;
+    p.mode = m;
+    TdorcChannel c(p);
+    for (int k = 0; k < 1000; ++k) {
+      const auto o = c.update(k, 98000.0 + 0.05 * k);
+      EXPECT_EQ(o.ready, k >= 100);
+      if (k >= 100) {
+        ASSERT_TRUE(o.ready);
+        EXPECT_NEAR(o.calibrated, 0.0, 1e-9) << k;  // eq. 5 with the exact line
+        EXPECT_NEAR(o.compensated, 0.0, 1e-9) << k;
+        EXPECT_NEAR(o.drift_slope, 0.05, 1e-12);
+      }
+    }
+  }
+}
+
+TEST(TdorcChannel, BandpassModePassesRawToFilter) {
+  Params p;
+  p.mode = Mode::kBandpass;
+  TdorcChannel c(p);
+  auto o = c.update(0, 101325.0);
+  EXPECT_TRUE(o.ready);
+  EXPECT_EQ(o.calibrated, 101325.0);  // S_c = S_r
+  EXPECT_EQ(o.compensated, 0.0);      // steady-state start
+  // A +100 Pa step: S_p jumps by b0 * 100 = 5.64.
+  o = c.update(1, 101425.0);
+  EXPECT_NEAR(o.compensated, 5.64, 1e-9);
+  EXPECT_EQ(c.fit_count(), 0u);
+}
+
+namespace {
+// Drifting whisker: ramp + contact bump on channel 1 between samples [300, 400).
+std::array<double, 3> sample(int k, bool bump) {
+  const double drift = 0.03 * k;
+  const double b = bump ? 400.0 : 0.0;
+  return {{100000.0 + drift, 99000.0 - drift + b, 101000.0 + 0.5 * drift}};
+}
+}  // namespace
+
+TEST(TdorcWhisker, FreezesAllChannelsDuringContactAndRefitsAfter) {
+  // 000 eq. 8: a sample in whisker contact (any channel) re-fits no channel;
+  // a free-flight sample re-fits every channel.
+  Params p;
+  TdorcWhisker w(p);
+  int first_contact = -1, last_contact = -1, contact_samples = 0;
+  for (int k = 0; k < 1200; ++k) {
+    std::array<uint64_t, 3> fits_before{};
+    std::array<LineFit, 3> line_before{};
+    for (int i = 0; i < 3; ++i) {
+      fits_before[i] = w.channel(i).fit_count();
+      line_before[i] = w.channel(i).line();
+    }
+    const auto o = w.update(sample(k, k >= 300 && k < 400));
+    if (k < 100) continue;  // first window
+    ASSERT_TRUE(o.ready);
+    EXPECT_EQ(o.drift_frozen, o.contact) << k;
+    for (int i = 0; i < 3; ++i) {
+      if (o.contact) {
+        EXPECT_EQ(w.channel(i).fit_count(), fits_before[i]) << k;
+        EXPECT_EQ(w.channel(i).line().slope, line_before[i].slope) << k;
+        EXPECT_EQ(w.channel(i).line().intercept, line_before[i].intercept) << k;
+        EXPECT_EQ(w.channel(i).line().first_index, line_before[i].first_index) << k;
+      } else {
+        EXPECT_EQ(w.channel(i).fit_count(), fits_before[i] + 1) << k;
+      }
+    }
+    if (o.contact) {
+      if (first_contact < 0) first_contact = k;
+      last_contact = k;
+      ++contact_samples;
+    }
+  }
+  // A 400 Pa step gives S_p = 0.0564 * 400 = 22.56 > 20 at once.
+  ASSERT_EQ(first_contact, 300);
+  ASSERT_GT(contact_samples, 1);
+  ASSERT_LT(last_contact, 1100);
+  // Long after contact the windows hold pure drift again: exact slopes.
+  EXPECT_NEAR(w.channel(0).line().slope, 0.03, 1e-9);
+  EXPECT_NEAR(w.channel(1).line().slope, -0.03, 1e-9);
+  EXPECT_NEAR(w.channel(2).line().slope, 0.015, 1e-9);
+}
+
+TEST(TdorcWhisker, ContactOnsetNeverEntersTheWindow) {
+  // The onset sample is judged before learning, so with a held +400 Pa the
+  // frozen line extrapolates the pre-contact drift exactly: S_c = 400 while
+  // the whisker stays in contact.
+  Params p;
+  TdorcWhisker w(p);
+  for (int k = 0; k < 300; ++k) w.update(sample(k, false));
+  const auto o = w.update(sample(300, true));
+  ASSERT_TRUE(o.contact);
+  EXPECT_TRUE(o.channel[1].contact);
+  EXPECT_FALSE(o.channel[0].contact);
+  EXPECT_NEAR(o.channel[1].calibrated, 400.0, 1e-6);
+  EXPECT_NEAR(o.channel[1].compensated, 0.0564 * 400.0, 1e-6);
+  EXPECT_NEAR(o.channel[0].calibrated, 0.0, 1e-6);
+  const auto o2 = w.update(sample(301, true));
+  ASSERT_TRUE(o2.contact);
+  EXPECT_NEAR(o2.channel[1].calibrated, 400.0, 1e-6);
+  EXPECT_NEAR(o2.channel[1].drift_slope, -0.03, 1e-9);
+}
+
+TEST(TdorcWhisker, TdocNeverRefits) {
+  Params p;
+  p.mode = Mode::kTdoc;
+  TdorcWhisker w(p);
+  LineFit first{};
+  for (int k = 0; k < 2000; ++k) {
+    // Drift changes slope after the first fit: TDOC keeps the first line.
+    const double v = k < 100 ? 100000.0 + 0.01 * k : 100000.0 + 0.01 * k + 1e-5 * (k - 100) * (k - 100);
+    const auto o = w.update({{v, v, v}});
+    if (k == 99) first = w.channel(0).line();
+    if (k >= 99) {
+      EXPECT_EQ(w.channel(0).fit_count(), 1u);
+      EXPECT_FALSE(o.drift_frozen);
+    }
+  }
+  EXPECT_EQ(w.channel(0).line().slope, first.slope);
+  EXPECT_EQ(w.channel(0).line().intercept, first.intercept);
+  EXPECT_NEAR(first.slope, 0.01, 1e-12);
+}
+
+TEST(TdorcWhisker, TdorcFollowsChangingDriftButTdocDoesNot) {
+  // Extended Data Fig. 2b in miniature: a drift whose slope changes after
+  // take-off. TDORC keeps S_p near 0; TDOC's S_c grows.
+  Params pr, po;
+  po.mode = Mode::kTdoc;
+  TdorcWhisker r(pr), o(po);
+  double max_r = 0.0, sc_o = 0.0;
+  for (int k = 0; k < 3000; ++k) {
+    const double v = 100000.0 + 0.5 * std::sin(k * 0.002) * 400.0;
+    const auto a = r.update({{v, v, v}});
+    const auto b = o.update({{v, v, v}});
+    if (k > 200) max_r = std::max(max_r, std::fabs(a.channel[0].calibrated));
+    sc_o = b.channel[0].calibrated;
+  }
+  EXPECT_LT(max_r, 1.0);
+  EXPECT_GT(std::fabs(sc_o), 50.0);
+}
+
+TEST(TdorcWhisker, AbsoluteThresholdCountsNegativeExcursions) {
+  Params p;
+  p.mode = Mode::kBandpass;
+  TdorcWhisker plain(p);
+  p.absolute_threshold = true;
+  TdorcWhisker abs(p);
+  plain.update({{0.0, 0.0, 0.0}});
+  abs.update({{0.0, 0.0, 0.0}});
+  // A -400 Pa step: S_p = -22.56.
+  EXPECT_FALSE(plain.update({{0.0, -400.0, 0.0}}).contact);
+  EXPECT_TRUE(abs.update({{0.0, -400.0, 0.0}}).contact);
+}
+
+TEST(TdorcWhisker, ResetStartsOver) {
+  Params p;
+  p.window = 5;
+  TdorcWhisker w(p);
+  for (int k = 0; k < 20; ++k) w.update({{1.0 * k, 2.0, 3.0}});
+  EXPECT_TRUE(w.update({{20.0, 2.0, 3.0}}).ready);
+  w.reset();
+  EXPECT_EQ(w.samples(), 0);
+  EXPECT_FALSE(w.update({{1.0, 2.0, 3.0}}).ready);
+  EXPECT_EQ(w.channel(0).fit_count(), 0u);
+}
+
+TEST(TdorcWhisker, StateSize) {
+  TdorcWhisker w{Params{}};
+  const std::size_t s = w.state_size_bytes();
+  // Three windows of n = 100 (value + index, 16 B each) dominate.
+  EXPECT_GE(s, 3u * 100u * 16u);
+  EXPECT_LT(s, 3u * 100u * 16u + 2048u);
+}
+
+// ------------------------------------------------------------------ validation
+
+TEST(Params, ValidateNamesTheField) {
+  Params p;
+  EXPECT_EQ(error_of(p), "");
+  p.window = 1;
+  EXPECT_EQ(error_of(p), "TdorcParams.window: must be >= 2, got 1");
+  p = Params{};
+  p.contact_threshold = std::nan("");
+  EXPECT_NE(error_of(p).find("TdorcParams.contact_threshold"), std::string::npos);
+  p = Params{};
+  p.absolute_threshold = true;
+  p.contact_threshold = -1.0;
+  EXPECT_NE(error_of(p).find("TdorcParams.contact_threshold: must be >= 0"), std::string::npos);
+  p = Params{};
+  p.bandpass_a[0] = 2.0;
+  EXPECT_NE(error_of(p).find("TdorcParams.bandpass_a[0]: must be 1"), std::string::npos);
+  p = Params{};
+  p.bandpass_a = {{1.0, -2.0, 1.0}};  // double pole at z = 1
+  EXPECT_NE(error_of(p).find("TdorcParams.bandpass_a: poles"), std::string::npos);
+  p = Params{};
+  p.bandpass_b[2] = INFINITY;
+  EXPECT_NE(error_of(p).find("TdorcParams.bandpass_b[2]: must be finite"), std::string::npos);
+  p = Params{};
+  p.window = 1;
+  EXPECT_THROW(TdorcWhisker{p}, std::invalid_argument);
+}
+
+TEST(Params, ModeStrings) {
+  EXPECT_EQ(tdorc_filter::mode_from_string("tdorc"), Mode::kTdorc);
+  EXPECT_EQ(tdorc_filter::mode_from_string("tdoc"), Mode::kTdoc);
+  EXPECT_EQ(tdorc_filter::mode_from_string("bandpass"), Mode::kBandpass);
+  EXPECT_STREQ(tdorc_filter::to_string(Mode::kTdoc), "tdoc");
+  try {
+    tdorc_filter::mode_from_string("TDORC ");
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("TdorcParams.mode"), std::string::npos);
+  }
+}
