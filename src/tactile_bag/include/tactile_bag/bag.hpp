@@ -1,0 +1,225 @@
+// rosbag2 reader and writer without ROS (sqlite3 storage plugin, metadata.yaml).
+//
+// Format (see README.md for the full description):
+//   <dir>/metadata.yaml         rosbag2_bagfile_information, version 9 by default
+//   <dir>/<basename(dir)>_0.db3 sqlite3 database, schema version 4:
+//     schema(schema_version, ros_distro), metadata(id, metadata_version, metadata),
+//     topics(id, name, type, serialization_format, offered_qos_profiles,
+//            type_description_hash),
+//     message_definitions(id, topic_type, encoding, encoded_message_definition,
+//                         type_description_hash),
+//     messages(id, topic_id, timestamp, data) + index on timestamp.
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+struct sqlite3;
+struct sqlite3_stmt;
+
+namespace tactile_bag {
+
+/// Every error of this library. The message names the file and the reason.
+class BagError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct TopicInfo {
+  std::string name;
+  std::string type;                          ///< e.g. "tactile_msgs/msg/WhiskerPressure"
+  std::string serialization_format = "cdr";
+  /// QoS profiles as YAML text (a sequence of maps). Written by the Writer in the
+  /// encoding of the chosen metadata version; read back normalised to the Jazzy (v9)
+  /// spelling (string enums). Empty on write: default_qos_profiles().
+  std::string offered_qos_profiles;
+  std::string type_definition;               ///< full definition text (ros2msg)
+  std::string definition_encoding = "ros2msg";
+  std::string type_description_hash;         ///< "RIHS01_<hex>" or empty
+};
+
+struct SerializedMessage {
+  std::string topic;
+  int64_t timestamp_ns = 0;
+  std::vector<uint8_t> data;
+};
+
+/// One QoS profile as rosbag2 stores it.
+struct QosProfile {
+  struct Time {
+    int64_t sec = 0;
+    int64_t nsec = 0;
+  };
+  static constexpr Time kInfinite{9223372036LL, 854775807LL};  // RMW_DURATION_INFINITE
+  std::string history = "unknown";     // system_default|keep_last|keep_all|unknown
+  int64_t depth = 0;
+  std::string reliability = "reliable";  // system_default|reliable|best_effort|unknown|best_available
+  std::string durability = "volatile";   // system_default|transient_local|volatile|unknown|best_available
+  Time deadline = kInfinite;
+  Time lifespan = kInfinite;
+  std::string liveliness = "automatic";  // system_default|automatic|manual_by_node|manual_by_topic|unknown|best_available
+  Time liveliness_lease_duration = kInfinite;
+  bool avoid_ros_namespace_conventions = false;
+};
+
+/// Parse offered_qos_profiles text (both spellings: integer enums of metadata <= 8,
+/// string enums of metadata 9). Throws BagError naming `context` and the key.
+std::vector<QosProfile> parse_qos_profiles(const std::string& yaml_text,
+                                           const std::string& context = "offered_qos_profiles");
+/// Serialise profiles as YAML text; metadata_version < 9 uses integer enums.
+std::string dump_qos_profiles(const std::vector<QosProfile>& profiles, int metadata_version = 9);
+/// What ROS 2 Jazzy's recorder stores for a reliable / volatile publisher.
+std::string default_qos_profiles(int metadata_version = 9);
+
+struct WriterOptions {
+  /// rosbag2 metadata version: 9 (Jazzy, default; read by Jazzy and rosbags),
+  /// 8 (Iron) or 5 (Humble: QoS as a string with integer enums).
+  int metadata_version = 9;
+  /// Open transactions are committed at least this often (wall time), by write()
+  /// and by a background thread while idle. A SIGKILL loses at most this window.
+  std::chrono::milliseconds flush_interval{250};
+  /// ros_distro stored in metadata (v >= 8) and in the schema table. Empty: the
+  /// distro whose format the version follows (jazzy, iron, humble).
+  std::string ros_distro;
+};
+
+class Writer {
+ public:
+  Writer();
+  explicit Writer(WriterOptions options);
+  ~Writer();  ///< closes
+  Writer(const Writer&) = delete;
+  Writer& operator=(const Writer&) = delete;
+
+  /// Create the bag directory (it must not exist or be empty), the database
+  /// <dir>/<basename>_0.db3 and a first metadata.yaml.
+  void open(const std::string& dir);
+  bool is_open() const { return db_ != nullptr; }
+
+  /// Register a topic; a second call with the same name and type is a no-op, with
+  /// another type an error.
+  void create_topic(const TopicInfo& topic);
+  bool has_topic(const std::string& name) const;
+
+  void write(const std::string& topic, int64_t timestamp_ns, const uint8_t* data, size_t size);
+  void write(const std::string& topic, int64_t timestamp_ns, const std::vector<uint8_t>& data) {
+    write(topic, timestamp_ns, data.data(), data.size());
+  }
+  /// Typed write (defined in tactile_bag/typed.hpp): serialises with tactile_msgs CDR
+  /// and creates the topic from MessageTraits<T> on first use.
+  template <class T>
+  void write(const std::string& topic, int64_t timestamp_ns, const T& msg);
+
+  /// Commit pending messages now.
+  void flush();
+  /// Commit, rewrite metadata.yaml with the final counts, close the database.
+  void close();
+
+  const std::string& db_path() const { return db_path_; }
+  uint64_t message_count() const;
+
+ private:
+  struct TopicState {
+    TopicInfo info;
+    int64_t id = 0;
+    uint64_t count = 0;
+  };
+  void exec(const char* sql);
+  void begin_locked();
+  void commit_locked();
+  void write_metadata_locked();
+  std::string metadata_yaml_locked(bool with_root) const;
+  void flusher_main();
+  [[noreturn]] void fail(const std::string& what) const;
+
+  WriterOptions opt_;
+  std::string dir_, db_path_, db_name_;
+  sqlite3* db_ = nullptr;
+  sqlite3_stmt* insert_ = nullptr;
+  std::map<std::string, TopicState> topics_;
+  std::vector<std::string> topic_order_;
+  std::map<std::string, bool> defined_types_;
+  bool in_txn_ = false;
+  uint64_t count_ = 0;
+  int64_t min_ts_ = 0, max_ts_ = 0;
+  std::chrono::steady_clock::time_point last_commit_;
+  mutable std::mutex mu_;
+  std::condition_variable cv_;
+  bool stop_ = false;
+  std::thread flusher_;
+};
+
+class Reader {
+ public:
+  Reader() = default;
+  explicit Reader(const std::string& dir) { open(dir); }
+  ~Reader();
+  Reader(const Reader&) = delete;
+  Reader& operator=(const Reader&) = delete;
+
+  /// Read metadata.yaml (versions 1..9) and the .db3 files it names. Topics, counts
+  /// and times always come from the databases; a missing or stale metadata.yaml (a
+  /// killed recording) is reconstructed from them (see metadata_complete()).
+  void open(const std::string& dir);
+  void close();
+
+  const std::vector<TopicInfo>& topics() const { return topics_; }
+  const TopicInfo* find_topic(const std::string& name) const;
+  uint64_t message_count() const { return total_count_; }
+  uint64_t message_count(const std::string& topic) const;
+  int64_t start_time_ns() const { return start_ns_; }
+  int64_t end_time_ns() const { return end_ns_; }       ///< last timestamp
+  int64_t duration_ns() const { return end_ns_ - start_ns_; }
+  int metadata_version() const { return metadata_version_; }  ///< 0 without metadata.yaml
+  std::string storage_identifier() const { return "sqlite3"; }
+  bool metadata_complete() const { return metadata_complete_; }
+  const std::string& recovery_note() const { return recovery_note_; }
+  const std::vector<std::string>& files() const { return db_paths_; }
+
+  /// Restrict iteration to these topics (empty: all) and restart from the first message.
+  void set_topic_filter(const std::vector<std::string>& topics);
+  /// Restart iteration from the first message.
+  void reset();
+  /// Next message in timestamp order (ties: insertion order); false at the end.
+  bool read_next(SerializedMessage& out);
+
+ private:
+  struct File {
+    std::string path;
+    sqlite3* db = nullptr;
+    sqlite3_stmt* stmt = nullptr;
+    std::map<int64_t, std::string> topic_names;  // topic id -> name
+    bool has_row = false;
+    int64_t ts = 0;
+    int64_t rowid = 0;
+  };
+  void open_file(File& f, std::map<std::string, TopicInfo>& found,
+                 std::map<std::string, uint64_t>& counts, int64_t& tmin, int64_t& tmax,
+                 bool& any);
+  void step(File& f);
+  void prepare_iteration();
+
+  std::string dir_;
+  std::vector<File> files_;
+  std::vector<std::string> db_paths_;
+  std::vector<TopicInfo> topics_;
+  std::map<std::string, uint64_t> counts_;
+  std::vector<std::string> filter_;
+  uint64_t total_count_ = 0;
+  int64_t start_ns_ = 0, end_ns_ = 0;
+  int metadata_version_ = 0;
+  bool metadata_complete_ = false;
+  std::string recovery_note_;
+  bool iter_ready_ = false;
+};
+
+}  // namespace tactile_bag

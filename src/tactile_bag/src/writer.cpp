@@ -1,0 +1,410 @@
+// rosbag2 writer: sqlite3 storage (schema version 4) + metadata.yaml.
+//
+// Durability: the database runs in WAL mode (synchronous=NORMAL, what rosbag2's
+// "resilient" preset uses). Messages are inserted inside a transaction that is
+// committed by write() once flush_interval of wall time has passed since the last
+// commit, and by a background thread while the caller is idle. A committed
+// transaction survives a SIGKILL of the process (it is in the -wal file, which the
+// next reader recovers), so a killed recording loses at most the last interval.
+// metadata.yaml is written at open, rewritten on every new topic and at close.
+#include <sqlite3.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <string>
+#include <utility>
+
+#include <yaml-cpp/yaml.h>
+
+#include "internal.hpp"
+#include "tactile_bag/bag.hpp"
+
+namespace fs = std::filesystem;
+
+namespace tactile_bag {
+namespace {
+
+const char* kSchemaSql =
+    "CREATE TABLE schema(schema_version INTEGER PRIMARY KEY, ros_distro TEXT NOT NULL);"
+    "CREATE TABLE metadata(id INTEGER PRIMARY KEY, metadata_version INTEGER NOT NULL,"
+    " metadata TEXT NOT NULL);"
+    "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL,"
+    " serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL,"
+    " type_description_hash TEXT NOT NULL);"
+    "CREATE TABLE message_definitions(id INTEGER PRIMARY KEY, topic_type TEXT NOT NULL,"
+    " encoding TEXT NOT NULL, encoded_message_definition TEXT NOT NULL,"
+    " type_description_hash TEXT NOT NULL);"
+    "CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL,"
+    " timestamp INTEGER NOT NULL, data BLOB NOT NULL);"
+    "CREATE INDEX timestamp_idx ON messages (timestamp ASC);";
+
+constexpr int kSchemaVersion = 4;
+
+std::string distro_for(int version) {
+  if (version >= 9) return "jazzy";
+  if (version == 8) return "iron";
+  return "humble";
+}
+
+struct Stmt {
+  sqlite3_stmt* s = nullptr;
+  ~Stmt() { sqlite3_finalize(s); }
+};
+
+}  // namespace
+
+Writer::Writer() : Writer(WriterOptions{}) {}
+
+Writer::Writer(WriterOptions options) : opt_(std::move(options)) {
+  if (opt_.metadata_version != 5 && opt_.metadata_version != 8 && opt_.metadata_version != 9) {
+    throw BagError("WriterOptions.metadata_version: must be 5, 8 or 9, got " +
+                   std::to_string(opt_.metadata_version));
+  }
+  if (opt_.flush_interval.count() <= 0 || opt_.flush_interval > std::chrono::seconds(1)) {
+    throw BagError("WriterOptions.flush_interval: must be in (0, 1000] ms, got " +
+                   std::to_string(opt_.flush_interval.count()) + " ms");
+  }
+  if (opt_.ros_distro.empty()) opt_.ros_distro = distro_for(opt_.metadata_version);
+}
+
+Writer::~Writer() {
+  try {
+    close();
+  } catch (const std::exception& e) {
+    std::cerr << "tactile_bag::Writer: close failed in destructor: " << e.what() << "\n";
+  }
+}
+
+void Writer::fail(const std::string& what) const {
+  std::string msg = db_path_ + ": " + what;
+  if (db_ != nullptr) msg += ": " + std::string(sqlite3_errmsg(db_));
+  throw BagError(msg);
+}
+
+void Writer::exec(const char* sql) {
+  char* err = nullptr;
+  if (sqlite3_exec(db_, sql, nullptr, nullptr, &err) != SQLITE_OK) {
+    std::string e = err != nullptr ? err : "unknown error";
+    sqlite3_free(err);
+    throw BagError(db_path_ + ": " + std::string(sql).substr(0, 40) + "...: " + e);
+  }
+}
+
+void Writer::open(const std::string& dir) {
+  if (db_ != nullptr) throw BagError(dir + ": writer is already open on " + dir_);
+  fs::path p = fs::path(dir).lexically_normal();
+  if (p.filename().empty()) p = p.parent_path();
+  std::error_code ec;
+  if (fs::exists(p, ec)) {
+    if (!fs::is_directory(p, ec)) throw BagError(p.string() + ": exists and is not a directory");
+    if (!fs::is_empty(p, ec)) {
+      throw BagError(p.string() + ": bag directory exists and is not empty (not overwriting)");
+    }
+  } else if (!fs::create_directories(p, ec) || ec) {
+    throw BagError(p.string() + ": cannot create bag directory: " + ec.message());
+  }
+  dir_ = p.string();
+  db_name_ = p.filename().string() + "_0.db3";
+  db_path_ = (p / db_name_).string();
+
+  if (sqlite3_open_v2(db_path_.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE,
+                      nullptr) != SQLITE_OK) {
+    std::string e = db_ != nullptr ? sqlite3_errmsg(db_) : "out of memory";
+    sqlite3_close(db_);
+    db_ = nullptr;
+    throw BagError(db_path_ + ": cannot create database: " + e);
+  }
+  try {
+    exec("PRAGMA journal_mode=WAL;");
+    exec("PRAGMA synchronous=NORMAL;");
+    exec(kSchemaSql);
+    {
+      Stmt st;
+      if (sqlite3_prepare_v2(db_, "INSERT INTO schema(schema_version, ros_distro) VALUES(?, ?)",
+                             -1, &st.s, nullptr) != SQLITE_OK) {
+        fail("prepare schema insert");
+      }
+      sqlite3_bind_int(st.s, 1, kSchemaVersion);
+      sqlite3_bind_text(st.s, 2, opt_.ros_distro.c_str(), -1, SQLITE_TRANSIENT);
+      if (sqlite3_step(st.s) != SQLITE_DONE) fail("insert schema version");
+    }
+    if (sqlite3_prepare_v2(db_, "INSERT INTO messages(topic_id, timestamp, data) VALUES(?, ?, ?)",
+                           -1, &insert_, nullptr) != SQLITE_OK) {
+      fail("prepare message insert");
+    }
+  } catch (...) {
+    sqlite3_finalize(insert_);
+    insert_ = nullptr;
+    sqlite3_close(db_);
+    db_ = nullptr;
+    throw;
+  }
+  std::lock_guard<std::mutex> lk(mu_);
+  topics_.clear();
+  topic_order_.clear();
+  defined_types_.clear();
+  count_ = 0;
+  min_ts_ = max_ts_ = 0;
+  in_txn_ = false;
+  last_commit_ = std::chrono::steady_clock::now();
+  write_metadata_locked();
+  stop_ = false;
+  flusher_ = std::thread([this] { flusher_main(); });
+}
+
+bool Writer::has_topic(const std::string& name) const {
+  std::lock_guard<std::mutex> lk(mu_);
+  return topics_.count(name) != 0;
+}
+
+uint64_t Writer::message_count() const {
+  std::lock_guard<std::mutex> lk(mu_);
+  return count_;
+}
+
+void Writer::create_topic(const TopicInfo& topic) {
+  std::lock_guard<std::mutex> lk(mu_);
+  if (db_ == nullptr) throw BagError(topic.name + ": create_topic on a writer that is not open");
+  if (topic.name.empty() || topic.type.empty()) {
+    throw BagError(db_path_ + ": create_topic: topic name and type must not be empty");
+  }
+  auto it = topics_.find(topic.name);
+  if (it != topics_.end()) {
+    if (it->second.info.type != topic.type) {
+      throw BagError(db_path_ + ": topic '" + topic.name + "' already exists with type '" +
+                     it->second.info.type + "', not '" + topic.type + "'");
+    }
+    return;
+  }
+  TopicState st;
+  st.info = topic;
+  // Normalise the QoS text to the encoding of the metadata version we write.
+  std::vector<QosProfile> profiles(1);
+  if (!topic.offered_qos_profiles.empty()) {
+    const std::string ctx = "topic '" + topic.name + "' offered_qos_profiles";
+    profiles = parse_qos_profiles(topic.offered_qos_profiles, ctx);
+  }
+  st.info.offered_qos_profiles = dump_qos_profiles(profiles, opt_.metadata_version);
+
+  begin_locked();
+  {
+    Stmt s;
+    if (sqlite3_prepare_v2(db_,
+                           "INSERT INTO topics(name, type, serialization_format,"
+                           " offered_qos_profiles, type_description_hash) VALUES(?, ?, ?, ?, ?)",
+                           -1, &s.s, nullptr) != SQLITE_OK) {
+      fail("prepare topic insert");
+    }
+    sqlite3_bind_text(s.s, 1, st.info.name.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(s.s, 2, st.info.type.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(s.s, 3, st.info.serialization_format.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(s.s, 4, st.info.offered_qos_profiles.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(s.s, 5, st.info.type_description_hash.c_str(), -1, SQLITE_TRANSIENT);
+    if (sqlite3_step(s.s) != SQLITE_DONE) fail("insert topic '" + topic.name + "'");
+    st.id = sqlite3_last_insert_rowid(db_);
+  }
+  if (!topic.type_definition.empty() && defined_types_.count(topic.type) == 0) {
+    Stmt s;
+    if (sqlite3_prepare_v2(db_,
+                           "INSERT INTO message_definitions(topic_type, encoding,"
+                           " encoded_message_definition, type_description_hash)"
+                           " VALUES(?, ?, ?, ?)",
+                           -1, &s.s, nullptr) != SQLITE_OK) {
+      fail("prepare message definition insert");
+    }
+    sqlite3_bind_text(s.s, 1, topic.type.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(s.s, 2, topic.definition_encoding.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(s.s, 3, topic.type_definition.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(s.s, 4, topic.type_description_hash.c_str(), -1, SQLITE_TRANSIENT);
+    if (sqlite3_step(s.s) != SQLITE_DONE) fail("insert definition of '" + topic.type + "'");
+    defined_types_[topic.type] = true;
+  }
+  commit_locked();
+  topics_.emplace(topic.name, st);
+  topic_order_.push_back(topic.name);
+  write_metadata_locked();
+}
+
+void Writer::begin_locked() {
+  if (in_txn_) return;
+  exec("BEGIN;");
+  in_txn_ = true;
+}
+
+void Writer::commit_locked() {
+  if (in_txn_) {
+    exec("COMMIT;");
+    in_txn_ = false;
+  }
+  last_commit_ = std::chrono::steady_clock::now();
+}
+
+void Writer::write(const std::string& topic, int64_t timestamp_ns, const uint8_t* data,
+                   size_t size) {
+  std::lock_guard<std::mutex> lk(mu_);
+  if (db_ == nullptr) throw BagError(topic + ": write on a writer that is not open");
+  auto it = topics_.find(topic);
+  if (it == topics_.end()) {
+    throw BagError(db_path_ + ": write: topic '" + topic + "' has not been created");
+  }
+  if (size > 0 && data == nullptr) throw BagError(db_path_ + ": write: null data");
+  if (size > static_cast<size_t>(sqlite3_limit(db_, SQLITE_LIMIT_LENGTH, -1))) {
+    throw BagError(db_path_ + ": write: message of " + std::to_string(size) +
+                   " bytes on '" + topic + "' exceeds the sqlite blob limit");
+  }
+  begin_locked();
+  sqlite3_bind_int64(insert_, 1, it->second.id);
+  sqlite3_bind_int64(insert_, 2, timestamp_ns);
+  static const uint8_t kEmpty = 0;
+  sqlite3_bind_blob64(insert_, 3, size > 0 ? data : &kEmpty, size, SQLITE_STATIC);
+  const int rc = sqlite3_step(insert_);
+  sqlite3_reset(insert_);
+  sqlite3_clear_bindings(insert_);
+  if (rc != SQLITE_DONE) fail("insert message on '" + topic + "'");
+  if (count_ == 0 || timestamp_ns < min_ts_) min_ts_ = timestamp_ns;
+  if (count_ == 0 || timestamp_ns > max_ts_) max_ts_ = timestamp_ns;
+  ++count_;
+  ++it->second.count;
+  if (std::chrono::steady_clock::now() - last_commit_ >= opt_.flush_interval) commit_locked();
+}
+
+void Writer::flush() {
+  std::lock_guard<std::mutex> lk(mu_);
+  if (db_ != nullptr) commit_locked();
+}
+
+void Writer::flusher_main() {
+  std::unique_lock<std::mutex> lk(mu_);
+  const auto period = opt_.flush_interval / 4 > std::chrono::milliseconds(1)
+                          ? opt_.flush_interval / 4
+                          : std::chrono::milliseconds(1);
+  while (!stop_) {
+    cv_.wait_for(lk, period);
+    if (stop_ || db_ == nullptr) break;
+    if (in_txn_ && std::chrono::steady_clock::now() - last_commit_ >= opt_.flush_interval) {
+      try {
+        commit_locked();
+      } catch (const std::exception& e) {
+        std::cerr << "tactile_bag::Writer: background commit failed: " << e.what() << "\n";
+      }
+    }
+  }
+}
+
+std::string Writer::metadata_yaml_locked(bool with_root) const {
+  const int v = opt_.metadata_version;
+  const int64_t start = count_ > 0 ? min_ts_ : 0;
+  const int64_t duration = count_ > 0 ? max_ts_ - min_ts_ : 0;
+  YAML::Node info;
+  info["version"] = v;
+  info["storage_identifier"] = "sqlite3";
+  info["duration"]["nanoseconds"] = duration;
+  info["starting_time"]["nanoseconds_since_epoch"] = start;
+  info["message_count"] = count_;
+  YAML::Node topics(YAML::NodeType::Sequence);
+  for (const auto& name : topic_order_) {
+    const TopicState& st = topics_.at(name);
+    YAML::Node tm;
+    tm["name"] = st.info.name;
+    tm["type"] = st.info.type;
+    tm["serialization_format"] = st.info.serialization_format;
+    if (v >= 9) {
+      tm["offered_qos_profiles"] = qos_node(parse_qos_profiles(st.info.offered_qos_profiles), v);
+    } else {
+      tm["offered_qos_profiles"] = st.info.offered_qos_profiles;
+    }
+    if (v >= 7) tm["type_description_hash"] = st.info.type_description_hash;
+    YAML::Node t;
+    t["topic_metadata"] = tm;
+    t["message_count"] = st.count;
+    topics.push_back(t);
+  }
+  info["topics_with_message_count"] = topics;
+  info["compression_format"] = "";
+  info["compression_mode"] = "";
+  YAML::Node paths(YAML::NodeType::Sequence);
+  paths.push_back(db_name_);
+  info["relative_file_paths"] = paths;
+  if (v >= 5) {
+    YAML::Node f;
+    f["path"] = db_name_;
+    f["starting_time"]["nanoseconds_since_epoch"] = start;
+    f["duration"]["nanoseconds"] = duration;
+    f["message_count"] = count_;
+    YAML::Node files(YAML::NodeType::Sequence);
+    files.push_back(f);
+    info["files"] = files;
+  }
+  if (v >= 6) info["custom_data"] = YAML::Node(YAML::NodeType::Map);
+  if (v >= 8) info["ros_distro"] = opt_.ros_distro;
+  YAML::Emitter e;
+  if (with_root) {
+    YAML::Node root;
+    root["rosbag2_bagfile_information"] = info;
+    e << root;
+  } else {
+    e << info;
+  }
+  return std::string(e.c_str()) + "\n";
+}
+
+void Writer::write_metadata_locked() {
+  const std::string text = metadata_yaml_locked(true);
+  const fs::path final_path = fs::path(dir_) / "metadata.yaml";
+  const fs::path tmp = fs::path(dir_) / ".metadata.yaml.tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out << text;
+    out.flush();
+    if (!out) throw BagError(tmp.string() + ": cannot write metadata");
+  }
+  std::error_code ec;
+  fs::rename(tmp, final_path, ec);
+  if (ec) throw BagError(final_path.string() + ": cannot write metadata: " + ec.message());
+}
+
+void Writer::close() {
+  if (flusher_.joinable()) {
+    {
+      std::lock_guard<std::mutex> lk(mu_);
+      stop_ = true;
+    }
+    cv_.notify_all();
+    flusher_.join();
+  }
+  std::lock_guard<std::mutex> lk(mu_);
+  if (db_ == nullptr) return;
+  std::string error;
+  try {
+    commit_locked();
+    // The final metadata is also stored in the database, as rosbag2 does; its
+    // version tells ROS 2 how to parse the QoS strings of the topics table.
+    Stmt s;
+    if (sqlite3_prepare_v2(db_, "INSERT INTO metadata(metadata_version, metadata) VALUES(?, ?)",
+                           -1, &s.s, nullptr) != SQLITE_OK) {
+      fail("prepare metadata insert");
+    }
+    const std::string meta = metadata_yaml_locked(false);
+    sqlite3_bind_int(s.s, 1, opt_.metadata_version);
+    sqlite3_bind_text(s.s, 2, meta.c_str(), -1, SQLITE_TRANSIENT);
+    if (sqlite3_step(s.s) != SQLITE_DONE) fail("insert metadata");
+    // Checkpoint the WAL into the main file and leave a plain rollback-journal
+    // database, so read-only and immutable openers (rosbags) see every message.
+    exec("PRAGMA journal_mode=DELETE;");
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  sqlite3_finalize(insert_);
+  insert_ = nullptr;
+  if (sqlite3_close(db_) != SQLITE_OK && error.empty()) {
+    error = db_path_ + ": close: " + sqlite3_errmsg(db_);
+  }
+  db_ = nullptr;
+  in_txn_ = false;
+  write_metadata_locked();
+  if (!error.empty()) throw BagError(error);
+}
+
+}  // namespace tactile_bag
