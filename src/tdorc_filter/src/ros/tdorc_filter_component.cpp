@@ -1,0 +1,38 @@
+// rclcpp component of tdorc_filter: a mechanical adapter around
+// TdorcFilterLogic (all behaviour lives there). ROS builds only.
+#include <memory>
+
+#include "rclcpp/rclcpp.hpp"
+#include "rclcpp_components/register_node_macro.hpp"
+#include "tactile_common/ros_parameters.hpp"
+#include "tdorc_filter/tdorc_filter_logic.hpp"
+
+namespace tdorc_filter {
+
+class TdorcFilterComponent : public rclcpp::Node {
+ public:
+  explicit TdorcFilterComponent(const rclcpp::NodeOptions & options)
+  : Node(TdorcFilterLogic::kNodeName, options),
+    logic_(TdorcFilterLogic::params_from(
+      tactile_common::declare_parameters(*this, TdorcFilterLogic::default_parameters())))
+  {
+    publisher_ = create_publisher<tactile_msgs::msg::WhiskerSignal>(
+      TdorcFilterLogic::kOutputTopic, rclcpp::SensorDataQoS());
+    subscription_ = create_subscription<tactile_msgs::msg::WhiskerPressure>(
+      TdorcFilterLogic::kInputTopic, rclcpp::SensorDataQoS(),
+      [this](const tactile_msgs::msg::WhiskerPressure & msg) {
+        if (auto out = logic_.on_pressure(msg)) {
+          publisher_->publish(*out);
+        }
+      });
+  }
+
+ private:
+  TdorcFilterLogic logic_;
+  rclcpp::Publisher<tactile_msgs::msg::WhiskerSignal>::SharedPtr publisher_;
+  rclcpp::Subscription<tactile_msgs::msg::WhiskerPressure>::SharedPtr subscription_;
+};
+
+}  // namespace tdorc_filter
+
+RCLCPP_COMPONENTS_REGISTER_NODE(tdorc_filter::TdorcFilterComponent)

@@ -1,0 +1,142 @@
+#include "tdorc_filter/tdorc_filter_logic.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "tactile_common/time.hpp"
+
+namespace tdorc_filter {
+
+using tactile_common::ParamMap;
+
+void TdorcFilterLogic::Params::validate() const {
+  tdorc.validate();
+  if (!std::isfinite(max_sample_gap_s) || max_sample_gap_s <= 0.0) {
+    throw std::invalid_argument("TdorcFilterLogic.max_sample_gap_s: must be finite and > 0, got " +
+                                std::to_string(max_sample_gap_s));
+  }
+}
+
+ParamMap TdorcFilterLogic::default_parameters() {
+  const tdorc_filter::Params d;
+  ParamMap m(kNodeName, "defaults");
+  m.set("mode", std::string(to_string(d.mode)));
+  m.set("window", static_cast<int64_t>(d.window));                 // 000 eq. 6-7, n = 100
+  m.set("contact_threshold", d.contact_threshold);                 // 000 Results, T_c = 20
+  m.set("absolute_threshold", d.absolute_threshold);
+  m.set("bandpass_b", std::vector<double>(d.bandpass_b.begin(), d.bandpass_b.end()));  // 000 eq. 9-11
+  m.set("bandpass_a", std::vector<double>(d.bandpass_a.begin(), d.bandpass_a.end()));  // 000 eq. 9-11
+  m.set("max_sample_gap_s", Params{}.max_sample_gap_s);
+  return m;
+}
+
+namespace {
+
+std::array<double, 3> three(const ParamMap& m, const std::string& key) {
+  const std::vector<double> v = m.get_double_array(key);
+  if (v.size() != 3) throw m.error(key, "must have 3 elements (b0, b1, b2 / a0, a1, a2), got " + std::to_string(v.size()));
+  return {{v[0], v[1], v[2]}};
+}
+
+}  // namespace
+
+TdorcFilterLogic::Params TdorcFilterLogic::params_from(const ParamMap& m) {
+  Params p;
+  const std::string mode = m.get_string("mode");
+  try {
+    p.tdorc.mode = mode_from_string(mode.c_str());
+  } catch (const std::invalid_argument&) {
+    throw m.error("mode", "must be \"tdorc\", \"tdoc\" or \"bandpass\", got \"" + mode + "\"");
+  }
+  const int64_t window = m.get_int("window");
+  if (window < 2 || window > 100000) {
+    throw m.error("window", "must be in [2, 100000], got " + std::to_string(window));
+  }
+  p.tdorc.window = static_cast<int>(window);
+  p.tdorc.contact_threshold = m.get_double("contact_threshold");
+  p.tdorc.absolute_threshold = m.get_bool("absolute_threshold");
+  p.tdorc.bandpass_b = three(m, "bandpass_b");
+  p.tdorc.bandpass_a = three(m, "bandpass_a");
+  p.max_sample_gap_s = m.get_double("max_sample_gap_s");
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    // "TdorcParams.<field>[i]: <reason>" -> parameter <field>.
+    const std::string what = e.what();
+    const auto dot = what.find('.');
+    const auto end = what.find_first_of(":[", dot);
+    const auto colon = what.find(": ");
+    const std::string key = what.substr(dot + 1, end - dot - 1);
+    throw m.error(key, colon == std::string::npos ? what : what.substr(colon + 2));
+  }
+  return p;
+}
+
+TdorcFilterLogic::TdorcFilterLogic(const Params& params) : params_(params), whisker_(params.tdorc) {
+  params_.validate();
+}
+
+std::optional<tactile_msgs::msg::WhiskerSignal> TdorcFilterLogic::on_pressure(
+    const tactile_msgs::msg::WhiskerPressure& msg) {
+  using tactile_msgs::msg::WhiskerPressure;
+  using tactile_msgs::msg::WhiskerSignal;
+  ++stats_.received;
+  if (msg.whisker_id != WhiskerPressure::WHISKER_LEFT && msg.whisker_id != WhiskerPressure::WHISKER_RIGHT) {
+    ++stats_.dropped_wrong_whisker;
+    return std::nullopt;
+  }
+  if (whisker_id_ >= 0 && msg.whisker_id != whisker_id_) {
+    ++stats_.dropped_wrong_whisker;
+    return std::nullopt;
+  }
+  for (double p : msg.pressure) {
+    if (!std::isfinite(p)) {
+      ++stats_.dropped_nonfinite;  // never enters the filter state
+      return std::nullopt;
+    }
+  }
+  const int64_t stamp = tactile_common::from_stamp(msg.header.stamp);
+  if (have_last_ && stamp <= last_stamp_ns_) {
+    ++stats_.dropped_out_of_order;
+    return std::nullopt;
+  }
+  if (have_last_) {
+    if (tactile_common::to_seconds(stamp - last_stamp_ns_) > params_.max_sample_gap_s) {
+      whisker_.reset();  // the window and the extrapolated drift are stale
+      ++stats_.resets_on_gap;
+    }
+    if (msg.sequence != static_cast<uint32_t>(last_sequence_ + 1u)) ++stats_.sequence_gaps;
+  }
+  whisker_id_ = msg.whisker_id;
+  have_last_ = true;
+  last_stamp_ns_ = stamp;
+  last_sequence_ = msg.sequence;
+
+  const WhiskerOutput o = whisker_.update(msg.pressure);
+  WhiskerSignal s;
+  s.header = msg.header;
+  s.whisker_id = msg.whisker_id;
+  switch (params_.tdorc.mode) {
+    case Mode::kTdorc: s.mode = WhiskerSignal::MODE_TDORC; break;
+    case Mode::kTdoc: s.mode = WhiskerSignal::MODE_TDOC; break;
+    case Mode::kBandpass: s.mode = WhiskerSignal::MODE_BANDPASS; break;
+  }
+  for (std::size_t i = 0; i < 3; ++i) {
+    s.raw[i] = o.channel[i].raw;
+    s.calibrated[i] = o.channel[i].calibrated;
+    s.compensated[i] = o.channel[i].compensated;
+    s.channel_contact[i] = o.channel[i].contact;
+    s.drift_slope[i] = o.channel[i].drift_slope;
+    s.drift_intercept[i] = o.channel[i].drift_intercept;
+  }
+  s.contact = o.contact;
+  s.calibrated_ready = o.ready;
+  s.drift_frozen = o.drift_frozen;
+  s.window_fill = static_cast<uint32_t>(o.window_fill);
+  ++stats_.published;
+  return s;
+}
+
+}  // namespace tdorc_filter
