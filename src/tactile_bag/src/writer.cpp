@@ -159,6 +159,12 @@ bool Writer::has_topic(const std::string& name) const {
   return topics_.count(name) != 0;
 }
 
+std::string Writer::topic_type(const std::string& name) const {
+  std::lock_guard<std::mutex> lk(mu_);
+  auto it = topics_.find(name);
+  return it == topics_.end() ? std::string() : it->second.info.type;
+}
+
 uint64_t Writer::message_count() const {
   std::lock_guard<std::mutex> lk(mu_);
   return count_;

@@ -109,6 +109,8 @@ class Writer {
   /// another type an error.
   void create_topic(const TopicInfo& topic);
   bool has_topic(const std::string& name) const;
+  /// Type of a created topic; empty if the topic does not exist.
+  std::string topic_type(const std::string& name) const;
 
   void write(const std::string& topic, int64_t timestamp_ns, const uint8_t* data, size_t size);
   void write(const std::string& topic, int64_t timestamp_ns, const std::vector<uint8_t>& data) {
