@@ -148,8 +148,13 @@ void ParamMap::set(const std::string& key, ParamValue value) { values_[key] = st
 
 bool ParamMap::has(const std::string& key) const { return values_.count(key) != 0; }
 
+const std::string& ParamMap::origin(const std::string& key) const {
+  auto it = origin_.find(key);
+  return it == origin_.end() ? source_ : it->second;
+}
+
 ParamError ParamMap::error(const std::string& key, const std::string& reason) const {
-  return ParamError(source_ + ": " + node_ + ".ros__parameters." + key + ": " + reason);
+  return ParamError(origin(key) + ": " + node_ + ".ros__parameters." + key + ": " + reason);
 }
 
 const ParamValue& ParamMap::at(const std::string& key) const {
@@ -228,14 +233,15 @@ void ParamMap::merge_from(const ParamMap& other) {
     if (empty_array && declared_array) {
       it->second = std::visit([](const auto& d) -> ParamValue { return std::decay_t<decltype(d)>{}; },
                               it->second);
+      origin_[key] = other.source();
       continue;
     }
     if (!compatible(it->second, value)) {
       throw other.error(key, "expected " + type_name(it->second) + ", got " + type_name(value));
     }
     it->second = coerce(it->second, value);
+    origin_[key] = other.source();
   }
-  source_ = other.source();
 }
 
 ParamMap load_node_parameters_from_string(const std::string& yaml, const std::string& source,

@@ -111,6 +111,18 @@ TEST(Parameters, ErrorHelperFormatsLikeLoader) {
                "cfg.yaml: tdorc_filter.ros__parameters.window: must be >= 2, got 1");
 }
 
+TEST(Parameters, ErrorsNameTheOriginOfEachKey) {
+  auto p = load_node_parameters_from_string("tdorc_filter:\n  ros__parameters:\n    window: 1\n",
+                                            "file.yaml", "tdorc_filter", defaults());
+  ParamMap launch("tdorc_filter", "launch overrides");
+  launch.set("mode", std::string("tdoc"));
+  p.merge_from(launch);
+  EXPECT_EQ(p.origin("window"), "file.yaml");
+  EXPECT_EQ(p.origin("mode"), "launch overrides");
+  EXPECT_NE(std::string(p.error("window", "bad").what()).find("file.yaml:"), std::string::npos);
+  EXPECT_NE(std::string(p.error("mode", "bad").what()).find("launch overrides:"), std::string::npos);
+}
+
 TEST(Time, StampRoundTrip) {
   Stamp s;
   tactile_common::to_stamp(3'250'000'001LL, s);

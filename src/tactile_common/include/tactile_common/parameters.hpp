@@ -55,14 +55,18 @@ class ParamMap {
   std::vector<std::string> get_string_array(const std::string& key) const;
 
   /// A ParamError for `key` with `reason`, formatted like every other
-  /// parameter error: "<source>: <node>.ros__parameters.<key>: <reason>".
+  /// parameter error: "<source>: <node>.ros__parameters.<key>: <reason>",
+  /// where <source> is where this key's value came from (the file that set
+  /// it, or the map's own source for defaults).
   /// Node logic uses it when a value has the right type but is invalid.
   ParamError error(const std::string& key, const std::string& reason) const;
 
   /// Overlays `other` onto this map: keys of `other` must exist here (unknown
   /// keys are typos) and have a compatible type; the source of each error is
-  /// other.source().
+  /// other.source(). Each overlaid key remembers other.source() as its origin.
   void merge_from(const ParamMap& other);
+  /// Where the value of `key` came from.
+  const std::string& origin(const std::string& key) const;
 
  private:
   const ParamValue& at(const std::string& key) const;
@@ -71,6 +75,7 @@ class ParamMap {
   std::string node_;
   std::string source_ = "defaults";
   std::map<std::string, ParamValue> values_;
+  std::map<std::string, std::string> origin_;  ///< keys set by merge_from
 };
 
 /// Reads the parameters of `node_name` from a ROS 2 parameter file:
