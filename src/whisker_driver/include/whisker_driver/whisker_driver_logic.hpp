@@ -1,0 +1,88 @@
+// Node logic of the whisker driver: one instance per whisker (namespaced
+// whisker/left or whisker/right), publishing tactile_msgs/WhiskerPressure on
+// the relative topic "pressure" at rate_hz (50 Hz, paper 000: whisker deck at
+// 50 Hz). No ROS; the rclcpp component and the standalone host call on_timer().
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "tactile_common/parameters.hpp"
+#include "tactile_msgs/msg/whisker_pressure.hpp"
+#include "whisker_driver/frame_parser.hpp"
+#include "whisker_driver/sources.hpp"
+
+namespace whisker_driver {
+
+struct WhiskerDriverParams {
+  std::string source = "sim";          ///< "serial" | "sim" | "bag"
+  std::string device = "/dev/ttyUSB0"; ///< serial device of the whisker deck
+  int64_t baud = 115200;               ///< 000 hardware: UART link of the whisker deck
+  std::string protocol = "text";       ///< "text" (whisker 1) | "csv" (whisker 2)
+  int64_t whisker_id = 0;              ///< WhiskerPressure::WHISKER_LEFT (0) or WHISKER_RIGHT (1)
+  std::string frame_id = "whisker_left";
+  double rate_hz = 50.0;               ///< 000: whiskers sampled and processed at 50 Hz
+  // Simulated source (tactile_sim::WhiskerBarometerModel, 000 eq. 1).
+  int64_t sim_seed = 1;
+  double sim_takeoff_s = 2.0;
+  double sim_hover_s = 90.0;
+  std::vector<double> sim_contact_start_s = {40.0};
+  std::vector<double> sim_contact_duration_s = {2.0};
+  std::vector<double> sim_contact_peak_nm = {2e-4};
+  // Bag source.
+  std::string bag_path;
+  std::string bag_topic = "/whisker/left/pressure";
+
+  /// Throws std::invalid_argument naming the field and the reason.
+  void validate() const;
+};
+
+class WhiskerDriverLogic {
+ public:
+  using Params = WhiskerDriverParams;
+  using WhiskerPressure = tactile_msgs::msg::WhiskerPressure;
+
+  /// Relative output topic; the node runs in namespace whisker/left or whisker/right.
+  static constexpr const char* kOutputTopic = "pressure";
+  static constexpr const char* kNodeName = "whisker_driver";
+
+  struct Outputs {
+    std::vector<WhiskerPressure> pressure;  ///< in order, zero or more per tick
+  };
+
+  struct Stats {
+    ParseStats parse;             ///< serial parser counters (zeros for sim/bag)
+    uint64_t published = 0;       ///< messages returned by on_timer
+    uint64_t source_errors = 0;   ///< serial disconnects / failed reopens, bag decode errors
+    uint64_t sequence_gaps = 0;   ///< samples missing according to the sequence counter
+  };
+
+  static tactile_common::ParamMap default_parameters();
+  /// Reads and validates; errors name the source file and the parameter.
+  static Params params_from(const tactile_common::ParamMap& map);
+
+  /// Builds the source named by params.source (opens the serial port or the
+  /// bag: throws SerialError / std::runtime_error naming the device or path).
+  explicit WhiskerDriverLogic(const Params& params);
+  /// With an explicit source (tests, standalone host).
+  WhiskerDriverLogic(const Params& params, std::unique_ptr<WhiskerSource> source);
+
+  Outputs on_timer(int64_t now_ns);
+
+  Stats stats() const;
+  const Params& params() const { return params_; }
+  /// Timer period from rate_hz [ns].
+  int64_t period_ns() const;
+  bool finished() const { return source_->finished(); }
+
+ private:
+  Params params_;
+  std::unique_ptr<WhiskerSource> source_;
+  Stats stats_;
+  bool have_last_seq_ = false;
+  uint32_t last_seq_ = 0;
+};
+
+}  // namespace whisker_driver

@@ -1,0 +1,171 @@
+#include "whisker_driver/whisker_driver_logic.hpp"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "whisker_driver/serial_port.hpp"
+#ifdef WHISKER_DRIVER_WITH_BAG
+#include "whisker_driver/bag_source.hpp"
+#endif
+
+namespace whisker_driver {
+namespace {
+[[noreturn]] void bad(const std::string& field, const std::string& reason) {
+  throw std::invalid_argument("WhiskerDriverParams." + field + ": " + reason);
+}
+}  // namespace
+
+void WhiskerDriverParams::validate() const {
+  if (source != "serial" && source != "sim" && source != "bag")
+    bad("source", "must be \"serial\", \"sim\" or \"bag\", got \"" + source + "\"");
+  if (protocol != "text" && protocol != "csv")
+    bad("protocol", "must be \"text\" or \"csv\", got \"" + protocol + "\"");
+  if (whisker_id != 0 && whisker_id != 1)
+    bad("whisker_id", "must be 0 (WHISKER_LEFT) or 1 (WHISKER_RIGHT), got " + std::to_string(whisker_id));
+  if (!(rate_hz > 0.0 && rate_hz <= 1000.0))
+    bad("rate_hz", "must be in (0, 1000], got " + std::to_string(rate_hz));
+  if (source == "serial" && device.empty()) bad("device", "must not be empty for source \"serial\"");
+  if (baud <= 0) bad("baud", "must be > 0, got " + std::to_string(baud));
+  if (!(sim_takeoff_s >= 0.0) || !std::isfinite(sim_takeoff_s))
+    bad("sim_takeoff_s", "must be >= 0, got " + std::to_string(sim_takeoff_s));
+  if (!(sim_hover_s >= 0.0) || !std::isfinite(sim_hover_s))
+    bad("sim_hover_s", "must be >= 0, got " + std::to_string(sim_hover_s));
+  if (sim_contact_duration_s.size() != sim_contact_start_s.size() ||
+      sim_contact_peak_nm.size() != sim_contact_start_s.size())
+    bad("sim_contact_start_s", "sim_contact_start_s, sim_contact_duration_s and sim_contact_peak_nm "
+                               "must have the same length");
+  for (size_t i = 0; i < sim_contact_start_s.size(); ++i) {
+    if (!std::isfinite(sim_contact_start_s[i]) || sim_contact_start_s[i] < 0.0)
+      bad("sim_contact_start_s", "entries must be finite and >= 0");
+    if (!std::isfinite(sim_contact_duration_s[i]) || sim_contact_duration_s[i] < 0.0)
+      bad("sim_contact_duration_s", "entries must be finite and >= 0");
+    if (!std::isfinite(sim_contact_peak_nm[i]) || sim_contact_peak_nm[i] < 0.0)
+      bad("sim_contact_peak_nm", "entries must be finite and >= 0");
+  }
+  if (source == "bag" && bag_path.empty()) bad("bag_path", "must not be empty for source \"bag\"");
+  if (source == "bag" && bag_topic.empty()) bad("bag_topic", "must not be empty for source \"bag\"");
+}
+
+tactile_common::ParamMap WhiskerDriverLogic::default_parameters() {
+  const Params d;
+  tactile_common::ParamMap m(kNodeName, "defaults");
+  m.set("source", d.source);
+  m.set("device", d.device);
+  m.set("baud", d.baud);
+  m.set("protocol", d.protocol);
+  m.set("whisker_id", d.whisker_id);
+  m.set("frame_id", d.frame_id);
+  m.set("rate_hz", d.rate_hz);
+  m.set("sim_seed", d.sim_seed);
+  m.set("sim_takeoff_s", d.sim_takeoff_s);
+  m.set("sim_hover_s", d.sim_hover_s);
+  m.set("sim_contact_start_s", d.sim_contact_start_s);
+  m.set("sim_contact_duration_s", d.sim_contact_duration_s);
+  m.set("sim_contact_peak_nm", d.sim_contact_peak_nm);
+  m.set("bag_path", d.bag_path);
+  m.set("bag_topic", d.bag_topic);
+  return m;
+}
+
+WhiskerDriverParams WhiskerDriverLogic::params_from(const tactile_common::ParamMap& m) {
+  Params p;
+  p.source = m.get_string("source");
+  p.device = m.get_string("device");
+  p.baud = m.get_int("baud");
+  p.protocol = m.get_string("protocol");
+  p.whisker_id = m.get_int("whisker_id");
+  p.frame_id = m.get_string("frame_id");
+  p.rate_hz = m.get_double("rate_hz");
+  p.sim_seed = m.get_int("sim_seed");
+  p.sim_takeoff_s = m.get_double("sim_takeoff_s");
+  p.sim_hover_s = m.get_double("sim_hover_s");
+  p.sim_contact_start_s = m.get_double_array("sim_contact_start_s");
+  p.sim_contact_duration_s = m.get_double_array("sim_contact_duration_s");
+  p.sim_contact_peak_nm = m.get_double_array("sim_contact_peak_nm");
+  p.bag_path = m.get_string("bag_path");
+  p.bag_topic = m.get_string("bag_topic");
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    // "WhiskerDriverParams.<key>: <reason>" -> ParamError naming file and key.
+    std::string what = e.what();
+    const std::string prefix = "WhiskerDriverParams.";
+    std::string key = "?", reason = what;
+    if (what.rfind(prefix, 0) == 0) {
+      const size_t colon = what.find(": ", prefix.size());
+      if (colon != std::string::npos) {
+        key = what.substr(prefix.size(), colon - prefix.size());
+        reason = what.substr(colon + 2);
+      }
+    }
+    throw m.error(key, reason);
+  }
+  return p;
+}
+
+namespace {
+std::unique_ptr<WhiskerSource> make_source(const WhiskerDriverParams& p) {
+  p.validate();
+  SampleIdentity id{static_cast<uint8_t>(p.whisker_id), p.frame_id};
+  const auto period_ns = static_cast<int64_t>(std::llround(1e9 / p.rate_hz));
+  if (p.source == "serial") {
+    SerialPort port(p.device, static_cast<int>(p.baud));
+    return std::make_unique<SerialSource>(std::move(port), protocol_from_string(p.protocol), id,
+                                          period_ns, static_cast<int>(p.baud));
+  }
+  if (p.source == "sim") {
+    SimScenario sc;
+    sc.takeoff_s = p.sim_takeoff_s;
+    sc.hover_s = p.sim_hover_s;
+    for (size_t i = 0; i < p.sim_contact_start_s.size(); ++i) {
+      sc.contacts.push_back({p.sim_contact_start_s[i], p.sim_contact_duration_s[i], p.sim_contact_peak_nm[i]});
+    }
+    return std::make_unique<SimSource>(tactile_sim::WhiskerBarometerParams{},
+                                       static_cast<uint64_t>(p.sim_seed), sc, id, p.rate_hz);
+  }
+#ifdef WHISKER_DRIVER_WITH_BAG
+  return std::make_unique<BagSource>(p.bag_path, p.bag_topic);
+#else
+  throw std::runtime_error("whisker_driver: source \"bag\" is not available (built without tactile_bag)");
+#endif
+}
+}  // namespace
+
+WhiskerDriverLogic::WhiskerDriverLogic(const Params& params)
+    : WhiskerDriverLogic(params, make_source(params)) {}
+
+WhiskerDriverLogic::WhiskerDriverLogic(const Params& params, std::unique_ptr<WhiskerSource> source)
+    : params_(params), source_(std::move(source)) {
+  params_.validate();
+  if (!source_) throw std::invalid_argument("WhiskerDriverLogic: source must not be null");
+}
+
+int64_t WhiskerDriverLogic::period_ns() const {
+  return static_cast<int64_t>(std::llround(1e9 / params_.rate_hz));
+}
+
+WhiskerDriverLogic::Outputs WhiskerDriverLogic::on_timer(int64_t now_ns) {
+  Outputs out;
+  source_->poll(now_ns, out.pressure);
+  for (const auto& m : out.pressure) {
+    if (have_last_seq_) {
+      const uint32_t expected = last_seq_ + 1u;
+      const uint32_t gap = m.sequence - expected;  // modulo 2^32
+      if (gap != 0 && gap < 0x80000000u) stats_.sequence_gaps += gap;  // ignore restarts
+    }
+    have_last_seq_ = true;
+    last_seq_ = m.sequence;
+  }
+  stats_.published += out.pressure.size();
+  return out;
+}
+
+WhiskerDriverLogic::Stats WhiskerDriverLogic::stats() const {
+  Stats s = stats_;
+  s.parse = source_->parse_stats();
+  s.source_errors = source_->errors();
+  return s;
+}
+
+}  // namespace whisker_driver

@@ -1,0 +1,202 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "tactile_common/parameters.hpp"
+#include "tactile_common/time.hpp"
+#include "whisker_driver/sources.hpp"
+#include "whisker_driver/whisker_driver_logic.hpp"
+#ifdef WHISKER_DRIVER_WITH_BAG
+#include "tactile_bag/bag.hpp"
+#include "tactile_bag/typed.hpp"
+#include "whisker_driver/bag_source.hpp"
+#endif
+
+using namespace whisker_driver;
+using tactile_common::from_stamp;
+
+namespace {
+WhiskerDriverParams sim_params() {
+  WhiskerDriverParams p;
+  p.source = "sim";
+  p.sim_seed = 5;
+  p.sim_takeoff_s = 1.0;
+  p.sim_hover_s = 30.0;
+  p.sim_contact_start_s = {10.0};
+  p.sim_contact_duration_s = {2.0};
+  p.sim_contact_peak_nm = {2e-4};
+  return p;
+}
+
+std::vector<WhiskerPressure> run(WhiskerDriverLogic& logic, int64_t t0, int ticks, int64_t period,
+                                 int64_t jitter = 0) {
+  std::vector<WhiskerPressure> all;
+  for (int k = 0; k < ticks; ++k) {
+    // Timer ticks a little late on odd ticks: the stamps must not care.
+    const int64_t now = t0 + k * period + ((k % 2) ? jitter : 0);
+    for (auto& m : logic.on_timer(now).pressure) all.push_back(m);
+  }
+  return all;
+}
+}  // namespace
+
+TEST(WhiskerDriverLogic, DefaultParametersRoundTrip) {
+  const auto defaults = WhiskerDriverLogic::default_parameters();
+  const auto p = WhiskerDriverLogic::params_from(defaults);
+  const WhiskerDriverParams d;
+  EXPECT_EQ(p.source, d.source);
+  EXPECT_EQ(p.protocol, "text");
+  EXPECT_DOUBLE_EQ(p.rate_hz, 50.0);
+  EXPECT_EQ(p.sim_contact_peak_nm, d.sim_contact_peak_nm);
+  EXPECT_STREQ(WhiskerDriverLogic::kOutputTopic, "pressure");
+}
+
+TEST(WhiskerDriverLogic, BadParametersNameTheKey) {
+  auto m = WhiskerDriverLogic::default_parameters();
+  m.set("source", std::string("usb"));
+  try {
+    WhiskerDriverLogic::params_from(m);
+    FAIL();
+  } catch (const tactile_common::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("source"), std::string::npos) << e.what();
+  }
+  m = WhiskerDriverLogic::default_parameters();
+  m.set("sim_contact_peak_nm", std::vector<double>{1e-4, 2e-4});
+  EXPECT_THROW(WhiskerDriverLogic::params_from(m), tactile_common::ParamError);
+  m = WhiskerDriverLogic::default_parameters();
+  m.set("whisker_id", int64_t{2});
+  EXPECT_THROW(WhiskerDriverLogic::params_from(m), tactile_common::ParamError);
+  m = WhiskerDriverLogic::default_parameters();
+  m.set("rate_hz", 0.0);
+  EXPECT_THROW(WhiskerDriverLogic::params_from(m), tactile_common::ParamError);
+}
+
+TEST(WhiskerDriverLogic, ConfigFileLoads) {
+  // The repository's config/whisker_driver.yaml (tests run in the package directory).
+  // Every key must be known with the right type. Note: tactile_common's loader
+  // matches sections by node base name, so the namespaced sections
+  // (/whisker/left/..., /whisker/right/...) are both applied, in file order.
+  const std::string path = "../../config/whisker_driver.yaml";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "no " << path;
+  const auto m = tactile_common::load_node_parameters(path, "whisker_driver",
+                                                      WhiskerDriverLogic::default_parameters());
+  const auto p = WhiskerDriverLogic::params_from(m);
+  EXPECT_DOUBLE_EQ(p.rate_hz, 50.0);
+  EXPECT_EQ(p.baud, 115200);
+  EXPECT_EQ(p.source, "sim");
+}
+
+TEST(SimSource, FiftyHertzStampsAndDeterminism) {
+  const auto p = sim_params();
+  WhiskerDriverLogic a(p), b(p);
+  const int64_t t0 = 123456789;
+  const int64_t period = 20000000;
+  EXPECT_EQ(a.period_ns(), period);
+  const auto ma = run(a, t0, 1500, period, 7000000);
+  const auto mb = run(b, t0, 1500, period, 0);
+  // One sample per period, stamped exactly t0 + k * 20 ms regardless of jitter.
+  ASSERT_EQ(ma.size(), 1500u);
+  ASSERT_EQ(mb.size(), 1500u);
+  for (size_t k = 0; k < ma.size(); ++k) {
+    ASSERT_EQ(from_stamp(ma[k].header.stamp), t0 + static_cast<int64_t>(k) * period) << k;
+    ASSERT_EQ(ma[k].sequence, k);
+    for (int c = 0; c < 3; ++c) {
+      ASSERT_EQ(ma[k].pressure[c], mb[k].pressure[c]) << k;
+      ASSERT_EQ(ma[k].temperature[c], mb[k].temperature[c]) << k;
+      ASSERT_TRUE(std::isfinite(ma[k].pressure[c]));
+    }
+    EXPECT_EQ(ma[k].header.frame_id, "whisker_left");
+  }
+  EXPECT_EQ(a.stats().published, 1500u);
+  EXPECT_EQ(a.stats().sequence_gaps, 0u);
+  // Another seed gives another trace.
+  auto q = p;
+  q.sim_seed = 6;
+  WhiskerDriverLogic c(q);
+  const auto mc = run(c, t0, 10, period);
+  EXPECT_NE(mc[5].pressure[0], ma[5].pressure[0]);
+}
+
+TEST(SimSource, LateTimerCatchesUpWithExactStamps) {
+  WhiskerDriverLogic logic(sim_params());
+  auto out = logic.on_timer(0);
+  ASSERT_EQ(out.pressure.size(), 1u);  // sample 0 at t0
+  out = logic.on_timer(100000000);     // 100 ms later: samples 1..5
+  ASSERT_EQ(out.pressure.size(), 5u);
+  EXPECT_EQ(from_stamp(out.pressure.back().header.stamp), 100000000);
+  out = logic.on_timer(100000000);     // same time: nothing new
+  EXPECT_TRUE(out.pressure.empty());
+}
+
+TEST(SimSource, ScriptedContactShowsInThePressure) {
+  // Contact 10-12 s (half-sine, 2e-4 N m peak): channel 1 rises by about
+  // sensitivity * peak = 200 Pa at the top of the pulse (t = 11 s).
+  WhiskerDriverLogic logic(sim_params());
+  const auto m = run(logic, 0, 700, 20000000);
+  const double before = m[450].pressure[0];  // t = 9 s
+  const double peak = m[550].pressure[0];    // t = 11 s
+  const tactile_sim::WhiskerBarometerParams model;
+  EXPECT_NEAR(peak - before, model.sensitivity_pa_per_nm[0] * 2e-4, 40.0);
+  // Motors on after 1 s: the scenario's take-off cools the barometers.
+  EXPECT_LT(m[690].temperature[0], m[40].temperature[0] - 0.3);
+  SimScenario sc;
+  sc.contacts = {{10.0, 2.0, 2e-4}};
+  EXPECT_DOUBLE_EQ(sc.load(11.0), 2e-4);
+  EXPECT_DOUBLE_EQ(sc.load(9.99), 0.0);
+  EXPECT_NEAR(sc.load(10.5), 2e-4 * std::sqrt(0.5), 1e-12);
+}
+
+#ifdef WHISKER_DRIVER_WITH_BAG
+TEST(BagSource, ReplaysWhiskerPressurePacedByRecordedTime) {
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("whisker_driver_bag_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  {
+    tactile_bag::Writer w;
+    w.open(dir.string());
+    for (int k = 0; k < 10; ++k) {
+      WhiskerPressure m;
+      tactile_common::to_stamp(5000000000LL + k * 20000000LL, m.header.stamp);
+      m.header.frame_id = "whisker_left";
+      m.pressure = {100000.0 + k, 100001.0, 100002.0};
+      m.temperature = {25.0, 25.0, 25.0};
+      if (k == 4) m.pressure[1] = std::nan("");  // bad sample in the bag: dropped
+      m.sequence = static_cast<uint32_t>(k);
+      w.write("/whisker/left/pressure", 5000000000LL + k * 20000000LL, m);
+    }
+    w.close();
+  }
+  WhiskerDriverParams p;
+  p.source = "bag";
+  p.bag_path = dir.string();
+  p.bag_topic = "/whisker/left/pressure";
+  WhiskerDriverLogic logic(p);
+  auto out = logic.on_timer(0);
+  ASSERT_EQ(out.pressure.size(), 1u);
+  EXPECT_EQ(from_stamp(out.pressure[0].header.stamp), 5000000000LL);  // recorded stamp kept
+  out = logic.on_timer(50000000);  // 50 ms: recorded offsets 20, 40 ms
+  ASSERT_EQ(out.pressure.size(), 2u);
+  EXPECT_DOUBLE_EQ(out.pressure[1].pressure[0], 100002.0);
+  out = logic.on_timer(1000000000);
+  EXPECT_EQ(out.pressure.size(), 6u);  // 3..9 without the NaN one
+  EXPECT_TRUE(logic.finished());
+  EXPECT_EQ(logic.stats().source_errors, 1u);
+  EXPECT_EQ(logic.stats().sequence_gaps, 1u);
+
+  p.bag_topic = "/whisker/right/pressure";
+  try {
+    WhiskerDriverLogic bad(p);
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("/whisker/right/pressure"), std::string::npos);
+  }
+  std::filesystem::remove_all(dir);
+}
+#endif
