@@ -50,6 +50,7 @@ void WhiskerBarometerParams::validate() const {
     bad("board_temperature_c", "must be within -40..85 degC (BMP390 range)", board_temperature_c);
   require_positive("cooling_tau_s", cooling_tau_s);
   require_positive("rewarming_tau_s", rewarming_tau_s);
+  require_positive("package_tau_s", package_tau_s);
   require_finite("heating_delta_c", heating_delta_c);
   require_positive("heating_tau_s", heating_tau_s);
   require_non_negative("airflow_sigma_c", airflow_sigma_c);
@@ -77,7 +78,8 @@ WhiskerBarometerModel::WhiskerBarometerModel(const Params& params, uint64_t seed
     : p_(params), rng_(seed) {
   p_.validate();
   p_.seed = seed;
-  temp_.fill(p_.board_temperature_c);  // at rest, in thermal equilibrium
+  package_.fill(p_.board_temperature_c);  // at rest, in thermal equilibrium
+  temp_.fill(p_.board_temperature_c);
 }
 
 WhiskerBarometerModel::Sample WhiskerBarometerModel::step(double dt, double load, bool motors_on) {
@@ -87,10 +89,12 @@ WhiskerBarometerModel::Sample WhiskerBarometerModel::step(double dt, double load
   if (!std::isfinite(load)) load = prev_load_;  // keep the last valid load
 
   // --- N_td: temperature (000 eq. 1, temperature drift term) --------------
-  // First-order approach to the cooled temperature while the propellers blow
-  // (tau = cooling_tau_s), back to the board temperature at rest.
+  // The propeller airflow cools the package surface (lag package_tau_s) and the
+  // die follows the package (cooling_tau_s); at rest both relax back to the
+  // board temperature (re-warming time constant for the die).
   const double tau_t = motors_on ? p_.cooling_tau_s : p_.rewarming_tau_s;
   const double k_t = 1.0 - std::exp(-dt / tau_t);
+  const double k_p = 1.0 - std::exp(-dt / p_.package_tau_s);
   // Slow deck heating while flying, decays back at rest with the same tau.
   const double k_h = 1.0 - std::exp(-dt / p_.heating_tau_s);
   heating_ += ((motors_on ? p_.heating_delta_c : 0.0) - heating_) * k_h;
@@ -131,8 +135,9 @@ WhiskerBarometerModel::Sample WhiskerBarometerModel::step(double dt, double load
   const double noise_sigma = std::sqrt(p_.measurement_noise_pa * p_.measurement_noise_pa +
                                        (motors_on ? p_.vibration_noise_pa * p_.vibration_noise_pa : 0.0));
   for (int i = 0; i < 3; ++i) {
-    temp_[i] += ((motors_on ? p_.board_temperature_c - p_.cooling_delta_c[i] : p_.board_temperature_c) -
-                 temp_[i]) * k_t;
+    package_[i] += ((motors_on ? p_.board_temperature_c - p_.cooling_delta_c[i] : p_.board_temperature_c) -
+                    package_[i]) * k_p;
+    temp_[i] += (package_[i] - temp_[i]) * k_t;
     airflow_[i] = a_ou * airflow_[i] + s_ou * gauss();
     walk_[i] += s_rw * gauss();
     const double temperature = temp_[i] + heating_ + airflow_[i];

@@ -79,7 +79,10 @@ def free_flight(d):
     return idx[0], idx[-1] + 1
 
 
-def test_false_positive_rates_order_as_in_the_paper():
+@pytest.mark.parametrize("signed", [True, False])
+def test_false_positive_rates_order_as_in_the_paper(signed):
+    """signed: a false positive is S_p > 20 (the paper's S_p^up > T);
+    otherwise |S_p| > 20. The model's drift rises, so both agree."""
     rates = {"bp": [], "tdoc": [], "tdorc": []}
     for seed in range(1, 7):
         d = trace(seed)
@@ -87,13 +90,14 @@ def test_false_positive_rates_order_as_in_the_paper():
         outs = [pipelines(d[ch], i0, i1) for ch in ("p1", "p2", "p3")]
         for j, name in enumerate(("bp", "tdoc", "tdorc")):
             y = np.concatenate([o[j] for o in outs])
-            rates[name].append(100.0 * np.mean(np.abs(y) > THRESHOLD))
+            fp = y > THRESHOLD if signed else np.abs(y) > THRESHOLD
+            rates[name].append(100.0 * np.mean(fp))
     bp, tdoc, tdorc = (float(np.mean(rates[k])) for k in ("bp", "tdoc", "tdorc"))
     print(f"FPR band-pass {bp:.1f} %, TDOC {tdoc:.1f} %, TDORC {tdorc:.2f} %")
-    assert 25.0 < bp < 50.0          # paper 38.24 %
-    assert 4.0 < tdoc < 22.0         # paper 12.23 %
+    assert 30.0 < bp < 46.0          # paper 38.24 %
+    assert 6.0 < tdoc < 18.0         # paper 12.23 %
     assert tdorc < 0.5               # paper 0 %
-    assert bp > tdoc + 10.0 and tdoc > tdorc + 3.0
+    assert bp > tdoc + 15.0 and tdoc > tdorc + 5.0
 
 
 def test_contact_detected_after_tdorc():

@@ -39,6 +39,7 @@ int main(int argc, char** argv) {
       const double v = std::atof(kv.c_str() + eq + 1);
       auto& p = params;
       if (k == "cooling_tau_s") p.cooling_tau_s = v;
+      else if (k == "package_tau_s") p.package_tau_s = v;
       else if (k == "cooling_scale") for (auto& c : p.cooling_delta_c) c *= v;
       else if (k == "coeff_scale") for (auto& c : p.temp_coeff_pa_per_c) c *= v;
       else if (k == "heating_delta_c") p.heating_delta_c = v;
