@@ -1,0 +1,79 @@
+// The standalone host: node logic objects composed in one process on the
+// deterministic Executor, wired by the Bus, configured from the same
+// `ros__parameters` YAML files the launch files hand to the rclcpp components.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "tactile_bag/bag.hpp"
+#include "tactile_cli/executor.hpp"
+#include "tactile_common/parameters.hpp"
+
+namespace tactile_cli {
+
+/// Records every message published on the bus into a rosbag2 bag, creating
+/// each topic (type + definition) on its first message.
+class BagRecorder : public BusTap {
+ public:
+  explicit BagRecorder(const std::string& dir);
+  void on_message(const std::string& topic, const std::string& type_name,
+                  const std::string& definition, int64_t stamp_ns,
+                  const std::function<std::vector<uint8_t>()>& serialize) override;
+  void close() { writer_.close(); }
+  uint64_t message_count() const { return writer_.message_count(); }
+
+ private:
+  tactile_bag::Writer writer_;
+};
+
+/// A summary line of one node instance's counters, for metrics and logs.
+struct NodeReport {
+  std::string name;  ///< fully qualified, e.g. "/whisker/left/tdorc_filter"
+  std::vector<std::pair<std::string, uint64_t>> counters;
+};
+
+class Host {
+ public:
+  /// @param config_dir directory holding <node>.yaml parameter files; a node
+  ///        without a file runs with its defaults.
+  explicit Host(std::string config_dir);
+
+  Bus& bus() { return bus_; }
+  Executor& executor() { return executor_; }
+  const std::string& config_dir() const { return config_dir_; }
+
+  /// Parameters of `node_name`: defaults <- config/<node_name>.yaml <- overrides
+  /// (like a launch file's per-node parameter dict). Errors name the file, key, reason.
+  tactile_common::ParamMap load_parameters(const std::string& node_name,
+                                           const tactile_common::ParamMap& defaults,
+                                           const tactile_common::ParamMap& overrides) const;
+
+  /// Keeps an object alive for the lifetime of the host.
+  template <class T>
+  T* keep(std::shared_ptr<T> object) {
+    T* raw = object.get();
+    objects_.push_back(std::move(object));
+    return raw;
+  }
+
+  /// Registers a function reporting a node's counters.
+  void add_reporter(std::function<NodeReport()> reporter) { reporters_.push_back(std::move(reporter)); }
+  std::vector<NodeReport> reports() const;
+
+ private:
+  std::string config_dir_;
+  Bus bus_;
+  Executor executor_;
+  std::vector<std::shared_ptr<void>> objects_;
+  std::vector<std::function<NodeReport()>> reporters_;
+};
+
+/// Overrides for a node, like the parameter dicts of a launch file.
+tactile_common::ParamMap overrides(
+    std::initializer_list<std::pair<const char*, tactile_common::ParamValue>> values);
+
+}  // namespace tactile_cli

@@ -1,0 +1,23 @@
+// Node instances in the standalone host, one function per node, each the
+// counterpart of that node's rclcpp component: same node name, namespace,
+// topics (the logic's constants), parameters (config/<node>.yaml + overrides).
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include "tactile_cli/host.hpp"
+#include "tdorc_filter/tdorc_filter_logic.hpp"
+#include "whisker_driver/whisker_driver_logic.hpp"
+
+namespace tactile_cli {
+
+/// whisker_driver in namespace `ns`: a timer at rate_hz publishing on <ns>/pressure.
+std::shared_ptr<whisker_driver::WhiskerDriverLogic> add_whisker_driver(
+    Host& host, const std::string& ns, const tactile_common::ParamMap& overrides);
+
+/// tdorc_filter in namespace `ns`: <ns>/pressure -> <ns>/signal.
+std::shared_ptr<tdorc_filter::TdorcFilterLogic> add_tdorc_filter(
+    Host& host, const std::string& ns, const tactile_common::ParamMap& overrides);
+
+}  // namespace tactile_cli

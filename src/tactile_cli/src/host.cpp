@@ -1,0 +1,52 @@
+#include "tactile_cli/host.hpp"
+
+#include <filesystem>
+
+#include "tactile_bag/typed.hpp"
+
+namespace tactile_cli {
+
+BagRecorder::BagRecorder(const std::string& dir) { writer_.open(dir); }
+
+void BagRecorder::on_message(const std::string& topic, const std::string& type_name,
+                             const std::string& definition, int64_t stamp_ns,
+                             const std::function<std::vector<uint8_t>()>& serialize) {
+  if (!writer_.has_topic(topic)) {
+    tactile_bag::TopicInfo info;
+    info.name = topic;
+    info.type = type_name;
+    info.type_definition = definition;
+    writer_.create_topic(info);
+  }
+  writer_.write(topic, stamp_ns, serialize());
+}
+
+Host::Host(std::string config_dir) : config_dir_(std::move(config_dir)) {}
+
+tactile_common::ParamMap Host::load_parameters(const std::string& node_name,
+                                               const tactile_common::ParamMap& defaults,
+                                               const tactile_common::ParamMap& over) const {
+  const std::string path = (std::filesystem::path(config_dir_) / (node_name + ".yaml")).string();
+  tactile_common::ParamMap params = std::filesystem::exists(path)
+                                        ? tactile_common::load_node_parameters(path, node_name, defaults)
+                                        : defaults;
+  tactile_common::ParamMap o(node_name, "overrides of " + node_name + " in the standalone host");
+  for (const auto& [k, v] : over.values()) o.set(k, v);
+  params.merge_from(o);
+  return params;
+}
+
+std::vector<NodeReport> Host::reports() const {
+  std::vector<NodeReport> out;
+  for (const auto& r : reporters_) out.push_back(r());
+  return out;
+}
+
+tactile_common::ParamMap overrides(
+    std::initializer_list<std::pair<const char*, tactile_common::ParamValue>> values) {
+  tactile_common::ParamMap m("", "overrides");
+  for (const auto& [k, v] : values) m.set(k, v);
+  return m;
+}
+
+}  // namespace tactile_cli

@@ -1,0 +1,79 @@
+// The `tactile` command: standalone host of the workspace's node logic.
+#include <CLI/CLI.hpp>
+
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <iostream>
+
+#include "tactile_cli/whisker_demo.hpp"
+#include "tactile_cli/whisker_replay.hpp"
+
+namespace {
+
+void check_config_dir(const std::string& dir) {
+  if (!std::filesystem::is_directory(dir)) {
+    throw std::runtime_error(dir + ": configuration directory not found (pass --config DIR, e.g. the "
+                                   "repository's config/)");
+  }
+}
+
+void print_fpr(const nlohmann::json& m) {
+  std::printf("  FPR band-pass %.2f %%, TDOC %.2f %%, TDORC %.2f %%; contact detected: %s\n",
+              100.0 * m["fpr_bandpass"].get<double>(), 100.0 * m["fpr_tdoc"].get<double>(),
+              100.0 * m["fpr_tdorc"].get<double>(), m["contact_detected"].get<bool>() ? "yes" : "no");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"tactile: standalone host of the tactile flight workspace (no ROS needed)"};
+  app.require_subcommand(1);
+
+  std::string config_dir = "config";
+  app.add_option("--config", config_dir, "directory of the <node>.yaml parameter files")
+      ->capture_default_str();
+
+  tactile_cli::ReplayOptions replay;
+  auto* replay_cmd = app.add_subcommand(
+      "replay", "run whisker_driver -> tdorc_filter over a bag of raw whisker pressures");
+  replay_cmd->add_option("bag", replay.bag, "input rosbag2 directory")->required();
+  replay_cmd->add_option("--out", replay.out_dir, "output directory (bag/, metrics.json, signals.png)")
+      ->required();
+  replay_cmd->add_flag("!--no-png", replay.write_png, "do not draw signals.png");
+
+  tactile_cli::DemoOptions demo;
+  auto* demo_cmd = app.add_subcommand(
+      "demo", "whisker signal demo: simulate free flight and a contact, record bags, replay them");
+  demo_cmd->add_option("--out", demo.out_dir, "output directory")->required();
+  demo_cmd->add_option("--seed", demo.seed, "seed of the simulated barometers")->capture_default_str();
+  demo_cmd->add_option("--hover", demo.hover_s, "free-flight duration after take-off [s]")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+
+  CLI11_PARSE(app, argc, argv);
+
+  try {
+    check_config_dir(config_dir);
+    if (*replay_cmd) {
+      replay.config_dir = config_dir;
+      const auto m = tactile_cli::run_replay(replay);
+      std::printf("tactile replay: %s -> %s (%.0f messages/s)\n", replay.bag.c_str(),
+                  replay.out_dir.c_str(), m["messages_per_second"].get<double>());
+      print_fpr(m);
+    } else if (*demo_cmd) {
+      demo.config_dir = config_dir;
+      const auto summary = tactile_cli::run_whisker_demo(demo);
+      for (const auto& [name, m] : summary.items()) {
+        std::printf("%s:\n", name.c_str());
+        print_fpr(m);
+      }
+      std::printf("outputs in %s (summary.json, */metrics.json, */signals.png, */bag/)\n",
+                  demo.out_dir.c_str());
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "tactile: error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,90 @@
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "std_msgs/msg/header.hpp"
+#include "std_msgs/msg/float64.hpp"
+#include "tactile_cli/executor.hpp"
+
+using tactile_cli::Bus;
+using tactile_cli::Executor;
+using tactile_cli::resolve_topic;
+
+TEST(ResolveTopic, LikeRclcpp) {
+  EXPECT_EQ(resolve_topic("whisker/left", "pressure"), "/whisker/left/pressure");
+  EXPECT_EQ(resolve_topic("/whisker/left/", "pressure"), "/whisker/left/pressure");
+  EXPECT_EQ(resolve_topic("", "pressure"), "/pressure");
+  EXPECT_EQ(resolve_topic("whisker/left", "/abs"), "/abs");
+}
+
+TEST(Executor, TimersFireInDueOrderTiesByCreation) {
+  Executor ex;
+  std::vector<std::string> log;
+  ex.add_timer(20, [&](int64_t t) { log.push_back("a" + std::to_string(t)); });
+  ex.add_timer(30, [&](int64_t t) { log.push_back("b" + std::to_string(t)); });
+  ex.add_timer(60, [&](int64_t t) { log.push_back("c" + std::to_string(t)); }, 10);
+  ex.run_until(60);
+  const std::vector<std::string> want = {"a0", "b0", "c10", "a20", "b30", "a40", "a60", "b60"};
+  EXPECT_EQ(log, want);
+  EXPECT_EQ(ex.now_ns(), 60);
+}
+
+TEST(Executor, StopEndsRunAndRejectsBadPeriod) {
+  Executor ex;
+  int n = 0;
+  ex.add_timer(10, [&](int64_t) {
+    if (++n == 3) ex.stop();
+  });
+  ex.run_until(1000);
+  EXPECT_EQ(n, 3);
+  EXPECT_EQ(ex.now_ns(), 20);
+  EXPECT_THROW(ex.add_timer(0, [](int64_t) {}), std::invalid_argument);
+}
+
+TEST(Executor, StartsAtSetTime) {
+  Executor ex;
+  ex.set_time(5000);
+  std::vector<int64_t> at;
+  ex.add_timer(100, [&](int64_t t) { at.push_back(t); }, ex.now_ns());
+  ex.run_until(5250);
+  EXPECT_EQ(at, (std::vector<int64_t>{5000, 5100, 5200}));
+}
+
+namespace {
+struct CountingTap : tactile_cli::BusTap {
+  std::vector<std::string> seen;
+  void on_message(const std::string& topic, const std::string& type, const std::string& def, int64_t t,
+                  const std::function<std::vector<uint8_t>()>& ser) override {
+    seen.push_back(topic + " " + type + " " + std::to_string(t) + " " + std::to_string(ser().size()));
+    EXPECT_FALSE(def.empty());
+  }
+};
+}  // namespace
+
+TEST(Bus, DeliversInSubscriptionOrderAndTapsSerialize) {
+  Bus bus;
+  CountingTap tap;
+  bus.add_tap(&tap);
+  std::vector<std::string> order;
+  bus.subscribe<std_msgs::msg::Float64>("/x", [&](const std_msgs::msg::Float64& m) {
+    order.push_back("first " + std::to_string(m.data));
+  });
+  bus.subscribe<std_msgs::msg::Float64>("/x", [&](const std_msgs::msg::Float64&) { order.push_back("second"); });
+  std_msgs::msg::Float64 m;
+  m.data = 2.0;
+  bus.publish("/x", m, 7);
+  ASSERT_EQ(order.size(), 2u);
+  EXPECT_EQ(order[0].rfind("first 2.0", 0), 0u);
+  EXPECT_EQ(order[1], "second");
+  // 4-byte encapsulation header + 8-byte double.
+  ASSERT_EQ(tap.seen.size(), 1u);
+  EXPECT_EQ(tap.seen[0], "/x std_msgs/msg/Float64 7 12");
+  EXPECT_EQ(bus.published_counts().at("/x"), 1u);
+}
+
+TEST(Bus, OneTopicOneType) {
+  Bus bus;
+  bus.subscribe<std_msgs::msg::Float64>("/x", [](const std_msgs::msg::Float64&) {});
+  EXPECT_THROW(bus.publish("/x", std_msgs::msg::Header{}, 0), std::logic_error);
+}
