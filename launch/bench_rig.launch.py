@@ -7,7 +7,7 @@ Run by path on a ROS 2 machine after building the workspace with colcon:
 Whisker 1 (left) speaks the text protocol (P1:/P2:/P3:/T1:/T2:/T3: lines), whisker 2
 (right) the CSV protocol, both at 115200 baud. Parameters come from the same YAML files
 the standalone host reads (config/whisker_driver.yaml, config/tdorc_filter.yaml); the
-launch arguments override the device and protocol per whisker.
+launch arguments override the serial device per whisker.
 
 Topics: /whisker/{left,right}/pressure (tactile_msgs/WhiskerPressure),
         /whisker/{left,right}/signal   (tactile_msgs/WhiskerSignal).
@@ -24,7 +24,7 @@ from launch_ros.descriptions import ComposableNode
 CONFIG_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config')
 
 
-def whisker_nodes(side, whisker_id, device, protocol):
+def whisker_nodes(side, device):
     namespace = 'whisker/' + side
     return [
         ComposableNode(
@@ -34,8 +34,9 @@ def whisker_nodes(side, whisker_id, device, protocol):
             namespace=namespace,
             parameters=[
                 os.path.join(CONFIG_DIR, 'whisker_driver.yaml'),
-                {'source': 'serial', 'device': device, 'protocol': protocol,
-                 'whisker_id': whisker_id, 'frame_id': 'whisker_' + side},
+                # Protocol, whisker_id and frame_id come from the file's
+                # /whisker/<side>/whisker_driver section.
+                {'source': 'serial', 'device': device},
             ],
             extra_arguments=[{'use_intra_process_comms': True}],
         ),
@@ -59,8 +60,7 @@ def generate_launch_description():
         package='rclcpp_components',
         executable='component_container',
         composable_node_descriptions=(
-            whisker_nodes('left', 0, left_device, 'text')
-            + whisker_nodes('right', 1, right_device, 'csv')
+            whisker_nodes('left', left_device) + whisker_nodes('right', right_device)
         ),
         output='screen',
     )

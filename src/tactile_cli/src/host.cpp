@@ -23,12 +23,12 @@ void BagRecorder::on_message(const std::string& topic, const std::string& type_n
 
 Host::Host(std::string config_dir) : config_dir_(std::move(config_dir)) {}
 
-tactile_common::ParamMap Host::load_parameters(const std::string& node_name,
+tactile_common::ParamMap Host::load_parameters(const std::string& ns, const std::string& node_name,
                                                const tactile_common::ParamMap& defaults,
                                                const tactile_common::ParamMap& over) const {
   const std::string path = (std::filesystem::path(config_dir_) / (node_name + ".yaml")).string();
   tactile_common::ParamMap params = std::filesystem::exists(path)
-                                        ? tactile_common::load_node_parameters(path, node_name, defaults)
+                                        ? tactile_common::load_node_parameters(path, resolve_topic(ns, node_name), defaults)
                                         : defaults;
   tactile_common::ParamMap o(node_name, "overrides of " + node_name + " in the standalone host");
   for (const auto& [k, v] : over.values()) o.set(k, v);

@@ -7,7 +7,7 @@ namespace tactile_cli {
 std::shared_ptr<whisker_driver::WhiskerDriverLogic> add_whisker_driver(
     Host& host, const std::string& ns, const tactile_common::ParamMap& over) {
   using Logic = whisker_driver::WhiskerDriverLogic;
-  auto params = host.load_parameters(Logic::kNodeName, Logic::default_parameters(), over);
+  auto params = host.load_parameters(ns, Logic::kNodeName, Logic::default_parameters(), over);
   auto logic = std::make_shared<Logic>(Logic::params_from(params));
   const std::string out = resolve_topic(ns, Logic::kOutputTopic);
   Host* h = &host;
@@ -36,7 +36,7 @@ std::shared_ptr<whisker_driver::WhiskerDriverLogic> add_whisker_driver(
 std::shared_ptr<tdorc_filter::TdorcFilterLogic> add_tdorc_filter(
     Host& host, const std::string& ns, const tactile_common::ParamMap& over) {
   using Logic = tdorc_filter::TdorcFilterLogic;
-  auto params = host.load_parameters(Logic::kNodeName, Logic::default_parameters(), over);
+  auto params = host.load_parameters(ns, Logic::kNodeName, Logic::default_parameters(), over);
   auto logic = std::make_shared<Logic>(Logic::params_from(params));
   const std::string out = resolve_topic(ns, Logic::kOutputTopic);
   Host* h = &host;

@@ -21,20 +21,19 @@ void record_sim_whisker_bag(const std::string& bag_dir, const std::string& confi
   Host host(config_dir);
   BagRecorder recorder(bag_dir);
   host.bus().add_tap(&recorder);
-  const struct {
-    const char* ns;
-    int64_t id;
-    const char* frame;
-  } sides[2] = {{"whisker/left", 0, "whisker_left"}, {"whisker/right", 1, "whisker_right"}};
   double end_s = 0.0;
-  for (const auto& side : sides) {
+  int64_t side_index = 0;
+  for (const char* ns : {"whisker/left", "whisker/right"}) {
+    // whisker_id, frame_id come from the per-whisker sections of
+    // config/whisker_driver.yaml, as in the launch files.
     auto driver = add_whisker_driver(
-        host, side.ns,
+        host, ns,
         overrides({{"source", std::string("sim")},
-                   {"whisker_id", side.id},
-                   {"frame_id", std::string(side.frame)},
                    // Each whisker's barometers get their own noise stream.
-                   {"sim_seed", static_cast<int64_t>(seed * 2 + static_cast<uint64_t>(side.id))},
+                   {"sim_seed", static_cast<int64_t>(seed * 2) + side_index++},
+                   // The recording starts at take-off, like the paper's
+                   // free-flight logs (TDOC then fits right after take-off).
+                   {"sim_takeoff_s", 0.0},
                    {"sim_hover_s", hover_s},
                    {"sim_contact_start_s", contact_start_s},
                    {"sim_contact_duration_s", contact_duration_s},
@@ -48,14 +47,15 @@ void record_sim_whisker_bag(const std::string& bag_dir, const std::string& confi
       scenario.contacts.push_back(
           {p.sim_contact_start_s[i], p.sim_contact_duration_s[i], p.sim_contact_peak_nm[i]});
     }
-    end_s = std::max(end_s, p.sim_takeoff_s + p.sim_hover_s + 2.0);
-    const std::string topic = resolve_topic("/ground_truth", std::string(side.ns) + "/contact");
+    end_s = std::max(end_s, p.sim_takeoff_s + p.sim_hover_s);
+    const std::string topic = resolve_topic("/ground_truth", std::string(ns) + "/contact");
     Host* h = &host;
-    const uint8_t id = static_cast<uint8_t>(side.id);
-    host.executor().add_timer(driver->period_ns(), [h, scenario, topic, id](int64_t now_ns) {
+    const uint8_t id = static_cast<uint8_t>(p.whisker_id);
+    const std::string frame = p.frame_id;
+    host.executor().add_timer(driver->period_ns(), [h, scenario, topic, id, frame](int64_t now_ns) {
       tactile_msgs::msg::WhiskerGroundTruth gt;
       tactile_common::to_stamp(now_ns, gt.header.stamp);
-      gt.header.frame_id = id == 0 ? "whisker_left" : "whisker_right";
+      gt.header.frame_id = frame;
       gt.whisker_id = id;
       const double t = tactile_common::to_seconds(now_ns);
       gt.load = scenario.load(t);
@@ -65,7 +65,8 @@ void record_sim_whisker_bag(const std::string& bag_dir, const std::string& confi
       h->bus().publish(topic, gt, now_ns);
     });
   }
-  host.executor().run_until(tactile_common::from_seconds(end_s));
+  // The last sample is at end_s - one period (hover ends, motors stop).
+  host.executor().run_until(tactile_common::from_seconds(end_s) - 1);
   recorder.close();
 }
 
@@ -77,7 +78,7 @@ nlohmann::json run_whisker_demo(const DemoOptions& options) {
   };
   // One contact episode: 2 s on both whiskers (the 2 s sweep of the 000
   // data-collection protocol), a third of the way into the hover.
-  const double contact_start_s = 2.0 + options.hover_s / 3.0;
+  const double contact_start_s = options.hover_s / 3.0;
   const Case cases[] = {
       {"free_flight", {}, {}, {}},
       {"contact", {contact_start_s}, {2.0}, {2e-4}},
@@ -87,7 +88,7 @@ nlohmann::json run_whisker_demo(const DemoOptions& options) {
     const fs::path dir = fs::path(options.out_dir) / c.name;
     fs::create_directories(dir);
     const std::string raw = (dir / "raw_bag").string();
-    std::printf("[demo] %s: simulating %.0f s of flight -> %s\n", c.name, options.hover_s + 4.0, raw.c_str());
+    std::printf("[demo] %s: simulating %.0f s of flight -> %s\n", c.name, options.hover_s, raw.c_str());
     std::fflush(stdout);
     record_sim_whisker_bag(raw, options.config_dir, options.seed, options.hover_s, c.start, c.duration, c.peak);
     std::printf("[demo] %s: replaying driver -> TDORC -> %s\n", c.name, dir.string().c_str());

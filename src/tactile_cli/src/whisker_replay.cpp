@@ -148,7 +148,7 @@ nlohmann::json run_replay(const ReplayOptions& options) {
     eval->truth = it == truths.end() ? nullptr : &it->second;
     using Logic = tdorc_filter::TdorcFilterLogic;
     for (size_t m = 0; m < kModes.size(); ++m) {
-      auto params = host.load_parameters(Logic::kNodeName, Logic::default_parameters(),
+      auto params = host.load_parameters(ns, Logic::kNodeName, Logic::default_parameters(),
                                          overrides({{"mode", std::string(kModes[m])}}));
       auto p = Logic::params_from(params);
       contact_threshold = p.tdorc.contact_threshold;

@@ -35,25 +35,36 @@ std::string slurp(const fs::path& p) {
 
 }  // namespace
 
-TEST(WhiskerReplay, FreeFlightOrdersFalsePositiveRatesLikeThePaper) {
+TEST(WhiskerReplay, FreeFlightFalsePositiveRatesReproduceThePaper) {
+  // 000 Extended Data Fig. 2: band-pass 38.24 %, TDOC 12.23 %, TDORC 0 %, on
+  // free flight. Four seeded 90 s flights from take-off (the duration the
+  // signal model is calibrated on); TDOC varies from flight to flight with
+  // the airflow fluctuation, so the rates are compared as means.
   const fs::path dir = fresh_dir("free");
-  tactile_cli::record_sim_whisker_bag((dir / "raw").string(), kConfig, 7, 60.0, {}, {}, {});
-  tactile_cli::ReplayOptions o{(dir / "raw").string(), (dir / "out").string(), kConfig, true};
-  const auto m = tactile_cli::run_replay(o);
-  const double bp = m["fpr_bandpass"], tdoc = m["fpr_tdoc"], tdorc = m["fpr_tdorc"];
-  // 000 Extended Data Fig. 2: band-pass 38.24 %, TDOC 12.23 %, TDORC 0 %.
-  EXPECT_GT(bp, tdoc);
-  EXPECT_GT(tdoc, tdorc);
-  EXPECT_LT(tdorc, 0.005);
-  EXPECT_GT(bp, 0.05);
-  EXPECT_FALSE(m["ground_truth_contact"].get<bool>());
-  EXPECT_FALSE(m["contact_detected"].get<bool>());
-  EXPECT_TRUE(fs::exists(dir / "out" / "metrics.json"));
-  EXPECT_GT(fs::file_size(dir / "out" / "signals.png"), 10000u);
-  // Both whiskers, every raw sample reached the filters and came out.
-  for (const char* side : {"/whisker/left/signal", "/whisker/right/signal"}) {
-    EXPECT_EQ(m["output_topics"][side].get<uint64_t>(), m["raw_messages"].get<uint64_t>() / 2) << side;
+  double bp_sum = 0, tdoc_sum = 0;
+  const int seeds = 4;
+  for (int seed = 1; seed <= seeds; ++seed) {
+    const fs::path run = dir / std::to_string(seed);
+    tactile_cli::record_sim_whisker_bag((run / "raw").string(), kConfig, static_cast<uint64_t>(seed), 90.0, {}, {}, {});
+    tactile_cli::ReplayOptions o{(run / "raw").string(), (run / "out").string(), kConfig, seed == 1};
+    const auto m = tactile_cli::run_replay(o);
+    const double bp = m["fpr_bandpass"], tdoc = m["fpr_tdoc"], tdorc = m["fpr_tdorc"];
+    EXPECT_GT(bp, tdoc) << "seed " << seed;
+    EXPECT_GT(tdoc, tdorc) << "seed " << seed;
+    EXPECT_LE(tdorc, 0.001) << "seed " << seed;
+    EXPECT_FALSE(m["ground_truth_contact"].get<bool>());
+    EXPECT_FALSE(m["contact_detected"].get<bool>());
+    // Both whiskers: every raw sample reached the filters and came out.
+    for (const char* side : {"/whisker/left/signal", "/whisker/right/signal"}) {
+      EXPECT_EQ(m["output_topics"][side].get<uint64_t>(), m["raw_messages"].get<uint64_t>() / 2) << side;
+    }
+    bp_sum += bp;
+    tdoc_sum += tdoc;
   }
+  EXPECT_NEAR(bp_sum / seeds, 0.3824, 0.06);
+  EXPECT_NEAR(tdoc_sum / seeds, 0.1223, 0.06);
+  EXPECT_TRUE(fs::exists(dir / "1" / "out" / "metrics.json"));
+  EXPECT_GT(fs::file_size(dir / "1" / "out" / "signals.png"), 10000u);
   fs::remove_all(dir);
 }
 
@@ -142,7 +153,7 @@ TEST(WhiskerReplay, MissingBagCorruptBagAndBadInputNameTheFile) {
 TEST(WhiskerReplay, BadConfigStopsWithFileKeyAndReason) {
   const fs::path dir = fresh_dir("badcfg");
   fs::create_directories(dir / "cfg");
-  std::ofstream(dir / "cfg" / "tdorc_filter.yaml") << "tdorc_filter:\n  ros__parameters:\n    window: 1\n";
+  std::ofstream(dir / "cfg" / "tdorc_filter.yaml") << "/**/tdorc_filter:\n  ros__parameters:\n    window: 1\n";
   tactile_cli::record_sim_whisker_bag((dir / "raw").string(), kConfig, 1, 2.0, {}, {}, {});
   try {
     tactile_cli::run_replay({(dir / "raw").string(), (dir / "out").string(), (dir / "cfg").string(), false});

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <fstream>
 #include <sstream>
+#include <tuple>
 
 namespace tactile_common {
 
@@ -137,6 +138,53 @@ void flatten(const YAML::Node& map, const std::string& prefix, const std::string
   }
 }
 
+std::vector<std::string> split_tokens(const std::string& name) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (char c : name) {
+    if (c == '/') {
+      if (!cur.empty()) out.push_back(cur);
+      cur.clear();
+    } else {
+      cur += c;
+    }
+  }
+  if (!cur.empty()) out.push_back(cur);
+  return out;
+}
+
+std::string fully_qualified(const std::string& name) {
+  return name.empty() || name.front() != '/' ? "/" + name : name;
+}
+
+// Glob match of name tokens: '*' one token, '**' zero or more tokens.
+bool tokens_match(const std::vector<std::string>& pat, size_t i, const std::vector<std::string>& name,
+                  size_t j) {
+  if (i == pat.size()) return j == name.size();
+  if (pat[i] == "**") {
+    for (size_t k = j; k <= name.size(); ++k) {
+      if (tokens_match(pat, i + 1, name, k)) return true;
+    }
+    return false;
+  }
+  if (j == name.size()) return false;
+  return (pat[i] == "*" || pat[i] == name[j]) && tokens_match(pat, i + 1, name, j + 1);
+}
+
+bool name_matches(const std::string& pattern, const std::string& fqn) {
+  return tokens_match(split_tokens(pattern), 0, split_tokens(fqn), 0);
+}
+
+// 0: "/**"; 1: other patterns with wildcards; 2: an exact name.
+int specificity(const std::string& name) {
+  const auto tokens = split_tokens(name);
+  if (tokens.size() == 1 && tokens[0] == "**") return 0;
+  for (const auto& t : tokens) {
+    if (t == "*" || t == "**") return 1;
+  }
+  return 2;
+}
+
 }  // namespace
 
 std::string type_name(const ParamValue& value) { return std::visit(TypeNamer{}, value); }
@@ -253,38 +301,42 @@ ParamMap load_node_parameters_from_string(const std::string& yaml, const std::st
     throw ParamError(source + ": YAML syntax error at line " + std::to_string(e.mark.line + 1) +
                      ", column " + std::to_string(e.mark.column + 1) + ": " + e.msg);
   }
-  ParamMap result(node_name, source);
+  ParamMap result(fully_qualified(node_name).substr(fully_qualified(node_name).rfind('/') + 1), source);
   for (const auto& [k, v] : defaults.values()) result.set(k, v);
   if (root.IsNull()) return result;
   if (!root.IsMap()) throw ParamError(source + ": top level must be a map of node names");
 
-  // "/**" applies to every node; then the node's own section, matched by its
-  // name with or without leading slash or namespace.
-  std::vector<std::pair<std::string, YAML::Node>> sections;
+  // Sections apply when their key matches the node's fully qualified name as
+  // in ROS 2 parameter files: "/ns/node" (leading '/' optional), with '*'
+  // matching one name token and '**' any number of tokens ("/**" = every
+  // node, "/**/tdorc_filter" = tdorc_filter in any namespace). Less specific
+  // sections are applied first, so an exact name wins over a wildcard.
+  const std::string fqn = fully_qualified(node_name);
+  std::vector<std::tuple<int, size_t, std::string, YAML::Node>> sections;
+  size_t order = 0;
   for (const auto& kv : root) {
     const std::string name = kv.first.as<std::string>();
-    std::string base = name;
-    if (auto slash = base.rfind('/'); slash != std::string::npos) base = base.substr(slash + 1);
-    const bool wildcard = (name == "/**" || name == "**");
-    if (!wildcard && base != node_name) continue;
+    ++order;
+    if (!name_matches(fully_qualified(name), fqn)) continue;
     if (!kv.second.IsMap() || !kv.second["ros__parameters"]) {
       throw ParamError(source + ": " + name + ": expected a map with key 'ros__parameters'");
     }
-    sections.emplace_back(name, kv.second["ros__parameters"]);
+    sections.emplace_back(specificity(name), order, name, kv.second["ros__parameters"]);
   }
-  std::stable_sort(sections.begin(), sections.end(), [](const auto& a, const auto& b) {
-    auto wild = [](const std::string& n) { return n == "/**" || n == "**"; };
-    return wild(a.first) && !wild(b.first);
+  std::sort(sections.begin(), sections.end(), [](const auto& a, const auto& b) {
+    return std::tie(std::get<0>(a), std::get<1>(a)) < std::tie(std::get<0>(b), std::get<1>(b));
   });
-  for (const auto& [name, params] : sections) {
+  const std::string base = fqn.substr(fqn.rfind('/') + 1);
+  for (const auto& [spec, ord, name, params] : sections) {
+    (void)ord;
     if (params.IsNull()) continue;
     if (!params.IsMap()) throw ParamError(source + ": " + name + ".ros__parameters: must be a map");
-    ParamMap overlay(node_name, source);
-    flatten(params, "", source + ": " + node_name + ".ros__parameters", overlay);
+    ParamMap overlay(base, source);
+    flatten(params, "", source + ": " + name + ".ros__parameters", overlay);
     if (name == "/**" || name == "**") {
-      // Wildcard sections may carry parameters other nodes declare: apply only
-      // the ones this node knows (as ROS 2 does for undeclared parameters).
-      ParamMap known(node_name, source);
+      // The catch-all section may carry parameters of other nodes: apply only
+      // the ones this node declares (ROS 2 ignores undeclared ones too).
+      ParamMap known(base, source);
       for (const auto& [k, v] : overlay.values()) {
         if (result.has(k)) known.set(k, v);
       }

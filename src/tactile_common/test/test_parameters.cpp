@@ -49,13 +49,33 @@ TEST(Parameters, NodeSectionOverridesWildcardWhichOverridesDefaults) {
       "/**:\n  ros__parameters:\n    window: 50\n    contact_threshold: 30.0\n    other_node_key: 1\n"
       "/whisker/left/tdorc_filter:\n  ros__parameters:\n    window: 80\n    mode: tdoc\n"
       "    kf:\n      q: 0.5\n    bandpass_b: [1, 0, -1]\n";
-  auto p = load_node_parameters_from_string(yaml, "x.yaml", "tdorc_filter", defaults());
+  auto p = load_node_parameters_from_string(yaml, "x.yaml", "/whisker/left/tdorc_filter", defaults());
   EXPECT_EQ(p.get_int("window"), 80);
   EXPECT_DOUBLE_EQ(p.get_double("contact_threshold"), 30.0);
   EXPECT_EQ(p.get_string("mode"), "tdoc");
   EXPECT_DOUBLE_EQ(p.get_double("kf.q"), 0.5);
   EXPECT_EQ(p.get_double_array("bandpass_b"), (std::vector<double>{1.0, 0.0, -1.0}));
   EXPECT_EQ(p.source(), "x.yaml");
+}
+
+TEST(Parameters, SectionsMatchFullyQualifiedNamesLikeRos2) {
+  const std::string yaml =
+      "/**/tdorc_filter:\n  ros__parameters:\n    window: 60\n"
+      "/whisker/right/tdorc_filter:\n  ros__parameters:\n    window: 70\n"
+      "/whisker/*/tdorc_filter:\n  ros__parameters:\n    mode: tdoc\n"
+      "tdorc_filter:\n  ros__parameters:\n    window: 90\n";
+  auto left = load_node_parameters_from_string(yaml, "x.yaml", "/whisker/left/tdorc_filter", defaults());
+  auto right = load_node_parameters_from_string(yaml, "x.yaml", "/whisker/right/tdorc_filter", defaults());
+  auto root = load_node_parameters_from_string(yaml, "x.yaml", "tdorc_filter", defaults());
+  auto deep = load_node_parameters_from_string(yaml, "x.yaml", "/a/b/c/tdorc_filter", defaults());
+  EXPECT_EQ(left.get_int("window"), 60);   // only the '**' section applies
+  EXPECT_EQ(left.get_string("mode"), "tdoc");
+  EXPECT_EQ(right.get_int("window"), 70);  // exact name beats the wildcard
+  EXPECT_EQ(root.get_int("window"), 90);   // a bare name is the root namespace
+  EXPECT_EQ(root.get_string("mode"), "tdorc");
+  EXPECT_EQ(deep.get_int("window"), 60);
+  EXPECT_EQ(deep.get_string("mode"), "tdorc");  // '*' is exactly one token
+  EXPECT_EQ(left.node(), "tdorc_filter");
 }
 
 TEST(Parameters, IntegerAcceptedForDouble) {

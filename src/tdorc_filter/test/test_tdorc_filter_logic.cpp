@@ -57,7 +57,7 @@ TEST(TdorcFilterLogic, DefaultsArePaperValues) {
 
 TEST(TdorcFilterLogic, RepositoryConfigMatchesDefaults) {
   // The test runs in the package source directory.
-  const ParamMap m = tactile_common::load_node_parameters("../../config/tdorc_filter.yaml", "tdorc_filter",
+  const ParamMap m = tactile_common::load_node_parameters("../../config/tdorc_filter.yaml", "/whisker/left/tdorc_filter",
                                                           TdorcFilterLogic::default_parameters());
   const auto p = TdorcFilterLogic::params_from(m);
   const auto d = TdorcFilterLogic::params_from(TdorcFilterLogic::default_parameters());

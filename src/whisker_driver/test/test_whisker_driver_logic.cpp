@@ -79,18 +79,25 @@ TEST(WhiskerDriverLogic, BadParametersNameTheKey) {
 }
 
 TEST(WhiskerDriverLogic, ConfigFileLoads) {
-  // The repository's config/whisker_driver.yaml (tests run in the package directory).
-  // Every key must be known with the right type. Note: tactile_common's loader
-  // matches sections by node base name, so the namespaced sections
-  // (/whisker/left/..., /whisker/right/...) are both applied, in file order.
+  // The repository's config/whisker_driver.yaml (tests run in the package directory):
+  // every key known with the right type; shared values from /**/whisker_driver,
+  // per-whisker values from /whisker/<side>/whisker_driver.
   const std::string path = "../../config/whisker_driver.yaml";
-  if (!std::filesystem::exists(path)) GTEST_SKIP() << "no " << path;
-  const auto m = tactile_common::load_node_parameters(path, "whisker_driver",
-                                                      WhiskerDriverLogic::default_parameters());
-  const auto p = WhiskerDriverLogic::params_from(m);
-  EXPECT_DOUBLE_EQ(p.rate_hz, 50.0);
-  EXPECT_EQ(p.baud, 115200);
-  EXPECT_EQ(p.source, "sim");
+  ASSERT_TRUE(std::filesystem::exists(path)) << path;
+  const auto left = WhiskerDriverLogic::params_from(tactile_common::load_node_parameters(
+      path, "/whisker/left/whisker_driver", WhiskerDriverLogic::default_parameters()));
+  const auto right = WhiskerDriverLogic::params_from(tactile_common::load_node_parameters(
+      path, "/whisker/right/whisker_driver", WhiskerDriverLogic::default_parameters()));
+  for (const auto& p : {left, right}) {
+    EXPECT_DOUBLE_EQ(p.rate_hz, 50.0);
+    EXPECT_EQ(p.baud, 115200);
+    EXPECT_EQ(p.source, "sim");
+  }
+  EXPECT_EQ(left.protocol, "text");
+  EXPECT_EQ(left.whisker_id, 0);
+  EXPECT_EQ(right.protocol, "csv");
+  EXPECT_EQ(right.whisker_id, 1);
+  EXPECT_NE(left.sim_seed, right.sim_seed);
 }
 
 TEST(SimSource, FiftyHertzStampsAndDeterminism) {

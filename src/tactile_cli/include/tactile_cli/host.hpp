@@ -46,9 +46,11 @@ class Host {
   Executor& executor() { return executor_; }
   const std::string& config_dir() const { return config_dir_; }
 
-  /// Parameters of `node_name`: defaults <- config/<node_name>.yaml <- overrides
-  /// (like a launch file's per-node parameter dict). Errors name the file, key, reason.
-  tactile_common::ParamMap load_parameters(const std::string& node_name,
+  /// Parameters of node `node_name` in namespace `ns`: defaults <-
+  /// config/<node_name>.yaml (sections matched against the fully qualified
+  /// name, as ROS 2 does) <- overrides (like a launch file's per-node
+  /// parameter dict). Errors name the file, key and reason.
+  tactile_common::ParamMap load_parameters(const std::string& ns, const std::string& node_name,
                                            const tactile_common::ParamMap& defaults,
                                            const tactile_common::ParamMap& overrides) const;
 

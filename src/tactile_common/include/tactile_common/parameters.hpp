@@ -78,13 +78,18 @@ class ParamMap {
   std::map<std::string, std::string> origin_;  ///< keys set by merge_from
 };
 
-/// Reads the parameters of `node_name` from a ROS 2 parameter file:
+/// Reads the parameters of a node from a ROS 2 parameter file. `node_name` is
+/// the node's fully qualified name ("/whisker/left/tdorc_filter"; a name
+/// without namespace is in the root namespace). Sections match as in ROS 2:
 ///
-///   /**:                      # applies to every node (optional)
+///   /**:                        # every node
 ///     ros__parameters: {...}
-///   node_name:                # or "/node_name", or "/namespace/node_name"
+///   /**/tdorc_filter:           # tdorc_filter in any namespace ('*' = one token)
+///     ros__parameters: {...}
+///   /whisker/left/tdorc_filter: # exactly this node (leading '/' optional)
 ///     ros__parameters: {...}
 ///
+/// Less specific sections apply first, so an exact name overrides a wildcard.
 /// Starts from `defaults`; values in the file override them. Unknown keys,
 /// wrong types, YAML syntax errors and a missing file throw ParamError naming
 /// the file, the key and the reason. Nested maps are flattened with '.'
