@@ -29,6 +29,7 @@ void print_fpr(const nlohmann::json& m) {
 int main(int argc, char** argv) {
   CLI::App app{"tactile: standalone host of the tactile flight workspace (no ROS needed)"};
   app.require_subcommand(1);
+  app.fallthrough();  // --config may follow the subcommand
 
   std::string config_dir = "config";
   app.add_option("--config", config_dir, "directory of the <node>.yaml parameter files")

@@ -95,3 +95,16 @@ def test_metrics_recomputed_from_bags(demo, case):
     assert metrics["contact_detected"] is detected
     assert metrics["ground_truth_contact"] is (case == "contact")
     assert metrics["contact_detected"] is (case == "contact")
+
+
+def test_command_errors_name_the_path_and_exit_nonzero(tmp_path):
+    res = subprocess.run([TACTILE, "--config", CONFIG, "replay", str(tmp_path / "missing"), "--out",
+                          str(tmp_path / "out")], capture_output=True, text=True)
+    assert res.returncode == 1
+    assert str(tmp_path / "missing") in res.stderr and "does not exist" in res.stderr
+    res = subprocess.run([TACTILE, "demo", "--config", str(tmp_path / "nocfg"), "--out", str(tmp_path / "o")],
+                         capture_output=True, text=True)
+    assert res.returncode == 1
+    assert "configuration directory not found" in res.stderr
+    res = subprocess.run([TACTILE, "replay"], capture_output=True, text=True)
+    assert res.returncode != 0 and "bag" in res.stderr
