@@ -90,7 +90,7 @@ TEST(ArenaFiles, RoomExitIsEighyCentimetresOnTheEastSide) {
   EXPECT_FALSE(a.raycast({0, 0}, {1, 0}, 5.0).hit);
   EXPECT_FALSE(a.raycast({0, 0.39}, {1, 0}, 5.0).hit);
   EXPECT_TRUE(a.raycast({0, 0.41}, {1, 0}, 5.0).hit);
-  for (const Vec2 d : {Vec2(-1, 0), Vec2(0, 1), Vec2(0, -1)}) {
+  for (const Vec2& d : {Vec2(-1, 0), Vec2(0, 1), Vec2(0, -1)}) {
     const Hit h = a.raycast({0, 0}, d, 5.0);
     ASSERT_TRUE(h.hit);
     EXPECT_NEAR(h.distance, 1.0, 1e-12);
@@ -195,7 +195,7 @@ TEST(Arena, TransformPreservesDistancesAndRotatesHits) {
   moved.transform(dx, dy, yaw);
   const Eigen::Rotation2Dd R(yaw);
   const Vec2 t(dx, dy);
-  for (const Vec2 p : {Vec2(0, 0), Vec2(0.5, 0.9), Vec2(1.3, 0.0), Vec2(3, -2)}) {
+  for (const Vec2& p : {Vec2(0, 0), Vec2(0.5, 0.9), Vec2(1.3, 0.0), Vec2(3, -2)}) {
     const Hit h0 = base.closest(p, 10);
     const Hit h1 = moved.closest(R * p + t, 10);
     ASSERT_TRUE(h0.hit && h1.hit);
