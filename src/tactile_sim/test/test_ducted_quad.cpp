@@ -4,8 +4,10 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <tuple>
 
 #include "tactile_sim/ducted_quad.hpp"
+#include "tactile_sim/sensors.hpp"
 
 using namespace tactile_sim;
 
@@ -199,6 +201,52 @@ TEST(DuctedQuad, DeterministicForTheSameInputs) {
   EXPECT_EQ(a.position, b.position);
   EXPECT_EQ(a.velocity, b.velocity);
   EXPECT_EQ(a.orientation.coeffs(), b.orientation.coeffs());
+}
+
+TEST(DuctedQuad, OnboardSensorsOnTheHoveringVehicle) {
+  // IMU, ToF and flow fed from the vehicle truth while it hovers at 0.8 m:
+  // IMU ~ (0, 0, 9.81) and zero rate, ToF ~ 0.8 m, flow ~ 0; the same seed
+  // gives the same samples.
+  auto fly = [](uint64_t seed) {
+    DuctedQuad q(DuctedQuadParams{}, at(0, 0, 0.8));
+    Arena empty;
+    PositionSetpoint sp;
+    sp.position = Vec3(0, 0, 0.8);
+    q.set_position_setpoint(sp);
+    run(q, empty, 2.0);
+    ImuModel imu(ImuParams{}, seed);
+    RangeModel tof(RangeParams{}, seed);
+    FlowModel flow(FlowParams{}, seed);
+    Vec3 acc = Vec3::Zero(), gyr = Vec3::Zero();
+    double range = 0.0, height = 0.0, nx = 0.0, ny = 0.0;
+    const int n = 500;
+    for (int k = 0; k < n; ++k) {
+      q.step(kDt, empty);
+      const ImuSample s = imu.sample(q.specific_force_body(), q.state().angular_velocity);
+      acc += s.accel / n;
+      gyr += s.gyro / n;
+      range += tof.sample(q.wall_truth().height, q.state().orientation) / n;
+      height += q.wall_truth().height / n;
+      const FlowSample f = flow.sample(q.state().velocity, q.state().orientation,
+                                       q.state().angular_velocity, q.wall_truth().height);
+      nx += f.n_x / n;
+      ny += f.n_y / n;
+    }
+    return std::make_tuple(acc, gyr, range, nx, ny, height);
+  };
+  const auto [acc, gyr, range, nx, ny, height] = fly(3);
+  EXPECT_LT((acc - Vec3(0, 0, 9.81)).norm(), 0.01);
+  EXPECT_LT(gyr.norm(), 0.002);
+  // ToF noise std 2 mm + 0.5 % of 0.8 m = 6 mm; mean of 500 within 5 sigma / sqrt(500).
+  EXPECT_NEAR(range, height, 5 * 0.006 / std::sqrt(500.0));
+  EXPECT_NEAR(height, 0.8, 0.01);
+  EXPECT_NEAR(nx, 0.0, 0.005);
+  EXPECT_NEAR(ny, 0.0, 0.005);
+  const auto again = fly(3);
+  EXPECT_EQ(std::get<0>(again), acc);
+  EXPECT_EQ(std::get<2>(again), range);
+  EXPECT_EQ(std::get<3>(again), nx);
+  EXPECT_NE(std::get<2>(fly(4)), range);
 }
 
 TEST(DuctedQuad, ParamsValidate) {
