@@ -68,6 +68,8 @@ struct CrazyflieParams {
   double attitude_wn = 30.0;                 ///< natural frequency [rad/s]
   double attitude_zeta = 0.8;                ///< damping ratio
   double yaw_rate_tau = 0.05;                ///< yaw-rate lag [s]
+  double yaw_kp = 6.0;                       ///< yaw angle -> rate [1/s] (fw attitude PID yaw kp 6)
+  double yaw_ki = 1.0;                       ///< [1/s^2] (fw attitude PID yaw ki 1)
   // --- estimate ----------------------------------------------------------------
   StateEstimateMode estimate_mode = StateEstimateMode::kMocap;
   double mocap_position_noise = 0.0005;      ///< [m] (white, per step)
@@ -138,6 +140,7 @@ class WhiskerCrazyflie {
   // attitude (ZYX Euler) and rates
   double roll_ = 0.0, pitch_ = 0.0, yaw_ = 0.0;
   double roll_rate_ = 0.0, pitch_rate_ = 0.0, yaw_rate_ = 0.0;
+  double yaw_sp_ = 0.0, yaw_int_ = 0.0;  // integrated yaw setpoint, attitude-loop integrator
   // controller
   double roll_cmd_ = 0.0, pitch_cmd_ = 0.0, thrust_cmd_ = 0.0;
   double vx_int_ = 0.0, vy_int_ = 0.0, z_int_ = 0.0, vz_int_ = 0.0;
