@@ -109,7 +109,9 @@ void Writer::open(const std::string& dir) {
   db_name_ = p.filename().string() + "_0.db3";
   db_path_ = (p / db_name_).string();
 
-  if (sqlite3_open_v2(db_path_.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE,
+  // Every call into the connection holds mu_, so sqlite's own per-call mutex is
+  // redundant (NOMUTEX: sqlite's multi-thread mode).
+  if (sqlite3_open_v2(db_path_.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_NOMUTEX,
                       nullptr) != SQLITE_OK) {
     std::string e = db_ != nullptr ? sqlite3_errmsg(db_) : "out of memory";
     sqlite3_close(db_);

@@ -82,7 +82,8 @@ WhiskerBarometerModel::WhiskerBarometerModel(const Params& params, uint64_t seed
   temp_.fill(p_.board_temperature_c);
 }
 
-WhiskerBarometerModel::Sample WhiskerBarometerModel::step(double dt, double load, bool motors_on) {
+WhiskerBarometerModel::Sample WhiskerBarometerModel::step(double dt, double load, bool motors_on,
+                                                          double contact_noise_scale) {
   if (!(dt > 0.0) || !std::isfinite(dt)) {
     throw std::invalid_argument("WhiskerBarometerModel::step: dt must be > 0 and finite");
   }
@@ -132,7 +133,9 @@ WhiskerBarometerModel::Sample WhiskerBarometerModel::step(double dt, double load
   }
 
   Sample out;
-  const double noise_sigma = std::sqrt(p_.measurement_noise_pa * p_.measurement_noise_pa +
+  const double loaded_scale = load > p_.contact_load_threshold_nm ? std::max(contact_noise_scale, 0.0) : 1.0;
+  const double noise_sigma = loaded_scale *
+                             std::sqrt(p_.measurement_noise_pa * p_.measurement_noise_pa +
                                        (motors_on ? p_.vibration_noise_pa * p_.vibration_noise_pa : 0.0));
   for (int i = 0; i < 3; ++i) {
     package_[i] += ((motors_on ? p_.board_temperature_c - p_.cooling_delta_c[i] : p_.board_temperature_c) -

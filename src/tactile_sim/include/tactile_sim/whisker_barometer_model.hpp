@@ -116,7 +116,10 @@ class WhiskerBarometerModel {
   /// Advances the model by dt [s] (> 0) and returns the measured sample.
   /// @param load      whisker base bending moment in the sweep plane [N m] (>= 0 pushes)
   /// @param motors_on propellers spinning (convective cooling, vibration)
-  Sample step(double dt, double load, bool motors_on);
+  /// @param contact_noise_scale multiplies the pressure noise while the whisker
+  ///        is loaded (surface texture: the arena material's signal_noise_scale;
+  ///        glass is smoother than a rigid board, textile rougher). 1 = nominal.
+  Sample step(double dt, double load, bool motors_on, double contact_noise_scale = 1.0);
 
   const Params& params() const { return p_; }
   const Components& components() const { return c_; }
