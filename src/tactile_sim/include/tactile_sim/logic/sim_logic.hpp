@@ -1,0 +1,134 @@
+// Node logic of the simulator: the SITL world of a scenario stepped at the
+// physics rate on the host's clock, publishing sensor and ground-truth
+// messages at their own rates and taking setpoints. Topics and rates:
+// docs/sitl_design.md. No ROS: the standalone host (and an rclcpp component
+// where ROS 2 exists) call step() from a timer at period_ns().
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "geometry_msgs/msg/pose_stamped.hpp"
+#include "geometry_msgs/msg/wrench_stamped.hpp"
+#include "nav_msgs/msg/odometry.hpp"
+#include "sensor_msgs/msg/imu.hpp"
+#include "sensor_msgs/msg/range.hpp"
+#include "tactile_msgs/msg/arm_imu_array.hpp"
+#include "tactile_msgs/msg/collision_event.hpp"
+#include "tactile_msgs/msg/hover_setpoint.hpp"
+#include "tactile_msgs/msg/optical_flow.hpp"
+#include "tactile_msgs/msg/thrust_command.hpp"
+#include "tactile_msgs/msg/wall_estimate.hpp"
+#include "tactile_msgs/msg/whisker_ground_truth.hpp"
+#include "tactile_msgs/msg/whisker_pressure.hpp"
+#include "tactile_sim/arena.hpp"
+#include "tactile_sim/logic/faults.hpp"
+#include "tactile_sim/scenario.hpp"
+
+namespace tactile_sim {
+
+/// A message and the topic it goes to.
+template <class T>
+struct Published {
+  std::string topic;
+  T msg;
+};
+
+/// One point of the recorded trajectory (100 Hz): truth and state estimate.
+struct TrajectoryPoint {
+  double t = 0.0;
+  RigidBodyState truth;
+  RigidBodyState estimate;
+};
+
+class SimLogic {
+ public:
+  static constexpr const char* kNodeName = "tactile_sim";
+  static constexpr const char* kHoverSetpointTopic = "/cmd_hover";
+  static constexpr const char* kPositionSetpointTopic = "/cmd_position";
+  static constexpr const char* kRotorThrustTopic = "/cmd_rotor_thrust";
+
+  struct Outputs {
+    std::vector<Published<tactile_msgs::msg::WhiskerPressure>> pressure;
+    std::vector<Published<tactile_msgs::msg::WhiskerGroundTruth>> whisker_truth;
+    std::vector<Published<nav_msgs::msg::Odometry>> odometry;
+    std::vector<Published<sensor_msgs::msg::Imu>> imu;
+    std::vector<Published<sensor_msgs::msg::Range>> range;
+    std::vector<Published<tactile_msgs::msg::OpticalFlow>> flow;
+    std::vector<Published<tactile_msgs::msg::ArmImuArray>> arm_imu;
+    std::vector<Published<tactile_msgs::msg::ThrustCommand>> thrust;
+    std::vector<Published<geometry_msgs::msg::WrenchStamped>> wrench;
+    std::vector<Published<tactile_msgs::msg::WallEstimate>> wall;
+    std::vector<Published<tactile_msgs::msg::CollisionEvent>> collisions;
+    void clear();
+    size_t size() const;
+  };
+
+  /// Ground-truth summary of a run (metrics.json), by name.
+  using Summary = std::map<std::string, double>;
+
+  /// Builds the world of `scenario` for one run: arena (with the scenario's
+  /// transform plus `extra_arena_yaw` [rad] about the arena transform's
+  /// origin, for randomised trials), vehicle, sensors, faults; all noise
+  /// seeded from `seed`. Throws ScenarioError / ArenaError /
+  /// std::invalid_argument naming the file, key and reason.
+  SimLogic(const Scenario& scenario, uint64_t seed, double extra_arena_yaw = 0.0);
+  ~SimLogic();
+  SimLogic(const SimLogic&) = delete;
+  SimLogic& operator=(const SimLogic&) = delete;
+
+  /// Physics step [ns].
+  int64_t period_ns() const { return period_ns_; }
+
+  void on_hover_setpoint(const tactile_msgs::msg::HoverSetpoint& msg);
+  void on_position_setpoint(const geometry_msgs::msg::PoseStamped& msg);
+  void on_rotor_thrust(const tactile_msgs::msg::ThrustCommand& msg);
+
+  /// Called every period_ns() from now_ns = 0: advances the world to now_ns
+  /// (the first call only samples the initial state) and appends the
+  /// messages due at this instant, after fault injection.
+  void step(int64_t now_ns, Outputs& out);
+
+  /// The scenario duration has elapsed.
+  bool finished(int64_t now_ns) const;
+
+  const Arena& arena() const;
+  const Scenario& scenario() const { return scenario_; }
+  uint64_t seed() const { return seed_; }
+  const std::vector<TrajectoryPoint>& trajectory() const { return trajectory_; }
+  const std::vector<CollisionEvent>& collisions() const { return collisions_; }
+  /// Whisker contact points (world x, y) sampled at 50 Hz while in contact.
+  const std::vector<Vec2>& whisker_contacts() const { return whisker_contacts_; }
+  Summary summary() const;
+  const FaultCounts& fault_counts() const { return fault_counts_; }
+  /// Setpoints that arrived with non-finite values (dropped, counted).
+  uint64_t dropped_setpoints() const { return dropped_setpoints_; }
+
+  class Vehicle;  // per-vehicle model + sensors (sim_logic.cpp)
+
+ private:
+  template <class T>
+  void emit(std::vector<Published<T>>& out, const std::string& topic, T msg, int64_t now_ns);
+
+  Scenario scenario_;
+  uint64_t seed_;
+  std::unique_ptr<Arena> arena_;
+  std::unique_ptr<Vehicle> vehicle_;
+  int64_t period_ns_;
+  double dt_;
+  int64_t k_ = 0;
+  bool started_ = false;
+  std::vector<TrajectoryPoint> trajectory_;
+  std::vector<CollisionEvent> collisions_;
+  std::vector<Vec2> whisker_contacts_;
+  FaultCounts fault_counts_;
+  uint64_t dropped_setpoints_ = 0;
+  double max_external_force_ = 0.0;
+  struct FaultSet;
+  std::unique_ptr<FaultSet> faults_;
+};
+
+}  // namespace tactile_sim

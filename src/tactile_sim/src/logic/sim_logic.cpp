@@ -1,0 +1,812 @@
+#include "tactile_sim/logic/sim_logic.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <set>
+#include <tuple>
+
+#include "tactile_common/time.hpp"
+#include "tactile_sim/crazyflie.hpp"
+#include "tactile_sim/ducted_quad.hpp"
+#include "tactile_sim/sensors.hpp"
+#include "tactile_sim/whisker_barometer_model.hpp"
+#include "tactile_sim/xplorer.hpp"
+
+namespace tactile_sim {
+
+namespace {
+
+// Stream ids of the random sources SimLogic owns (vehicles own theirs).
+constexpr uint64_t kStreamVehicle = 1;
+constexpr uint64_t kStreamBarometerLeft = 10;
+constexpr uint64_t kStreamBarometerRight = 11;
+constexpr uint64_t kStreamFaults = 20;  // + index of the faulted topic
+constexpr uint64_t kStreamTrialYaw = 30;
+
+template <class Stamp>
+void stamp(Stamp& s, int64_t ns) {
+  tactile_common::to_stamp(ns, s);
+}
+
+void fill_pose(const RigidBodyState& x, geometry_msgs::msg::Pose& pose) {
+  pose.position.x = x.position.x();
+  pose.position.y = x.position.y();
+  pose.position.z = x.position.z();
+  pose.orientation.x = x.orientation.x();
+  pose.orientation.y = x.orientation.y();
+  pose.orientation.z = x.orientation.z();
+  pose.orientation.w = x.orientation.w();
+}
+
+nav_msgs::msg::Odometry odometry(const RigidBodyState& x, int64_t now_ns) {
+  nav_msgs::msg::Odometry m;
+  stamp(m.header.stamp, now_ns);
+  m.header.frame_id = "odom";
+  m.child_frame_id = "base_link";
+  fill_pose(x, m.pose.pose);
+  // REP-105: twist in the child (body) frame.
+  const Vec3 v_body = x.orientation.conjugate() * x.velocity;
+  m.twist.twist.linear.x = v_body.x();
+  m.twist.twist.linear.y = v_body.y();
+  m.twist.twist.linear.z = v_body.z();
+  m.twist.twist.angular.x = x.angular_velocity.x();
+  m.twist.twist.angular.y = x.angular_velocity.y();
+  m.twist.twist.angular.z = x.angular_velocity.z();
+  return m;
+}
+
+sensor_msgs::msg::Imu imu_msg(const ImuSample& s, const Quat& q, int64_t now_ns, double gyro_var,
+                              double accel_var) {
+  sensor_msgs::msg::Imu m;
+  stamp(m.header.stamp, now_ns);
+  m.header.frame_id = "imu_link";
+  m.orientation.x = q.x();
+  m.orientation.y = q.y();
+  m.orientation.z = q.z();
+  m.orientation.w = q.w();
+  m.angular_velocity.x = s.gyro.x();
+  m.angular_velocity.y = s.gyro.y();
+  m.angular_velocity.z = s.gyro.z();
+  m.linear_acceleration.x = s.accel.x();
+  m.linear_acceleration.y = s.accel.y();
+  m.linear_acceleration.z = s.accel.z();
+  for (int i = 0; i < 3; ++i) {
+    m.angular_velocity_covariance[static_cast<size_t>(4 * i)] = gyro_var;
+    m.linear_acceleration_covariance[static_cast<size_t>(4 * i)] = accel_var;
+  }
+  return m;
+}
+
+sensor_msgs::msg::Range range_msg(double range, const RangeParams& p, int64_t now_ns) {
+  sensor_msgs::msg::Range m;
+  stamp(m.header.stamp, now_ns);
+  m.header.frame_id = "tof_down";
+  m.radiation_type = sensor_msgs::msg::Range::INFRARED;
+  m.field_of_view = static_cast<float>(p.field_of_view);
+  m.min_range = static_cast<float>(p.min_range);
+  m.max_range = static_cast<float>(p.max_range);
+  m.range = static_cast<float>(range);
+  return m;
+}
+
+tactile_msgs::msg::OpticalFlow flow_msg(const FlowSample& s, int64_t now_ns) {
+  tactile_msgs::msg::OpticalFlow m;
+  stamp(m.header.stamp, now_ns);
+  m.header.frame_id = "flow";
+  m.flow_x = s.n_x;
+  m.flow_y = s.n_y;
+  m.integration_time = s.integration_time;
+  m.quality = s.quality;
+  return m;
+}
+
+bool every(int64_t k, double physics_hz, double rate_hz) {
+  const auto n = static_cast<int64_t>(std::llround(physics_hz / rate_hz));
+  return n <= 1 || k % n == 0;
+}
+
+double heading(const Quat& q) {
+  const Vec3 x = q * Vec3::UnitX();
+  return std::atan2(x.y(), x.x());
+}
+
+template <class Map>
+double& at_least(Map& m, const char* key, double v) {
+  auto [it, inserted] = m.emplace(key, v);
+  if (!inserted) it->second = std::max(it->second, v);
+  return it->second;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------
+// Vehicles
+
+class SimLogic::Vehicle {
+ public:
+  virtual ~Vehicle() = default;
+  virtual void step(double dt, const Arena& arena) = 0;
+  virtual const RigidBodyState& truth() const = 0;
+  virtual RigidBodyState estimate() const = 0;
+  virtual Vec3 external_force_world() const = 0;
+  virtual std::vector<CollisionEvent> take_collisions() = 0;
+  /// Setpoints; false if this vehicle does not take that kind.
+  virtual bool hover_setpoint(const HoverSetpoint&) { return false; }
+  virtual bool position_setpoint(const Vec3&, double) { return false; }
+  virtual bool rotor_thrust(const std::array<double, 4>&) { return false; }
+  /// Vehicle-specific sensors due at physics step k.
+  virtual void sense(int64_t k, double physics_hz, int64_t now_ns, const Arena& arena, SimLogic::Outputs& out,
+                     std::vector<Vec2>& whisker_contacts) = 0;
+  /// Topics this vehicle publishes, with their type names (fault validation).
+  virtual std::vector<std::pair<std::string, std::string>> topics() const = 0;
+  virtual void summarize(Summary& s) const = 0;
+};
+
+namespace {
+
+const char* kPressure = "tactile_msgs/msg/WhiskerPressure";
+const char* kImuType = "sensor_msgs/msg/Imu";
+const char* kRangeType = "sensor_msgs/msg/Range";
+const char* kFlowType = "tactile_msgs/msg/OpticalFlow";
+const char* kArmType = "tactile_msgs/msg/ArmImuArray";
+const char* kThrustType = "tactile_msgs/msg/ThrustCommand";
+const char* kWallType = "tactile_msgs/msg/WallEstimate";
+const char* kTruthType = "tactile_msgs/msg/WhiskerGroundTruth";
+
+/// Sets `field` of `params` from the scenario's vehicle.params (by name).
+class ParamOverrides {
+ public:
+  ParamOverrides(const Scenario& s) : s_(s) {}
+  void number(const char* name, double& field) {
+    auto it = s_.vehicle_params.find(name);
+    if (it == s_.vehicle_params.end()) return;
+    used_.insert(name);
+    if (auto d = std::get_if<double>(&it->second)) {
+      field = *d;
+    } else if (auto i = std::get_if<int64_t>(&it->second)) {
+      field = static_cast<double>(*i);
+    } else {
+      throw ScenarioError(s_.source + ": vehicle.params." + name + ": expected a number");
+    }
+  }
+  void flag(const char* name, bool& field) {
+    auto it = s_.vehicle_params.find(name);
+    if (it == s_.vehicle_params.end()) return;
+    used_.insert(name);
+    if (auto b = std::get_if<bool>(&it->second)) {
+      field = *b;
+    } else {
+      throw ScenarioError(s_.source + ": vehicle.params." + name + ": expected true or false");
+    }
+  }
+  /// Every override must have been used: unknown names are typos.
+  void check_all_used(const std::string& known) const {
+    for (const auto& [k, v] : s_.vehicle_params) {
+      if (!used_.count(k)) {
+        throw ScenarioError(s_.source + ": vehicle.params." + k + ": unknown parameter of " +
+                            to_string(s_.vehicle) + " (settable: " + known + ")");
+      }
+    }
+  }
+
+ private:
+  const Scenario& s_;
+  std::set<std::string> used_;
+};
+
+RigidBodyState initial_state(const Scenario& s) {
+  RigidBodyState x;
+  x.position = s.initial_position;
+  x.orientation = Quat(Eigen::AngleAxisd(s.initial_yaw, Vec3::UnitZ()));
+  return x;
+}
+
+// --- whiskered Crazyflie (paper 000) ------------------------------------------
+class CrazyflieVehicle : public SimLogic::Vehicle {
+ public:
+  CrazyflieVehicle(const Scenario& s, uint64_t seed) : cf_(make_params(s), initial_state(s), stream_seed(seed, kStreamVehicle)),
+        imu_(imu_params(), seed) {
+    WhiskerBarometerParams bp;
+    baro_[0] = std::make_unique<WhiskerBarometerModel>(bp, stream_seed(seed, kStreamBarometerLeft));
+    baro_[1] = std::make_unique<WhiskerBarometerModel>(bp, stream_seed(seed, kStreamBarometerRight));
+  }
+
+  static CrazyflieParams make_params(const Scenario& s) {
+    CrazyflieParams p;
+    ParamOverrides o(s);
+    o.number("mass", p.mass);
+    o.number("drag_coeff", p.drag_coeff);
+    o.number("guard_radius", p.guard_radius);
+    o.flag("whiskers_enabled", p.whiskers_enabled);
+    o.number("whisker_spacing", p.whisker_spacing);
+    o.number("whisker_base_x", p.whisker_base_x);
+    o.number("whisker_length", p.whisker.length);
+    double placement_deg = std::numeric_limits<double>::quiet_NaN();
+    o.number("whisker_placement_deg", placement_deg);
+    if (std::isfinite(placement_deg)) p.whisker.placement_angle = placement_deg * M_PI / 180.0;
+    o.number("mocap_position_noise", p.mocap_position_noise);
+    o.number("flow_scale_error", p.flow_deck.flow_scale_error);
+    o.number("gyro_bias", p.flow_deck.gyro_bias);
+    o.check_all_used(
+        "mass, drag_coeff, guard_radius, whiskers_enabled, whisker_spacing, whisker_base_x, whisker_length, "
+        "whisker_placement_deg, mocap_position_noise, flow_scale_error, gyro_bias");
+    p.estimate_mode = s.state_estimate == "flow_deck" ? StateEstimateMode::kFlowDeck : StateEstimateMode::kMocap;
+    p.validate();
+    return p;
+  }
+
+  static ImuParams imu_params() {
+    ImuParams p;
+    p.rate_hz = kImuHz;
+    return p;
+  }
+
+  void step(double dt, const Arena& arena) override { cf_.step(dt, arena); }
+  const RigidBodyState& truth() const override { return cf_.state(); }
+  RigidBodyState estimate() const override { return cf_.estimate(); }
+  Vec3 external_force_world() const override { return cf_.external_force_world(); }
+  std::vector<CollisionEvent> take_collisions() override { return cf_.take_collisions(); }
+  bool hover_setpoint(const HoverSetpoint& sp) override {
+    cf_.set_setpoint(sp);
+    return true;
+  }
+
+  void sense(int64_t k, double physics_hz, int64_t now_ns, const Arena& arena, SimLogic::Outputs& out,
+             std::vector<Vec2>& contacts) override {
+    if (every(k, physics_hz, kImuHz)) {
+      const ImuSample s = imu_.sample(cf_.specific_force_body(), cf_.state().angular_velocity);
+      out.imu.push_back({"/imu", imu_msg(s, cf_.estimate().orientation, now_ns, 0.0, 0.0)});
+    }
+    if (every(k, physics_hz, kBarometerHz)) {
+      static const char* kSides[2] = {"left", "right"};
+      for (int i = 0; i < 2; ++i) {
+        const auto& w = cf_.whiskers()[static_cast<size_t>(i)];
+        const double noise_scale =
+            w.contact && w.obstacle_id >= 0 ? material_scale(arena, w) : 1.0;
+        const auto sample = baro_[static_cast<size_t>(i)]->step(1.0 / kBarometerHz, w.base_moment, cf_.motors_on(),
+                                                               noise_scale);
+        tactile_msgs::msg::WhiskerPressure p;
+        stamp(p.header.stamp, now_ns);
+        p.header.frame_id = std::string("whisker_") + kSides[i];
+        p.whisker_id = static_cast<uint8_t>(i);
+        for (size_t c = 0; c < 3; ++c) {
+          p.pressure[c] = sample.pressure[c];
+          p.temperature[c] = sample.temperature[c];
+        }
+        p.sequence = sequence_[static_cast<size_t>(i)]++;
+        out.pressure.push_back({std::string("/whisker/") + kSides[i] + "/pressure", p});
+
+        tactile_msgs::msg::WhiskerGroundTruth gt;
+        gt.header = p.header;
+        gt.whisker_id = p.whisker_id;
+        gt.contact = w.contact;
+        gt.load = w.base_moment;
+        gt.depth = w.depth;
+        gt.motors_on = cf_.motors_on();
+        out.whisker_truth.push_back({std::string("/ground_truth/whisker/") + kSides[i] + "/contact", gt});
+
+        if (w.contact) {
+          contacts.push_back(w.contact_point);
+          contact_samples_[static_cast<size_t>(i)]++;
+          max_moment_ = std::max(max_moment_, w.base_moment);
+          if (std::isfinite(w.depth)) max_depth_[static_cast<size_t>(i)] = std::max(max_depth_[static_cast<size_t>(i)], w.depth);
+          if (std::isnan(first_contact_s_)) first_contact_s_ = tactile_common::to_seconds(now_ns);
+        }
+        if (cf_.motors_on()) flying_samples_[static_cast<size_t>(i)]++;
+      }
+    }
+    const auto& deck = cf_.flow_deck();
+    if (cf_.params().estimate_mode == StateEstimateMode::kFlowDeck) {
+      if (deck.flow_updated()) out.flow.push_back({"/flow", flow_msg(deck.last_flow(), now_ns)});
+      if (deck.range_updated()) {
+        out.range.push_back({"/tof", range_msg(deck.last_range(), deck.params().range, now_ns)});
+      }
+    }
+  }
+
+  std::vector<std::pair<std::string, std::string>> topics() const override {
+    std::vector<std::pair<std::string, std::string>> t = {
+        {"/imu", kImuType},
+        {"/whisker/left/pressure", kPressure},
+        {"/whisker/right/pressure", kPressure},
+        {"/ground_truth/whisker/left/contact", kTruthType},
+        {"/ground_truth/whisker/right/contact", kTruthType}};
+    if (cf_.params().estimate_mode == StateEstimateMode::kFlowDeck) {
+      t.emplace_back("/flow", kFlowType);
+      t.emplace_back("/tof", kRangeType);
+    }
+    return t;
+  }
+
+  void summarize(SimLogic::Summary& s) const override {
+    static const char* kSides[2] = {"left", "right"};
+    for (size_t i = 0; i < 2; ++i) {
+      s[std::string("whisker_contact_fraction_") + kSides[i]] =
+          flying_samples_[i] ? static_cast<double>(contact_samples_[i]) / static_cast<double>(flying_samples_[i]) : 0.0;
+      s[std::string("max_true_depth_") + kSides[i] + "_m"] = max_depth_[i];
+    }
+    s["max_whisker_base_moment_nm"] = max_moment_;
+    s["first_whisker_contact_s"] = first_contact_s_;
+  }
+
+ private:
+  static double material_scale(const Arena& arena, const WhiskerCrazyflie::Whisker& w) {
+    const Hit h = arena.closest(w.contact_point, 0.01);
+    return h.hit ? arena.material(h.material).signal_noise_scale : 1.0;
+  }
+
+  // The Crazyflie's IMU as the ground station sees it: state logged over the
+  // radio at 100 Hz (the onboard 1 kHz loop is inside the vehicle model).
+  static constexpr double kImuHz = 100.0;
+  static constexpr double kBarometerHz = 50.0;  // 000: whisker deck at 50 Hz
+  WhiskerCrazyflie cf_;
+  ImuModel imu_;
+  std::array<std::unique_ptr<WhiskerBarometerModel>, 2> baro_;
+  std::array<uint32_t, 2> sequence_{};
+  std::array<uint64_t, 2> contact_samples_{}, flying_samples_{};
+  std::array<double, 2> max_depth_{0.0, 0.0};
+  double max_moment_ = 0.0;
+  double first_contact_s_ = std::numeric_limits<double>::quiet_NaN();
+};
+
+// --- ducted quadrotor (paper 004) ------------------------------------------------
+class DuctedVehicle : public SimLogic::Vehicle {
+ public:
+  DuctedVehicle(const Scenario& s, uint64_t seed)
+      : quad_(make_params(s), initial_state(s)), imu_(imu_params(), seed), tof_(RangeParams{}, seed),
+        flow_(FlowParams{}, seed) {
+    PositionSetpoint sp;
+    sp.position = s.initial_position;
+    sp.yaw = s.initial_yaw;
+    quad_.set_position_setpoint(sp);
+  }
+  static DuctedQuadParams make_params(const Scenario& s) {
+    DuctedQuadParams p;
+    ParamOverrides o(s);
+    o.number("mass", p.mass);
+    o.check_all_used("mass");
+    p.validate();
+    return p;
+  }
+  static ImuParams imu_params() {
+    ImuParams p;
+    p.rate_hz = kImuHz;
+    return p;
+  }
+  void step(double dt, const Arena& arena) override { quad_.step(dt, arena); }
+  const RigidBodyState& truth() const override { return quad_.state(); }
+  RigidBodyState estimate() const override { return quad_.state(); }  // motion capture
+  Vec3 external_force_world() const override { return quad_.external_force_world() + quad_.wall_force_world(); }
+  std::vector<CollisionEvent> take_collisions() override { return quad_.take_collisions(); }
+  bool position_setpoint(const Vec3& p, double yaw) override {
+    PositionSetpoint sp;
+    sp.position = p;
+    sp.yaw = yaw;
+    quad_.set_position_setpoint(sp);
+    return true;
+  }
+  bool rotor_thrust(const std::array<double, 4>& t) override {
+    quad_.set_rotor_thrusts(t);
+    return true;
+  }
+  void sense(int64_t k, double physics_hz, int64_t now_ns, const Arena& arena, SimLogic::Outputs& out,
+             std::vector<Vec2>&) override {
+    const auto& x = quad_.state();
+    const double height = x.position.z() - arena.floor_z();
+    if (every(k, physics_hz, kImuHz)) {
+      const ImuSample s = imu_.sample(quad_.specific_force_body(), x.angular_velocity);
+      out.imu.push_back({"/imu", imu_msg(s, x.orientation, now_ns, 0.0, 0.0)});
+    }
+    if (every(k, physics_hz, tof_.params().rate_hz)) {
+      out.range.push_back({"/tof", range_msg(tof_.sample(height, x.orientation), tof_.params(), now_ns)});
+    }
+    if (every(k, physics_hz, flow_.params().rate_hz)) {
+      out.flow.push_back({"/flow", flow_msg(flow_.sample(x.velocity, x.orientation, x.angular_velocity, height), now_ns)});
+    }
+    if (every(k, physics_hz, 50.0)) {
+      tactile_msgs::msg::ThrustCommand t;
+      stamp(t.header.stamp, now_ns);
+      t.header.frame_id = "base_link";
+      t.normalized = std::numeric_limits<double>::quiet_NaN();
+      t.total_thrust = quad_.collective_thrust();
+      t.rotor_thrust.assign(quad_.rotor_commands().begin(), quad_.rotor_commands().end());
+      out.thrust.push_back({"/thrust_command", t});
+    }
+    if (every(k, physics_hz, 100.0)) {
+      const WallTruth w = quad_.wall_truth();
+      tactile_msgs::msg::WallEstimate m;
+      stamp(m.header.stamp, now_ns);
+      m.header.frame_id = "base_link";
+      m.wall_detected = w.present;
+      m.distance = w.present ? w.distance : std::numeric_limits<double>::infinity();
+      m.direction = w.direction;
+      m.height = w.height;
+      const Vec3 v_body = x.orientation.conjugate() * x.velocity;
+      m.velocity.x = v_body.x();
+      m.velocity.y = v_body.y();
+      m.velocity.z = v_body.z();
+      out.wall.push_back({"/ground_truth/wall", m});
+      if (w.present) min_wall_ = std::min(min_wall_, w.distance);
+    }
+  }
+  std::vector<std::pair<std::string, std::string>> topics() const override {
+    return {{"/imu", kImuType}, {"/tof", kRangeType}, {"/flow", kFlowType}, {"/thrust_command", kThrustType},
+            {"/ground_truth/wall", kWallType}};
+  }
+  void summarize(SimLogic::Summary& s) const override { s["min_wall_distance_m"] = min_wall_; }
+
+ private:
+  static constexpr double kImuHz = 500.0;
+  DuctedQuad quad_;
+  ImuModel imu_;
+  RangeModel tof_;
+  FlowModel flow_;
+  double min_wall_ = std::numeric_limits<double>::infinity();
+};
+
+
+// --- XPLORER (paper 001) ------------------------------------------------------------
+class XplorerVehicle : public SimLogic::Vehicle {
+ public:
+  XplorerVehicle(const Scenario& s, uint64_t seed) : x_(make_params(s), initial_state(s)), imu_(imu_params(), seed) {
+    for (size_t i = 0; i < 4; ++i) {
+      ImuParams ap;
+      ap.rate_hz = kArmImuHz;
+      arm_imus_[i] = std::make_unique<ImuModel>(ap, seed, sensor_streams::kArmImuStreamBase + i);
+    }
+    PositionSetpoint sp;
+    sp.position = s.initial_position;
+    sp.yaw = s.initial_yaw;
+    x_.set_setpoint(sp);
+  }
+  static XplorerParams make_params(const Scenario& s) {
+    XplorerParams p;
+    ParamOverrides o(s);
+    o.number("mass", p.mass);
+    o.check_all_used("mass");
+    p.validate();
+    return p;
+  }
+  static ImuParams imu_params() {
+    ImuParams p;
+    p.rate_hz = kImuHz;
+    return p;
+  }
+  void step(double dt, const Arena& arena) override { x_.step(dt, arena); }
+  const RigidBodyState& truth() const override { return x_.state(); }
+  RigidBodyState estimate() const override { return x_.state(); }  // motion capture (001)
+  Vec3 external_force_world() const override { return x_.external_force_world(); }
+  std::vector<CollisionEvent> take_collisions() override { return x_.take_collisions(); }
+  bool position_setpoint(const Vec3& p, double yaw) override {
+    PositionSetpoint sp;
+    sp.position = p;
+    sp.yaw = yaw;
+    x_.set_setpoint(sp);
+    return true;
+  }
+  void sense(int64_t k, double physics_hz, int64_t now_ns, const Arena&, SimLogic::Outputs& out,
+             std::vector<Vec2>&) override {
+    const auto& st = x_.state();
+    if (every(k, physics_hz, kImuHz)) {
+      const ImuSample sm = imu_.sample(x_.specific_force_body(), st.angular_velocity);
+      out.imu.push_back({"/imu", imu_msg(sm, st.orientation, now_ns, 0.0, 0.0)});
+    }
+    if (every(k, physics_hz, kArmImuHz)) {  // 001: arm IMUs at 50 Hz
+      tactile_msgs::msg::ArmImuArray a;
+      stamp(a.header.stamp, now_ns);
+      a.header.frame_id = "base_link";
+      for (int i = 0; i < 4; ++i) {
+        const ArmImuTruth t = x_.arm_imu(i);
+        const ImuSample sm = arm_imus_[static_cast<size_t>(i)]->sample(t.accel, t.gyro);
+        tactile_msgs::msg::ArmImu m;
+        m.arm_id = static_cast<uint8_t>(i);
+        m.orientation.x = t.orientation.x();
+        m.orientation.y = t.orientation.y();
+        m.orientation.z = t.orientation.z();
+        m.orientation.w = t.orientation.w();
+        m.angular_velocity.x = sm.gyro.x();
+        m.angular_velocity.y = sm.gyro.y();
+        m.angular_velocity.z = sm.gyro.z();
+        m.linear_acceleration.x = sm.accel.x();
+        m.linear_acceleration.y = sm.accel.y();
+        m.linear_acceleration.z = sm.accel.z();
+        m.arm_angle = x_.arm_angles()[static_cast<size_t>(i)];
+        a.arms.push_back(m);
+        max_arm_ = std::max(max_arm_, std::abs(m.arm_angle));
+      }
+      out.arm_imu.push_back({"/arm_imu", a});
+      tactile_msgs::msg::ThrustCommand t;
+      t.header = a.header;
+      t.normalized = x_.thrust_command();
+      t.total_thrust = x_.collective_thrust();
+      t.rotor_thrust.assign(x_.rotor_thrusts().begin(), x_.rotor_thrusts().end());
+      out.thrust.push_back({"/thrust_command", t});
+    }
+  }
+  std::vector<std::pair<std::string, std::string>> topics() const override {
+    return {{"/imu", kImuType}, {"/arm_imu", kArmType}, {"/thrust_command", kThrustType}};
+  }
+  void summarize(SimLogic::Summary& s) const override { s["max_arm_deflection_deg"] = max_arm_ * 180.0 / M_PI; }
+
+ private:
+  static constexpr double kImuHz = 500.0;
+  static constexpr double kArmImuHz = 50.0;
+  Xplorer x_;
+  ImuModel imu_;
+  std::array<std::unique_ptr<ImuModel>, 4> arm_imus_;
+  double max_arm_ = 0.0;
+};
+
+}  // namespace
+
+// ---------------------------------------------------------------------------
+// Faults
+
+struct SimLogic::FaultSet {
+  template <class T>
+  using Map = std::map<std::string, TopicFaults<T>>;
+  std::tuple<Map<tactile_msgs::msg::WhiskerPressure>, Map<sensor_msgs::msg::Imu>, Map<sensor_msgs::msg::Range>,
+             Map<nav_msgs::msg::Odometry>, Map<tactile_msgs::msg::OpticalFlow>, Map<tactile_msgs::msg::ArmImuArray>>
+      maps;
+
+  /// Message types faults can be injected on (those with FaultChannels).
+  template <class T>
+  static constexpr bool supports =
+      std::disjunction_v<std::is_same<T, tactile_msgs::msg::WhiskerPressure>, std::is_same<T, sensor_msgs::msg::Imu>,
+                         std::is_same<T, sensor_msgs::msg::Range>, std::is_same<T, nav_msgs::msg::Odometry>,
+                         std::is_same<T, tactile_msgs::msg::OpticalFlow>,
+                         std::is_same<T, tactile_msgs::msg::ArmImuArray>>;
+
+  template <class T>
+  TopicFaults<T>* find(const std::string& topic) {
+    auto& m = std::get<Map<T>>(maps);
+    auto it = m.find(topic);
+    return it == m.end() ? nullptr : &it->second;
+  }
+  template <class T>
+  void add(const std::string& topic, std::vector<FaultSpec> rules, uint64_t seed) {
+    std::get<Map<T>>(maps).emplace(topic, TopicFaults<T>(std::move(rules), seed));
+  }
+};
+
+// ---------------------------------------------------------------------------
+
+void SimLogic::Outputs::clear() {
+  pressure.clear();
+  whisker_truth.clear();
+  odometry.clear();
+  imu.clear();
+  range.clear();
+  flow.clear();
+  arm_imu.clear();
+  thrust.clear();
+  wrench.clear();
+  wall.clear();
+  collisions.clear();
+}
+
+size_t SimLogic::Outputs::size() const {
+  return pressure.size() + whisker_truth.size() + odometry.size() + imu.size() + range.size() + flow.size() +
+         arm_imu.size() + thrust.size() + wrench.size() + wall.size() + collisions.size();
+}
+
+SimLogic::SimLogic(const Scenario& scenario, uint64_t seed, double extra_arena_yaw)
+    : scenario_(scenario), seed_(seed), faults_(std::make_unique<FaultSet>()) {
+  arena_ = std::make_unique<Arena>(
+      Arena::from_yaml_text(scenario.arena_yaml, scenario.arena_source, scenario.arena_key));
+  // Randomised trials rotate the arena about its own origin, then the
+  // scenario's transform places it.
+  if (extra_arena_yaw != 0.0) arena_->transform(0.0, 0.0, extra_arena_yaw);
+  if (scenario.arena_x != 0.0 || scenario.arena_y != 0.0 || scenario.arena_yaw != 0.0) {
+    arena_->transform(scenario.arena_x, scenario.arena_y, scenario.arena_yaw);
+  }
+  period_ns_ = static_cast<int64_t>(std::llround(1e9 / scenario.physics_rate_hz));
+  dt_ = 1.0 / scenario.physics_rate_hz;
+  switch (scenario.vehicle) {
+    case VehicleType::kWhiskerCrazyflie: vehicle_ = std::make_unique<CrazyflieVehicle>(scenario, seed); break;
+    case VehicleType::kDuctedQuadrotor: vehicle_ = std::make_unique<DuctedVehicle>(scenario, seed); break;
+    case VehicleType::kXplorer: vehicle_ = std::make_unique<XplorerVehicle>(scenario, seed); break;
+  }
+
+  // Faults: every rule must name a topic this simulator publishes, with a
+  // message type that supports the fault.
+  auto topics = vehicle_->topics();
+  topics.emplace_back("/odom", "nav_msgs/msg/Odometry");
+  topics.emplace_back("/ground_truth/odom", "nav_msgs/msg/Odometry");
+  topics.emplace_back("/ground_truth/external_force", "geometry_msgs/msg/WrenchStamped");
+  topics.emplace_back("/collisions", "tactile_msgs/msg/CollisionEvent");
+  std::map<std::string, std::vector<FaultSpec>> by_topic;
+  for (size_t i = 0; i < scenario.faults.size(); ++i) {
+    const FaultSpec& f = scenario.faults[i];
+    auto it = std::find_if(topics.begin(), topics.end(), [&](const auto& t) { return t.first == f.topic; });
+    const std::string where = scenario.source + ": faults[" + std::to_string(i) + "].topic: ";
+    if (it == topics.end()) {
+      std::string list;
+      for (const auto& t : topics) list += (list.empty() ? "" : ", ") + t.first;
+      throw ScenarioError(where + "the " + std::string(to_string(scenario.vehicle)) + " simulator publishes no '" +
+                          f.topic + "' (it publishes " + list + ")");
+    }
+    static const std::set<std::string> supported = {kPressure, kImuType, kRangeType, kFlowType, kArmType,
+                                                    "nav_msgs/msg/Odometry"};
+    if (!supported.count(it->second)) {
+      throw ScenarioError(where + "faults are supported on sensor topics (WhiskerPressure, Imu, Range, "
+                                  "OpticalFlow, ArmImuArray, Odometry), not on " + it->second);
+    }
+    by_topic[f.topic].push_back(f);
+  }
+  uint64_t index = 0;
+  for (auto& [topic, rules] : by_topic) {
+    const std::string type =
+        std::find_if(topics.begin(), topics.end(), [&](const auto& t) { return t.first == topic; })->second;
+    const uint64_t s = stream_seed(seed, kStreamFaults + index++);
+    if (type == kPressure) faults_->add<tactile_msgs::msg::WhiskerPressure>(topic, rules, s);
+    if (type == kImuType) faults_->add<sensor_msgs::msg::Imu>(topic, rules, s);
+    if (type == kRangeType) faults_->add<sensor_msgs::msg::Range>(topic, rules, s);
+    if (type == kFlowType) faults_->add<tactile_msgs::msg::OpticalFlow>(topic, rules, s);
+    if (type == kArmType) faults_->add<tactile_msgs::msg::ArmImuArray>(topic, rules, s);
+    if (type == "nav_msgs/msg/Odometry") faults_->add<nav_msgs::msg::Odometry>(topic, rules, s);
+  }
+}
+
+SimLogic::~SimLogic() = default;
+
+const Arena& SimLogic::arena() const { return *arena_; }
+
+void SimLogic::on_hover_setpoint(const tactile_msgs::msg::HoverSetpoint& msg) {
+  if (!std::isfinite(msg.vx) || !std::isfinite(msg.vy) || !std::isfinite(msg.yaw_rate) || !std::isfinite(msg.height)) {
+    ++dropped_setpoints_;
+    return;
+  }
+  HoverSetpoint sp;
+  sp.vx = msg.vx;
+  sp.vy = msg.vy;
+  sp.yaw_rate = msg.yaw_rate;
+  sp.height = msg.height;
+  sp.land = msg.land;
+  if (!vehicle_->hover_setpoint(sp)) ++dropped_setpoints_;
+}
+
+void SimLogic::on_position_setpoint(const geometry_msgs::msg::PoseStamped& msg) {
+  const auto& p = msg.pose.position;
+  const auto& q = msg.pose.orientation;
+  const Quat quat(q.w, q.x, q.y, q.z);
+  if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || !std::isfinite(quat.norm()) ||
+      quat.norm() < 1e-6) {
+    ++dropped_setpoints_;
+    return;
+  }
+  if (!vehicle_->position_setpoint(Vec3(p.x, p.y, p.z), heading(quat.normalized()))) ++dropped_setpoints_;
+}
+
+void SimLogic::on_rotor_thrust(const tactile_msgs::msg::ThrustCommand& msg) {
+  if (msg.rotor_thrust.size() != 4 ||
+      !std::all_of(msg.rotor_thrust.begin(), msg.rotor_thrust.end(), [](double t) { return std::isfinite(t); })) {
+    ++dropped_setpoints_;
+    return;
+  }
+  std::array<double, 4> t{};
+  std::copy(msg.rotor_thrust.begin(), msg.rotor_thrust.end(), t.begin());
+  if (!vehicle_->rotor_thrust(t)) ++dropped_setpoints_;
+}
+
+namespace {
+template <class Map, class T>
+void flush_delayed(Map& faults, std::vector<Published<T>>& out, int64_t now_ns) {
+  for (auto& [topic, f] : faults) {
+    std::vector<T> due;
+    f.flush(now_ns, due);
+    for (auto& d : due) out.push_back({topic, std::move(d)});
+  }
+}
+}  // namespace
+
+template <class T>
+void SimLogic::emit(std::vector<Published<T>>& out, const std::string& topic, T msg, int64_t now_ns) {
+  if constexpr (FaultSet::supports<T>) {
+    if (auto* f = faults_->find<T>(topic)) {
+      std::vector<T> delivered;
+      f->push(std::move(msg), now_ns, delivered, fault_counts_);
+      for (auto& m : delivered) out.push_back({topic, std::move(m)});
+      return;
+    }
+  }
+  out.push_back({topic, std::move(msg)});
+}
+
+void SimLogic::step(int64_t now_ns, Outputs& out) {
+  if (started_) {
+    vehicle_->step(dt_, *arena_);
+    ++k_;
+  }
+  started_ = true;
+  const double hz = scenario_.physics_rate_hz;
+
+  Outputs raw;
+  vehicle_->sense(k_, hz, now_ns, *arena_, raw, whisker_contacts_);
+  const RigidBodyState& truth = vehicle_->truth();
+  if (every(k_, hz, 100.0)) {
+    const RigidBodyState est = vehicle_->estimate();
+    raw.odometry.push_back({"/odom", odometry(est, now_ns)});
+    raw.odometry.push_back({"/ground_truth/odom", odometry(truth, now_ns)});
+    trajectory_.push_back({tactile_common::to_seconds(now_ns), truth, est});
+    geometry_msgs::msg::WrenchStamped w;
+    stamp(w.header.stamp, now_ns);
+    w.header.frame_id = "map";
+    const Vec3 f = vehicle_->external_force_world();
+    max_external_force_ = std::max(max_external_force_, f.norm());
+    w.wrench.force.x = f.x();
+    w.wrench.force.y = f.y();
+    w.wrench.force.z = f.z();
+    raw.wrench.push_back({"/ground_truth/external_force", w});
+  }
+  for (auto& c : vehicle_->take_collisions()) {
+    tactile_msgs::msg::CollisionEvent m;
+    stamp(m.header.stamp, now_ns);
+    m.header.frame_id = "map";
+    m.part = c.part;
+    m.point.x = c.point.x();
+    m.point.y = c.point.y();
+    m.point.z = truth.position.z();
+    m.normal.x = c.normal.x();
+    m.normal.y = c.normal.y();
+    m.impact_speed = c.impact_speed;
+    m.obstacle_id = c.obstacle_id;
+    raw.collisions.push_back({"/collisions", m});
+    collisions_.push_back(c);
+  }
+
+  // Route everything through the fault injection, in a fixed order.
+  for (auto& p : raw.pressure) emit(out.pressure, p.topic, std::move(p.msg), now_ns);
+  for (auto& p : raw.whisker_truth) emit(out.whisker_truth, p.topic, std::move(p.msg), now_ns);
+  for (auto& p : raw.odometry) emit(out.odometry, p.topic, std::move(p.msg), now_ns);
+  for (auto& p : raw.imu) emit(out.imu, p.topic, std::move(p.msg), now_ns);
+  for (auto& p : raw.range) emit(out.range, p.topic, std::move(p.msg), now_ns);
+  for (auto& p : raw.flow) emit(out.flow, p.topic, std::move(p.msg), now_ns);
+  for (auto& p : raw.arm_imu) emit(out.arm_imu, p.topic, std::move(p.msg), now_ns);
+  for (auto& p : raw.thrust) emit(out.thrust, p.topic, std::move(p.msg), now_ns);
+  for (auto& p : raw.wrench) emit(out.wrench, p.topic, std::move(p.msg), now_ns);
+  for (auto& p : raw.wall) emit(out.wall, p.topic, std::move(p.msg), now_ns);
+  for (auto& p : raw.collisions) emit(out.collisions, p.topic, std::move(p.msg), now_ns);
+  // Messages held back by a latency fault that are due now.
+  flush_delayed(std::get<0>(faults_->maps), out.pressure, now_ns);
+  flush_delayed(std::get<1>(faults_->maps), out.imu, now_ns);
+  flush_delayed(std::get<2>(faults_->maps), out.range, now_ns);
+  flush_delayed(std::get<3>(faults_->maps), out.odometry, now_ns);
+  flush_delayed(std::get<4>(faults_->maps), out.flow, now_ns);
+  flush_delayed(std::get<5>(faults_->maps), out.arm_imu, now_ns);
+}
+
+bool SimLogic::finished(int64_t now_ns) const {
+  return tactile_common::to_seconds(now_ns) >= scenario_.duration_s - 0.5 * dt_;
+}
+
+SimLogic::Summary SimLogic::summary() const {
+  Summary s;
+  double path = 0.0, max_speed = 0.0, max_err = 0.0;
+  double min_clear = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < trajectory_.size(); ++i) {
+    const auto& p = trajectory_[i];
+    if (i > 0) path += (p.truth.position - trajectory_[i - 1].truth.position).norm();
+    max_speed = std::max(max_speed, p.truth.velocity.norm());
+    max_err = std::max(max_err, (p.estimate.position - p.truth.position).norm());
+    const Hit h = arena_->closest(p.truth.position.head<2>(), 100.0);
+    if (h.hit) min_clear = std::min(min_clear, h.distance);
+  }
+  s["max_external_force_n"] = max_external_force_;
+  s["path_length_m"] = path;
+  s["max_speed_mps"] = max_speed;
+  s["min_obstacle_distance_m"] = min_clear;
+  s["max_estimate_error_m"] = max_err;
+  if (!trajectory_.empty()) {
+    const auto& last = trajectory_.back();
+    s["final_x_m"] = last.truth.position.x();
+    s["final_y_m"] = last.truth.position.y();
+    s["final_z_m"] = last.truth.position.z();
+    s["final_estimate_error_m"] = (last.estimate.position - last.truth.position).norm();
+  }
+  vehicle_->summarize(s);
+  return s;
+}
+
+}  // namespace tactile_sim
