@@ -60,4 +60,80 @@ std::shared_ptr<tdorc_filter::TdorcFilterLogic> add_tdorc_filter(
   return logic;
 }
 
+namespace {
+template <class T>
+void publish_all(Host& host, std::vector<tactile_sim::Published<T>>& msgs, int64_t now_ns) {
+  for (const auto& m : msgs) host.bus().publish(m.topic, m.msg, now_ns);
+}
+}  // namespace
+
+void add_tactile_sim(Host& host, std::shared_ptr<tactile_sim::SimLogic> sim) {
+  using Sim = tactile_sim::SimLogic;
+  Host* h = &host;
+  Sim* s = sim.get();
+  host.bus().subscribe<tactile_msgs::msg::HoverSetpoint>(
+      Sim::kHoverSetpointTopic, [s](const tactile_msgs::msg::HoverSetpoint& m) { s->on_hover_setpoint(m); });
+  host.bus().subscribe<geometry_msgs::msg::PoseStamped>(
+      Sim::kPositionSetpointTopic, [s](const geometry_msgs::msg::PoseStamped& m) { s->on_position_setpoint(m); });
+  host.bus().subscribe<tactile_msgs::msg::ThrustCommand>(
+      Sim::kRotorThrustTopic, [s](const tactile_msgs::msg::ThrustCommand& m) { s->on_rotor_thrust(m); });
+  auto out = std::make_shared<Sim::Outputs>();
+  host.executor().add_timer(
+      sim->period_ns(),
+      [h, s, out](int64_t now_ns) {
+        out->clear();
+        s->step(now_ns, *out);
+        publish_all(*h, out->pressure, now_ns);
+        publish_all(*h, out->whisker_truth, now_ns);
+        publish_all(*h, out->odometry, now_ns);
+        publish_all(*h, out->imu, now_ns);
+        publish_all(*h, out->range, now_ns);
+        publish_all(*h, out->flow, now_ns);
+        publish_all(*h, out->arm_imu, now_ns);
+        publish_all(*h, out->thrust, now_ns);
+        publish_all(*h, out->wrench, now_ns);
+        publish_all(*h, out->wall, now_ns);
+        publish_all(*h, out->collisions, now_ns);
+        if (s->finished(now_ns)) h->executor().stop();
+      },
+      host.executor().now_ns());
+  host.add_reporter([s] {
+    NodeReport r{std::string("/") + Sim::kNodeName, {{"dropped_setpoints", s->dropped_setpoints()}}};
+    for (const auto& [type, n] : s->fault_counts()) r.counters.emplace_back("faults_" + type, n);
+    return r;
+  });
+  host.keep(out);
+  host.keep(sim);
+}
+
+void add_scenario_pilot(Host& host, std::shared_ptr<tactile_sim::ScriptedPilotLogic> pilot) {
+  using Pilot = tactile_sim::ScriptedPilotLogic;
+  Host* h = &host;
+  Pilot* p = pilot.get();
+  for (const char* side : {"/whisker/left/signal", "/whisker/right/signal"}) {
+    host.bus().subscribe<tactile_msgs::msg::WhiskerSignal>(
+        side, [p](const tactile_msgs::msg::WhiskerSignal& m) { p->on_whisker_signal(m); });
+  }
+  host.bus().subscribe<tactile_msgs::msg::CollisionEvent>(
+      Pilot::kCollisionTopic, [p](const tactile_msgs::msg::CollisionEvent& m) { p->on_collision(m); });
+  host.bus().subscribe<nav_msgs::msg::Odometry>(Pilot::kOdometryTopic,
+                                                [p](const nav_msgs::msg::Odometry& m) { p->on_odometry(m); });
+  host.executor().add_timer(
+      tactile_common::from_seconds(1.0 / Pilot::kRateHz),
+      [h, p](int64_t now_ns) {
+        const auto out = p->on_timer(now_ns);
+        if (out.hover) h->bus().publish(Pilot::kHoverTopic, *out.hover, now_ns);
+        if (out.position) h->bus().publish(Pilot::kPositionTopic, *out.position, now_ns);
+      },
+      host.executor().now_ns());
+  host.add_reporter([p] {
+    const auto& s = p->stats();
+    return NodeReport{std::string("/") + Pilot::kNodeName,
+                      {{"steps_completed", s.steps_completed},
+                       {"steps_timed_out", s.steps_timed_out},
+                       {"finished", s.finished ? 1u : 0u}}};
+  });
+  host.keep(pilot);
+}
+
 }  // namespace tactile_cli

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "tactile_cli/sim_run.hpp"
 #include "tactile_cli/whisker_demo.hpp"
 #include "tactile_cli/whisker_replay.hpp"
 
@@ -52,11 +53,41 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
 
+  tactile_cli::SimOptions sim;
+  uint64_t sim_seed = 0;
+  auto* sim_cmd = app.add_subcommand("sim", "fly a SITL scenario (config/scenarios/*.yaml)");
+  sim_cmd->add_option("scenario", sim.scenario, "scenario file")->required();
+  sim_cmd->add_option("--out", sim.out_dir, "output directory (bag/, trajectory.csv, metrics.json, topview.png)")
+      ->required();
+  auto* seed_opt = sim_cmd->add_option("--seed", sim_seed, "seed (default: the scenario's)");
+  sim_cmd->add_option("--trials", sim.trials, "number of seeded trials (seed, seed+1, ...)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sim_cmd->add_flag("!--no-bag", sim.write_bag, "do not record the bag");
+  sim_cmd->add_flag("!--no-png", sim.write_png, "do not draw topview.png");
+  sim_cmd->add_flag("!--quiet", sim.progress, "no progress line");
+
   CLI11_PARSE(app, argc, argv);
 
   try {
     check_config_dir(config_dir);
-    if (*replay_cmd) {
+    if (*sim_cmd) {
+      sim.config_dir = config_dir;
+      if (*seed_opt) sim.seed = sim_seed;
+      const auto m = tactile_cli::run_sim(sim);
+      if (sim.trials == 1) {
+        std::printf("tactile sim: %s seed %llu: %.1f s simulated in %.2f s (%.0fx real time), %zu collisions, %s\n",
+                    m["scenario"].get<std::string>().c_str(), static_cast<unsigned long long>(m["seed"].get<uint64_t>()),
+                    m["sim_time_s"].get<double>(), m["wall_time_s"].get<double>(),
+                    m["real_time_factor"].get<double>(), m["collisions"].get<size_t>(),
+                    m["success"].get<bool>() ? "success" : "no success");
+      } else {
+        std::printf("tactile sim: %s, %d trials: %d successes, %zu collisions, %.0fx real time\n",
+                    m["scenario"].get<std::string>().c_str(), sim.trials, m["success_count"].get<int>(),
+                    m["collisions"].get<size_t>(), m["real_time_factor"].get<double>());
+      }
+      std::printf("outputs in %s\n", sim.out_dir.c_str());
+    } else if (*replay_cmd) {
       replay.config_dir = config_dir;
       const auto m = tactile_cli::run_replay(replay);
       std::printf("tactile replay: %s -> %s (%.0f messages/s)\n", replay.bag.c_str(),

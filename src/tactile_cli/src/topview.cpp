@@ -183,7 +183,7 @@ void write_topview_png(const std::string& path, const TopView& view, int width_p
   for (size_t i = 1; i < n; ++i) {
     const Vec2 &a = view.trajectory[i - 1], &b = view.trajectory[i];
     if (!finite(a) || !finite(b)) continue;
-    cv::line(img, P(a), P(b), ramp((static_cast<double>(i) - 0.5) / std::max<size_t>(1, n - 1)), 2, cv::LINE_AA);
+    cv::line(img, P(a), P(b), ramp((static_cast<double>(i) - 0.5) / static_cast<double>(std::max<size_t>(1, n - 1))), 2, cv::LINE_AA);
   }
   for (const Vec2& p : view.whisker_contacts) {
     if (finite(p)) cv::circle(img, P(p), 3, cv::Scalar(60, 170, 40), cv::FILLED, cv::LINE_AA);

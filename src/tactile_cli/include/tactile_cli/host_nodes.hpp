@@ -7,6 +7,8 @@
 #include <string>
 
 #include "tactile_cli/host.hpp"
+#include "tactile_sim/logic/pilot_logic.hpp"
+#include "tactile_sim/logic/sim_logic.hpp"
 #include "tdorc_filter/tdorc_filter_logic.hpp"
 #include "whisker_driver/whisker_driver_logic.hpp"
 
@@ -19,5 +21,12 @@ std::shared_ptr<whisker_driver::WhiskerDriverLogic> add_whisker_driver(
 /// tdorc_filter in namespace `ns`: <ns>/pressure -> <ns>/signal.
 std::shared_ptr<tdorc_filter::TdorcFilterLogic> add_tdorc_filter(
     Host& host, const std::string& ns, const tactile_common::ParamMap& overrides);
+
+/// The simulator: a timer at the physics rate publishing every sensor and
+/// ground-truth topic, subscribed to the setpoint topics.
+void add_tactile_sim(Host& host, std::shared_ptr<tactile_sim::SimLogic> sim);
+
+/// The scenario pilot: /whisker/*/signal, /collisions, /odom in; setpoints out at 50 Hz.
+void add_scenario_pilot(Host& host, std::shared_ptr<tactile_sim::ScriptedPilotLogic> pilot);
 
 }  // namespace tactile_cli

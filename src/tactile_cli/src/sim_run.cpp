@@ -1,0 +1,261 @@
+#include "tactile_cli/sim_run.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <random>
+#include <sstream>
+#include <algorithm>
+
+#include "tactile_cli/host.hpp"
+#include "tactile_cli/host_nodes.hpp"
+#include "tactile_cli/topview.hpp"
+#include "tactile_common/time.hpp"
+#include "tactile_sim/scenario.hpp"
+
+namespace tactile_cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+using tactile_sim::Scenario;
+
+constexpr uint64_t kStreamTrialYaw = 30;  // tactile_sim stream id of the trial's arena rotation
+
+void write_text(const fs::path& path, const std::string& text) {
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error(path.string() + ": cannot write");
+  out << text;
+  if (!out) throw std::runtime_error(path.string() + ": write failed");
+}
+
+void write_trajectory_csv(const fs::path& path, const tactile_sim::SimLogic& sim) {
+  std::ostringstream os;
+  os << "t,x,y,z,yaw,vx,vy,vz,est_x,est_y,est_z,est_yaw\n";
+  os << std::setprecision(9);
+  for (const auto& p : sim.trajectory()) {
+    const auto& x = p.truth;
+    const auto& e = p.estimate;
+    os << p.t << ',' << x.position.x() << ',' << x.position.y() << ',' << x.position.z() << ',' << x.yaw()
+       << ',' << x.velocity.x() << ',' << x.velocity.y() << ',' << x.velocity.z() << ',' << e.position.x()
+       << ',' << e.position.y() << ',' << e.position.z() << ',' << e.yaw() << '\n';
+  }
+  write_text(path, os.str());
+}
+
+struct Progress {
+  bool enabled;
+  std::string label;
+  double duration_s;
+  std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+  int last_percent = -1;
+  void update(double sim_s) {
+    if (!enabled) return;
+    const int percent = static_cast<int>(100.0 * sim_s / duration_s);
+    if (percent == last_percent || percent % 5 != 0) return;
+    last_percent = percent;
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::fprintf(stderr, "\r[sim] %s: %3d %% (%.1f / %.1f s simulated, %.0fx real time)   ", label.c_str(),
+                 percent, sim_s, duration_s, wall > 0 ? sim_s / wall : 0.0);
+    std::fflush(stderr);
+  }
+  void done() {
+    if (enabled) std::fprintf(stderr, "\n");
+  }
+};
+
+/// One run of the scenario into `dir`.
+nlohmann::json run_once(const Scenario& scenario, const SimOptions& options, uint64_t seed, const fs::path& dir,
+                        const std::string& label) {
+  const auto wall_start = std::chrono::steady_clock::now();
+  double arena_yaw = 0.0;
+  if (scenario.randomize_arena_yaw) {
+    tactile_sim::Rng rng(tactile_sim::stream_seed(seed, kStreamTrialYaw));
+    arena_yaw = std::uniform_real_distribution<double>(scenario.randomize_arena_yaw->first,
+                                                       scenario.randomize_arena_yaw->second)(rng);
+  }
+  // The world first: a bad arena, vehicle parameter or fault stops the run
+  // before anything is written.
+  auto sim = std::make_shared<tactile_sim::SimLogic>(scenario, seed, arena_yaw);
+  fs::create_directories(dir);
+  Host host(options.config_dir);
+  std::unique_ptr<BagRecorder> recorder;
+  if (options.write_bag) {
+    recorder = std::make_unique<BagRecorder>((dir / "bag").string());
+    host.bus().add_tap(recorder.get());
+  }
+  add_tactile_sim(host, sim);
+  std::shared_ptr<tactile_sim::ScriptedPilotLogic> pilot;
+  if (scenario.graph == "pilot") {
+    if (scenario.vehicle == tactile_sim::VehicleType::kWhiskerCrazyflie) {
+      // The whisker signal chain the pilot's 'until: contact' listens to.
+      add_tdorc_filter(host, "whisker/left", {});
+      add_tdorc_filter(host, "whisker/right", {});
+    }
+    pilot = std::make_shared<tactile_sim::ScriptedPilotLogic>(scenario.pilot, scenario.vehicle,
+                                                               scenario.initial_position, scenario.initial_yaw);
+    add_scenario_pilot(host, pilot);
+  }
+
+  Progress progress{options.progress, label, scenario.duration_s};
+  host.executor().add_timer(tactile_common::from_seconds(0.1),
+                            [&progress](int64_t now) { progress.update(tactile_common::to_seconds(now)); });
+  host.executor().run_until(tactile_common::from_seconds(scenario.duration_s) + sim->period_ns());
+  progress.done();
+  if (recorder) recorder->close();
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  const double sim_s = tactile_common::to_seconds(host.executor().now_ns());
+
+  nlohmann::json m;
+  m["scenario"] = scenario.name;
+  m["scenario_file"] = scenario.source;
+  m["vehicle"] = tactile_sim::to_string(scenario.vehicle);
+  m["seed"] = seed;
+  m["arena_yaw_deg"] = (scenario.arena_yaw + arena_yaw) * 180.0 / M_PI;
+  m["sim_time_s"] = sim_s;
+  m["wall_time_s"] = wall_s;
+  m["real_time_factor"] = wall_s > 0 ? sim_s / wall_s : 0.0;
+  m["physics_rate_hz"] = scenario.physics_rate_hz;
+  m["collisions"] = sim->collisions().size();
+  for (const auto& c : sim->collisions()) {
+    m["collision_events"].push_back({{"t", c.time_s}, {"part", c.part}, {"x", c.point.x()}, {"y", c.point.y()},
+                                     {"impact_speed", c.impact_speed}, {"obstacle_id", c.obstacle_id}});
+  }
+  for (const auto& [k, v] : sim->summary()) {
+    m["ground_truth"][k] = std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
+  }
+  if (pilot) {
+    const auto& ps = pilot->stats();
+    m["pilot"] = {{"finished", ps.finished},
+                  {"steps", scenario.pilot.size()},
+                  {"steps_completed", ps.steps_completed},
+                  {"steps_timed_out", ps.steps_timed_out},
+                  {"contact_time_s", std::isfinite(ps.contact_time_s) ? nlohmann::json(ps.contact_time_s)
+                                                                      : nlohmann::json(nullptr)}};
+  }
+  // Success: the pilot flew its whole script (no 'until' timed out) without
+  // impacts, unless the scenario flies a collision-resilient vehicle into
+  // contact on purpose (metrics: {allow_collisions: true}, XPLORER).
+  bool allow_collisions = false;
+  if (auto it = scenario.metrics.find("allow_collisions"); it != scenario.metrics.end()) {
+    const bool* b = std::get_if<bool>(&it->second);
+    if (!b) throw std::runtime_error(scenario.source + ": metrics.allow_collisions: expected true or false");
+    allow_collisions = *b;
+  }
+  m["success"] = (!pilot || (pilot->stats().finished && pilot->stats().steps_timed_out == 0)) &&
+                 (allow_collisions || sim->collisions().empty());
+  for (const auto& [k, v] : sim->fault_counts()) m["faults_injected"][k] = v;
+  for (const auto& r : host.reports()) {
+    for (const auto& [k, v] : r.counters) m["nodes"][r.name][k] = v;
+  }
+  for (const auto& [topic, n] : host.bus().published_counts()) m["topics"][topic] = n;
+
+  write_trajectory_csv(dir / "trajectory.csv", *sim);
+  write_text(dir / "metrics.json", m.dump(2) + "\n");
+  if (options.write_png) {
+    TopView view;
+    view.arena = &sim->arena();
+    for (const auto& p : sim->trajectory()) {
+      view.trajectory.push_back(p.truth.position.head<2>());
+      view.estimate_trajectory.push_back(p.estimate.position.head<2>());
+    }
+    view.whisker_contacts = sim->whisker_contacts();
+    for (const auto& c : sim->collisions()) view.collisions.push_back(c.point);
+    const auto& traj = sim->trajectory();
+    for (size_t i = 0; i < traj.size(); i += std::max<size_t>(1, traj.size() / 6)) {
+      view.poses.emplace_back(traj[i].truth.position.head<2>(), traj[i].truth.yaw());
+    }
+    if (!traj.empty()) view.poses.emplace_back(traj.back().truth.position.head<2>(), traj.back().truth.yaw());
+    char title[200];
+    std::snprintf(title, sizeof title, "%s (%s, seed %llu): %zu collisions", scenario.name.c_str(),
+                  tactile_sim::to_string(scenario.vehicle), static_cast<unsigned long long>(seed),
+                  sim->collisions().size());
+    view.title = title;
+    write_topview_png((dir / "topview.png").string(), view);
+  }
+  return m;
+}
+
+/// Mean / std / min / max of every numeric leaf over the trials.
+void aggregate(const std::vector<nlohmann::json>& runs, const std::string& prefix, const nlohmann::json& first,
+               nlohmann::json& out) {
+  for (const auto& [key, value] : first.items()) {
+    const std::string path = prefix.empty() ? key : prefix + "." + key;
+    if (value.is_object()) {
+      aggregate(runs, path, value, out);
+      continue;
+    }
+    if (!value.is_number() && !value.is_boolean()) continue;
+    std::vector<double> xs;
+    for (const auto& r : runs) {
+      const auto ptr = nlohmann::json::json_pointer("/" + [&] {
+        std::string p = path;
+        for (auto& c : p) if (c == '.') c = '/';
+        return p;
+      }());
+      if (!r.contains(ptr)) continue;
+      const auto& v = r.at(ptr);
+      if (v.is_number()) xs.push_back(v.get<double>());
+      if (v.is_boolean()) xs.push_back(v.get<bool>() ? 1.0 : 0.0);
+    }
+    if (xs.empty()) continue;
+    double mean = 0.0;
+    for (double x : xs) mean += x;
+    mean /= static_cast<double>(xs.size());
+    double var = 0.0;
+    for (double x : xs) var += (x - mean) * (x - mean);
+    const double sd = xs.size() > 1 ? std::sqrt(var / static_cast<double>(xs.size() - 1)) : 0.0;
+    out[path] = {{"mean", mean}, {"std", sd}, {"min", *std::min_element(xs.begin(), xs.end())},
+                 {"max", *std::max_element(xs.begin(), xs.end())}, {"n", xs.size()}};
+  }
+}
+
+}  // namespace
+
+nlohmann::json run_sim(const SimOptions& options) {
+  if (options.trials < 1) throw std::invalid_argument("--trials must be >= 1");
+  const Scenario scenario = tactile_sim::load_scenario(options.scenario);
+  const uint64_t seed0 = options.seed.value_or(scenario.seed);
+  fs::create_directories(options.out_dir);
+  if (options.trials == 1) {
+    return run_once(scenario, options, seed0, options.out_dir, scenario.name);
+  }
+  std::vector<nlohmann::json> runs;
+  const auto wall_start = std::chrono::steady_clock::now();
+  for (int k = 0; k < options.trials; ++k) {
+    const uint64_t seed = seed0 + static_cast<uint64_t>(k);
+    const std::string label = scenario.name + " trial " + std::to_string(k + 1) + "/" + std::to_string(options.trials);
+    runs.push_back(run_once(scenario, options, seed, fs::path(options.out_dir) / ("trial_" + std::to_string(k)), label));
+  }
+  nlohmann::json agg;
+  agg["scenario"] = scenario.name;
+  agg["trials"] = options.trials;
+  agg["seeds"] = nlohmann::json::array();
+  int success = 0;
+  double sim_total = 0.0;
+  size_t collisions = 0;
+  for (const auto& r : runs) {
+    agg["seeds"].push_back(r["seed"]);
+    success += r["success"].get<bool>() ? 1 : 0;
+    sim_total += r["sim_time_s"].get<double>();
+    collisions += r["collisions"].get<size_t>();
+  }
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  agg["success_count"] = success;
+  agg["sim_time_s"] = sim_total;
+  agg["wall_time_s"] = wall_s;
+  agg["real_time_factor"] = wall_s > 0 ? sim_total / wall_s : 0.0;
+  agg["collisions"] = collisions;
+  nlohmann::json stats;
+  aggregate(runs, "", runs.front(), stats);
+  stats.erase("seed");
+  agg["statistics"] = stats;
+  agg["per_trial"] = runs;
+  write_text(fs::path(options.out_dir) / "metrics.json", agg.dump(2) + "\n");
+  return agg;
+}
+
+}  // namespace tactile_cli

@@ -1,0 +1,197 @@
+// Scenario tests of `tactile sim`: every library scenario flies, the
+// data-collection protocol reaches the wall and sweeps it, metrics carry the
+// required keys, one seed gives identical outputs, trials aggregate, and bad
+// scenario files stop with file, key and reason.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "tactile_bag/bag.hpp"
+#include "tactile_cli/sim_run.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path kConfig = TACTILE_CONFIG_DIR;
+
+fs::path fresh_dir(const std::string& name) {
+  fs::path p = fs::temp_directory_path() / ("tactile_sim_test_" + name + "_" + std::to_string(::getpid()));
+  fs::remove_all(p);
+  return p;
+}
+
+tactile_cli::SimOptions options(const std::string& scenario, const fs::path& out) {
+  tactile_cli::SimOptions o;
+  o.scenario = (kConfig / "scenarios" / scenario).string();
+  o.out_dir = out.string();
+  o.config_dir = kConfig.string();
+  o.progress = false;
+  return o;
+}
+
+}  // namespace
+
+TEST(Sim, WhiskerSweepFollowsTheDataCollectionProtocol) {
+  const fs::path dir = fresh_dir("sweep");
+  const auto m = tactile_cli::run_sim(options("whisker_sweep.yaml", dir));
+  for (const char* key : {"sim_time_s", "wall_time_s", "real_time_factor", "collisions", "ground_truth"}) {
+    EXPECT_TRUE(m.contains(key)) << key;
+  }
+  EXPECT_NEAR(m["sim_time_s"].get<double>(), 16.0, 0.01);
+  EXPECT_EQ(m["collisions"].get<int>(), 0);
+  // The whiskers reached the wall (x = 1.0) and the pilot saw the contact
+  // through the TDORC signal, then swept and landed.
+  EXPECT_TRUE(m["pilot"]["finished"].get<bool>());
+  EXPECT_EQ(m["pilot"]["steps_timed_out"].get<int>(), 0);
+  EXPECT_TRUE(m["success"].get<bool>());
+  const auto& gt = m["ground_truth"];
+  EXPECT_GT(gt["whisker_contact_fraction_left"].get<double>(), 0.05);
+  EXPECT_GT(gt["whisker_contact_fraction_right"].get<double>(), 0.05);
+  EXPECT_GT(gt["max_true_depth_left_m"].get<double>(), 0.01);
+  // The body never reached the wall: the whiskers touch, the guard does not.
+  EXPECT_GT(gt["min_obstacle_distance_m"].get<double>(), 0.08);
+  // Swept right (-y) along the wall for 2 s at 0.2 m/s.
+  EXPECT_LT(gt["final_y_m"].get<double>(), -0.25);
+  for (const char* f : {"bag/metadata.yaml", "trajectory.csv", "metrics.json", "topview.png"}) {
+    EXPECT_TRUE(fs::exists(dir / f)) << f;
+  }
+  tactile_bag::Reader bag((dir / "bag").string());
+  for (const char* topic : {"/whisker/left/pressure", "/whisker/right/pressure", "/whisker/left/signal",
+                            "/ground_truth/odom", "/odom", "/imu", "/cmd_hover", "/ground_truth/external_force",
+                            "/ground_truth/whisker/left/contact"}) {
+    EXPECT_GT(bag.message_count(topic), 0u) << topic;
+  }
+  // Barometers at 50 Hz, ground-truth odometry and the Crazyflie's IMU at 100 Hz.
+  EXPECT_NEAR(static_cast<double>(bag.message_count("/whisker/left/pressure")), 16.0 * 50, 2);
+  EXPECT_NEAR(static_cast<double>(bag.message_count("/ground_truth/odom")), 16.0 * 100, 2);
+  EXPECT_NEAR(static_cast<double>(bag.message_count("/imu")), 16.0 * 100, 2);
+  fs::remove_all(dir);
+}
+
+TEST(Sim, EveryLibraryScenarioFlies) {
+  const fs::path dir = fresh_dir("library");
+  for (const auto& e : fs::directory_iterator(kConfig / "scenarios")) {
+    if (e.path().extension() != ".yaml") continue;
+    SCOPED_TRACE(e.path().filename().string());
+    auto o = options(e.path().filename().string(), dir / e.path().stem());
+    o.write_bag = false;
+    o.write_png = false;
+    const auto m = tactile_cli::run_sim(o);
+    EXPECT_GT(m["sim_time_s"].get<double>(), 1.0);
+    EXPECT_TRUE(m["ground_truth"].contains("path_length_m"));
+    EXPECT_TRUE(fs::exists(dir / e.path().stem() / "trajectory.csv"));
+  }
+  fs::remove_all(dir);
+}
+
+TEST(Sim, SameSeedSameOutputsDifferentSeedDifferentNoise) {
+  const fs::path dir = fresh_dir("determinism");
+  auto run = [&](const char* name, uint64_t seed) {
+    auto o = options("whisker_sweep_glass.yaml", dir / name);
+    o.seed = seed;
+    o.write_png = false;
+    return tactile_cli::run_sim(o);
+  };
+  auto a = run("a", 3), b = run("b", 3), c = run("c", 4);
+  for (auto* m : {&a, &b, &c}) {
+    m->erase("wall_time_s");
+    m->erase("real_time_factor");
+  }
+  EXPECT_EQ(a, b);
+  EXPECT_NE(a["ground_truth"], c["ground_truth"]);
+  tactile_bag::Reader ra((dir / "a" / "bag").string()), rb((dir / "b" / "bag").string());
+  ASSERT_EQ(ra.message_count(), rb.message_count());
+  tactile_bag::SerializedMessage ma, mb;
+  while (ra.read_next(ma)) {
+    ASSERT_TRUE(rb.read_next(mb));
+    ASSERT_EQ(ma.topic, mb.topic);
+    ASSERT_EQ(ma.timestamp_ns, mb.timestamp_ns);
+    ASSERT_EQ(ma.data, mb.data) << ma.topic << " at " << ma.timestamp_ns;
+  }
+  fs::remove_all(dir);
+}
+
+TEST(Sim, TrialsAggregateWithRandomArenaRotation) {
+  const fs::path dir = fresh_dir("trials");
+  auto o = options("whisker_room_exit.yaml", dir);
+  o.trials = 3;
+  o.write_bag = false;
+  const auto m = tactile_cli::run_sim(o);
+  EXPECT_EQ(m["trials"].get<int>(), 3);
+  ASSERT_EQ(m["per_trial"].size(), 3u);
+  EXPECT_TRUE(m.contains("success_count"));
+  EXPECT_TRUE(m["statistics"].contains("ground_truth.path_length_m"));
+  EXPECT_EQ(m["statistics"]["ground_truth.path_length_m"]["n"].get<int>(), 3);
+  // Each trial rotates the room differently.
+  const double y0 = m["per_trial"][0]["arena_yaw_deg"], y1 = m["per_trial"][1]["arena_yaw_deg"];
+  EXPECT_NE(y0, y1);
+  EXPECT_GE(y0, -180.0);
+  EXPECT_LE(y0, 180.0);
+  for (int k = 0; k < 3; ++k) EXPECT_TRUE(fs::exists(dir / ("trial_" + std::to_string(k)) / "topview.png"));
+  fs::remove_all(dir);
+}
+
+TEST(Sim, FaultsAreInjectedAndCounted) {
+  const fs::path dir = fresh_dir("faults");
+  fs::create_directories(dir);
+  std::ifstream in(kConfig / "scenarios" / "whisker_sweep.yaml");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  std::string yaml = ss.str();
+  yaml.replace(yaml.find("arena_file: arenas/"), 19, "arena_file: " + (kConfig / "scenarios" / "arenas").string() + "/");
+  yaml +=
+      "faults:\n"
+      "  - {type: nan, topic: /whisker/left/pressure, probability: 0.05}\n"
+      "  - {type: dropout, topic: /imu, start_s: 2.0, duration_s: 1.0}\n"
+      "  - {type: latency, topic: /odom, delay_s: 0.05}\n";
+  std::ofstream(dir / "faulty.yaml") << yaml;
+  auto o = options("", dir / "out");
+  o.scenario = (dir / "faulty.yaml").string();
+  o.write_png = false;
+  const auto m = tactile_cli::run_sim(o);
+  EXPECT_GT(m["faults_injected"]["nan"].get<int>(), 10);
+  EXPECT_NEAR(m["faults_injected"]["dropout"].get<double>(), 100.0, 2.0);  // 1 s of a 100 Hz IMU
+  EXPECT_GT(m["faults_injected"]["latency"].get<int>(), 1000);
+  // The TDORC node dropped (and counted) every NaN sample instead of passing it on.
+  EXPECT_EQ(m["nodes"]["/whisker/left/tdorc_filter"]["dropped_nonfinite"].get<int>(),
+            m["faults_injected"]["nan"].get<int>());
+  EXPECT_NEAR(m["topics"]["/imu"].get<double>(), 16.0 * 100 - 100, 3);
+  fs::remove_all(dir);
+}
+
+TEST(Sim, MalformedScenarioStopsWithFileKeyAndReason) {
+  const fs::path dir = fresh_dir("bad");
+  fs::create_directories(dir);
+  auto error_of = [&](const std::string& yaml) -> std::string {
+    std::ofstream(dir / "bad.yaml") << yaml;
+    auto o = options("", dir / "out");
+    o.scenario = (dir / "bad.yaml").string();
+    try {
+      tactile_cli::run_sim(o);
+    } catch (const std::exception& e) {
+      return e.what();
+    }
+    return "";
+  };
+  const std::string head = "name: b\nduration_s: 2\nvehicle: {type: whisker_crazyflie}\ngraph: none\n";
+  std::string msg = error_of(head + "arena:\n  walls:\n    - points: [[0, 0], [0, 0]]\n");
+  EXPECT_NE(msg.find("bad.yaml"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("walls[0]"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("zero-length"), std::string::npos) << msg;
+  msg = error_of(head + "arena:\n  walls:\n    - points: [[0, 0], [2, 0], [1, 1], [1, -1]]\n");
+  EXPECT_NE(msg.find("walls[0]"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("self-intersect"), std::string::npos) << msg;
+  msg = error_of(head + "arena:\n  walls:\n    - points: [[1, -1], [1, 1]]\nfaults:\n  - {type: loss, topic: /nope}\n");
+  EXPECT_NE(msg.find("faults[0].topic"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("publishes no '/nope'"), std::string::npos) << msg;
+  msg = error_of("name: b\nduration_s: 2\nvehicle: {type: xplorer, params: {mas: 1}}\ngraph: none\n"
+                 "arena:\n  walls:\n    - points: [[1, -1], [1, 1]]\n");
+  EXPECT_NE(msg.find("vehicle.params.mas"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("unknown parameter"), std::string::npos) << msg;
+  msg = error_of("name: b\nduration_s: 2\n  bad indent: [\n");
+  EXPECT_NE(msg.find("YAML syntax error"), std::string::npos) << msg;
+  fs::remove_all(dir);
+}
