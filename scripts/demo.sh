@@ -16,4 +16,11 @@ set +u
 source install/setup.bash
 set -u
 rm -rf "$out"
-tactile demo --config config --out "$out"
+# 1. SITL: the whiskered Crazyflie flies the paper's data-collection protocol
+#    (hover, forward until the TDORC signal reports contact, sweep along the wall).
+tactile sim config/scenarios/whisker_sweep.yaml --config config --out "$out/sitl_whisker_sweep"
+# 2. The same against glass with the flow-deck state estimate, three seeded trials.
+tactile sim config/scenarios/whisker_sweep_glass.yaml --config config --out "$out/sitl_whisker_sweep_glass" \
+  --trials 3 --quiet
+# 3. Whisker signal chain: simulated free flight and contact, replayed through TDORC.
+tactile demo --config config --out "$out/whisker_signals"
