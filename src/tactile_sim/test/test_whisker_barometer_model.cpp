@@ -203,3 +203,25 @@ TEST(WhiskerBarometerModel, ValidateNamesTheField) {
   WhiskerBarometerModel ok{WhiskerBarometerParams{}};
   EXPECT_THROW(ok.step(0.0, 0.0, false), std::invalid_argument);
 }
+
+// The touched surface's noise scale multiplies the pressure noise only while
+// the whisker is loaded: with one seed the draws are identical, so the
+// outputs are linear in the scale under load and equal without load.
+TEST(WhiskerBarometerModel, SurfaceNoiseScaleAppliesOnlyUnderLoad) {
+  const tactile_sim::WhiskerBarometerParams p;
+  tactile_sim::WhiskerBarometerModel m1(p, 5), m2(p, 5), m3(p, 5);
+  for (int k = 0; k < 200; ++k) {
+    const double load = (k >= 100) ? 2e-4 : 0.0;
+    const auto a = m1.step(0.02, load, true, 1.0);
+    const auto b = m2.step(0.02, load, true, 2.0);
+    const auto c = m3.step(0.02, load, true, 3.0);
+    for (int i = 0; i < 3; ++i) {
+      if (load == 0.0) {
+        EXPECT_EQ(a.pressure[i], c.pressure[i]) << k;
+      } else {
+        EXPECT_NEAR(c.pressure[i] - b.pressure[i], b.pressure[i] - a.pressure[i], 0.02) << k;  // quantum 0.016 Pa
+      }
+    }
+    if (k == 150) EXPECT_NE(a.pressure[0], c.pressure[0]);
+  }
+}
