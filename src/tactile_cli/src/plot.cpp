@@ -1,3 +1,4 @@
+#include "png.hpp"
 #include "tactile_cli/plot.hpp"
 
 #include <algorithm>
@@ -150,13 +151,7 @@ void write_plot_png(const std::string& path, const std::vector<Panel>& panels,
   }
   cv::putText(img, x_label, {width / 2 - 40, height - 8}, font, 0.5, cv::Scalar(0, 0, 0), 1,
               cv::LINE_AA);
-  bool ok = false;
-  try {
-    ok = cv::imwrite(path, img);
-  } catch (const cv::Exception& e) {
-    throw std::runtime_error(path + ": cannot write PNG: " + e.what());
-  }
-  if (!ok) throw std::runtime_error(path + ": cannot write PNG");
+  detail::write_png(path, img);
 }
 
 }  // namespace tactile_cli

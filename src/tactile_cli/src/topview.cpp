@@ -1,3 +1,4 @@
+#include "png.hpp"
 #include "tactile_cli/topview.hpp"
 
 #include <algorithm>
@@ -255,13 +256,7 @@ void write_topview_png(const std::string& path, const TopView& view, int width_p
     cv::putText(img, view.title, {l.left, 24}, kFont, 0.6, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
   }
 
-  bool ok = false;
-  try {
-    ok = cv::imwrite(path, img);
-  } catch (const cv::Exception& e) {
-    throw std::runtime_error(path + ": cannot write PNG: " + e.what());
-  }
-  if (!ok) throw std::runtime_error(path + ": cannot write PNG");
+  detail::write_png(path, img);
 }
 
 }  // namespace tactile_cli

@@ -195,6 +195,31 @@ class ParamOverrides {
   std::set<std::string> used_;
 };
 
+ImuParams imu_at(double rate_hz) {
+  ImuParams p;
+  p.rate_hz = rate_hz;
+  return p;
+}
+
+/// Hold the initial pose: the position vehicles' setpoint before the pilot's first.
+PositionSetpoint hold_initial(const Scenario& s) {
+  PositionSetpoint sp;
+  sp.position = s.initial_position;
+  sp.yaw = s.initial_yaw;
+  return sp;
+}
+
+/// Parameters of a vehicle whose only scenario override is its mass.
+template <class Params>
+Params mass_override(const Scenario& s) {
+  Params p;
+  ParamOverrides o(s);
+  o.number("mass", p.mass);
+  o.check_all_used("mass");
+  p.validate();
+  return p;
+}
+
 RigidBodyState initial_state(const Scenario& s) {
   RigidBodyState x;
   x.position = s.initial_position;
@@ -206,7 +231,7 @@ RigidBodyState initial_state(const Scenario& s) {
 class CrazyflieVehicle : public SimLogic::Vehicle {
  public:
   CrazyflieVehicle(const Scenario& s, uint64_t seed) : cf_(make_params(s), initial_state(s), stream_seed(seed, kStreamVehicle)),
-        imu_(imu_params(), seed) {
+        imu_(imu_at(kImuHz), seed) {
     WhiskerBarometerParams bp;
     baro_[0] = std::make_unique<WhiskerBarometerModel>(bp, stream_seed(seed, kStreamBarometerLeft));
     baro_[1] = std::make_unique<WhiskerBarometerModel>(bp, stream_seed(seed, kStreamBarometerRight));
@@ -233,12 +258,6 @@ class CrazyflieVehicle : public SimLogic::Vehicle {
         "whisker_placement_deg, mocap_position_noise, flow_scale_error, gyro_bias");
     p.estimate_mode = s.state_estimate == "flow_deck" ? StateEstimateMode::kFlowDeck : StateEstimateMode::kMocap;
     p.validate();
-    return p;
-  }
-
-  static ImuParams imu_params() {
-    ImuParams p;
-    p.rate_hz = kImuHz;
     return p;
   }
 
@@ -354,25 +373,9 @@ class CrazyflieVehicle : public SimLogic::Vehicle {
 class DuctedVehicle : public SimLogic::Vehicle {
  public:
   DuctedVehicle(const Scenario& s, uint64_t seed)
-      : quad_(make_params(s), initial_state(s)), imu_(imu_params(), seed), tof_(RangeParams{}, seed),
-        flow_(FlowParams{}, seed) {
-    PositionSetpoint sp;
-    sp.position = s.initial_position;
-    sp.yaw = s.initial_yaw;
-    quad_.set_position_setpoint(sp);
-  }
-  static DuctedQuadParams make_params(const Scenario& s) {
-    DuctedQuadParams p;
-    ParamOverrides o(s);
-    o.number("mass", p.mass);
-    o.check_all_used("mass");
-    p.validate();
-    return p;
-  }
-  static ImuParams imu_params() {
-    ImuParams p;
-    p.rate_hz = kImuHz;
-    return p;
+      : quad_(mass_override<DuctedQuadParams>(s), initial_state(s)), imu_(imu_at(kImuHz), seed),
+        tof_(RangeParams{}, seed), flow_(FlowParams{}, seed) {
+    quad_.set_position_setpoint(hold_initial(s));
   }
   void step(double dt, const Arena& arena) override { quad_.step(dt, arena); }
   const RigidBodyState& truth() const override { return quad_.state(); }
@@ -449,29 +452,12 @@ class DuctedVehicle : public SimLogic::Vehicle {
 // --- XPLORER (paper 001) ------------------------------------------------------------
 class XplorerVehicle : public SimLogic::Vehicle {
  public:
-  XplorerVehicle(const Scenario& s, uint64_t seed) : x_(make_params(s), initial_state(s)), imu_(imu_params(), seed) {
+  XplorerVehicle(const Scenario& s, uint64_t seed)
+      : x_(mass_override<XplorerParams>(s), initial_state(s)), imu_(imu_at(kImuHz), seed) {
     for (size_t i = 0; i < 4; ++i) {
-      ImuParams ap;
-      ap.rate_hz = kArmImuHz;
-      arm_imus_[i] = std::make_unique<ImuModel>(ap, seed, sensor_streams::kArmImuStreamBase + i);
+      arm_imus_[i] = std::make_unique<ImuModel>(imu_at(kArmImuHz), seed, sensor_streams::kArmImuStreamBase + i);
     }
-    PositionSetpoint sp;
-    sp.position = s.initial_position;
-    sp.yaw = s.initial_yaw;
-    x_.set_setpoint(sp);
-  }
-  static XplorerParams make_params(const Scenario& s) {
-    XplorerParams p;
-    ParamOverrides o(s);
-    o.number("mass", p.mass);
-    o.check_all_used("mass");
-    p.validate();
-    return p;
-  }
-  static ImuParams imu_params() {
-    ImuParams p;
-    p.rate_hz = kImuHz;
-    return p;
+    x_.set_setpoint(hold_initial(s));
   }
   void step(double dt, const Arena& arena) override { x_.step(dt, arena); }
   const RigidBodyState& truth() const override { return x_.state(); }
