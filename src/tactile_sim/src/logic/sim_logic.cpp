@@ -637,6 +637,22 @@ SimLogic::SimLogic(const Scenario& scenario, uint64_t seed, double extra_arena_y
 
 SimLogic::~SimLogic() = default;
 
+tactile_common::ParamMap SimLogic::default_parameters() {
+  tactile_common::ParamMap p(kNodeName, "defaults");
+  p.set("scenario", std::string(""));
+  p.set("seed", int64_t{-1});
+  return p;
+}
+
+std::unique_ptr<SimLogic> SimLogic::from_parameters(const tactile_common::ParamMap& params) {
+  const std::string path = params.get_string("scenario");
+  if (path.empty()) throw params.error("scenario", "must name a scenario file (config/scenarios/*.yaml)");
+  const int64_t seed = params.get_int("seed");
+  if (seed < -1) throw params.error("seed", "must be >= 0, or -1 for the scenario's seed");
+  const Scenario scenario = load_scenario(path);
+  return std::make_unique<SimLogic>(scenario, seed < 0 ? scenario.seed : static_cast<uint64_t>(seed));
+}
+
 const Arena& SimLogic::arena() const { return *arena_; }
 
 void SimLogic::on_hover_setpoint(const tactile_msgs::msg::HoverSetpoint& msg) {

@@ -76,6 +76,14 @@ class SimLogic {
   /// seeded from `seed`. Throws ScenarioError / ArenaError /
   /// std::invalid_argument naming the file, key and reason.
   SimLogic(const Scenario& scenario, uint64_t seed, double extra_arena_yaw = 0.0);
+
+  /// Node parameters of the simulator when it runs as a node (rclcpp
+  /// component): `scenario` (path of the scenario file) and `seed` (-1: the
+  /// scenario's own seed).
+  static tactile_common::ParamMap default_parameters();
+  /// Loads the scenario named by the parameters and builds the world.
+  /// Errors name the parameter source or the scenario file, key and reason.
+  static std::unique_ptr<SimLogic> from_parameters(const tactile_common::ParamMap& params);
   ~SimLogic();
   SimLogic(const SimLogic&) = delete;
   SimLogic& operator=(const SimLogic&) = delete;
