@@ -2,6 +2,8 @@
 // against hand-computed answers, and every validation error.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 #include <cmath>
 #include <map>
 #include <string>
@@ -314,4 +316,18 @@ TEST(ArenaValidation, GarbageTruncatedAndMissingFiles) {
   } catch (const ArenaError& e) {
     EXPECT_NE(std::string(e.what()).find("does_not_exist.yaml: cannot open"), std::string::npos);
   }
+}
+
+// Every arena file shipped in config/scenarios/arenas loads and validates,
+// including the ones added after the paper set (generalisation layouts).
+TEST(ArenaFiles, EveryShippedFileLoads) {
+  size_t n = 0;
+  for (const auto& e : std::filesystem::directory_iterator(kArenaDir)) {
+    if (e.path().extension() != ".yaml") continue;
+    SCOPED_TRACE(e.path().string());
+    const Arena a = Arena::load(e.path().string());
+    EXPECT_FALSE(a.walls().empty() && a.cylinders().empty());
+    ++n;
+  }
+  EXPECT_GE(n, 14u);
 }
