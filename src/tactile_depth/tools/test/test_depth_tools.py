@@ -1,0 +1,282 @@
+"""Tests of the tactile-depth tools (make_dataset.py, depth_model.py, train_depth_model.py)
+on tiny synthetic datasets and one short real `tactile sim` flight.
+
+Environment (set by ctest): TACTILE_EXE (the `tactile` executable) and TACTILE_CONFIG_DIR
+(the repository's config/) for the SITL test."""
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+TOOLS = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(TOOLS))
+import depth_model  # noqa: E402
+import make_dataset  # noqa: E402
+import train_depth_model as tdm  # noqa: E402
+
+
+def synthetic_dataset(n_flights=6, per_flight=60, seed=3):
+    """Dataset dict in make_dataset's layout: S_p a smooth function of depth plus noise."""
+    rng = np.random.default_rng(seed)
+    n = n_flights * per_flight
+    depth = rng.uniform(0.07, 0.14, size=(n, 2))
+    gain = np.array([900.0, 500.0, 250.0])
+    sp = (0.142 - depth)[:, :, None] * gain + rng.normal(0, 2.0, size=(n, 2, 3))
+    flights = np.repeat(np.arange(1, n_flights + 1), per_flight)
+    pose = np.zeros((n, 3))
+    pose[:, 0] = rng.uniform(0.7, 0.8, n)
+    contact = np.ones((n, 2), bool)
+    contact[::7, 1] = False  # some samples with only one whisker touching
+    depth[~contact] = np.nan
+    return {
+        "flight": flights, "t": np.tile(np.arange(per_flight) * 0.02, n_flights), "sp": sp, "depth": depth,
+        "contact": contact, "ready": np.ones((n, 2), bool), "detected": contact.copy(), "pose": pose,
+        "z": np.full(n, 0.4),
+        "wall": np.array([[f, 1.0, 0.0, math.pi / 2] for f in range(1, n_flights + 1)]),
+        "wall_fit_residual": np.zeros(n_flights), "base_x": np.float64(0.05), "spacing": np.float64(0.05),
+        "scenario": np.str_("synthetic.yaml"), "seeds": np.arange(1, n_flights + 1),
+        "arena_yaw_deg": np.zeros(n_flights),
+    }
+
+
+# ---------------------------------------------------------------------------- model file
+
+def test_exported_file_forward_pass_reproduces_sklearn_predict(tmp_path):
+    from sklearn.neural_network import MLPRegressor
+
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(300, 3)) * [50.0, 30.0, 10.0] + [20.0, -5.0, 3.0]
+    y = 0.1 + 0.01 * np.tanh(x[:, 0] / 40) - 0.003 * x[:, 1] / 30
+    mean, std = x.mean(axis=0), x.std(axis=0)
+    y_off, y_scale = y.mean(), y.std()
+    mlp = MLPRegressor(hidden_layer_sizes=(32, 32, 32), activation="relu", max_iter=60, random_state=1)
+    with pytest.warns(Warning):  # not converged in 60 iterations: irrelevant here
+        mlp.fit((x - mean) / std, (y - y_off) / y_scale)
+    entry = depth_model.export_whisker(mlp, mean, std, output_scale=y_scale, output_offset=y_off)
+    model = depth_model.make_model({"left": entry, "right": entry}, {"tool": "test"})
+    path = tmp_path / "model.json"
+    depth_model.save_model(model, path)
+    loaded = depth_model.load_model(path)
+
+    w = loaded["whiskers"]["left"]
+    assert [len(layer["weights"]) for layer in w["layers"]] == [32, 32, 32, 1]
+    assert [len(layer["weights"][0]) for layer in w["layers"]] == [3, 32, 32, 32]
+    assert [layer["activation"] for layer in w["layers"]] == ["relu"] * 3 + ["identity"]
+    # weights[k] = coefs_[k].T exactly (json keeps every double)
+    for layer, c, b in zip(w["layers"], mlp.coefs_, mlp.intercepts_):
+        np.testing.assert_array_equal(np.array(layer["weights"]), c.T)
+        np.testing.assert_array_equal(np.array(layer["bias"]), b)
+    x_test = rng.normal(size=(200, 3)) * [60.0, 40.0, 15.0]
+    expected = mlp.predict((x_test - mean) / std) * y_scale + y_off
+    got = depth_model.forward(w, x_test)
+    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-9)
+    # the forward pass is not vacuous: outputs vary over the inputs
+    assert np.ptp(got) > 1e-3
+
+
+def test_forward_pass_by_hand():
+    # 3 -> 2 (relu) -> 1: s_n = (S_p - mu) / sigma, h = relu(W s_n + b), m = w h + c, depth = s m + o
+    w = {"input_mean": [1.0, 2.0, 3.0], "input_std": [1.0, 2.0, 4.0], "output_scale": 0.5, "output_offset": 0.1,
+         "layers": [{"weights": [[1.0, 0.0, 0.0], [0.0, 1.0, -1.0]], "bias": [0.0, -0.5], "activation": "relu"},
+                    {"weights": [[2.0, 3.0]], "bias": [1.0], "activation": "identity"}]}
+    # S_p = (3, 6, 3): s_n = (2, 2, 0); h = (2, 1.5); m = 4 + 4.5 + 1 = 9.5; depth = 4.85
+    # S_p = (0, 2, 7): s_n = (-1, 0, 1); h = relu(-1, -1.5) = 0; m = 1; depth = 0.6
+    np.testing.assert_allclose(depth_model.forward(w, [[3.0, 6.0, 3.0], [0.0, 2.0, 7.0]]), [4.85, 0.6], atol=1e-15)
+
+
+@pytest.mark.parametrize("mutate, message", [
+    (lambda m: m.update(format="other"), "format"),
+    (lambda m: m.update(version=2), "version"),
+    (lambda m: m["whiskers"].pop("right"), "whiskers.right"),
+    (lambda m: m["whiskers"]["left"].update(input_std=[1.0, 0.0, 1.0]), "input_std"),
+    (lambda m: m["whiskers"]["left"].update(input_mean=[1.0, 2.0]), "input_mean"),
+    (lambda m: m["whiskers"]["left"]["layers"][0].update(weights=[[1.0, 2.0]]), "layers[0]"),
+    (lambda m: m["whiskers"]["left"]["layers"][0].update(activation="tanh"), "activation"),
+    (lambda m: m["whiskers"]["left"]["layers"].pop(), "last layer"),
+])
+def test_validate_rejects_malformed_models(mutate, message):
+    w = {"input_mean": [0.0] * 3, "input_std": [1.0] * 3, "output_scale": 1.0, "output_offset": 0.0,
+         "layers": [{"weights": [[1.0, 1.0, 1.0]] * 2, "bias": [0.0, 0.0], "activation": "relu"},
+                    {"weights": [[1.0, 1.0]], "bias": [0.0], "activation": "identity"}]}
+    model = depth_model.make_model({"left": json.loads(json.dumps(w)), "right": w}, {})
+    depth_model.validate_model(model)
+    mutate(model)
+    with pytest.raises(ValueError, match=message.replace("[", r"\[").replace("]", r"\]")):
+        depth_model.validate_model(model)
+
+
+def test_load_rejects_truncated_file(tmp_path):
+    path = tmp_path / "m.json"
+    path.write_text('{"format": "tactile_depth_mlp", "version": 1, "whiskers": {"left": {"input_mean": [1')
+    with pytest.raises(json.JSONDecodeError):
+        depth_model.load_model(path)
+
+
+# ---------------------------------------------------------------------------- split and metrics
+
+def test_split_is_by_flight():
+    ids = np.repeat([12, 3, 7, 1, 2, 4, 5, 6, 8, 9, 10, 11], 5)  # unsorted, as read from disk
+    sp = tdm.split_flights(ids)
+    assert sp["train"] == [1, 2, 3, 4, 5, 6, 7, 8, 9]
+    assert sp["test"] == [10, 11, 12]
+    assert sp["fit"] == [1, 2, 3, 4, 5, 6, 7] and sp["val"] == [8, 9]
+    d = synthetic_dataset(n_flights=12, per_flight=10)
+    for part in ("fit", "val", "test"):
+        x, y = tdm.whisker_samples(d, "right", sp[part])
+        m = np.isin(d["flight"], sp[part]) & d["contact"][:, 1]
+        np.testing.assert_array_equal(x, d["sp"][m, 1])
+        np.testing.assert_array_equal(y, d["depth"][m, 1])
+        assert set(np.unique(d["flight"][m])) == set(sp[part])
+    # a small dataset keeps the proportions and never shares a flight between parts
+    sp6 = tdm.split_flights(np.arange(1, 7))
+    assert sp6["test"] == [5, 6] and sp6["val"] == [3, 4] and sp6["fit"] == [1, 2]
+    with pytest.raises(ValueError):
+        tdm.split_flights([1, 2])
+
+
+def test_orientation_and_reconstruction_by_hand():
+    # d_l - d_r = spacing -> 45 deg; equal depths -> 0 deg
+    np.testing.assert_allclose(tdm.orientation_deg([0.10, 0.08], [0.05, 0.08], 0.05), [45.0, 0.0])
+    # drone at the origin facing +x, wall x = 0.2 (point (0.2, 0), direction 90 deg), base 5 cm ahead
+    pose = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.0, 0.3, 0.0]])
+    wall = np.array([[0.2, 0.0, math.pi / 2]] * 3)
+    err = tdm.reconstruction_error(pose, [0.15, 0.17, 0.14], [0.15, 0.15, 0.14], wall, 0.05)
+    np.testing.assert_allclose(err, [0.0, 0.01, 0.01], atol=1e-12)
+
+
+def test_train_writes_model_and_report_with_every_key(tmp_path):
+    a, b = tmp_path / "a.npz", tmp_path / "b.npz"
+    np.savez(a, **synthetic_dataset(seed=3))
+    np.savez(b, **synthetic_dataset(seed=4))
+    out = tmp_path / "out"
+    assert tdm.main(["--dataset", f"wb={a}", "--dataset", f"gl={b}", "--out", str(out), "--fast", "--seed", "7"]) == 0
+    report = json.loads((out / "report.json").read_text())
+    model = depth_model.load_model(out / "model.json")
+    assert set(model) == {"format", "version", "whiskers", "units", "provenance"}
+    assert model["units"] == {"input": "Pa (TDORC compensated S_p)", "output": "m"}
+    for key in ("datasets", "train_flights", "test_flights", "tool", "python", "sklearn", "numpy", "seed", "date",
+                "metrics"):
+        assert key in model["provenance"], key
+    assert model["provenance"]["seed"] == 7
+    assert model["provenance"]["train_flights"] == {"wb": [1, 2], "gl": [1, 2]}
+    assert model["provenance"]["validation_flights"] == {"wb": [3, 4], "gl": [3, 4]}
+    assert model["provenance"]["test_flights"] == {"wb": [5, 6], "gl": [5, 6]}
+    for side in ("left", "right"):
+        assert set(model["whiskers"][side]) == {"input_mean", "input_std", "layers", "output_scale", "output_offset"}
+    for ds in ("wb", "gl"):
+        r = report["datasets"][ds]
+        assert r["split"]["test"] == [5, 6]
+        keys = {f"{m}@{run}" for m in ("MLP", "PolyFit", "GPR", "RFR") for run in ("wb+gl", "wb", "gl")}
+        assert set(r["results"]) == keys
+        for res in r["results"].values():
+            for cat in ("whisker_left", "whisker_right", "orientation", "reconstruction"):
+                assert set(res[cat]) == {"mae", "rmse", "n"}
+                assert res[cat]["n"] > 0 and 0 <= res[cat]["mae"] <= res[cat]["rmse"]
+            assert set(res["per_flight"]) == {"5", "6"}
+        # The MLP metrics in the report are those of the written file: recompute one.
+        d = dict(np.load(a if ds == "wb" else b))
+        m = np.isin(d["flight"], [5, 6]) & d["contact"][:, 0]
+        err = 1e3 * (depth_model.forward(model["whiskers"]["left"], d["sp"][m, 0]) - d["depth"][m, 0])
+        assert r["results"]["MLP@wb+gl"]["whisker_left"]["mae"] == pytest.approx(np.mean(np.abs(err)), rel=1e-12)
+        # a learnable synthetic relation: every model beats predicting the mean depth (~17.5 mm MAE)
+        for res in r["results"].values():
+            assert res["whisker_left"]["mae"] < 10.0
+    md = (out / "report.md").read_text()
+    assert "| MLP | wb+gl |" in md and "### gl" in md
+
+
+def test_training_is_deterministic(tmp_path):
+    a = tmp_path / "a.npz"
+    np.savez(a, **synthetic_dataset(seed=5))
+    models = []
+    for k in range(2):
+        out = tmp_path / f"o{k}"
+        tdm.main(["--dataset", f"wb={a}", "--out", str(out), "--fast", "--no-per-dataset"])
+        m = json.loads((out / "model.json").read_text())
+        models.append(m["whiskers"])
+    assert models[0] == models[1]
+
+
+# ---------------------------------------------------------------------------- extractor on a real SITL flight
+
+SHORT_SCENARIO = """
+name: depth_short
+duration_s: 7.5
+seed: 1
+arena:
+  walls:
+    - points: [[0.45, -1.0], [0.45, 1.0]]
+      material: rigid
+vehicle:
+  type: whisker_crazyflie
+  initial: {x: 0.0, y: 0.0, z: 0.0, yaw_deg: 0.0}
+  state_estimate: mocap
+graph: pilot
+pilot:
+  - {takeoff: 0.4, duration: 3.0}
+  - {velocity: [0.2, 0.0], until: contact, timeout: 3.0}
+  - {velocity: [0.0, -0.2], duration: 1.5}
+  - {hover: 1.0}
+"""
+
+
+@pytest.mark.skipif("TACTILE_EXE" not in os.environ, reason="needs TACTILE_EXE (set by ctest)")
+def test_extractor_on_a_short_sitl_flight(tmp_path):
+    scen = tmp_path / "depth_short.yaml"
+    scen.write_text(SHORT_SCENARIO)
+    out = tmp_path / "ds"
+    assert make_dataset.main(["--scenario", str(scen), "--flights", "1", "--first-seed", "4", "--out", str(out),
+                              "--tactile", os.environ["TACTILE_EXE"],
+                              "--config", os.environ.get("TACTILE_CONFIG_DIR", "config")]) == 0
+    d = dict(np.load(out / "dataset.npz"))
+    for key in make_dataset.DATASET_KEYS:
+        assert key in d, key
+
+    # Independent count from the bag: stamps with true contact, ready TDORC and height >= 0.2 m.
+    bag = make_dataset.read_bag(str(out / "runs" / "flight_04" / "bag"),
+                                ["/whisker/left/signal", "/ground_truth/whisker/left/contact", "/ground_truth/odom"])
+    gt = {(m.header.stamp.sec, m.header.stamp.nanosec): m for m in bag["/ground_truth/whisker/left/contact"]}
+    odom_t = np.array([m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for m in bag["/ground_truth/odom"]])
+    odom_z = np.array([m.pose.pose.position.z for m in bag["/ground_truth/odom"]])
+    expected = []
+    for m in bag["/whisker/left/signal"]:
+        g = gt[(m.header.stamp.sec, m.header.stamp.nanosec)]
+        t = m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec
+        if g.contact and m.calibrated_ready and np.interp(t, odom_t, odom_z) >= 0.2:
+            expected.append((t, list(m.compensated), g.depth))
+    assert len(expected) > 20, "the short flight must touch the wall with a ready TDORC"
+    left = d["contact"][:, 0]
+    assert int(left.sum()) == len(expected)
+    np.testing.assert_allclose(d["t"][left], [e[0] for e in expected], atol=1e-9)
+    np.testing.assert_array_equal(d["sp"][left, 0], [e[1] for e in expected])
+    np.testing.assert_array_equal(d["depth"][left, 0], [e[2] for e in expected])
+    assert np.all(d["flight"] == 4) and list(d["seeds"]) == [4]
+    assert np.all(d["ready"][d["contact"]])
+    assert np.all(np.isnan(d["depth"][~d["contact"]]))
+    # depth within the whisker's horizontal reach (0.2 m cos 45 deg) and beyond the guard
+    dep = d["depth"][d["contact"]]
+    assert np.all((dep > 0.02) & (dep < 0.1415))
+    # The wall fitted to the true contact points is the arena's wall x = 0.45.
+    _, px, py, ang = d["wall"][0]
+    assert px == pytest.approx(0.45, abs=1e-3)
+    assert abs(math.cos(ang)) < 1e-2
+    assert d["wall_fit_residual"][0] < 1e-3
+    # CSV: one row per used (stamp, whisker) sample
+    rows = (out / "dataset.csv").read_text().strip().splitlines()
+    assert len(rows) == 1 + int(d["contact"].sum())
+
+
+def test_extractor_reports_a_failing_simulator(tmp_path):
+    scen = tmp_path / "bad.yaml"
+    scen.write_text("name: x\n")
+    fake = tmp_path / "fake_tactile"
+    fake.write_text("#!/bin/sh\necho 'bad.yaml: duration_s: required' >&2\nexit 1\n")
+    fake.chmod(0o755)
+    with pytest.raises(RuntimeError, match="duration_s: required"):
+        make_dataset.main(["--scenario", str(scen), "--flights", "1", "--out", str(tmp_path / "o"),
+                           "--tactile", str(fake), "--config", str(tmp_path)])
