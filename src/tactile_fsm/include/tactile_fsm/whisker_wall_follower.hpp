@@ -1,0 +1,195 @@
+// Whisker wall-following finite-state machine (paper 000, Methods "Whisker-based
+// aerial tactile navigation strategy" and Supplementary Fig. S4e).
+//
+// Core layer: no ROS, no message types, no allocation per tick. One call of
+// WhiskerWallFollower::step() per control tick (50 Hz in 000) turns the
+// latest tactile depths, whisker contact flags and odometry into a
+// velocity-mode hover setpoint (body vx, vy, yaw rate, height, land).
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+
+namespace tactile_fsm {
+
+/// Top-level states (000 Methods: hover -> fly forward -> wall following ->
+/// resume forward -> landing) plus the workspace's terminal and fail-safe states.
+enum class FsmState : uint8_t {
+  kHoverInit,      ///< hover while TDORC initialises (000 Methods "Hovering")
+  kFlyForward,     ///< forward at V_max (000 Methods "Flying Forward")
+  kWallFollowing,  ///< Fig. S4e sub-states, see WallSubState
+  kResumeForward,  ///< obstacle cleared: side-step the clearance margin, then FlyForward
+  kLanding,        ///< target reached (000 Methods "Landing")
+  kLanded,         ///< terminal
+  kFailsafeHover,  ///< stale input: hold position
+  kFailsafeLand,   ///< stale input for failsafe_land_after_s: land (terminal)
+};
+
+/// Wall-following sub-states of 000 Fig. S4e.
+enum class WallSubState : uint8_t {
+  kNone,          ///< not wall following
+  kFlySideways,   ///< along the wall at V_max (000 Fig. S4e, V_sideway = V_max)
+  kFlyForward,    ///< toward the wall at V_max / 2 (000 Fig. S4e, V_forward)
+  kFlyBackward,   ///< away from the wall at V_max / 2 (000 Fig. S4e, V_backward)
+  kTurnLeft,      ///< counter-clockwise at omega_max
+  kTurnRight,     ///< clockwise at omega_max
+};
+
+/// Side the wall is followed to (direction of the sideways flight).
+enum class Side : uint8_t { kRight, kLeft };
+
+const char* to_string(FsmState s);
+const char* to_string(WallSubState s);
+const char* to_string(Side s);
+/// "right" / "left"; throws std::invalid_argument otherwise.
+Side side_from_string(const char* s);
+
+struct WallFollowerParams {
+  // --- paper 000 values ---
+  double v_max = 0.2;                          ///< V_max [m/s] (000 Results: "V_max = 20 cm/s")
+  double omega_max = 25.0 * M_PI / 180.0;      ///< omega_max [rad/s]; symbolic in 000 Fig. S4e, 25 deg/s our value
+  double t_min = 0.060;                        ///< T_min [m] (000 Results, Fig. 4c: band 60-100 mm)
+  double t_max = 0.100;                        ///< T_max [m]
+  double whisker_spacing = 0.05;               ///< s, lateral distance of the whisker bases [m] (000 eq. 21)
+  double hover_init_s = 2.0;                   ///< hover for TDORC initialisation [s] (000 Methods "Hovering")
+  double flight_height = 0.4;                  ///< height setpoint [m]
+  // --- workspace choices (the paper does not give them) ---
+  /// Heading alignment inside the band: start turning when the wall angle
+  /// estimate |atan((d_l - d_r)/s)| (000 eq. 21) exceeds align_enter, stop
+  /// below align_exit (hysteresis against depth noise).
+  double align_enter = 3.0 * M_PI / 180.0;     ///< [rad]
+  double align_exit = 1.0 * M_PI / 180.0;      ///< [rad]
+  /// First-order low-pass for the rule: of the depths, and of the wall's
+  /// world-frame normal heading yaw - theta (constant for a straight wall, so
+  /// turning adds no filter lag). 0 = off.
+  double depth_filter_tau_s = 0.08;
+  Side follow_side = Side::kRight;             ///< default side (000 data collection sweeps right)
+  bool side_toward_target = true;              ///< follow toward the target's lateral offset if > side_deadband
+  double side_deadband = 0.10;                 ///< [m]
+  double clear_confirm_s = 0.2;                ///< both whiskers off the wall this long = obstacle cleared [s]
+  double clear_margin = 0.15;                  ///< extra side-step after clearing, so the frame passes the edge [m]
+  double target_radius = 0.15;                 ///< land within this distance of the target [m]
+  bool land_past_target = true;                ///< also land once past the target along the course direction
+  double landing_duration_s = 2.0;             ///< LANDING -> LANDED after this [s]
+  double max_input_age_s = 0.2;                ///< depth/odometry older than this is stale [s] (10 ticks at 50 Hz)
+  double failsafe_land_after_s = 2.0;          ///< FAILSAFE_HOVER -> FAILSAFE_LAND after this [s]
+
+  /// Throws std::invalid_argument "WallFollowerParams.<field>: <reason>".
+  void validate() const;
+};
+
+/// One tick of input. Stamps are on the same clock as t; NaN = never received.
+struct WallFollowerInput {
+  double t = 0.0;  ///< current time [s]
+  // Tactile depth (TactileDepth, 000 eq. 12-30).
+  double depth_stamp = NAN;
+  bool left_valid = false;   ///< d_l measured (whisker in contact, finite)
+  bool right_valid = false;
+  double depth_left = NAN;   ///< d_l along body x from the whisker base to the wall [m]
+  double depth_right = NAN;  ///< d_r [m]
+  // TDORC contact flags (S_p over T_c, 000 eq. 4-11); false when stale.
+  bool tdorc_contact_left = false;
+  bool tdorc_contact_right = false;
+  // Odometry pose (world frame, REP-103).
+  double odom_stamp = NAN;
+  double x = 0.0, y = 0.0, yaw = 0.0;
+  // Target position (world frame).
+  bool has_target = false;
+  double target_x = 0.0, target_y = 0.0;
+};
+
+/// Velocity-mode setpoint (Crazyflie hover setpoint).
+struct Setpoint {
+  double vx = 0.0;        ///< forward, body-yaw frame [m/s]
+  double vy = 0.0;        ///< left [m/s]
+  double yaw_rate = 0.0;  ///< counter-clockwise [rad/s]
+  double height = 0.0;    ///< [m]
+  bool land = false;
+};
+
+struct WallFollowerOutput {
+  Setpoint setpoint;
+  FsmState state = FsmState::kHoverInit;
+  WallSubState sub_state = WallSubState::kNone;
+  bool transitioned = false;  ///< the top-level state or sub-state changed this tick
+};
+
+/// The wall-following sub-state rule (000 Fig. S4e; the exact conditions are
+/// only in the figure, this is our rule, derived in README.md):
+///  - both depths valid:
+///    * both < T_min                         -> FLY_BACKWARD
+///    * both > T_max                         -> FLY_FORWARD
+///    * in different intervals (one out of the band): TURN toward
+///      perpendicular (d_l > d_r -> TURN_RIGHT, d_l < d_r -> TURN_LEFT) while
+///      |theta| > align_exit, theta = atan((d_l - d_r)/s) (000 eq. 21);
+///      when already aligned, translate: the out-of-band depth says
+///      FLY_FORWARD (> T_max) or FLY_BACKWARD (< T_min)
+///    * both in [T_min, T_max]: TURN when |theta| > align_enter (or, already
+///      turning, > align_exit), else FLY_SIDEWAYS
+///  - one depth missing:
+///    * before both whiskers touched in this episode (approach): the missing
+///      one counts as beyond T_max (the rule above)
+///    * after (whisker lost the wall): the leading whisker (in the sideways
+///      direction) lost -> passing the edge: FLY_SIDEWAYS, or FLY_BACKWARD
+///      if the remaining depth < T_min; the trailing one lost -> as approach
+///  - none: FLY_SIDEWAYS (clearing is decided by the top level).
+/// theta: wall angle estimate to use when both depths are valid; NaN = compute
+/// it from the depths (000 eq. 21).
+WallSubState wall_sub_state(double d_l, bool l_valid, double d_r, bool r_valid, Side side, bool both_touched,
+                            WallSubState current, const WallFollowerParams& p, double theta = NAN);
+
+/// |(vx, vy)| <= v_max (scaled, direction kept), |yaw_rate| <= omega_max,
+/// non-finite values -> 0.
+Setpoint saturate(const Setpoint& s, const WallFollowerParams& p);
+
+class WhiskerWallFollower {
+ public:
+  explicit WhiskerWallFollower(const WallFollowerParams& params);
+
+  /// One control tick. Ticks must have non-decreasing t.
+  WallFollowerOutput step(const WallFollowerInput& in);
+  void reset();
+
+  FsmState state() const { return state_; }
+  FsmState previous_state() const { return previous_; }
+  WallSubState sub_state() const { return sub_; }
+  /// Why the last top-level transition (or sub-state change) happened; static text.
+  const char* reason() const { return reason_; }
+  bool started() const { return started_; }
+  double state_entered() const { return entered_; }
+  uint32_t transitions() const { return transitions_; }
+  Side active_side() const { return side_; }
+  /// Low-pass filtered depths used by the rule (NaN when invalid).
+  double filtered_left() const { return f_left_; }
+  double filtered_right() const { return f_right_; }
+  /// Wall angle in the body frame used by the rule [rad] (NaN unless both valid).
+  double wall_angle() const { return theta_; }
+  const WallFollowerParams& params() const { return p_; }
+
+ private:
+  void enter(FsmState s, const char* reason, double t);
+  bool target_reached(const WallFollowerInput& in) const;
+  void set_origin(const WallFollowerInput& in);
+  Setpoint command(const WallFollowerInput& in) const;
+
+  WallFollowerParams p_;
+  FsmState state_ = FsmState::kHoverInit;
+  FsmState previous_ = FsmState::kHoverInit;
+  WallSubState sub_ = WallSubState::kNone;
+  const char* reason_ = "start";
+  bool started_ = false;
+  double entered_ = 0.0;
+  double last_t_ = 0.0;
+  uint32_t transitions_ = 0;
+  Side side_ = Side::kRight;
+  bool both_touched_ = false;
+  double last_contact_t_ = 0.0;
+  double f_left_ = NAN, f_right_ = NAN;
+  double wall_heading_ = NAN;  ///< filtered yaw - theta [rad]
+  double theta_ = NAN;
+  bool origin_set_ = false;
+  double origin_x_ = 0.0, origin_y_ = 0.0;  ///< course start (end of hover)
+  double clear_x_ = 0.0, clear_y_ = 0.0;    ///< where the obstacle was cleared
+};
+
+}  // namespace tactile_fsm

@@ -1,0 +1,346 @@
+#include "tactile_fsm/whisker_wall_follower.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <stdexcept>
+#include <string>
+
+namespace tactile_fsm {
+
+const char* to_string(FsmState s) {
+  switch (s) {
+    case FsmState::kHoverInit: return "HOVER_INIT";
+    case FsmState::kFlyForward: return "FLY_FORWARD";
+    case FsmState::kWallFollowing: return "WALL_FOLLOWING";
+    case FsmState::kResumeForward: return "RESUME_FORWARD";
+    case FsmState::kLanding: return "LANDING";
+    case FsmState::kLanded: return "LANDED";
+    case FsmState::kFailsafeHover: return "FAILSAFE_HOVER";
+    case FsmState::kFailsafeLand: return "FAILSAFE_LAND";
+  }
+  return "UNKNOWN";
+}
+
+const char* to_string(WallSubState s) {
+  switch (s) {
+    case WallSubState::kNone: return "NONE";
+    case WallSubState::kFlySideways: return "FLY_SIDEWAYS";
+    case WallSubState::kFlyForward: return "FLY_FORWARD";
+    case WallSubState::kFlyBackward: return "FLY_BACKWARD";
+    case WallSubState::kTurnLeft: return "TURN_LEFT";
+    case WallSubState::kTurnRight: return "TURN_RIGHT";
+  }
+  return "UNKNOWN";
+}
+
+const char* to_string(Side s) { return s == Side::kLeft ? "left" : "right"; }
+
+Side side_from_string(const char* s) {
+  if (std::strcmp(s, "right") == 0) return Side::kRight;
+  if (std::strcmp(s, "left") == 0) return Side::kLeft;
+  throw std::invalid_argument(std::string("side must be \"right\" or \"left\", got \"") + s + "\"");
+}
+
+namespace {
+
+// Tolerance of time comparisons: ticks are sums of 20 ms steps in floating point.
+constexpr double kTimeEps = 1e-9;
+
+void require(bool ok, const char* field, const std::string& reason, double value) {
+  if (!ok) {
+    throw std::invalid_argument(std::string("WallFollowerParams.") + field + ": " + reason + ", got " +
+                                std::to_string(value));
+  }
+}
+
+bool finite_positive(double v) { return std::isfinite(v) && v > 0.0; }
+bool finite_nonneg(double v) { return std::isfinite(v) && v >= 0.0; }
+
+}  // namespace
+
+void WallFollowerParams::validate() const {
+  require(finite_positive(v_max), "v_max", "must be finite and > 0", v_max);
+  require(finite_positive(omega_max), "omega_max", "must be finite and > 0", omega_max);
+  require(finite_positive(t_min), "t_min", "must be finite and > 0", t_min);
+  require(std::isfinite(t_max) && t_max > t_min, "t_max", "must be finite and > t_min", t_max);
+  require(finite_positive(whisker_spacing), "whisker_spacing", "must be finite and > 0", whisker_spacing);
+  require(finite_nonneg(hover_init_s), "hover_init_s", "must be finite and >= 0", hover_init_s);
+  require(finite_positive(flight_height), "flight_height", "must be finite and > 0", flight_height);
+  require(std::isfinite(align_enter) && align_enter > 0.0 && align_enter < M_PI / 2, "align_enter",
+          "must be in (0, pi/2)", align_enter);
+  require(std::isfinite(align_exit) && align_exit >= 0.0 && align_exit <= align_enter, "align_exit",
+          "must be in [0, align_enter]", align_exit);
+  require(finite_nonneg(depth_filter_tau_s), "depth_filter_tau_s", "must be finite and >= 0", depth_filter_tau_s);
+  require(finite_nonneg(side_deadband), "side_deadband", "must be finite and >= 0", side_deadband);
+  require(finite_nonneg(clear_confirm_s), "clear_confirm_s", "must be finite and >= 0", clear_confirm_s);
+  require(finite_nonneg(clear_margin), "clear_margin", "must be finite and >= 0", clear_margin);
+  require(finite_positive(target_radius), "target_radius", "must be finite and > 0", target_radius);
+  require(finite_nonneg(landing_duration_s), "landing_duration_s", "must be finite and >= 0", landing_duration_s);
+  require(finite_positive(max_input_age_s), "max_input_age_s", "must be finite and > 0", max_input_age_s);
+  require(finite_nonneg(failsafe_land_after_s), "failsafe_land_after_s", "must be finite and >= 0",
+          failsafe_land_after_s);
+}
+
+WallSubState wall_sub_state(double d_l, bool l_valid, double d_r, bool r_valid, Side side, bool both_touched,
+                            WallSubState current, const WallFollowerParams& p, double theta_in) {
+  l_valid = l_valid && std::isfinite(d_l);
+  r_valid = r_valid && std::isfinite(d_r);
+  if (!l_valid && !r_valid) return WallSubState::kFlySideways;
+  if (l_valid != r_valid) {
+    const bool leading_lost = (side == Side::kRight) ? !r_valid : !l_valid;
+    if (both_touched && leading_lost) {
+      // The leading whisker ran off the wall's end: keep passing the edge.
+      const double remaining = l_valid ? d_l : d_r;
+      return remaining < p.t_min ? WallSubState::kFlyBackward : WallSubState::kFlySideways;
+    }
+    // Approach (or trailing whisker lost): the missing depth is beyond the
+    // whisker's reach, hence beyond T_max.
+    const double far = p.t_max + p.whisker_spacing;
+    if (!l_valid) d_l = far;
+    if (!r_valid) d_r = far;
+  }
+  // Wall angle in the body frame, 000 eq. 21: theta = atan((d_l - d_r) / s).
+  // theta > 0: the wall is nearer on the right; the heading perpendicular to
+  // the wall is yaw - theta, i.e. turn right (clockwise).
+  const double theta = (l_valid && r_valid && std::isfinite(theta_in)) ? theta_in
+                                                                      : std::atan((d_l - d_r) / p.whisker_spacing);
+  const WallSubState turn = theta > 0.0 ? WallSubState::kTurnRight : WallSubState::kTurnLeft;
+  const bool turning = current == WallSubState::kTurnLeft || current == WallSubState::kTurnRight;
+  const int band_l = d_l < p.t_min ? -1 : (d_l > p.t_max ? 1 : 0);
+  const int band_r = d_r < p.t_min ? -1 : (d_r > p.t_max ? 1 : 0);
+  if (band_l == -1 && band_r == -1) return WallSubState::kFlyBackward;  // both too close
+  if (band_l == 1 && band_r == 1) return WallSubState::kFlyForward;     // both too far
+  if (band_l != band_r) {
+    // Different intervals: the heading is off (000 Fig. S4e turn conditions).
+    if (std::fabs(theta) > p.align_exit) return turn;
+    // Aligned but straddling a band edge: translate back into the band.
+    return (band_l == -1 || band_r == -1) ? WallSubState::kFlyBackward : WallSubState::kFlyForward;
+  }
+  // Both inside [T_min, T_max]: align (hysteresis), then fly along the wall.
+  if (std::fabs(theta) > p.align_enter || (turning && std::fabs(theta) > p.align_exit)) return turn;
+  return WallSubState::kFlySideways;
+}
+
+Setpoint saturate(const Setpoint& s, const WallFollowerParams& p) {
+  Setpoint o = s;
+  if (!std::isfinite(o.vx)) o.vx = 0.0;
+  if (!std::isfinite(o.vy)) o.vy = 0.0;
+  if (!std::isfinite(o.yaw_rate)) o.yaw_rate = 0.0;
+  if (!std::isfinite(o.height)) o.height = 0.0;
+  const double speed = std::hypot(o.vx, o.vy);
+  if (speed > p.v_max) {
+    const double k = p.v_max / speed;
+    o.vx *= k;
+    o.vy *= k;
+  }
+  o.yaw_rate = std::clamp(o.yaw_rate, -p.omega_max, p.omega_max);
+  return o;
+}
+
+WhiskerWallFollower::WhiskerWallFollower(const WallFollowerParams& params) : p_(params) {
+  p_.validate();
+  reset();
+}
+
+void WhiskerWallFollower::reset() {
+  state_ = previous_ = FsmState::kHoverInit;
+  sub_ = WallSubState::kNone;
+  reason_ = "start";
+  started_ = false;
+  entered_ = last_t_ = 0.0;
+  transitions_ = 0;
+  side_ = p_.follow_side;
+  both_touched_ = false;
+  last_contact_t_ = 0.0;
+  f_left_ = f_right_ = NAN;
+  wall_heading_ = theta_ = NAN;
+  origin_set_ = false;
+  origin_x_ = origin_y_ = clear_x_ = clear_y_ = 0.0;
+}
+
+void WhiskerWallFollower::enter(FsmState s, const char* reason, double t) {
+  previous_ = state_;
+  state_ = s;
+  reason_ = reason;
+  entered_ = t;
+  ++transitions_;
+  sub_ = WallSubState::kNone;
+}
+
+void WhiskerWallFollower::set_origin(const WallFollowerInput& in) {
+  origin_set_ = true;
+  origin_x_ = in.x;
+  origin_y_ = in.y;
+}
+
+bool WhiskerWallFollower::target_reached(const WallFollowerInput& in) const {
+  if (!in.has_target) return false;
+  const double ex = in.x - in.target_x, ey = in.y - in.target_y;
+  if (std::hypot(ex, ey) <= p_.target_radius) return true;
+  if (!p_.land_past_target) return false;
+  // Past the target along the course direction (course start -> target).
+  const double cx = in.target_x - origin_x_, cy = in.target_y - origin_y_;
+  const double n = std::hypot(cx, cy);
+  if (n < 1e-6) return false;
+  return (ex * cx + ey * cy) / n >= 0.0;
+}
+
+WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
+  const double t = in.t;
+  const FsmState state_before = state_;
+  const WallSubState sub_before = sub_;
+  if (!started_) {
+    started_ = true;
+    entered_ = t;
+    last_t_ = t;
+  }
+  const double dt = std::max(0.0, t - last_t_);
+  last_t_ = t;
+
+  const bool depth_fresh = std::isfinite(in.depth_stamp) && t - in.depth_stamp <= p_.max_input_age_s + kTimeEps;
+  const bool odom_fresh = std::isfinite(in.odom_stamp) && t - in.odom_stamp <= p_.max_input_age_s + kTimeEps;
+  const bool l_valid = depth_fresh && in.left_valid && std::isfinite(in.depth_left);
+  const bool r_valid = depth_fresh && in.right_valid && std::isfinite(in.depth_right);
+
+  // First-order low-pass of the depths for the sub-state rule (our choice;
+  // restarts when a whisker loses the wall).
+  const double a = p_.depth_filter_tau_s > 0.0 ? dt / (p_.depth_filter_tau_s + dt) : 1.0;
+  f_left_ = !l_valid ? NAN : (std::isfinite(f_left_) ? f_left_ + a * (in.depth_left - f_left_) : in.depth_left);
+  f_right_ = !r_valid ? NAN : (std::isfinite(f_right_) ? f_right_ + a * (in.depth_right - f_right_) : in.depth_right);
+  // Wall angle, 000 eq. 21: theta = atan((d_l - d_r) / s), filtered as the
+  // world-frame heading of the wall normal yaw - theta (our choice: a straight
+  // wall keeps it constant while the drone turns, so the filter adds no lag
+  // to the turn and the turn stops on time).
+  if (l_valid && r_valid && std::isfinite(in.yaw)) {
+    const double w = in.yaw - std::atan((in.depth_left - in.depth_right) / p_.whisker_spacing);
+    wall_heading_ = std::isfinite(wall_heading_) ? wall_heading_ + a * std::remainder(w - wall_heading_, 2.0 * M_PI) : w;
+    theta_ = std::remainder(in.yaw - wall_heading_, 2.0 * M_PI);
+  } else {
+    wall_heading_ = theta_ = NAN;
+  }
+
+  // 000 Methods: wall following is triggered when either whisker's S_p
+  // exceeds T_c (TDORC flags); the depth node's contact flags count too.
+  const bool contact_l = l_valid || in.tdorc_contact_left;
+  const bool contact_r = r_valid || in.tdorc_contact_right;
+  const bool contact = contact_l || contact_r;
+  const bool flying =
+      state_ == FsmState::kFlyForward || state_ == FsmState::kWallFollowing || state_ == FsmState::kResumeForward;
+
+  if (flying && !depth_fresh) {
+    enter(FsmState::kFailsafeHover, "tactile depth stale", t);
+  } else if (flying && !odom_fresh) {
+    enter(FsmState::kFailsafeHover, "odometry stale", t);
+  } else if (flying && target_reached(in)) {
+    enter(FsmState::kLanding, "target reached", t);
+  } else {
+    switch (state_) {
+      case FsmState::kHoverInit:
+        if (t - entered_ >= p_.hover_init_s - kTimeEps) {
+          if (!depth_fresh) {
+            enter(FsmState::kFailsafeHover, "tactile depth stale at end of hover", t);
+          } else if (!odom_fresh) {
+            enter(FsmState::kFailsafeHover, "odometry stale at end of hover", t);
+          } else {
+            set_origin(in);
+            enter(FsmState::kFlyForward, "hover initialisation done", t);
+          }
+        }
+        break;
+      case FsmState::kFlyForward:
+      case FsmState::kResumeForward:
+        if (contact) {
+          // Side: toward the target's lateral offset in the body frame when it
+          // is clear, else the configured side.
+          side_ = p_.follow_side;
+          if (p_.side_toward_target && in.has_target) {
+            const double lateral = -std::sin(in.yaw) * (in.target_x - in.x) + std::cos(in.yaw) * (in.target_y - in.y);
+            if (lateral > p_.side_deadband) side_ = Side::kLeft;
+            if (lateral < -p_.side_deadband) side_ = Side::kRight;
+          }
+          both_touched_ = false;
+          last_contact_t_ = t;
+          enter(FsmState::kWallFollowing,
+                state_ == FsmState::kFlyForward ? "whisker contact" : "whisker contact while clearing", t);
+        } else if (state_ == FsmState::kResumeForward &&
+                   std::hypot(in.x - clear_x_, in.y - clear_y_) >= p_.clear_margin) {
+          enter(FsmState::kFlyForward, "cleared the obstacle by the margin", t);
+        }
+        break;
+      case FsmState::kWallFollowing:
+        if (contact) last_contact_t_ = t;
+        if (l_valid && r_valid) both_touched_ = true;
+        if (!contact && t - last_contact_t_ >= p_.clear_confirm_s - kTimeEps) {
+          clear_x_ = in.x;
+          clear_y_ = in.y;
+          enter(FsmState::kResumeForward, "obstacle cleared (both whiskers off the wall)", t);
+        }
+        break;
+      case FsmState::kFailsafeHover:
+        if (depth_fresh && odom_fresh) {
+          if (!origin_set_) set_origin(in);
+          enter(FsmState::kFlyForward, "inputs fresh again", t);
+        } else if (t - entered_ >= p_.failsafe_land_after_s - kTimeEps) {
+          enter(FsmState::kFailsafeLand, "inputs stale for failsafe_land_after_s", t);
+        }
+        break;
+      case FsmState::kLanding:
+        if (t - entered_ >= p_.landing_duration_s - kTimeEps) enter(FsmState::kLanded, "landing complete", t);
+        break;
+      case FsmState::kLanded:
+      case FsmState::kFailsafeLand:
+        break;
+    }
+  }
+
+  if (state_ == FsmState::kWallFollowing) {
+    const WallSubState next = wall_sub_state(f_left_, l_valid, f_right_, r_valid, side_, both_touched_, sub_, p_, theta_);
+    if (next != sub_ && state_ == state_before) reason_ = "sub-state rule (000 Fig. S4e)";
+    sub_ = next;
+  } else {
+    sub_ = WallSubState::kNone;
+  }
+
+  WallFollowerOutput out;
+  out.state = state_;
+  out.sub_state = sub_;
+  out.transitioned = state_ != state_before || sub_ != sub_before;
+  out.setpoint = saturate(command(in), p_);
+  return out;
+}
+
+Setpoint WhiskerWallFollower::command(const WallFollowerInput&) const {
+  Setpoint s;
+  s.height = p_.flight_height;
+  const double sideways = side_ == Side::kLeft ? p_.v_max : -p_.v_max;  // vy > 0 is left
+  switch (state_) {
+    case FsmState::kHoverInit:
+    case FsmState::kFailsafeHover:
+      break;
+    case FsmState::kFlyForward:
+      s.vx = p_.v_max;  // 000 Methods "Flying Forward" at V_max
+      break;
+    case FsmState::kResumeForward:
+      s.vy = sideways;  // side-step past the edge, then FLY_FORWARD
+      break;
+    case FsmState::kWallFollowing:
+      switch (sub_) {  // 000 Fig. S4e: V_sideway = V_max, V_forward = V_backward = V_max/2, omega_max
+        case WallSubState::kFlySideways: s.vy = sideways; break;
+        case WallSubState::kFlyForward: s.vx = 0.5 * p_.v_max; break;
+        case WallSubState::kFlyBackward: s.vx = -0.5 * p_.v_max; break;
+        case WallSubState::kTurnLeft: s.yaw_rate = p_.omega_max; break;
+        case WallSubState::kTurnRight: s.yaw_rate = -p_.omega_max; break;
+        case WallSubState::kNone: break;
+      }
+      break;
+    case FsmState::kLanding:
+    case FsmState::kLanded:
+    case FsmState::kFailsafeLand:
+      s.height = 0.0;
+      s.land = true;
+      break;
+  }
+  return s;
+}
+
+}  // namespace tactile_fsm

@@ -1,0 +1,470 @@
+// Core tests of the whisker wall-following FSM (000 Methods, Fig. S4e):
+// state sequence, the sub-state rule on hand-picked depths, saturation,
+// stale-input fail-safe, and a closed loop with a kinematic point drone.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <random>
+#include <stdexcept>
+#include <string>
+
+#include "tactile_fsm/whisker_wall_follower.hpp"
+
+using tactile_fsm::FsmState;
+using tactile_fsm::Setpoint;
+using tactile_fsm::Side;
+using tactile_fsm::wall_sub_state;
+using tactile_fsm::WallFollowerInput;
+using tactile_fsm::WallFollowerOutput;
+using tactile_fsm::WallFollowerParams;
+using tactile_fsm::WallSubState;
+using tactile_fsm::WhiskerWallFollower;
+
+namespace {
+
+constexpr double kDt = 0.02;  // 50 Hz
+constexpr double kDeg = M_PI / 180.0;
+
+// Fresh input at time t, drone at (x, y, yaw), no contact, target (2, 0).
+WallFollowerInput input(double t, double x = 0.0, double y = 0.0, double yaw = 0.0) {
+  WallFollowerInput in;
+  in.t = t;
+  in.depth_stamp = t;
+  in.odom_stamp = t;
+  in.x = x;
+  in.y = y;
+  in.yaw = yaw;
+  in.has_target = true;
+  in.target_x = 2.0;
+  in.target_y = 0.0;
+  return in;
+}
+
+void set_depths(WallFollowerInput& in, double dl, double dr) {
+  in.left_valid = in.right_valid = true;
+  in.depth_left = dl;
+  in.depth_right = dr;
+}
+
+WallSubState rule(double dl, double dr, WallSubState current = WallSubState::kFlySideways) {
+  return wall_sub_state(dl, true, dr, true, Side::kRight, true, current, WallFollowerParams{});
+}
+
+}  // namespace
+
+TEST(WallFollowerParams, DefaultsArePaperValuesAndValidate) {
+  const WallFollowerParams p;
+  EXPECT_DOUBLE_EQ(p.v_max, 0.2);                   // 000 Results, 20 cm/s
+  EXPECT_NEAR(p.omega_max, 0.4363323, 1e-6);        // 25 deg/s
+  EXPECT_DOUBLE_EQ(p.t_min, 0.06);                  // 000 Fig. 4c band 60-100 mm
+  EXPECT_DOUBLE_EQ(p.t_max, 0.10);
+  EXPECT_DOUBLE_EQ(p.hover_init_s, 2.0);
+  EXPECT_DOUBLE_EQ(p.flight_height, 0.4);
+  EXPECT_EQ(p.follow_side, Side::kRight);
+  EXPECT_NO_THROW(p.validate());
+}
+
+TEST(WallFollowerParams, ValidateNamesFieldAndReason) {
+  auto message = [](WallFollowerParams p) -> std::string {
+    try {
+      p.validate();
+    } catch (const std::invalid_argument& e) {
+      return e.what();
+    }
+    return "";
+  };
+  WallFollowerParams p;
+  p.t_max = 0.05;  // below t_min
+  EXPECT_NE(message(p).find("WallFollowerParams.t_max: must be finite and > t_min"), std::string::npos) << message(p);
+  p = WallFollowerParams{};
+  p.v_max = -1.0;
+  EXPECT_NE(message(p).find("WallFollowerParams.v_max"), std::string::npos);
+  p = WallFollowerParams{};
+  p.align_exit = 5.0 * kDeg;  // above align_enter (3 deg)
+  EXPECT_NE(message(p).find("WallFollowerParams.align_exit"), std::string::npos);
+  p = WallFollowerParams{};
+  p.max_input_age_s = std::nan("");
+  EXPECT_NE(message(p).find("WallFollowerParams.max_input_age_s"), std::string::npos);
+  EXPECT_THROW(WhiskerWallFollower{p}, std::invalid_argument);
+  EXPECT_EQ(tactile_fsm::side_from_string("left"), Side::kLeft);
+  EXPECT_THROW(tactile_fsm::side_from_string("up"), std::invalid_argument);
+}
+
+// --- Sub-state rule (000 Fig. S4e) on hand-picked (d_l, d_r) pairs, band 60-100 mm, s = 50 mm.
+
+TEST(WallSubStateRule, InsideBandAlignedFliesSideways) {
+  EXPECT_EQ(rule(0.080, 0.080), WallSubState::kFlySideways);
+  EXPECT_EQ(rule(0.061, 0.0615), WallSubState::kFlySideways);  // 0.6 deg, near T_min
+}
+
+TEST(WallSubStateRule, BothTooCloseFliesBackwardBothTooFarFliesForward) {
+  EXPECT_EQ(rule(0.050, 0.055), WallSubState::kFlyBackward);
+  EXPECT_EQ(rule(0.120, 0.110), WallSubState::kFlyForward);
+}
+
+TEST(WallSubStateRule, TiltTurnsTowardPerpendicular) {
+  // d_l < d_r: the wall is nearer on the left; theta = atan(-0.02/0.05) = -21.8 deg,
+  // the perpendicular heading is counter-clockwise -> turn left.
+  EXPECT_EQ(rule(0.070, 0.090), WallSubState::kTurnLeft);
+  EXPECT_EQ(rule(0.090, 0.070), WallSubState::kTurnRight);
+  // Different intervals (one out of the band) with a clear tilt.
+  EXPECT_EQ(rule(0.050, 0.080), WallSubState::kTurnLeft);
+  EXPECT_EQ(rule(0.110, 0.090), WallSubState::kTurnRight);
+  EXPECT_EQ(rule(0.050, 0.110), WallSubState::kTurnLeft);
+}
+
+TEST(WallSubStateRule, AlignmentHysteresis) {
+  // 2 deg tilt: d_l - d_r = 0.05 * tan(2 deg) = 1.746 mm; between exit (1) and enter (3 deg).
+  const double half = 0.5 * 0.05 * std::tan(2.0 * kDeg);
+  EXPECT_EQ(rule(0.080 + half, 0.080 - half, WallSubState::kFlySideways), WallSubState::kFlySideways);
+  EXPECT_EQ(rule(0.080 + half, 0.080 - half, WallSubState::kTurnRight), WallSubState::kTurnRight);
+  // 4 deg starts a turn from sideways.
+  const double h4 = 0.5 * 0.05 * std::tan(4.0 * kDeg);
+  EXPECT_EQ(rule(0.080 + h4, 0.080 - h4, WallSubState::kFlySideways), WallSubState::kTurnRight);
+}
+
+TEST(WallSubStateRule, AlignedButStraddlingBandEdgeTranslates) {
+  // theta = atan(0.0004 / 0.05) = 0.46 deg < align_exit: move, do not turn.
+  EXPECT_EQ(rule(0.1002, 0.0998), WallSubState::kFlyForward);
+  EXPECT_EQ(rule(0.0598, 0.0602), WallSubState::kFlyBackward);
+}
+
+TEST(WallSubStateRule, MissingDepth) {
+  const WallFollowerParams p;
+  // Approach: left not touching yet counts as beyond T_max -> turn right (toward the wall on the right).
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kRight, false, WallSubState::kNone, p),
+            WallSubState::kTurnRight);
+  // Following right, the leading (right) whisker ran off the end: keep passing the edge.
+  EXPECT_EQ(wall_sub_state(0.08, true, NAN, false, Side::kRight, true, WallSubState::kFlySideways, p),
+            WallSubState::kFlySideways);
+  EXPECT_EQ(wall_sub_state(0.05, true, NAN, false, Side::kRight, true, WallSubState::kFlySideways, p),
+            WallSubState::kFlyBackward);
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kLeft, true, WallSubState::kFlySideways, p),
+            WallSubState::kFlySideways);
+  // Following right, the trailing (left) whisker lost: as approach -> turn right.
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kRight, true, WallSubState::kFlySideways, p),
+            WallSubState::kTurnRight);
+  // Invalid flag wins over a finite value; NaN with a valid flag is invalid.
+  EXPECT_EQ(wall_sub_state(0.08, true, NAN, true, Side::kRight, false, WallSubState::kNone, p),
+            WallSubState::kTurnLeft);
+}
+
+TEST(Saturation, ScalesSpeedAndClampsYawRate) {
+  const WallFollowerParams p;
+  Setpoint s;
+  s.vx = 0.3;
+  s.vy = 0.4;  // |v| = 0.5 -> scaled by 0.4 to 0.2
+  s.yaw_rate = -2.0;
+  s.height = 0.4;
+  const Setpoint o = tactile_fsm::saturate(s, p);
+  EXPECT_NEAR(o.vx, 0.12, 1e-12);
+  EXPECT_NEAR(o.vy, 0.16, 1e-12);
+  EXPECT_NEAR(o.yaw_rate, -25.0 * kDeg, 1e-12);
+  EXPECT_DOUBLE_EQ(o.height, 0.4);
+  s.vx = NAN;
+  s.vy = 0.1;
+  s.yaw_rate = INFINITY;
+  const Setpoint n = tactile_fsm::saturate(s, p);
+  EXPECT_EQ(n.vx, 0.0);
+  EXPECT_DOUBLE_EQ(n.vy, 0.1);
+  EXPECT_EQ(n.yaw_rate, 0.0);
+  // A smaller V_max in the params scales the FSM's own commands too.
+  WallFollowerParams slow;
+  slow.v_max = 0.1;
+  slow.omega_max = 0.2;
+  WhiskerWallFollower fsm(slow);
+  for (int k = 0; k <= 150; ++k) fsm.step(input(k * kDt));
+  ASSERT_EQ(fsm.state(), FsmState::kFlyForward);
+  EXPECT_DOUBLE_EQ(fsm.step(input(151 * kDt)).setpoint.vx, 0.1);
+}
+
+// --- Scripted sequence: hover 2 s -> forward -> contact -> wall following ->
+// cleared -> resume -> forward -> target -> landing -> landed.
+TEST(WhiskerWallFollower, ScriptedStateSequence) {
+  const WallFollowerParams p;
+  WhiskerWallFollower fsm(p);
+  double t = 0.0;
+  WallFollowerOutput o;
+  // Hover for 2 s at the flight height.
+  for (; t < 1.99; t += kDt) {
+    o = fsm.step(input(t));
+    ASSERT_EQ(o.state, FsmState::kHoverInit) << t;
+    EXPECT_EQ(o.setpoint.vx, 0.0);
+    EXPECT_DOUBLE_EQ(o.setpoint.height, 0.4);
+    EXPECT_FALSE(o.setpoint.land);
+  }
+  o = fsm.step(input(2.0));
+  ASSERT_EQ(o.state, FsmState::kFlyForward);
+  EXPECT_TRUE(o.transitioned);
+  EXPECT_STREQ(fsm.reason(), "hover initialisation done");
+  EXPECT_DOUBLE_EQ(o.setpoint.vx, 0.2);  // V_max
+  EXPECT_EQ(o.setpoint.vy, 0.0);
+  // Contact: TDORC flag on the left whisker, depths still beyond T_max.
+  WallFollowerInput in = input(2.5, 0.4);
+  in.tdorc_contact_left = true;
+  set_depths(in, 0.13, 0.13);
+  o = fsm.step(in);
+  ASSERT_EQ(o.state, FsmState::kWallFollowing);
+  EXPECT_STREQ(fsm.reason(), "whisker contact");
+  EXPECT_EQ(fsm.active_side(), Side::kRight);  // target straight ahead -> default side
+  EXPECT_EQ(o.sub_state, WallSubState::kFlyForward);
+  EXPECT_DOUBLE_EQ(o.setpoint.vx, 0.1);  // V_max / 2
+  // In the band: fly sideways to the right at V_max (filter settles within a few ticks).
+  t = 2.5;
+  for (int k = 0; k < 30; ++k) {
+    t += kDt;
+    in = input(t, 0.45);
+    set_depths(in, 0.08, 0.08);
+    o = fsm.step(in);
+  }
+  EXPECT_EQ(o.state, FsmState::kWallFollowing);
+  EXPECT_EQ(o.sub_state, WallSubState::kFlySideways);
+  EXPECT_DOUBLE_EQ(o.setpoint.vy, -0.2);
+  EXPECT_EQ(o.setpoint.vx, 0.0);
+  // Both whiskers leave the wall: cleared clear_confirm_s = 0.2 s after the
+  // last tick in contact (t).
+  const double off = t + kDt;
+  for (int k = 0; k < 9; ++k) {
+    o = fsm.step(input(off + k * kDt, 0.45, -0.3));
+    ASSERT_EQ(o.state, FsmState::kWallFollowing) << k;
+  }
+  o = fsm.step(input(t + 0.2, 0.45, -0.3));
+  ASSERT_EQ(o.state, FsmState::kResumeForward);
+  EXPECT_DOUBLE_EQ(o.setpoint.vy, -0.2);  // side-step the clearance margin
+  o = fsm.step(input(off + 0.3, 0.45, -0.40));  // 0.10 m < clear_margin
+  EXPECT_EQ(o.state, FsmState::kResumeForward);
+  o = fsm.step(input(off + 0.4, 0.45, -0.46));  // 0.16 m
+  ASSERT_EQ(o.state, FsmState::kFlyForward);
+  EXPECT_DOUBLE_EQ(o.setpoint.vx, 0.2);
+  // Not yet at the target (2, 0): 1.0 m before it.
+  o = fsm.step(input(off + 0.5, 1.0, -0.46));
+  EXPECT_EQ(o.state, FsmState::kFlyForward);
+  // Past the target along the course (+x from the start at the origin), 0.46 m to its side.
+  o = fsm.step(input(off + 0.6, 2.01, -0.46));
+  ASSERT_EQ(o.state, FsmState::kLanding);
+  EXPECT_STREQ(fsm.reason(), "target reached");
+  EXPECT_TRUE(o.setpoint.land);
+  EXPECT_EQ(o.setpoint.height, 0.0);
+  o = fsm.step(input(off + 2.5, 2.01, -0.46));
+  EXPECT_EQ(o.state, FsmState::kLanding);
+  o = fsm.step(input(off + 2.6, 2.01, -0.46));
+  EXPECT_EQ(o.state, FsmState::kLanded);
+  EXPECT_TRUE(o.setpoint.land);
+  EXPECT_EQ(fsm.transitions(), 6u);  // hover->fwd->wall->resume->fwd->landing->landed
+}
+
+TEST(WhiskerWallFollower, LandsWithinTargetRadius) {
+  WallFollowerParams p;
+  p.land_past_target = false;
+  WhiskerWallFollower fsm(p);
+  for (int k = 0; k <= 100; ++k) fsm.step(input(k * kDt));
+  ASSERT_EQ(fsm.state(), FsmState::kFlyForward);
+  // Past the target but 0.5 m to the side: no landing without land_past_target.
+  EXPECT_EQ(fsm.step(input(2.1, 2.2, 0.5)).state, FsmState::kFlyForward);
+  EXPECT_EQ(fsm.step(input(2.12, 1.9, 0.1)).state, FsmState::kLanding);  // 0.141 m < 0.15 m
+}
+
+TEST(WhiskerWallFollower, SideTowardTargetLateralOffset) {
+  // Target (2, 0.5) from the origin heading +x: 0.5 m to the left -> follow left.
+  WhiskerWallFollower fsm{WallFollowerParams{}};
+  for (int k = 0; k <= 100; ++k) fsm.step(input(k * kDt));
+  WallFollowerInput in = input(2.1);
+  in.target_y = 0.5;
+  set_depths(in, 0.08, 0.08);
+  fsm.step(in);
+  ASSERT_EQ(fsm.state(), FsmState::kWallFollowing);
+  EXPECT_EQ(fsm.active_side(), Side::kLeft);
+  // Heading +y (yaw 90 deg): the same target is 2 m to the right.
+  WhiskerWallFollower fsm2{WallFollowerParams{}};
+  for (int k = 0; k <= 100; ++k) fsm2.step(input(k * kDt, 0.0, 0.0, M_PI / 2));
+  in = input(2.1, 0.0, 0.0, M_PI / 2);
+  in.target_y = 0.5;
+  set_depths(in, 0.08, 0.08);
+  const WallFollowerOutput o = fsm2.step(in);
+  EXPECT_EQ(fsm2.active_side(), Side::kRight);
+  EXPECT_DOUBLE_EQ(o.setpoint.vy, -0.2);
+  // With side_toward_target off the configured side is used.
+  WallFollowerParams p;
+  p.side_toward_target = false;
+  p.follow_side = Side::kLeft;
+  WhiskerWallFollower fsm3(p);
+  for (int k = 0; k <= 100; ++k) fsm3.step(input(k * kDt));
+  in = input(2.1);
+  in.target_y = -1.0;
+  set_depths(in, 0.08, 0.08);
+  fsm3.step(in);
+  EXPECT_EQ(fsm3.active_side(), Side::kLeft);
+}
+
+TEST(WhiskerWallFollower, StaleDepthFailsafeHoverThenLand) {
+  WhiskerWallFollower fsm{WallFollowerParams{}};
+  for (int k = 0; k <= 125; ++k) fsm.step(input(k * kDt));
+  ASSERT_EQ(fsm.state(), FsmState::kFlyForward);
+  // Depth stops at t = 2.5 s; odometry continues. Stale after 0.2 s.
+  WallFollowerOutput o;
+  for (int k = 126; k <= 135; ++k) {
+    WallFollowerInput in = input(k * kDt);
+    in.depth_stamp = 2.5;
+    o = fsm.step(in);
+    ASSERT_EQ(o.state, FsmState::kFlyForward) << k;
+  }
+  WallFollowerInput in = input(2.72);
+  in.depth_stamp = 2.5;
+  o = fsm.step(in);
+  ASSERT_EQ(o.state, FsmState::kFailsafeHover);
+  EXPECT_STREQ(fsm.reason(), "tactile depth stale");
+  EXPECT_EQ(o.setpoint.vx, 0.0);
+  EXPECT_EQ(o.setpoint.vy, 0.0);
+  EXPECT_DOUBLE_EQ(o.setpoint.height, 0.4);
+  EXPECT_FALSE(o.setpoint.land);
+  in.t = 4.70;
+  EXPECT_EQ(fsm.step(in).state, FsmState::kFailsafeHover);
+  in.t = 4.72;  // 2 s after entering the fail-safe hover
+  o = fsm.step(in);
+  ASSERT_EQ(o.state, FsmState::kFailsafeLand);
+  EXPECT_TRUE(o.setpoint.land);
+  // Terminal: fresh input does not restart the flight.
+  EXPECT_EQ(fsm.step(input(5.0)).state, FsmState::kFailsafeLand);
+}
+
+TEST(WhiskerWallFollower, StaleOdometryFailsafeAndRecovery) {
+  WhiskerWallFollower fsm{WallFollowerParams{}};
+  for (int k = 0; k <= 125; ++k) fsm.step(input(k * kDt));
+  WallFollowerInput in = input(3.0);
+  in.odom_stamp = 2.5;
+  EXPECT_EQ(fsm.step(in).state, FsmState::kFailsafeHover);
+  EXPECT_STREQ(fsm.reason(), "odometry stale");
+  // Fresh again before failsafe_land_after_s: resume forward flight.
+  EXPECT_EQ(fsm.step(input(3.5)).state, FsmState::kFlyForward);
+  EXPECT_STREQ(fsm.reason(), "inputs fresh again");
+}
+
+TEST(WhiskerWallFollower, NoInputAtEndOfHoverIsFailsafe) {
+  WhiskerWallFollower fsm{WallFollowerParams{}};
+  WallFollowerInput in;  // never received anything
+  for (int k = 0; k < 100; ++k) {
+    in.t = k * kDt;
+    ASSERT_EQ(fsm.step(in).state, FsmState::kHoverInit);
+  }
+  in.t = 2.0;
+  EXPECT_EQ(fsm.step(in).state, FsmState::kFailsafeHover);
+  EXPECT_STREQ(fsm.reason(), "tactile depth stale at end of hover");
+}
+
+// --- Closed loop: a point drone with yaw integrating the setpoints through a
+// first-order velocity lag, a straight wall at a known angle, two whiskers 5 cm
+// apart 5 cm ahead of the centre, geometric depths along body x with 2 mm noise.
+namespace {
+
+struct ClosedLoopResult {
+  bool reached_wall = false;
+  double in_band_fraction = 0.0;  ///< both true depths in [T_min, T_max], fraction of the first 10 s of wall following
+  double max_heading_error_last5 = 0.0;  ///< [deg], last 5 s of the 10 s
+  double min_depth = 1.0;         ///< closest true depth during wall following [m]
+  int sideways_ticks = 0;
+};
+
+ClosedLoopResult fly_to_wall(double wall_deg, unsigned seed) {
+  const WallFollowerParams p;
+  WhiskerWallFollower fsm(p);
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, 0.002);
+  const double a = wall_deg * kDeg;
+  // Wall: points q with n.q = c, n = (cos a, sin a) pointing into the wall;
+  // the perpendicular heading is a. It crosses the x axis at x = 0.6 m.
+  const double nx = std::cos(a), ny = std::sin(a), c = 0.6 * nx;
+  const double reach = 0.14, base_x = 0.05, half_s = 0.025, tau = 0.1;
+  double x = 0.0, y = 0.0, psi = 0.0, vxb = 0.0, vyb = 0.0, r = 0.0;
+  auto depth = [&](double side_y) -> double {
+    const double bx = x + base_x * std::cos(psi) - side_y * std::sin(psi);
+    const double by = y + base_x * std::sin(psi) + side_y * std::cos(psi);
+    const double nh = nx * std::cos(psi) + ny * std::sin(psi);
+    if (nh <= 1e-3) return NAN;
+    const double d = (c - nx * bx - ny * by) / nh;
+    return (d >= 0.0 && d <= reach) ? d : NAN;
+  };
+  ClosedLoopResult res;
+  double band_start = -1.0;
+  int band_ticks = 0, total_ticks = 0;
+  Setpoint sp;
+  for (int k = 0; k < 50 * 30; ++k) {
+    const double t = k * kDt;
+    const double dl = depth(+half_s), dr = depth(-half_s);
+    WallFollowerInput in;
+    in.t = t;
+    in.depth_stamp = in.odom_stamp = t;
+    in.left_valid = std::isfinite(dl);
+    in.right_valid = std::isfinite(dr);
+    in.depth_left = in.left_valid ? dl + noise(rng) : NAN;
+    in.depth_right = in.right_valid ? dr + noise(rng) : NAN;
+    in.tdorc_contact_left = in.left_valid;
+    in.tdorc_contact_right = in.right_valid;
+    in.x = x;
+    in.y = y;
+    in.yaw = psi;
+    const WallFollowerOutput o = fsm.step(in);
+    sp = o.setpoint;
+    if (std::getenv("TACTILE_FSM_TRACE") != nullptr) {  // debugging aid: one line per tick
+      std::printf("%.2f %s %s dl=%.4f dr=%.4f err=%.2f\n", t, tactile_fsm::to_string(o.state),
+                  tactile_fsm::to_string(o.sub_state), dl, dr, std::remainder(psi - a, 2.0 * M_PI) / kDeg);
+    }
+    EXPECT_LE(std::hypot(sp.vx, sp.vy), p.v_max + 1e-12);
+    EXPECT_LE(std::fabs(sp.yaw_rate), p.omega_max + 1e-12);
+    if (o.state == FsmState::kWallFollowing) {
+      res.reached_wall = true;
+      if (std::isfinite(dl)) res.min_depth = std::min(res.min_depth, dl);
+      if (std::isfinite(dr)) res.min_depth = std::min(res.min_depth, dr);
+      if (o.sub_state == WallSubState::kFlySideways) ++res.sideways_ticks;
+    } else if (res.reached_wall) {
+      ADD_FAILURE() << "left wall following at t=" << t << " to " << tactile_fsm::to_string(o.state) << ": "
+                    << fsm.reason();
+      break;
+    }
+    const bool in_band = std::isfinite(dl) && std::isfinite(dr) && dl >= p.t_min && dl <= p.t_max &&
+                         dr >= p.t_min && dr <= p.t_max;
+    if (band_start < 0.0 && res.reached_wall) band_start = t;  // 10 s from the wall-following entry
+    if (band_start >= 0.0) {
+      if (t >= band_start + 10.0) break;
+      ++total_ticks;
+      if (in_band) ++band_ticks;
+      if (t >= band_start + 5.0) {
+        const double err = std::remainder(psi - a, 2.0 * M_PI) / kDeg;
+        res.max_heading_error_last5 = std::max(res.max_heading_error_last5, std::fabs(err));
+      }
+    }
+    // Integrate 20 ms in 1 ms steps (velocity lag tau, world-frame motion).
+    for (int i = 0; i < 20; ++i) {
+      const double h = 0.001;
+      vxb += (sp.vx - vxb) * h / tau;
+      vyb += (sp.vy - vyb) * h / tau;
+      r += (sp.yaw_rate - r) * h / tau;
+      x += (vxb * std::cos(psi) - vyb * std::sin(psi)) * h;
+      y += (vxb * std::sin(psi) + vyb * std::cos(psi)) * h;
+      psi += r * h;
+    }
+  }
+  res.in_band_fraction = total_ticks > 0 ? static_cast<double>(band_ticks) / total_ticks : 0.0;
+  if (total_ticks < 499) ADD_FAILURE() << "wall following shorter than 10 s: " << total_ticks << " ticks";
+  return res;
+}
+
+}  // namespace
+
+class ClosedLoop : public ::testing::TestWithParam<double> {};
+
+TEST_P(ClosedLoop, KeepsBandAndPerpendicularHeading) {
+  const double wall_deg = GetParam();
+  for (unsigned seed : {1u, 2u, 3u, 4u, 5u}) {
+    const ClosedLoopResult r = fly_to_wall(wall_deg, seed);
+    ASSERT_TRUE(r.reached_wall) << wall_deg;
+    EXPECT_GE(r.in_band_fraction, 0.90) << "wall " << wall_deg << " deg, seed " << seed;
+    EXPECT_LE(r.max_heading_error_last5, 5.0) << "wall " << wall_deg << " deg, seed " << seed;
+    EXPECT_GT(r.min_depth, 0.03) << "wall " << wall_deg << " deg, seed " << seed;
+    // It actually follows the wall (sideways most of the time), not just hovers.
+    EXPECT_GT(r.sideways_ticks, 250) << "wall " << wall_deg << " deg, seed " << seed;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(WallAngles, ClosedLoop, ::testing::Values(0.0, 20.0, -20.0, 30.0, -30.0));
