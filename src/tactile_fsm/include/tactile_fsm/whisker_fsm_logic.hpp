@@ -1,0 +1,97 @@
+// Node logic of the whisker wall-following FSM (paper 000, Methods "Whisker-based
+// aerial tactile navigation strategy", Fig. S4e): TactileDepth, the two
+// WhiskerSignals and Odometry in; a 50 Hz timer publishes HoverSetpoint and
+// FsmState. No rclcpp: the rclcpp component and the standalone host use this class.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "nav_msgs/msg/odometry.hpp"
+#include "tactile_common/parameters.hpp"
+#include "tactile_fsm/whisker_wall_follower.hpp"
+#include "tactile_msgs/msg/fsm_state.hpp"
+#include "tactile_msgs/msg/hover_setpoint.hpp"
+#include "tactile_msgs/msg/tactile_depth.hpp"
+#include "tactile_msgs/msg/whisker_signal.hpp"
+
+namespace tactile_fsm {
+
+class WhiskerFsmLogic {
+ public:
+  static constexpr const char* kNodeName = "whisker_fsm";
+  static constexpr const char* kBehaviour = "whisker_wall_following";
+  static constexpr const char* kDepthTopic = "/whisker/depth";               // tactile_msgs/msg/TactileDepth
+  static constexpr const char* kLeftSignalTopic = "/whisker/left/signal";    // tactile_msgs/msg/WhiskerSignal
+  static constexpr const char* kRightSignalTopic = "/whisker/right/signal";  // tactile_msgs/msg/WhiskerSignal
+  static constexpr const char* kOdomTopic = "/odom";                         // nav_msgs/msg/Odometry
+  static constexpr const char* kSetpointTopic = "/cmd_hover";                // tactile_msgs/msg/HoverSetpoint
+  static constexpr const char* kStateTopic = "/fsm_state";                   // tactile_msgs/msg/FsmState
+  static constexpr const char* kBodyFrame = "base_link";
+  /// Control tick, 50 Hz as 000 ("at 50 Hz" onboard).
+  static constexpr int64_t kTimerPeriodNs = 20000000;
+  /// FsmState is published on every transition and at least at 5 Hz.
+  static constexpr int64_t kStatePeriodNs = 200000000;
+
+  struct Params {
+    WallFollowerParams fsm;
+    /// Target position in the odometry frame [m]. Not in the paper (it lands
+    /// "once the fuselage passed over the final baffle"); the default is the
+    /// three-baffle scenario's target, 0.6 m past the last baffle.
+    double target_x = 3.6;
+    double target_y = 0.0;
+    void validate() const;
+  };
+
+  struct Stats {
+    uint64_t received_depth = 0;
+    uint64_t received_signal_left = 0;
+    uint64_t received_signal_right = 0;
+    uint64_t received_odom = 0;
+    uint64_t dropped_nonfinite = 0;     ///< NaN/inf in a used field (depth in contact, S_p, pose, quaternion of zero norm)
+    uint64_t dropped_out_of_order = 0;  ///< stamp older than the last accepted one of that input
+    uint64_t dropped_wrong_whisker = 0; ///< WhiskerSignal.whisker_id not the side of its topic
+    uint64_t ticks = 0;
+    uint64_t state_messages = 0;
+  };
+
+  struct Outputs {
+    tactile_msgs::msg::HoverSetpoint setpoint;          ///< every tick
+    std::optional<tactile_msgs::msg::FsmState> state;   ///< on transitions and at 5 Hz
+  };
+
+  /// Every parameter the node reads, with the paper's defaults.
+  static tactile_common::ParamMap default_parameters();
+  /// Reads and validates; throws tactile_common::ParamError naming the source,
+  /// the parameter and the reason.
+  static Params params_from(const tactile_common::ParamMap& map);
+
+  explicit WhiskerFsmLogic(const Params& params);
+
+  void on_depth(const tactile_msgs::msg::TactileDepth& msg);
+  void on_left_signal(const tactile_msgs::msg::WhiskerSignal& msg);
+  void on_right_signal(const tactile_msgs::msg::WhiskerSignal& msg);
+  void on_odometry(const nav_msgs::msg::Odometry& msg);
+  /// 50 Hz control tick at now_ns (same clock as the message stamps).
+  Outputs on_timer(int64_t now_ns);
+
+  const Stats& stats() const { return stats_; }
+  const Params& params() const { return params_; }
+  const WhiskerWallFollower& fsm() const { return fsm_; }
+
+ private:
+  bool on_signal(const tactile_msgs::msg::WhiskerSignal& msg, uint8_t expected_id, int64_t& stamp, bool& contact);
+
+  Params params_;
+  WhiskerWallFollower fsm_;
+  Stats stats_;
+  WallFollowerInput in_;
+  int64_t depth_ns_ = INT64_MIN, odom_ns_ = INT64_MIN, left_ns_ = INT64_MIN, right_ns_ = INT64_MIN;
+  bool left_contact_ = false, right_contact_ = false;
+  int64_t last_state_pub_ns_ = INT64_MIN;
+  std::string previous_state_name_;  ///< state before the last transition ("" at start)
+  std::string current_state_name_;   ///< "STATE" or "WALL_FOLLOWING/SUB_STATE"
+};
+
+}  // namespace tactile_fsm

@@ -1,0 +1,61 @@
+// rclcpp component of the whisker wall-following FSM: a mechanical adapter
+// around WhiskerFsmLogic (all behaviour lives there). ROS builds only.
+#include <chrono>
+#include <memory>
+
+#include "rclcpp/rclcpp.hpp"
+#include "rclcpp_components/register_node_macro.hpp"
+#include "tactile_common/ros_parameters.hpp"
+#include "tactile_fsm/whisker_fsm_logic.hpp"
+
+namespace tactile_fsm {
+
+class WhiskerFsmComponent : public rclcpp::Node {
+ public:
+  explicit WhiskerFsmComponent(const rclcpp::NodeOptions & options)
+  : Node(WhiskerFsmLogic::kNodeName, options),
+    logic_(WhiskerFsmLogic::params_from(
+      tactile_common::declare_parameters(*this, WhiskerFsmLogic::default_parameters())))
+  {
+    setpoint_pub_ = create_publisher<tactile_msgs::msg::HoverSetpoint>(
+      WhiskerFsmLogic::kSetpointTopic, rclcpp::QoS(10));
+    state_pub_ = create_publisher<tactile_msgs::msg::FsmState>(
+      WhiskerFsmLogic::kStateTopic, rclcpp::QoS(10).reliable());
+    depth_sub_ = create_subscription<tactile_msgs::msg::TactileDepth>(
+      WhiskerFsmLogic::kDepthTopic, rclcpp::SensorDataQoS(),
+      [this](const tactile_msgs::msg::TactileDepth & msg) {logic_.on_depth(msg);});
+    left_sub_ = create_subscription<tactile_msgs::msg::WhiskerSignal>(
+      WhiskerFsmLogic::kLeftSignalTopic, rclcpp::SensorDataQoS(),
+      [this](const tactile_msgs::msg::WhiskerSignal & msg) {logic_.on_left_signal(msg);});
+    right_sub_ = create_subscription<tactile_msgs::msg::WhiskerSignal>(
+      WhiskerFsmLogic::kRightSignalTopic, rclcpp::SensorDataQoS(),
+      [this](const tactile_msgs::msg::WhiskerSignal & msg) {logic_.on_right_signal(msg);});
+    odom_sub_ = create_subscription<nav_msgs::msg::Odometry>(
+      WhiskerFsmLogic::kOdomTopic, rclcpp::SensorDataQoS(),
+      [this](const nav_msgs::msg::Odometry & msg) {logic_.on_odometry(msg);});
+    // Wall timer at 50 Hz; the tick time is the node clock (sim time when use_sim_time).
+    timer_ = create_wall_timer(
+      std::chrono::nanoseconds(WhiskerFsmLogic::kTimerPeriodNs),
+      [this]() {
+        auto out = logic_.on_timer(now().nanoseconds());
+        setpoint_pub_->publish(out.setpoint);
+        if (out.state) {
+          state_pub_->publish(*out.state);
+        }
+      });
+  }
+
+ private:
+  WhiskerFsmLogic logic_;
+  rclcpp::Publisher<tactile_msgs::msg::HoverSetpoint>::SharedPtr setpoint_pub_;
+  rclcpp::Publisher<tactile_msgs::msg::FsmState>::SharedPtr state_pub_;
+  rclcpp::Subscription<tactile_msgs::msg::TactileDepth>::SharedPtr depth_sub_;
+  rclcpp::Subscription<tactile_msgs::msg::WhiskerSignal>::SharedPtr left_sub_;
+  rclcpp::Subscription<tactile_msgs::msg::WhiskerSignal>::SharedPtr right_sub_;
+  rclcpp::Subscription<nav_msgs::msg::Odometry>::SharedPtr odom_sub_;
+  rclcpp::TimerBase::SharedPtr timer_;
+};
+
+}  // namespace tactile_fsm
+
+RCLCPP_COMPONENTS_REGISTER_NODE(tactile_fsm::WhiskerFsmComponent)

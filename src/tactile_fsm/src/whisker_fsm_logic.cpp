@@ -1,0 +1,217 @@
+#include "tactile_fsm/whisker_fsm_logic.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "tactile_common/time.hpp"
+#include "tactile_msgs/msg/whisker_pressure.hpp"
+
+namespace tactile_fsm {
+
+using tactile_common::ParamMap;
+
+void WhiskerFsmLogic::Params::validate() const {
+  fsm.validate();
+  if (!std::isfinite(target_x)) throw std::invalid_argument("WhiskerFsmLogic.target_x: must be finite");
+  if (!std::isfinite(target_y)) throw std::invalid_argument("WhiskerFsmLogic.target_y: must be finite");
+}
+
+ParamMap WhiskerFsmLogic::default_parameters() {
+  const WallFollowerParams d;
+  const Params n;
+  ParamMap m(kNodeName, "defaults");
+  m.set("v_max", d.v_max);                        // 000 Results: V_max = 20 cm/s
+  m.set("omega_max", d.omega_max);                // 000 Fig. S4e omega_max; 25 deg/s
+  m.set("t_min", d.t_min);                        // 000 Fig. 4c: band 60-100 mm
+  m.set("t_max", d.t_max);
+  m.set("whisker_spacing", d.whisker_spacing);    // 000 eq. 21, s
+  m.set("hover_init_s", d.hover_init_s);          // 000 Methods "Hovering"
+  m.set("flight_height", d.flight_height);
+  m.set("align_enter", d.align_enter);
+  m.set("align_exit", d.align_exit);
+  m.set("depth_filter_tau_s", d.depth_filter_tau_s);
+  m.set("follow_side", std::string(to_string(d.follow_side)));
+  m.set("side_toward_target", d.side_toward_target);
+  m.set("side_deadband", d.side_deadband);
+  m.set("clear_confirm_s", d.clear_confirm_s);
+  m.set("clear_margin", d.clear_margin);
+  m.set("target_radius", d.target_radius);
+  m.set("land_past_target", d.land_past_target);
+  m.set("landing_duration_s", d.landing_duration_s);
+  m.set("max_input_age_s", d.max_input_age_s);
+  m.set("failsafe_land_after_s", d.failsafe_land_after_s);
+  m.set("target_x", n.target_x);
+  m.set("target_y", n.target_y);
+  return m;
+}
+
+WhiskerFsmLogic::Params WhiskerFsmLogic::params_from(const ParamMap& m) {
+  Params p;
+  WallFollowerParams& f = p.fsm;
+  f.v_max = m.get_double("v_max");
+  f.omega_max = m.get_double("omega_max");
+  f.t_min = m.get_double("t_min");
+  f.t_max = m.get_double("t_max");
+  f.whisker_spacing = m.get_double("whisker_spacing");
+  f.hover_init_s = m.get_double("hover_init_s");
+  f.flight_height = m.get_double("flight_height");
+  f.align_enter = m.get_double("align_enter");
+  f.align_exit = m.get_double("align_exit");
+  f.depth_filter_tau_s = m.get_double("depth_filter_tau_s");
+  const std::string side = m.get_string("follow_side");
+  try {
+    f.follow_side = side_from_string(side.c_str());
+  } catch (const std::invalid_argument&) {
+    throw m.error("follow_side", "must be \"right\" or \"left\", got \"" + side + "\"");
+  }
+  f.side_toward_target = m.get_bool("side_toward_target");
+  f.side_deadband = m.get_double("side_deadband");
+  f.clear_confirm_s = m.get_double("clear_confirm_s");
+  f.clear_margin = m.get_double("clear_margin");
+  f.target_radius = m.get_double("target_radius");
+  f.land_past_target = m.get_bool("land_past_target");
+  f.landing_duration_s = m.get_double("landing_duration_s");
+  f.max_input_age_s = m.get_double("max_input_age_s");
+  f.failsafe_land_after_s = m.get_double("failsafe_land_after_s");
+  p.target_x = m.get_double("target_x");
+  p.target_y = m.get_double("target_y");
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    // "<Struct>.<field>: <reason>" -> parameter <field>.
+    const std::string what = e.what();
+    const auto dot = what.find('.');
+    const auto colon = what.find(": ");
+    const std::string key = what.substr(dot + 1, colon - dot - 1);
+    throw m.error(key, colon == std::string::npos ? what : what.substr(colon + 2));
+  }
+  return p;
+}
+
+WhiskerFsmLogic::WhiskerFsmLogic(const Params& params) : params_(params), fsm_(params.fsm) {
+  params_.validate();
+  in_.has_target = true;
+  in_.target_x = params_.target_x;
+  in_.target_y = params_.target_y;
+}
+
+void WhiskerFsmLogic::on_depth(const tactile_msgs::msg::TactileDepth& msg) {
+  ++stats_.received_depth;
+  // A depth is only used while its whisker is in contact; NaN there is bad input.
+  if ((msg.contact_left && !std::isfinite(msg.depth_left)) || (msg.contact_right && !std::isfinite(msg.depth_right))) {
+    ++stats_.dropped_nonfinite;
+    return;
+  }
+  const int64_t stamp = tactile_common::from_stamp(msg.header.stamp);
+  if (stamp < depth_ns_) {
+    ++stats_.dropped_out_of_order;
+    return;
+  }
+  depth_ns_ = stamp;
+  in_.depth_stamp = tactile_common::to_seconds(stamp);
+  in_.left_valid = msg.contact_left;
+  in_.right_valid = msg.contact_right;
+  in_.depth_left = msg.contact_left ? msg.depth_left : NAN;
+  in_.depth_right = msg.contact_right ? msg.depth_right : NAN;
+}
+
+bool WhiskerFsmLogic::on_signal(const tactile_msgs::msg::WhiskerSignal& msg, uint8_t expected_id, int64_t& stamp_ns,
+                                bool& contact) {
+  if (msg.whisker_id != expected_id) {
+    ++stats_.dropped_wrong_whisker;
+    return false;
+  }
+  for (double v : msg.compensated) {
+    if (!std::isfinite(v)) {
+      ++stats_.dropped_nonfinite;
+      return false;
+    }
+  }
+  const int64_t stamp = tactile_common::from_stamp(msg.header.stamp);
+  if (stamp < stamp_ns) {
+    ++stats_.dropped_out_of_order;
+    return false;
+  }
+  stamp_ns = stamp;
+  contact = msg.contact;  // S_p over T_c (000 eq. 4-11, tdorc_filter)
+  return true;
+}
+
+void WhiskerFsmLogic::on_left_signal(const tactile_msgs::msg::WhiskerSignal& msg) {
+  ++stats_.received_signal_left;
+  on_signal(msg, tactile_msgs::msg::WhiskerPressure::WHISKER_LEFT, left_ns_, left_contact_);
+}
+
+void WhiskerFsmLogic::on_right_signal(const tactile_msgs::msg::WhiskerSignal& msg) {
+  ++stats_.received_signal_right;
+  on_signal(msg, tactile_msgs::msg::WhiskerPressure::WHISKER_RIGHT, right_ns_, right_contact_);
+}
+
+void WhiskerFsmLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
+  ++stats_.received_odom;
+  const auto& p = msg.pose.pose.position;
+  const auto& q = msg.pose.pose.orientation;
+  const double qn = q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z;
+  if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(qn) || qn < 1e-12) {
+    ++stats_.dropped_nonfinite;
+    return;
+  }
+  const int64_t stamp = tactile_common::from_stamp(msg.header.stamp);
+  if (stamp < odom_ns_) {
+    ++stats_.dropped_out_of_order;
+    return;
+  }
+  odom_ns_ = stamp;
+  in_.odom_stamp = tactile_common::to_seconds(stamp);
+  in_.x = p.x;
+  in_.y = p.y;
+  in_.yaw = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));  // ZYX yaw
+}
+
+WhiskerFsmLogic::Outputs WhiskerFsmLogic::on_timer(int64_t now_ns) {
+  ++stats_.ticks;
+  const double age = params_.fsm.max_input_age_s;
+  in_.t = tactile_common::to_seconds(now_ns);
+  // TDORC contact flags count only while fresh.
+  in_.tdorc_contact_left = left_contact_ && left_ns_ != INT64_MIN && in_.t - tactile_common::to_seconds(left_ns_) <= age;
+  in_.tdorc_contact_right =
+      right_contact_ && right_ns_ != INT64_MIN && in_.t - tactile_common::to_seconds(right_ns_) <= age;
+  const WallFollowerOutput o = fsm_.step(in_);
+
+  Outputs out;
+  tactile_common::to_stamp(now_ns, out.setpoint.header.stamp);
+  out.setpoint.header.frame_id = kBodyFrame;
+  out.setpoint.vx = o.setpoint.vx;
+  out.setpoint.vy = o.setpoint.vy;
+  out.setpoint.yaw_rate = o.setpoint.yaw_rate;
+  out.setpoint.height = o.setpoint.height;
+  out.setpoint.land = o.setpoint.land;
+
+  if (o.transitioned || stats_.ticks == 1) {
+    // WALL_FOLLOWING carries its Fig. S4e sub-state: "WALL_FOLLOWING/FLY_SIDEWAYS".
+    previous_state_name_ = current_state_name_;
+    current_state_name_ = to_string(o.state);
+    if (o.sub_state != WallSubState::kNone) {
+      current_state_name_ += '/';
+      current_state_name_ += to_string(o.sub_state);
+    }
+  }
+  if (o.transitioned || last_state_pub_ns_ == INT64_MIN || now_ns - last_state_pub_ns_ >= kStatePeriodNs) {
+    tactile_msgs::msg::FsmState s;
+    tactile_common::to_stamp(now_ns, s.header.stamp);
+    s.header.frame_id = kBodyFrame;
+    s.behaviour = kBehaviour;
+    s.state = current_state_name_;
+    s.previous_state = previous_state_name_;
+    s.reason = fsm_.reason();
+    s.time_in_state = in_.t - fsm_.state_entered();
+    s.transitions = fsm_.transitions();
+    last_state_pub_ns_ = now_ns;
+    ++stats_.state_messages;
+    out.state = std::move(s);
+  }
+  return out;
+}
+
+}  // namespace tactile_fsm

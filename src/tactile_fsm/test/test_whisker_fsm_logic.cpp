@@ -1,0 +1,250 @@
+// Node logic tests: parameters (defaults, repository config, errors), message
+// mapping, the 5 Hz / on-transition FsmState, bad input dropped and counted.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "tactile_common/parameters.hpp"
+#include "tactile_common/time.hpp"
+#include "tactile_fsm/whisker_fsm_logic.hpp"
+
+using tactile_common::ParamError;
+using tactile_common::ParamMap;
+using tactile_fsm::WhiskerFsmLogic;
+
+namespace {
+
+constexpr int64_t kStepNs = 20000000;  // 50 Hz
+
+tactile_msgs::msg::TactileDepth depth(int64_t ns, bool cl, double dl, bool cr, double dr) {
+  tactile_msgs::msg::TactileDepth m;
+  tactile_common::to_stamp(ns, m.header.stamp);
+  m.contact_left = cl;
+  m.contact_right = cr;
+  m.depth_left = dl;
+  m.depth_right = dr;
+  return m;
+}
+
+nav_msgs::msg::Odometry odom(int64_t ns, double x, double y, double yaw) {
+  nav_msgs::msg::Odometry m;
+  tactile_common::to_stamp(ns, m.header.stamp);
+  m.pose.pose.position.x = x;
+  m.pose.pose.position.y = y;
+  m.pose.pose.orientation.w = std::cos(yaw / 2);
+  m.pose.pose.orientation.z = std::sin(yaw / 2);
+  return m;
+}
+
+tactile_msgs::msg::WhiskerSignal signal(int64_t ns, uint8_t id, bool contact) {
+  tactile_msgs::msg::WhiskerSignal m;
+  tactile_common::to_stamp(ns, m.header.stamp);
+  m.whisker_id = id;
+  m.contact = contact;
+  m.compensated = {{contact ? 30.0 : 1.0, 0.0, 0.0}};
+  return m;
+}
+
+std::string param_error(const ParamMap& m) {
+  try {
+    WhiskerFsmLogic::params_from(m);
+  } catch (const ParamError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// Feeds fresh no-contact depth and odometry at (x, y, yaw) and ticks.
+WhiskerFsmLogic::Outputs tick(WhiskerFsmLogic& l, int64_t ns, double x = 0.0, double y = 0.0, double yaw = 0.0) {
+  l.on_depth(depth(ns, false, NAN, false, NAN));
+  l.on_odometry(odom(ns, x, y, yaw));
+  return l.on_timer(ns);
+}
+
+}  // namespace
+
+TEST(WhiskerFsmLogic, DefaultsAndTopics) {
+  const auto p = WhiskerFsmLogic::params_from(WhiskerFsmLogic::default_parameters());
+  EXPECT_DOUBLE_EQ(p.fsm.v_max, 0.2);
+  EXPECT_DOUBLE_EQ(p.fsm.t_min, 0.06);
+  EXPECT_DOUBLE_EQ(p.fsm.t_max, 0.10);
+  EXPECT_NEAR(p.fsm.omega_max, 25.0 * M_PI / 180.0, 1e-15);
+  EXPECT_EQ(p.fsm.follow_side, tactile_fsm::Side::kRight);
+  EXPECT_DOUBLE_EQ(p.target_x, 3.6);
+  EXPECT_STREQ(WhiskerFsmLogic::kNodeName, "whisker_fsm");
+  EXPECT_STREQ(WhiskerFsmLogic::kDepthTopic, "/whisker/depth");
+  EXPECT_STREQ(WhiskerFsmLogic::kLeftSignalTopic, "/whisker/left/signal");
+  EXPECT_STREQ(WhiskerFsmLogic::kRightSignalTopic, "/whisker/right/signal");
+  EXPECT_STREQ(WhiskerFsmLogic::kOdomTopic, "/odom");
+  EXPECT_STREQ(WhiskerFsmLogic::kSetpointTopic, "/cmd_hover");
+  EXPECT_STREQ(WhiskerFsmLogic::kStateTopic, "/fsm_state");
+  EXPECT_EQ(WhiskerFsmLogic::kTimerPeriodNs, 20000000);
+}
+
+TEST(WhiskerFsmLogic, RepositoryConfigMatchesDefaults) {
+  // The test runs in the package source directory.
+  const ParamMap m = tactile_common::load_node_parameters("../../config/tactile_fsm.yaml", "/whisker_fsm",
+                                                          WhiskerFsmLogic::default_parameters());
+  const auto p = WhiskerFsmLogic::params_from(m);
+  const auto d = WhiskerFsmLogic::params_from(WhiskerFsmLogic::default_parameters());
+  EXPECT_EQ(p.fsm.v_max, d.fsm.v_max);
+  EXPECT_NEAR(p.fsm.omega_max, d.fsm.omega_max, 1e-15);
+  EXPECT_EQ(p.fsm.t_min, d.fsm.t_min);
+  EXPECT_EQ(p.fsm.t_max, d.fsm.t_max);
+  EXPECT_EQ(p.fsm.whisker_spacing, d.fsm.whisker_spacing);
+  EXPECT_EQ(p.fsm.hover_init_s, d.fsm.hover_init_s);
+  EXPECT_EQ(p.fsm.flight_height, d.fsm.flight_height);
+  EXPECT_NEAR(p.fsm.align_enter, d.fsm.align_enter, 1e-15);
+  EXPECT_NEAR(p.fsm.align_exit, d.fsm.align_exit, 1e-15);
+  EXPECT_EQ(p.fsm.depth_filter_tau_s, d.fsm.depth_filter_tau_s);
+  EXPECT_EQ(p.fsm.follow_side, d.fsm.follow_side);
+  EXPECT_EQ(p.fsm.side_toward_target, d.fsm.side_toward_target);
+  EXPECT_EQ(p.fsm.clear_margin, d.fsm.clear_margin);
+  EXPECT_EQ(p.fsm.max_input_age_s, d.fsm.max_input_age_s);
+  EXPECT_EQ(p.fsm.failsafe_land_after_s, d.fsm.failsafe_land_after_s);
+  EXPECT_EQ(p.target_x, d.target_x);
+  EXPECT_EQ(p.target_y, d.target_y);
+}
+
+TEST(WhiskerFsmLogic, ParameterErrorsNameTheKey) {
+  ParamMap m = WhiskerFsmLogic::default_parameters();
+  m.set("follow_side", std::string("up"));
+  EXPECT_NE(param_error(m).find("follow_side"), std::string::npos);
+  EXPECT_NE(param_error(m).find("\"up\""), std::string::npos);
+  m = WhiskerFsmLogic::default_parameters();
+  m.set("t_max", 0.05);
+  EXPECT_NE(param_error(m).find("t_max"), std::string::npos) << param_error(m);
+  EXPECT_NE(param_error(m).find("> t_min"), std::string::npos) << param_error(m);
+  m = WhiskerFsmLogic::default_parameters();
+  m.set("target_x", std::nan(""));
+  EXPECT_NE(param_error(m).find("target_x"), std::string::npos) << param_error(m);
+  m = WhiskerFsmLogic::default_parameters();
+  m.set("v_max", std::string("fast"));  // wrong type
+  EXPECT_THROW(WhiskerFsmLogic::params_from(m), ParamError);
+}
+
+TEST(WhiskerFsmLogic, FlightThroughMessages) {
+  auto p = WhiskerFsmLogic::params_from(WhiskerFsmLogic::default_parameters());
+  p.target_x = 2.0;
+  WhiskerFsmLogic l(p);
+  int64_t ns = 0;
+  auto o = tick(l, ns);
+  ASSERT_TRUE(o.state.has_value());  // first tick publishes the state
+  EXPECT_EQ(o.state->behaviour, "whisker_wall_following");
+  EXPECT_EQ(o.state->state, "HOVER_INIT");
+  EXPECT_EQ(o.state->previous_state, "");
+  EXPECT_DOUBLE_EQ(o.setpoint.height, 0.4);
+  EXPECT_EQ(o.setpoint.header.frame_id, "base_link");
+  // 5 Hz state messages while hovering: ticks 10, 20, ..., none in between.
+  int states = 0;
+  for (int k = 1; k < 100; ++k) {
+    o = tick(l, k * kStepNs);
+    if (o.state) {
+      ++states;
+      EXPECT_EQ(k % 10, 0) << k;
+      EXPECT_NEAR(o.state->time_in_state, k * 0.02, 1e-9);
+    }
+  }
+  EXPECT_EQ(states, 9);
+  o = tick(l, 100 * kStepNs);  // 2 s: forward
+  ASSERT_TRUE(o.state.has_value());
+  EXPECT_EQ(o.state->state, "FLY_FORWARD");
+  EXPECT_EQ(o.state->previous_state, "HOVER_INIT");
+  EXPECT_EQ(o.state->reason, "hover initialisation done");
+  EXPECT_EQ(o.state->transitions, 1u);
+  EXPECT_DOUBLE_EQ(o.setpoint.vx, 0.2);
+  tactile_common::to_stamp(100 * kStepNs, o.setpoint.header.stamp);
+  // A TDORC contact on the right whisker alone triggers wall following.
+  ns = 101 * kStepNs;
+  l.on_depth(depth(ns, false, NAN, false, NAN));
+  l.on_odometry(odom(ns, 0.5, 0.0, 0.0));
+  l.on_right_signal(signal(ns, 1, true));
+  o = l.on_timer(ns);
+  ASSERT_TRUE(o.state.has_value());
+  EXPECT_EQ(o.state->state, "WALL_FOLLOWING/FLY_SIDEWAYS");  // no depth yet
+  EXPECT_EQ(o.state->reason, "whisker contact");
+  EXPECT_DOUBLE_EQ(o.setpoint.vy, -0.2);
+  // Depths in the band, tilted: d_l = 90 mm, d_r = 70 mm -> turn right at omega_max.
+  ns = 102 * kStepNs;
+  l.on_depth(depth(ns, true, 0.09, true, 0.07));
+  l.on_odometry(odom(ns, 0.5, 0.0, 0.0));
+  o = l.on_timer(ns);
+  ASSERT_TRUE(o.state.has_value());
+  EXPECT_EQ(o.state->state, "WALL_FOLLOWING/TURN_RIGHT");
+  EXPECT_EQ(o.state->previous_state, "WALL_FOLLOWING/FLY_SIDEWAYS");
+  EXPECT_NEAR(o.setpoint.yaw_rate, -25.0 * M_PI / 180.0, 1e-12);
+  // Odometry past the target (2, 0) -> landing.
+  ns = 103 * kStepNs;
+  l.on_depth(depth(ns, true, 0.08, true, 0.08));
+  l.on_odometry(odom(ns, 2.05, 0.0, 0.0));
+  o = l.on_timer(ns);
+  ASSERT_TRUE(o.state.has_value());
+  EXPECT_EQ(o.state->state, "LANDING");
+  EXPECT_TRUE(o.setpoint.land);
+  EXPECT_EQ(o.setpoint.height, 0.0);
+}
+
+TEST(WhiskerFsmLogic, BadInputDroppedAndCounted) {
+  WhiskerFsmLogic l(WhiskerFsmLogic::params_from(WhiskerFsmLogic::default_parameters()));
+  for (int k = 0; k <= 100; ++k) tick(l, k * kStepNs);
+  ASSERT_EQ(l.fsm().state(), tactile_fsm::FsmState::kFlyForward);
+  const int64_t ns = 101 * kStepNs;
+  // NaN depth of a whisker in contact: dropped (would otherwise start wall following).
+  l.on_depth(depth(ns, true, NAN, false, NAN));
+  // NaN depth of a whisker not in contact is not used: accepted.
+  l.on_depth(depth(ns, false, NAN, false, 0.5));
+  // NaN pose and a zero quaternion.
+  auto bad = odom(ns, NAN, 0.0, 0.0);
+  l.on_odometry(bad);
+  bad = odom(ns, 0.1, 0.0, 0.0);
+  bad.pose.pose.orientation.w = 0.0;
+  l.on_odometry(bad);
+  // NaN S_p, wrong whisker id on the left topic, and an out-of-order signal.
+  auto s = signal(ns, 0, true);
+  s.compensated[1] = NAN;
+  l.on_left_signal(s);
+  l.on_left_signal(signal(ns, 1, true));
+  l.on_right_signal(signal(ns, 1, false));
+  l.on_right_signal(signal(ns - kStepNs, 1, true));
+  // Out-of-order depth.
+  l.on_depth(depth(ns - 5 * kStepNs, true, 0.08, true, 0.08));
+  l.on_odometry(odom(ns, 0.1, 0.0, 0.0));
+  const auto o = l.on_timer(ns);
+  EXPECT_EQ(l.fsm().state(), tactile_fsm::FsmState::kFlyForward);  // nothing bad got through
+  EXPECT_DOUBLE_EQ(o.setpoint.vx, 0.2);
+  EXPECT_EQ(l.stats().dropped_nonfinite, 4u);  // depth NaN, pose NaN, zero quaternion, S_p NaN
+  EXPECT_EQ(l.stats().dropped_wrong_whisker, 1u);
+  EXPECT_EQ(l.stats().dropped_out_of_order, 2u);
+  EXPECT_EQ(l.stats().received_signal_left, 2u);
+  EXPECT_EQ(l.stats().received_signal_right, 2u);
+}
+
+TEST(WhiskerFsmLogic, StaleInputsFailsafe) {
+  WhiskerFsmLogic l(WhiskerFsmLogic::params_from(WhiskerFsmLogic::default_parameters()));
+  for (int k = 0; k <= 100; ++k) tick(l, k * kStepNs);
+  // Odometry keeps coming, depth stops at tick 100 (2.0 s); stale after 0.2 s.
+  WhiskerFsmLogic::Outputs o;
+  int k = 101;
+  for (; k <= 110; ++k) {
+    l.on_odometry(odom(k * kStepNs, 0.0, 0.0, 0.0));
+    o = l.on_timer(k * kStepNs);
+    ASSERT_EQ(l.fsm().state(), tactile_fsm::FsmState::kFlyForward) << k;
+  }
+  l.on_odometry(odom(k * kStepNs, 0.0, 0.0, 0.0));
+  o = l.on_timer(k * kStepNs);
+  ASSERT_TRUE(o.state.has_value());
+  EXPECT_EQ(o.state->state, "FAILSAFE_HOVER");
+  EXPECT_EQ(o.state->reason, "tactile depth stale");
+  EXPECT_EQ(o.setpoint.vx, 0.0);
+  for (++k; k <= 211; ++k) o = l.on_timer(k * kStepNs);
+  EXPECT_EQ(l.fsm().state(), tactile_fsm::FsmState::kFailsafeLand);
+  EXPECT_TRUE(o.setpoint.land);
+}
+
+TEST(WhiskerFsmLogic, StaleSignalContactIsIgnored) {
+  WhiskerFsmLogic l(WhiskerFsmLogic::params_from(WhiskerFsmLogic::default_parameters()));
+  l.on_left_signal(signal(0, 0, true));  // contact at t = 0, never updated
+  for (int k = 0; k <= 120; ++k) tick(l, k * kStepNs);
+  EXPECT_EQ(l.fsm().state(), tactile_fsm::FsmState::kFlyForward);
+}
