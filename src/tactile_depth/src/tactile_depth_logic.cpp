@@ -1,0 +1,242 @@
+#include "tactile_depth/tactile_depth_logic.hpp"
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "tactile_common/time.hpp"
+#include "tactile_msgs/msg/whisker_pressure.hpp"
+
+#ifndef TACTILE_DEPTH_INSTALL_SHARE_DIR
+#define TACTILE_DEPTH_INSTALL_SHARE_DIR ""
+#endif
+
+namespace tactile_depth {
+
+using tactile_common::ParamMap;
+using tactile_msgs::msg::TactileDepth;
+using tactile_msgs::msg::WhiskerSignal;
+
+namespace {
+
+bool is_file(const std::string& path) {
+  std::ifstream f(path);
+  return static_cast<bool>(f);
+}
+
+std::vector<std::string> split_paths(const char* env) {
+  std::vector<std::string> out;
+  if (env == nullptr) return out;
+  std::string s(env);
+  std::size_t start = 0;
+  while (start <= s.size()) {
+    const std::size_t end = s.find(':', start);
+    const std::string item = s.substr(start, end == std::string::npos ? std::string::npos : end - start);
+    if (!item.empty()) out.push_back(item);
+    if (end == std::string::npos) break;
+    start = end + 1;
+  }
+  return out;
+}
+
+}  // namespace
+
+void TactileDepthLogic::Params::validate() const {
+  estimator.validate();
+  if (!std::isfinite(max_input_age_s) || max_input_age_s <= 0.0) {
+    throw std::invalid_argument("TactileDepthLogic.max_input_age_s: must be finite and > 0, got " + std::to_string(max_input_age_s));
+  }
+}
+
+ParamMap TactileDepthLogic::default_parameters() {
+  const tactile_depth::Params d;
+  ParamMap m(kNodeName, "defaults");
+  m.set("model_file", std::string("default_model.json"));
+  m.set("estimator", std::string(to_string(d.model)));
+  m.set("kf.q_mm2", d.q_mm2);                        // 000 eq. 27, onboard Q = 0.01 mm^2
+  m.set("kf.r_mm2", d.r_mm2);                        // 000 eq. 28, onboard R = 1 mm^2
+  m.set("kf.p0_mm2", d.p0_mm2);                      // onboard P0 = 50 mm^2
+  m.set("whisker_spacing", d.whisker_spacing);       // 000 eq. 22, s = 0.05 m
+  m.set("whisker_base_x", d.whisker_base_x);
+  m.set("max_input_age_s", Params{}.max_input_age_s);
+  return m;
+}
+
+std::string TactileDepthLogic::resolve_model_file(const std::string& name) {
+  if (name.empty()) return "";
+  if (name[0] == '/') return is_file(name) ? name : "";
+  for (const std::string& prefix : split_paths(std::getenv("AMENT_PREFIX_PATH"))) {
+    const std::string p = prefix + "/share/tactile_depth/models/" + name;
+    if (is_file(p)) return p;
+  }
+  const std::string share = TACTILE_DEPTH_INSTALL_SHARE_DIR;
+  if (!share.empty()) {
+    const std::string p = share + "/models/" + name;
+    if (is_file(p)) return p;
+  }
+  return is_file(name) ? name : "";
+}
+
+TactileDepthLogic::Params TactileDepthLogic::params_from(const ParamMap& m) {
+  Params p;
+  const std::string est = m.get_string("estimator");
+  try {
+    p.estimator.model = estimator_model_from_string(est.c_str());
+  } catch (const std::invalid_argument&) {
+    throw m.error("estimator", "must be \"mlp\", \"kf_simplified\" or \"kf_full\", got \"" + est + "\"");
+  }
+  p.estimator.q_mm2 = m.get_double("kf.q_mm2");
+  p.estimator.r_mm2 = m.get_double("kf.r_mm2");
+  p.estimator.p0_mm2 = m.get_double("kf.p0_mm2");
+  p.estimator.whisker_spacing = m.get_double("whisker_spacing");
+  p.estimator.whisker_base_x = m.get_double("whisker_base_x");
+  p.max_input_age_s = m.get_double("max_input_age_s");
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    // "TactileDepthParams.<field>: <reason>" -> parameter name.
+    const std::string what = e.what();
+    const auto dot = what.find('.');
+    const auto colon = what.find(": ");
+    std::string field = what.substr(dot + 1, colon - dot - 1);
+    if (field == "q_mm2" || field == "r_mm2" || field == "p0_mm2") field = "kf." + field;
+    throw m.error(field, colon == std::string::npos ? what : what.substr(colon + 2));
+  }
+  const std::string name = m.get_string("model_file");
+  p.model_file = resolve_model_file(name);
+  if (p.model_file.empty()) {
+    throw m.error("model_file", "file \"" + name +
+                                    "\" not found (relative names are looked up in share/tactile_depth/models/ of "
+                                    "the install prefixes, then in the working directory)");
+  }
+  return p;
+}
+
+TactileDepthLogic::TactileDepthLogic(const Params& params)
+    : TactileDepthLogic(params, SensorModelFile::load(params.model_file)) {}
+
+TactileDepthLogic::TactileDepthLogic(const Params& params, const SensorModelFile& models)
+    : params_(params), models_(models), estimator_(params.estimator, models.left, models.right) {
+  params_.validate();
+}
+
+void TactileDepthLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
+  ++stats_.received_odometry;
+  const auto& p = msg.pose.pose.position;
+  const auto& q = msg.pose.pose.orientation;
+  if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(q.x) || !std::isfinite(q.y) ||
+      !std::isfinite(q.z) || !std::isfinite(q.w)) {
+    ++stats_.dropped_nonfinite;
+    return;
+  }
+  odom_pose_.x = p.x;
+  odom_pose_.y = p.y;
+  odom_pose_.yaw = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+  odom_ns_ = tactile_common::from_stamp(msg.header.stamp);
+  odom_frame_ = msg.header.frame_id;
+  body_frame_ = msg.child_frame_id.empty() ? std::string(kDefaultBodyFrame) : msg.child_frame_id;
+  have_odom_ = true;
+}
+
+std::optional<TactileDepth> TactileDepthLogic::on_left_signal(const WhiskerSignal& msg) { return on_signal(0, msg); }
+std::optional<TactileDepth> TactileDepthLogic::on_right_signal(const WhiskerSignal& msg) { return on_signal(1, msg); }
+
+std::optional<TactileDepth> TactileDepthLogic::on_signal(int side, const WhiskerSignal& msg) {
+  using tactile_msgs::msg::WhiskerPressure;
+  ++(side == 0 ? stats_.received_left : stats_.received_right);
+  const int expected = side == 0 ? WhiskerPressure::WHISKER_LEFT : WhiskerPressure::WHISKER_RIGHT;
+  if (msg.whisker_id != expected) {
+    ++stats_.dropped_wrong_whisker;
+    return std::nullopt;
+  }
+  for (double v : msg.compensated) {
+    if (!std::isfinite(v)) {
+      ++stats_.dropped_nonfinite;
+      return std::nullopt;
+    }
+  }
+  const int64_t stamp = tactile_common::from_stamp(msg.header.stamp);
+  if (have_published_ && stamp <= last_pair_ns_) {
+    ++stats_.dropped_out_of_order;
+    return std::nullopt;
+  }
+  const int64_t max_age_ns = tactile_common::from_seconds(params_.max_input_age_s);
+  auto drop_pending = [&](Pending& p) {
+    if (stamp - p.stamp_ns > max_age_ns) {
+      ++stats_.dropped_stale;
+    } else {
+      ++stats_.dropped_unpaired;
+    }
+    p.valid = false;
+  };
+  Pending& own = pending_[side];
+  Pending& other = pending_[1 - side];
+  if (other.valid) {
+    if (other.stamp_ns == stamp) {
+      if (own.valid) drop_pending(own);  // an older sample of this side never found its partner
+      other.valid = false;
+      const WhiskerSignal& left = side == 0 ? msg : other.msg;
+      const WhiskerSignal& right = side == 0 ? other.msg : msg;
+      return tick(left, right, stamp);
+    }
+    if (other.stamp_ns < stamp) {
+      drop_pending(other);  // its partner (this side at that stamp) never came
+    } else {
+      ++stats_.dropped_unpaired;  // the other side already moved past this stamp
+      return std::nullopt;
+    }
+  }
+  if (own.valid) drop_pending(own);
+  own.valid = true;
+  own.stamp_ns = stamp;
+  own.msg = msg;
+  return std::nullopt;
+}
+
+TactileDepth TactileDepthLogic::tick(const WhiskerSignal& left, const WhiskerSignal& right, int64_t stamp_ns) {
+  TickInput in;
+  in.sp_left = left.compensated;
+  in.sp_right = right.compensated;
+  in.contact_left = left.contact && left.calibrated_ready;
+  in.contact_right = right.contact && right.calibrated_ready;
+  const int64_t max_age_ns = tactile_common::from_seconds(params_.max_input_age_s);
+  const int64_t age = stamp_ns - odom_ns_;
+  in.pose = odom_pose_;
+  in.pose_valid = have_odom_ && (age <= max_age_ns && age >= -max_age_ns);
+  if (!in.pose_valid) ++stats_.ticks_without_odometry;
+  const TickOutput o = estimator_.update(in);
+  if (o.prediction_skipped) ++stats_.prediction_skipped;
+
+  TactileDepth d;
+  tactile_common::to_stamp(stamp_ns, d.header.stamp);
+  d.header.frame_id = body_frame_;
+  switch (params_.estimator.model) {
+    case EstimatorModel::kMlp: d.model = TactileDepth::MODEL_MLP; break;
+    case EstimatorModel::kKfSimplified: d.model = TactileDepth::MODEL_MLP_KF_SIMPLIFIED; break;
+    case EstimatorModel::kKfFull: d.model = TactileDepth::MODEL_MLP_KF_FULL; break;
+  }
+  d.contact_left = o.contact[0];
+  d.contact_right = o.contact[1];
+  d.filter_initialized = o.filter_initialized;
+  d.depth_left = o.depth[0];
+  d.depth_right = o.depth[1];
+  d.variance_left = o.variance[0];
+  d.variance_right = o.variance[1];
+  d.wall_angle = o.wall_angle;
+  d.wall_angle_variance = o.wall_angle_variance;
+  d.contact_point_left.x = o.contact_point[0].x;
+  d.contact_point_left.y = o.contact_point[0].y;
+  d.contact_point_left.z = 0.0;
+  d.contact_point_right.x = o.contact_point[1].x;
+  d.contact_point_right.y = o.contact_point[1].y;
+  d.contact_point_right.z = 0.0;
+  have_published_ = true;
+  last_pair_ns_ = stamp_ns;
+  ++stats_.published;
+  return d;
+}
+
+}  // namespace tactile_depth
