@@ -250,3 +250,22 @@ TEST(TactileDepthLogic, NotReadyOrNoContactResetsFilter) {
   EXPECT_TRUE(out->contact_right);
   EXPECT_FALSE(out->filter_initialized);
 }
+
+TEST(TactileDepthLogic, RepoConfigMatchesDefaults) {
+  // The tests run in the package source dir; the config lives in the repo root.
+  const tactile_common::ParamMap d = TactileDepthLogic::default_parameters();
+  const tactile_common::ParamMap m =
+      tactile_common::load_node_parameters("../../config/tactile_depth.yaml", "/tactile_depth", d);
+  for (const auto& [key, value] : d.values()) {
+    EXPECT_TRUE(m.values().at(key) == value) << key << " differs from default_parameters()";
+  }
+}
+
+TEST(TactileDepthLogic, ShippedDefaultModelFollowsTheContract) {
+  // Contract check with the training tool's output; the other tests never use it.
+  if (!std::ifstream("models/default_model.json")) GTEST_SKIP() << "no models/default_model.json yet";
+  const SensorModelFile f = SensorModelFile::load("models/default_model.json");
+  EXPECT_EQ(f.left.layers().front().in, 3);
+  EXPECT_EQ(f.left.layers().back().out, 1);
+  EXPECT_TRUE(std::isfinite(f.right.predict({{30.0, 5.0, -3.0}})));
+}
