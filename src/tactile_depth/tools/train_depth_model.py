@@ -359,9 +359,9 @@ def main(argv=None):
     provenance = {
         "datasets": [{"name": n, "scenario": str(d["scenario"]), "flights": [int(s) for s in d["seeds"]]}
                      for n, (d, _) in datasets.items() if n in train_on],
-        "train_flights": {n: datasets[n][1]["fit"] for n in train_on},
-        "validation_flights": {n: datasets[n][1]["val"] for n in train_on},
-        "test_flights": {n: datasets[n][1]["test"] for n in train_on},
+        "train_flights": [{"dataset": n, "flights": datasets[n][1]["fit"]} for n in train_on],
+        "validation_flights": [{"dataset": n, "flights": datasets[n][1]["val"]} for n in train_on],
+        "test_flights": [{"dataset": n, "flights": datasets[n][1]["test"]} for n in train_on],
         "tool": "tools/train_depth_model.py",
         "python": platform.python_version(),
         "sklearn": sklearn.__version__,

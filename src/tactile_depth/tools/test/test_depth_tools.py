@@ -161,9 +161,10 @@ def test_train_writes_model_and_report_with_every_key(tmp_path):
                 "metrics"):
         assert key in model["provenance"], key
     assert model["provenance"]["seed"] == 7
-    assert model["provenance"]["train_flights"] == {"wb": [1, 2], "gl": [1, 2]}
-    assert model["provenance"]["validation_flights"] == {"wb": [3, 4], "gl": [3, 4]}
-    assert model["provenance"]["test_flights"] == {"wb": [5, 6], "gl": [5, 6]}
+    prov = model["provenance"]
+    assert prov["train_flights"] == [{"dataset": "wb", "flights": [1, 2]}, {"dataset": "gl", "flights": [1, 2]}]
+    assert prov["validation_flights"] == [{"dataset": "wb", "flights": [3, 4]}, {"dataset": "gl", "flights": [3, 4]}]
+    assert prov["test_flights"] == [{"dataset": "wb", "flights": [5, 6]}, {"dataset": "gl", "flights": [5, 6]}]
     for side in ("left", "right"):
         assert set(model["whiskers"][side]) == {"input_mean", "input_std", "layers", "output_scale", "output_offset"}
     for ds in ("wb", "gl"):
