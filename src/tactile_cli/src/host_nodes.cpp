@@ -60,6 +60,73 @@ std::shared_ptr<tdorc_filter::TdorcFilterLogic> add_tdorc_filter(
   return logic;
 }
 
+std::shared_ptr<tactile_depth::TactileDepthLogic> add_tactile_depth(Host& host,
+                                                                   const tactile_common::ParamMap& over,
+                                                                   const std::string& output_topic) {
+  using Logic = tactile_depth::TactileDepthLogic;
+  auto params = host.load_parameters("", Logic::kNodeName, Logic::default_parameters(), over);
+  auto logic = std::make_shared<Logic>(Logic::params_from(params));
+  Host* h = &host;
+  Logic* l = logic.get();
+  auto publish = [h, output_topic](const std::optional<tactile_msgs::msg::TactileDepth>& d) {
+    if (d) h->bus().publish(output_topic, *d, h->executor().now_ns());
+  };
+  host.bus().subscribe<tactile_msgs::msg::WhiskerSignal>(
+      Logic::kLeftSignalTopic, [l, publish](const tactile_msgs::msg::WhiskerSignal& m) { publish(l->on_left_signal(m)); });
+  host.bus().subscribe<tactile_msgs::msg::WhiskerSignal>(
+      Logic::kRightSignalTopic, [l, publish](const tactile_msgs::msg::WhiskerSignal& m) { publish(l->on_right_signal(m)); });
+  host.bus().subscribe<nav_msgs::msg::Odometry>(Logic::kOdometryTopic,
+                                                [l](const nav_msgs::msg::Odometry& m) { l->on_odometry(m); });
+  host.add_reporter([l, output_topic] {
+    const auto& s = l->stats();
+    return NodeReport{std::string("/") + Logic::kNodeName + (output_topic == Logic::kOutputTopic ? "" : output_topic),
+                      {{"published", s.published},
+                       {"dropped_nonfinite", s.dropped_nonfinite},
+                       {"dropped_wrong_whisker", s.dropped_wrong_whisker},
+                       {"dropped_out_of_order", s.dropped_out_of_order},
+                       {"dropped_unpaired", s.dropped_unpaired},
+                       {"dropped_stale", s.dropped_stale},
+                       {"ticks_without_odometry", s.ticks_without_odometry},
+                       {"prediction_skipped", s.prediction_skipped}}};
+  });
+  host.keep(logic);
+  return logic;
+}
+
+std::shared_ptr<tactile_fsm::WhiskerFsmLogic> add_whisker_fsm(Host& host, const tactile_common::ParamMap& over) {
+  using Logic = tactile_fsm::WhiskerFsmLogic;
+  auto params = host.load_parameters("", Logic::kNodeName, Logic::default_parameters(), over);
+  auto logic = std::make_shared<Logic>(Logic::params_from(params));
+  Host* h = &host;
+  Logic* l = logic.get();
+  host.bus().subscribe<tactile_msgs::msg::TactileDepth>(
+      Logic::kDepthTopic, [l](const tactile_msgs::msg::TactileDepth& m) { l->on_depth(m); });
+  host.bus().subscribe<tactile_msgs::msg::WhiskerSignal>(
+      Logic::kLeftSignalTopic, [l](const tactile_msgs::msg::WhiskerSignal& m) { l->on_left_signal(m); });
+  host.bus().subscribe<tactile_msgs::msg::WhiskerSignal>(
+      Logic::kRightSignalTopic, [l](const tactile_msgs::msg::WhiskerSignal& m) { l->on_right_signal(m); });
+  host.bus().subscribe<nav_msgs::msg::Odometry>(Logic::kOdomTopic,
+                                                [l](const nav_msgs::msg::Odometry& m) { l->on_odometry(m); });
+  host.executor().add_timer(
+      Logic::kTimerPeriodNs,
+      [h, l](int64_t now_ns) {
+        auto out = l->on_timer(now_ns);
+        h->bus().publish(Logic::kSetpointTopic, out.setpoint, now_ns);
+        if (out.state) h->bus().publish(Logic::kStateTopic, *out.state, now_ns);
+      },
+      host.executor().now_ns());
+  host.add_reporter([l] {
+    const auto& s = l->stats();
+    return NodeReport{std::string("/") + Logic::kNodeName,
+                      {{"ticks", s.ticks},
+                       {"dropped_nonfinite", s.dropped_nonfinite},
+                       {"dropped_out_of_order", s.dropped_out_of_order},
+                       {"dropped_wrong_whisker", s.dropped_wrong_whisker}}};
+  });
+  host.keep(logic);
+  return logic;
+}
+
 namespace {
 template <class T>
 void publish_all(Host& host, std::vector<tactile_sim::Published<T>>& msgs, int64_t now_ns) {

@@ -262,7 +262,8 @@ Scenario load_scenario_from_string(const std::string& yaml, const std::string& s
   }
   const Node top(root, source, "");
   top.allow_only({"name", "description", "duration_s", "physics_rate_hz", "seed", "arena", "arena_file",
-                  "arena_transform", "randomize", "vehicle", "graph", "pilot", "faults", "metrics"});
+                  "arena_transform", "randomize", "vehicle", "graph", "pilot", "faults", "node_parameters",
+                  "metrics"});
   Scenario s;
   s.source = source;
   s.name = top.at("name").text();
@@ -358,7 +359,12 @@ Scenario load_scenario_from_string(const std::string& yaml, const std::string& s
 
   if (top.has("graph")) {
     s.graph = top.at("graph").text();
-    if (s.graph != "pilot" && s.graph != "none") top.at("graph").fail("unknown graph '" + s.graph + "' (pilot, none)");
+    if (s.graph != "pilot" && s.graph != "none" && s.graph != "whisker_fsm") {
+      top.at("graph").fail("unknown graph '" + s.graph + "' (pilot, whisker_fsm, none)");
+    }
+    if (s.graph == "whisker_fsm" && s.vehicle != VehicleType::kWhiskerCrazyflie) {
+      top.at("graph").fail("whisker_fsm flies the whiskered Crazyflie only");
+    }
   }
   if (top.has("pilot")) {
     const Node p = top.at("pilot");
@@ -368,6 +374,19 @@ Scenario load_scenario_from_string(const std::string& yaml, const std::string& s
   if (top.has("faults")) {
     const Node f = top.at("faults");
     for (size_t i = 0; i < f.size(); ++i) s.faults.push_back(parse_fault(f[i]));
+  }
+  if (top.has("node_parameters")) {
+    const Node np = top.at("node_parameters");
+    np.require_map();
+    for (const auto& node : np.raw()) {
+      const std::string name = node.first.as<std::string>();
+      const Node params(node.second, source, np.key_path(name));
+      params.require_map();
+      for (const auto& kv : params.raw()) {
+        const std::string key = kv.first.as<std::string>();
+        s.node_parameters[name][key] = Node(kv.second, source, params.key_path(key)).param_value();
+      }
+    }
   }
   if (top.has("metrics")) {
     const Node m = top.at("metrics");

@@ -73,6 +73,7 @@ TEST(Scenario, FullSchema) {
       "  - {type: dropout, topic: /whisker/left/pressure, start_s: 5, duration_s: 1}\n"
       "  - {type: spike, topic: /whisker/left/pressure, channel: 2, magnitude: 300, probability: 0.01}\n"
       "  - {type: latency, topic: /odom, delay_s: 0.05}\n"
+      "node_parameters:\n  whisker_fsm: {t_max: 0.105, follow_side: left}\n"
       "metrics: {band_mm: [60, 100]}\n";
   const auto s = load_scenario_from_string(yaml, "scn.yaml", ".");
   EXPECT_EQ(s.seed, 7u);
@@ -99,6 +100,8 @@ TEST(Scenario, FullSchema) {
   EXPECT_EQ(s.faults[1].channel, 2);
   EXPECT_DOUBLE_EQ(s.faults[2].delay_s, 0.05);
   EXPECT_EQ(std::get<std::vector<double>>(s.metrics.at("band_mm")), (std::vector<double>{60, 100}));
+  EXPECT_DOUBLE_EQ(std::get<double>(s.node_parameters.at("whisker_fsm").at("t_max")), 0.105);
+  EXPECT_EQ(std::get<std::string>(s.node_parameters.at("whisker_fsm").at("follow_side")), "left");
 }
 
 TEST(Scenario, MalformedFilesNameFileKeyAndReason) {

@@ -7,6 +7,8 @@
 #include <string>
 
 #include "tactile_cli/host.hpp"
+#include "tactile_depth/tactile_depth_logic.hpp"
+#include "tactile_fsm/whisker_fsm_logic.hpp"
 #include "tactile_sim/logic/pilot_logic.hpp"
 #include "tactile_sim/logic/sim_logic.hpp"
 #include "tdorc_filter/tdorc_filter_logic.hpp"
@@ -21,6 +23,15 @@ std::shared_ptr<whisker_driver::WhiskerDriverLogic> add_whisker_driver(
 /// tdorc_filter in namespace `ns`: <ns>/pressure -> <ns>/signal.
 std::shared_ptr<tdorc_filter::TdorcFilterLogic> add_tdorc_filter(
     Host& host, const std::string& ns, const tactile_common::ParamMap& overrides);
+
+/// tactile_depth: /whisker/{left,right}/signal + /odom -> `output_topic`
+/// (the node's own /whisker/depth unless an evaluator renames it).
+std::shared_ptr<tactile_depth::TactileDepthLogic> add_tactile_depth(
+    Host& host, const tactile_common::ParamMap& overrides,
+    const std::string& output_topic = tactile_depth::TactileDepthLogic::kOutputTopic);
+
+/// whisker_fsm: /whisker/depth, /whisker/*/signal, /odom -> /cmd_hover, /fsm_state at 50 Hz.
+std::shared_ptr<tactile_fsm::WhiskerFsmLogic> add_whisker_fsm(Host& host, const tactile_common::ParamMap& overrides);
 
 /// The simulator: a timer at the physics rate publishing every sensor and
 /// ground-truth topic, subscribed to the setpoint topics.

@@ -78,9 +78,15 @@ struct Scenario {
   /// Overrides of the vehicle's parameters by field name.
   std::map<std::string, tactile_common::ParamValue> vehicle_params;
 
-  std::string graph = "pilot"; ///< node graph around the simulator: pilot | none
+  /// Node graph around the simulator: pilot (scenario pilot), whisker_fsm
+  /// (TDORC -> tactile_depth -> whisker wall-following FSM), none.
+  std::string graph = "pilot";
   std::vector<PilotStep> pilot;
   std::vector<FaultSpec> faults;
+  /// Parameter overrides of the nodes of the graph, by node name (e.g.
+  /// whisker_fsm: {t_max: 0.105}), applied over config/<node>.yaml like a
+  /// launch file's per-node parameters.
+  std::map<std::string, std::map<std::string, tactile_common::ParamValue>> node_parameters;
   /// Per-scenario metric settings (interpreted by later behaviours).
   std::map<std::string, tactile_common::ParamValue> metrics;
 };

@@ -1,0 +1,77 @@
+// Evaluations of the whiskered-drone graph in `tactile sim` (paper 000):
+// tactile depth against the simulator's ground truth (Table 1 / Table S1
+// metrics for the MLP, MLP + KF simplified and MLP + KF full models), and
+// wall following against the truth (depth in band, heading error).
+#pragma once
+
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "tactile_cli/host.hpp"
+#include "tactile_msgs/msg/fsm_state.hpp"
+#include "tactile_msgs/msg/tactile_depth.hpp"
+#include "tactile_msgs/msg/whisker_ground_truth.hpp"
+#include "tactile_sim/arena.hpp"
+
+namespace tactile_cli {
+
+/// Ground truth of both whiskers by stamp, from /ground_truth/whisker/*/contact.
+class WhiskerTruth {
+ public:
+  explicit WhiskerTruth(Host& host);
+  struct Sample {
+    bool contact = false;
+    double depth = 0.0;
+  };
+  /// Truth of whisker `side` (0 left, 1 right) at `stamp_ns`, if recorded.
+  const Sample* at(int side, int64_t stamp_ns) const;
+
+ private:
+  std::map<int64_t, Sample> samples_[2];
+};
+
+/// Runs tactile_depth three times side by side (estimator mlp, kf_simplified,
+/// kf_full, publishing on /evaluation/depth/<model>) and compares each with
+/// the truth: MAE / RMSE per whisker [mm] over samples where the whisker
+/// truly touches and the estimator reports contact, orientation MAE [deg]
+/// (theta = atan((d_l - d_r) / s), 000 eq. 22) where both touch, and
+/// reconstruction MAE [mm] (distance of the estimated contact point in the
+/// odometry frame to the nearest arena wall).
+class DepthEvaluation {
+ public:
+  /// `overrides`: the scenario's tactile_depth parameters (the estimator is set per instance).
+  DepthEvaluation(Host& host, const WhiskerTruth& truth, const tactile_sim::Arena& arena,
+                  const tactile_common::ParamMap& overrides);
+  /// {"mlp": {...}, "mlp_kf_simplified": {...}, "mlp_kf_full": {...}}
+  nlohmann::json metrics() const;
+
+ private:
+  const WhiskerTruth& truth_;
+  const tactile_sim::Arena& arena_;
+  double spacing_ = 0.05;
+  std::map<std::string, std::vector<tactile_msgs::msg::TactileDepth>> estimates_;
+};
+
+/// Wall-following quality of the whisker FSM against the truth, over the
+/// 50 Hz samples while the FSM is in WALL_FOLLOWING: depth_in_band_fraction
+/// (every touching whisker's true depth in [T_min, T_max]) and
+/// mean_abs_heading_error_deg (|atan((d_l - d_r) / s)| of the true depths
+/// where both whiskers touch: 0 when the drone faces the wall squarely).
+class WallFollowingEvaluation {
+ public:
+  WallFollowingEvaluation(Host& host, const WhiskerTruth& truth, double t_min, double t_max, double spacing);
+  nlohmann::json metrics() const;
+  const std::string& last_state() const { return state_; }
+
+ private:
+  const WhiskerTruth& truth_;
+  double t_min_, t_max_, spacing_;
+  std::string state_;
+  std::vector<std::pair<int64_t, std::string>> states_;  // transitions (stamp, state)
+};
+
+}  // namespace tactile_cli
