@@ -371,6 +371,7 @@ Scenario load_scenario_from_string(const std::string& yaml, const std::string& s
     for (size_t i = 0; i < p.size(); ++i) s.pilot.push_back(parse_step(p[i]));
   }
   if (s.graph == "pilot" && s.pilot.empty()) top.fail("graph 'pilot' needs a non-empty 'pilot' script");
+  if (s.graph != "pilot" && !s.pilot.empty()) top.at("pilot").fail("only used with graph: pilot (graph is '" + s.graph + "')");
   if (top.has("faults")) {
     const Node f = top.at("faults");
     for (size_t i = 0; i < f.size(); ++i) s.faults.push_back(parse_fault(f[i]));

@@ -130,6 +130,10 @@ TEST(Scenario, MalformedFilesNameFileKeyAndReason) {
   expect_error("name: t\nduration_s: 5\narena_file: nope.yaml\nvehicle: {type: xplorer}\ngraph: none\n",
                "arena_file", "not found");
   expect_error("name: [t\n", "", "YAML syntax error at line");
+  expect_error(kMinimal + "graph: whisker_fsm\n", "pilot", "only used with graph: pilot");
+  std::string xpl = kMinimal;
+  xpl.replace(xpl.find("whisker_crazyflie"), 17, "xplorer");
+  expect_error(xpl + "graph: whisker_fsm\n", "graph", "whiskered Crazyflie only");
 }
 
 TEST(Scenario, EveryLibraryScenarioLoads) {
