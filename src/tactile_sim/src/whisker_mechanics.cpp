@@ -1,6 +1,8 @@
 #include "tactile_sim/whisker_mechanics.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <cstdint>
 #include <sstream>
 #include <stdexcept>
 
@@ -34,6 +36,10 @@ void WhiskerParams::validate() const {
           "placement_angle", "must be in (0, pi/2) rad", placement_angle);
   require(std::isfinite(friction_speed_eps) && friction_speed_eps > 0.0, "friction_speed_eps",
           "must be > 0", friction_speed_eps);
+  require(std::isfinite(stick_slip_gain) && stick_slip_gain >= 0.0, "stick_slip_gain", "must be >= 0",
+          stick_slip_gain);
+  require(std::isfinite(stick_slip_length) && stick_slip_length > 0.0, "stick_slip_length", "must be > 0",
+          stick_slip_length);
 }
 
 PrbmState prbm_contact(const WhiskerParams& p, double d) {
@@ -71,6 +77,22 @@ PrbmState prbm_contact(const WhiskerParams& p, double d) {
   return s;
 }
 
+double stick_slip_profile(double u, double length, uint64_t seed, int obstacle_id) {
+  if (!std::isfinite(u) || !(length > 0.0)) return 0.0;
+  const double x = u / length;
+  const double cycle = std::floor(x);
+  const double f = x - cycle;  // phase in the cycle, [0, 1)
+  // splitmix64 of (seed, obstacle, cycle): the amplitude of this asperity.
+  uint64_t z = seed ^ (static_cast<uint64_t>(static_cast<int64_t>(cycle)) * 0x9E3779B97F4A7C15ULL) ^
+               (static_cast<uint64_t>(obstacle_id + 1) * 0xD1B54A32D192ED03ULL);
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ULL;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBULL;
+  z ^= z >> 31;
+  const double a = 0.5 + 0.5 * static_cast<double>(z >> 11) * (1.0 / 9007199254740992.0);  // [0.5, 1)
+  // Sawtooth: load builds while the tip sticks (f: 0 -> 1), drops at the slip.
+  return a * (2.0 * f - 1.0);
+}
+
 WhiskerContact whisker_contact(const WhiskerParams& p, const Vec2& base, const Vec2& forward,
                                const Vec2& base_velocity, bool hit, double hit_distance,
                                const Vec2& hit_point, const Vec2& hit_normal, double friction,
@@ -99,6 +121,17 @@ WhiskerContact whisker_contact(const WhiskerParams& p, const Vec2& base, const V
   const double slip = std::clamp(v_t / p.friction_speed_eps, -1.0, 1.0);
   const double f_t = -friction * c.normal_force * slip;
   c.friction_force = std::abs(f_t);
+  // Stick-slip of the sliding tip (docs/whisker_signal_model.md, "Stick-slip while sliding"): a
+  // zero-mean fluctuation of the bending moment the barometers feel, scaled by
+  // the friction moment mu N l_o sin(alpha) and by how fully the tip slides;
+  // its frequency is the sliding speed over the cycle length. The force on the
+  // body keeps the mean (PRBM) normal force.
+  if (p.stick_slip_gain > 0.0 && friction > 0.0) {
+    const double u = hit_point.dot(tangent);
+    c.stick_slip_moment = p.stick_slip_gain * friction * c.normal_force * p.contact_height() * std::abs(slip) *
+                          stick_slip_profile(u, p.stick_slip_length, p.stick_slip_seed, obstacle_id);
+    c.base_moment = std::max(c.base_moment + c.stick_slip_moment, 0.0);
+  }
   // Reaction transmitted through the shaft to the drone: the wall pushes along
   // its normal and drags against the sliding direction.
   c.force_on_body = c.normal_force * hit_normal + f_t * tangent;

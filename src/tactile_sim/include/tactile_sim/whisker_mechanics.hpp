@@ -24,6 +24,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstdint>
 
 #include "tactile_sim/types.hpp"
 
@@ -40,6 +41,17 @@ struct WhiskerParams {
   double placement_angle = M_PI / 4.0;  ///< alpha [rad] w.r.t. the yaw plane (000: 45 deg)
   /// Speed below which Coulomb friction is regularised linearly (stick ~ viscous) [m/s].
   double friction_speed_eps = 0.005;
+  /// Stick-slip (friction-induced vibration) of a whisker sliding on a wall: a
+  /// zero-mean fluctuation of the base bending moment, amplitude
+  /// stick_slip_gain * mu * N * l_o sin(alpha) * min(|v_t| / friction_speed_eps, 1),
+  /// a sawtooth per stick-slip cycle (load builds while the tip sticks, drops
+  /// when it slips) whose cycles are stick_slip_length long on the wall with a
+  /// per-cycle amplitude drawn from a hash of (stick_slip_seed, obstacle, cycle):
+  /// the surface's asperities. 0 disables it. Choice, see docs/whisker_signal_model.md
+  /// ("Stick-slip while sliding"). Zero without contact and without sliding.
+  double stick_slip_gain = 2.0;
+  double stick_slip_length = 0.0015;  ///< wall length of one stick-slip cycle [m]
+  uint64_t stick_slip_seed = 0x5715C1157ULL;
 
   /// Second moment of area I = pi d^4 / 64 [m^4].
   double second_moment() const { return M_PI * std::pow(diameter, 4) / 64.0; }
@@ -88,11 +100,19 @@ struct WhiskerContact {
   double deflection = 0.0;   ///< PRBM contact depth d [m]
   double normal_force = 0.0;    ///< N [N]
   double friction_force = 0.0;  ///< |friction| (mu N while sliding) [N]
-  double base_moment = 0.0;     ///< bending moment at the base [N m] (barometer load)
+  /// Bending moment at the base [N m] (barometer load): the PRBM moment
+  /// (prbm.base_moment) plus the stick-slip fluctuation while sliding.
+  double base_moment = 0.0;
+  double stick_slip_moment = 0.0;  ///< stick-slip part of base_moment [N m]
   Vec2 force_on_body = Vec2::Zero();  ///< horizontal reaction on the drone (normal + friction) [N]
   int obstacle_id = -1;
   PrbmState prbm;               ///< eq. S1-S10 intermediates of this contact
 };
+
+/// Stick-slip profile along the wall: zero-mean sawtooth in [-1, 1] of the wall
+/// coordinate u [m] (cycles of `length`, per-cycle amplitude in [0.5, 1] from a
+/// hash of seed, obstacle and cycle index). Deterministic, no state.
+double stick_slip_profile(double u, double length, uint64_t seed, int obstacle_id);
 
 /// Contact of a whisker whose base is at `base`, pointing along the unit
 /// vector `forward` (body x in the plane), with a wall hit found by a segment
