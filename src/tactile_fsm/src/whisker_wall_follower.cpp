@@ -74,6 +74,7 @@ void WallFollowerParams::validate() const {
   require(finite_nonneg(side_deadband), "side_deadband", "must be finite and >= 0", side_deadband);
   require(finite_nonneg(clear_confirm_s), "clear_confirm_s", "must be finite and >= 0", clear_confirm_s);
   require(finite_nonneg(clear_margin), "clear_margin", "must be finite and >= 0", clear_margin);
+  require(finite_nonneg(realign_gain), "realign_gain", "must be finite and >= 0", realign_gain);
   require(finite_positive(target_radius), "target_radius", "must be finite and > 0", target_radius);
   require(finite_nonneg(landing_duration_s), "landing_duration_s", "must be finite and >= 0", landing_duration_s);
   require(finite_positive(max_input_age_s), "max_input_age_s", "must be finite and > 0", max_input_age_s);
@@ -156,6 +157,7 @@ void WhiskerWallFollower::reset() {
   wall_heading_ = theta_ = NAN;
   origin_set_ = false;
   origin_x_ = origin_y_ = clear_x_ = clear_y_ = 0.0;
+  course_yaw_ = 0.0;
 }
 
 void WhiskerWallFollower::enter(FsmState s, const char* reason, double t) {
@@ -171,6 +173,7 @@ void WhiskerWallFollower::set_origin(const WallFollowerInput& in) {
   origin_set_ = true;
   origin_x_ = in.x;
   origin_y_ = in.y;
+  course_yaw_ = std::isfinite(in.yaw) ? in.yaw : 0.0;
 }
 
 bool WhiskerWallFollower::target_reached(const WallFollowerInput& in) const {
@@ -249,7 +252,15 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
         break;
       case FsmState::kFlyForward:
       case FsmState::kResumeForward:
-        if (contact) {
+        if (contact && state_ == FsmState::kResumeForward) {
+          // Contact again while side-stepping past the edge: the same
+          // obstacle's end (the contact flags dropped early). Keep the side and
+          // treat it as passing the edge (rule 2), not as a new approach,
+          // which would turn toward the touching whisker and wrap the tip.
+          both_touched_ = true;
+          last_contact_t_ = t;
+          enter(FsmState::kWallFollowing, "whisker contact while clearing", t);
+        } else if (contact) {
           // Side: toward the target's lateral offset in the body frame when it
           // is clear, else the configured side.
           side_ = p_.follow_side;
@@ -260,8 +271,7 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
           }
           both_touched_ = false;
           last_contact_t_ = t;
-          enter(FsmState::kWallFollowing,
-                state_ == FsmState::kFlyForward ? "whisker contact" : "whisker contact while clearing", t);
+          enter(FsmState::kWallFollowing, "whisker contact", t);
         } else if (state_ == FsmState::kResumeForward &&
                    std::hypot(in.x - clear_x_, in.y - clear_y_) >= p_.clear_margin) {
           enter(FsmState::kFlyForward, "cleared the obstacle by the margin", t);
@@ -309,7 +319,7 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
   return out;
 }
 
-Setpoint WhiskerWallFollower::command(const WallFollowerInput&) const {
+Setpoint WhiskerWallFollower::command(const WallFollowerInput& in) const {
   Setpoint s;
   s.height = p_.flight_height;
   const double sideways = side_ == Side::kLeft ? p_.v_max : -p_.v_max;  // vy > 0 is left
@@ -319,9 +329,11 @@ Setpoint WhiskerWallFollower::command(const WallFollowerInput&) const {
       break;
     case FsmState::kFlyForward:
       s.vx = p_.v_max;  // 000 Methods "Flying Forward" at V_max
+      s.yaw_rate = realign(in);
       break;
     case FsmState::kResumeForward:
       s.vy = sideways;  // side-step past the edge, then FLY_FORWARD
+      s.yaw_rate = realign(in);
       break;
     case FsmState::kWallFollowing:
       switch (sub_) {  // 000 Fig. S4e: V_sideway = V_max, V_forward = V_backward = V_max/2, omega_max
@@ -341,6 +353,12 @@ Setpoint WhiskerWallFollower::command(const WallFollowerInput&) const {
       break;
   }
   return s;
+}
+
+double WhiskerWallFollower::realign(const WallFollowerInput& in) const {
+  // Back to the course heading after a (tilted) obstacle; saturate() limits it to omega_max.
+  if (!origin_set_ || !std::isfinite(in.yaw)) return 0.0;
+  return p_.realign_gain * std::remainder(course_yaw_ - in.yaw, 2.0 * M_PI);
 }
 
 }  // namespace tactile_fsm

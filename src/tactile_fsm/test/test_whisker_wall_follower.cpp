@@ -235,16 +235,28 @@ TEST(WhiskerWallFollower, ScriptedStateSequence) {
   o = fsm.step(input(t + 0.2, 0.45, -0.3));
   ASSERT_EQ(o.state, FsmState::kResumeForward);
   EXPECT_DOUBLE_EQ(o.setpoint.vy, -0.2);  // side-step the clearance margin
-  o = fsm.step(input(off + 0.3, 0.45, -0.40));  // 0.10 m < clear_margin
+  o = fsm.step(input(off + 0.3, 0.45, -0.59));  // 0.29 m < clear_margin (0.30 m)
   EXPECT_EQ(o.state, FsmState::kResumeForward);
-  o = fsm.step(input(off + 0.4, 0.45, -0.46));  // 0.16 m
+  o = fsm.step(input(off + 0.4, 0.45, -0.61));  // 0.31 m
   ASSERT_EQ(o.state, FsmState::kFlyForward);
   EXPECT_DOUBLE_EQ(o.setpoint.vx, 0.2);
+  // Heading realignment to the course heading (0 at the end of the hover):
+  // yaw 0.1 rad -> yaw_rate = -realign_gain * 0.1 = -0.15 rad/s; 0.5 rad ->
+  // -0.75 saturated at -omega_max.
+  {
+    WallFollowerInput r = input(off + 0.45, 0.5, -0.61);
+    r.yaw = 0.1;
+    EXPECT_NEAR(fsm.step(r).setpoint.yaw_rate, -0.15, 1e-12);
+    r.t += kDt;
+    r.yaw = 0.5;
+    EXPECT_NEAR(fsm.step(r).setpoint.yaw_rate, -25.0 * kDeg, 1e-12);
+  }
   // Not yet at the target (2, 0): 1.0 m before it.
-  o = fsm.step(input(off + 0.5, 1.0, -0.46));
+  o = fsm.step(input(off + 0.5, 1.0, -0.61));
   EXPECT_EQ(o.state, FsmState::kFlyForward);
-  // Past the target along the course (+x from the start at the origin), 0.46 m to its side.
-  o = fsm.step(input(off + 0.6, 2.01, -0.46));
+  EXPECT_EQ(o.setpoint.yaw_rate, 0.0);  // on the course heading
+  // Past the target along the course (+x from the start at the origin), 0.61 m to its side.
+  o = fsm.step(input(off + 0.6, 2.01, -0.61));
   ASSERT_EQ(o.state, FsmState::kLanding);
   EXPECT_STREQ(fsm.reason(), "target reached");
   EXPECT_TRUE(o.setpoint.land);

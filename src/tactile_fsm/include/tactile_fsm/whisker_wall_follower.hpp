@@ -67,7 +67,17 @@ struct WallFollowerParams {
   bool side_toward_target = true;              ///< follow toward the target's lateral offset if > side_deadband
   double side_deadband = 0.10;                 ///< [m]
   double clear_confirm_s = 0.2;                ///< both whiskers off the wall this long = obstacle cleared [s]
-  double clear_margin = 0.15;                  ///< extra side-step after clearing, so the frame passes the edge [m]
+  /// Extra side-step after clearing, so the frame passes the edge [m]. 0.30 m
+  /// (was 0.15): in the SITL the tactile contact flags can drop up to ~0.2 m
+  /// before the whiskers really leave a baffle's end (depth estimate drifting
+  /// past the whisker's reach), and 0.15 m then put the frame into the tip.
+  double clear_margin = 0.30;
+  /// Heading realignment outside wall following (RESUME_FORWARD, FLY_FORWARD):
+  /// yaw_rate = realign_gain * (course heading - yaw), saturated at omega_max;
+  /// the course heading is the heading at the end of HOVER_INIT. After a
+  /// tilted baffle the drone turns back to the course, so the next baffle is
+  /// met head-on (000 Fig. 4h: -1 / 24.3 / -1 deg). 0 = off. [1/s]
+  double realign_gain = 1.5;
   double target_radius = 0.15;                 ///< land within this distance of the target [m]
   bool land_past_target = true;                ///< also land once past the target along the course direction
   double landing_duration_s = 2.0;             ///< LANDING -> LANDED after this [s]
@@ -171,6 +181,7 @@ class WhiskerWallFollower {
   bool target_reached(const WallFollowerInput& in) const;
   void set_origin(const WallFollowerInput& in);
   Setpoint command(const WallFollowerInput& in) const;
+  double realign(const WallFollowerInput& in) const;
 
   WallFollowerParams p_;
   FsmState state_ = FsmState::kHoverInit;
@@ -189,6 +200,7 @@ class WhiskerWallFollower {
   double theta_ = NAN;
   bool origin_set_ = false;
   double origin_x_ = 0.0, origin_y_ = 0.0;  ///< course start (end of hover)
+  double course_yaw_ = 0.0;                   ///< heading at the course start [rad]
   double clear_x_ = 0.0, clear_y_ = 0.0;    ///< where the obstacle was cleared
 };
 
