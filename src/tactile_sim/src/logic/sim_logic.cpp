@@ -201,13 +201,15 @@ ImuParams imu_at(double rate_hz) {
   return p;
 }
 
-/// Hold the initial pose: the position vehicles' setpoint before the pilot's first.
-PositionSetpoint hold_initial(const Scenario& s) {
+PositionSetpoint position_setpoint(const Vec3& position, double yaw) {
   PositionSetpoint sp;
-  sp.position = s.initial_position;
-  sp.yaw = s.initial_yaw;
+  sp.position = position;
+  sp.yaw = yaw;
   return sp;
 }
+
+/// Hold the initial pose: the position vehicles' setpoint before the pilot's first.
+PositionSetpoint hold_initial(const Scenario& s) { return position_setpoint(s.initial_position, s.initial_yaw); }
 
 /// Parameters of a vehicle whose only scenario override is its mass.
 template <class Params>
@@ -383,10 +385,7 @@ class DuctedVehicle : public SimLogic::Vehicle {
   Vec3 external_force_world() const override { return quad_.external_force_world() + quad_.wall_force_world(); }
   std::vector<CollisionEvent> take_collisions() override { return quad_.take_collisions(); }
   bool position_setpoint(const Vec3& p, double yaw) override {
-    PositionSetpoint sp;
-    sp.position = p;
-    sp.yaw = yaw;
-    quad_.set_position_setpoint(sp);
+    quad_.set_position_setpoint(tactile_sim::position_setpoint(p, yaw));
     return true;
   }
   bool rotor_thrust(const std::array<double, 4>& t) override {
@@ -465,10 +464,7 @@ class XplorerVehicle : public SimLogic::Vehicle {
   Vec3 external_force_world() const override { return x_.external_force_world(); }
   std::vector<CollisionEvent> take_collisions() override { return x_.take_collisions(); }
   bool position_setpoint(const Vec3& p, double yaw) override {
-    PositionSetpoint sp;
-    sp.position = p;
-    sp.yaw = yaw;
-    x_.set_setpoint(sp);
+    x_.set_setpoint(tactile_sim::position_setpoint(p, yaw));
     return true;
   }
   void sense(int64_t k, double physics_hz, int64_t now_ns, const Arena&, SimLogic::Outputs& out,
