@@ -53,13 +53,13 @@ StepMetrics metrics(const std::vector<double>& y, double y0, double y1, double b
   double t10 = NAN, t90 = NAN;
   for (size_t i = 0; i < y.size(); ++i) {
     const double f = (y[i] - y0) / (y1 - y0);
-    if (std::isnan(t10) && f >= 0.1) t10 = i * kDt;
-    if (std::isnan(t90) && f >= 0.9) t90 = i * kDt;
+    if (std::isnan(t10) && f >= 0.1) t10 = static_cast<double>(i) * kDt;
+    if (std::isnan(t90) && f >= 0.9) t90 = static_cast<double>(i) * kDt;
   }
   m.rise = t90 - t10;
   for (size_t i = y.size(); i-- > 0;) {
     if (std::abs(y[i] - y1) > band * std::abs(y1 - y0)) {
-      m.settle = (i + 1) * kDt;
+      m.settle = static_cast<double>(i + 1) * kDt;
       break;
     }
   }

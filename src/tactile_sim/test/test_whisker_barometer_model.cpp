@@ -222,6 +222,8 @@ TEST(WhiskerBarometerModel, SurfaceNoiseScaleAppliesOnlyUnderLoad) {
         EXPECT_NEAR(c.pressure[i] - b.pressure[i], b.pressure[i] - a.pressure[i], 0.02) << k;  // quantum 0.016 Pa
       }
     }
-    if (k == 150) EXPECT_NE(a.pressure[0], c.pressure[0]);
+    if (k == 150) {
+      EXPECT_NE(a.pressure[0], c.pressure[0]);
+    }
   }
 }
