@@ -12,6 +12,7 @@
 
 #include "tactile_cli/host.hpp"
 #include "tactile_cli/host_nodes.hpp"
+#include "tactile_cli/sim_graph.hpp"
 #include "tactile_cli/topview.hpp"
 #include "tactile_cli/whisker_eval.hpp"
 #include "tactile_common/time.hpp"
@@ -68,27 +69,6 @@ struct Progress {
   }
 };
 
-/// The scenario's parameter overrides of node `name` (node_parameters.<name>),
-/// plus `extra`; the source names the scenario file so errors point at it.
-tactile_common::ParamMap node_overrides(const Scenario& scenario, const std::string& name,
-                                        const tactile_common::ParamMap& extra = {}) {
-  tactile_common::ParamMap m(name, scenario.source + " (node_parameters." + name + ")");
-  if (auto it = scenario.node_parameters.find(name); it != scenario.node_parameters.end()) {
-    for (const auto& [k, v] : it->second) m.set(k, v);
-  }
-  for (const auto& [k, v] : extra.values()) m.set(k, v);
-  return m;
-}
-
-/// A boolean setting of the scenario's metrics section (false if absent).
-bool metric_flag(const Scenario& scenario, const char* key) {
-  auto it = scenario.metrics.find(key);
-  if (it == scenario.metrics.end()) return false;
-  const bool* b = std::get_if<bool>(&it->second);
-  if (!b) throw std::runtime_error(scenario.source + ": metrics." + key + ": expected true or false");
-  return *b;
-}
-
 /// One run of the scenario into `dir`.
 nlohmann::json run_once(const Scenario& scenario, const SimOptions& options, uint64_t seed, const fs::path& dir,
                         const std::string& label) {
@@ -102,6 +82,20 @@ nlohmann::json run_once(const Scenario& scenario, const SimOptions& options, uin
   // The world first: a bad arena, vehicle parameter or fault stops the run
   // before anything is written.
   auto sim = std::make_shared<tactile_sim::SimLogic>(scenario, seed, arena_yaw);
+  const GraphInfo& info = find_sim_graph(scenario.graph, scenario.source);
+  if (!info.vehicles.empty() &&
+      std::find(info.vehicles.begin(), info.vehicles.end(), scenario.vehicle) == info.vehicles.end()) {
+    throw std::runtime_error(scenario.source + ": graph: '" + info.name + "' cannot fly the " +
+                             tactile_sim::to_string(scenario.vehicle) + " (" + info.description + ")");
+  }
+  for (const auto& [name, params] : scenario.node_parameters) {
+    if (std::find(info.nodes.begin(), info.nodes.end(), name) == info.nodes.end()) {
+      std::string known;
+      for (const auto& n : info.nodes) known += (known.empty() ? "" : ", ") + n;
+      throw std::runtime_error(scenario.source + ": node_parameters." + name + ": no such node in graph '" +
+                               info.name + "' (" + (known.empty() ? "it has no configurable nodes" : known) + ")");
+    }
+  }
   fs::create_directories(dir);
   Host host(options.config_dir);
   std::unique_ptr<BagRecorder> recorder;
@@ -110,54 +104,16 @@ nlohmann::json run_once(const Scenario& scenario, const SimOptions& options, uin
     host.bus().add_tap(recorder.get());
   }
   add_tactile_sim(host, sim);
-  for (const auto& [name, params] : scenario.node_parameters) {
-    static const char* kNodes[] = {"tdorc_filter", "tactile_depth", "whisker_fsm"};
-    if (std::none_of(std::begin(kNodes), std::end(kNodes), [&](const char* n) { return name == n; })) {
-      throw std::runtime_error(scenario.source + ": node_parameters." + name +
-                               ": no such node in the graphs of tactile sim (tdorc_filter, tactile_depth, whisker_fsm)");
-    }
-  }
   const bool whisker = scenario.vehicle == tactile_sim::VehicleType::kWhiskerCrazyflie;
-  const bool depth_evaluation = metric_flag(scenario, "depth_evaluation");
-  if (whisker && scenario.graph != "none") {
-    // The whisker signal chain (the pilot's 'until: contact' and the FSM listen to it).
-    add_tdorc_filter(host, "whisker/left", node_overrides(scenario, "tdorc_filter"));
-    add_tdorc_filter(host, "whisker/right", node_overrides(scenario, "tdorc_filter"));
-  }
   std::unique_ptr<WhiskerTruth> truth;
   if (whisker) truth = std::make_unique<WhiskerTruth>(host);
+  GraphContext ctx{scenario, host, sim, seed, arena_yaw, dir, truth.get()};
   std::unique_ptr<DepthEvaluation> depth_eval;
-  if (depth_evaluation) {
+  if (ctx.flag("depth_evaluation")) {
     if (!whisker) throw std::runtime_error(scenario.source + ": metrics.depth_evaluation: needs the whiskered Crazyflie");
-    depth_eval = std::make_unique<DepthEvaluation>(host, *truth, sim->arena(), node_overrides(scenario, "tactile_depth"));
+    depth_eval = std::make_unique<DepthEvaluation>(host, *truth, sim->arena(), ctx.overrides("tactile_depth"));
   }
-  std::shared_ptr<tactile_sim::ScriptedPilotLogic> pilot;
-  if (scenario.graph == "pilot") {
-    pilot = std::make_shared<tactile_sim::ScriptedPilotLogic>(scenario.pilot, scenario.vehicle,
-                                                               scenario.initial_position, scenario.initial_yaw);
-    add_scenario_pilot(host, pilot);
-  }
-  std::shared_ptr<tactile_fsm::WhiskerFsmLogic> fsm;
-  std::unique_ptr<WallFollowingEvaluation> wall_eval;
-  if (scenario.graph == "whisker_fsm") {
-    add_tactile_depth(host, node_overrides(scenario, "tactile_depth"));
-    // The scenario's target (metrics.target: [x, y] in the arena frame, moved
-    // with the arena's transform and trial rotation) is the FSM's landing target.
-    tactile_common::ParamMap fsm_over;
-    if (auto it = scenario.metrics.find("target"); it != scenario.metrics.end()) {
-      const auto* xy = std::get_if<std::vector<double>>(&it->second);
-      if (!xy || xy->size() != 2) throw std::runtime_error(scenario.source + ": metrics.target: expected [x, y]");
-      const double c0 = std::cos(arena_yaw), s0 = std::sin(arena_yaw);
-      tactile_sim::Vec2 t(c0 * (*xy)[0] - s0 * (*xy)[1], s0 * (*xy)[0] + c0 * (*xy)[1]);
-      const double c1 = std::cos(scenario.arena_yaw), s1 = std::sin(scenario.arena_yaw);
-      t = tactile_sim::Vec2(c1 * t.x() - s1 * t.y() + scenario.arena_x, s1 * t.x() + c1 * t.y() + scenario.arena_y);
-      fsm_over.set("target_x", t.x());
-      fsm_over.set("target_y", t.y());
-    }
-    fsm = add_whisker_fsm(host, node_overrides(scenario, "whisker_fsm", fsm_over));
-    const auto& fp = fsm->params().fsm;
-    wall_eval = std::make_unique<WallFollowingEvaluation>(host, *truth, fp.t_min, fp.t_max, fp.whisker_spacing);
-  }
+  const std::unique_ptr<SimGraph> graph = info.build(ctx);
 
   Progress progress{options.progress, label, scenario.duration_s};
   host.executor().add_timer(tactile_common::from_seconds(0.1),
@@ -186,30 +142,15 @@ nlohmann::json run_once(const Scenario& scenario, const SimOptions& options, uin
   for (const auto& [k, v] : sim->summary()) {
     m["ground_truth"][k] = std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr);
   }
-  if (pilot) {
-    const auto& ps = pilot->stats();
-    m["pilot"] = {{"finished", ps.finished},
-                  {"steps", scenario.pilot.size()},
-                  {"steps_completed", ps.steps_completed},
-                  {"steps_timed_out", ps.steps_timed_out},
-                  {"contact_time_s", std::isfinite(ps.contact_time_s) ? nlohmann::json(ps.contact_time_s)
-                                                                      : nlohmann::json(nullptr)}};
-  }
-  // Success: the pilot flew its whole script (no 'until' timed out) without
-  // impacts, unless the scenario flies a collision-resilient vehicle into
-  // contact on purpose (metrics: {allow_collisions: true}, XPLORER).
-  const bool allow_collisions = metric_flag(scenario, "allow_collisions");
-  bool flew = !pilot || (pilot->stats().finished && pilot->stats().steps_timed_out == 0);
-  if (fsm) {
-    // The FSM reached its target (000 Methods: land when the target is reached).
-    const auto state = fsm->fsm().state();
-    flew = state == tactile_fsm::FsmState::kLanding || state == tactile_fsm::FsmState::kLanded;
-    m["fsm"] = wall_eval->metrics();
-    m["fsm"]["target"] = {fsm->params().target_x, fsm->params().target_y};
-    m["fsm"]["reached_target"] = flew;
-  }
+  // Success: the graph reached its goal (or has none) without impacts, unless
+  // the scenario flies a collision-resilient vehicle into contact on purpose
+  // (metrics: {allow_collisions: true}, XPLORER).
+  const bool allow_collisions = ctx.flag("allow_collisions");
+  const bool reached = graph->reached_goal().value_or(true);
+  if (auto gm = graph->metrics(); !gm.is_null()) m[info.metrics_key] = gm;
   if (depth_eval) m["depth"] = depth_eval->metrics();
-  m["success"] = flew && (allow_collisions || sim->collisions().empty());
+  m["graph"] = info.name;
+  m["success"] = reached && (allow_collisions || sim->collisions().empty());
   for (const auto& [k, v] : sim->fault_counts()) m["faults_injected"][k] = v;
   for (const auto& r : host.reports()) {
     for (const auto& [k, v] : r.counters) m["nodes"][r.name][k] = v;
@@ -218,6 +159,7 @@ nlohmann::json run_once(const Scenario& scenario, const SimOptions& options, uin
 
   write_trajectory_csv(dir / "trajectory.csv", *sim);
   write_text(dir / "metrics.json", m.dump(2) + "\n");
+  graph->write_outputs(dir);
   if (options.write_png) {
     TopView view;
     view.arena = &sim->arena();
@@ -237,6 +179,7 @@ nlohmann::json run_once(const Scenario& scenario, const SimOptions& options, uin
                   tactile_sim::to_string(scenario.vehicle), static_cast<unsigned long long>(seed),
                   sim->collisions().size());
     view.title = title;
+    graph->decorate(view);
     write_topview_png((dir / "topview.png").string(), view);
   }
   return m;

@@ -85,7 +85,7 @@ TopViewLayout topview_layout(const TopView& view, int width_px) {
     }
   }
   for (const auto* v : {&view.trajectory, &view.estimate_trajectory, &view.whisker_contacts,
-                        &view.collisions}) {
+                        &view.collisions, &view.map_points, &view.targets}) {
     for (const Vec2& p : *v) add(p);
   }
   for (const auto& p : view.poses) add(p.first);
@@ -179,6 +179,9 @@ void write_topview_png(const std::string& path, const TopView& view, int width_p
       cv::line(img, P(a + (b - a) * k / n), P(a + (b - a) * (k + 1) / n), grey, 2, cv::LINE_AA);
     }
   }
+  for (const Vec2& p : view.map_points) {
+    if (finite(p)) cv::circle(img, P(p), 1, cv::Scalar(200, 120, 30), cv::FILLED, cv::LINE_AA);
+  }
   // Trajectory: time colour.
   const size_t n = view.trajectory.size();
   for (size_t i = 1; i < n; ++i) {
@@ -194,6 +197,11 @@ void write_topview_png(const std::string& path, const TopView& view, int width_p
   }
   for (const Vec2& p : view.collisions) {
     if (finite(p)) draw_cross(img, P(p), 7, cv::Scalar(0, 0, 230), 2);
+  }
+  for (const Vec2& p : view.targets) {
+    if (!finite(p)) continue;
+    cv::circle(img, P(p), 9, cv::Scalar(200, 0, 200), 2, cv::LINE_AA);
+    cv::circle(img, P(p), 2, cv::Scalar(200, 0, 200), cv::FILLED, cv::LINE_AA);
   }
   cv::rectangle(img, {l.left, l.top}, {x_right, y_bottom}, cv::Scalar(0, 0, 0), 1);
 
@@ -246,6 +254,14 @@ void write_topview_png(const std::string& path, const TopView& view, int width_p
   if (!view.collisions.empty()) {
     draw_cross(img, {lx + 12, ly}, 6, cv::Scalar(0, 0, 230), 2);
     label("collision");
+  }
+  if (!view.map_points.empty()) {
+    cv::circle(img, {lx + 12, ly}, 2, cv::Scalar(200, 120, 30), cv::FILLED, cv::LINE_AA);
+    label("map");
+  }
+  if (!view.targets.empty()) {
+    cv::circle(img, {lx + 12, ly}, 7, cv::Scalar(200, 0, 200), 2, cv::LINE_AA);
+    label("target");
   }
   if (!view.poses.empty()) {
     ly += 6;

@@ -191,6 +191,16 @@ TEST(Sim, MalformedScenarioStopsWithFileKeyAndReason) {
                  "arena:\n  walls:\n    - points: [[1, -1], [1, 1]]\n");
   EXPECT_NE(msg.find("vehicle.params.mas"), std::string::npos) << msg;
   EXPECT_NE(msg.find("unknown parameter"), std::string::npos) << msg;
+  // The graph registry: unknown graph, a graph that cannot fly the vehicle,
+  // parameters of a node the graph does not have.
+  const std::string walls = "arena:\n  walls:\n    - points: [[1, -1], [1, 1]]\n";
+  msg = error_of("name: b\nduration_s: 2\nvehicle: {type: whisker_crazyflie}\ngraph: no_such_graph\n" + walls);
+  EXPECT_NE(msg.find("bad.yaml: graph: unknown graph 'no_such_graph'"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("whisker_fsm"), std::string::npos) << msg;  // lists the known graphs
+  msg = error_of("name: b\nduration_s: 2\nvehicle: {type: xplorer}\ngraph: whisker_fsm\n" + walls);
+  EXPECT_NE(msg.find("'whisker_fsm' cannot fly the xplorer"), std::string::npos) << msg;
+  msg = error_of(head + walls + "node_parameters:\n  whisker_fsm: {t_max: 0.1}\n");
+  EXPECT_NE(msg.find("node_parameters.whisker_fsm: no such node in graph 'none'"), std::string::npos) << msg;
   msg = error_of("name: b\nduration_s: 2\n  bad indent: [\n");
   EXPECT_NE(msg.find("YAML syntax error"), std::string::npos) << msg;
   fs::remove_all(dir);

@@ -131,9 +131,7 @@ TEST(Scenario, MalformedFilesNameFileKeyAndReason) {
                "arena_file", "not found");
   expect_error("name: [t\n", "", "YAML syntax error at line");
   expect_error(kMinimal + "graph: whisker_fsm\n", "pilot", "only used with graph: pilot");
-  std::string xpl = kMinimal;
-  xpl.replace(xpl.find("whisker_crazyflie"), 17, "xplorer");
-  expect_error(xpl + "graph: whisker_fsm\n", "graph", "whiskered Crazyflie only");
+  expect_error(kMinimal + "graph: Whisker-FSM\n", "graph", "lower-case letters");
 }
 
 TEST(Scenario, EveryLibraryScenarioLoads) {

@@ -19,6 +19,8 @@ struct TopView {
   std::vector<tactile_sim::Vec2> estimate_trajectory;  ///< optional, dashed grey
   std::vector<tactile_sim::Vec2> whisker_contacts;     ///< points
   std::vector<tactile_sim::Vec2> collisions;           ///< red crosses
+  std::vector<tactile_sim::Vec2> map_points;           ///< a behaviour's map (small blue dots)
+  std::vector<tactile_sim::Vec2> targets;              ///< goals / targets (magenta rings)
   std::vector<std::pair<tactile_sim::Vec2, double>> poses;  ///< vehicle icons: position, yaw [rad]
   std::string title;
 };

@@ -78,8 +78,8 @@ struct Scenario {
   /// Overrides of the vehicle's parameters by field name.
   std::map<std::string, tactile_common::ParamValue> vehicle_params;
 
-  /// Node graph around the simulator: pilot (scenario pilot), whisker_fsm
-  /// (TDORC -> tactile_depth -> whisker wall-following FSM), none.
+  /// Node graph around the simulator, by name (pilot = the scenario pilot
+  /// below; the others are defined by `tactile sim`'s graph registry).
   std::string graph = "pilot";
   std::vector<PilotStep> pilot;
   std::vector<FaultSpec> faults;

@@ -1,0 +1,12 @@
+// One function per graph of `tactile sim`, each defined in its own file.
+#pragma once
+
+#include "tactile_cli/sim_graph.hpp"
+
+namespace tactile_cli::graphs {
+
+GraphInfo none_graph();         // none.cpp
+GraphInfo pilot_graph();        // pilot.cpp
+GraphInfo whisker_fsm_graph();  // whisker_fsm.cpp
+
+}  // namespace tactile_cli::graphs
