@@ -1,0 +1,263 @@
+// GPIS core (000 eq. 33-40). See gpis.hpp.
+#include "gpis_explorer/gpis.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+namespace gpis_explorer {
+namespace {
+
+[[noreturn]] void fail(const char* field, const std::string& reason) {
+  throw std::invalid_argument(std::string("GpisParams.") + field + ": " + reason);
+}
+
+/// First allocation: the whole onboard budget, or a block that doubles.
+constexpr std::size_t kInitialCapacity = 256;
+/// Columns per block in predict_batch (bounds the work matrix to n x 512).
+constexpr Eigen::Index kBatchColumns = 512;
+
+}  // namespace
+
+void GpisParams::validate() const {
+  if (!(std::isfinite(beta) && beta > 0.0)) fail("beta", "must be > 0 (000 eq. 33), got " + std::to_string(beta));
+  if (!(std::isfinite(c) && c > 0.0)) fail("c", "must be > 0 (000 eq. 33), got " + std::to_string(c));
+  if (!(std::isfinite(noise) && noise > 0.0)) {
+    fail("noise", "must be > 0 (keeps K + sigma^2 I positive definite), got " + std::to_string(noise));
+  }
+  if (max_points < 1) fail("max_points", "must be >= 1, got 0");
+  if (max_points > 100000) {
+    fail("max_points", "must be <= 100000 (dense factor of max_points^2 doubles), got " + std::to_string(max_points));
+  }
+  if (!(std::isfinite(duplicate_tolerance) && duplicate_tolerance >= 0.0)) {
+    fail("duplicate_tolerance", "must be >= 0, got " + std::to_string(duplicate_tolerance));
+  }
+}
+
+const char* to_string(AddStatus s) {
+  switch (s) {
+    case AddStatus::kAdded: return "added";
+    case AddStatus::kDuplicate: return "duplicate";
+    case AddStatus::kBudgetFull: return "budget_full";
+    case AddStatus::kNonFinite: return "non_finite";
+    case AddStatus::kBadLabel: return "bad_label";
+    case AddStatus::kNotPositive: return "not_positive_definite";
+  }
+  return "unknown";
+}
+
+Gpis::Gpis(const GpisParams& params) : p_(params) {
+  p_.validate();
+  prior_var_ = std::pow(p_.c * p_.c, -p_.beta);  // k(x, x), 000 eq. 33 with r = 0
+  ensure_capacity(std::min(p_.max_points, kInitialCapacity));
+}
+
+void Gpis::ensure_capacity(std::size_t n) {
+  if (n <= capacity_) return;
+  std::size_t cap = std::max<std::size_t>(capacity_, 1);
+  while (cap < n) cap *= 2;
+  cap = std::min(std::max(cap, n), p_.max_points);
+  const auto c = static_cast<Eigen::Index>(cap);
+  const auto m = static_cast<Eigen::Index>(n_);
+  Eigen::Matrix2Xd X(2, c);
+  Eigen::VectorXd y(c), alpha(c);
+  Eigen::MatrixXd L = Eigen::MatrixXd::Zero(c, c);
+  if (m > 0) {
+    X.leftCols(m) = X_.leftCols(m);
+    y.head(m) = y_.head(m);
+    alpha.head(m) = alpha_.head(m);
+    L.topLeftCorner(m, m) = L_.topLeftCorner(m, m);
+  }
+  X_.swap(X);
+  y_.swap(y);
+  alpha_.swap(alpha);
+  L_.swap(L);
+  work_.resize(c);
+  capacity_ = cap;
+}
+
+double Gpis::kernel(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
+  return std::pow(p_.c * p_.c + (a - b).squaredNorm(), -p_.beta);  // 000 eq. 33
+}
+
+AddStatus Gpis::add_point(const Eigen::Vector2d& x, double label) {
+  if (!x.allFinite()) return AddStatus::kNonFinite;
+  if (!std::isfinite(label)) return AddStatus::kBadLabel;
+  const double tol2 = p_.duplicate_tolerance * p_.duplicate_tolerance;
+  for (std::size_t i = 0; i < n_; ++i) {
+    const auto ii = static_cast<Eigen::Index>(i);
+    if ((X_.col(ii) - x).squaredNorm() <= tol2 && y_(ii) == label) return AddStatus::kDuplicate;
+  }
+  if (n_ >= p_.max_points) return AddStatus::kBudgetFull;
+  ensure_capacity(n_ + 1);
+  const auto n = static_cast<Eigen::Index>(n_);
+  // New row of the factor: L_{n,0:n} = L^-1 k(X, x), L_nn = sqrt(k(x,x) + sigma^2 - |l|^2).
+  Eigen::VectorXd::SegmentReturnType l = work_.head(n);
+  for (Eigen::Index i = 0; i < n; ++i) l(i) = kernel(X_.col(i), x);
+  if (n > 0) L_.topLeftCorner(n, n).triangularView<Eigen::Lower>().solveInPlace(l);
+  const double pivot = prior_var_ + p_.noise - l.squaredNorm();
+  if (!(pivot > 0.0) || !std::isfinite(pivot)) return AddStatus::kNotPositive;
+  L_.row(n).head(n) = l.transpose();
+  L_(n, n) = std::sqrt(pivot);
+  X_.col(n) = x;
+  y_(n) = label;
+  ++n_;
+  if (label == kSurfaceLabel) ++surface_count_;
+  solve_alpha();
+  return AddStatus::kAdded;
+}
+
+void Gpis::solve_alpha() {
+  const auto n = static_cast<Eigen::Index>(n_);
+  alpha_.head(n) = y_.head(n);
+  const auto L = L_.topLeftCorner(n, n);
+  L.triangularView<Eigen::Lower>().solveInPlace(alpha_.head(n));
+  L.triangularView<Eigen::Lower>().transpose().solveInPlace(alpha_.head(n));
+}
+
+void Gpis::refactorize() {
+  const auto n = static_cast<Eigen::Index>(n_);
+  if (n == 0) return;
+  Eigen::MatrixXd K(n, n);
+  for (Eigen::Index j = 0; j < n; ++j) {
+    for (Eigen::Index i = j; i < n; ++i) K(i, j) = kernel(X_.col(i), X_.col(j));
+    K(j, j) += p_.noise;
+  }
+  Eigen::LLT<Eigen::MatrixXd> llt(K);
+  if (llt.info() != Eigen::Success) throw std::runtime_error("Gpis::refactorize: K + sigma^2 I not positive definite");
+  L_.topLeftCorner(n, n) = llt.matrixL();
+  solve_alpha();
+}
+
+void Gpis::clear() {
+  n_ = 0;
+  surface_count_ = 0;
+}
+
+Eigen::Ref<const Eigen::MatrixXd> Gpis::cholesky() const {
+  const auto n = static_cast<Eigen::Index>(n_);
+  return L_.topLeftCorner(n, n);
+}
+
+Eigen::Ref<const Eigen::VectorXd> Gpis::alpha() const { return alpha_.head(static_cast<Eigen::Index>(n_)); }
+
+double Gpis::mean(const Eigen::Vector2d& x) const {
+  double m = 0.0;
+  for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(n_); ++i) m += kernel(X_.col(i), x) * alpha_(i);  // eq. 34
+  return m;
+}
+
+void Gpis::predict(const Eigen::Vector2d& x, double* mean, double* variance) const {
+  const auto n = static_cast<Eigen::Index>(n_);
+  double m = 0.0;
+  auto v = work_.head(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    v(i) = kernel(X_.col(i), x);
+    m += v(i) * alpha_(i);  // 000 eq. 34
+  }
+  if (mean) *mean = m;
+  if (variance) {
+    if (n > 0) L_.topLeftCorner(n, n).triangularView<Eigen::Lower>().solveInPlace(v);
+    *variance = std::max(0.0, prior_var_ - v.squaredNorm());  // 000 eq. 35
+  }
+}
+
+void Gpis::predict_batch(const Eigen::Ref<const Eigen::Matrix2Xd>& Q, Eigen::VectorXd& mean,
+                         Eigen::VectorXd& variance) const {
+  const auto n = static_cast<Eigen::Index>(n_);
+  const Eigen::Index m = Q.cols();
+  mean.resize(m);
+  variance.resize(m);
+  if (n == 0) {
+    mean.setZero();
+    variance.setConstant(prior_var_);
+    return;
+  }
+  const double c2 = p_.c * p_.c;
+  const auto L = L_.topLeftCorner(n, n);
+  const auto alpha = alpha_.head(n);
+  Eigen::MatrixXd Ks(n, std::min(m, kBatchColumns));
+  for (Eigen::Index start = 0; start < m; start += kBatchColumns) {
+    const Eigen::Index b = std::min(kBatchColumns, m - start);
+    for (Eigen::Index j = 0; j < b; ++j) {
+      const Eigen::Vector2d q = Q.col(start + j);
+      for (Eigen::Index i = 0; i < n; ++i) Ks(i, j) = std::pow(c2 + (X_.col(i) - q).squaredNorm(), -p_.beta);
+    }
+    auto block = Ks.leftCols(b);
+    mean.segment(start, b).noalias() = block.transpose() * alpha;  // 000 eq. 34
+    L.triangularView<Eigen::Lower>().solveInPlace(block);
+    variance.segment(start, b) =
+        (prior_var_ - block.colwise().squaredNorm().array()).max(0.0).matrix().transpose();  // 000 eq. 35
+  }
+}
+
+void Gpis::derivatives(const Eigen::Vector2d& x, Eigen::Vector2d* gradient, Eigen::Matrix2d* hessian) const {
+  // k = s^-beta, s = c^2 + |d|^2, d = x - x_i:
+  //   dk/dx   = -2 beta s^(-beta-1) d                                   (000 eq. 37)
+  //   d2k/dx2 = -2 beta s^(-beta-1) I + 4 beta (beta+1) s^(-beta-2) d d^T (000 eq. 39)
+  // For beta = 1/2 these are -d s^-3/2 and s^-5/2 (3 d d^T - s I); 000 eq. 37
+  // and 39 print a factor 2 and |d|^2 in place of s, which the finite-difference
+  // tests reject (see README). The mean's derivatives are sum_i alpha_i dk_i
+  // (000 eq. 36, 38).
+  Eigen::Vector2d g = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d H = Eigen::Matrix2d::Zero();
+  const double c2 = p_.c * p_.c;
+  const double b = p_.beta;
+  for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(n_); ++i) {
+    const Eigen::Vector2d d = x - X_.col(i);
+    const double s = c2 + d.squaredNorm();
+    const double s1 = std::pow(s, -b - 1.0);
+    const double a = alpha_(i);
+    g += (-2.0 * b * s1 * a) * d;
+    if (hessian) {
+      H += (4.0 * b * (b + 1.0) * s1 / s * a) * (d * d.transpose());
+      H.diagonal().array() += -2.0 * b * s1 * a;
+    }
+  }
+  if (gradient) *gradient = g;
+  if (hessian) *hessian = H;
+}
+
+Eigen::Vector2d Gpis::gradient(const Eigen::Vector2d& x) const {
+  Eigen::Vector2d g;
+  derivatives(x, &g, nullptr);
+  return g;
+}
+
+Eigen::Matrix2d Gpis::hessian(const Eigen::Vector2d& x) const {
+  Eigen::Vector2d g;
+  Eigen::Matrix2d H;
+  derivatives(x, &g, &H);
+  return H;
+}
+
+double Gpis::curvature(const Eigen::Vector2d& x, double min_gradient) const {
+  Eigen::Vector2d g;
+  Eigen::Matrix2d H;
+  derivatives(x, &g, &H);
+  const double gn = g.norm();
+  if (!(gn >= min_gradient) || gn == 0.0) return std::numeric_limits<double>::quiet_NaN();
+  return (g.dot(H * g) - g.squaredNorm() * H.trace()) / (gn * gn * gn);  // 000 eq. 40
+}
+
+std::size_t Gpis::state_bytes() const {
+  const std::size_t n = p_.max_points;
+  // points (2 doubles), label, alpha and work (1 double each), dense factor n^2.
+  return sizeof(double) * (n * 2 + n + n + n + n * n);
+}
+
+bool points_collinear(const Eigen::Ref<const Eigen::Matrix2Xd>& points, double tolerance) {
+  if (points.cols() < 3) return true;
+  const Eigen::Vector2d mu = points.rowwise().mean();
+  const Eigen::Matrix2Xd centred = points.colwise() - mu;
+  const Eigen::Matrix2d cov = centred * centred.transpose() / static_cast<double>(points.cols());
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(cov);
+  return std::sqrt(std::max(0.0, es.eigenvalues()(0))) < tolerance;
+}
+
+}  // namespace gpis_explorer
