@@ -1,0 +1,238 @@
+#include "xplorer_force_est/xplorer_force_est_logic.hpp"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <vector>
+
+#include "tactile_common/time.hpp"
+
+namespace xplorer_force_est {
+
+using tactile_common::ParamMap;
+
+namespace {
+
+bool finite(double a, double b, double c) { return std::isfinite(a) && std::isfinite(b) && std::isfinite(c); }
+
+std::array<double, 4> four(const ParamMap& m, const std::string& key) {
+  const std::vector<double> v = m.get_double_array(key);
+  if (v.size() != 4) throw m.error(key, "must have 4 elements (one per arm), got " + std::to_string(v.size()));
+  return {v[0], v[1], v[2], v[3]};
+}
+
+geometry_msgs::msg::WrenchStamped wrench(const std_msgs::msg::Header& h, const std::string& frame, const Vec3& f,
+                                         double yaw_torque) {
+  geometry_msgs::msg::WrenchStamped w;
+  w.header.stamp = h.stamp;
+  w.header.frame_id = frame;
+  w.wrench.force.x = f.x();
+  w.wrench.force.y = f.y();
+  w.wrench.force.z = f.z();
+  w.wrench.torque.z = yaw_torque;  // about z (world z = body z near hover)
+  return w;
+}
+
+}  // namespace
+
+void XplorerForceEstLogic::Params::validate() const {
+  estimator.validate();
+  if (!std::isfinite(max_sample_gap_s) || max_sample_gap_s <= 0.0)
+    throw std::invalid_argument("XplorerForceEstLogic.max_sample_gap_s: must be finite and > 0, got " +
+                                std::to_string(max_sample_gap_s));
+  if (world_frame.empty()) throw std::invalid_argument("XplorerForceEstLogic.world_frame: must not be empty");
+  if (body_frame.empty()) throw std::invalid_argument("XplorerForceEstLogic.body_frame: must not be empty");
+}
+
+ParamMap XplorerForceEstLogic::default_parameters() {
+  const xplorer_force_est::Params d;
+  const Params n;
+  ParamMap m(kNodeName, "defaults");
+  m.set("arm_rate_hz", d.arm_rate_hz);
+  m.set("imu_rate_hz", d.imu_rate_hz);
+  m.set("arm_median_window", static_cast<int64_t>(d.arm_median_window));
+  m.set("arm_lowpass_hz", d.arm_lowpass_hz);
+  m.set("arm_bandstop", d.arm_bandstop);
+  m.set("arm_bandstop_hz", d.arm_bandstop_hz);
+  m.set("arm_bandstop_q", d.arm_bandstop_q);
+  m.set("arm_hold_samples", static_cast<int64_t>(d.arm_hold_samples));
+  m.set("arm_inertia", d.arm_inertia);
+  m.set("arm_damping", d.arm_damping);
+  m.set("arm_stiffness", d.arm_stiffness);
+  m.set("lever_arm", d.lever_arm);
+  m.set("observer_gain", d.observer_gain);
+  m.set("arm_directions", std::vector<double>(d.arm_directions.begin(), d.arm_directions.end()));
+  m.set("mass", d.mass);
+  m.set("thrust_scale", d.thrust_scale);
+  m.set("gravity", d.gravity);
+  m.set("com_median_window", static_cast<int64_t>(d.com_median_window));
+  m.set("com_lowpass_hz", d.com_lowpass_hz);
+  m.set("contact_threshold", d.contact_threshold);
+  m.set("xi_f", d.xi_f);
+  m.set("kappa_mode", std::string(to_string(d.kappa_mode)));
+  m.set("yaw_inertia", d.yaw_inertia);
+  m.set("yaw_observer_gain", d.yaw_observer_gain);
+  m.set("torque_coefficient", d.torque_coefficient);
+  m.set("spin_sign", std::vector<double>(d.spin_sign.begin(), d.spin_sign.end()));
+  m.set("world_frame", n.world_frame);
+  m.set("body_frame", n.body_frame);
+  m.set("max_sample_gap_s", n.max_sample_gap_s);
+  return m;
+}
+
+XplorerForceEstLogic::Params XplorerForceEstLogic::params_from(const ParamMap& m) {
+  Params p;
+  auto& e = p.estimator;
+  e.arm_rate_hz = m.get_double("arm_rate_hz");
+  e.imu_rate_hz = m.get_double("imu_rate_hz");
+  e.arm_median_window = static_cast<int>(m.get_int("arm_median_window"));
+  e.arm_lowpass_hz = m.get_double("arm_lowpass_hz");
+  e.arm_bandstop = m.get_bool("arm_bandstop");
+  e.arm_bandstop_hz = m.get_double("arm_bandstop_hz");
+  e.arm_bandstop_q = m.get_double("arm_bandstop_q");
+  e.arm_hold_samples = static_cast<int>(m.get_int("arm_hold_samples"));
+  e.arm_inertia = m.get_double("arm_inertia");
+  e.arm_damping = m.get_double("arm_damping");
+  e.arm_stiffness = m.get_double("arm_stiffness");
+  e.lever_arm = m.get_double("lever_arm");
+  e.observer_gain = m.get_double("observer_gain");
+  e.arm_directions = four(m, "arm_directions");
+  e.mass = m.get_double("mass");
+  e.thrust_scale = m.get_double("thrust_scale");
+  e.gravity = m.get_double("gravity");
+  e.com_median_window = static_cast<int>(m.get_int("com_median_window"));
+  e.com_lowpass_hz = m.get_double("com_lowpass_hz");
+  e.contact_threshold = m.get_double("contact_threshold");
+  e.xi_f = m.get_double("xi_f");
+  const std::string km = m.get_string("kappa_mode");
+  try {
+    e.kappa_mode = kappa_mode_from_string(km);
+  } catch (const std::invalid_argument&) {
+    throw m.error("kappa_mode", "must be \"rate\" or \"magnitude\", got \"" + km + "\"");
+  }
+  e.yaw_inertia = m.get_double("yaw_inertia");
+  e.yaw_observer_gain = m.get_double("yaw_observer_gain");
+  e.torque_coefficient = m.get_double("torque_coefficient");
+  e.spin_sign = four(m, "spin_sign");
+  p.world_frame = m.get_string("world_frame");
+  p.body_frame = m.get_string("body_frame");
+  p.max_sample_gap_s = m.get_double("max_sample_gap_s");
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& ex) {
+    // "Params.<field>[i]: <reason>" / "XplorerForceEstLogic.<field>: <reason>" -> parameter <field>.
+    const std::string what = ex.what();
+    const auto dot = what.find('.');
+    const auto end = what.find_first_of(":[", dot);
+    const auto colon = what.find(": ");
+    throw m.error(what.substr(dot + 1, end - dot - 1), colon == std::string::npos ? what : what.substr(colon + 2));
+  }
+  return p;
+}
+
+XplorerForceEstLogic::XplorerForceEstLogic(const Params& params)
+    : params_((params.validate(), params)), estimator_(params.estimator) {}
+
+void XplorerForceEstLogic::on_imu(const sensor_msgs::msg::Imu& msg) {
+  ++stats_.received_imu;
+  const auto& a = msg.linear_acceleration;
+  const auto& g = msg.angular_velocity;
+  const auto& q = msg.orientation;
+  const double qn = std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
+  if (!finite(a.x, a.y, a.z) || !finite(g.x, g.y, g.z) || !finite(q.x, q.y, q.z) || !std::isfinite(q.w) ||
+      !(std::abs(qn - 1.0) < 1e-3)) {
+    ++stats_.dropped_nonfinite_imu;
+    return;
+  }
+  const int64_t t = tactile_common::from_stamp(msg.header.stamp);
+  double dt = 1.0 / params_.estimator.imu_rate_hz;
+  if (have_imu_stamp_) {
+    if (t <= last_imu_ns_) {
+      ++stats_.dropped_out_of_order;
+      return;
+    }
+    dt = tactile_common::to_seconds(t - last_imu_ns_);
+    if (dt > params_.max_sample_gap_s) {
+      dt = 1.0 / params_.estimator.imu_rate_hz;
+      ++stats_.resets_on_gap;
+      estimator_.reset();
+    }
+  }
+  have_imu_stamp_ = true;
+  last_imu_ns_ = t;
+  q_wb_ = Quat(q.w, q.x, q.y, q.z).normalized();
+  have_attitude_ = true;
+  estimator_.update_imu(Vec3(a.x, a.y, a.z), Vec3(g.x, g.y, g.z), q_wb_, dt);
+}
+
+void XplorerForceEstLogic::on_thrust(const tactile_msgs::msg::ThrustCommand& msg) {
+  ++stats_.received_thrust;
+  double f = std::isfinite(msg.normalized) ? msg.normalized * params_.estimator.thrust_scale  // 001 Sec. V-A3
+                                           : msg.total_thrust;
+  if (!std::isfinite(f) || f < 0.0) {
+    ++stats_.dropped_nonfinite_thrust;
+    return;
+  }
+  estimator_.set_thrust(f);
+  if (msg.rotor_thrust.size() == 4) {
+    std::array<double, 4> t{};
+    for (size_t i = 0; i < 4; ++i) t[i] = msg.rotor_thrust[i];
+    if (finite(t[0], t[1], t[2]) && std::isfinite(t[3])) estimator_.set_rotor_thrusts(t);
+  }
+}
+
+XplorerForceEstLogic::Outputs XplorerForceEstLogic::on_arm_imu(const tactile_msgs::msg::ArmImuArray& msg) {
+  ++stats_.received_arm;
+  Outputs out;
+  const int64_t t = tactile_common::from_stamp(msg.header.stamp);
+  double dt = 1.0 / params_.estimator.arm_rate_hz;
+  if (have_arm_stamp_) {
+    if (t <= last_arm_ns_) {
+      ++stats_.dropped_out_of_order;
+      return out;
+    }
+    dt = tactile_common::to_seconds(t - last_arm_ns_);
+    if (dt > params_.max_sample_gap_s) {
+      dt = 1.0 / params_.estimator.arm_rate_hz;
+      ++stats_.resets_on_gap;
+      estimator_.reset();
+    }
+  }
+  have_arm_stamp_ = true;
+  last_arm_ns_ = t;
+
+  std::array<double, 4> theta;
+  theta.fill(std::numeric_limits<double>::quiet_NaN());
+  std::array<bool, 4> seen{};
+  for (const auto& arm : msg.arms) {
+    if (arm.arm_id > 3 || seen[arm.arm_id]) {
+      ++stats_.arm_bad_id;
+      continue;
+    }
+    seen[arm.arm_id] = true;
+    double th = arm.arm_angle;
+    if (!std::isfinite(th) && have_attitude_) {
+      // BNO055-style attitude of the arm (arm -> world): theta = yaw of
+      // (body^-1 arm) minus the arm's undeflected direction (001 Sec. V-A2).
+      const auto& q = arm.orientation;
+      const double qn = std::sqrt(q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z);
+      if (finite(q.x, q.y, q.z) && std::isfinite(q.w) && std::abs(qn - 1.0) < 1e-3) {
+        const Mat3 rel = (q_wb_.conjugate() * Quat(q.w, q.x, q.y, q.z)).toRotationMatrix();
+        th = std::remainder(std::atan2(rel(1, 0), rel(0, 0)) - params_.estimator.arm_directions[arm.arm_id], 2 * M_PI);
+        ++stats_.arm_from_orientation;
+      }
+    }
+    theta[arm.arm_id] = th;
+  }
+  for (size_t i = 0; i < 4; ++i) {
+    if (!std::isfinite(theta[i])) ++stats_.arm_missing[i];
+  }
+  const Estimate& e = estimator_.update_arms(theta, dt);
+  out.world = wrench(msg.header, params_.world_frame, e.force_world, e.yaw_torque);
+  out.body = wrench(msg.header, params_.body_frame, e.force_body, e.yaw_torque);
+  ++stats_.published;
+  if (e.degraded) ++stats_.published_degraded;
+  return out;
+}
+
+}  // namespace xplorer_force_est
