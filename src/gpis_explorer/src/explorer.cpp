@@ -109,10 +109,18 @@ const UpdateResult& GpisExplorer::update() {
   ++updates_;
   UpdateResult& r = result_;
   r = UpdateResult{};
-  gpis_.predict_batch(nodes_, mean_buf_, var_buf_);  // 000 eq. 34-35 on the grid
-  for (std::size_t k = 0; k < mean_.size(); ++k) {
-    mean_[k] = mean_buf_(static_cast<Eigen::Index>(k));
-    var_[k] = var_buf_(static_cast<Eigen::Index>(k));
+  if (p_.grid_variance) {
+    gpis_.predict_batch(nodes_, mean_buf_, var_buf_);  // 000 eq. 34-35 on the grid
+    for (std::size_t k = 0; k < mean_.size(); ++k) {
+      mean_[k] = mean_buf_(static_cast<Eigen::Index>(k));
+      var_[k] = var_buf_(static_cast<Eigen::Index>(k));
+    }
+  } else {
+    gpis_.mean_batch(nodes_, mean_buf_);  // 000 eq. 34 on the grid
+    for (std::size_t k = 0; k < mean_.size(); ++k) {
+      mean_[k] = mean_buf_(static_cast<Eigen::Index>(k));
+      var_[k] = std::numeric_limits<double>::quiet_NaN();
+    }
   }
   const std::size_t n = gpis_.size();
   if (n == 0) {
@@ -148,13 +156,22 @@ const UpdateResult& GpisExplorer::update() {
   const double hi_x = grid_.origin_x + (grid_.width - 1) * grid_.resolution - p_.border_margin;
   const double hi_y = grid_.origin_y + (grid_.height - 1) * grid_.resolution - p_.border_margin;
   double best = -std::numeric_limits<double>::infinity();
+  std::size_t total = 0;
+  for (const auto& info : r.contours) total += info.contour.points.size();
+  Eigen::Matrix2Xd cp(2, static_cast<Eigen::Index>(total));
+  Eigen::Index col = 0;
+  for (const auto& info : r.contours) {
+    for (const auto& q : info.contour.points) cp.col(col++) = q;
+  }
+  Eigen::VectorXd cmean, cvar;
+  gpis_.predict_batch(cp, cmean, cvar);  // sigma^2 at every contour point (000 eq. 35), one blocked solve
+  col = 0;
   for (auto& info : r.contours) {
     const auto& P = info.contour.points;
     info.variance.resize(P.size());
     info.acquisition.resize(P.size());
     for (std::size_t i = 0; i < P.size(); ++i) {
-      double var = 0.0;
-      gpis_.predict(P[i], nullptr, &var);
+      const double var = cvar(col++);
       info.variance[i] = var;                                                          // 000 eq. 44
       info.acquisition[i] = var + corner_penalty(P[i], r.corners, p_.penalty_scale);  // 000 eq. 46
       bool excluded = P[i].x() < lo_x || P[i].x() > hi_x || P[i].y() < lo_y || P[i].y() > hi_y;

@@ -53,6 +53,7 @@ const char* to_string(AddStatus s) {
 
 Gpis::Gpis(const GpisParams& params) : p_(params) {
   p_.validate();
+  half_beta_ = p_.beta == 0.5;
   prior_var_ = std::pow(p_.c * p_.c, -p_.beta);  // k(x, x), 000 eq. 33 with r = 0
   ensure_capacity(std::min(p_.max_points, kInitialCapacity));
 }
@@ -82,7 +83,7 @@ void Gpis::ensure_capacity(std::size_t n) {
 }
 
 double Gpis::kernel(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
-  return std::pow(p_.c * p_.c + (a - b).squaredNorm(), -p_.beta);  // 000 eq. 33
+  return imq(p_.c * p_.c + (a - b).squaredNorm());  // 000 eq. 33
 }
 
 AddStatus Gpis::add_point(const Eigen::Vector2d& x, double label) {
@@ -118,6 +119,38 @@ void Gpis::solve_alpha() {
   const auto L = L_.topLeftCorner(n, n);
   L.triangularView<Eigen::Lower>().solveInPlace(alpha_.head(n));
   L.triangularView<Eigen::Lower>().transpose().solveInPlace(alpha_.head(n));
+}
+
+std::size_t Gpis::fit(const Eigen::Ref<const Eigen::Matrix2Xd>& X, const Eigen::Ref<const Eigen::VectorXd>& y) {
+  if (X.cols() != y.size()) {
+    throw std::invalid_argument("Gpis::fit: " + std::to_string(X.cols()) + " points but " + std::to_string(y.size()) +
+                                " labels");
+  }
+  clear();
+  ensure_capacity(std::min<std::size_t>(static_cast<std::size_t>(X.cols()), p_.max_points));
+  const double tol2 = p_.duplicate_tolerance * p_.duplicate_tolerance;
+  for (Eigen::Index k = 0; k < X.cols() && n_ < p_.max_points; ++k) {
+    if (!X.col(k).allFinite() || !std::isfinite(y(k))) continue;
+    bool dup = false;
+    for (std::size_t i = 0; i < n_ && !dup; ++i) {
+      const auto ii = static_cast<Eigen::Index>(i);
+      dup = (X_.col(ii) - X.col(k)).squaredNorm() <= tol2 && y_(ii) == y(k);
+    }
+    if (dup) continue;
+    X_.col(static_cast<Eigen::Index>(n_)) = X.col(k);
+    y_(static_cast<Eigen::Index>(n_)) = y(k);
+    if (y(k) == kSurfaceLabel) ++surface_count_;
+    ++n_;
+  }
+  refactorize();
+  return n_;
+}
+
+void Gpis::pop_back() {
+  if (n_ == 0) return;
+  --n_;
+  if (y_(static_cast<Eigen::Index>(n_)) == kSurfaceLabel) --surface_count_;
+  solve_alpha();
 }
 
 void Gpis::refactorize() {
@@ -186,13 +219,28 @@ void Gpis::predict_batch(const Eigen::Ref<const Eigen::Matrix2Xd>& Q, Eigen::Vec
     const Eigen::Index b = std::min(kBatchColumns, m - start);
     for (Eigen::Index j = 0; j < b; ++j) {
       const Eigen::Vector2d q = Q.col(start + j);
-      for (Eigen::Index i = 0; i < n; ++i) Ks(i, j) = std::pow(c2 + (X_.col(i) - q).squaredNorm(), -p_.beta);
+      for (Eigen::Index i = 0; i < n; ++i) Ks(i, j) = imq(c2 + (X_.col(i) - q).squaredNorm());
     }
     auto block = Ks.leftCols(b);
     mean.segment(start, b).noalias() = block.transpose() * alpha;  // 000 eq. 34
     L.triangularView<Eigen::Lower>().solveInPlace(block);
     variance.segment(start, b) =
         (prior_var_ - block.colwise().squaredNorm().array()).max(0.0).matrix().transpose();  // 000 eq. 35
+  }
+}
+
+void Gpis::mean_batch(const Eigen::Ref<const Eigen::Matrix2Xd>& Q, Eigen::VectorXd& mean) const {
+  const auto n = static_cast<Eigen::Index>(n_);
+  mean.setZero(Q.cols());
+  const double c2 = p_.c * p_.c;
+  for (Eigen::Index j = 0; j < Q.cols(); ++j) {
+    const double qx = Q(0, j), qy = Q(1, j);
+    double m = 0.0;
+    for (Eigen::Index i = 0; i < n; ++i) {
+      const double dx = X_(0, i) - qx, dy = X_(1, i) - qy;
+      m += imq(c2 + dx * dx + dy * dy) * alpha_(i);  // 000 eq. 34
+    }
+    mean(j) = m;
   }
 }
 
@@ -211,7 +259,7 @@ void Gpis::derivatives(const Eigen::Vector2d& x, Eigen::Vector2d* gradient, Eige
   for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(n_); ++i) {
     const Eigen::Vector2d d = x - X_.col(i);
     const double s = c2 + d.squaredNorm();
-    const double s1 = std::pow(s, -b - 1.0);
+    const double s1 = half_beta_ ? 1.0 / (s * std::sqrt(s)) : std::pow(s, -b - 1.0);
     const double a = alpha_(i);
     g += (-2.0 * b * s1 * a) * d;
     if (hessian) {

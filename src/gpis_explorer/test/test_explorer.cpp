@@ -165,3 +165,23 @@ TEST(Explorer, StateBytesOfTheOnboardBudget) {
   // GPIS 2750 doubles + 10x10 mean and variance.
   EXPECT_EQ(ex.state_bytes(), (2750u + 200u) * 8u);
 }
+
+TEST(Explorer, GridVarianceOffGivesTheSameTarget) {
+  ExplorerParams p = ExplorerParams::onboard();
+  p.gpis.max_points = 200;
+  GpisExplorer a(p);
+  p.grid_variance = false;
+  GpisExplorer b(p);
+  add_room(a, 1.0, 0.8, 0.25);
+  add_room(b, 1.0, 0.8, 0.25);
+  const auto ra = a.update();
+  const auto& rb = b.update();
+  ASSERT_TRUE(ra.has_target && rb.has_target);
+  // The room is mirror-symmetric: equal acquisition (a tie may pick the mirror point).
+  EXPECT_NEAR(ra.target_acquisition, rb.target_acquisition, 1e-9);
+  EXPECT_NEAR(std::abs(ra.target.x()), std::abs(rb.target.x()), 1e-9);
+  EXPECT_NEAR(ra.target.y(), rb.target.y(), 1e-9);
+  EXPECT_EQ(ra.corners.size(), rb.corners.size());
+  EXPECT_TRUE(std::isnan(b.grid_variance()[0]));
+  for (std::size_t k = 0; k < a.grid_mean().size(); ++k) EXPECT_NEAR(a.grid_mean()[k], b.grid_mean()[k], 1e-12);
+}

@@ -214,3 +214,39 @@ TEST(Gpis, OnboardStateBytes) {
   // 50 points: 2*50 + 50 + 50 + 50 + 50*50 doubles = 2750 * 8 bytes.
   EXPECT_EQ(g.state_bytes(), 2750u * 8u);
 }
+
+TEST(Gpis, BatchFitEqualsIncrementalAndPopBackUndoesAdd) {
+  Gpis inc = random_gpis(40, 23);
+  Eigen::Matrix2Xd X(2, 42);
+  Eigen::VectorXd y(42);
+  for (int i = 0; i < 40; ++i) {
+    X.col(i) = inc.point(static_cast<std::size_t>(i));
+    y(i) = inc.label(static_cast<std::size_t>(i));
+  }
+  X.col(40) = X.col(3);  // duplicate: skipped
+  y(40) = y(3);
+  X.col(41) << NAN, 0.0;  // non-finite: skipped
+  y(41) = 0.0;
+  GpisParams p;
+  p.max_points = 40;
+  Gpis batch(p);
+  EXPECT_EQ(batch.fit(X, y), 40u);
+  EXPECT_LT((batch.cholesky() - inc.cholesky()).cwiseAbs().maxCoeff(), 1e-10);
+  EXPECT_LT((batch.alpha() - inc.alpha()).cwiseAbs().maxCoeff(), 1e-8);
+  EXPECT_EQ(batch.surface_count(), inc.surface_count());
+  EXPECT_THROW(batch.fit(X, y.head(3)), std::invalid_argument);
+  // pop_back restores the posterior of the first n-1 points.
+  Gpis g = random_gpis(10, 29);
+  const double m10 = g.mean({0.2, 0.3});
+  GpisParams q;
+  q.max_points = 10;
+  Gpis first9(q);
+  for (std::size_t i = 0; i < 9; ++i) ASSERT_EQ(first9.add_point(g.point(i), g.label(i)), AddStatus::kAdded);
+  g.pop_back();
+  EXPECT_EQ(g.size(), 9u);
+  EXPECT_NEAR(g.mean({0.2, 0.3}), first9.mean({0.2, 0.3}), 1e-12);
+  EXPECT_NE(m10, g.mean({0.2, 0.3}));
+  Gpis e(GpisParams{});
+  e.pop_back();
+  EXPECT_TRUE(e.empty());
+}

@@ -37,6 +37,11 @@ struct ExplorerParams {
   /// (open contours end on the border, where the grid cut them, not at a
   /// surface). Workspace choice.
   double border_margin = 0.0;
+  /// Predict the variance on the whole grid (the uncertainty map of 000
+  /// Fig. 5). The target needs the variance on the contour points only; off,
+  /// the grid variance is left at NaN and an update costs O(n m) instead of
+  /// O(n^2 m) for n points and m grid nodes.
+  bool grid_variance = true;
 
   /// The onboard budget of 000: 50 points, 10 x 10 grid over 4 m.
   static ExplorerParams onboard();
@@ -97,6 +102,12 @@ class GpisExplorer {
 
   /// Adds a training point (incremental Cholesky update).
   AddStatus add_point(const Eigen::Vector2d& x, double label) { return gpis_.add_point(x, label); }
+  /// Replaces the training set and factorizes once (Gpis::fit).
+  std::size_t fit(const Eigen::Ref<const Eigen::Matrix2Xd>& X, const Eigen::Ref<const Eigen::VectorXd>& y) {
+    return gpis_.fit(X, y);
+  }
+  void pop_back() { gpis_.pop_back(); }
+  void refactorize() { gpis_.refactorize(); }
   void clear() { gpis_.clear(); }
   /// Centres the prediction grid on (x, y) (grid_size, grid_cells unchanged).
   void centre_grid(double x, double y);

@@ -14,6 +14,7 @@
 // on this); refactorize() recomputes it from scratch (O(n^3)) for checks.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -64,6 +65,13 @@ class Gpis {
   /// Adds one training point and extends the Cholesky factor by one row
   /// (O(n^2)); alpha is recomputed by two triangular solves (O(n^2)).
   AddStatus add_point(const Eigen::Vector2d& x, double label);
+  /// Replaces the training set by the columns of X with labels y and
+  /// factorizes once (blocked Cholesky, O(n^3)). Points that add_point()
+  /// would skip are skipped the same way; returns the number stored.
+  std::size_t fit(const Eigen::Ref<const Eigen::Matrix2Xd>& X, const Eigen::Ref<const Eigen::VectorXd>& y);
+  /// Removes the most recently added point (the factor loses its last row,
+  /// O(n^2) for alpha). No effect when empty.
+  void pop_back();
   /// Recomputes the factor from the stored points (O(n^3)).
   void refactorize();
   /// Removes every point (keeps the allocated memory).
@@ -94,6 +102,8 @@ class Gpis {
   /// triangular solve). mean and variance are resized to m.
   void predict_batch(const Eigen::Ref<const Eigen::Matrix2Xd>& Q, Eigen::VectorXd& mean,
                      Eigen::VectorXd& variance) const;
+  /// Mean only at the columns of Q (O(n m), no triangular solve).
+  void mean_batch(const Eigen::Ref<const Eigen::Matrix2Xd>& Q, Eigen::VectorXd& mean) const;
   /// Gradient of the posterior mean (000 eq. 36-37, for general beta).
   Eigen::Vector2d gradient(const Eigen::Vector2d& x) const;
   /// Hessian of the posterior mean (000 eq. 38-39, for general beta).
@@ -112,11 +122,14 @@ class Gpis {
   std::size_t state_bytes() const;
 
  private:
+  /// s^-beta; 1/sqrt(s) for the default beta = 0.5 (no pow in the inner loops).
+  double imq(double s) const { return half_beta_ ? 1.0 / std::sqrt(s) : std::pow(s, -p_.beta); }
   void ensure_capacity(std::size_t n);
   void solve_alpha();
 
   GpisParams p_;
   double prior_var_ = 1.0;
+  bool half_beta_ = true;
   std::size_t n_ = 0;
   std::size_t capacity_ = 0;
   std::size_t surface_count_ = 0;

@@ -1,0 +1,109 @@
+// Benchmarks of the GPIS explorer (000 eq. 31-46): one update (fit + grid
+// prediction + contour + curvature + corners + target) for the onboard budget
+// (50 points, 10 x 10 grid) and the ground budget (2000 points, 200 x 200),
+// and the incremental Cholesky update per added point. The numpy reference
+// of the same steps: scripts/bench_numpy_compare.py (runs both, prints ratios).
+#include <cmath>
+#include <random>
+
+#include <Eigen/Geometry>
+#include <benchmark/benchmark.h>
+
+#include "gpis_explorer/explorer.hpp"
+
+namespace {
+
+using gpis_explorer::ExplorerParams;
+using gpis_explorer::GpisExplorer;
+
+/// n training points of a rotated 2 m room: 80 % contacts on the walls with
+/// 1 cm noise (label 0), 20 % interior points (label -1). Fixed seed.
+void room_points(int n, Eigen::Matrix2Xd& X, Eigen::VectorXd& y) {
+  std::mt19937 rng(42);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::normal_distribution<double> noise(0.0, 0.01);
+  X.resize(2, n);
+  y.resize(n);
+  const double a = 0.3;
+  for (int i = 0; i < n; ++i) {
+    Eigen::Vector2d p;
+    if (i % 5 == 4) {
+      p = {0.7 * u(rng), 0.7 * u(rng)};
+      y(i) = -1.0;
+    } else {
+      const double t = u(rng);
+      switch (i % 4) {
+        case 0: p = {t, -1.0}; break;
+        case 1: p = {t, 1.0}; break;
+        case 2: p = {-1.0, t}; break;
+        default: p = {1.0, t}; break;
+      }
+      p += Eigen::Vector2d(noise(rng), noise(rng));
+      y(i) = 0.0;
+    }
+    X.col(i) = Eigen::Rotation2Dd(a) * p;
+  }
+}
+
+ExplorerParams params_for(int points, int cells, bool grid_variance = true) {
+  ExplorerParams p = ExplorerParams::ground();
+  p.grid_variance = grid_variance;
+  p.gpis.max_points = static_cast<std::size_t>(points);
+  p.grid_cells = static_cast<uint32_t>(cells);
+  return p;
+}
+
+// Args: points, grid nodes per side, grid variance (0/1).
+void BM_Update(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const int cells = static_cast<int>(state.range(1));
+  Eigen::Matrix2Xd X;
+  Eigen::VectorXd y;
+  room_points(n, X, y);
+  GpisExplorer ex(params_for(n, cells, state.range(2) != 0));
+  std::size_t contour_points = 0;
+  for (auto _ : state) {
+    ex.fit(X, y);                      // K + sigma^2 I, Cholesky (000 eq. 34-35)
+    const auto& r = ex.update();       // grid, marching squares, eq. 40-46
+    benchmark::DoNotOptimize(r.target);
+    contour_points = 0;
+    for (const auto& c : r.contours) contour_points += c.contour.points.size();
+  }
+  state.counters["contour_points"] = static_cast<double>(contour_points);
+  state.counters["state_bytes"] = static_cast<double>(ex.state_bytes());
+}
+BENCHMARK(BM_Update)->Args({50, 10, 1})->Args({2000, 200, 1})->Args({2000, 200, 0})->Unit(benchmark::kMillisecond);
+
+// Adding one point to a GPIS of n - 1 points: new factor row + alpha (O(n^2)).
+void BM_IncrementalAdd(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  Eigen::Matrix2Xd X;
+  Eigen::VectorXd y;
+  room_points(n, X, y);
+  GpisExplorer ex(params_for(n, 10));
+  ex.fit(X.leftCols(n - 1), y.head(n - 1));
+  const Eigen::Vector2d x = X.col(n - 1);
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(ex.add_point(x, y(n - 1)));
+    state.PauseTiming();
+    ex.pop_back();
+    state.ResumeTiming();
+  }
+}
+BENCHMARK(BM_IncrementalAdd)->Arg(50)->Arg(2000)->Unit(benchmark::kMicrosecond);
+
+// Refactorizing from scratch for comparison (what the incremental update avoids).
+void BM_Refactorize(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  Eigen::Matrix2Xd X;
+  Eigen::VectorXd y;
+  room_points(n, X, y);
+  GpisExplorer ex(params_for(n, 10));
+  ex.fit(X, y);
+  for (auto _ : state) ex.refactorize();
+}
+BENCHMARK(BM_Refactorize)->Arg(50)->Arg(2000)->Unit(benchmark::kMicrosecond);
+
+}  // namespace
+
+BENCHMARK_MAIN();
