@@ -1,0 +1,83 @@
+// Node logic of the XPLORER contact mapper (paper 001 Sec. IV-B): the body
+// force estimate (xplorer_force_est) and the odometry in, the contact point
+// cloud out (sensor_msgs/PointCloud2) and, on request, a PLY file. No rclcpp.
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <string>
+
+#include "geometry_msgs/msg/wrench_stamped.hpp"
+#include "mapping_pcl/point_cloud2.hpp"
+#include "mapping_pcl/point_map.hpp"
+#include "mapping_pcl/xplorer_stamping.hpp"
+#include "nav_msgs/msg/odometry.hpp"
+#include "sensor_msgs/msg/point_cloud2.hpp"
+#include "tactile_common/parameters.hpp"
+
+namespace mapping_pcl {
+
+class XplorerMapLogic {
+ public:
+  static constexpr const char* kNodeName = "xplorer_mapping";
+  static constexpr const char* kWrenchBodyTopic = "/xplorer/wrench_body";  // geometry_msgs/msg/WrenchStamped
+  static constexpr const char* kOdometryTopic = "/odom";                   // nav_msgs/msg/Odometry
+  static constexpr const char* kCloudTopic = "/xplorer/map";               // sensor_msgs/msg/PointCloud2
+
+  struct Params {
+    XplorerMapParams stamping;
+    MapParams map;
+    int force_average_samples = 50;  ///< moving average of the body force (001 Sec. V-C: 50 samples)
+    double floor_z = 0.0;            ///< floor height for the flying check [m]
+    double publish_rate_hz = 1.0;    ///< PointCloud2 rate (choice: the full map is large)
+    double max_odometry_age_s = 0.1; ///< older odometry pauses the stamping (choice)
+    std::string frame_id = "map";
+    std::string ply_file;            ///< written by save_ply() ("" = none)
+    bool ply_binary = false;         ///< false: ASCII as 001; true: binary little endian
+    void validate() const;
+  };
+
+  struct Stats {
+    uint64_t received_wrench = 0;
+    uint64_t received_odometry = 0;
+    uint64_t dropped_nonfinite = 0;   ///< NaN/inf force or pose
+    uint64_t dropped_wrong_frame = 0; ///< wrench not in the body frame of the odometry / base_link
+    uint64_t ticks_without_input = 0; ///< timer ticks with no or stale odometry/force
+    uint64_t published = 0;
+  };
+
+  static tactile_common::ParamMap default_parameters();
+  static Params params_from(const tactile_common::ParamMap& map);
+
+  explicit XplorerMapLogic(const Params& params);
+
+  void on_wrench_body(const geometry_msgs::msg::WrenchStamped& msg);
+  void on_odometry(const nav_msgs::msg::Odometry& msg);
+  /// Timer at stamping.rate_hz (30 Hz): stamps slabs; returns the cloud when
+  /// a publication is due.
+  std::optional<sensor_msgs::msg::PointCloud2> on_timer(int64_t now_ns);
+
+  /// Voxel filter (1 cm) and statistical outlier removal of the map, then its measurement.
+  MapMeasurement finalize();
+  /// Writes params.ply_file (or `path` if given) in the configured format.
+  void save_ply(const std::string& path = "") const;
+
+  const PointMap& map() const { return map_; }
+  const XplorerContactMapper& mapper() const { return mapper_; }
+  const Stats& stats() const { return stats_; }
+  const Params& params() const { return params_; }
+  int64_t period_ns() const;
+
+ private:
+  Params params_;
+  PointMap map_;
+  XplorerContactMapper mapper_;
+  Stats stats_;
+  std::deque<Eigen::Vector2d> forces_;
+  Eigen::Vector2d force_sum_ = Eigen::Vector2d::Zero();
+  std::optional<nav_msgs::msg::Odometry> odom_;
+  int64_t last_publish_ns_ = -1;
+};
+
+}  // namespace mapping_pcl

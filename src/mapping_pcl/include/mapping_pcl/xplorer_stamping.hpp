@@ -1,0 +1,86 @@
+// XPLORER contact map (paper 001 Sec. IV-B, Sec. V-D): while the vehicle
+// flies and presses an obstacle (|b_delta_f| >= delta_map = 1.51 N), stamp a
+// 0.25 x 0.08 x 0.5 m slab of points 0.21 m from the vehicle along the
+// contact direction C_n; when the move direction lambda changes (a corner),
+// add a diagonal slab at 0.417 m; at most 30 Hz. The map itself is the
+// generic PointMap.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+
+#include "mapping_pcl/point_map.hpp"
+
+namespace mapping_pcl {
+
+/// Contact / move directions of 001 Sec. IV-A in the body frame: b1, -b1, b2, -b2
+/// (C_n is one-hot over these four; lambda takes "+X", "-X", "+Y", "-Y").
+enum class BodyDirection : int { kPlusX = 0, kMinusX = 1, kPlusY = 2, kMinusY = 3 };
+Eigen::Vector2d unit(BodyDirection d);
+const char* to_string(BodyDirection d);
+/// Right-hand traversal (001 Sec. IV-A): the move direction is the contact
+/// direction turned by -90 deg (obstacle ahead -> move right).
+BodyDirection right_hand_move(BodyDirection contact);
+/// Contact direction from the body force: the axis of the larger |component|
+/// if it exceeds `threshold`; the obstacle lies opposite to the force it
+/// exerts (force along -b1 -> obstacle at +b1). Empty if below threshold.
+std::optional<BodyDirection> contact_direction(const Eigen::Vector2d& force_body, double threshold);
+
+struct XplorerMapParams {
+  double delta_map = 1.51;                     ///< [N] (001 Sec. V-D)
+  Vec3 slab_size = Vec3(0.25, 0.08, 0.5);      ///< along the face, along C_n, height [m] (001 Sec. IV-B)
+  double slab_offset = 0.21;                   ///< vehicle centre -> slab's near face along C_n [m] (001 Sec. IV-B)
+  double corner_offset = 0.417;                ///< vehicle centre -> corner slab centre, diagonal [m] (001 Sec. IV-B)
+  double rate_hz = 30.0;                       ///< stamping rate (001 Sec. IV-B)
+  double slab_spacing = 0.02;                  ///< point spacing inside a slab [m] (choice; the map is voxel-filtered at 1 cm)
+  double min_flight_height = 0.2;              ///< "mapping only when flying": height above the floor [m] (choice)
+  void validate() const;                       ///< throws std::invalid_argument "XplorerMapParams.<field>: <reason>"
+};
+
+/// One sample of what the mapper needs (world ENU, body FLU).
+struct ContactSample {
+  double t = 0.0;                        ///< [s]
+  Vec3 position = Vec3::Zero();          ///< vehicle centre, world [m]
+  double yaw = 0.0;                      ///< [rad]
+  double height = 0.0;                   ///< above the floor [m]
+  Eigen::Vector2d force_body = Eigen::Vector2d::Zero();  ///< filtered external force, body x-y [N]
+};
+
+class XplorerContactMapper {
+ public:
+  struct Stats {
+    uint64_t samples = 0;
+    uint64_t slabs = 0;
+    uint64_t corner_slabs = 0;
+    uint64_t skipped_rate = 0;        ///< sample within 1/rate_hz of the last stamp
+    uint64_t skipped_not_flying = 0;
+    uint64_t skipped_low_force = 0;
+    uint64_t rejected_nonfinite = 0;
+  };
+
+  XplorerContactMapper(const XplorerMapParams& params, PointMap& map);
+
+  /// Returns the number of slabs stamped (0, 1 or 2 with a corner).
+  int update(const ContactSample& s);
+
+  /// The slab that `update` would stamp for a contact direction (tests, pictures).
+  Box face_slab(const ContactSample& s, BodyDirection contact) const;
+  Box corner_slab(const ContactSample& s, const Eigen::Vector2d& previous_contact_world,
+                  const Eigen::Vector2d& contact_world) const;
+
+  const Stats& stats() const { return stats_; }
+  const XplorerMapParams& params() const { return p_; }
+  std::optional<BodyDirection> last_contact() const { return last_contact_; }
+
+ private:
+  XplorerMapParams p_;
+  PointMap* map_;
+  Stats stats_;
+  double last_stamp_t_ = -1e300;
+  std::optional<BodyDirection> last_contact_;
+  std::optional<int> last_move_world_;       ///< lambda quantised to a world axis (0:+X 1:+Y 2:-X 3:-Y)
+  Eigen::Vector2d last_contact_world_ = Eigen::Vector2d::Zero();
+};
+
+}  // namespace mapping_pcl

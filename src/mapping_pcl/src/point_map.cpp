@@ -1,0 +1,254 @@
+// Generic PCL point-cloud map: insertion, filters, footprint measurement, PLY.
+#include "mapping_pcl/point_map.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include <pcl/filters/statistical_outlier_removal.h>
+#include <pcl/filters/voxel_grid.h>
+
+namespace mapping_pcl {
+
+void MapParams::validate() const {
+  auto bad = [](const char* f, const std::string& why) {
+    throw std::invalid_argument(std::string("MapParams.") + f + ": " + why);
+  };
+  if (!(voxel_leaf > 0.0) || !std::isfinite(voxel_leaf)) bad("voxel_leaf", "must be finite and > 0, got " + std::to_string(voxel_leaf));
+  if (outlier_mean_k < 1) bad("outlier_mean_k", "must be >= 1, got " + std::to_string(outlier_mean_k));
+  if (!(outlier_stddev > 0.0) || !std::isfinite(outlier_stddev))
+    bad("outlier_stddev", "must be finite and > 0, got " + std::to_string(outlier_stddev));
+  if (!(auto_filter_growth == 0.0 || auto_filter_growth > 1.0) || !std::isfinite(auto_filter_growth))
+    bad("auto_filter_growth", "must be 0 (off) or > 1, got " + std::to_string(auto_filter_growth));
+}
+
+PointMap::PointMap(const MapParams& params) : params_((params.validate(), params)), cloud_(new Cloud) {}
+
+void PointMap::clear() {
+  cloud_->clear();
+  size_after_filter_ = 0;
+}
+
+void PointMap::insert(const Vec3& p) {
+  if (!p.allFinite()) throw std::invalid_argument("PointMap::insert: non-finite point");
+  cloud_->push_back(pcl::PointXYZ(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())));
+  maybe_auto_filter();
+}
+
+void PointMap::insert(const std::vector<Vec3>& points) {
+  for (const auto& p : points) {
+    if (!p.allFinite()) throw std::invalid_argument("PointMap::insert: non-finite point");
+  }
+  cloud_->reserve(cloud_->size() + points.size());
+  for (const auto& p : points)
+    cloud_->push_back(pcl::PointXYZ(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())));
+  maybe_auto_filter();
+}
+
+std::size_t PointMap::insert_box(const Box& b, double spacing) {
+  if (!(spacing > 0.0) || !std::isfinite(spacing)) throw std::invalid_argument("PointMap::insert_box: spacing must be > 0");
+  if (!b.center.allFinite() || !b.size.allFinite() || !std::isfinite(b.yaw) || (b.size.array() < 0.0).any())
+    throw std::invalid_argument("PointMap::insert_box: non-finite or negative box");
+  std::array<int, 3> n{};
+  for (int a = 0; a < 3; ++a) n[a] = std::max(2, static_cast<int>(std::ceil(b.size[a] / spacing - 1e-9)) + 1);
+  const double c = std::cos(b.yaw), s = std::sin(b.yaw);
+  cloud_->reserve(cloud_->size() + static_cast<std::size_t>(n[0]) * n[1] * n[2]);
+  for (int i = 0; i < n[0]; ++i) {
+    const double u = -0.5 * b.size.x() + b.size.x() * i / (n[0] - 1);
+    for (int j = 0; j < n[1]; ++j) {
+      const double v = -0.5 * b.size.y() + b.size.y() * j / (n[1] - 1);
+      const double x = b.center.x() + c * u - s * v, y = b.center.y() + s * u + c * v;
+      for (int k = 0; k < n[2]; ++k) {
+        const double w = -0.5 * b.size.z() + b.size.z() * k / (n[2] - 1);
+        cloud_->push_back(pcl::PointXYZ(static_cast<float>(x), static_cast<float>(y), static_cast<float>(b.center.z() + w)));
+      }
+    }
+  }
+  maybe_auto_filter();
+  return static_cast<std::size_t>(n[0]) * n[1] * n[2];
+}
+
+void PointMap::maybe_auto_filter() {
+  if (params_.auto_filter_growth <= 0.0 || cloud_->size() < params_.auto_filter_min_points) return;
+  if (static_cast<double>(cloud_->size()) < params_.auto_filter_growth * static_cast<double>(size_after_filter_)) return;
+  voxel_filter(params_.voxel_leaf);
+  ++auto_filters_;
+}
+
+void PointMap::voxel_filter(double leaf) {
+  if (!(leaf > 0.0)) throw std::invalid_argument("PointMap::voxel_filter: leaf must be > 0");
+  if (!cloud_->empty()) {
+    pcl::VoxelGrid<pcl::PointXYZ> vg;
+    vg.setInputCloud(cloud_);
+    const float l = static_cast<float>(leaf);
+    vg.setLeafSize(l, l, l);
+    Cloud::Ptr out(new Cloud);
+    vg.filter(*out);
+    cloud_ = out;
+  }
+  size_after_filter_ = cloud_->size();
+}
+
+std::size_t PointMap::remove_outliers(int mean_k, double stddev) {
+  if (mean_k < 1 || !(stddev > 0.0)) throw std::invalid_argument("PointMap::remove_outliers: mean_k >= 1 and stddev > 0");
+  if (cloud_->size() <= static_cast<std::size_t>(mean_k)) return 0;
+  pcl::StatisticalOutlierRemoval<pcl::PointXYZ> sor;
+  sor.setInputCloud(cloud_);
+  sor.setMeanK(mean_k);
+  sor.setStddevMulThresh(stddev);
+  Cloud::Ptr out(new Cloud);
+  sor.filter(*out);
+  const std::size_t removed = cloud_->size() - out->size();
+  cloud_ = out;
+  size_after_filter_ = std::min(size_after_filter_, cloud_->size());
+  return removed;
+}
+
+namespace {
+double cross(const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+}
+}  // namespace
+
+Rect2 min_area_rectangle(const std::vector<Eigen::Vector2d>& pts_in) {
+  Rect2 r;
+  if (pts_in.empty()) return r;
+  std::vector<Eigen::Vector2d> p = pts_in;
+  std::sort(p.begin(), p.end(), [](const auto& a, const auto& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
+  p.erase(std::unique(p.begin(), p.end(), [](const auto& a, const auto& b) { return a == b; }), p.end());
+  if (p.size() == 1) {
+    r.cx = p[0].x();
+    r.cy = p[0].y();
+    return r;
+  }
+  // Andrew's monotone chain convex hull (counter-clockwise).
+  std::vector<Eigen::Vector2d> h(2 * p.size());
+  std::size_t k = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    while (k >= 2 && cross(h[k - 2], h[k - 1], p[i]) <= 0) --k;
+    h[k++] = p[i];
+  }
+  for (std::size_t i = p.size() - 1, t = k + 1; i-- > 0;) {
+    while (k >= t && cross(h[k - 2], h[k - 1], p[i]) <= 0) --k;
+    h[k++] = p[i];
+  }
+  h.resize(k - 1);
+  double area = 0.0;
+  for (std::size_t i = 0; i < h.size(); ++i) {
+    const auto& a = h[i];
+    const auto& b = h[(i + 1) % h.size()];
+    area += a.x() * b.y() - b.x() * a.y();
+  }
+  r.hull_area = 0.5 * std::abs(area);
+  // The minimum-area rectangle has a side on a hull edge.
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < h.size(); ++i) {
+    const Eigen::Vector2d e = h[(i + 1) % h.size()] - h[i];
+    if (e.norm() < 1e-12) continue;
+    const Eigen::Vector2d u = e.normalized(), v(-u.y(), u.x());
+    double umin = 1e300, umax = -1e300, vmin = 1e300, vmax = -1e300;
+    for (const auto& q : h) {
+      const double a = q.dot(u), b = q.dot(v);
+      umin = std::min(umin, a);
+      umax = std::max(umax, a);
+      vmin = std::min(vmin, b);
+      vmax = std::max(vmax, b);
+    }
+    const double A = (umax - umin) * (vmax - vmin);
+    if (A < best - 1e-15) {
+      best = A;
+      const double lu = umax - umin, lv = vmax - vmin;
+      const Eigen::Vector2d c = u * 0.5 * (umin + umax) + v * 0.5 * (vmin + vmax);
+      r.cx = c.x();
+      r.cy = c.y();
+      const Eigen::Vector2d axis = lu >= lv ? u : v;
+      r.length = std::max(lu, lv);
+      r.width = std::min(lu, lv);
+      double yaw = std::atan2(axis.y(), axis.x());
+      if (yaw <= -M_PI / 2) yaw += M_PI;
+      if (yaw > M_PI / 2) yaw -= M_PI;
+      r.yaw = yaw;
+    }
+  }
+  return r;
+}
+
+MapMeasurement PointMap::measure() const {
+  MapMeasurement m;
+  m.points = cloud_->size();
+  if (cloud_->empty()) return m;
+  std::vector<Eigen::Vector2d> xy;
+  xy.reserve(cloud_->size());
+  m.min = Vec3::Constant(std::numeric_limits<double>::infinity());
+  m.max = -m.min;
+  for (const auto& p : *cloud_) {
+    const Vec3 q(p.x, p.y, p.z);
+    m.min = m.min.cwiseMin(q);
+    m.max = m.max.cwiseMax(q);
+    xy.emplace_back(q.x(), q.y());
+  }
+  const Rect2 r = min_area_rectangle(xy);
+  m.length = r.length;
+  m.width = r.width;
+  m.height = m.max.z() - m.min.z();
+  m.obb_area = r.length * r.width;
+  m.hull_area = r.hull_area;
+  m.yaw = r.yaw;
+  m.center = Vec3(r.cx, r.cy, 0.5 * (m.min.z() + m.max.z()));
+  return m;
+}
+
+// --- PLY -------------------------------------------------------------------------------
+
+std::string ply_bytes(const Cloud& cloud, PlyFormat format, const PlyInfo& info) {
+  auto one_line = [](const std::string& s) {
+    std::string o = s;
+    std::replace(o.begin(), o.end(), '\n', ' ');
+    std::replace(o.begin(), o.end(), '\r', ' ');
+    return o;
+  };
+  std::ostringstream h;
+  h << "ply\n"
+    << "format " << (format == PlyFormat::kAscii ? "ascii" : "binary_little_endian") << " 1.0\n"
+    << "comment generator mapping_pcl\n"
+    << "comment frame " << one_line(info.frame) << "\n"
+    << "comment units " << one_line(info.units) << "\n";
+  if (!info.comment.empty()) h << "comment " << one_line(info.comment) << "\n";
+  h << "element vertex " << cloud.size() << "\n"
+    << "property float x\nproperty float y\nproperty float z\n"
+    << "end_header\n";
+  std::string out = h.str();
+  if (format == PlyFormat::kAscii) {
+    std::ostringstream b;
+    b.precision(9);  // float32 round-trips with 9 significant digits
+    for (const auto& p : cloud) b << p.x << ' ' << p.y << ' ' << p.z << '\n';
+    out += b.str();
+  } else {
+    const std::size_t off = out.size();
+    out.resize(off + 12 * cloud.size());
+    char* d = &out[off];
+    for (const auto& p : cloud) {
+      for (float f : {p.x, p.y, p.z}) {
+        uint32_t u;
+        std::memcpy(&u, &f, 4);
+        for (int i = 0; i < 4; ++i) *d++ = static_cast<char>((u >> (8 * i)) & 0xFFu);  // little endian
+      }
+    }
+  }
+  return out;
+}
+
+void write_ply(const std::string& path, const Cloud& cloud, PlyFormat format, const PlyInfo& info) {
+  std::ofstream f(path, std::ios::binary | std::ios::trunc);
+  if (!f) throw std::runtime_error(path + ": cannot open for writing");
+  const std::string bytes = ply_bytes(cloud, format, info);
+  f.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  f.close();
+  if (!f) throw std::runtime_error(path + ": write failed");
+}
+
+}  // namespace mapping_pcl

@@ -1,0 +1,50 @@
+// rclcpp component of the XPLORER contact mapper: a mechanical adapter around
+// XplorerMapLogic (all behaviour lives there). ROS builds only.
+#include <chrono>
+#include <memory>
+
+#include "mapping_pcl/xplorer_map_logic.hpp"
+#include "rclcpp/rclcpp.hpp"
+#include "rclcpp_components/register_node_macro.hpp"
+#include "tactile_common/ros_parameters.hpp"
+
+namespace mapping_pcl {
+
+class XplorerMapComponent : public rclcpp::Node {
+ public:
+  explicit XplorerMapComponent(const rclcpp::NodeOptions & options)
+  : Node(XplorerMapLogic::kNodeName, options),
+    logic_(XplorerMapLogic::params_from(
+      tactile_common::declare_parameters(*this, XplorerMapLogic::default_parameters())))
+  {
+    cloud_pub_ = create_publisher<sensor_msgs::msg::PointCloud2>(XplorerMapLogic::kCloudTopic, rclcpp::QoS(1));
+    wrench_sub_ = create_subscription<geometry_msgs::msg::WrenchStamped>(
+      XplorerMapLogic::kWrenchBodyTopic, rclcpp::SensorDataQoS(),
+      [this](const geometry_msgs::msg::WrenchStamped & msg) {logic_.on_wrench_body(msg);});
+    odom_sub_ = create_subscription<nav_msgs::msg::Odometry>(
+      XplorerMapLogic::kOdometryTopic, rclcpp::SensorDataQoS(),
+      [this](const nav_msgs::msg::Odometry & msg) {logic_.on_odometry(msg);});
+    timer_ = create_wall_timer(std::chrono::nanoseconds(logic_.period_ns()), [this]() {
+        if (auto cloud = logic_.on_timer(now().nanoseconds())) {cloud_pub_->publish(*cloud);}
+      });
+  }
+
+  ~XplorerMapComponent() override
+  {
+    if (!logic_.params().ply_file.empty()) {
+      logic_.finalize();
+      logic_.save_ply();
+    }
+  }
+
+ private:
+  XplorerMapLogic logic_;
+  rclcpp::Publisher<sensor_msgs::msg::PointCloud2>::SharedPtr cloud_pub_;
+  rclcpp::Subscription<geometry_msgs::msg::WrenchStamped>::SharedPtr wrench_sub_;
+  rclcpp::Subscription<nav_msgs::msg::Odometry>::SharedPtr odom_sub_;
+  rclcpp::TimerBase::SharedPtr timer_;
+};
+
+}  // namespace mapping_pcl
+
+RCLCPP_COMPONENTS_REGISTER_NODE(mapping_pcl::XplorerMapComponent)

@@ -1,0 +1,156 @@
+#include "mapping_pcl/xplorer_map_logic.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include "tactile_common/time.hpp"
+
+namespace mapping_pcl {
+
+using tactile_common::ParamMap;
+
+void XplorerMapLogic::Params::validate() const {
+  stamping.validate();
+  map.validate();
+  auto bad = [](const char* f, const std::string& why) {
+    throw std::invalid_argument(std::string("XplorerMapLogic.") + f + ": " + why);
+  };
+  if (force_average_samples < 1) bad("force_average_samples", "must be >= 1, got " + std::to_string(force_average_samples));
+  if (!std::isfinite(floor_z)) bad("floor_z", "must be finite");
+  if (!(publish_rate_hz >= 0.0) || !std::isfinite(publish_rate_hz)) bad("publish_rate_hz", "must be finite and >= 0 (0: never)");
+  if (!(max_odometry_age_s > 0.0)) bad("max_odometry_age_s", "must be > 0");
+  if (frame_id.empty()) bad("frame_id", "must not be empty");
+}
+
+ParamMap XplorerMapLogic::default_parameters() {
+  const Params d;
+  ParamMap m(kNodeName, "defaults");
+  m.set("delta_map", d.stamping.delta_map);
+  m.set("slab_size", std::vector<double>{d.stamping.slab_size.x(), d.stamping.slab_size.y(), d.stamping.slab_size.z()});
+  m.set("slab_offset", d.stamping.slab_offset);
+  m.set("corner_offset", d.stamping.corner_offset);
+  m.set("rate_hz", d.stamping.rate_hz);
+  m.set("slab_spacing", d.stamping.slab_spacing);
+  m.set("min_flight_height", d.stamping.min_flight_height);
+  m.set("voxel_leaf", d.map.voxel_leaf);
+  m.set("outlier_mean_k", static_cast<int64_t>(d.map.outlier_mean_k));
+  m.set("outlier_stddev", d.map.outlier_stddev);
+  m.set("force_average_samples", static_cast<int64_t>(d.force_average_samples));
+  m.set("floor_z", d.floor_z);
+  m.set("publish_rate_hz", d.publish_rate_hz);
+  m.set("max_odometry_age_s", d.max_odometry_age_s);
+  m.set("frame_id", d.frame_id);
+  m.set("ply_file", d.ply_file);
+  m.set("ply_binary", d.ply_binary);
+  return m;
+}
+
+XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
+  Params p;
+  p.stamping.delta_map = m.get_double("delta_map");
+  const std::vector<double> s = m.get_double_array("slab_size");
+  if (s.size() != 3) throw m.error("slab_size", "must have 3 elements (along the face, along C_n, height), got " + std::to_string(s.size()));
+  p.stamping.slab_size = Vec3(s[0], s[1], s[2]);
+  p.stamping.slab_offset = m.get_double("slab_offset");
+  p.stamping.corner_offset = m.get_double("corner_offset");
+  p.stamping.rate_hz = m.get_double("rate_hz");
+  p.stamping.slab_spacing = m.get_double("slab_spacing");
+  p.stamping.min_flight_height = m.get_double("min_flight_height");
+  p.map.voxel_leaf = m.get_double("voxel_leaf");
+  p.map.outlier_mean_k = static_cast<int>(m.get_int("outlier_mean_k"));
+  p.map.outlier_stddev = m.get_double("outlier_stddev");
+  p.force_average_samples = static_cast<int>(m.get_int("force_average_samples"));
+  p.floor_z = m.get_double("floor_z");
+  p.publish_rate_hz = m.get_double("publish_rate_hz");
+  p.max_odometry_age_s = m.get_double("max_odometry_age_s");
+  p.frame_id = m.get_string("frame_id");
+  p.ply_file = m.get_string("ply_file");
+  p.ply_binary = m.get_bool("ply_binary");
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    const auto dot = what.find('.');
+    const auto end = what.find_first_of(":[", dot);
+    const auto colon = what.find(": ");
+    throw m.error(what.substr(dot + 1, end - dot - 1), colon == std::string::npos ? what : what.substr(colon + 2));
+  }
+  return p;
+}
+
+XplorerMapLogic::XplorerMapLogic(const Params& params)
+    : params_((params.validate(), params)), map_(params.map), mapper_(params.stamping, map_) {}
+
+int64_t XplorerMapLogic::period_ns() const { return tactile_common::from_seconds(1.0 / params_.stamping.rate_hz); }
+
+void XplorerMapLogic::on_wrench_body(const geometry_msgs::msg::WrenchStamped& msg) {
+  ++stats_.received_wrench;
+  const Eigen::Vector2d f(msg.wrench.force.x, msg.wrench.force.y);
+  if (!f.allFinite()) {
+    ++stats_.dropped_nonfinite;
+    return;
+  }
+  if (msg.header.frame_id != "base_link" && !(odom_ && msg.header.frame_id == odom_->child_frame_id)) {
+    ++stats_.dropped_wrong_frame;  // a world-frame wrench would stamp in the wrong direction
+    return;
+  }
+  forces_.push_back(f);  // 001 Sec. V-C: moving average of the body force
+  force_sum_ += f;
+  while (static_cast<int>(forces_.size()) > params_.force_average_samples) {
+    force_sum_ -= forces_.front();
+    forces_.pop_front();
+  }
+}
+
+void XplorerMapLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
+  ++stats_.received_odometry;
+  const auto& p = msg.pose.pose.position;
+  const auto& q = msg.pose.pose.orientation;
+  if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || !std::isfinite(q.w) ||
+      !std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z)) {
+    ++stats_.dropped_nonfinite;
+    return;
+  }
+  odom_ = msg;
+}
+
+std::optional<sensor_msgs::msg::PointCloud2> XplorerMapLogic::on_timer(int64_t now_ns) {
+  if (!odom_ || forces_.empty() ||
+      tactile_common::to_seconds(now_ns - tactile_common::from_stamp(odom_->header.stamp)) > params_.max_odometry_age_s) {
+    ++stats_.ticks_without_input;
+  } else {
+    const auto& p = odom_->pose.pose.position;
+    const auto& q = odom_->pose.pose.orientation;
+    ContactSample s;
+    s.t = tactile_common::to_seconds(now_ns);
+    s.position = Vec3(p.x, p.y, p.z);
+    s.yaw = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+    s.height = p.z - params_.floor_z;
+    s.force_body = force_sum_ / static_cast<double>(forces_.size());
+    mapper_.update(s);
+  }
+  if (params_.publish_rate_hz <= 0.0) return std::nullopt;
+  if (last_publish_ns_ >= 0 && now_ns - last_publish_ns_ < tactile_common::from_seconds(1.0 / params_.publish_rate_hz))
+    return std::nullopt;
+  last_publish_ns_ = now_ns;
+  ++stats_.published;
+  return to_point_cloud2(map_.cloud(), params_.frame_id, now_ns);
+}
+
+MapMeasurement XplorerMapLogic::finalize() {
+  map_.voxel_filter();
+  map_.remove_outliers();
+  return map_.measure();
+}
+
+void XplorerMapLogic::save_ply(const std::string& path) const {
+  const std::string out = path.empty() ? params_.ply_file : path;
+  if (out.empty()) throw std::invalid_argument("XplorerMapLogic::save_ply: no path (parameter ply_file is empty)");
+  PlyInfo info;
+  info.frame = params_.frame_id;
+  info.comment = "XPLORER contact map (paper 001 Sec. IV-B)";
+  write_ply(out, map_.cloud(), params_.ply_binary ? PlyFormat::kBinaryLittleEndian : PlyFormat::kAscii, info);
+}
+
+}  // namespace mapping_pcl

@@ -1,0 +1,138 @@
+// XPLORER contact map stamping rules (001 Sec. IV-B, V-D).
+#include "mapping_pcl/xplorer_stamping.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace mapping_pcl {
+
+Eigen::Vector2d unit(BodyDirection d) {
+  switch (d) {
+    case BodyDirection::kPlusX: return {1.0, 0.0};
+    case BodyDirection::kMinusX: return {-1.0, 0.0};
+    case BodyDirection::kPlusY: return {0.0, 1.0};
+    case BodyDirection::kMinusY: return {0.0, -1.0};
+  }
+  return {0.0, 0.0};
+}
+
+const char* to_string(BodyDirection d) {
+  switch (d) {
+    case BodyDirection::kPlusX: return "+X";
+    case BodyDirection::kMinusX: return "-X";
+    case BodyDirection::kPlusY: return "+Y";
+    case BodyDirection::kMinusY: return "-Y";
+  }
+  return "?";
+}
+
+BodyDirection right_hand_move(BodyDirection c) {
+  switch (c) {
+    case BodyDirection::kPlusX: return BodyDirection::kMinusY;   // wall ahead -> move right
+    case BodyDirection::kMinusY: return BodyDirection::kMinusX;  // wall on the right -> move back
+    case BodyDirection::kMinusX: return BodyDirection::kPlusY;
+    case BodyDirection::kPlusY: return BodyDirection::kPlusX;    // wall on the left -> move forward
+  }
+  return c;
+}
+
+std::optional<BodyDirection> contact_direction(const Eigen::Vector2d& f, double threshold) {
+  if (!f.allFinite()) return std::nullopt;
+  if (std::abs(f.x()) >= std::abs(f.y())) {
+    if (std::abs(f.x()) <= threshold) return std::nullopt;
+    return f.x() < 0 ? BodyDirection::kPlusX : BodyDirection::kMinusX;
+  }
+  if (std::abs(f.y()) <= threshold) return std::nullopt;
+  return f.y() < 0 ? BodyDirection::kPlusY : BodyDirection::kMinusY;
+}
+
+void XplorerMapParams::validate() const {
+  auto bad = [](const std::string& f, const std::string& why, double v) {
+    throw std::invalid_argument("XplorerMapParams." + f + ": " + why + ", got " + std::to_string(v));
+  };
+  if (!(delta_map > 0.0) || !std::isfinite(delta_map)) bad("delta_map", "must be finite and > 0", delta_map);
+  for (int i = 0; i < 3; ++i) {
+    if (!(slab_size[i] > 0.0) || !std::isfinite(slab_size[i])) bad("slab_size[" + std::to_string(i) + "]", "must be finite and > 0", slab_size[i]);
+  }
+  if (!(slab_offset >= 0.0) || !std::isfinite(slab_offset)) bad("slab_offset", "must be finite and >= 0", slab_offset);
+  if (!(corner_offset >= 0.0) || !std::isfinite(corner_offset)) bad("corner_offset", "must be finite and >= 0", corner_offset);
+  if (!(rate_hz > 0.0) || !std::isfinite(rate_hz)) bad("rate_hz", "must be finite and > 0", rate_hz);
+  if (!(slab_spacing > 0.0) || !std::isfinite(slab_spacing)) bad("slab_spacing", "must be finite and > 0", slab_spacing);
+  if (!std::isfinite(min_flight_height)) bad("min_flight_height", "must be finite", min_flight_height);
+}
+
+XplorerContactMapper::XplorerContactMapper(const XplorerMapParams& params, PointMap& map)
+    : p_((params.validate(), params)), map_(&map) {}
+
+Box XplorerContactMapper::face_slab(const ContactSample& s, BodyDirection contact) const {
+  const Eigen::Vector2d d = Eigen::Rotation2Dd(s.yaw) * unit(contact);  // C_n in the world
+  Box b;
+  const double reach = p_.slab_offset + 0.5 * p_.slab_size.y();  // near face at slab_offset
+  b.center = Vec3(s.position.x() + reach * d.x(), s.position.y() + reach * d.y(), s.position.z());
+  b.size = p_.slab_size;
+  b.yaw = std::atan2(d.y(), d.x()) + M_PI / 2;  // box x along the face, y along C_n
+  return b;
+}
+
+Box XplorerContactMapper::corner_slab(const ContactSample& s, const Eigen::Vector2d& prev_w,
+                                      const Eigen::Vector2d& now_w) const {
+  Eigen::Vector2d diag = prev_w + now_w;
+  if (diag.norm() < 1e-6) diag = now_w;
+  diag.normalize();
+  Box b;
+  b.center = Vec3(s.position.x() + p_.corner_offset * diag.x(), s.position.y() + p_.corner_offset * diag.y(),
+                  s.position.z());
+  b.size = p_.slab_size;
+  // Placed diagonally (001 Sec. IV-B), oriented like the new face's slab: a
+  // slab turned by 45 deg would stick out of the faces by ~3 cm (README).
+  b.yaw = std::atan2(now_w.y(), now_w.x()) + M_PI / 2;
+  return b;
+}
+
+int XplorerContactMapper::update(const ContactSample& s) {
+  ++stats_.samples;
+  if (!s.position.allFinite() || !std::isfinite(s.yaw) || !std::isfinite(s.height) || !s.force_body.allFinite() ||
+      !std::isfinite(s.t)) {
+    ++stats_.rejected_nonfinite;
+    return 0;
+  }
+  if (s.t - last_stamp_t_ < 1.0 / p_.rate_hz - 1e-9) {  // 001 Sec. IV-B: 30 Hz
+    ++stats_.skipped_rate;
+    return 0;
+  }
+  if (s.height < p_.min_flight_height) {  // 001 Sec. V-D: only while flying
+    ++stats_.skipped_not_flying;
+    return 0;
+  }
+  if (s.force_body.norm() < p_.delta_map) {  // 001 Sec. V-D: |b_delta_f| >= delta_map
+    ++stats_.skipped_low_force;
+    return 0;
+  }
+  const auto c = contact_direction(s.force_body, 0.0);
+  if (!c) {
+    ++stats_.skipped_low_force;
+    return 0;
+  }
+  last_stamp_t_ = s.t;
+  int stamped = 0;
+  map_->insert_box(face_slab(s, *c), p_.slab_spacing);
+  ++stats_.slabs;
+  ++stamped;
+  const Eigen::Rotation2Dd R(s.yaw);
+  const Eigen::Vector2d c_w = R * unit(*c);
+  const Eigen::Vector2d m_w = R * unit(right_hand_move(*c));  // lambda in the world
+  const double ang = std::atan2(m_w.y(), m_w.x());
+  const int move_world = static_cast<int>(std::lround(ang / (M_PI / 2))) & 3;  // nearest world axis
+  if (last_move_world_ && *last_move_world_ != move_world) {  // 001 Sec. IV-B: corner
+    map_->insert_box(corner_slab(s, last_contact_world_, c_w), p_.slab_spacing);
+    ++stats_.corner_slabs;
+    ++stamped;
+  }
+  last_move_world_ = move_world;
+  last_contact_world_ = c_w;
+  last_contact_ = c;
+  return stamped;
+}
+
+}  // namespace mapping_pcl

@@ -1,0 +1,151 @@
+// Generic PointMap: insertion, PCL filters, footprint measurement, PLY bytes.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
+
+#include "mapping_pcl/point_map.hpp"
+
+using namespace mapping_pcl;
+
+TEST(PointMap, InsertBoxCountAndBoundsByHand) {
+  PointMap m;
+  Box b;
+  b.center = Vec3(1.0, 2.0, 0.7);
+  b.size = Vec3(0.25, 0.08, 0.5);
+  // Per axis: ceil(size / 0.02) + 1 points = 14, 5, 26.
+  EXPECT_EQ(m.insert_box(b, 0.02), 14u * 5u * 26u);
+  const MapMeasurement r = m.measure();
+  EXPECT_EQ(r.points, 1820u);
+  EXPECT_NEAR(r.min.x(), 0.875, 1e-6);
+  EXPECT_NEAR(r.max.x(), 1.125, 1e-6);
+  EXPECT_NEAR(r.min.y(), 1.96, 1e-6);
+  EXPECT_NEAR(r.max.z(), 0.95, 1e-6);
+  EXPECT_NEAR(r.length, 0.25, 1e-6);
+  EXPECT_NEAR(r.width, 0.08, 1e-6);
+  EXPECT_NEAR(r.height, 0.5, 1e-6);
+  EXPECT_NEAR(r.obb_area, 0.02, 1e-6);
+  EXPECT_THROW(m.insert_box(b, 0.0), std::invalid_argument);
+  EXPECT_THROW(m.insert(Vec3(std::nan(""), 0, 0)), std::invalid_argument);
+}
+
+TEST(PointMap, VoxelFilterMergesWithinALeafAndKeepsSeparatePoints) {
+  MapParams p;
+  p.auto_filter_growth = 0.0;
+  PointMap m(p);
+  m.insert({Vec3(0.0012, 0.0012, 0.0012), Vec3(0.0052, 0.0052, 0.0052), Vec3(0.0512, 0.0012, 0.0012)});
+  m.voxel_filter(0.01);
+  ASSERT_EQ(m.size(), 2u);
+  // Centroid of the two points in the first voxel.
+  bool found = false;
+  for (const auto& q : m.cloud()) {
+    if (std::abs(q.x - 0.0032f) < 1e-6f) found = true;
+  }
+  EXPECT_TRUE(found);
+}
+
+TEST(PointMap, StatisticalOutlierRemovalDropsIsolatedPoints) {
+  PointMap m;
+  Box b;
+  b.size = Vec3(0.3, 0.3, 0.3);
+  m.insert_box(b, 0.02);
+  const std::size_t n = m.size();
+  m.insert({Vec3(3, 3, 3), Vec3(-4, 2, 0), Vec3(0, 5, 1)});
+  EXPECT_EQ(m.remove_outliers(), 3u);
+  EXPECT_EQ(m.size(), n);
+}
+
+TEST(PointMap, AutoFilterBoundsGrowth) {
+  MapParams p;
+  p.auto_filter_min_points = 1000;
+  PointMap m(p);
+  Box b;
+  b.size = Vec3(0.25, 0.08, 0.5);
+  for (int i = 0; i < 50; ++i) m.insert_box(b, 0.005);  // same slab again and again
+  EXPECT_GT(m.auto_filters(), 0u);
+  EXPECT_LT(m.size(), 2u * 26u * 9u * 51u + 51u * 17u * 101u);
+}
+
+TEST(MinAreaRectangle, RotatedRectanglePerimeter) {
+  const double L = 1.22, W = 1.0, yaw = 30.0 * M_PI / 180.0;
+  std::vector<Eigen::Vector2d> pts;
+  const Eigen::Rotation2Dd R(yaw);
+  for (int i = 0; i <= 100; ++i) {
+    const double s = i / 100.0;
+    pts.push_back(Eigen::Vector2d(2, 1) + R * Eigen::Vector2d(-L / 2 + L * s, -W / 2));
+    pts.push_back(Eigen::Vector2d(2, 1) + R * Eigen::Vector2d(-L / 2 + L * s, W / 2));
+    pts.push_back(Eigen::Vector2d(2, 1) + R * Eigen::Vector2d(-L / 2, -W / 2 + W * s));
+    pts.push_back(Eigen::Vector2d(2, 1) + R * Eigen::Vector2d(L / 2, -W / 2 + W * s));
+  }
+  const Rect2 r = min_area_rectangle(pts);
+  EXPECT_NEAR(r.length, L, 1e-9);
+  EXPECT_NEAR(r.width, W, 1e-9);
+  EXPECT_NEAR(r.yaw, yaw, 1e-9);
+  EXPECT_NEAR(r.cx, 2.0, 1e-9);
+  EXPECT_NEAR(r.cy, 1.0, 1e-9);
+  EXPECT_NEAR(r.hull_area, L * W, 1e-9);
+}
+
+TEST(MinAreaRectangle, DegenerateInputs) {
+  EXPECT_EQ(min_area_rectangle({}).length, 0.0);
+  const Rect2 one = min_area_rectangle({Eigen::Vector2d(1, 2)});
+  EXPECT_EQ(one.cx, 1.0);
+  const Rect2 line = min_area_rectangle({Eigen::Vector2d(0, 0), Eigen::Vector2d(1, 0), Eigen::Vector2d(2, 0)});
+  EXPECT_NEAR(line.length, 2.0, 1e-12);
+  EXPECT_NEAR(line.width, 0.0, 1e-12);
+}
+
+TEST(Ply, AsciiHeaderAndValues) {
+  Cloud c;
+  c.push_back(pcl::PointXYZ(1.0f, -2.5f, 0.125f));
+  c.push_back(pcl::PointXYZ(0.1f, 0.2f, 0.3f));
+  PlyInfo info;
+  info.frame = "map";
+  info.comment = "two\npoints";
+  const std::string s = ply_bytes(c, PlyFormat::kAscii, info);
+  const std::string header =
+      "ply\nformat ascii 1.0\ncomment generator mapping_pcl\ncomment frame map\ncomment units m\n"
+      "comment two points\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+  ASSERT_EQ(s.substr(0, header.size()), header);
+  EXPECT_EQ(s.substr(header.size()), "1 -2.5 0.125\n0.100000001 0.200000003 0.300000012\n");
+}
+
+TEST(Ply, BinaryLittleEndianBytes) {
+  Cloud c;
+  c.push_back(pcl::PointXYZ(1.0f, -2.0f, 0.5f));
+  const std::string s = ply_bytes(c, PlyFormat::kBinaryLittleEndian);
+  const auto end = s.find("end_header\n");
+  ASSERT_NE(end, std::string::npos);
+  EXPECT_NE(s.find("format binary_little_endian 1.0\n"), std::string::npos);
+  const std::string body = s.substr(end + 11);
+  ASSERT_EQ(body.size(), 12u);
+  // 1.0f = 0x3F800000, -2.0f = 0xC0000000, 0.5f = 0x3F000000, least significant byte first.
+  const unsigned char expect[12] = {0, 0, 0x80, 0x3F, 0, 0, 0, 0xC0, 0, 0, 0, 0x3F};
+  EXPECT_EQ(std::memcmp(body.data(), expect, 12), 0);
+}
+
+TEST(Ply, WriteErrorNamesThePath) {
+  Cloud c;
+  try {
+    write_ply("/nonexistent-dir/x.ply", c, PlyFormat::kAscii);
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent-dir/x.ply"), std::string::npos);
+  }
+}
+
+TEST(MapParams, ValidateNamesTheField) {
+  MapParams p;
+  p.voxel_leaf = 0;
+  try {
+    p.validate();
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("MapParams.voxel_leaf"), std::string::npos);
+  }
+  p = MapParams{};
+  p.auto_filter_growth = 0.5;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+}

@@ -1,0 +1,127 @@
+// Node logic of the XPLORER contact mapper: parameters, inputs, PointCloud2, PLY.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "mapping_pcl/xplorer_map_logic.hpp"
+#include "tactile_common/time.hpp"
+
+using namespace mapping_pcl;
+using tactile_common::ParamMap;
+
+namespace {
+geometry_msgs::msg::WrenchStamped wrench(double fx, double fy, const char* frame = "base_link") {
+  geometry_msgs::msg::WrenchStamped w;
+  w.header.frame_id = frame;
+  w.wrench.force.x = fx;
+  w.wrench.force.y = fy;
+  return w;
+}
+nav_msgs::msg::Odometry odom(int64_t ns, double x, double y, double z, double yaw) {
+  nav_msgs::msg::Odometry o;
+  tactile_common::to_stamp(ns, o.header.stamp);
+  o.header.frame_id = "odom";
+  o.child_frame_id = "base_link";
+  o.pose.pose.position.x = x;
+  o.pose.pose.position.y = y;
+  o.pose.pose.position.z = z;
+  o.pose.pose.orientation.w = std::cos(yaw / 2);
+  o.pose.pose.orientation.z = std::sin(yaw / 2);
+  return o;
+}
+}  // namespace
+
+TEST(XplorerMapLogic, DefaultsAndRepoConfig) {
+  const ParamMap d = XplorerMapLogic::default_parameters();
+  const auto p = XplorerMapLogic::params_from(d);
+  EXPECT_DOUBLE_EQ(p.stamping.delta_map, 1.51);
+  EXPECT_DOUBLE_EQ(p.stamping.corner_offset, 0.417);
+  EXPECT_EQ(p.force_average_samples, 50);
+  const ParamMap f = tactile_common::load_node_parameters("../../config/xplorer_mapping.yaml", "xplorer_mapping", d);
+  for (const auto& kv : d.values()) EXPECT_TRUE(f.values().at(kv.first) == kv.second) << kv.first;
+  ParamMap bad = d;
+  bad.set("slab_size", std::vector<double>{0.25, 0.08});
+  EXPECT_THROW(XplorerMapLogic::params_from(bad), tactile_common::ParamError);
+  bad = d;
+  bad.set("delta_map", -1.0);
+  try {
+    XplorerMapLogic::params_from(bad);
+    FAIL();
+  } catch (const tactile_common::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("delta_map"), std::string::npos) << e.what();
+  }
+}
+
+TEST(XplorerMapLogic, StampsWhilePressingAndPublishesPointCloud2) {
+  XplorerMapLogic logic(XplorerMapLogic::params_from(XplorerMapLogic::default_parameters()));
+  const int64_t dt = logic.period_ns();
+  std::optional<sensor_msgs::msg::PointCloud2> last;
+  for (int k = 0; k < 60; ++k) {  // 2 s at 30 Hz; force 2 N along -x (obstacle ahead)
+    const int64_t t = k * dt;
+    logic.on_odometry(odom(t, 0.0, 0.0, 0.7, 0.0));
+    logic.on_wrench_body(wrench(-2.0, 0.0));
+    if (auto c = logic.on_timer(t)) last = c;
+  }
+  EXPECT_EQ(logic.mapper().stats().slabs, 60u);
+  EXPECT_EQ(logic.stats().published, 2u);  // 1 Hz
+  ASSERT_TRUE(last);
+  EXPECT_EQ(last->header.frame_id, "map");
+  EXPECT_EQ(last->point_step, 12u);
+  ASSERT_EQ(last->fields.size(), 3u);
+  EXPECT_EQ(last->fields[2].name, "z");
+  EXPECT_EQ(last->fields[2].offset, 8u);
+  EXPECT_EQ(last->data.size(), 12u * last->width);
+  // Decode the first point by hand (little endian float32): inside the slab ahead.
+  uint32_t u = 0;
+  for (int b = 0; b < 4; ++b) u |= static_cast<uint32_t>(last->data[static_cast<size_t>(b)]) << (8 * b);
+  float x;
+  std::memcpy(&x, &u, 4);
+  EXPECT_GE(x, 0.21f - 1e-6f);
+  EXPECT_LE(x, 0.29f + 1e-6f);
+  const MapMeasurement m = logic.finalize();
+  EXPECT_NEAR(m.length, 0.25, 0.011);
+  EXPECT_NEAR(m.width, 0.08, 0.011);
+}
+
+TEST(XplorerMapLogic, BadInputIsCountedAndNothingIsStamped) {
+  XplorerMapLogic logic(XplorerMapLogic::params_from(XplorerMapLogic::default_parameters()));
+  logic.on_timer(0);  // no input yet
+  EXPECT_EQ(logic.stats().ticks_without_input, 1u);
+  logic.on_wrench_body(wrench(std::nan(""), 0.0));
+  logic.on_wrench_body(wrench(-2.0, 0.0, "map"));  // world frame: wrong input
+  EXPECT_EQ(logic.stats().dropped_nonfinite, 1u);
+  EXPECT_EQ(logic.stats().dropped_wrong_frame, 1u);
+  auto o = odom(0, 0, 0, 0.7, 0);
+  o.pose.pose.position.x = std::nan("");
+  logic.on_odometry(o);
+  EXPECT_EQ(logic.stats().dropped_nonfinite, 2u);
+  logic.on_wrench_body(wrench(-2.0, 0.0));
+  logic.on_odometry(odom(0, 0, 0, 0.7, 0));
+  logic.on_timer(tactile_common::from_seconds(1.0));  // odometry 1 s old: stale
+  EXPECT_EQ(logic.stats().ticks_without_input, 2u);
+  EXPECT_EQ(logic.map().size(), 0u);
+  EXPECT_THROW(logic.save_ply(), std::invalid_argument);  // no ply_file
+}
+
+TEST(XplorerMapLogic, SavePlyWritesTheConfiguredFormat) {
+  ParamMap d = XplorerMapLogic::default_parameters();
+  d.set("ply_binary", true);
+  XplorerMapLogic logic(XplorerMapLogic::params_from(d));
+  logic.on_odometry(odom(0, 0, 0, 0.7, 0));
+  logic.on_wrench_body(wrench(0.0, 2.0));  // pushed left: obstacle on the right
+  logic.on_timer(0);
+  const std::string path = ::testing::TempDir() + "xplorer_map_logic_test.ply";
+  logic.save_ply(path);
+  std::ifstream f(path, std::ios::binary);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  const std::string s = ss.str();
+  EXPECT_NE(s.find("format binary_little_endian 1.0"), std::string::npos);
+  EXPECT_NE(s.find("comment frame map"), std::string::npos);
+  EXPECT_NE(s.find("element vertex " + std::to_string(logic.map().size())), std::string::npos);
+  std::remove(path.c_str());
+}
