@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "whisker_localization/root_finding.hpp"
+
 namespace whisker_localization {
 
 void MomentNoise::validate() const {
@@ -77,6 +79,185 @@ std::vector<Table1Row> run_table1(const Table1Params& p) {
     }
   }
   return rows;
+}
+
+}  // namespace whisker_localization
+
+namespace whisker_localization {
+
+namespace {
+constexpr double kPi2 = 3.14159265358979323846;
+}
+
+WallContact tip_wall_contact(const ElasticaSolver& solver, const BoundaryMap& map, const Pose2& base) {
+  WallContact w;
+  const double L = solver.params().length;
+  const double c = std::cos(base.theta), s = std::sin(base.theta);
+  auto to_world = [&](double x, double y, double& wx, double& wy) {
+    wx = base.x + c * x - s * y;
+    wy = base.y + s * x + c * y;
+  };
+  double tx, ty;
+  to_world(L, 0.0, tx, ty);
+  double nx, ny, tan;
+  if (map.signed_distance(tx, ty, &nx, &ny, &tan) >= 0.0) return w;  // tip in free space
+  w.contact = true;
+  for (int it = 0; it < 8; ++it) {
+    // Load on the whisker along the wall's free-side normal, in the sensor frame.
+    const double dir = tan + kPi2 / 2.0 - base.theta;
+    auto gap = [&](double F) {
+      const BeamShape b = solver.solve_fixed(F, dir, L);
+      if (!b.ok) return std::nan("");
+      double x, y;
+      to_world(b.contact_x, b.contact_y, x, y);
+      return map.signed_distance(x, y);
+    };
+    double lo = 0.0, flo = gap(0.0), hi = 1e-3, fhi = gap(hi);
+    for (int k = 0; k < 60 && fhi < 0.0; ++k) {
+      lo = hi;
+      flo = fhi;
+      hi *= 1.6;
+      fhi = gap(hi);
+    }
+    auto F = brent_root(gap, lo, hi, flo, fhi, 1e-12, 200);
+    if (!F) {
+      w.ok = false;
+      return w;
+    }
+    w.shape = solver.solve_fixed(*F, dir, L, true);
+    to_world(w.shape.contact_x, w.shape.contact_y, w.tip_x, w.tip_y);
+    double tan2;
+    map.signed_distance(w.tip_x, w.tip_y, &nx, &ny, &tan2);
+    const bool converged = std::fabs(wrap_angle(tan2 - tan)) < 1e-9;
+    tan = tan2;
+    if (converged) break;
+  }
+  w.m0 = w.shape.base_moment;
+  // Beyond the elastic range (or a buckled branch): the whisker would snap over.
+  w.ok = w.shape.ok && std::fabs(w.shape.phi_a) <= ElasticaSolver::kMaxSlope;
+  return w;
+}
+
+std::vector<std::array<double, 2>> concave_corner_polyline(double fillet_radius, double leg, double spacing) {
+  std::vector<std::array<double, 2>> pts;
+  const int nl = std::max(1, static_cast<int>(std::ceil(leg / spacing)));
+  for (int i = 0; i < nl; ++i) pts.push_back({-leg + leg * i / nl, 0.0});
+  const double arc = fillet_radius * kPi2 / 2.0;
+  const int na = std::max(2, static_cast<int>(std::ceil(arc / spacing)));
+  for (int i = 0; i <= na; ++i) {
+    const double a = (kPi2 / 2.0) * i / na;
+    pts.push_back({fillet_radius * std::sin(a), fillet_radius * (1.0 - std::cos(a))});
+  }
+  for (int i = 1; i <= nl; ++i) pts.push_back({fillet_radius, fillet_radius + leg * i / nl});
+  return pts;
+}
+
+void Table2Params::validate() const {
+  beam.validate();
+  localizer.validate();
+  noise.validate();
+  auto pos = [](double v, const char* f) {
+    if (!(v > 0.0) || !std::isfinite(v)) throw std::invalid_argument(std::string("Table2Params.") + f + ": must be finite and > 0, got " + std::to_string(v));
+  };
+  pos(fillet_radius, "fillet_radius");
+  pos(leg, "leg");
+  pos(penetration, "penetration");
+  pos(step, "step");
+  pos(truth_distance, "truth_distance");
+  pos(truth_angle, "truth_angle");
+  pos(localized_spread, "localized_spread");
+  if (!(attack_deg >= 0.0 && attack_deg < 80.0)) throw std::invalid_argument("Table2Params.attack_deg: must be in [0, 80), got " + std::to_string(attack_deg));
+  if (steps < 4) throw std::invalid_argument("Table2Params.steps: must be >= 4, got " + std::to_string(steps));
+  if (sweep_starts.empty()) throw std::invalid_argument("Table2Params.sweep_starts: must not be empty");
+  for (double x : sweep_starts) {
+    if (!(x > -0.8 * leg && x <= 0.0)) throw std::invalid_argument("Table2Params.sweep_starts: each must be in (-0.8 leg, 0], got " + std::to_string(x));
+  }
+}
+
+std::vector<Table2Sweep> run_table2(const Table2Params& p) {
+  p.validate();
+  const ElasticaSolver solver(p.beam);
+  // The localizer's map: the boundary at 1 mm (002 Sec. VII-B). The world the
+  // whisker touches: the same curve at 0.05 mm (closer to the analytic one).
+  const BoundaryMap map({concave_corner_polyline(p.fillet_radius, p.leg, 0.001)}, 0.001);
+  const BoundaryMap world({concave_corner_polyline(p.fillet_radius, p.leg, 0.00005)}, 0.001);
+  std::mt19937_64 rng(p.seed);
+  std::vector<Table2Sweep> out;
+  const double L = p.beam.length;
+  const double attack = p.attack_deg * kPi2 / 180.0;
+  for (std::size_t sw = 0; sw < p.sweep_starts.size(); ++sw) {
+    Table2Sweep r;
+    r.id = static_cast<int>(sw) + 1;
+    r.steps = p.steps;
+    // Start: the wall point, its tangent and free-side normal.
+    const double xc = p.sweep_starts[sw], yc = 0.0;
+    const double tangent = 0.0;  // the floor
+    const double inward = tangent - kPi2 / 2.0;  // into the obstacle
+    const double heading = inward + attack;      // whisker axis
+    const double reach = L - p.penetration / std::cos(attack);
+    Pose2 base{xc - reach * std::cos(heading), yc - reach * std::sin(heading), heading};
+    // The stage moves along the wall tangent at the start (a straight line).
+    const Pose2 motion{p.step * std::cos(tangent - heading), p.step * std::sin(tangent - heading), 0.0};
+    PreimageLocalizer loc(map, solver, p.localizer);
+    loc.set_prior(base);  // 002 Sec. VII-D: the sweep starts at a known location
+    std::vector<double> errors, half;
+    int kept = 0;
+    for (int k = 0; k < p.steps; ++k) {
+      if (k > 0) base = compose(base, motion);
+      const WallContact wc = tip_wall_contact(solver, world, base);
+      if (!wc.contact || !wc.ok) ++r.contact_failures;
+      double z = wc.contact && wc.ok ? wc.m0 : 0.0;
+      if (z != 0.0) {
+        if (p.bounded_noise) {
+          std::uniform_real_distribution<double> u(-p.noise.relative, p.noise.relative);
+          z *= 1.0 + u(rng);
+        } else {
+          z = p.noise.apply(z, rng);
+        }
+      }
+      const auto st = loc.step(k == 0 ? Pose2{} : motion, z);
+      if (!st.localizing) continue;
+      ++r.localizing_steps;
+      bool in = false;
+      for (const auto& q : loc.set().poses) {
+        if (std::hypot(q.x - base.x, q.y - base.y) <= p.truth_distance &&
+            std::fabs(wrap_angle(q.theta - base.theta)) <= p.truth_angle) {
+          in = true;
+          break;
+        }
+      }
+      kept += in ? 1 : 0;
+      const double err = std::hypot(st.best.x - base.x, st.best.y - base.y);
+      r.final_error_mm = err * 1e3;
+      if (k >= p.steps / 2) half.push_back(err * 1e3);
+      r.final_spread_mm = st.spread * 1e3;
+      r.final_set_size = st.set_size;
+      if (st.spread <= p.localized_spread) {
+        if (r.first_localized_step < 0) r.first_localized_step = k;
+        ++r.localized_steps;
+        errors.push_back(err * 1e3);
+      }
+    }
+    r.resets = loc.resets();
+    r.truth_kept_fraction = r.localizing_steps > 0 ? static_cast<double>(kept) / r.localizing_steps : 0.0;
+    auto stats = [](const std::vector<double>& e, double& mean, double& sd) {
+      if (e.empty()) {
+        mean = sd = std::nan("");
+        return;
+      }
+      double m = 0.0;
+      for (double x : e) m += x;
+      m /= static_cast<double>(e.size());
+      double v = 0.0;
+      for (double x : e) v += (x - m) * (x - m);
+      mean = m;
+      sd = std::sqrt(v / static_cast<double>(e.size()));
+    };
+    stats(half, r.mean_error_mm, r.std_error_mm);
+    stats(errors, r.localized_mean_error_mm, r.localized_std_error_mm);
+    out.push_back(r);
+  }
+  return out;
 }
 
 }  // namespace whisker_localization

@@ -11,6 +11,7 @@
 
 #include "whisker_localization/contact_estimation.hpp"
 #include "whisker_localization/elastica.hpp"
+#include "whisker_localization/preimage.hpp"
 
 namespace whisker_localization {
 
@@ -56,5 +57,72 @@ struct Table1Row {
 };
 
 std::vector<Table1Row> run_table1(const Table1Params& p);
+
+/// Tip contact of the whisker on a frictionless wall (002 Sec. VII, Table II:
+/// "contact known to be at the tip"): the load at s = L is along the wall
+/// normal at the contact; its magnitude puts the tip on the wall. No contact
+/// (m0 = 0) when the undeformed tip is in free space.
+struct WallContact {
+  bool contact = false;
+  bool ok = true;            ///< false if no equilibrium was found
+  double m0 = 0.0;           ///< base moment [N m]
+  double tip_x = 0.0, tip_y = 0.0;  ///< contact point in the world [m]
+  BeamShape shape;
+};
+WallContact tip_wall_contact(const ElasticaSolver& solver, const BoundaryMap& map, const Pose2& base);
+
+/// The concave boundary of the Table II experiment: a floor y = 0 from
+/// x = -leg to 0, a concave fillet of radius r (centre (0, r)) turning up by
+/// 90 deg, and a wall x = r up to y = r + leg. Walked floor -> wall, so the
+/// free space (inside the corner) is on the left. `spacing` is the
+/// polyline's point spacing [m].
+std::vector<std::array<double, 2>> concave_corner_polyline(double fillet_radius, double leg, double spacing);
+
+/// Table II protocol (002 Sec. VII-D): five sweeps of the stage along the
+/// concave boundary with tip contact; the preimage localizer runs from an
+/// unknown start pose (the whole map). Geometry values are choices (the paper
+/// gives its object only as a CAD drawing).
+struct Table2Params {
+  BeamParams beam;
+  LocalizerParams localizer;
+  MomentNoise noise;
+  bool bounded_noise = false;     ///< true: uniform relative noise in +-noise.relative (possibilistic test)
+  double fillet_radius = 0.05;    ///< concave fillet radius [m]; choice
+  double leg = 0.15;              ///< length of the straight floor and wall [m]; choice
+  /// Tip contact x on the floor at the start of each sweep (sweep IDs 01-05)
+  /// [m]; the fillet starts at x = 0. Choice: every sweep reaches the fillet.
+  std::vector<double> sweep_starts{-0.020, -0.016, -0.012, -0.008, -0.004};
+  double attack_deg = 40.0;       ///< whisker axis from the wall's inward normal [deg]; choice
+  double penetration = 0.004;     ///< undeformed tip depth behind the wall at the start [m]; choice
+  double step = 0.0005;           ///< base motion per step along +x (the floor) [m] (< 1 mm, 002 Sec. VII-D)
+  int steps = 40;
+  /// Truth counts as inside the pose set if a pose is within these [m], [rad]; choice.
+  double truth_distance = 0.003;
+  double truth_angle = 0.0524;
+  /// The set counts as localized when its spread is at most this [m]; choice.
+  double localized_spread = 0.010;
+  uint64_t seed = 1;
+  void validate() const;
+};
+
+struct Table2Sweep {
+  int id = 0;
+  int steps = 0;
+  int localizing_steps = 0;       ///< steps with a preimage (>= 3 observations)
+  int localized_steps = 0;        ///< steps with spread <= localized_spread
+  int first_localized_step = -1;
+  double mean_error_mm = 0.0;     ///< mean |best - truth| over the localizing steps of the second half of the sweep
+  double std_error_mm = 0.0;
+  double localized_mean_error_mm = 0.0;  ///< same over the localized steps (spread <= localized_spread)
+  double localized_std_error_mm = 0.0;
+  double final_error_mm = 0.0;
+  double final_spread_mm = 0.0;
+  std::size_t final_set_size = 0;
+  double truth_kept_fraction = 0.0;  ///< fraction of localizing steps with the truth inside the set
+  uint64_t resets = 0;            ///< empty intersections (restarted from the preimage)
+  int contact_failures = 0;       ///< truth steps without a tip contact
+};
+
+std::vector<Table2Sweep> run_table2(const Table2Params& p);
 
 }  // namespace whisker_localization
