@@ -1,0 +1,89 @@
+// Node logic of gpis_explorer: tactile depth (contact points) and odometry in;
+// velocity setpoints, the GPIS map, the next exploration target and the
+// exploration state out (paper 000 eq. 31-46, Extended Data Fig. 1d). No
+// rclcpp: the rclcpp component and the standalone host both use this class.
+#pragma once
+
+#include <climits>
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "gpis_explorer/sequencer.hpp"
+#include "nav_msgs/msg/odometry.hpp"
+#include "tactile_common/parameters.hpp"
+#include "tactile_msgs/msg/exploration_target.hpp"
+#include "tactile_msgs/msg/fsm_state.hpp"
+#include "tactile_msgs/msg/gpis_map.hpp"
+#include "tactile_msgs/msg/hover_setpoint.hpp"
+#include "tactile_msgs/msg/tactile_depth.hpp"
+
+namespace gpis_explorer {
+
+class GpisExplorerLogic {
+ public:
+  static constexpr const char* kNodeName = "gpis_explorer";
+  static constexpr const char* kDepthTopic = "/whisker/depth";     // tactile_msgs/msg/TactileDepth
+  static constexpr const char* kOdomTopic = "/odom";               // nav_msgs/msg/Odometry
+  static constexpr const char* kSetpointTopic = "/cmd_hover";      // tactile_msgs/msg/HoverSetpoint
+  static constexpr const char* kStateTopic = "/fsm_state";         // tactile_msgs/msg/FsmState
+  static constexpr const char* kMapTopic = "/gpis/map";            // tactile_msgs/msg/GpisMap
+  static constexpr const char* kTargetTopic = "/gpis/target";      // tactile_msgs/msg/ExplorationTarget
+  static constexpr const char* kFrame = "odom";
+  static constexpr const char* kBehaviour = "gpis_exploration";
+  /// Control tick, 50 Hz as 000 ("at 50 Hz" onboard).
+  static constexpr int64_t kTimerPeriodNs = 20000000;
+  /// FsmState on every transition and at least at 5 Hz.
+  static constexpr int64_t kStatePeriodNs = 200000000;
+
+  struct Params {
+    SequencerParams sequencer;
+    /// Depth / odometry older than this is stale: hover [s] (as tactile_fsm).
+    double max_input_age_s = 0.2;
+    void validate() const;
+  };
+
+  struct Stats {
+    uint64_t received_depth = 0;
+    uint64_t received_odom = 0;
+    uint64_t dropped_nonfinite = 0;     ///< NaN/inf in a used field (depth in contact, pose, zero quaternion)
+    uint64_t dropped_out_of_order = 0;  ///< stamp older than the last accepted one of that input
+    uint64_t ticks = 0;
+    uint64_t stale_ticks = 0;           ///< ticks with stale odometry (hovered)
+    uint64_t maps_published = 0;
+  };
+
+  struct Outputs {
+    tactile_msgs::msg::HoverSetpoint setpoint;                 ///< every tick
+    std::optional<tactile_msgs::msg::FsmState> state;          ///< transitions and 5 Hz
+    std::optional<tactile_msgs::msg::GpisMap> map;             ///< after each GPIS update
+    std::optional<tactile_msgs::msg::ExplorationTarget> target;  ///< after each GPIS update
+  };
+
+  static tactile_common::ParamMap default_parameters();
+  static Params params_from(const tactile_common::ParamMap& map);
+
+  explicit GpisExplorerLogic(const Params& params);
+
+  void on_depth(const tactile_msgs::msg::TactileDepth& msg);
+  void on_odometry(const nav_msgs::msg::Odometry& msg);
+  Outputs on_timer(int64_t now_ns);
+
+  const Stats& stats() const { return stats_; }
+  const Params& params() const { return params_; }
+  const ExplorationSequencer& sequencer() const { return seq_; }
+
+  /// The GPIS map message of the explorer's current state.
+  static tactile_msgs::msg::GpisMap make_map(const GpisExplorer& ex, int64_t stamp_ns);
+
+ private:
+  Params params_;
+  ExplorationSequencer seq_;
+  Stats stats_;
+  SequencerInput in_;
+  int64_t depth_ns_ = INT64_MIN;
+  int64_t odom_ns_ = INT64_MIN;
+  int64_t last_state_ns_ = INT64_MIN;
+};
+
+}  // namespace gpis_explorer

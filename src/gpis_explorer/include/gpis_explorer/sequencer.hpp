@@ -1,0 +1,194 @@
+// Exploration sequencing of the whiskered drone (paper 000, Methods "Active
+// aerial tactile exploration implementation", Extended Data Fig. 1d):
+//   1. probe in four orthogonal directions (90 deg apart): turn, fly forward
+//      until a whisker touches;
+//   2. on contact follow the wall for 2 s collecting surface points, then fly
+//      backward for 1 s; keep 4 surface points per wall follow and 1 interior
+//      point per retreat (the onboard downsampling of 000);
+//   3. refit the GPIS (eq. 31-46), turn toward the target and fly to it;
+//      contact -> 2.; target reached without contact -> it is free space
+//      (interior point) and the drone keeps going: still no contact after
+//      exit_confirm_distance -> the exit has "emerged" and is flown through.
+// The drone never heads into a penalised corner: targets near corners are
+// excluded (GpisExplorer), targets whose straight path passes a corner are
+// skipped, and approaching a corner centroid aborts the leg (retreat, refit).
+//
+// Core layer: no ROS, no messages. The wall-following sub-state rule is
+// tactile_fsm's (000 Fig. S4e) through its public wall_sub_state().
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "gpis_explorer/explorer.hpp"
+#include "tactile_fsm/whisker_wall_follower.hpp"
+
+namespace gpis_explorer {
+
+enum class Phase : uint8_t {
+  kHoverInit,   ///< hover at the start (000 Methods "Hovering")
+  kTurn,        ///< yaw toward the next heading
+  kProbe,       ///< one of the four orthogonal probes: forward until contact
+  kReturn,      ///< a probe found no wall: back to the start point
+  kFollowWall,  ///< 2 s of wall following (000 Fig. S4e rule), collecting surface points
+  kRetreat,     ///< 1 s backward, then an interior point
+  kGoToTarget,  ///< forward toward the GPIS target
+  kExitThrough, ///< target reached without contact: keep going through the opening
+  kLanding,     ///< land (exit flown through, open space, or gave up)
+  kDone,        ///< terminal
+};
+const char* to_string(Phase p);
+
+/// Why the exploration ended.
+enum class Outcome : uint8_t {
+  kRunning,
+  kExitFound,      ///< flew through an opening (probe or GPIS target)
+  kOpenSpace,      ///< no contact in any probe direction: no surface to explore
+  kNoTarget,       ///< GPIS gave no reachable target (status in last_update)
+  kUpdateLimit,    ///< max_updates GPIS updates without an exit
+  kTimeLimit,      ///< max_time_s without an exit
+};
+const char* to_string(Outcome o);
+
+struct SequencerParams {
+  ExplorerParams explorer;
+  /// Wall-following band and speeds (000 Fig. S4e; tactile_fsm's defaults).
+  tactile_fsm::WallFollowerParams wall;
+  int probe_directions = 4;             ///< 000: "four orthogonal directions (90 deg apart)"
+  double follow_time_s = 2.0;           ///< 000: "follows the wall for 2 seconds"
+  double retreat_time_s = 1.0;          ///< 000: "flies backward for 1 second"
+  int surface_points_per_follow = 4;    ///< 000: "storing four data points per wall-follow"
+  int interior_points_per_retreat = 1;  ///< 000: "and one per retreat"
+  /// Backward speed of the retreat [m/s]; workspace choice: V_max / 2 as the
+  /// FSM's FLY_BACKWARD (000 Fig. S4e).
+  double retreat_speed = 0.1;
+  /// A probe with no contact after this distance found an opening [m] (choice).
+  double probe_max_distance = 2.0;
+  /// Yaw control: rate = gain * error, |rate| <= omega_max; aligned below tolerance.
+  double yaw_gain = 2.0;                ///< [1/s] (choice)
+  double yaw_tolerance = 0.05;          ///< [rad] (choice, ~3 deg)
+  double target_radius = 0.10;          ///< target reached [m] (choice)
+  /// Beyond a contact-free target, this much more contact-free flight = exit
+  /// flown through [m] (choice: about the whisker-to-frame margin plus a room wall).
+  double exit_confirm_distance = 0.8;
+  double min_target_distance = 0.3;     ///< targets closer than this to the drone are skipped [m] (choice)
+  /// Sideways wall following ends early when a known surface point (an
+  /// earlier contact) lies within this distance ahead of the frame in the
+  /// sideways direction: the frame has no side whiskers, so a wall met
+  /// sideways in a corner would be hit (000 Results: corners "risk
+  /// collisions"). [m] (choice)
+  double side_clearance = 0.25;
+  int max_updates = 40;                 ///< give up after this many GPIS updates (choice)
+  double max_time_s = 600.0;            ///< give up after this long [s] (choice)
+  double landing_duration_s = 2.0;      ///< LANDING -> DONE [s]
+  /// Throws std::invalid_argument "SequencerParams.<field>: <reason>".
+  void validate() const;
+};
+
+/// One control tick of input (odometry frame).
+struct SequencerInput {
+  double t = 0.0;
+  bool pose_valid = false;  ///< odometry fresh
+  double x = 0.0, y = 0.0, yaw = 0.0;
+  bool depth_valid = false;  ///< tactile depth fresh
+  bool contact_left = false, contact_right = false;
+  double depth_left = 0.0, depth_right = 0.0;  ///< [m], used while in contact
+  /// Estimated contact points (odometry frame); NaN when unknown.
+  Eigen::Vector2d point_left{NAN, NAN}, point_right{NAN, NAN};
+};
+
+struct SequencerOutput {
+  tactile_fsm::Setpoint setpoint;
+  bool transitioned = false;
+  bool gpis_updated = false;  ///< update() ran this tick (publish map and target)
+};
+
+/// One contact point seen by the whiskers (all of them, for mapping metrics).
+struct ContactSample {
+  double t;
+  Eigen::Vector2d p;
+};
+
+class ExplorationSequencer {
+ public:
+  explicit ExplorationSequencer(const SequencerParams& params);
+
+  SequencerOutput step(const SequencerInput& in);
+
+  Phase phase() const { return phase_; }
+  Phase previous_phase() const { return previous_; }
+  const char* reason() const { return reason_; }
+  double phase_entered() const { return entered_; }
+  uint32_t transitions() const { return transitions_; }
+  Outcome outcome() const { return outcome_; }
+  bool exit_found() const { return outcome_ == Outcome::kExitFound; }
+  const GpisExplorer& explorer() const { return explorer_; }
+  bool has_target() const { return has_target_; }
+  Eigen::Vector2d target() const { return target_; }
+  double target_acquisition() const { return target_acq_; }
+  double target_variance() const { return target_var_; }
+  /// Every contact point received (not downsampled), for maps and metrics.
+  const std::vector<ContactSample>& contacts() const { return contacts_; }
+  /// Every accepted pose at 10 Hz (trajectory for pictures).
+  const std::vector<Eigen::Vector2d>& trajectory() const { return trajectory_; }
+  double travel_distance() const { return travel_; }
+  std::size_t points_rejected() const { return points_rejected_; }
+  std::size_t corner_aborts() const { return corner_aborts_; }
+  std::size_t side_stops() const { return side_stops_; }
+  const SequencerParams& params() const { return p_; }
+
+ private:
+  void enter(Phase p, const char* reason, double t);
+  void finish(Outcome o, const char* reason, double t);
+  tactile_fsm::Setpoint hover() const;
+  double yaw_rate_to(double heading, double yaw) const;
+  void start_follow(const SequencerInput& in, bool probing);
+  void commit_points(const SequencerInput& in);
+  void refit_and_choose(const SequencerInput& in);
+  bool choose_target(const Eigen::Vector2d& from);
+  bool near_corner(const Eigen::Vector2d& p) const;
+  bool side_blocked(const SequencerInput& in) const;
+  void add(const Eigen::Vector2d& p, double label);
+
+  SequencerParams p_;
+  GpisExplorer explorer_;
+  Phase phase_ = Phase::kHoverInit;
+  Phase previous_ = Phase::kHoverInit;
+  Phase after_turn_ = Phase::kProbe;
+  const char* reason_ = "start";
+  Outcome outcome_ = Outcome::kRunning;
+  bool started_ = false;
+  double entered_ = 0.0;
+  uint32_t transitions_ = 0;
+  Eigen::Vector2d start_{0, 0};
+  double start_yaw_ = 0.0;
+  int probe_ = 0;  ///< index of the current probe direction
+  bool probing_ = true;
+  double heading_ = 0.0;  ///< heading of the current turn / leg [rad]
+  Eigen::Vector2d leg_start_{0, 0};
+  int open_probe_ = -1;  ///< a probe that found no wall
+  tactile_fsm::Side side_ = tactile_fsm::Side::kRight;
+  bool both_touched_ = false;
+  tactile_fsm::WallSubState sub_ = tactile_fsm::WallSubState::kNone;
+  std::vector<Eigen::Vector2d> follow_points_;
+  bool has_target_ = false;
+  Eigen::Vector2d target_{0, 0};
+  double target_acq_ = 0.0, target_var_ = 0.0;
+  Eigen::Vector2d exit_from_{0, 0};
+  double exit_distance_ = 0.8;  ///< contact-free distance from exit_from_ that confirms the exit
+  std::vector<ContactSample> contacts_;
+  std::vector<Eigen::Vector2d> trajectory_;
+  double last_traj_t_ = -1.0;
+  bool have_last_pose_ = false;
+  Eigen::Vector2d last_pose_{0, 0};
+  double travel_ = 0.0;
+  std::size_t points_rejected_ = 0;
+  std::size_t corner_aborts_ = 0;
+  std::size_t side_stops_ = 0;
+};
+
+}  // namespace gpis_explorer

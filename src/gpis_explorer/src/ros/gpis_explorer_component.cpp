@@ -1,0 +1,55 @@
+// rclcpp component of gpis_explorer: a mechanical adapter around
+// GpisExplorerLogic (all behaviour lives there). ROS builds only.
+#include <chrono>
+#include <memory>
+
+#include "gpis_explorer/gpis_explorer_logic.hpp"
+#include "rclcpp/rclcpp.hpp"
+#include "rclcpp_components/register_node_macro.hpp"
+#include "tactile_common/ros_parameters.hpp"
+
+namespace gpis_explorer {
+
+class GpisExplorerComponent : public rclcpp::Node {
+ public:
+  explicit GpisExplorerComponent(const rclcpp::NodeOptions & options)
+  : Node(GpisExplorerLogic::kNodeName, options),
+    logic_(GpisExplorerLogic::params_from(
+      tactile_common::declare_parameters(*this, GpisExplorerLogic::default_parameters())))
+  {
+    setpoint_ = create_publisher<tactile_msgs::msg::HoverSetpoint>(GpisExplorerLogic::kSetpointTopic, 10);
+    state_ = create_publisher<tactile_msgs::msg::FsmState>(GpisExplorerLogic::kStateTopic, 10);
+    map_ = create_publisher<tactile_msgs::msg::GpisMap>(
+      GpisExplorerLogic::kMapTopic, rclcpp::QoS(1).transient_local());
+    target_ = create_publisher<tactile_msgs::msg::ExplorationTarget>(
+      GpisExplorerLogic::kTargetTopic, rclcpp::QoS(1).transient_local());
+    depth_ = create_subscription<tactile_msgs::msg::TactileDepth>(
+      GpisExplorerLogic::kDepthTopic, rclcpp::SensorDataQoS(),
+      [this](const tactile_msgs::msg::TactileDepth & msg) {logic_.on_depth(msg);});
+    odometry_ = create_subscription<nav_msgs::msg::Odometry>(
+      GpisExplorerLogic::kOdomTopic, rclcpp::SensorDataQoS(),
+      [this](const nav_msgs::msg::Odometry & msg) {logic_.on_odometry(msg);});
+    timer_ = create_wall_timer(
+      std::chrono::nanoseconds(GpisExplorerLogic::kTimerPeriodNs), [this]() {
+        auto out = logic_.on_timer(now().nanoseconds());
+        setpoint_->publish(out.setpoint);
+        if (out.state) {state_->publish(*out.state);}
+        if (out.map) {map_->publish(*out.map);}
+        if (out.target) {target_->publish(*out.target);}
+      });
+  }
+
+ private:
+  GpisExplorerLogic logic_;
+  rclcpp::Publisher<tactile_msgs::msg::HoverSetpoint>::SharedPtr setpoint_;
+  rclcpp::Publisher<tactile_msgs::msg::FsmState>::SharedPtr state_;
+  rclcpp::Publisher<tactile_msgs::msg::GpisMap>::SharedPtr map_;
+  rclcpp::Publisher<tactile_msgs::msg::ExplorationTarget>::SharedPtr target_;
+  rclcpp::Subscription<tactile_msgs::msg::TactileDepth>::SharedPtr depth_;
+  rclcpp::Subscription<nav_msgs::msg::Odometry>::SharedPtr odometry_;
+  rclcpp::TimerBase::SharedPtr timer_;
+};
+
+}  // namespace gpis_explorer
+
+RCLCPP_COMPONENTS_REGISTER_NODE(gpis_explorer::GpisExplorerComponent)

@@ -1,0 +1,401 @@
+// Exploration sequencing (000 Methods, Extended Data Fig. 1d). See sequencer.hpp.
+#include "gpis_explorer/sequencer.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace gpis_explorer {
+namespace {
+
+[[noreturn]] void fail(const char* field, const std::string& reason) {
+  throw std::invalid_argument(std::string("SequencerParams.") + field + ": " + reason);
+}
+void positive(const char* field, double v) {
+  if (!(std::isfinite(v) && v > 0.0)) fail(field, "must be > 0, got " + std::to_string(v));
+}
+double wrap(double a) { return std::remainder(a, 2.0 * M_PI); }
+
+/// Distance from c to the segment a-b.
+double segment_distance(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+  const Eigen::Vector2d ab = b - a;
+  const double l2 = ab.squaredNorm();
+  const double t = l2 > 0.0 ? std::clamp((c - a).dot(ab) / l2, 0.0, 1.0) : 0.0;
+  return (a + t * ab - c).norm();
+}
+
+constexpr std::size_t kMaxContacts = 200000;     ///< bound on the stored contact history
+constexpr std::size_t kMaxTrajectory = 200000;
+
+}  // namespace
+
+const char* to_string(Phase p) {
+  switch (p) {
+    case Phase::kHoverInit: return "HOVER_INIT";
+    case Phase::kTurn: return "TURN";
+    case Phase::kProbe: return "PROBE";
+    case Phase::kReturn: return "RETURN";
+    case Phase::kFollowWall: return "FOLLOW_WALL";
+    case Phase::kRetreat: return "RETREAT";
+    case Phase::kGoToTarget: return "GO_TO_TARGET";
+    case Phase::kExitThrough: return "EXIT_THROUGH";
+    case Phase::kLanding: return "LANDING";
+    case Phase::kDone: return "DONE";
+  }
+  return "UNKNOWN";
+}
+
+const char* to_string(Outcome o) {
+  switch (o) {
+    case Outcome::kRunning: return "running";
+    case Outcome::kExitFound: return "exit_found";
+    case Outcome::kOpenSpace: return "open_space";
+    case Outcome::kNoTarget: return "no_target";
+    case Outcome::kUpdateLimit: return "update_limit";
+    case Outcome::kTimeLimit: return "time_limit";
+  }
+  return "unknown";
+}
+
+void SequencerParams::validate() const {
+  explorer.validate();
+  wall.validate();
+  if (probe_directions < 1 || probe_directions > 16) {
+    fail("probe_directions", "must be in [1, 16], got " + std::to_string(probe_directions));
+  }
+  positive("follow_time_s", follow_time_s);
+  positive("retreat_time_s", retreat_time_s);
+  if (surface_points_per_follow < 1) fail("surface_points_per_follow", "must be >= 1");
+  if (interior_points_per_retreat < 0 || interior_points_per_retreat > 1) {
+    fail("interior_points_per_retreat", "must be 0 or 1 (the retreat's end point)");
+  }
+  positive("retreat_speed", retreat_speed);
+  positive("probe_max_distance", probe_max_distance);
+  positive("yaw_gain", yaw_gain);
+  positive("yaw_tolerance", yaw_tolerance);
+  positive("target_radius", target_radius);
+  positive("exit_confirm_distance", exit_confirm_distance);
+  if (!(std::isfinite(min_target_distance) && min_target_distance >= 0.0)) fail("min_target_distance", "must be >= 0");
+  if (!(std::isfinite(side_clearance) && side_clearance >= 0.0)) fail("side_clearance", "must be >= 0");
+  if (max_updates < 1) fail("max_updates", "must be >= 1");
+  positive("max_time_s", max_time_s);
+  positive("landing_duration_s", landing_duration_s);
+}
+
+ExplorationSequencer::ExplorationSequencer(const SequencerParams& params)
+    : p_(params), explorer_((params.validate(), params.explorer)) {}
+
+void ExplorationSequencer::enter(Phase p, const char* reason, double t) {
+  previous_ = phase_;
+  phase_ = p;
+  reason_ = reason;
+  entered_ = t;
+  ++transitions_;
+}
+
+void ExplorationSequencer::finish(Outcome o, const char* reason, double t) {
+  outcome_ = o;
+  enter(Phase::kLanding, reason, t);
+}
+
+tactile_fsm::Setpoint ExplorationSequencer::hover() const {
+  tactile_fsm::Setpoint s;
+  s.height = p_.wall.flight_height;
+  return s;
+}
+
+double ExplorationSequencer::yaw_rate_to(double heading, double yaw) const {
+  return std::clamp(p_.yaw_gain * wrap(heading - yaw), -p_.wall.omega_max, p_.wall.omega_max);
+}
+
+bool ExplorationSequencer::near_corner(const Eigen::Vector2d& q) const {
+  for (const auto& c : explorer_.last().corners) {
+    if ((q - c).norm() < p_.explorer.corner_exclusion) return true;
+  }
+  return false;
+}
+
+bool ExplorationSequencer::side_blocked(const SequencerInput& in) const {
+  const double s = side_ == tactile_fsm::Side::kLeft ? 1.0 : -1.0;
+  const Eigen::Vector2d fx(std::cos(in.yaw), std::sin(in.yaw)), fy(-std::sin(in.yaw), std::cos(in.yaw));
+  const Eigen::Vector2d pos(in.x, in.y);
+  const Gpis& g = explorer_.gpis();
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    if (g.label(i) != kSurfaceLabel) continue;
+    const Eigen::Vector2d d = g.point(i) - pos;
+    const double lateral = s * d.dot(fy), forward = d.dot(fx);
+    if (lateral > 0.0 && lateral < p_.side_clearance && std::abs(forward) < p_.side_clearance) return true;
+  }
+  return false;
+}
+
+void ExplorationSequencer::add(const Eigen::Vector2d& q, double label) {
+  if (explorer_.add_point(q, label) != AddStatus::kAdded) ++points_rejected_;
+}
+
+void ExplorationSequencer::start_follow(const SequencerInput& in, bool probing) {
+  probing_ = probing;
+  follow_points_.clear();
+  both_touched_ = false;
+  sub_ = tactile_fsm::WallSubState::kNone;
+  side_ = p_.wall.follow_side;
+  if (!probing && has_target_) {
+    // Follow toward the target's side (as tactile_fsm's side_toward_target).
+    const Eigen::Vector2d d = target_ - Eigen::Vector2d(in.x, in.y);
+    const double lateral = -std::sin(in.yaw) * d.x() + std::cos(in.yaw) * d.y();  // body y (left)
+    if (std::abs(lateral) > p_.wall.side_deadband) side_ = lateral > 0 ? tactile_fsm::Side::kLeft : tactile_fsm::Side::kRight;
+  }
+  enter(Phase::kFollowWall, "contact", in.t);
+}
+
+void ExplorationSequencer::commit_points(const SequencerInput& in) {
+  // 4 surface points per wall follow, evenly spaced in time (000 downsampling).
+  const std::size_t n = follow_points_.size();
+  const auto k = static_cast<std::size_t>(p_.surface_points_per_follow);
+  if (n > 0) {
+    for (std::size_t j = 0; j < std::min(k, n); ++j) {
+      const std::size_t idx = (k >= n) ? j : (j * (n - 1)) / (k - 1 > 0 ? k - 1 : 1);
+      add(follow_points_[std::min(idx, n - 1)], kSurfaceLabel);
+    }
+  }
+  follow_points_.clear();
+  // 1 interior point per retreat: where the drone is (000).
+  if (p_.interior_points_per_retreat > 0) add({in.x, in.y}, kInteriorLabel);
+}
+
+bool ExplorationSequencer::choose_target(const Eigen::Vector2d& from) {
+  const UpdateResult& r = explorer_.last();
+  has_target_ = false;
+  double best = -std::numeric_limits<double>::infinity();
+  const GridSpec& g = explorer_.grid();
+  for (const auto& info : r.contours) {
+    const auto& P = info.contour.points;
+    for (std::size_t i = 0; i < P.size(); ++i) {
+      if (!(info.acquisition[i] > best)) continue;
+      if ((P[i] - from).norm() < p_.min_target_distance) continue;
+      if (!g.contains(P[i])) continue;
+      bool blocked = near_corner(P[i]);
+      for (const auto& c : r.corners) blocked = blocked || segment_distance(from, P[i], c) < p_.explorer.corner_exclusion;
+      if (blocked) continue;  // never into (or past) a penalised corner
+      best = info.acquisition[i];
+      has_target_ = true;
+      target_ = P[i];
+      target_acq_ = info.acquisition[i];
+      target_var_ = info.variance[i];
+    }
+  }
+  return has_target_;
+}
+
+void ExplorationSequencer::refit_and_choose(const SequencerInput& in) {
+  explorer_.update();  // GPIS fit is incremental; grid, contours, corners, acquisition (000 eq. 31-46)
+  if (static_cast<int>(explorer_.updates()) >= p_.max_updates) {
+    finish(Outcome::kUpdateLimit, "GPIS update limit", in.t);
+    return;
+  }
+  if (!choose_target({in.x, in.y})) {
+    finish(Outcome::kNoTarget, "no reachable target", in.t);
+    return;
+  }
+  heading_ = std::atan2(target_.y() - in.y, target_.x() - in.x);
+  after_turn_ = Phase::kGoToTarget;
+  enter(Phase::kTurn, "target chosen", in.t);
+}
+
+SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
+  SequencerOutput out;
+  out.setpoint = hover();
+  const Phase before = phase_;
+  const uint32_t tr = transitions_;
+  if (!started_) {
+    started_ = true;
+    entered_ = in.t;
+  }
+  if (phase_ == Phase::kDone) {
+    out.setpoint.height = 0.0;
+    out.setpoint.land = true;
+    return out;
+  }
+  if (phase_ == Phase::kLanding) {
+    out.setpoint.height = 0.0;
+    out.setpoint.land = true;
+    if (in.t - entered_ >= p_.landing_duration_s) enter(Phase::kDone, "landed", in.t);
+    out.transitioned = transitions_ != tr;
+    return out;
+  }
+  if (!in.pose_valid) return out;  // no odometry: hover in place (counted by the node logic)
+  const Eigen::Vector2d pos(in.x, in.y);
+  if (have_last_pose_) travel_ += (pos - last_pose_).norm();
+  last_pose_ = pos;
+  have_last_pose_ = true;
+  if (in.t - last_traj_t_ >= 0.1 && trajectory_.size() < kMaxTrajectory) {
+    trajectory_.push_back(pos);
+    last_traj_t_ = in.t;
+  }
+  const bool contact = in.depth_valid && (in.contact_left || in.contact_right);
+  if (in.depth_valid && contacts_.size() < kMaxContacts) {
+    if (in.contact_left && in.point_left.allFinite()) contacts_.push_back({in.t, in.point_left});
+    if (in.contact_right && in.point_right.allFinite()) contacts_.push_back({in.t, in.point_right});
+  }
+  if (phase_ != Phase::kHoverInit && in.t - entered_ >= 0.0 && in.t >= p_.max_time_s) {
+    finish(Outcome::kTimeLimit, "time limit", in.t);
+    out.transitioned = true;
+    return out;
+  }
+  const double v = p_.wall.v_max;
+  auto& sp = out.setpoint;
+  switch (phase_) {
+    case Phase::kHoverInit:
+      if (in.t - entered_ >= p_.wall.hover_init_s) {
+        start_ = pos;
+        start_yaw_ = in.yaw;
+        explorer_.centre_grid(pos.x(), pos.y());
+        probe_ = 0;
+        heading_ = start_yaw_;
+        after_turn_ = Phase::kProbe;
+        enter(Phase::kTurn, "hover done: first probe", in.t);
+      }
+      break;
+    case Phase::kTurn: {
+      const double err = wrap(heading_ - in.yaw);
+      sp.yaw_rate = yaw_rate_to(heading_, in.yaw);
+      if (std::abs(err) < p_.yaw_tolerance) {
+        leg_start_ = pos;
+        enter(after_turn_, "aligned", in.t);
+      }
+      break;
+    }
+    case Phase::kProbe:
+      sp.vx = v;  // 000 Methods "Flying Forward" at V_max
+      sp.yaw_rate = yaw_rate_to(heading_, in.yaw);
+      if (contact) {
+        start_follow(in, true);
+      } else if ((pos - leg_start_).norm() >= p_.probe_max_distance) {
+        add(pos, kInteriorLabel);  // free all the way
+        if (open_probe_ < 0) open_probe_ = probe_;
+        enter(Phase::kReturn, "probe found no wall", in.t);
+      }
+      break;
+    case Phase::kReturn: {
+      const Eigen::Vector2d d = start_ - pos;
+      if (d.norm() < p_.target_radius) {
+        ++probe_;
+        if (probe_ < p_.probe_directions) {
+          heading_ = start_yaw_ + 2.0 * M_PI * probe_ / p_.probe_directions;
+          after_turn_ = Phase::kProbe;
+          enter(Phase::kTurn, "next probe", in.t);
+        } else {
+          enter(Phase::kRetreat, "probes done", in.t);  // zero-length retreat: refit below
+          entered_ = in.t - p_.retreat_time_s;
+        }
+        break;
+      }
+      const Eigen::Vector2d w = d.normalized() * std::min(v, d.norm());
+      sp.vx = std::cos(in.yaw) * w.x() + std::sin(in.yaw) * w.y();  // world -> body
+      sp.vy = -std::sin(in.yaw) * w.x() + std::cos(in.yaw) * w.y();
+      break;
+    }
+    case Phase::kFollowWall: {
+      if (in.depth_valid) {
+        if (in.contact_left && in.point_left.allFinite()) follow_points_.push_back(in.point_left);
+        if (in.contact_right && in.point_right.allFinite()) follow_points_.push_back(in.point_right);
+      }
+      const bool lv = in.depth_valid && in.contact_left && std::isfinite(in.depth_left);
+      const bool rv = in.depth_valid && in.contact_right && std::isfinite(in.depth_right);
+      both_touched_ = both_touched_ || (lv && rv);
+      // 000 Fig. S4e rule (tactile_fsm) and its velocities: V_sideway = V_max,
+      // V_forward = V_backward = V_max / 2, turn at omega_max.
+      sub_ = tactile_fsm::wall_sub_state(in.depth_left, lv, in.depth_right, rv, side_, both_touched_, sub_, p_.wall);
+      const double sideways = side_ == tactile_fsm::Side::kLeft ? v : -v;
+      switch (sub_) {
+        case tactile_fsm::WallSubState::kFlySideways: sp.vy = sideways; break;
+        case tactile_fsm::WallSubState::kFlyForward: sp.vx = 0.5 * v; break;
+        case tactile_fsm::WallSubState::kFlyBackward: sp.vx = -0.5 * v; break;
+        case tactile_fsm::WallSubState::kTurnLeft: sp.yaw_rate = p_.wall.omega_max; break;
+        case tactile_fsm::WallSubState::kTurnRight: sp.yaw_rate = -p_.wall.omega_max; break;
+        case tactile_fsm::WallSubState::kNone: break;
+      }
+      if (in.t - entered_ >= p_.follow_time_s) {
+        enter(Phase::kRetreat, "wall followed", in.t);
+      } else if (sub_ == tactile_fsm::WallSubState::kFlySideways && side_blocked(in)) {
+        ++side_stops_;
+        sp.vy = 0.0;
+        enter(Phase::kRetreat, "known surface beside: end of wall follow", in.t);
+      }
+      break;
+    }
+    case Phase::kRetreat:
+      sp.vx = -p_.retreat_speed;  // 000: "flies backward for 1 second"
+      if (in.t - entered_ >= p_.retreat_time_s) {
+        if (previous_ != Phase::kReturn) commit_points(in);
+        if (probing_ && probe_ + 1 < p_.probe_directions && previous_ != Phase::kReturn) {
+          // Back to the start, then the next probe.
+          enter(Phase::kReturn, "retreated: next probe", in.t);
+          break;
+        }
+        probing_ = false;
+        if (open_probe_ >= 0 && explorer_.gpis().surface_count() > 0 && explorer_.updates() == 0) {
+          // A probe flew 2 m without touching anything in a walled place: an opening.
+          explorer_.update();
+          heading_ = start_yaw_ + 2.0 * M_PI * open_probe_ / p_.probe_directions;
+          exit_from_ = pos;
+          exit_distance_ = p_.probe_max_distance + p_.exit_confirm_distance;
+          after_turn_ = Phase::kExitThrough;
+          enter(Phase::kTurn, "a probe found the opening", in.t);
+          break;
+        }
+        if (explorer_.gpis().surface_count() == 0) {
+          explorer_.update();
+          out.gpis_updated = true;
+          finish(Outcome::kOpenSpace, "no contact in any probe direction", in.t);
+          break;
+        }
+        refit_and_choose(in);
+        out.gpis_updated = true;
+      }
+      break;
+    case Phase::kGoToTarget: {
+      sp.yaw_rate = yaw_rate_to(heading_, in.yaw);
+      sp.vx = v;
+      if (contact) {
+        start_follow(in, false);
+        break;
+      }
+      if (near_corner(pos + Eigen::Vector2d(std::cos(in.yaw), std::sin(in.yaw)) * 0.1)) {
+        ++corner_aborts_;
+        follow_points_.clear();
+        enter(Phase::kRetreat, "approaching a penalised corner", in.t);
+        break;
+      }
+      // Past the target along the leg (or within the radius): free space there.
+      const Eigen::Vector2d dir(std::cos(heading_), std::sin(heading_));
+      if ((target_ - pos).norm() < p_.target_radius || (target_ - pos).dot(dir) < 0.0) {
+        add(target_, kInteriorLabel);
+        exit_from_ = pos;
+        exit_distance_ = p_.exit_confirm_distance;
+        enter(Phase::kExitThrough, "target reached without contact", in.t);
+      }
+      break;
+    }
+    case Phase::kExitThrough:
+      sp.vx = v;
+      sp.yaw_rate = yaw_rate_to(heading_, in.yaw);
+      if (contact) {
+        start_follow(in, false);
+      } else if ((pos - exit_from_).norm() >= exit_distance_) {
+        finish(Outcome::kExitFound, "flew through the opening", in.t);
+        out.gpis_updated = true;  // publish the final target with exit_found
+      }
+      break;
+    case Phase::kLanding:
+    case Phase::kDone:
+      break;
+  }
+  out.setpoint = tactile_fsm::saturate(out.setpoint, p_.wall);
+  out.transitioned = transitions_ != tr || phase_ != before;
+  return out;
+}
+
+}  // namespace gpis_explorer

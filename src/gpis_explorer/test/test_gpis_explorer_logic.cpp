@@ -1,0 +1,106 @@
+// gpis_explorer node logic: parameters (defaults = repository config), input
+// validation counters, message outputs.
+#include <cmath>
+#include <filesystem>
+
+#include <gtest/gtest.h>
+
+#include "gpis_explorer/gpis_explorer_logic.hpp"
+#include "tactile_common/time.hpp"
+
+using gpis_explorer::GpisExplorerLogic;
+
+namespace {
+nav_msgs::msg::Odometry odom(int64_t ns, double x, double y) {
+  nav_msgs::msg::Odometry m;
+  tactile_common::to_stamp(ns, m.header.stamp);
+  m.pose.pose.position.x = x;
+  m.pose.pose.position.y = y;
+  m.pose.pose.orientation.w = 1.0;
+  return m;
+}
+}  // namespace
+
+TEST(GpisExplorerLogic, RepositoryConfigEqualsDefaults) {
+  const auto path = std::filesystem::path(__FILE__).parent_path() / ".." / ".." / ".." / "config" / "gpis_explorer.yaml";
+  ASSERT_TRUE(std::filesystem::exists(path)) << path;
+  const auto defaults = GpisExplorerLogic::default_parameters();
+  const auto loaded = tactile_common::load_node_parameters(path.string(), GpisExplorerLogic::kNodeName, defaults);
+  for (const auto& [k, v] : defaults.values()) {
+    EXPECT_EQ(loaded.values().at(k), v) << k;
+  }
+  EXPECT_NO_THROW(GpisExplorerLogic::params_from(loaded));
+}
+
+TEST(GpisExplorerLogic, BadParameterNamesKey) {
+  auto m = GpisExplorerLogic::default_parameters();
+  m.set("follow_side", std::string("up"));
+  try {
+    GpisExplorerLogic::params_from(m);
+    FAIL();
+  } catch (const tactile_common::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("follow_side"), std::string::npos) << e.what();
+  }
+  m = GpisExplorerLogic::default_parameters();
+  m.set("corner_curvature", 1.0);
+  EXPECT_THROW(GpisExplorerLogic::params_from(m), tactile_common::ParamError);
+  m = GpisExplorerLogic::default_parameters();
+  m.set("gpis.max_points", int64_t{-3});
+  EXPECT_THROW(GpisExplorerLogic::params_from(m), tactile_common::ParamError);
+}
+
+TEST(GpisExplorerLogic, DropsBadInputAndHoversWithoutOdometry) {
+  GpisExplorerLogic logic(GpisExplorerLogic::params_from(GpisExplorerLogic::default_parameters()));
+  auto out = logic.on_timer(0);
+  EXPECT_EQ(out.setpoint.vx, 0.0);
+  EXPECT_TRUE(out.state.has_value());
+  EXPECT_EQ(out.state->behaviour, "gpis_exploration");
+  EXPECT_EQ(logic.stats().stale_ticks, 1u);
+  auto bad = odom(10, NAN, 0);
+  logic.on_odometry(bad);
+  EXPECT_EQ(logic.stats().dropped_nonfinite, 1u);
+  logic.on_odometry(odom(20, 0, 0));
+  logic.on_odometry(odom(10, 0, 0));
+  EXPECT_EQ(logic.stats().dropped_out_of_order, 1u);
+  tactile_msgs::msg::TactileDepth d;
+  d.contact_left = true;
+  d.depth_left = NAN;
+  logic.on_depth(d);
+  EXPECT_EQ(logic.stats().dropped_nonfinite, 2u);
+}
+
+TEST(GpisExplorerLogic, OpenSpacePublishesMapAndTarget) {
+  GpisExplorerLogic logic(GpisExplorerLogic::params_from(GpisExplorerLogic::default_parameters()));
+  // Free flight: integrate the setpoints, no contact ever.
+  double x = 0, y = 0, yaw = 0;
+  int maps = 0;
+  bool landed = false;
+  for (int64_t k = 0; k < 50 * 200 && !landed; ++k) {
+    const int64_t ns = k * GpisExplorerLogic::kTimerPeriodNs;
+    auto o = odom(ns, x, y);
+    o.pose.pose.orientation.z = std::sin(yaw / 2);
+    o.pose.pose.orientation.w = std::cos(yaw / 2);
+    logic.on_odometry(o);
+    tactile_msgs::msg::TactileDepth d;
+    tactile_common::to_stamp(ns, d.header.stamp);
+    logic.on_depth(d);
+    const auto out = logic.on_timer(ns);
+    x += 0.02 * (out.setpoint.vx * std::cos(yaw) - out.setpoint.vy * std::sin(yaw));
+    y += 0.02 * (out.setpoint.vx * std::sin(yaw) + out.setpoint.vy * std::cos(yaw));
+    yaw += 0.02 * out.setpoint.yaw_rate;
+    if (out.map) {
+      ++maps;
+      EXPECT_EQ(out.map->width, 10u);
+      EXPECT_EQ(out.map->mean.size(), 100u);
+      EXPECT_EQ(out.map->training_points.size(), out.map->training_labels.size());
+      EXPECT_EQ(out.map->header.frame_id, "odom");
+      ASSERT_TRUE(out.target.has_value());
+      EXPECT_FALSE(out.target->exit_found);
+      EXPECT_EQ(out.target->gpis_update, 1u);
+    }
+    landed = out.setpoint.land;
+  }
+  EXPECT_EQ(maps, 1);
+  EXPECT_TRUE(landed);
+  EXPECT_EQ(logic.sequencer().outcome(), gpis_explorer::Outcome::kOpenSpace);
+}

@@ -1,0 +1,68 @@
+// Exploration sequencing (000 Methods) in a kinematic test world: the four
+// probes, wall follow / retreat downsampling, GPIS refits, exit through an
+// opening, open space, parameter validation.
+#include <cmath>
+#include <stdexcept>
+
+#include <gtest/gtest.h>
+
+#include "kinematic_room.hpp"
+
+using gpis_explorer::ExplorationSequencer;
+using gpis_explorer::Outcome;
+using gpis_explorer::Phase;
+using gpis_explorer::SequencerParams;
+
+TEST(SequencerParams, ValidateNamesField) {
+  SequencerParams p;
+  p.follow_time_s = 0.0;
+  try {
+    p.validate();
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("SequencerParams.follow_time_s"), std::string::npos);
+  }
+  EXPECT_NO_THROW(SequencerParams{}.validate());
+}
+
+TEST(Sequencer, OpenSpaceLandsWithStatus) {
+  SequencerParams p;
+  ExplorationSequencer seq(p);
+  const auto r = gpis_test::fly(seq, {}, 0.0, 200.0);
+  EXPECT_EQ(r.outcome, Outcome::kOpenSpace);
+  EXPECT_EQ(seq.phase(), Phase::kDone);
+  EXPECT_EQ(seq.explorer().gpis().surface_count(), 0u);
+  EXPECT_EQ(seq.explorer().gpis().size(), 4u);  // one interior point per probe
+  EXPECT_EQ(seq.explorer().last().status, gpis_explorer::UpdateStatus::kNoSurfacePoints);
+}
+
+TEST(Sequencer, ClosedRoomNeverExitsAndStopsAtALimit) {
+  SequencerParams p;
+  p.max_updates = 6;
+  ExplorationSequencer seq(p);
+  const auto walls = gpis_test::room(2.0, 0.0, 0.3);
+  const auto r = gpis_test::fly(seq, walls, 0.0, 400.0);
+  EXPECT_FALSE(r.exit_found);
+  EXPECT_NE(r.outcome, Outcome::kRunning);
+  EXPECT_GT(r.min_wall_distance, 0.0);
+  // Downsampling: at most 4 surface + 1 interior point per contact episode.
+  EXPECT_LE(seq.explorer().gpis().size(), 5u * (4u + 6u));
+  EXPECT_GE(seq.explorer().gpis().surface_count(), 4u);
+}
+
+TEST(Sequencer, FindsTheExitOfRotatedRooms) {
+  int found = 0;
+  const double yaws[] = {0.2, 1.1, 2.3, -0.7, -2.0};
+  for (double yaw : yaws) {
+    SequencerParams p;
+    ExplorationSequencer seq(p);
+    const auto walls = gpis_test::room(2.0, 0.8, yaw);
+    const auto r = gpis_test::fly(seq, walls, 0.0, 500.0, 1.0, yaw);
+    if (r.exit_found && r.outside) ++found;
+    EXPECT_GT(r.min_wall_distance, 0.05) << "yaw " << yaw;  // frame radius ~5 cm
+    std::printf("yaw %.2f: outcome %s, updates %zu, travel %.1f m, t %.0f s, min wall %.3f m in %s at (%.2f, %.2f)\n",
+                yaw, to_string(r.outcome), r.updates, seq.travel_distance(), r.t_end, r.min_wall_distance,
+                to_string(r.min_wall_phase), r.min_wall_at.x(), r.min_wall_at.y());
+  }
+  EXPECT_GE(found, 4);
+}
