@@ -1,0 +1,127 @@
+"""Peer test: the official Python client (cflib, UDP driver) against our
+simulated Crazyflie (crazyflie_sim_server, the SITL whiskered drone behind
+the firmware side of CRTP). cflib connects (platform, log TOC, memories,
+param TOC, all params), receives the whisker barometers in a 50 Hz log block,
+reads and writes parameters, and its hover setpoints fly the simulated drone.
+CRAZYFLIE_SIM_SERVER and TACTILE_CONFIG_DIR are set by CMake."""
+import os
+import socket
+import subprocess
+import threading
+import time
+
+import pytest
+
+cflib = pytest.importorskip('cflib')
+import cflib.crtp  # noqa: E402
+from cflib.crazyflie import Crazyflie  # noqa: E402
+from cflib.crazyflie.log import LogConfig  # noqa: E402
+from cflib.crazyflie.syncCrazyflie import SyncCrazyflie  # noqa: E402
+
+SCENARIO = os.path.join(os.environ.get('TACTILE_CONFIG_DIR', 'config'), 'scenarios', 'whisker_hover.yaml')
+
+
+def free_udp_port():
+    s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    s.bind(('127.0.0.1', 0))
+    port = s.getsockname()[1]
+    s.close()
+    return port
+
+
+@pytest.fixture
+def sim():
+    port = free_udp_port()
+    p = subprocess.Popen([os.environ['CRAZYFLIE_SIM_SERVER'], SCENARIO, '--port', str(port), '--duration', '60'],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    line = p.stdout.readline()
+    assert line.startswith('listening udp://127.0.0.1:%d' % port), line + p.stderr.read()
+    yield 'udp://127.0.0.1:%d' % port
+    p.terminate()
+    out, err = p.communicate(timeout=10)
+    assert p.returncode == 0, err
+
+
+def collect(scf, name, variables, period_ms, seconds):
+    lc = LogConfig(name=name, period_in_ms=period_ms)
+    for v in variables:
+        lc.add_variable(v, 'float')
+    samples = []
+    lock = threading.Lock()
+
+    def cb(ts, data, conf):
+        with lock:
+            samples.append((ts, dict(data)))
+    lc.data_received_cb.add_callback(cb)
+    scf.cf.log.add_config(lc)
+    lc.start()
+    time.sleep(seconds)
+    lc.stop()
+    time.sleep(0.1)
+    with lock:
+        return list(samples)
+
+
+def test_cflib_connects_logs_params_and_flies(sim, tmp_path):
+    cflib.crtp.init_drivers()
+    cf = Crazyflie(rw_cache=str(tmp_path))
+    with SyncCrazyflie(sim, cf=cf) as scf:
+        assert scf.cf.platform.get_protocol_version() == 10
+        toc = scf.cf.log.toc.toc
+        for i in (1, 2, 3):
+            assert 'Barometer1_%d' % i in toc['Whisker']
+            assert 'Barometer2_%d' % i in toc['Whisker1']
+        for n in ('x', 'y', 'z', 'yaw'):
+            assert n in toc['stateEstimate']
+
+        # Whisker barometers at 50 Hz (000: 3 barometers per whisker, 50 Hz).
+        names = ['Whisker.Barometer1_%d' % i for i in (1, 2, 3)] + ['Whisker1.Barometer2_%d' % i for i in (1, 2, 3)]
+        samples = collect(scf, 'whisker', names, 20, 2.0)
+        assert 80 <= len(samples) <= 110, len(samples)
+        stamps = [ts for ts, _ in samples]
+        periods = {b - a for a, b in zip(stamps, stamps[1:])}
+        assert periods == {20}, periods  # firmware timestamps exactly 20 ms apart
+        for _, d in samples:
+            for n in names:
+                assert 9.0e4 < d[n] < 1.1e5, (n, d[n])  # absolute pressure [Pa]
+        # The barometers are not a constant: noise/drift makes values change.
+        assert len({d[names[0]] for _, d in samples}) > 5
+
+        # Parameters: read a read-only one, write and read back a writable one.
+        scf.wait_for_params()
+        assert scf.cf.param.get_value('deck.bcWhisker') == '1'
+        assert scf.cf.param.get_value('commander.enHighLevel') == '0'
+        scf.cf.param.set_value('commander.enHighLevel', 1)
+        time.sleep(0.3)
+        assert scf.cf.param.get_value('commander.enHighLevel') == '1'
+
+        # Hover setpoints move the simulated drone: take off to 0.4 m, then fly
+        # forward at 0.2 m/s for 2 s.
+        lc = LogConfig(name='state', period_in_ms=20)
+        for v in ('sitl.truthX', 'sitl.truthZ', 'stateEstimate.z'):
+            lc.add_variable(v, 'float')
+        state = []
+        lc.data_received_cb.add_callback(lambda ts, data, conf: state.append(dict(data)))
+        scf.cf.log.add_config(lc)
+        lc.start()
+        time.sleep(0.2)
+        x0 = state[-1]['sitl.truthX']
+        z0 = state[-1]['sitl.truthZ']
+        for _ in range(100):  # 2 s at 50 Hz
+            scf.cf.commander.send_hover_setpoint(0.0, 0.0, 0.0, 0.4)
+            time.sleep(0.02)
+        z_hover = state[-1]['sitl.truthZ']
+        x_hover = state[-1]['sitl.truthX']
+        for _ in range(100):
+            scf.cf.commander.send_hover_setpoint(0.2, 0.0, 0.0, 0.4)
+            time.sleep(0.02)
+        x_end = state[-1]['sitl.truthX']
+        scf.cf.commander.send_stop_setpoint()
+        scf.cf.commander.send_notify_setpoint_stop()
+        lc.stop()
+        assert z0 < 0.05
+        assert 0.3 < z_hover < 0.5, z_hover
+        assert abs(x_hover - x0) < 0.1
+        # 0.2 m/s for 2 s = 0.4 m; the velocity loop needs a few tenths of a second to reach it.
+        assert 0.2 < x_end - x_hover < 0.5, (x_hover, x_end)
+        assert abs(state[-1]['stateEstimate.z'] - state[-1]['sitl.truthZ']) < 0.1

@@ -1,0 +1,263 @@
+// The ground client against the firmware emulator: in memory (every byte
+// goes through encode/decode) and over real UDP sockets.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cerrno>
+#include <cstdio>
+#include <deque>
+#include <filesystem>
+#include <thread>
+
+#include "crazyflie_bridge/client.hpp"
+#include "crazyflie_bridge/firmware.hpp"
+
+using namespace crazyflie_bridge;
+
+namespace {
+
+/// Link whose far end is a FirmwareEmulator; drop_every > 0 drops every n-th uplink packet.
+class EmulatorLink : public Link {
+ public:
+  explicit EmulatorLink(FirmwareEmulator& fw) : fw_(fw) {}
+  void send(const CrtpPacket& pk) override {
+    ++stats_.packets_sent;
+    if (drop_every > 0 && stats_.packets_sent % static_cast<uint64_t>(drop_every) == 0) return;
+    const auto wire = pk.encode();
+    std::vector<CrtpPacket> out;
+    fw_.on_packet(CrtpPacket::decode(wire.data(), wire.size()), now_ms, out);
+    for (auto& p : out) in_.push_back(p);
+  }
+  std::optional<CrtpPacket> receive(std::chrono::milliseconds) override {
+    if (in_.empty()) {
+      std::vector<CrtpPacket> out;
+      fw_.tick(now_ms, out);
+      now_ms += 10;
+      for (auto& p : out) in_.push_back(p);
+      if (in_.empty()) return std::nullopt;
+    }
+    auto wire = in_.front().encode();
+    in_.pop_front();
+    ++stats_.packets_received;
+    return CrtpPacket::decode(wire.data(), wire.size());
+  }
+  const LinkStatistics& statistics() const override { return stats_; }
+  std::string uri() const override { return "emulator://"; }
+  uint32_t now_ms = 0;
+  int drop_every = 0;
+
+ private:
+  FirmwareEmulator& fw_;
+  std::deque<CrtpPacket> in_;
+  LinkStatistics stats_;
+};
+
+FirmwareEmulator make_firmware() {
+  FirmwareEmulator fw;
+  fw.add_log_variable("Whisker", "Barometer1_1", logp::Type::kFloat);
+  fw.add_log_variable("stateEstimate", "z", logp::Type::kFloat);
+  fw.add_log_variable("pm", "state", logp::Type::kInt8);
+  fw.add_log_variable("motor", "m1", logp::Type::kUint16);
+  fw.add_param("deck", "bcWhisker", param::kUint8, 1, true);
+  fw.add_param("pid", "kp", param::kFloat, 2.5, false);
+  fw.add_param("ring", "effect", param::kInt16, -3, false);
+  return fw;
+}
+
+}  // namespace
+
+TEST(FirmwareClient, ConnectDownloadsTocsAndLogs) {
+  auto fw = make_firmware();
+  fw.set_log_value(0, 101325.5);
+  fw.set_log_value(1, 0.4);
+  fw.set_log_value(2, -1);
+  fw.set_log_value(3, 40000);
+  EmulatorLink link(fw);
+  CrazyflieClient c(link);
+  c.connect();
+  EXPECT_EQ(c.protocol_version(), 10);
+  ASSERT_EQ(c.log_toc().size(), 4u);
+  EXPECT_EQ(c.log_toc()[3].full_name(), "motor.m1");
+  ASSERT_EQ(c.param_toc().size(), 3u);
+  EXPECT_EQ(c.log_toc_crc(), fw.log_toc_crc());
+  const uint8_t id = c.start_log_block({"Whisker.Barometer1_1", "stateEstimate.z", "pm.state", "motor.m1"}, 20);
+  EXPECT_EQ(fw.block_period_ms(id), 20u);
+  std::vector<LogSample> got;
+  for (int i = 0; i < 10; ++i) {
+    if (auto s = c.poll(std::chrono::milliseconds(10))) got.push_back(*s);
+  }
+  ASSERT_GE(got.size(), 3u);
+  EXPECT_FLOAT_EQ(static_cast<float>(got[0].values[0]), 101325.5f);
+  EXPECT_FLOAT_EQ(static_cast<float>(got[0].values[1]), 0.4f);
+  EXPECT_EQ(got[0].values[2], -1.0);
+  EXPECT_EQ(got[0].values[3], 40000.0);
+  // 20 ms period: consecutive firmware timestamps 20 ms apart.
+  EXPECT_EQ(got[1].timestamp_ms - got[0].timestamp_ms, 20u);
+}
+
+TEST(FirmwareClient, ParamsReadWriteAndErrors) {
+  auto fw = make_firmware();
+  EmulatorLink link(fw);
+  CrazyflieClient c(link);
+  c.connect();
+  EXPECT_EQ(c.read_param("deck.bcWhisker"), 1.0);
+  EXPECT_FLOAT_EQ(static_cast<float>(c.read_param("pid.kp")), 2.5f);
+  EXPECT_EQ(c.read_param("ring.effect"), -3.0);
+  EXPECT_FLOAT_EQ(static_cast<float>(c.write_param("pid.kp", 0.75)), 0.75f);
+  EXPECT_FLOAT_EQ(static_cast<float>(fw.param_value(1)), 0.75f);
+  EXPECT_FLOAT_EQ(static_cast<float>(c.read_param("pid.kp")), 0.75f);
+  EXPECT_EQ(c.write_param("ring.effect", 40000), 32767.0);  // saturated to int16
+  EXPECT_THROW(c.write_param("deck.bcWhisker", 0), ClientError);  // read-only
+  EXPECT_THROW(c.read_param("no.such"), ClientError);
+  EXPECT_THROW(c.start_log_block({"no.such"}, 20), ClientError);
+  // 7 floats = 28 bytes > 26.
+  EXPECT_THROW(c.start_log_block(std::vector<std::string>(7, "stateEstimate.z"), 20), ClientError);
+}
+
+TEST(FirmwareClient, RequestsSurvivePacketLoss) {
+  auto fw = make_firmware();
+  EmulatorLink link(fw);
+  link.drop_every = 3;  // every third uplink packet lost
+  ClientOptions opt;
+  opt.reply_timeout = std::chrono::milliseconds(1);
+  CrazyflieClient c(link, opt);
+  c.connect();
+  EXPECT_EQ(c.log_toc().size(), 4u);
+  EXPECT_GT(c.stats().resends, 0u);
+  EXPECT_FLOAT_EQ(static_cast<float>(c.write_param("pid.kp", 1.25)), 1.25f);
+}
+
+TEST(FirmwareClient, TocCacheByCrc) {
+  const auto dir = std::filesystem::temp_directory_path() / ("cf_toc_cache_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  auto fw = make_firmware();
+  ClientOptions opt;
+  opt.toc_cache_dir = dir.string();
+  {
+    EmulatorLink link(fw);
+    CrazyflieClient c(link, opt);
+    c.connect();
+    EXPECT_FALSE(c.log_toc_from_cache());
+  }
+  EmulatorLink link(fw);
+  CrazyflieClient c(link, opt);
+  const auto before = fw.stats().replies;
+  c.connect();
+  EXPECT_TRUE(c.log_toc_from_cache());
+  EXPECT_EQ(c.log_toc()[1].full_name(), "stateEstimate.z");
+  // Cached: no TOC item requests, only version, reset, 2 infos (+ link source).
+  EXPECT_EQ(fw.stats().replies - before, 5u);
+  // A different TOC (new CRC) is downloaded again.
+  fw.add_log_variable("extra", "v", logp::Type::kFloat);
+  EmulatorLink link2(fw);
+  CrazyflieClient c2(link2, opt);
+  c2.connect();
+  EXPECT_FALSE(c2.log_toc_from_cache());
+  EXPECT_EQ(c2.log_toc().size(), 5u);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(FirmwareClient, LogControlErrnos) {
+  auto fw = make_firmware();
+  std::vector<CrtpPacket> out;
+  fw.on_packet(logp::start_block_v2(9, 10), 0, out);  // unknown block
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(logp::decode_control_reply(out[0]).status, ENOENT);
+  out.clear();
+  fw.on_packet(logp::create_block_v2(1, {{99, logp::Type::kFloat, logp::Type::kFloat}})[0], 0, out);  // unknown var
+  EXPECT_EQ(logp::decode_control_reply(out[0]).status, ENOENT);
+  out.clear();
+  fw.on_packet(logp::create_block_v2(1, {{0, logp::Type::kFloat, logp::Type::kFloat}})[0], 0, out);
+  fw.on_packet(logp::create_block_v2(1, {{0, logp::Type::kFloat, logp::Type::kFloat}})[0], 0, out);
+  EXPECT_EQ(logp::decode_control_reply(out[0]).status, 0);
+  EXPECT_EQ(logp::decode_control_reply(out[1]).status, EEXIST);
+  out.clear();
+  // Truncated packets are counted, not answered.
+  fw.on_packet(CrtpPacket(port::kLog, 1, {logp::kCmdStartBlockV2, 1, 5}), 0, out);
+  fw.on_packet(CrtpPacket(port::kParam, 1, {1}), 0, out);
+  EXPECT_TRUE(out.empty());
+  EXPECT_EQ(fw.stats().malformed, 2u);
+}
+
+TEST(FirmwareClient, CommanderWatchdog) {
+  auto fw = make_firmware();
+  std::vector<CrtpPacket> out;
+  EXPECT_EQ(fw.commander(0).mode, FirmwareEmulator::CommanderOutput::Mode::kIdle);
+  fw.on_packet(commander::hover(0.1f, 0, 0, 0.4f), 1000, out);
+  EXPECT_EQ(fw.commander(1499).mode, FirmwareEmulator::CommanderOutput::Mode::kSetpoint);
+  EXPECT_EQ(fw.commander(1500).mode, FirmwareEmulator::CommanderOutput::Mode::kStabilize);
+  EXPECT_EQ(fw.commander(3000).mode, FirmwareEmulator::CommanderOutput::Mode::kShutdown);
+  // notify-setpoint-stop keeps the last setpoint valid for the given time.
+  fw.on_packet(commander::notify_setpoint_stop(1000), 1100, out);
+  EXPECT_EQ(fw.commander(2500).mode, FirmwareEmulator::CommanderOutput::Mode::kSetpoint);
+  fw.on_packet(commander::stop(), 2600, out);
+  EXPECT_EQ(fw.commander(2600).mode, FirmwareEmulator::CommanderOutput::Mode::kShutdown);
+  EXPECT_TRUE(out.empty());  // setpoints are not answered
+}
+
+TEST(FirmwareClient, OverUdpSockets) {
+  auto fw = make_firmware();
+  fw.set_log_value(1, 0.5);
+  UdpServer server(0);
+  std::atomic<bool> stop{false};
+  std::thread t([&] {
+    const auto t0 = std::chrono::steady_clock::now();
+    uint32_t last_tick = 0;
+    while (!stop) {
+      const auto now_ms = static_cast<uint32_t>(
+          std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - t0).count());
+      std::vector<CrtpPacket> out;
+      if (auto pk = server.receive(std::chrono::microseconds(1000))) fw.on_packet(*pk, now_ms, out);
+      if (now_ms != last_tick) fw.tick(now_ms, out), last_tick = now_ms;
+      for (auto& p : out) server.send(p);
+    }
+  });
+  {
+    UdpLink link(parse_uri("udp://127.0.0.1:" + std::to_string(server.port()) + "?handshake=1"));
+    CrazyflieClient c(link);
+    c.connect();
+    c.start_log_block({"stateEstimate.z"}, 10);
+    int n = 0;
+    const auto t0 = std::chrono::steady_clock::now();
+    while (std::chrono::steady_clock::now() - t0 < std::chrono::milliseconds(300)) {
+      if (auto s = c.poll(std::chrono::milliseconds(50))) {
+        EXPECT_FLOAT_EQ(static_cast<float>(s->values[0]), 0.5f);
+        ++n;
+      }
+    }
+    EXPECT_GE(n, 15);  // 100 Hz for 0.3 s, generous for a loaded machine
+    EXPECT_LE(n, 35);
+    // Garbage datagrams are counted by the server, not fatal.
+    const uint8_t junk[40] = {};
+    link.send_raw(junk, sizeof junk);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  stop = true;
+  t.join();
+  EXPECT_EQ(server.connects(), 1u);
+  EXPECT_EQ(server.disconnects(), 1u);
+  EXPECT_EQ(server.statistics().malformed, 1u);
+  // Port busy: a second server on the same port fails with a clear error.
+  try {
+    UdpServer again(server.port());
+    FAIL();
+  } catch (const LinkError& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot bind"), std::string::npos);
+  }
+}
+
+TEST(Links, MissingDevicesGiveClearErrors) {
+  // No Crazyradio / Crazyflie is attached to the test machine (or libusb cannot
+  // see one): opening must fail with a message naming the device, not crash.
+  for (const char* uri : {"radio://7/80/2M", "usb://7"}) {
+    try {
+      open_link(uri);
+      ADD_FAILURE() << uri;
+    } catch (const LinkError& e) {
+      const std::string w = e.what();
+      EXPECT_TRUE(w.find("no Crazy") != std::string::npos || w.find("libusb") != std::string::npos) << w;
+    }
+  }
+}
