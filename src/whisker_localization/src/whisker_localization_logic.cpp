@@ -1,0 +1,245 @@
+#include "whisker_localization/whisker_localization_logic.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "tactile_common/time.hpp"
+#include "whisker_localization/stage_sim.hpp"
+
+namespace whisker_localization {
+
+using tactile_common::ParamMap;
+
+namespace {
+
+double yaw_of(const geometry_msgs::msg::Quaternion& q) {
+  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+}
+
+geometry_msgs::msg::Pose to_pose(const Pose2& p) {
+  geometry_msgs::msg::Pose m;
+  m.position.x = p.x;
+  m.position.y = p.y;
+  m.position.z = 0.0;
+  m.orientation.x = 0.0;
+  m.orientation.y = 0.0;
+  m.orientation.z = std::sin(0.5 * p.theta);
+  m.orientation.w = std::cos(0.5 * p.theta);
+  return m;
+}
+
+}  // namespace
+
+void WhiskerLocalizationLogic::Params::validate() const {
+  beam.validate();
+  localizer.validate();
+  if (!(map_spacing > 0.0) || !std::isfinite(map_spacing))
+    throw std::invalid_argument("WhiskerLocalizationLogic.map_spacing: must be finite and > 0, got " + std::to_string(map_spacing));
+  if (!(fillet_radius > 0.0)) throw std::invalid_argument("WhiskerLocalizationLogic.fillet_radius: must be > 0, got " + std::to_string(fillet_radius));
+  if (!(leg > 0.0)) throw std::invalid_argument("WhiskerLocalizationLogic.leg: must be > 0, got " + std::to_string(leg));
+  if (!std::isfinite(prior_x) || !std::isfinite(prior_y) || !std::isfinite(prior_yaw))
+    throw std::invalid_argument("WhiskerLocalizationLogic.prior_x: prior must be finite");
+  if (!(contact_threshold >= 0.0)) throw std::invalid_argument("WhiskerLocalizationLogic.contact_threshold: must be >= 0, got " + std::to_string(contact_threshold));
+  if (!(max_odom_age_s > 0.0)) throw std::invalid_argument("WhiskerLocalizationLogic.max_odom_age_s: must be > 0, got " + std::to_string(max_odom_age_s));
+}
+
+ParamMap WhiskerLocalizationLogic::default_parameters() {
+  const Params d;
+  ParamMap m(kNodeName, "defaults");
+  m.set("beam.length", d.beam.length);                         // 002 Sec. V-A, L = 75 mm
+  m.set("beam.youngs_modulus", d.beam.youngs_modulus);         // 002 Sec. V-A, E = 52 GPa
+  m.set("beam.moment_of_inertia", d.beam.moment_of_inertia);   // 002 Sec. V-A, I = 5.555e-15 m^4
+  m.set("beam.taper_ratio", d.beam.taper_ratio);
+  m.set("beam.n_segments", static_cast<int64_t>(d.beam.n_segments));
+  m.set("contact_tolerance", d.localizer.contact_tolerance);
+  m.set("match_angle", d.localizer.match_angle);
+  m.set("epsilon", d.localizer.epsilon);                       // 002 eq. 24, 5 %
+  m.set("epsilon_samples", static_cast<int64_t>(d.localizer.epsilon_samples));
+  m.set("possibilistic", d.localizer.possibilistic);
+  m.set("slope_samples", static_cast<int64_t>(d.localizer.slope_samples));  // 002 Sec. VII-D, 2 to 5
+  m.set("min_clearance", d.localizer.min_clearance);
+  m.set("heading_samples", static_cast<int64_t>(d.localizer.heading_samples));
+  m.set("heading_spread", d.localizer.heading_spread);
+  m.set("prior_radius", d.localizer.prior_radius);
+  m.set("mode_radius", d.localizer.mode_radius);
+  m.set("refine_passes", static_cast<int64_t>(d.localizer.refine_passes));
+  m.set("map_file", d.map_file);
+  m.set("map_spacing", d.map_spacing);                         // 002 Sec. VII-B, 1 mm
+  m.set("fillet_radius", d.fillet_radius);
+  m.set("leg", d.leg);
+  m.set("use_prior", d.use_prior);
+  m.set("prior_x", d.prior_x);
+  m.set("prior_y", d.prior_y);
+  m.set("prior_yaw", d.prior_yaw);
+  m.set("contact_threshold", d.contact_threshold);
+  m.set("max_odom_age_s", d.max_odom_age_s);
+  return m;
+}
+
+WhiskerLocalizationLogic::Params WhiskerLocalizationLogic::params_from(const ParamMap& m) {
+  Params p;
+  auto to_int = [&](const char* key, int64_t lo, int64_t hi) {
+    const int64_t v = m.get_int(key);
+    if (v < lo || v > hi) throw m.error(key, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " + std::to_string(v));
+    return static_cast<int>(v);
+  };
+  p.beam.length = m.get_double("beam.length");
+  p.beam.youngs_modulus = m.get_double("beam.youngs_modulus");
+  p.beam.moment_of_inertia = m.get_double("beam.moment_of_inertia");
+  p.beam.taper_ratio = m.get_double("beam.taper_ratio");
+  p.beam.n_segments = to_int("beam.n_segments", 4, 100000);
+  p.localizer.contact_tolerance = m.get_double("contact_tolerance");
+  p.localizer.match_angle = m.get_double("match_angle");
+  p.localizer.epsilon = m.get_double("epsilon");
+  p.localizer.epsilon_samples = to_int("epsilon_samples", 1, 1000);
+  p.localizer.possibilistic = m.get_bool("possibilistic");
+  p.localizer.slope_samples = to_int("slope_samples", 2, 50);
+  p.localizer.min_clearance = m.get_double("min_clearance");
+  p.localizer.heading_samples = to_int("heading_samples", 1, 101);
+  p.localizer.heading_spread = m.get_double("heading_spread");
+  p.localizer.prior_radius = m.get_double("prior_radius");
+  p.localizer.mode_radius = m.get_double("mode_radius");
+  p.localizer.refine_passes = to_int("refine_passes", 0, 10);
+  p.map_file = m.get_string("map_file");
+  p.map_spacing = m.get_double("map_spacing");
+  p.fillet_radius = m.get_double("fillet_radius");
+  p.leg = m.get_double("leg");
+  p.use_prior = m.get_bool("use_prior");
+  p.prior_x = m.get_double("prior_x");
+  p.prior_y = m.get_double("prior_y");
+  p.prior_yaw = m.get_double("prior_yaw");
+  p.contact_threshold = m.get_double("contact_threshold");
+  p.max_odom_age_s = m.get_double("max_odom_age_s");
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    // "<Struct>.<field>: <reason>" -> parameter <field> (beam.* for BeamParams).
+    const std::string what = e.what();
+    const auto dot = what.find('.');
+    const auto colon = what.find(": ");
+    std::string key = what.substr(dot + 1, colon - dot - 1);
+    if (what.rfind("BeamParams", 0) == 0) key = "beam." + key;
+    throw m.error(key, colon == std::string::npos ? what : what.substr(colon + 2));
+  }
+  return p;
+}
+
+std::vector<std::vector<std::array<double, 2>>> load_map_file(const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const std::exception& e) {
+    throw std::runtime_error(path + ": cannot read map: " + e.what());
+  }
+  const YAML::Node pls = root["polylines"];
+  if (!pls || !pls.IsSequence() || pls.size() == 0) throw std::runtime_error(path + ": polylines: must be a non-empty list of polylines");
+  std::vector<std::vector<std::array<double, 2>>> out;
+  for (std::size_t i = 0; i < pls.size(); ++i) {
+    const std::string key = path + ": polylines[" + std::to_string(i) + "]";
+    if (!pls[i].IsSequence() || pls[i].size() < 2) throw std::runtime_error(key + ": must be a list of >= 2 [x, y] points");
+    std::vector<std::array<double, 2>> pl;
+    for (std::size_t j = 0; j < pls[i].size(); ++j) {
+      const YAML::Node p = pls[i][j];
+      if (!p.IsSequence() || p.size() != 2) throw std::runtime_error(key + "[" + std::to_string(j) + "]: must be [x, y]");
+      try {
+        pl.push_back({p[0].as<double>(), p[1].as<double>()});
+      } catch (const YAML::Exception&) {
+        throw std::runtime_error(key + "[" + std::to_string(j) + "]: x and y must be numbers");
+      }
+    }
+    out.push_back(std::move(pl));
+  }
+  return out;
+}
+
+WhiskerLocalizationLogic::WhiskerLocalizationLogic(const Params& params) : params_(params) {
+  params_.validate();
+  std::vector<std::vector<std::array<double, 2>>> polylines;
+  if (params_.map_file.empty()) {
+    polylines = {concave_corner_polyline(params_.fillet_radius, params_.leg, params_.map_spacing)};
+  } else {
+    polylines = load_map_file(params_.map_file);
+  }
+  try {
+    map_ = std::make_unique<BoundaryMap>(polylines, params_.map_spacing);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error((params_.map_file.empty() ? std::string("default map") : params_.map_file) + ": " + e.what());
+  }
+  solver_ = std::make_unique<ElasticaSolver>(params_.beam);
+  localizer_ = std::make_unique<PreimageLocalizer>(*map_, *solver_, params_.localizer);
+  if (params_.use_prior) localizer_->set_prior(Pose2{params_.prior_x, params_.prior_y, params_.prior_yaw});
+}
+
+void WhiskerLocalizationLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
+  ++stats_.odom_received;
+  const auto& p = msg.pose.pose;
+  const double yaw = yaw_of(p.orientation);
+  if (!std::isfinite(p.position.x) || !std::isfinite(p.position.y) || !std::isfinite(yaw)) {
+    ++stats_.dropped_nonfinite;
+    return;
+  }
+  odom_ = Pose2{p.position.x, p.position.y, yaw};
+  odom_stamp_ = tactile_common::from_stamp(msg.header.stamp);
+  have_odom_ = true;
+}
+
+WhiskerLocalizationLogic::Outputs WhiskerLocalizationLogic::on_moment(const geometry_msgs::msg::WrenchStamped& msg) {
+  Outputs out;
+  ++stats_.moments_received;
+  const double m0 = msg.wrench.torque.z;
+  if (!std::isfinite(m0)) {
+    ++stats_.dropped_nonfinite;
+    return out;
+  }
+  const int64_t stamp = tactile_common::from_stamp(msg.header.stamp);
+  if (have_last_ && stamp <= last_stamp_) {
+    ++stats_.dropped_out_of_order;
+    return out;
+  }
+  if (!have_odom_ || std::fabs(tactile_common::to_seconds(stamp - odom_stamp_)) > params_.max_odom_age_s) {
+    ++stats_.dropped_no_odom;
+    return out;
+  }
+  // Motion since the previous sample in the previous base frame (002 Sec. IV-D: T_local).
+  Pose2 motion;
+  if (have_last_) {
+    const double c = std::cos(last_odom_.theta), s = std::sin(last_odom_.theta);
+    const double dx = odom_.x - last_odom_.x, dy = odom_.y - last_odom_.y;
+    motion = Pose2{c * dx + s * dy, -s * dx + c * dy, wrap_angle(odom_.theta - last_odom_.theta)};
+  }
+  have_last_ = true;
+  last_stamp_ = stamp;
+  last_odom_ = odom_;
+  const bool contact = std::fabs(m0) >= params_.contact_threshold;
+  if (!contact) ++stats_.no_contact;
+  const PreimageLocalizer::StepResult r = localizer_->step(motion, contact ? m0 : 0.0);
+  stats_.resets = localizer_->resets();
+
+  tactile_msgs::msg::LocalizationResult res;
+  res.header.stamp = msg.header.stamp;
+  res.header.frame_id = kMapFrame;
+  res.contact_valid = r.contact && (r.geometry.cx != 0.0 || r.geometry.cy != 0.0);
+  res.contact_point.x = r.geometry.cx;  // whisker base frame
+  res.contact_point.y = r.geometry.cy;
+  res.contact_point.z = 0.0;
+  res.base_moment = m0;
+  geometry_msgs::msg::PoseArray set;
+  set.header = res.header;
+  for (const auto& q : localizer_->set().poses) set.poses.push_back(to_pose(q));
+  res.pose_set = set;
+  if (!localizer_->set().empty()) {
+    res.best_estimate = to_pose(r.best);
+    res.spread = r.spread;
+  } else {
+    res.spread = std::nan("");
+  }
+  out.result = std::move(res);
+  out.pose_set = std::move(set);
+  ++stats_.published;
+  return out;
+}
+
+}  // namespace whisker_localization

@@ -1,0 +1,160 @@
+// Node logic: parameters (repo config = defaults, errors), message handling,
+// bad input counted, and a closed loop against the tip-contact SITL.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+#include "tactile_common/time.hpp"
+#include "whisker_localization/stage_sim.hpp"
+#include "whisker_localization/whisker_localization_logic.hpp"
+
+using namespace whisker_localization;
+using tactile_common::ParamMap;
+
+namespace {
+
+nav_msgs::msg::Odometry odom(int64_t ns, const Pose2& p) {
+  nav_msgs::msg::Odometry o;
+  tactile_common::to_stamp(ns, o.header.stamp);
+  o.pose.pose.position.x = p.x;
+  o.pose.pose.position.y = p.y;
+  o.pose.pose.orientation.z = std::sin(0.5 * p.theta);
+  o.pose.pose.orientation.w = std::cos(0.5 * p.theta);
+  return o;
+}
+
+geometry_msgs::msg::WrenchStamped moment(int64_t ns, double m) {
+  geometry_msgs::msg::WrenchStamped w;
+  tactile_common::to_stamp(ns, w.header.stamp);
+  w.wrench.torque.z = m;
+  return w;
+}
+
+}  // namespace
+
+TEST(WhiskerLocalizationLogic, RepoConfigEqualsDefaults) {
+  const ParamMap d = WhiskerLocalizationLogic::default_parameters();
+  const ParamMap f = tactile_common::load_node_parameters(std::string(WHISKER_LOC_CONFIG_DIR) + "/whisker_localization.yaml",
+                                                          "whisker_localization", d);
+  for (const auto& [key, value] : d.values()) {
+    EXPECT_EQ(tactile_common::type_name(value), tactile_common::type_name(f.values().at(key))) << key;
+    EXPECT_TRUE(value == f.values().at(key)) << key;
+  }
+  const auto p = WhiskerLocalizationLogic::params_from(f);
+  EXPECT_DOUBLE_EQ(p.beam.moment_of_inertia, 5.555e-15);
+}
+
+TEST(WhiskerLocalizationLogic, BadParametersNameTheKey) {
+  ParamMap m = WhiskerLocalizationLogic::default_parameters();
+  m.set("beam.length", -1.0);
+  try {
+    WhiskerLocalizationLogic::params_from(m);
+    FAIL();
+  } catch (const tactile_common::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("beam.length"), std::string::npos) << e.what();
+  }
+  m = WhiskerLocalizationLogic::default_parameters();
+  m.set("epsilon", 2.0);
+  try {
+    WhiskerLocalizationLogic::params_from(m);
+    FAIL();
+  } catch (const tactile_common::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("epsilon"), std::string::npos) << e.what();
+  }
+  m = WhiskerLocalizationLogic::default_parameters();
+  m.set("slope_samples", int64_t{1});
+  EXPECT_THROW(WhiskerLocalizationLogic::params_from(m), tactile_common::ParamError);
+}
+
+TEST(WhiskerLocalizationLogic, MapFileErrorsNameFileAndKey) {
+  const std::string path = ::testing::TempDir() + "bad_map.yaml";
+  {
+    std::ofstream f(path);
+    f << "polylines:\n  - [[0.0, 0.0], [0.1, zero]]\n";
+  }
+  try {
+    load_map_file(path);
+    FAIL();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("polylines[0][1]"), std::string::npos) << e.what();
+  }
+  {
+    std::ofstream f(path);
+    f << "polylines:\n  - [[0.0, 0.0], [0.1, 0.0], [0.2, 0.05]]\n";
+  }
+  const auto pls = load_map_file(path);
+  ASSERT_EQ(pls.size(), 1u);
+  EXPECT_EQ(pls[0].size(), 3u);
+  EXPECT_THROW(load_map_file(path + ".missing"), std::runtime_error);
+  {
+    std::ofstream f(path);
+    f << "polylines: [";
+  }
+  EXPECT_THROW(load_map_file(path), std::runtime_error);  // truncated YAML
+}
+
+TEST(WhiskerLocalizationLogic, BadInputIsCountedAndDropped) {
+  WhiskerLocalizationLogic logic(WhiskerLocalizationLogic::params_from(WhiskerLocalizationLogic::default_parameters()));
+  EXPECT_FALSE(logic.on_moment(moment(1000, 1e-3)).result);  // no odometry yet
+  EXPECT_EQ(logic.stats().dropped_no_odom, 1u);
+  logic.on_odometry(odom(1000, Pose2{}));
+  EXPECT_FALSE(logic.on_moment(moment(2000, std::nan(""))).result);
+  EXPECT_EQ(logic.stats().dropped_nonfinite, 1u);
+  EXPECT_TRUE(logic.on_moment(moment(3000, 0.0)).result);  // no contact: published, empty set
+  EXPECT_EQ(logic.stats().no_contact, 1u);
+  EXPECT_FALSE(logic.on_moment(moment(3000, 1e-3)).result);  // same stamp
+  EXPECT_EQ(logic.stats().dropped_out_of_order, 1u);
+  EXPECT_FALSE(logic.on_moment(moment(int64_t{1000000000}, 1e-3)).result);  // odometry 1 s old
+  EXPECT_EQ(logic.stats().dropped_no_odom, 2u);
+}
+
+TEST(WhiskerLocalizationLogic, SweepAlongTheCornerLocalizesTheBase) {
+  // Table II sweep 03 through the node logic: odometry of the stage (in its
+  // own frame, starting at 0) and base moments from the tip-contact SITL.
+  ParamMap m = WhiskerLocalizationLogic::default_parameters();
+  const Table2Params t;
+  const double L = t.beam.length, attack = t.attack_deg * 3.14159265358979 / 180.0;
+  const double heading = -3.14159265358979 / 2 + attack;
+  const double reach = L - t.penetration / std::cos(attack);
+  Pose2 base{-0.012 - reach * std::cos(heading), -reach * std::sin(heading), heading};
+  m.set("use_prior", true);
+  m.set("prior_x", base.x);
+  m.set("prior_y", base.y);
+  m.set("prior_yaw", base.theta);
+  WhiskerLocalizationLogic logic(WhiskerLocalizationLogic::params_from(m));
+  const ElasticaSolver solver{BeamParams{}};
+  const BoundaryMap world({concave_corner_polyline(0.05, 0.15, 0.00005)}, 0.001);
+  const Pose2 motion{t.step * std::cos(-heading), t.step * std::sin(-heading), 0.0};
+  Pose2 stage{};  // the odometry frame starts at the stage origin
+  double err = 1.0;
+  std::size_t set_size = 0;
+  for (int k = 0; k < 40; ++k) {
+    if (k > 0) {
+      base = compose(base, motion);
+      stage = compose(stage, motion);
+    }
+    const WallContact wc = tip_wall_contact(solver, world, base);
+    ASSERT_TRUE(wc.contact && wc.ok);
+    const int64_t ns = 1000000 + k * 20000000LL;
+    logic.on_odometry(odom(ns, stage));
+    const auto out = logic.on_moment(moment(ns, wc.m0));
+    ASSERT_TRUE(out.result && out.pose_set);
+    EXPECT_EQ(out.result->pose_set.poses.size(), out.pose_set->poses.size());
+    EXPECT_EQ(out.result->header.frame_id, "map");
+    if (k >= 5) {
+      EXPECT_TRUE(out.result->contact_valid);
+      EXPECT_NEAR(out.result->contact_point.x, wc.shape.contact_x, 1e-3);
+    }
+    if (!out.pose_set->poses.empty()) {
+      err = std::hypot(out.result->best_estimate.position.x - base.x, out.result->best_estimate.position.y - base.y);
+      set_size = out.pose_set->poses.size();
+    }
+  }
+  std::printf("final error %.2f mm, set %zu poses\n", err * 1e3, set_size);
+  EXPECT_LT(err, 0.003);
+  EXPECT_LT(set_size, 50u);
+  EXPECT_EQ(logic.stats().published, 40u);
+}
