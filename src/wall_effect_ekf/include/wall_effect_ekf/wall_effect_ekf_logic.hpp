@@ -1,0 +1,86 @@
+// Node logic of wall_effect_ekf: IMU, optical flow, ToF and the rotor thrust
+// commands in, the wall estimate (distance, direction, height, covariance)
+// out at the filter rate (paper 004 eq. 20-25, 100 Hz). No rclcpp: the
+// rclcpp component and the standalone host both use this class.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+
+#include "sensor_msgs/msg/imu.hpp"
+#include "sensor_msgs/msg/range.hpp"
+#include "tactile_common/parameters.hpp"
+#include "tactile_msgs/msg/optical_flow.hpp"
+#include "tactile_msgs/msg/thrust_command.hpp"
+#include "tactile_msgs/msg/wall_estimate.hpp"
+#include "wall_effect_ekf/wall_ekf.hpp"
+
+namespace wall_effect_ekf {
+
+class WallEffectEkfLogic {
+ public:
+  static constexpr const char* kNodeName = "wall_effect_ekf";
+  static constexpr const char* kImuTopic = "/imu";                     // sensor_msgs/msg/Imu
+  static constexpr const char* kFlowTopic = "/flow";                   // tactile_msgs/msg/OpticalFlow
+  static constexpr const char* kRangeTopic = "/tof";                   // sensor_msgs/msg/Range (downward)
+  static constexpr const char* kThrustTopic = "/thrust_command";       // tactile_msgs/msg/ThrustCommand
+  static constexpr const char* kOutputTopic = "/wall_effect/estimate"; // tactile_msgs/msg/WallEstimate
+
+  struct Params {
+    EkfParams ekf;
+    double rate_hz = 100.0;          ///< filter rate (004: 100 Hz); ekf.dt = 1 / rate_hz
+    /// wall_detected: y_hat below this and sigma_y below detection_sigma.
+    /// 004: estimates reliable within 20 cm; the FSM's d_dagger = 20 cm.
+    double detection_range = 0.25;   ///< [m] (choice, a little beyond d_dagger)
+    double detection_sigma = 0.05;   ///< [m] (choice)
+    double max_input_age_s = 0.1;    ///< thrust/IMU older than this: no step (choice)
+    uint64_t min_flow_quality = 1;   ///< flow samples below this quality are dropped
+    void validate() const;
+  };
+
+  struct Stats {
+    uint64_t imu = 0, flow = 0, range = 0, thrust = 0, published = 0;
+    uint64_t dropped_nonfinite = 0;       ///< NaN/inf in any input
+    uint64_t dropped_bad_thrust = 0;      ///< rotor_thrust without 4 entries or negative
+    uint64_t dropped_low_quality = 0;     ///< flow below min_flow_quality
+    uint64_t dropped_out_of_range = 0;    ///< ToF +-inf (no return / too close)
+    uint64_t ticks_without_input = 0;     ///< no thrust or IMU yet, or stale (no step, nothing published)
+    uint64_t ticks_without_imu = 0;       ///< predicted only: no IMU sample since the last tick
+  };
+
+  static tactile_common::ParamMap default_parameters();
+  static Params params_from(const tactile_common::ParamMap& map);
+
+  explicit WallEffectEkfLogic(const Params& params);
+
+  void on_imu(const sensor_msgs::msg::Imu& msg);
+  void on_flow(const tactile_msgs::msg::OpticalFlow& msg);
+  void on_range(const sensor_msgs::msg::Range& msg);
+  void on_thrust(const tactile_msgs::msg::ThrustCommand& msg);
+  /// Filter step at 1 / rate_hz: predict with the latest thrusts, update with
+  /// the mean IMU sample since the last tick and any new flow / ToF sample.
+  std::optional<tactile_msgs::msg::WallEstimate> on_timer(int64_t now_ns);
+
+  int64_t period_ns() const;
+  const Stats& stats() const { return stats_; }
+  const Params& params() const { return params_; }
+  const WallEkf& ekf() const { return ekf_; }
+
+ private:
+  Params params_;
+  WallEkf ekf_;
+  Stats stats_;
+  bool started_ = false;
+  Vec4 thrust_ = Vec4::Zero();
+  bool have_thrust_ = false;
+  int64_t thrust_ns_ = 0, imu_ns_ = 0;
+  bool have_imu_ = false;
+  Vec3 acc_sum_ = Vec3::Zero(), gyro_sum_ = Vec3::Zero();
+  int imu_count_ = 0;
+  bool flow_new_ = false;
+  Vec2 flow_ = Vec2::Zero();
+  bool range_new_ = false;
+  double range_ = 0.0;
+};
+
+}  // namespace wall_effect_ekf

@@ -1,0 +1,232 @@
+#include "wall_effect_ekf/wall_effect_ekf_logic.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "tactile_common/time.hpp"
+
+namespace wall_effect_ekf {
+
+using tactile_common::ParamMap;
+
+namespace {
+
+/// Every double parameter of the node and where it lives in Params.
+std::vector<std::pair<std::string, double*>> doubles(WallEffectEkfLogic::Params& p) {
+  EkfParams& e = p.ekf;
+  VehicleParams& v = e.vehicle;
+  return {
+      {"rate_hz", &p.rate_hz},
+      {"detection_range", &p.detection_range},
+      {"detection_sigma", &p.detection_sigma},
+      {"max_input_age_s", &p.max_input_age_s},
+      {"vehicle.mass", &v.mass},
+      {"vehicle.rotor_offset", &v.rotor_offset},
+      {"vehicle.torque_coefficient", &v.torque_coefficient},
+      {"vehicle.linear_drag", &v.linear_drag},
+      {"vehicle.max_rotor_thrust", &v.max_rotor_thrust},
+      {"proximity.rotor_radius", &v.proximity.rotor_radius},
+      {"proximity.a1", &v.proximity.a1},
+      {"proximity.b1", &v.proximity.b1},
+      {"proximity.a2", &v.proximity.a2},
+      {"proximity.b2", &v.proximity.b2},
+      {"ekf.q_distance", &e.q_distance},
+      {"ekf.q_height", &e.q_height},
+      {"ekf.q_velocity", &e.q_velocity},
+      {"ekf.q_attitude", &e.q_attitude},
+      {"ekf.q_rate", &e.q_rate},
+      {"ekf.r_accel", &e.r_accel},
+      {"ekf.r_gyro", &e.r_gyro},
+      {"ekf.r_flow", &e.r_flow},
+      {"ekf.r_tof", &e.r_tof},
+      {"ekf.gate_chi2", &e.gate_chi2},
+      {"ekf.y_min", &e.y_min},
+      {"ekf.y_max", &e.y_max},
+      {"ekf.sigma_y_init", &e.sigma_y_init},
+      {"ekf.sigma_yaw_init", &e.sigma_yaw_init},
+      {"ekf.sigma_y_max", &e.sigma_y_max},
+      {"ekf.sigma_attitude_max", &e.sigma_attitude_max},
+      {"ekf.min_height", &e.min_height},
+      {"ekf.reacquire_accel", &e.reacquire_accel},
+      {"ekf.reacquire_angle", &e.reacquire_angle},
+      {"ekf.reacquire_time_constant", &e.reacquire_time_constant},
+  };
+}
+
+bool finite3(const Vec3& v) { return v.allFinite(); }
+
+}  // namespace
+
+void WallEffectEkfLogic::Params::validate() const {
+  auto fail = [](const char* f, const char* why, double v) {
+    throw std::invalid_argument(std::string("WallEffectEkfLogic.") + f + ": " + why + ", got " + std::to_string(v));
+  };
+  if (!(rate_hz > 0.0) || !std::isfinite(rate_hz)) fail("rate_hz", "must be finite and > 0", rate_hz);
+  if (!(detection_range > 0.0) || !std::isfinite(detection_range)) fail("detection_range", "must be finite and > 0", detection_range);
+  if (!(detection_sigma > 0.0) || !std::isfinite(detection_sigma)) fail("detection_sigma", "must be finite and > 0", detection_sigma);
+  if (!(max_input_age_s > 0.0) || !std::isfinite(max_input_age_s)) fail("max_input_age_s", "must be finite and > 0", max_input_age_s);
+  ekf.validate();
+  if (std::abs(ekf.dt * rate_hz - 1.0) > 1e-9) fail("rate_hz", "ekf.dt must be 1 / rate_hz", rate_hz);
+}
+
+ParamMap WallEffectEkfLogic::default_parameters() {
+  Params d;
+  ParamMap m(kNodeName, "defaults");
+  for (const auto& [key, ptr] : doubles(d)) m.set(key, *ptr);
+  const Vec3& J = d.ekf.vehicle.inertia_diag;
+  m.set("vehicle.inertia_diag", std::vector<double>{J.x(), J.y(), J.z()});
+  m.set("min_flow_quality", static_cast<int64_t>(d.min_flow_quality));
+  return m;
+}
+
+WallEffectEkfLogic::Params WallEffectEkfLogic::params_from(const ParamMap& map) {
+  Params p;
+  auto fields = doubles(p);
+  for (auto& [key, ptr] : fields) *ptr = map.get_double(key);
+  const std::vector<double> J = map.get_double_array("vehicle.inertia_diag");
+  if (J.size() != 3) throw map.error("vehicle.inertia_diag", "must have 3 entries, got " + std::to_string(J.size()));
+  p.ekf.vehicle.inertia_diag = Vec3(J[0], J[1], J[2]);
+  const int64_t q = map.get_int("min_flow_quality");
+  if (q < 0 || q > 255) throw map.error("min_flow_quality", "must be in [0, 255], got " + std::to_string(q));
+  p.min_flow_quality = static_cast<uint64_t>(q);
+  p.ekf.dt = 1.0 / p.rate_hz;
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    // Name the parameter: the message starts with "<Struct>.<field>:".
+    const std::string what = e.what();
+    const std::string field = what.substr(0, what.find(':'));
+    const std::string leaf = field.substr(field.rfind('.') + 1);
+    std::string key = "vehicle.inertia_diag";
+    for (const auto& f : fields) {
+      const std::string& k = f.first;
+      if (k.size() >= leaf.size() && k.compare(k.size() - leaf.size(), leaf.size(), leaf) == 0 &&
+          (k.size() == leaf.size() || k[k.size() - leaf.size() - 1] == '.')) {
+        key = k;
+        break;
+      }
+    }
+    throw map.error(key, what);
+  }
+  return p;
+}
+
+WallEffectEkfLogic::WallEffectEkfLogic(const Params& params)
+    : params_((params.validate(), params)), ekf_(params.ekf) {}
+
+int64_t WallEffectEkfLogic::period_ns() const { return tactile_common::from_seconds(1.0 / params_.rate_hz); }
+
+void WallEffectEkfLogic::on_imu(const sensor_msgs::msg::Imu& msg) {
+  ++stats_.imu;
+  const Vec3 a(msg.linear_acceleration.x, msg.linear_acceleration.y, msg.linear_acceleration.z);
+  const Vec3 w(msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z);
+  if (!finite3(a) || !finite3(w)) {
+    ++stats_.dropped_nonfinite;
+    return;
+  }
+  acc_sum_ += a;
+  gyro_sum_ += w;
+  ++imu_count_;
+  have_imu_ = true;
+  imu_ns_ = tactile_common::from_stamp(msg.header.stamp);
+}
+
+void WallEffectEkfLogic::on_flow(const tactile_msgs::msg::OpticalFlow& msg) {
+  ++stats_.flow;
+  if (!std::isfinite(msg.flow_x) || !std::isfinite(msg.flow_y)) {
+    ++stats_.dropped_nonfinite;
+    return;
+  }
+  if (msg.quality < params_.min_flow_quality) {
+    ++stats_.dropped_low_quality;
+    return;
+  }
+  flow_ = Vec2(msg.flow_x, msg.flow_y);
+  flow_new_ = true;
+}
+
+void WallEffectEkfLogic::on_range(const sensor_msgs::msg::Range& msg) {
+  ++stats_.range;
+  if (std::isnan(msg.range)) {
+    ++stats_.dropped_nonfinite;
+    return;
+  }
+  if (std::isinf(msg.range)) {  // REP-117: no return / too close
+    ++stats_.dropped_out_of_range;
+    return;
+  }
+  range_ = msg.range;
+  range_new_ = true;
+}
+
+void WallEffectEkfLogic::on_thrust(const tactile_msgs::msg::ThrustCommand& msg) {
+  ++stats_.thrust;
+  if (msg.rotor_thrust.size() != 4) {
+    ++stats_.dropped_bad_thrust;
+    return;
+  }
+  Vec4 t;
+  for (int i = 0; i < 4; ++i) t[i] = msg.rotor_thrust[static_cast<size_t>(i)];
+  if (!t.allFinite()) {
+    ++stats_.dropped_nonfinite;
+    return;
+  }
+  if (t.minCoeff() < 0.0) {
+    ++stats_.dropped_bad_thrust;
+    return;
+  }
+  thrust_ = t;
+  have_thrust_ = true;
+  thrust_ns_ = tactile_common::from_stamp(msg.header.stamp);
+}
+
+std::optional<tactile_msgs::msg::WallEstimate> WallEffectEkfLogic::on_timer(int64_t now_ns) {
+  const int64_t max_age = tactile_common::from_seconds(params_.max_input_age_s);
+  if (!have_thrust_ || !have_imu_ || now_ns - thrust_ns_ > max_age || now_ns - imu_ns_ > max_age) {
+    ++stats_.ticks_without_input;
+    acc_sum_.setZero();
+    gyro_sum_.setZero();
+    imu_count_ = 0;
+    return std::nullopt;
+  }
+  if (!started_) {
+    // Start at the measured height (level), the wall at the far bound.
+    ekf_.reset(range_new_ ? range_ : 0.0);
+    started_ = true;
+  }
+  ekf_.predict(thrust_);                                   // 004 eq. 21-22
+  if (imu_count_ > 0) {
+    ekf_.update_accel(acc_sum_ / imu_count_);              // 004 eq. 23-25
+    ekf_.update_gyro(gyro_sum_ / imu_count_);
+  } else {
+    ++stats_.ticks_without_imu;
+  }
+  acc_sum_.setZero();
+  gyro_sum_.setZero();
+  imu_count_ = 0;
+  if (flow_new_) ekf_.update_flow(flow_);
+  if (range_new_) ekf_.update_tof(range_);
+  flow_new_ = range_new_ = false;
+
+  const WallState& x = ekf_.state();
+  const Mat3 C = ekf_.output_covariance();
+  tactile_msgs::msg::WallEstimate out;
+  tactile_common::to_stamp(now_ns, out.header.stamp);
+  out.header.frame_id = "base_link";
+  out.distance = x.y;
+  out.direction = x.wall_direction();
+  out.height = x.z;
+  out.velocity.x = x.v.x();
+  out.velocity.y = x.v.y();
+  out.velocity.z = x.v.z();
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) out.covariance[static_cast<size_t>(3 * r + c)] = C(r, c);
+  out.wall_detected = x.y < params_.detection_range && std::sqrt(C(0, 0)) < params_.detection_sigma;
+  ++stats_.published;
+  return out;
+}
+
+}  // namespace wall_effect_ekf

@@ -1,0 +1,149 @@
+// Node logic of wall_effect_ekf: parameters (repo config = defaults, errors
+// name the key), input validation counted in Stats, staleness, and a stream of
+// messages generated from the model near a wall giving a detected wall.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "tactile_common/time.hpp"
+#include "wall_effect_ekf/wall_effect_ekf_logic.hpp"
+
+using namespace wall_effect_ekf;
+using tactile_common::ParamMap;
+
+namespace {
+
+sensor_msgs::msg::Imu imu(int64_t ns, const Vec3& a, const Vec3& w) {
+  sensor_msgs::msg::Imu m;
+  tactile_common::to_stamp(ns, m.header.stamp);
+  m.linear_acceleration.x = a.x();
+  m.linear_acceleration.y = a.y();
+  m.linear_acceleration.z = a.z();
+  m.angular_velocity.x = w.x();
+  m.angular_velocity.y = w.y();
+  m.angular_velocity.z = w.z();
+  return m;
+}
+tactile_msgs::msg::ThrustCommand thrust(int64_t ns, const Vec4& t) {
+  tactile_msgs::msg::ThrustCommand m;
+  tactile_common::to_stamp(ns, m.header.stamp);
+  m.total_thrust = t.sum();
+  m.rotor_thrust = {t[0], t[1], t[2], t[3]};
+  return m;
+}
+
+}  // namespace
+
+TEST(WallEffectEkfLogic, RepoConfigEqualsDefaults) {
+  const ParamMap d = WallEffectEkfLogic::default_parameters();
+  const ParamMap f = tactile_common::load_node_parameters("../../config/wall_effect_ekf.yaml", "/wall_effect_ekf", d);
+  for (const auto& [key, value] : d.values()) {
+    ASSERT_TRUE(f.has(key)) << key;
+    EXPECT_EQ(f.origin(key), "../../config/wall_effect_ekf.yaml") << key << " not set in the config file";
+    EXPECT_TRUE(value == f.values().at(key)) << key;
+  }
+  EXPECT_NO_THROW(WallEffectEkfLogic::params_from(f));
+}
+
+TEST(WallEffectEkfLogic, BadParametersNameTheKey) {
+  ParamMap m = WallEffectEkfLogic::default_parameters();
+  m.set("ekf.r_flow", -1.0);
+  try {
+    WallEffectEkfLogic::params_from(m);
+    FAIL();
+  } catch (const tactile_common::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("ekf.r_flow"), std::string::npos) << e.what();
+  }
+  m = WallEffectEkfLogic::default_parameters();
+  m.set("proximity.b2", 1.5);
+  try {
+    WallEffectEkfLogic::params_from(m);
+    FAIL();
+  } catch (const tactile_common::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("proximity.b2"), std::string::npos) << e.what();
+  }
+  m = WallEffectEkfLogic::default_parameters();
+  m.set("vehicle.inertia_diag", std::vector<double>{1e-3, 1e-3});
+  EXPECT_THROW(WallEffectEkfLogic::params_from(m), tactile_common::ParamError);
+}
+
+TEST(WallEffectEkfLogic, BadInputIsCountedAndDropped) {
+  WallEffectEkfLogic logic(WallEffectEkfLogic::params_from(WallEffectEkfLogic::default_parameters()));
+  logic.on_imu(imu(0, Vec3(0, NAN, 9.8), Vec3::Zero()));
+  tactile_msgs::msg::ThrustCommand t = thrust(0, Vec4::Constant(0.7));
+  t.rotor_thrust.pop_back();
+  logic.on_thrust(t);
+  logic.on_thrust(thrust(0, Vec4(0.7, -0.1, 0.7, 0.7)));
+  tactile_msgs::msg::OpticalFlow f;
+  f.flow_x = NAN;
+  logic.on_flow(f);
+  f.flow_x = 0.0;
+  f.quality = 0;
+  logic.on_flow(f);
+  sensor_msgs::msg::Range r;
+  r.range = INFINITY;
+  logic.on_range(r);
+  // Nothing valid yet: no step, no output.
+  EXPECT_FALSE(logic.on_timer(10'000'000).has_value());
+  const auto& s = logic.stats();
+  EXPECT_EQ(s.dropped_nonfinite, 2u);
+  EXPECT_EQ(s.dropped_bad_thrust, 2u);
+  EXPECT_EQ(s.dropped_low_quality, 1u);
+  EXPECT_EQ(s.dropped_out_of_range, 1u);
+  EXPECT_EQ(s.ticks_without_input, 1u);
+  EXPECT_EQ(s.published, 0u);
+}
+
+TEST(WallEffectEkfLogic, StaleInputsStopTheFilter) {
+  WallEffectEkfLogic logic(WallEffectEkfLogic::params_from(WallEffectEkfLogic::default_parameters()));
+  logic.on_thrust(thrust(0, Vec4::Constant(0.28 * kGravity / 4)));
+  logic.on_imu(imu(0, Vec3(0, 0, kGravity), Vec3::Zero()));
+  EXPECT_TRUE(logic.on_timer(10'000'000).has_value());
+  EXPECT_FALSE(logic.on_timer(200'000'000).has_value());  // 0.2 s > max_input_age_s
+  EXPECT_EQ(logic.stats().ticks_without_input, 1u);
+}
+
+TEST(WallEffectEkfLogic, DetectsAWallFromModelMessages) {
+  // A vehicle hovering level 0.16 m from a wall on its right (body -y):
+  // the messages the simulator would send, generated from the model.
+  const auto params = WallEffectEkfLogic::params_from(WallEffectEkfLogic::default_parameters());
+  WallEffectEkfLogic logic(params);
+  WallState truth;
+  truth.y = 0.16;
+  truth.z = 0.8;
+  const VehicleParams& v = params.ekf.vehicle;
+  // Thrusts that balance the near-wall roll torque and carry the weight (eq. 36 with B of eq. 8).
+  Mat4 M;
+  M.topRows<3>() = torque_matrix(truth.y, truth.R, v);
+  M.row(3).setOnes();
+  const Vec4 T = M.fullPivLu().solve(Vec4(0, 0, 0, v.mass * kGravity / rotor_wrench(Vec4::Constant(0.25), truth.y, truth.R, v).force_wall.z()));
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::optional<tactile_msgs::msg::WallEstimate> last;
+  for (int k = 0; k < 300; ++k) {  // 3 s
+    const int64_t ns = static_cast<int64_t>(k) * 10'000'000;
+    logic.on_thrust(thrust(ns, T));
+    for (int j = 0; j < 5; ++j)
+      logic.on_imu(imu(ns, predict_accel(truth, T, v) + 0.04 * Vec3(n(rng), n(rng), n(rng)), 0.003 * Vec3(n(rng), n(rng), n(rng))));
+    tactile_msgs::msg::OpticalFlow f;
+    f.flow_x = 0.02 * n(rng);
+    f.flow_y = 0.02 * n(rng);
+    f.quality = 200;
+    logic.on_flow(f);
+    if (k % 2 == 0) {
+      sensor_msgs::msg::Range r;
+      r.range = truth.z + 0.003 * n(rng);
+      logic.on_range(r);
+    }
+    last = logic.on_timer(ns);
+    ASSERT_TRUE(last.has_value());
+  }
+  EXPECT_TRUE(last->wall_detected);
+  EXPECT_NEAR(last->distance, 0.16, 0.015);
+  EXPECT_NEAR(last->direction, -M_PI / 2, 0.2);  // the wall is on the right
+  EXPECT_NEAR(last->height, 0.8, 0.02);
+  EXPECT_GT(last->covariance[0], 0.0);
+  EXPECT_EQ(last->covariance[1], last->covariance[3]);
+  EXPECT_EQ(logic.stats().published, 300u);
+}
