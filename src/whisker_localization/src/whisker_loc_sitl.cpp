@@ -1,74 +1,29 @@
 // whisker_loc_sitl: runs the paper's bench protocols (002 Table I contact
 // estimation, Table II sweep localization) on the linear-stage SITL and
-// writes metrics.json. These are not vehicle flights, so they run here and
-// not under `tactile sim`.
+// writes metrics.json (same as `tactile stage`).
 //
 //   whisker_loc_sitl SCENARIO.yaml --out DIR [--seed N]
-#include <yaml-cpp/yaml.h>
-
-#include <cmath>
-#include <cstdio>
+#include <cstdlib>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <iostream>
-#include <nlohmann/json.hpp>
-#include <stdexcept>
+#include <optional>
 #include <string>
 
-#include "whisker_localization/stage_sim.hpp"
-
-using namespace whisker_localization;
-using nlohmann::json;
-
-namespace {
-
-struct Reader {
-  std::string file;
-  YAML::Node root;
-  double num(const YAML::Node& n, const std::string& path, double def) const {
-    if (!n || n.IsNull()) return def;
-    try {
-      return n.as<double>();
-    } catch (const YAML::Exception&) {
-      throw std::runtime_error(file + ": " + path + ": must be a number");
-    }
-  }
-  std::vector<double> nums(const YAML::Node& n, const std::string& path, const std::vector<double>& def,
-                           double scale) const {
-    if (!n || n.IsNull()) return def;
-    if (!n.IsSequence()) throw std::runtime_error(file + ": " + path + ": must be a list of numbers");
-    std::vector<double> v;
-    for (std::size_t i = 0; i < n.size(); ++i) v.push_back(num(n[i], path + "[" + std::to_string(i) + "]", 0.0) * scale);
-    return v;
-  }
-  bool flag(const YAML::Node& n, const std::string& path, bool def) const {
-    if (!n || n.IsNull()) return def;
-    try {
-      return n.as<bool>();
-    } catch (const YAML::Exception&) {
-      throw std::runtime_error(file + ": " + path + ": must be true or false");
-    }
-  }
-};
-
-json number(double v) { return std::isfinite(v) ? json(v) : json(nullptr); }
-
-}  // namespace
+#include "whisker_localization/protocols.hpp"
 
 int main(int argc, char** argv) {
   std::string scenario, out;
-  long long seed_override = -1;
+  std::optional<uint64_t> seed;
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--out") && i + 1 < argc) {
       out = argv[++i];
     } else if (!std::strcmp(argv[i], "--seed") && i + 1 < argc) {
-      seed_override = std::atoll(argv[++i]);
+      seed = std::strtoull(argv[++i], nullptr, 10);
     } else if (argv[i][0] != '-' && scenario.empty()) {
       scenario = argv[i];
     } else {
-      std::cerr << "usage: whisker_loc_sitl SCENARIO.yaml --out DIR [--seed N]\n";
-      return 2;
+      scenario.clear();
+      break;
     }
   }
   if (scenario.empty() || out.empty()) {
@@ -76,94 +31,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    Reader r{scenario, {}};
-    try {
-      r.root = YAML::LoadFile(scenario);
-    } catch (const std::exception& e) {
-      throw std::runtime_error(scenario + ": cannot read scenario: " + e.what());
-    }
-    const std::string protocol = r.root["protocol"] ? r.root["protocol"].as<std::string>() : "";
-    const uint64_t seed = seed_override >= 0 ? static_cast<uint64_t>(seed_override)
-                                             : static_cast<uint64_t>(r.num(r.root["seed"], "seed", 1.0));
-    MomentNoise noise;
-    const YAML::Node nz = r.root["noise"];
-    noise.relative = r.num(nz ? nz["relative"] : YAML::Node(), "noise.relative", noise.relative);
-    noise.absolute = r.num(nz ? nz["absolute"] : YAML::Node(), "noise.absolute", noise.absolute);
-    json m;
-    m["scenario"] = r.root["name"] ? r.root["name"].as<std::string>() : scenario;
-    m["protocol"] = protocol;
-    m["seed"] = seed;
-    if (protocol == "table1") {
-      Table1Params p;
-      p.noise = noise;
-      p.seed = seed;
-      const YAML::Node t = r.root["table1"];
-      p.contacts = r.nums(t ? t["contacts_mm"] : YAML::Node(), "table1.contacts_mm", p.contacts, 1e-3);
-      p.displacements = r.nums(t ? t["displacements_mm"] : YAML::Node(), "table1.displacements_mm", p.displacements, 1e-3);
-      p.trials = static_cast<int>(r.num(t ? t["trials"] : YAML::Node(), "table1.trials", p.trials));
-      json rows = json::array();
-      for (const auto& row : run_table1(p)) {
-        rows.push_back({{"p_x_mm", row.p_x * 1e3},
-                        {"t_y_mm", row.t_y * 1e3},
-                        {"m0_mNm", row.m0 * 1e3},
-                        {"phi_a_rad", row.phi_a},
-                        {"ours_distance_mm", number(row.ours_mean * 1e3)},
-                        {"ours_error_pct", number(row.ours_error_pct)},
-                        {"baseline_distance_mm", row.baseline_mean * 1e3},
-                        {"baseline_error_pct", row.baseline_error_pct},
-                        {"ours_failures", row.ours_failures}});
-      }
-      m["whisker_localization"] = {{"table1", rows}, {"trials", p.trials}, {"noise_relative", noise.relative},
-                                   {"noise_absolute_Nm", noise.absolute}};
-    } else if (protocol == "table2") {
-      Table2Params p;
-      p.noise = noise;
-      p.seed = seed;
-      p.bounded_noise = r.flag(nz ? nz["bounded"] : YAML::Node(), "noise.bounded", false);
-      const YAML::Node t = r.root["table2"];
-      p.sweep_starts = r.nums(t ? t["sweep_starts_mm"] : YAML::Node(), "table2.sweep_starts_mm", p.sweep_starts, 1e-3);
-      p.steps = static_cast<int>(r.num(t ? t["steps"] : YAML::Node(), "table2.steps", p.steps));
-      p.step = r.num(t ? t["step_mm"] : YAML::Node(), "table2.step_mm", p.step * 1e3) * 1e-3;
-      p.fillet_radius = r.num(t ? t["fillet_radius_mm"] : YAML::Node(), "table2.fillet_radius_mm", p.fillet_radius * 1e3) * 1e-3;
-      p.attack_deg = r.num(t ? t["attack_deg"] : YAML::Node(), "table2.attack_deg", p.attack_deg);
-      p.penetration = r.num(t ? t["penetration_mm"] : YAML::Node(), "table2.penetration_mm", p.penetration * 1e3) * 1e-3;
-      json variants = json::object();
-      const bool both = r.flag(t ? t["compare_possibilistic"] : YAML::Node(), "table2.compare_possibilistic", true);
-      for (bool poss : {false, true}) {
-        if (poss && !both) break;
-        p.localizer.possibilistic = poss;
-        json sweeps = json::array();
-        double mean = 0.0;
-        const auto rows = run_table2(p);
-        for (const auto& s : rows) {
-          sweeps.push_back({{"sweep_id", s.id},
-                            {"mean_localization_error_mm", number(s.mean_error_mm)},
-                            {"std_localization_error_mm", number(s.std_error_mm)},
-                            {"localized_steps", s.localized_steps},
-                            {"localizing_steps", s.localizing_steps},
-                            {"localized_mean_error_mm", number(s.localized_mean_error_mm)},
-                            {"final_error_mm", number(s.final_error_mm)},
-                            {"final_spread_mm", number(s.final_spread_mm)},
-                            {"final_set_size", s.final_set_size},
-                            {"truth_kept_fraction", s.truth_kept_fraction},
-                            {"resets", s.resets},
-                            {"contact_failures", s.contact_failures}});
-          mean += s.mean_error_mm / static_cast<double>(rows.size());
-        }
-        variants[poss ? "possibilistic" : "deterministic"] = {{"sweeps", sweeps},
-                                                              {"mean_localization_error_mm", number(mean)}};
-      }
-      m["whisker_localization"] = {{"table2", variants},
-                                   {"noise_relative", noise.relative},
-                                   {"noise_bounded", p.bounded_noise},
-                                   {"epsilon", p.localizer.epsilon}};
-    } else {
-      throw std::runtime_error(scenario + ": protocol: must be \"table1\" or \"table2\", got \"" + protocol + "\"");
-    }
-    std::filesystem::create_directories(out);
-    std::ofstream f(std::filesystem::path(out) / "metrics.json");
-    f << m.dump(2) << "\n";
-    std::cout << m.dump(2) << "\n";
+    std::cout << whisker_localization::run_bench_protocol_to(scenario, out, seed).dump(2) << "\n";
   } catch (const std::exception& e) {
     std::cerr << "whisker_loc_sitl: " << e.what() << "\n";
     return 1;
