@@ -16,11 +16,12 @@ source .venv/bin/activate
 out="$here/build/fuzz"
 mkdir -p "$out"
 export CC=clang CXX=clang++
-colcon build --packages-up-to whisker_driver tactile_msgs --build-base "$out/build" \
+colcon build --packages-up-to whisker_driver tactile_msgs crazyflie_bridge --build-base "$out/build" \
   --install-base "$out/install" --event-handlers console_cohesion- summary- \
   --cmake-args -DBUILD_TESTING=OFF -DTACTILE_BUILD_BENCHMARKS=OFF \
-  -DWHISKER_DRIVER_FUZZ=ON -DTACTILE_MSGS_FUZZ=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
-for h in "$out/build/whisker_driver/fuzz_frame_parser:512" "$out/build/tactile_msgs/fuzz_cdr:4096"; do
+  -DWHISKER_DRIVER_FUZZ=ON -DTACTILE_MSGS_FUZZ=ON -DCRAZYFLIE_BRIDGE_FUZZ=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+for h in "$out/build/whisker_driver/fuzz_frame_parser:512" "$out/build/tactile_msgs/fuzz_cdr:4096" \
+         "$out/build/crazyflie_bridge/fuzz_crtp:64"; do
   exe="${h%%:*}"; len="${h##*:}"
   corpus="$out/corpus/$(basename "$exe")"
   mkdir -p "$corpus"
