@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "tactile_cli/hardware.hpp"
 #include "tactile_cli/sim_run.hpp"
 #include "tactile_cli/whisker_demo.hpp"
 #include "tactile_cli/whisker_replay.hpp"
@@ -67,6 +68,25 @@ int main(int argc, char** argv) {
   sim_cmd->add_flag("!--no-png", sim.write_png, "do not draw topview.png");
   sim_cmd->add_flag("!--quiet", sim.progress, "no progress line");
 
+  tactile_cli::FlyOptions fly;
+  auto* fly_cmd = app.add_subcommand("fly", "whisker pipeline against a real or simulated Crazyflie (records a bag)");
+  fly_cmd->add_option("--uri", fly.uri, "radio://0/80/2M/E7E7E7E7E7, usb://0, udp://127.0.0.1:19850 (default: crazyflie_bridge.yaml)");
+  fly_cmd->add_option("--out", fly.out_dir, "output directory (bag/, metrics.json)")->required();
+  fly_cmd->add_option("--duration", fly.duration_s, "pipeline run time before the bridge lands [s]")->capture_default_str();
+  fly_cmd->add_option("--scenario", fly.scenario, "take node parameters and metrics.target from a scenario file");
+  fly_cmd->add_option("--sim", fly.sim_scenario, "fly the simulated Crazyflie of this scenario (in-process UDP server)");
+  fly_cmd->add_option("--sim-loss", fly.sim_loss, "injected UDP packet loss of the simulated Crazyflie [0, 1)");
+  fly_cmd->add_flag("!--no-bag", fly.write_bag, "do not record the bag");
+  tactile_cli::BenchOptions bench;
+  auto* bench_cmd = app.add_subcommand("bench", "whisker bench rig over serial: whisker_driver -> TDORC (records a bag)");
+  bench_cmd->add_option("--port", bench.left_port, "serial device of whisker 1 (text protocol)")->capture_default_str();
+  bench_cmd->add_option("--port2", bench.right_port, "serial device of whisker 2 (CSV protocol)");
+  bench_cmd->add_option("--out", bench.out_dir, "output directory (bag/, metrics.json)")->required();
+  bench_cmd->add_option("--duration", bench.duration_s, "[s]")->capture_default_str();
+  std::string scan_host = "127.0.0.1";
+  auto* scan_cmd = app.add_subcommand("scan", "list Crazyradios, Crazyflies on USB and simulated Crazyflies on UDP");
+  scan_cmd->add_option("--udp-host", scan_host, "host of simulated Crazyflies (ports 19850-19859)")->capture_default_str();
+
   CLI11_PARSE(app, argc, argv);
 
   try {
@@ -87,6 +107,23 @@ int main(int argc, char** argv) {
                     m["collisions"].get<size_t>(), m["real_time_factor"].get<double>());
       }
       std::printf("outputs in %s\n", sim.out_dir.c_str());
+    } else if (*fly_cmd || *bench_cmd || *scan_cmd) {
+      if (*scan_cmd) {
+        for (const auto& line : tactile_cli::run_scan(scan_host)) std::printf("%s\n", line.c_str());
+      } else if (*fly_cmd) {
+        fly.config_dir = config_dir;
+        const auto m = tactile_cli::run_fly(fly);
+        std::printf("tactile fly: %s, %.1f s, bridge %s, %llu log samples, link packets sent %llu lost %llu -> %s\n",
+                    m["uri"].get<std::string>().c_str(), m["wall_time_s"].get<double>(),
+                    m["bridge_mode"].get<std::string>().c_str(), m["log_samples"].get<unsigned long long>(),
+                    m["link_packets_sent"].get<unsigned long long>(), m["link_packets_lost"].get<unsigned long long>(),
+                    fly.out_dir.c_str());
+      } else {
+        bench.config_dir = config_dir;
+        const auto m = tactile_cli::run_bench(bench);
+        std::printf("tactile bench: %.1f s, %llu messages -> %s\n", m["wall_time_s"].get<double>(),
+                    m["bag_messages"].get<unsigned long long>(), bench.out_dir.c_str());
+      }
     } else if (*replay_cmd) {
       replay.config_dir = config_dir;
       const auto m = tactile_cli::run_replay(replay);

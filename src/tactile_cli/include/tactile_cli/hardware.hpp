@@ -1,0 +1,51 @@
+// `tactile fly`, `tactile bench`, `tactile scan`: the standalone host against
+// hardware (or the simulated Crazyflie), in wall-clock time.
+//
+//   fly    whisker pipeline (TDORC x2 -> tactile_depth -> whisker FSM) fed by
+//          crazyflie_bridge over a CRTP link (radio://, usb://, udp://), its
+//          hover setpoints sent back; every message recorded in a bag.
+//   bench  the whisker bench rig: whisker_driver (serial) -> TDORC per whisker,
+//          recorded in a bag.
+//   scan   Crazyradios, Crazyflies on USB, simulated Crazyflies on UDP.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace tactile_cli {
+
+struct FlyOptions {
+  std::string uri;              ///< cflib URI; overrides crazyflie_bridge.yaml's uri
+  std::string out_dir;
+  std::string config_dir;
+  std::string scenario;         ///< optional: node_parameters and metrics.target of a scenario
+  /// Fly the simulated Crazyflie of this scenario, started in-process on a
+  /// free UDP port (real sockets, wall-clock physics); implies `scenario`.
+  std::string sim_scenario;
+  double sim_loss = 0.0;        ///< injected UDP loss of the simulated Crazyflie (both directions)
+  double duration_s = 60.0;     ///< stop after this long (the safety chain then lands)
+  bool write_bag = true;
+  bool progress = true;
+};
+/// Runs until the duration elapsed and the bridge stopped the motors (at most
+/// duration + 15 s), or SIGINT. Writes bag/ and metrics.json (link_packets_sent,
+/// link_packets_lost, latency, bridge and pipeline counters; with sim_scenario
+/// also the simulator's ground-truth summary and collisions). Returns the metrics.
+nlohmann::json run_fly(const FlyOptions& options);
+
+struct BenchOptions {
+  std::string left_port = "/dev/ttyUSB0";   ///< whisker 1 (text protocol)
+  std::string right_port;                   ///< whisker 2 (CSV protocol); empty: left only
+  std::string out_dir;
+  std::string config_dir;
+  double duration_s = 60.0;
+  bool write_bag = true;
+};
+nlohmann::json run_bench(const BenchOptions& options);
+
+/// One line per device found ("uri  description").
+std::vector<std::string> run_scan(const std::string& udp_host);
+
+}  // namespace tactile_cli
