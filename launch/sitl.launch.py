@@ -1,0 +1,53 @@
+"""The bridge flies the simulated Crazyflie: crazyflie_sim_server (the SITL whiskered
+drone behind the firmware side of CRTP on UDP, wall-clock physics) plus the same
+container as radio.launch.py with the bridge on udp://127.0.0.1:<port>.
+
+    ros2 launch launch/sitl.launch.py scenario:=config/scenarios/whisker_darkness_rigid_fsm.yaml
+
+Any cflib-based tool (cfclient, scripts) can connect to the same simulated Crazyflie
+instead: udp://127.0.0.1:19850. The standalone host does the whole flight without ROS:
+
+    tactile fly --sim config/scenarios/whisker_darkness_rigid_fsm.yaml --out out/dark
+
+Note: the FSM's target comes from config/tactile_fsm.yaml here; `tactile fly --sim`
+also applies the scenario's node_parameters and metrics.target.
+"""
+
+import importlib.util
+import os
+
+from launch import LaunchDescription
+from launch.actions import DeclareLaunchArgument, ExecuteProcess
+from launch.substitutions import LaunchConfiguration, PathJoinSubstitution, PythonExpression
+from launch_ros.actions import ComposableNodeContainer
+from launch_ros.substitutions import FindPackagePrefix
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+CONFIG_DIR = os.path.join(HERE, '..', 'config')
+
+_spec = importlib.util.spec_from_file_location('radio_launch', os.path.join(HERE, 'radio.launch.py'))
+_radio = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(_radio)
+
+
+def generate_launch_description():
+    port = LaunchConfiguration('port')
+    server = ExecuteProcess(
+        cmd=[PathJoinSubstitution([FindPackagePrefix('crazyflie_bridge'), 'lib', 'crazyflie_bridge',
+                                   'crazyflie_sim_server']),
+             LaunchConfiguration('scenario'), '--port', port, '--seed', LaunchConfiguration('seed')],
+        output='screen')
+    uri = PythonExpression(["'udp://127.0.0.1:' + '", port, "'"])
+    return LaunchDescription([
+        DeclareLaunchArgument('scenario', default_value=os.path.join(
+            CONFIG_DIR, 'scenarios', 'whisker_darkness_rigid_fsm.yaml'),
+            description='scenario of the simulated Crazyflie (arena, vehicle, estimate)'),
+        DeclareLaunchArgument('port', default_value='19850', description='UDP port (19850 + N)'),
+        DeclareLaunchArgument('seed', default_value='-1', description="noise seed (-1: the scenario's)"),
+        server,
+        ComposableNodeContainer(
+            name='sitl_bridge_container', namespace='', package='rclcpp_components',
+            executable='component_container',
+            composable_node_descriptions=_radio.pipeline_nodes({'uri': uri}),
+            output='screen'),
+    ])
