@@ -47,6 +47,14 @@ void CrazyflieClient::dispatch(const CrtpPacket& pk) {
       s.names = it->second.names;
       logp::decode_values(d, it->second.types, s.values);
       s.received = std::chrono::steady_clock::now();
+      Block& b = it->second;
+      if (b.have_last && b.period_ms > 0) {
+        const uint32_t dt = (d.timestamp_ms - b.last_ts) & 0xFFFFFF;  // 24-bit wrap
+        const uint32_t slots = (dt + b.period_ms / 2) / b.period_ms;
+        if (slots > 1 && slots < 100000) stats_.log_missed += slots - 1;  // larger: firmware restart
+      }
+      b.have_last = true;
+      b.last_ts = d.timestamp_ms;
       pending_.push_back(std::move(s));
       ++stats_.log_samples;
     } catch (const CrtpError&) {
@@ -182,6 +190,7 @@ uint8_t CrazyflieClient::start_log_block(const std::vector<std::string>& names, 
       throw ClientError("creating log block " + std::to_string(id) + " failed: " + std::strerror(rep.status));
     }
   }
+  b.period_ms = period_ms;
   blocks_[id] = b;
   const auto rep = logp::decode_control_reply(request(logp::start_block_v2(id, period_ms), port::kLog,
                                                       logp::kChanSettings, {logp::kCmdStartBlockV2, id}, "log block start"));

@@ -44,6 +44,11 @@ AckStatus parse_ack(const uint8_t* in, size_t n, int arc) {
   return a;
 }
 
+std::optional<int> uplink_rssi(const AckStatus& a) {
+  if (a.ack && a.data.size() > 2 && (a.data[0] & 0xF3) == 0xF3 && a.data[1] == 0x01) return a.data[2];
+  return std::nullopt;
+}
+
 bool is_safelink_echo(const AckStatus& a) {
   return a.ack && a.data.size() == 3 && a.data[0] == 0xFF && a.data[1] == 0x05 && a.data[2] == 0x01;
 }

@@ -167,6 +167,10 @@ void CrazyradioLink::transfer(const std::vector<uint8_t>& out_bytes) {
   }
   lost_in_a_row_ = 0;
   ++stats_.acks;
+  if (const auto rssi = radio::uplink_rssi(ack)) {
+    stats_.uplink_rssi = *rssi;
+    ++stats_.rssi_reports;
+  }
   if (!ack.data.empty()) {
     auto pk = CrtpPacket::try_decode(ack.data.data(), ack.data.size());
     if (!pk) {
@@ -198,8 +202,12 @@ std::optional<CrtpPacket> CrazyradioLink::receive(std::chrono::milliseconds time
     ++stats_.null_sent;
     if (!in_.empty()) break;
     if (std::chrono::steady_clock::now() >= deadline) return std::nullopt;
-    // cflib: after 10 empty answers poll every 10 ms.
-    if (++empty > 10) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    // cflib: after 10 empty answers poll every 10 ms; rate_limit caps the poll rate.
+    if (uri_.rate_limit) {
+      std::this_thread::sleep_for(std::chrono::microseconds(1000000 / *uri_.rate_limit));
+    } else if (++empty > 10) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
   }
   CrtpPacket pk = in_.front();
   in_.pop_front();

@@ -275,6 +275,10 @@ TEST(Radio, AckStatusParsing) {
   EXPECT_EQ(s.retry, 3);
   EXPECT_TRUE(s.data.empty());
   EXPECT_FALSE(radio::parse_ack(nullptr, 0).ack);
+  // RSSI in an empty link-control ACK: header 0xF7 (0xF3 | safelink bit), 0x01, rssi.
+  const uint8_t rssi[] = {0x11, 0xF7, 0x01, 0x2D};
+  EXPECT_EQ(radio::uplink_rssi(radio::parse_ack(rssi, 4)), 45);
+  EXPECT_FALSE(radio::uplink_rssi(radio::parse_ack(a, 3)));
   const uint8_t echo[] = {0x01, 0xFF, 0x05, 0x01};
   EXPECT_TRUE(radio::is_safelink_echo(radio::parse_ack(echo, 4)));
 }

@@ -45,6 +45,7 @@ class EmulatorLink : public Link {
   std::string uri() const override { return "emulator://"; }
   uint32_t now_ms = 0;
   int drop_every = 0;
+  void inject(const CrtpPacket& pk) { in_.push_back(pk); }
 
  private:
   FirmwareEmulator& fw_;
@@ -125,6 +126,33 @@ TEST(FirmwareClient, RequestsSurvivePacketLoss) {
   EXPECT_EQ(c.log_toc().size(), 4u);
   EXPECT_GT(c.stats().resends, 0u);
   EXPECT_FLOAT_EQ(static_cast<float>(c.write_param("pid.kp", 1.25)), 1.25f);
+  EXPECT_EQ(c.stats().log_missed, 0u);
+}
+
+TEST(FirmwareClient, MissedLogPacketsCountedFromTimestamps) {
+  auto fw = make_firmware();
+  EmulatorLink link(fw);
+  CrazyflieClient c(link);
+  c.connect();
+  const uint8_t id = c.start_log_block({"stateEstimate.z"}, 10);
+  std::vector<CrtpPacket> ignored;
+  fw.on_packet(logp::stop_block(id), 0, ignored);  // only the hand-made packets below
+  // t = 100, 110, 140 (2 missing), 150; then a jump of ~4.6 h (more than 100000
+  // periods: a firmware restart, not counted) and the 24-bit wrap
+  // 0xFFFFFA -> 0x000004, which is one 10 ms period (nothing missing).
+  for (uint32_t t : {100u, 110u, 140u, 150u}) link.inject(logp::data_packet(id, t, {logp::Type::kFloat}, {0.5}));
+  int n = 0;
+  while (c.poll(std::chrono::milliseconds(1))) ++n;
+  EXPECT_EQ(n, 4);
+  EXPECT_EQ(c.stats().log_missed, 2u);
+  link.inject(logp::data_packet(id, 0xFFFFFAu, {logp::Type::kFloat}, {0.5}));
+  link.inject(logp::data_packet(id, 0x000004u, {logp::Type::kFloat}, {0.5}));
+  while (c.poll(std::chrono::milliseconds(1))) ++n;
+  EXPECT_EQ(n, 6);
+  EXPECT_EQ(c.stats().log_missed, 2u);
+  link.inject(logp::data_packet(id, 0x000022u, {logp::Type::kFloat}, {0.5}));  // 4 -> 34: 2 missing
+  c.poll(std::chrono::milliseconds(1));
+  EXPECT_EQ(c.stats().log_missed, 4u);
 }
 
 TEST(FirmwareClient, TocCacheByCrc) {

@@ -107,6 +107,7 @@ nlohmann::json run_fly(const FlyOptions& o) {
   const fs::path cache = dir / "toc_cache";
   fs::create_directories(cache);
   co.toc_cache_dir = cache.string();
+  if (sitl) co.reply_timeout = std::chrono::milliseconds(50);  // local UDP: answers within a few ms
 
   std::unique_ptr<BagRecorder> recorder;
   if (o.write_bag) {
@@ -170,10 +171,6 @@ nlohmann::json run_fly(const FlyOptions& o) {
   const auto cs = runner.client_stats();
   const auto ls = runner.logic_stats();
   const auto lat = runner.latency();
-  // Downlink loss: log packets the two blocks should have delivered minus what arrived.
-  const double expected = elapsed * (1000.0 / static_cast<double>(bridge_params.whisker_period_ms) +
-                                     1000.0 / static_cast<double>(bridge_params.state_period_ms));
-  const double lost_log = std::max(0.0, expected - static_cast<double>(cs.log_samples));
   nlohmann::json m;
   m["uri"] = bridge_params.uri;
   m["connect_s"] = connect_s;
@@ -183,8 +180,11 @@ nlohmann::json run_fly(const FlyOptions& o) {
   m["fsm_state"] = tactile_fsm::to_string(fsm->fsm().state());
   m["link_packets_sent"] = link.packets_sent;
   m["link_packets_received"] = link.packets_received;
-  m["link_packets_lost"] = static_cast<uint64_t>(std::llround(lost_log)) + link.ack_missing;
+  // Log packets missing from the firmware timestamps of each block (exact
+  // downlink loss) plus radio transfers never acknowledged.
+  m["link_packets_lost"] = cs.log_missed + link.ack_missing;
   m["link_ack_rate"] = link.ack_rate();
+  m["link_uplink_rssi"] = link.uplink_rssi;  // -dBm, -1: not reported (UDP)
   m["link_retries"] = link.retries;
   m["link_malformed"] = link.malformed;
   m["client_resends"] = cs.resends;

@@ -46,6 +46,9 @@ class CrazyflieClient {
     uint64_t log_samples = 0;
     uint64_t log_decode_errors = 0;  ///< data packets whose layout did not match (dropped)
     uint64_t log_unknown_block = 0;  ///< data for a block we did not create (dropped)
+    /// Log packets that never arrived: gaps in the firmware timestamps of
+    /// each block larger than its period (exact downlink loss of the log stream).
+    uint64_t log_missed = 0;
     uint64_t resends = 0;
     uint64_t other_packets = 0;      ///< packets no request waited for (console, late replies)
   };
@@ -94,6 +97,9 @@ class CrazyflieClient {
   struct Block {
     std::vector<std::string> names;
     std::vector<logp::Type> types;
+    uint32_t period_ms = 0;
+    bool have_last = false;
+    uint32_t last_ts = 0;
   };
   Link& link_;
   ClientOptions opt_;

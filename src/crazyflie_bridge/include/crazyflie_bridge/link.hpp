@@ -35,6 +35,8 @@ struct LinkStatistics {
   uint64_t ack_missing = 0;        ///< radio: transfers not acknowledged (after ARC retries)
   uint64_t retries = 0;            ///< radio: sum of the retry counts of the ACK status
   uint64_t safelink_out_of_sequence = 0;
+  int uplink_rssi = -1;            ///< radio: last RSSI reported in an ACK (-dBm), -1 if none
+  uint64_t rssi_reports = 0;
   uint64_t malformed = 0;          ///< datagrams that are not CRTP packets (dropped)
   uint64_t send_errors = 0;
   double ack_rate() const {

@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "crazyflie_bridge/uri.hpp"
@@ -58,6 +59,11 @@ struct AckStatus {
 };
 /// `arc` is what cflib reports as retries when the status byte is 0.
 AckStatus parse_ack(const uint8_t* in, size_t n, int arc = kDefaultArc);
+
+/// Uplink RSSI carried by an empty link-control ACK (cflib
+/// radio_link_statistics: data[0] & 0xF3 == 0xF3, data[1] == 0x01, RSSI =
+/// data[2], the magnitude of the dBm value); nullopt when the ACK has none.
+std::optional<int> uplink_rssi(const AckStatus& a);
 
 /// The safelink enable request and its expected echo: FF 05 01.
 constexpr std::array<uint8_t, 3> kSafelinkEnable{{0xFF, 0x05, 0x01}};
