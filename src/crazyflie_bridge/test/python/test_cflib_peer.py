@@ -125,3 +125,25 @@ def test_cflib_connects_logs_params_and_flies(sim, tmp_path):
         # 0.2 m/s for 2 s = 0.4 m; the velocity loop needs a few tenths of a second to reach it.
         assert 0.2 < x_end - x_hover < 0.5, (x_hover, x_end)
         assert abs(state[-1]['stateEstimate.z'] - state[-1]['sitl.truthZ']) < 0.1
+
+
+def test_cflib_scan_finds_simulated_crazyflie():
+    """cflib's UDP scan (null packet to 19850..19859) finds our server."""
+    p = None
+    for port in range(19859, 19849, -1):
+        p = subprocess.Popen([os.environ['CRAZYFLIE_SIM_SERVER'], SCENARIO, '--port', str(port), '--duration', '10'],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        line = p.stdout.readline()
+        if line.startswith('listening'):
+            break
+        p.communicate(timeout=10)
+        p = None
+    if p is None:
+        pytest.skip('UDP ports 19850-19859 all busy')
+    try:
+        cflib.crtp.init_drivers()
+        found = [uri for uri, _ in cflib.crtp.scan_interfaces()]
+        assert 'udp://127.0.0.1:%d' % port in found, found
+    finally:
+        p.terminate()
+        p.communicate(timeout=10)
