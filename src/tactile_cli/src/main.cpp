@@ -5,11 +5,13 @@
 #include <exception>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 
 #include "tactile_cli/hardware.hpp"
 #include "tactile_cli/sim_run.hpp"
 #include "tactile_cli/whisker_demo.hpp"
 #include "tactile_cli/whisker_replay.hpp"
+#include "whisker_localization/protocols.hpp"
 
 namespace {
 
@@ -86,8 +88,30 @@ int main(int argc, char** argv) {
   std::string scan_host = "127.0.0.1";
   auto* scan_cmd = app.add_subcommand("scan", "list Crazyradios, Crazyflies on USB and simulated Crazyflies on UDP");
   scan_cmd->add_option("--udp-host", scan_host, "host of simulated Crazyflies (ports 19850-19859)")->capture_default_str();
+  std::string stage_scenario, stage_out;
+  uint64_t stage_seed = 0;
+  auto* stage_cmd = app.add_subcommand(
+      "stage", "paper 002 linear-stage bench protocol (config/scenarios/bench/*.yaml): Table I contact "
+               "estimation or Table II sweep localization -> metrics.json");
+  stage_cmd->add_option("scenario", stage_scenario, "bench scenario file")->required();
+  stage_cmd->add_option("--out", stage_out, "output directory (metrics.json)")->required();
+  auto* stage_seed_opt = stage_cmd->add_option("--seed", stage_seed, "seed (default: the scenario's)");
 
   CLI11_PARSE(app, argc, argv);
+
+  if (*stage_cmd) {  // needs no node parameter files
+    try {
+      const auto m = whisker_localization::run_bench_protocol_to(
+          stage_scenario, stage_out, *stage_seed_opt ? std::optional<uint64_t>(stage_seed) : std::nullopt);
+      std::printf("tactile stage: %s (%s, seed %llu) -> %s/metrics.json\n", m["scenario"].get<std::string>().c_str(),
+                  m["protocol"].get<std::string>().c_str(), static_cast<unsigned long long>(m["seed"].get<uint64_t>()),
+                  stage_out.c_str());
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "tactile: error: %s\n", e.what());
+      return 1;
+    }
+    return 0;
+  }
 
   try {
     check_config_dir(config_dir);

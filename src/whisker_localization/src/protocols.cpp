@@ -125,7 +125,10 @@ json run_bench_protocol(const std::string& scenario_path, std::optional<uint64_t
                           {"final_set_size", s.final_set_size},
                           {"truth_kept_fraction", s.truth_kept_fraction},
                           {"resets", s.resets},
-                          {"contact_failures", s.contact_failures}});
+                          {"contact_failures", s.contact_failures},
+                          {"profile_points", s.profile_points},
+                          {"profile_mean_error_mm", s.profile_mean_error_mm},
+                          {"profile_max_error_mm", s.profile_max_error_mm}});
         mean += s.mean_error_mm / static_cast<double>(rows.size());
       }
       variants[poss ? "possibilistic" : "deterministic"] = {{"sweeps", sweeps},

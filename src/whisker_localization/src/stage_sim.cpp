@@ -1,5 +1,6 @@
 #include "whisker_localization/stage_sim.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -201,6 +202,7 @@ std::vector<Table2Sweep> run_table2(const Table2Params& p) {
     PreimageLocalizer loc(map, solver, p.localizer);
     loc.set_prior(base);  // 002 Sec. VII-D: the sweep starts at a known location
     std::vector<double> errors, half;
+    ProfileEstimator profile;
     int kept = 0;
     for (int k = 0; k < p.steps; ++k) {
       if (k > 0) base = compose(base, motion);
@@ -216,6 +218,9 @@ std::vector<Table2Sweep> run_table2(const Table2Params& p) {
         }
       }
       const auto st = loc.step(k == 0 ? Pose2{} : motion, z);
+      if (st.contact && (st.geometry.cx != 0.0 || st.geometry.cy != 0.0)) {
+        profile.add(base.x, base.y, base.theta, st.geometry.cx, st.geometry.cy);
+      }
       if (!st.localizing) continue;
       ++r.localizing_steps;
       bool in = false;
@@ -239,6 +244,12 @@ std::vector<Table2Sweep> run_table2(const Table2Params& p) {
       }
     }
     r.resets = loc.resets();
+    r.profile_points = profile.size();
+    for (std::size_t i = 0; i < profile.size(); ++i) {
+      const double d = std::fabs(world.signed_distance(profile.x()[i], profile.y()[i])) * 1e3;
+      r.profile_mean_error_mm += d / static_cast<double>(profile.size());
+      r.profile_max_error_mm = std::max(r.profile_max_error_mm, d);
+    }
     r.truth_kept_fraction = r.localizing_steps > 0 ? static_cast<double>(kept) / r.localizing_steps : 0.0;
     auto stats = [](const std::vector<double>& e, double& mean, double& sd) {
       if (e.empty()) {

@@ -100,10 +100,10 @@ namespace {
 void print(const char* label, const std::vector<Table2Sweep>& rows) {
   for (const auto& r : rows) {
     std::printf("%s sweep %02d: error %.2f +- %.2f mm (localized %d/%d steps: %.2f mm), final %.2f mm spread %.2f mm "
-                "size %zu, truth kept %.2f, resets %llu\n",
+                "size %zu, truth kept %.2f, resets %llu, profile %.3f / %.3f mm\n",
                 label, r.id, r.mean_error_mm, r.std_error_mm, r.localized_steps, r.localizing_steps,
                 r.localized_mean_error_mm, r.final_error_mm, r.final_spread_mm, r.final_set_size, r.truth_kept_fraction,
-                static_cast<unsigned long long>(r.resets));
+                static_cast<unsigned long long>(r.resets), r.profile_mean_error_mm, r.profile_max_error_mm);
   }
 }
 }  // namespace
@@ -120,6 +120,10 @@ TEST(Table2, DeterministicSweepsLocalizeWithinMillimetres) {
     EXPECT_GE(r.truth_kept_fraction, 0.8) << r.id;
     EXPECT_LT(r.mean_error_mm, 10.0) << r.id;  // paper Table II: 2.79-7.30 mm
     mean += r.mean_error_mm / 5.0;
+    // Obstacle profile (002 Fig. 12): the union of the estimated tip contacts
+    // lies on the true boundary.
+    EXPECT_GE(r.profile_points, 30u) << r.id;
+    EXPECT_LT(r.profile_max_error_mm, 0.5) << r.id;
     below5 += r.mean_error_mm < 5.0 ? 1 : 0;
   }
   EXPECT_LT(mean, 5.0);    // issue goal: < 5 mm

@@ -121,6 +121,12 @@ struct Table2Sweep {
   double truth_kept_fraction = 0.0;  ///< fraction of localizing steps with the truth inside the set
   uint64_t resets = 0;            ///< empty intersections (restarted from the preimage)
   int contact_failures = 0;       ///< truth steps without a tip contact
+  /// Obstacle profile (002 Sec. VI-B, Fig. 12): estimated contact points of
+  /// the sweep moved to the world by the known base poses; their distance to
+  /// the true boundary [mm].
+  std::size_t profile_points = 0;
+  double profile_mean_error_mm = 0.0;
+  double profile_max_error_mm = 0.0;
 };
 
 std::vector<Table2Sweep> run_table2(const Table2Params& p);
