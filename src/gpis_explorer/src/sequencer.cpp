@@ -141,6 +141,15 @@ void ExplorationSequencer::start_follow(const SequencerInput& in, bool probing) 
   both_touched_ = false;
   sub_ = tactile_fsm::WallSubState::kNone;
   side_ = p_.wall.follow_side;
+  // Slide toward the side where the wall is nearer (the whisker that touched
+  // first, or the smaller depth): along an oblique wall that is toward the
+  // foot of the perpendicular from the drone, away from the nearer corner.
+  // Workspace rule; 000 does not say which way the 2 s wall follow goes.
+  if (in.contact_left != in.contact_right) {
+    side_ = in.contact_left ? tactile_fsm::Side::kLeft : tactile_fsm::Side::kRight;
+  } else if (in.contact_left && in.contact_right && std::abs(in.depth_left - in.depth_right) > 0.005) {
+    side_ = in.depth_left < in.depth_right ? tactile_fsm::Side::kLeft : tactile_fsm::Side::kRight;
+  }
   if (!probing && has_target_) {
     // Follow toward the target's side (as tactile_fsm's side_toward_target).
     const Eigen::Vector2d d = target_ - Eigen::Vector2d(in.x, in.y);
@@ -176,8 +185,13 @@ bool ExplorationSequencer::choose_target(const Eigen::Vector2d& from) {
       if (!(info.acquisition[i] > best)) continue;
       if ((P[i] - from).norm() < p_.min_target_distance) continue;
       if (!g.contains(P[i])) continue;
+      // The path must keep corner_exclusion from every corner; from a start
+      // already closer than that, it must not get any closer than the start.
       bool blocked = near_corner(P[i]);
-      for (const auto& c : r.corners) blocked = blocked || segment_distance(from, P[i], c) < p_.explorer.corner_exclusion;
+      for (const auto& c : r.corners) {
+        const double limit = std::min(p_.explorer.corner_exclusion, (from - c).norm() - 1e-3);
+        blocked = blocked || segment_distance(from, P[i], c) < limit;
+      }
       if (blocked) continue;  // never into (or past) a penalised corner
       best = info.acquisition[i];
       has_target_ = true;
@@ -309,6 +323,14 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       // V_forward = V_backward = V_max / 2, turn at omega_max.
       sub_ = tactile_fsm::wall_sub_state(in.depth_left, lv, in.depth_right, rv, side_, both_touched_, sub_, p_.wall);
       const double sideways = side_ == tactile_fsm::Side::kLeft ? v : -v;
+      if (!both_touched_ && lv != rv) {
+        // One whisker on an oblique wall: turn toward it until both touch
+        // instead of the approach's forward flight, which at a steep angle
+        // brings the frame's corner to the wall first (workspace rule).
+        const double d = lv ? in.depth_left : in.depth_right;
+        sp.yaw_rate = lv ? p_.wall.omega_max : -p_.wall.omega_max;
+        if (d < p_.wall.t_min) sp.vx = -0.5 * v;
+      } else {
       switch (sub_) {
         case tactile_fsm::WallSubState::kFlySideways: sp.vy = sideways; break;
         case tactile_fsm::WallSubState::kFlyForward: sp.vx = 0.5 * v; break;
@@ -316,6 +338,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         case tactile_fsm::WallSubState::kTurnLeft: sp.yaw_rate = p_.wall.omega_max; break;
         case tactile_fsm::WallSubState::kTurnRight: sp.yaw_rate = -p_.wall.omega_max; break;
         case tactile_fsm::WallSubState::kNone: break;
+      }
       }
       if (in.t - entered_ >= p_.follow_time_s) {
         enter(Phase::kRetreat, "wall followed", in.t);

@@ -5,7 +5,10 @@
 
 #include <gtest/gtest.h>
 
+#include <opencv2/imgcodecs.hpp>
+
 #include "gpis_explorer/gpis_explorer_logic.hpp"
+#include "gpis_explorer/gpis_plot.hpp"
 #include "tactile_common/time.hpp"
 
 using gpis_explorer::GpisExplorerLogic;
@@ -103,4 +106,39 @@ TEST(GpisExplorerLogic, OpenSpacePublishesMapAndTarget) {
   EXPECT_EQ(maps, 1);
   EXPECT_TRUE(landed);
   EXPECT_EQ(logic.sequencer().outcome(), gpis_explorer::Outcome::kOpenSpace);
+}
+
+TEST(GpisPlot, WritesAPictureOfARoomUpdate) {
+  gpis_explorer::ExplorerParams p = gpis_explorer::ExplorerParams::onboard();
+  p.grid_cells = 40;
+  gpis_explorer::GpisExplorer ex(p);
+  for (double s = -1.0; s <= 1.0; s += 0.25) {
+    ex.add_point({s, -1.0}, 0.0);
+    ex.add_point({-1.0, s}, 0.0);
+    ex.add_point({1.0, s}, 0.0);
+  }
+  ex.add_point({0, 0}, -1.0);
+  ex.update();
+  gpis_explorer::GpisPicture pic;
+  pic.map = GpisExplorerLogic::make_map(ex, 0);
+  EXPECT_EQ(pic.map.contour_starts.size(), ex.last().contours.size());
+  EXPECT_EQ(pic.map.corners.size(), ex.last().corners.size());
+  pic.trajectory = {{0, 0}, {0.5, 0}, {0.5, 0.5}};
+  pic.target = ex.last().target;
+  pic.drone = std::make_pair(Eigen::Vector2d(0.5, 0.5), 0.3);
+  pic.title = "test";
+  const auto path = std::filesystem::temp_directory_path() / "gpis_plot_test.png";
+  gpis_explorer::write_gpis_png(path.string(), pic, 300);
+  const cv::Mat img = cv::imread(path.string());
+  ASSERT_FALSE(img.empty());
+  EXPECT_GE(img.cols, 300);
+  // The target ring is drawn in its colour (BGR 255, 80, 0) somewhere.
+  bool ring = false;
+  for (int r = 0; r < img.rows && !ring; ++r) {
+    for (int c = 0; c < img.cols && !ring; ++c) ring = img.at<cv::Vec3b>(r, c) == cv::Vec3b(255, 80, 0);
+  }
+  EXPECT_TRUE(ring);
+  std::filesystem::remove(path);
+  pic.map.mean.pop_back();
+  EXPECT_THROW(gpis_explorer::write_gpis_png(path.string(), pic), std::invalid_argument);
 }

@@ -66,3 +66,33 @@ TEST(Sequencer, FindsTheExitOfRotatedRooms) {
   }
   EXPECT_GE(found, 4);
 }
+
+TEST(Sequencer, RoomsItWasNotTunedOn) {
+  // Other sizes (1.5-3 m), exit widths (60-100 cm), the exit on any wall
+  // (room yaw), a square pillar inside.
+  struct Case {
+    double side, exit, yaw;
+    bool pillar;
+  };
+  const Case cases[] = {{1.5, 0.6, 0.4, false}, {1.5, 1.0, -2.6, false}, {3.0, 0.6, 1.9, false},
+                        {3.0, 1.0, -1.2, false}, {2.5, 0.8, 2.8, true},  {2.5, 0.8, -0.3, true}};
+  int found = 0;
+  for (const auto& c : cases) {
+    SequencerParams p;
+    ExplorationSequencer seq(p);
+    auto walls = gpis_test::room(c.side, c.exit, c.yaw);
+    if (c.pillar) {
+      const Eigen::Vector2d o(0.6, -0.5);
+      const double h = 0.1;
+      const Eigen::Vector2d q[4] = {o + Eigen::Vector2d(-h, -h), o + Eigen::Vector2d(h, -h), o + Eigen::Vector2d(h, h),
+                                    o + Eigen::Vector2d(-h, h)};
+      for (int k = 0; k < 4; ++k) walls.push_back({q[k], q[(k + 1) % 4]});
+    }
+    const auto r = gpis_test::fly(seq, walls, 0.0, 600.0, c.side / 2, c.yaw);
+    if (r.exit_found && r.outside) ++found;
+    std::printf("side %.1f exit %.1f yaw %.1f pillar %d: %s, outside %d, updates %zu, travel %.1f m, min wall %.3f m\n",
+                c.side, c.exit, c.yaw, c.pillar, to_string(r.outcome), r.outside, r.updates, seq.travel_distance(),
+                r.min_wall_distance);
+  }
+  EXPECT_GE(found, 5);
+}

@@ -6,6 +6,7 @@
 #include <memory>
 #include <string>
 
+#include "gpis_explorer/gpis_explorer_logic.hpp"
 #include "tactile_cli/host.hpp"
 #include "tactile_depth/tactile_depth_logic.hpp"
 #include "tactile_fsm/whisker_fsm_logic.hpp"
@@ -32,6 +33,11 @@ std::shared_ptr<tactile_depth::TactileDepthLogic> add_tactile_depth(
 
 /// whisker_fsm: /whisker/depth, /whisker/*/signal, /odom -> /cmd_hover, /fsm_state at 50 Hz.
 std::shared_ptr<tactile_fsm::WhiskerFsmLogic> add_whisker_fsm(Host& host, const tactile_common::ParamMap& overrides);
+
+/// gpis_explorer: /whisker/depth, /odom -> /cmd_hover, /fsm_state at 50 Hz,
+/// /gpis/map and /gpis/target after every GPIS update.
+std::shared_ptr<gpis_explorer::GpisExplorerLogic> add_gpis_explorer(Host& host,
+                                                                   const tactile_common::ParamMap& overrides);
 
 /// The simulator: a timer at the physics rate publishing every sensor and
 /// ground-truth topic, subscribed to the setpoint topics.

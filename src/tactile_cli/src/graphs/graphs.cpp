@@ -10,6 +10,7 @@ const std::vector<GraphInfo>& sim_graphs() {
       graphs::none_graph(),
       graphs::pilot_graph(),
       graphs::whisker_fsm_graph(),
+      graphs::gpis_explore_graph(),
   };
   return table;
 }

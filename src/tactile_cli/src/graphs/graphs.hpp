@@ -8,5 +8,6 @@ namespace tactile_cli::graphs {
 GraphInfo none_graph();         // none.cpp
 GraphInfo pilot_graph();        // pilot.cpp
 GraphInfo whisker_fsm_graph();  // whisker_fsm.cpp
+GraphInfo gpis_explore_graph();  // gpis_explore.cpp
 
 }  // namespace tactile_cli::graphs

@@ -1,0 +1,169 @@
+// Graph `gpis_explore` (paper 000, "Active aerial tactile exploration"): TDORC x2
+// -> tactile_depth -> gpis_explorer (four probes, wall follow, retreat, GPIS
+// refit with corner penalties, target, exit) flying the whiskered Crazyflie out
+// of an unknown room. Success: the explorer reports the exit and the true final
+// position is outside the room (most rays from it escape the arena).
+#include "graphs.hpp"
+
+#include <cmath>
+#include <cstdio>
+
+#include "gpis_explorer/gpis_plot.hpp"
+#include "tactile_cli/host_nodes.hpp"
+
+namespace tactile_cli::graphs {
+
+namespace {
+
+using gpis_explorer::GpisExplorerLogic;
+
+class GpisExploreGraph : public SimGraph {
+ public:
+  explicit GpisExploreGraph(GraphContext& ctx) : sim_(ctx.sim) {
+    add_tdorc_filter(ctx.host, "whisker/left", ctx.overrides("tdorc_filter"));
+    add_tdorc_filter(ctx.host, "whisker/right", ctx.overrides("tdorc_filter"));
+    add_tactile_depth(ctx.host, ctx.overrides("tactile_depth"));
+    explorer_ = add_gpis_explorer(ctx.host, ctx.overrides("gpis_explorer"));
+    GpisExplorerLogic* l = explorer_.get();
+    ctx.host.bus().subscribe<tactile_msgs::msg::GpisMap>(
+        GpisExplorerLogic::kMapTopic, [this, l](const tactile_msgs::msg::GpisMap& m) {
+          const auto& seq = l->sequencer();
+          gpis_explorer::GpisPicture pic;
+          pic.map = m;
+          pic.trajectory = seq.trajectory();
+          if (seq.has_target()) pic.target = seq.target();
+          if (!pic.trajectory.empty()) pic.drone = std::make_pair(pic.trajectory.back(), 0.0);
+          for (const auto& c : seq.explorer().last().contours) {
+            pic.curvature.insert(pic.curvature.end(), c.curvature.begin(), c.curvature.end());
+          }
+          char title[160];
+          std::snprintf(title, sizeof title, "GPIS update %zu: %zu points, %zu corners, %s",
+                        seq.explorer().updates(), seq.explorer().gpis().size(), m.corners.size(),
+                        gpis_explorer::to_string(seq.explorer().last().status));
+          pic.title = title;
+          pictures_.push_back(std::move(pic));
+        });
+  }
+
+  /// Fraction of 72 rays from p that leave the arena without hitting anything.
+  double escape_fraction(const tactile_sim::Vec2& p) const {
+    int escaped = 0;
+    for (int k = 0; k < 72; ++k) {
+      const double a = 2.0 * M_PI * k / 72.0;
+      if (!sim_->arena().raycast(p, tactile_sim::Vec2(std::cos(a), std::sin(a)), 50.0).hit) ++escaped;
+    }
+    return escaped / 72.0;
+  }
+
+  bool outside() const {
+    const auto& traj = sim_->trajectory();
+    return !traj.empty() && escape_fraction(traj.back().truth.position.head<2>()) > 0.6;
+  }
+
+  double wall_distance(const Eigen::Vector2d& p) const {
+    const auto h = sim_->arena().closest(p, 100.0);
+    return h.hit ? std::abs(h.distance) : NAN;
+  }
+
+  nlohmann::json metrics() const override {
+    const auto& seq = explorer_->sequencer();
+    const auto& ex = seq.explorer();
+    nlohmann::json m;
+    m["outcome"] = gpis_explorer::to_string(seq.outcome());
+    m["exit_found"] = seq.exit_found();
+    m["outside_room"] = outside();
+    m["gpis_updates"] = ex.updates();
+    m["training_points"] = ex.gpis().size();
+    m["surface_points"] = ex.gpis().surface_count();
+    m["points_rejected"] = seq.points_rejected();
+    m["budget_max_points"] = ex.params().gpis.max_points;
+    m["budget_grid_cells"] = ex.params().grid_cells;
+    m["state_bytes"] = ex.state_bytes();
+    m["corner_aborts"] = seq.corner_aborts();
+    m["side_stops"] = seq.side_stops();
+    m["last_update_status"] = gpis_explorer::to_string(ex.last().status);
+    // Travel: true path length (100 Hz trajectory).
+    double travel = 0.0;
+    const auto& traj = sim_->trajectory();
+    for (size_t i = 1; i < traj.size(); ++i) {
+      travel += (traj[i].truth.position.head<2>() - traj[i - 1].truth.position.head<2>()).norm();
+    }
+    m["travel_distance_m"] = travel;
+    // Reconstruction error: mean distance of the mapped whisker contact points
+    // (odometry frame, as the drone mapped them) to the true walls.
+    double sum = 0.0, sum2 = 0.0;
+    size_t n = 0;
+    for (const auto& c : seq.contacts()) {
+      const double d = wall_distance(c.p);
+      if (!std::isfinite(d)) continue;
+      sum += d;
+      sum2 += d * d;
+      ++n;
+    }
+    m["contact_points"] = n;
+    m["reconstruction_error_m"] = n ? nlohmann::json(sum / static_cast<double>(n)) : nlohmann::json(nullptr);
+    // GPIS contour of the last update vs the true walls (the exit region and
+    // unexplored bulges count too).
+    double csum = 0.0;
+    size_t cn = 0;
+    for (const auto& info : ex.last().contours) {
+      for (const auto& q : info.contour.points) {
+        const double d = wall_distance(q);
+        if (!std::isfinite(d)) continue;
+        csum += d;
+        ++cn;
+      }
+    }
+    m["contour_error_m"] = cn ? nlohmann::json(csum / static_cast<double>(cn)) : nlohmann::json(nullptr);
+    (void)sum2;
+    return m;
+  }
+
+  std::optional<bool> reached_goal() const override { return explorer_->sequencer().exit_found() && outside(); }
+
+  void decorate(TopView& view) const override {
+    const auto& seq = explorer_->sequencer();
+    for (const auto& c : seq.contacts()) view.map_points.push_back(c.p);
+    if (seq.has_target()) view.targets.push_back(seq.target());
+  }
+
+  void write_outputs(const std::filesystem::path& dir) const override {
+    std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> walls;
+    for (const auto& w : sim_->arena().walls()) walls.emplace_back(w.a, w.b);
+    for (size_t k = 0; k < pictures_.size(); ++k) {
+      gpis_explorer::GpisPicture pic = pictures_[k];
+      pic.walls = walls;
+      char name[64];
+      std::snprintf(name, sizeof name, "gpis_update_%02zu.png", k + 1);
+      gpis_explorer::write_gpis_png((dir / name).string(), pic);
+    }
+    if (!pictures_.empty()) {
+      gpis_explorer::GpisPicture fin = pictures_.back();
+      fin.walls = walls;
+      fin.trajectory = explorer_->sequencer().trajectory();
+      if (!fin.trajectory.empty()) fin.drone = std::make_pair(fin.trajectory.back(), 0.0);
+      fin.title = std::string("final map: ") + gpis_explorer::to_string(explorer_->sequencer().outcome());
+      gpis_explorer::write_gpis_png((dir / "gpis_final.png").string(), fin);
+    }
+  }
+
+ private:
+  std::shared_ptr<tactile_sim::SimLogic> sim_;
+  std::shared_ptr<GpisExplorerLogic> explorer_;
+  std::vector<gpis_explorer::GpisPicture> pictures_;
+};
+
+}  // namespace
+
+GraphInfo gpis_explore_graph() {
+  GraphInfo g;
+  g.name = "gpis_explore";
+  g.description = "TDORC -> tactile_depth -> gpis_explorer: GPIS active exploration to the exit of a room (000)";
+  g.vehicles = {tactile_sim::VehicleType::kWhiskerCrazyflie};
+  g.nodes = {"tdorc_filter", "tactile_depth", "gpis_explorer"};
+  g.metrics_key = "gpis";
+  g.build = [](GraphContext& ctx) { return std::make_unique<GpisExploreGraph>(ctx); };
+  return g;
+}
+
+}  // namespace tactile_cli::graphs
