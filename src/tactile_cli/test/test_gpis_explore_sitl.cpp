@@ -58,6 +58,9 @@ void expect_exit_found(const std::string& scenario, int budget_points) {
     EXPECT_GE(g["gpis_updates"].get<int>(), 1);
     EXPECT_LT(g["travel_distance_m"].get<double>(), 22.62 + 2 * 6.26);
     if (g["exit_found"].get<bool>() && g["outside_room"].get<bool>()) ++out;
+    EXPECT_GT(g["map_points"].get<int>(), 0);
+    ASSERT_TRUE(g["map_reconstruction_error_m"].is_number());
+    EXPECT_LE(g["map_reconstruction_error_m"].get<double>(), 0.08);
     if (g["reconstruction_error_m"].is_number()) {
       err += g["reconstruction_error_m"].get<double>();
       ++n_err;

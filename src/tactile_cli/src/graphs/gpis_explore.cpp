@@ -9,6 +9,7 @@
 #include <cstdio>
 
 #include "gpis_explorer/gpis_plot.hpp"
+#include "mapping_pcl/point_map.hpp"
 #include "tactile_cli/host_nodes.hpp"
 
 namespace tactile_cli::graphs {
@@ -115,8 +116,30 @@ class GpisExploreGraph : public SimGraph {
       }
     }
     m["contour_error_m"] = cn ? nlohmann::json(csum / static_cast<double>(cn)) : nlohmann::json(nullptr);
+    // The same contacts as a mapping_pcl map (1 cm voxel filter): points and error.
+    const auto map = contact_map();
+    double msum = 0.0;
+    size_t mn = 0;
+    for (const auto& q : map.cloud()) {
+      const double d = wall_distance(Eigen::Vector2d(q.x, q.y));
+      if (!std::isfinite(d)) continue;
+      msum += d;
+      ++mn;
+    }
+    m["map_points"] = mn;
+    m["map_reconstruction_error_m"] = mn ? nlohmann::json(msum / static_cast<double>(mn)) : nlohmann::json(nullptr);
     (void)sum2;
     return m;
+  }
+
+  /// Whisker contact points in a mapping_pcl PointMap at the flight height,
+  /// voxel-filtered (1 cm, MapParams default).
+  mapping_pcl::PointMap contact_map() const {
+    mapping_pcl::PointMap map;
+    const double z = explorer_->params().sequencer.wall.flight_height;
+    for (const auto& c : explorer_->sequencer().contacts()) map.insert(mapping_pcl::Vec3(c.p.x(), c.p.y(), z));
+    if (map.size() > 0) map.voxel_filter();
+    return map;
   }
 
   std::optional<bool> reached_goal() const override { return explorer_->sequencer().exit_found() && outside(); }
@@ -128,6 +151,11 @@ class GpisExploreGraph : public SimGraph {
   }
 
   void write_outputs(const std::filesystem::path& dir) const override {
+    mapping_pcl::PlyInfo info;
+    info.frame = "odom";
+    info.comment = "whisker contact points of gpis_explore (voxel 1 cm)";
+    mapping_pcl::write_ply((dir / "whisker_map.ply").string(), contact_map().cloud(),
+                           mapping_pcl::PlyFormat::kBinaryLittleEndian, info);
     std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> walls;
     for (const auto& w : sim_->arena().walls()) walls.emplace_back(w.a, w.b);
     for (size_t k = 0; k < pictures_.size(); ++k) {
