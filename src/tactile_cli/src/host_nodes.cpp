@@ -160,6 +160,37 @@ std::shared_ptr<gpis_explorer::GpisExplorerLogic> add_gpis_explorer(Host& host, 
   return logic;
 }
 
+std::shared_ptr<whisker_localization::WhiskerLocalizationLogic> add_whisker_localization(
+    Host& host, const tactile_common::ParamMap& over) {
+  using Logic = whisker_localization::WhiskerLocalizationLogic;
+  auto params = host.load_parameters("", Logic::kNodeName, Logic::default_parameters(), over);
+  auto logic = std::make_shared<Logic>(Logic::params_from(params));
+  Host* h = &host;
+  Logic* l = logic.get();
+  host.bus().subscribe<nav_msgs::msg::Odometry>(Logic::kOdomTopic,
+                                                [l](const nav_msgs::msg::Odometry& m) { l->on_odometry(m); });
+  host.bus().subscribe<geometry_msgs::msg::WrenchStamped>(
+      Logic::kMomentTopic, [h, l](const geometry_msgs::msg::WrenchStamped& m) {
+        auto out = l->on_moment(m);
+        const int64_t now = h->executor().now_ns();
+        if (out.result) h->bus().publish(Logic::kResultTopic, *out.result, now);
+        if (out.pose_set) h->bus().publish(Logic::kPoseSetTopic, *out.pose_set, now);
+      });
+  host.add_reporter([l] {
+    const auto& s = l->stats();
+    return NodeReport{std::string("/") + Logic::kNodeName,
+                      {{"moments_received", s.moments_received},
+                       {"published", s.published},
+                       {"dropped_nonfinite", s.dropped_nonfinite},
+                       {"dropped_out_of_order", s.dropped_out_of_order},
+                       {"dropped_no_odom", s.dropped_no_odom},
+                       {"no_contact", s.no_contact},
+                       {"resets", s.resets}}};
+  });
+  host.keep(logic);
+  return logic;
+}
+
 namespace {
 template <class T>
 void publish_all(Host& host, std::vector<tactile_sim::Published<T>>& msgs, int64_t now_ns) {

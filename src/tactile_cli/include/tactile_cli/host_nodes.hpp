@@ -14,6 +14,7 @@
 #include "tactile_sim/logic/sim_logic.hpp"
 #include "tdorc_filter/tdorc_filter_logic.hpp"
 #include "whisker_driver/whisker_driver_logic.hpp"
+#include "whisker_localization/whisker_localization_logic.hpp"
 
 namespace tactile_cli {
 
@@ -38,6 +39,11 @@ std::shared_ptr<tactile_fsm::WhiskerFsmLogic> add_whisker_fsm(Host& host, const 
 /// /gpis/map and /gpis/target after every GPIS update.
 std::shared_ptr<gpis_explorer::GpisExplorerLogic> add_gpis_explorer(Host& host,
                                                                    const tactile_common::ParamMap& overrides);
+
+/// whisker_localization (002): /whisker/base_wrench + /odom -> /whisker/localization
+/// (LocalizationResult) and /whisker/pose_set (PoseArray), one per moment sample.
+std::shared_ptr<whisker_localization::WhiskerLocalizationLogic> add_whisker_localization(
+    Host& host, const tactile_common::ParamMap& overrides);
 
 /// The simulator: a timer at the physics rate publishing every sensor and
 /// ground-truth topic, subscribed to the setpoint topics.
