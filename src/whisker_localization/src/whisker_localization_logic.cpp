@@ -42,6 +42,14 @@ void WhiskerLocalizationLogic::Params::validate() const {
   if (!(leg > 0.0)) throw std::invalid_argument("WhiskerLocalizationLogic.leg: must be > 0, got " + std::to_string(leg));
   if (!std::isfinite(prior_x) || !std::isfinite(prior_y) || !std::isfinite(prior_yaw))
     throw std::invalid_argument("WhiskerLocalizationLogic.prior_x: prior must be finite");
+  if (input != "moment" && input != "flux")
+    throw std::invalid_argument("WhiskerLocalizationLogic.input: must be \"moment\" or \"flux\", got \"" + input + "\"");
+  if (hall_coefficients.empty() || hall_coefficients.size() > 10)
+    throw std::invalid_argument("WhiskerLocalizationLogic.hall_coefficients: must have 1 to 10 elements, got " +
+                                std::to_string(hall_coefficients.size()));
+  for (double c : hall_coefficients) {
+    if (!std::isfinite(c)) throw std::invalid_argument("WhiskerLocalizationLogic.hall_coefficients: must be finite");
+  }
   if (!(contact_threshold >= 0.0)) throw std::invalid_argument("WhiskerLocalizationLogic.contact_threshold: must be >= 0, got " + std::to_string(contact_threshold));
   if (!(max_odom_age_s > 0.0)) throw std::invalid_argument("WhiskerLocalizationLogic.max_odom_age_s: must be > 0, got " + std::to_string(max_odom_age_s));
 }
@@ -74,6 +82,8 @@ ParamMap WhiskerLocalizationLogic::default_parameters() {
   m.set("prior_x", d.prior_x);
   m.set("prior_y", d.prior_y);
   m.set("prior_yaw", d.prior_yaw);
+  m.set("input", d.input);
+  m.set("hall_coefficients", d.hall_coefficients);             // 002 Sec. V-B, fitted B -> M(0)
   m.set("contact_threshold", d.contact_threshold);
   m.set("max_odom_age_s", d.max_odom_age_s);
   return m;
@@ -111,6 +121,8 @@ WhiskerLocalizationLogic::Params WhiskerLocalizationLogic::params_from(const Par
   p.prior_x = m.get_double("prior_x");
   p.prior_y = m.get_double("prior_y");
   p.prior_yaw = m.get_double("prior_yaw");
+  p.input = m.get_string("input");
+  p.hall_coefficients = m.get_double_array("hall_coefficients");
   p.contact_threshold = m.get_double("contact_threshold");
   p.max_odom_age_s = m.get_double("max_odom_age_s");
   try {
@@ -189,7 +201,12 @@ void WhiskerLocalizationLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
 WhiskerLocalizationLogic::Outputs WhiskerLocalizationLogic::on_moment(const geometry_msgs::msg::WrenchStamped& msg) {
   Outputs out;
   ++stats_.moments_received;
-  const double m0 = msg.wrench.torque.z;
+  double m0 = msg.wrench.torque.z;
+  if (params_.input == "flux") {  // Hall flux density -> M(0) (002 Sec. V-B calibration)
+    const double b = m0;
+    m0 = 0.0;
+    for (auto it = params_.hall_coefficients.rbegin(); it != params_.hall_coefficients.rend(); ++it) m0 = m0 * b + *it;
+  }
   if (!std::isfinite(m0)) {
     ++stats_.dropped_nonfinite;
     return out;

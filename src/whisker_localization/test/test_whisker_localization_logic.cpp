@@ -111,6 +111,22 @@ TEST(WhiskerLocalizationLogic, BadInputIsCountedAndDropped) {
   EXPECT_EQ(logic.stats().dropped_no_odom, 2u);
 }
 
+TEST(WhiskerLocalizationLogic, HallFluxInputIsCalibratedToMoment) {
+  ParamMap m = WhiskerLocalizationLogic::default_parameters();
+  m.set("input", std::string("flux"));
+  m.set("hall_coefficients", std::vector<double>{1e-5, 2e-4});  // M = 1e-5 + 2e-4 B
+  WhiskerLocalizationLogic logic(WhiskerLocalizationLogic::params_from(m));
+  logic.on_odometry(odom(1000, Pose2{}));
+  const auto out = logic.on_moment(moment(1000, 4.0));  // B = 4 mT
+  ASSERT_TRUE(out.result);
+  EXPECT_NEAR(out.result->base_moment, 1e-5 + 8e-4, 1e-15);
+  m.set("input", std::string("volts"));
+  EXPECT_THROW(WhiskerLocalizationLogic::params_from(m), tactile_common::ParamError);
+  m.set("input", std::string("flux"));
+  m.set("hall_coefficients", std::vector<double>{});
+  EXPECT_THROW(WhiskerLocalizationLogic::params_from(m), tactile_common::ParamError);
+}
+
 TEST(WhiskerLocalizationLogic, SweepAlongTheCornerLocalizesTheBase) {
   // Table II sweep 03 through the node logic: odometry of the stage (in its
   // own frame, starting at 0) and base moments from the tip-contact SITL.

@@ -9,6 +9,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "geometry_msgs/msg/pose_array.hpp"
 #include "geometry_msgs/msg/wrench_stamped.hpp"
@@ -43,6 +44,12 @@ class WhiskerLocalizationLogic {
     /// Known start (002 Sec. VII-D); used when use_prior.
     bool use_prior = false;
     double prior_x = 0.0, prior_y = 0.0, prior_yaw = 0.0;
+    /// What torque.z of the input carries: "moment" (calibrated M(0) [N m]) or
+    /// "flux" (the Hall sensor's flux density B [mT], converted with
+    /// hall_coefficients, 002 Sec. V-B).
+    std::string input = "moment";
+    /// M(0) = c0 + c1 B + c2 B^2 + ... (HallCalibration::coefficients()).
+    std::vector<double> hall_coefficients{0.0, 1.0};
     /// |M(0)| below this is no contact [N m]. Choice: 5x a 0.2 uN m noise floor.
     double contact_threshold = 1e-6;
     /// Odometry older than this at a moment sample is stale [s]. Choice: 0.1 s.
