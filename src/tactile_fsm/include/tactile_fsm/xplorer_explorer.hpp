@@ -1,0 +1,187 @@
+// XPLORER tactile behaviours (paper 001 Sec. III-B, IV): the admittance
+// controller of eq. 8, the exploration state machine Gamma in {Exploration,
+// Tactile-turning, Tactile-traversal} with the contact direction C_n and the
+// move direction lambda (right-hand traversal), static-wrench application,
+// and ricocheting (collision-inclusive waypoint flight, Gamma = 4) with its
+// collision-recovery controller, next to conventional waypoint flight.
+//
+// Outputs position + yaw setpoints for the vehicle's cascaded P-PID
+// controller (001 Fig. 2). World ENU, body FLU. Core layer: no ROS, no
+// messages.
+#pragma once
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <deque>
+#include <string>
+
+#include <Eigen/Geometry>
+
+namespace tactile_fsm {
+
+using XVec2 = Eigen::Vector2d;
+using XVec3 = Eigen::Vector3d;
+
+// ---------------------------------------------------------------------------
+// 001 eq. 8: admittance controller
+
+struct AdmittanceParams {
+  double virtual_mass = 1.0;     ///< m_v (001 Sec. V-A3)
+  double virtual_inertia = 1.0;  ///< I_v,z (001 Sec. V-A3)
+  /// diag(D), diag(K) over (x, y, z, yaw) (001 Sec. V-A3: 24.5, 24.5, 0, 1).
+  std::array<double, 4> damping = {24.5, 24.5, 0.0, 1.0};
+  std::array<double, 4> stiffness = {24.5, 24.5, 0.0, 1.0};
+  void validate() const;  ///< throws std::invalid_argument "AdmittanceParams.<field>: <reason>"
+};
+
+/// m_v r_d'' + D r_d' + K (r_d - r*) = delta_f - delta_f_des (x, y);
+/// I_v psi_d'' + D psi_d' + K (psi_d - psi*) = tau_z - tau_des (yaw).
+/// An axis with D = K = 0 (z in 001) is not in admittance: r_d = r* there.
+/// Semi-implicit Euler.
+class AdmittanceController {
+ public:
+  explicit AdmittanceController(const AdmittanceParams& p = AdmittanceParams{});
+  void reset(const XVec3& r, double yaw);
+  /// One step; returns r_d (yaw: yaw()).
+  const XVec3& update(const XVec3& force, const XVec3& force_des, const XVec3& r_star, double torque_z,
+                      double torque_des, double yaw_star, double dt);
+  const XVec3& position() const { return r_; }
+  const XVec3& velocity() const { return v_; }
+  double yaw() const { return yaw_; }
+
+ private:
+  AdmittanceParams p_;
+  XVec3 r_ = XVec3::Zero(), v_ = XVec3::Zero();
+  double yaw_ = 0.0, yaw_rate_ = 0.0;
+};
+
+// ---------------------------------------------------------------------------
+// The behaviours
+
+enum class XplorerMission { kExplore, kStaticWrench, kRicochet, kWaypoint };
+const char* to_string(XplorerMission m);
+XplorerMission mission_from_string(const std::string& s);  ///< "explore" | "static_wrench" | "ricochet" | "waypoint"
+
+/// Gamma of 001 (1-4) plus take-off, hold and done.
+enum class XplorerState {
+  kTakeoff = 0,
+  kExploration = 1,       ///< Gamma = 1
+  kTactileTurning = 2,    ///< Gamma = 2
+  kTactileTraversal = 3,  ///< Gamma = 3
+  kRicocheting = 4,       ///< Gamma = 4
+  kStaticWrench = 5,      ///< reaction mode 1 (001 Sec. III-B1)
+  kGoTo = 6,              ///< flying to / regulating at a waypoint
+  kDone = 7,              ///< loop closed: hold position
+};
+const char* to_string(XplorerState s);
+
+/// Contact / move direction in the body frame: b1, -b1, b2, -b2 (001 Sec. IV-A).
+enum class XDir : int { kPlusX = 0, kMinusX = 1, kPlusY = 2, kMinusY = 3, kNone = 4 };
+const char* to_string(XDir d);
+XVec2 unit(XDir d);
+XDir right_hand(XDir contact);  ///< lambda for a contact: C_n turned by -90 deg
+
+struct XplorerParams {
+  XplorerMission mission = XplorerMission::kExplore;
+  double hover_height = 0.7;         ///< [m] (001 Sec. V-C: "hover height of 0.7 m")
+  double takeoff_tolerance = 0.05;   ///< [m] (choice)
+  double explore_speed = 0.3;        ///< forward speed in Exploration [m/s] (choice)
+  double traverse_speed = 0.15;      ///< speed along lambda in Tactile-traversal [m/s] (choice)
+  double position_gain = 1.5;        ///< P gain of the vehicle's position loop [1/s]: turns speeds into setpoint leads (choice, SITL controller)
+  int force_average_samples = 50;    ///< moving average of the body force (001 Sec. V-C)
+  double delta_0 = 1.5;              ///< contact threshold [N] (001 Sec. V-C)
+  double delta_psi0 = 1.6;           ///< re-contact threshold ending Tactile-turning [N] (> delta_0, 001 Sec. IV-A; value a choice)
+  double yaw_rate_trigger = 0.4;     ///< psi_dot_0 [rad/s] (001 Sec. V-C)
+  double yaw_rate_lowpass_hz = 2.0;  ///< low-pass of the yaw rate (choice; 001 Sec. V-C)
+  double turn_rate = 0.26;           ///< controlled yaw rate in Tactile-turning [rad/s] (001 Sec. V-C)
+  double turn_limit = M_PI;          ///< |yaw change| limit of one turn [rad] (001: 180 deg)
+  double turn_push = 0.05;           ///< setpoint lead towards C_n while turning [m] (choice)
+  double contact_force = 1.25;       ///< |delta_f_des| in traversal [N] (001)
+  double release_force = 0.3;        ///< averaged |force| below which contact is lost [N] (choice)
+  double release_time = 1.0;         ///< ... for this long -> Exploration [s] (choice)
+  double settle_time = 1.0;          ///< no turning trigger this long after a contact / turn [s] (choice)
+  double loop_closure_radius = 0.25; ///< back within this of the first contact point -> done [m] (choice)
+  double loop_min_path = 2.0;        ///< ... after at least this much traversed path [m] (choice)
+  double static_force = 1.0;         ///< static-wrench reference |delta_f_ref| [N] (001 Sec. V-B)
+  XVec2 goal = XVec2(1.0, 0.0);      ///< ricochet / waypoint goal, world [m]
+  double ricochet_speed = 1.5;       ///< approach speed [m/s] ("maximum velocity", 001 Sec. IV-C; the SITL controller's limit)
+  double collision_force = 2.5;      ///< |delta_f| that marks a collision [N] (choice)
+  double restitution = 0.2;          ///< post-collision normal speed / pre-collision (001 Fig. 7: 0-1.5 m/s -> ~0.3 m/s) (choice)
+  double recovery_gain = 0.02;       ///< recovery setpoint distance per N of collision peak [m/N] (choice, after 001 ref. [12])
+  double recovery_time = 0.3;        ///< hold the recovery setpoint this long [s] (choice)
+  AdmittanceParams admittance;
+  void validate() const;
+};
+
+/// One control tick's input (50 Hz).
+struct XplorerInput {
+  double t = 0.0;                    ///< [s]
+  XVec3 position = XVec3::Zero();    ///< world [m]
+  XVec3 velocity = XVec3::Zero();    ///< world [m/s]
+  double yaw = 0.0;                  ///< [rad]
+  double yaw_rate = 0.0;             ///< [rad/s]
+  XVec3 force = XVec3::Zero();       ///< fused external force estimate, world [N] (001 eq. 7)
+  double torque_z = 0.0;             ///< external yaw torque estimate [N m]
+};
+
+struct XplorerOutput {
+  XVec3 position = XVec3::Zero();  ///< setpoint, world [m]
+  double yaw = 0.0;                ///< setpoint [rad]
+  XplorerState state = XplorerState::kTakeoff;
+  bool transitioned = false;
+};
+
+/// Post-collision velocity model for ricocheting (001 Sec. IV-C, Fig. 7):
+/// the normal component is reversed and scaled by e, the tangential kept.
+XVec2 post_collision_velocity(const XVec2& v_pre, const XVec2& normal, double restitution);
+
+class XplorerExplorer {
+ public:
+  explicit XplorerExplorer(const XplorerParams& p);
+  XplorerOutput update(const XplorerInput& in, double dt);
+
+  XplorerState state() const { return state_; }
+  XDir contact() const { return contact_; }
+  XDir move() const { return move_; }
+  const XVec2& body_force() const { return f_body_avg_; }  ///< 50-sample moving average
+  double filtered_yaw_rate() const { return yaw_rate_f_; }
+  const std::string& reason() const { return reason_; }
+  double time_in_state(double t) const { return t - t_enter_; }
+  uint32_t transitions() const { return transitions_; }
+  bool loop_closed() const { return loop_closed_; }
+  double loop_closure_time() const { return loop_closure_t_; }
+  double first_contact_time() const { return first_contact_t_; }
+  double traversed_path() const { return path_; }
+  uint32_t turns() const { return turns_; }
+  uint32_t collisions() const { return collisions_; }
+  double collision_peak() const { return collision_peak_; }
+  const XplorerParams& params() const { return p_; }
+
+ private:
+  void enter(XplorerState s, const XplorerInput& in, const std::string& why);
+  XDir detect_contact(double threshold) const;
+
+  XplorerParams p_;
+  AdmittanceController adm_;
+  XplorerState state_ = XplorerState::kTakeoff;
+  XDir contact_ = XDir::kNone, move_ = XDir::kNone;
+  std::deque<XVec2> forces_;
+  XVec2 f_sum_ = XVec2::Zero(), f_body_avg_ = XVec2::Zero();
+  double yaw_rate_f_ = 0.0;
+  bool have_rate_ = false;
+  double t_enter_ = 0.0, t_quiet_ = -1e9, low_force_since_ = -1.0;
+  double yaw_enter_ = 0.0, turn_sign_ = 1.0;
+  XVec2 explore_dir_ = XVec2(1, 0);
+  XVec3 hold_ = XVec3::Zero();
+  double hold_yaw_ = 0.0;
+  std::string reason_;
+  uint32_t transitions_ = 0, turns_ = 0, collisions_ = 0;
+  bool loop_closed_ = false, started_path_ = false, initialised_ = false;
+  double loop_closure_t_ = -1.0, first_contact_t_ = -1.0, path_ = 0.0, collision_peak_ = 0.0;
+  XVec2 first_contact_p_ = XVec2::Zero(), last_p_ = XVec2::Zero();
+  XVec2 collision_normal_ = XVec2::Zero();
+  XVec3 recovery_sp_ = XVec3::Zero();
+};
+
+}  // namespace tactile_fsm

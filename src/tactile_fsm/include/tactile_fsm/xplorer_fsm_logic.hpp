@@ -1,0 +1,79 @@
+// Node logic of the XPLORER behaviours (paper 001 Sec. III-B, IV): the fused
+// external wrench (xplorer_force_est, world frame) and the odometry in; a
+// 50 Hz timer publishes the position/yaw setpoint and the FSM state. No
+// rclcpp: the rclcpp component and the standalone host use this class.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+
+#include "geometry_msgs/msg/pose_stamped.hpp"
+#include "geometry_msgs/msg/wrench_stamped.hpp"
+#include "nav_msgs/msg/odometry.hpp"
+#include "tactile_common/parameters.hpp"
+#include "tactile_fsm/xplorer_explorer.hpp"
+#include "tactile_msgs/msg/fsm_state.hpp"
+
+namespace tactile_fsm {
+
+class XplorerFsmLogic {
+ public:
+  static constexpr const char* kNodeName = "xplorer_fsm";
+  static constexpr const char* kBehaviour = "xplorer_exploration";
+  static constexpr const char* kWrenchTopic = "/xplorer/wrench";          // geometry_msgs/msg/WrenchStamped (world)
+  static constexpr const char* kOdomTopic = "/odom";                      // nav_msgs/msg/Odometry
+  static constexpr const char* kSetpointTopic = "/cmd_position";          // geometry_msgs/msg/PoseStamped
+  static constexpr const char* kStateTopic = "/xplorer/fsm_state";        // tactile_msgs/msg/FsmState
+  static constexpr int64_t kTimerPeriodNs = 20000000;   ///< 50 Hz (the arm IMU and force-estimate rate)
+  static constexpr int64_t kStatePeriodNs = 200000000;  ///< FsmState at least at 5 Hz and on transitions
+
+  struct Params {
+    XplorerParams fsm;
+    std::string frame_id = "odom";
+    double max_input_age_s = 0.2;  ///< older odometry or wrench: hold position (choice)
+    void validate() const;
+  };
+
+  struct Stats {
+    uint64_t received_wrench = 0;
+    uint64_t received_odom = 0;
+    uint64_t dropped_nonfinite = 0;
+    uint64_t dropped_wrong_frame = 0;   ///< wrench not in the world frame
+    uint64_t dropped_out_of_order = 0;
+    uint64_t ticks = 0;
+    uint64_t ticks_stale = 0;           ///< no/stale input: position held
+    uint64_t state_messages = 0;
+  };
+
+  struct Outputs {
+    std::optional<geometry_msgs::msg::PoseStamped> setpoint;
+    std::optional<tactile_msgs::msg::FsmState> state;
+  };
+
+  static tactile_common::ParamMap default_parameters();
+  static Params params_from(const tactile_common::ParamMap& map);
+  explicit XplorerFsmLogic(const Params& params);
+
+  void on_wrench(const geometry_msgs::msg::WrenchStamped& msg);
+  void on_odometry(const nav_msgs::msg::Odometry& msg);
+  Outputs on_timer(int64_t now_ns);
+
+  const XplorerExplorer& fsm() const { return fsm_; }
+  const Stats& stats() const { return stats_; }
+  const Params& params() const { return params_; }
+
+ private:
+  Params params_;
+  XplorerExplorer fsm_;
+  Stats stats_;
+  std::optional<nav_msgs::msg::Odometry> odom_;
+  std::optional<geometry_msgs::msg::WrenchStamped> wrench_;
+  int64_t last_tick_ns_ = -1, last_state_ns_ = -1;
+  XplorerState last_state_ = XplorerState::kTakeoff;
+  std::string previous_state_;
+  XVec3 hold_ = XVec3::Zero();
+  double hold_yaw_ = 0.0;
+  bool have_hold_ = false;
+};
+
+}  // namespace tactile_fsm

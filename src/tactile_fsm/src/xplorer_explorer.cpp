@@ -1,0 +1,397 @@
+// XPLORER tactile behaviours (001 Sec. III-B, IV); see xplorer_explorer.hpp.
+#include "tactile_fsm/xplorer_explorer.hpp"
+
+#include <algorithm>
+#include <sstream>
+#include <stdexcept>
+
+namespace tactile_fsm {
+namespace {
+
+[[noreturn]] void bad(const std::string& s, const std::string& field, const std::string& why, double v) {
+  std::ostringstream o;
+  o << s << "." << field << ": " << why << ", got " << v;
+  throw std::invalid_argument(o.str());
+}
+XVec2 rot(double yaw, const XVec2& v) { return Eigen::Rotation2Dd(yaw) * v; }
+double wrap(double a) { return std::remainder(a, 2.0 * M_PI); }
+
+}  // namespace
+
+// --- 001 eq. 8 -------------------------------------------------------------------
+void AdmittanceParams::validate() const {
+  if (!(virtual_mass > 0.0) || !std::isfinite(virtual_mass)) bad("AdmittanceParams", "virtual_mass", "must be > 0", virtual_mass);
+  if (!(virtual_inertia > 0.0) || !std::isfinite(virtual_inertia))
+    bad("AdmittanceParams", "virtual_inertia", "must be > 0", virtual_inertia);
+  for (int i = 0; i < 4; ++i) {
+    if (!(damping[i] >= 0.0) || !std::isfinite(damping[i]))
+      bad("AdmittanceParams", "damping[" + std::to_string(i) + "]", "must be >= 0", damping[i]);
+    if (!(stiffness[i] >= 0.0) || !std::isfinite(stiffness[i]))
+      bad("AdmittanceParams", "stiffness[" + std::to_string(i) + "]", "must be >= 0", stiffness[i]);
+  }
+}
+
+AdmittanceController::AdmittanceController(const AdmittanceParams& p) : p_((p.validate(), p)) {}
+
+void AdmittanceController::reset(const XVec3& r, double yaw) {
+  r_ = r;
+  v_.setZero();
+  yaw_ = yaw;
+  yaw_rate_ = 0.0;
+}
+
+const XVec3& AdmittanceController::update(const XVec3& force, const XVec3& force_des, const XVec3& r_star,
+                                          double torque_z, double torque_des, double yaw_star, double dt) {
+  for (int i = 0; i < 3; ++i) {
+    if (p_.damping[i] == 0.0 && p_.stiffness[i] == 0.0) {  // axis not in admittance
+      r_[i] = r_star[i];
+      v_[i] = 0.0;
+      continue;
+    }
+    // 001 eq. 8: m_v r'' + D r' + K (r - r*) = delta_f - delta_f_des
+    const double acc = (force[i] - force_des[i] - p_.damping[i] * v_[i] - p_.stiffness[i] * (r_[i] - r_star[i])) /
+                       p_.virtual_mass;
+    v_[i] += acc * dt;
+    r_[i] += v_[i] * dt;
+  }
+  // 001 eq. 8, yaw row: I_v psi'' + D psi' + K (psi - psi*) = tau_z - tau_des
+  const double e = wrap(yaw_ - yaw_star);
+  const double acc = (torque_z - torque_des - p_.damping[3] * yaw_rate_ - p_.stiffness[3] * e) / p_.virtual_inertia;
+  yaw_rate_ += acc * dt;
+  yaw_ = wrap(yaw_ + yaw_rate_ * dt);
+  return r_;
+}
+
+// --- names ------------------------------------------------------------------------------
+const char* to_string(XplorerMission m) {
+  switch (m) {
+    case XplorerMission::kExplore: return "explore";
+    case XplorerMission::kStaticWrench: return "static_wrench";
+    case XplorerMission::kRicochet: return "ricochet";
+    case XplorerMission::kWaypoint: return "waypoint";
+  }
+  return "?";
+}
+
+XplorerMission mission_from_string(const std::string& s) {
+  for (auto m : {XplorerMission::kExplore, XplorerMission::kStaticWrench, XplorerMission::kRicochet,
+                 XplorerMission::kWaypoint}) {
+    if (s == to_string(m)) return m;
+  }
+  throw std::invalid_argument("XplorerParams.mission: must be explore, static_wrench, ricochet or waypoint, got \"" + s + "\"");
+}
+
+const char* to_string(XplorerState s) {
+  switch (s) {
+    case XplorerState::kTakeoff: return "takeoff";
+    case XplorerState::kExploration: return "exploration";
+    case XplorerState::kTactileTurning: return "tactile_turning";
+    case XplorerState::kTactileTraversal: return "tactile_traversal";
+    case XplorerState::kRicocheting: return "ricocheting";
+    case XplorerState::kStaticWrench: return "static_wrench";
+    case XplorerState::kGoTo: return "goto";
+    case XplorerState::kDone: return "done";
+  }
+  return "?";
+}
+
+const char* to_string(XDir d) {
+  switch (d) {
+    case XDir::kPlusX: return "+X";
+    case XDir::kMinusX: return "-X";
+    case XDir::kPlusY: return "+Y";
+    case XDir::kMinusY: return "-Y";
+    case XDir::kNone: return "none";
+  }
+  return "?";
+}
+
+XVec2 unit(XDir d) {
+  switch (d) {
+    case XDir::kPlusX: return {1, 0};
+    case XDir::kMinusX: return {-1, 0};
+    case XDir::kPlusY: return {0, 1};
+    case XDir::kMinusY: return {0, -1};
+    case XDir::kNone: return {0, 0};
+  }
+  return {0, 0};
+}
+
+XDir right_hand(XDir c) {
+  switch (c) {
+    case XDir::kPlusX: return XDir::kMinusY;
+    case XDir::kMinusY: return XDir::kMinusX;
+    case XDir::kMinusX: return XDir::kPlusY;
+    case XDir::kPlusY: return XDir::kPlusX;
+    case XDir::kNone: return XDir::kNone;
+  }
+  return XDir::kNone;
+}
+
+XVec2 post_collision_velocity(const XVec2& v, const XVec2& n_in, double e) {
+  const XVec2 n = n_in.normalized();
+  const double vn = v.dot(n);
+  return v - vn * n - e * vn * n;  // tangential kept, normal reversed and scaled
+}
+
+void XplorerParams::validate() const {
+  auto pos = [](const char* f, double v) {
+    if (!(v > 0.0) || !std::isfinite(v)) bad("XplorerParams", f, "must be finite and > 0", v);
+  };
+  pos("hover_height", hover_height);
+  pos("takeoff_tolerance", takeoff_tolerance);
+  pos("explore_speed", explore_speed);
+  pos("traverse_speed", traverse_speed);
+  pos("position_gain", position_gain);
+  if (force_average_samples < 1) bad("XplorerParams", "force_average_samples", "must be >= 1", force_average_samples);
+  pos("delta_0", delta_0);
+  pos("delta_psi0", delta_psi0);
+  if (!(delta_psi0 > delta_0)) bad("XplorerParams", "delta_psi0", "must be > delta_0 (001 Sec. IV-A)", delta_psi0);
+  pos("yaw_rate_trigger", yaw_rate_trigger);
+  pos("yaw_rate_lowpass_hz", yaw_rate_lowpass_hz);
+  pos("turn_rate", turn_rate);
+  if (!(turn_limit > 0.0 && turn_limit <= M_PI)) bad("XplorerParams", "turn_limit", "must be in (0, pi] (001: 180 deg)", turn_limit);
+  pos("turn_push", turn_push);
+  pos("contact_force", contact_force);
+  pos("release_force", release_force);
+  pos("release_time", release_time);
+  if (!(settle_time >= 0.0)) bad("XplorerParams", "settle_time", "must be >= 0", settle_time);
+  pos("loop_closure_radius", loop_closure_radius);
+  pos("loop_min_path", loop_min_path);
+  pos("static_force", static_force);
+  if (!goal.allFinite()) bad("XplorerParams", "goal", "must be finite", goal.x());
+  pos("ricochet_speed", ricochet_speed);
+  pos("collision_force", collision_force);
+  if (!(restitution >= 0.0 && restitution <= 1.0)) bad("XplorerParams", "restitution", "must be in [0, 1]", restitution);
+  if (!(recovery_gain >= 0.0)) bad("XplorerParams", "recovery_gain", "must be >= 0", recovery_gain);
+  if (!(recovery_time >= 0.0)) bad("XplorerParams", "recovery_time", "must be >= 0", recovery_time);
+  admittance.validate();
+}
+
+// --- the state machine ---------------------------------------------------------------------
+XplorerExplorer::XplorerExplorer(const XplorerParams& p) : p_((p.validate(), p)), adm_(p.admittance) {}
+
+void XplorerExplorer::enter(XplorerState s, const XplorerInput& in, const std::string& why) {
+  state_ = s;
+  t_enter_ = in.t;
+  reason_ = why;
+  ++transitions_;
+  low_force_since_ = -1.0;
+  hold_ = in.position;
+  hold_yaw_ = in.yaw;
+  yaw_enter_ = in.yaw;
+  if (s == XplorerState::kTactileTraversal || s == XplorerState::kStaticWrench) {
+    adm_.reset(XVec3(in.position.x(), in.position.y(), p_.hover_height), in.yaw);
+    t_quiet_ = in.t;
+  }
+}
+
+XDir XplorerExplorer::detect_contact(double threshold) const {
+  // 001 Sec. IV-A: |b_delta_f_x| > delta_0 -> contact along b1 (obstacle
+  // opposite to the force it exerts), likewise for b2.
+  const XVec2& f = f_body_avg_;
+  if (std::abs(f.x()) >= std::abs(f.y())) {
+    if (std::abs(f.x()) <= threshold) return XDir::kNone;
+    return f.x() < 0 ? XDir::kPlusX : XDir::kMinusX;
+  }
+  if (std::abs(f.y()) <= threshold) return XDir::kNone;
+  return f.y() < 0 ? XDir::kPlusY : XDir::kMinusY;
+}
+
+XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
+  // Body force (001 Sec. IV-A: b_delta = w_R_b^T delta) and its 50-sample moving average (Sec. V-C).
+  const XVec2 fb = rot(-in.yaw, in.force.head<2>());
+  forces_.push_back(fb);
+  f_sum_ += fb;
+  while (static_cast<int>(forces_.size()) > p_.force_average_samples) {
+    f_sum_ -= forces_.front();
+    forces_.pop_front();
+  }
+  f_body_avg_ = f_sum_ / static_cast<double>(forces_.size());
+  // Low-passed yaw rate (001 Sec. V-C).
+  const double a = 1.0 - std::exp(-2.0 * M_PI * p_.yaw_rate_lowpass_hz * dt);
+  yaw_rate_f_ = have_rate_ ? yaw_rate_f_ + a * (in.yaw_rate - yaw_rate_f_) : in.yaw_rate;
+  have_rate_ = true;
+
+  const XVec2 p2 = in.position.head<2>();
+  if (started_path_ && (state_ == XplorerState::kTactileTraversal || state_ == XplorerState::kTactileTurning))
+    path_ += (p2 - last_p_).norm();
+  last_p_ = p2;
+
+  if (!initialised_) {  // take off where the vehicle stands
+    initialised_ = true;
+    hold_ = in.position;
+    hold_yaw_ = yaw_enter_ = in.yaw;
+    t_enter_ = in.t;
+  }
+  XplorerOutput out;
+  const XplorerState before = state_;
+  const double lead_t = p_.traverse_speed / p_.position_gain;
+  switch (state_) {
+    case XplorerState::kTakeoff: {
+      out.position = XVec3(hold_.x(), hold_.y(), p_.hover_height);
+      out.yaw = hold_yaw_;
+      if (std::abs(in.position.z() - p_.hover_height) < p_.takeoff_tolerance) {
+        switch (p_.mission) {
+          case XplorerMission::kExplore:
+          case XplorerMission::kStaticWrench:
+            enter(XplorerState::kExploration, in, "hover height reached");
+            explore_dir_ = rot(in.yaw, XVec2(1, 0));  // 001 Sec. V-C: move along body +x
+            break;
+          case XplorerMission::kRicochet: enter(XplorerState::kRicocheting, in, "hover height reached"); break;
+          case XplorerMission::kWaypoint: enter(XplorerState::kGoTo, in, "hover height reached"); break;
+        }
+      }
+      break;
+    }
+    case XplorerState::kExploration: {
+      const XDir c = detect_contact(p_.delta_0);
+      if (c != XDir::kNone) {
+        contact_ = c;
+        if (p_.mission == XplorerMission::kStaticWrench) {
+          enter(XplorerState::kStaticWrench, in, std::string("contact ") + to_string(c));
+        } else {
+          move_ = right_hand(c);  // 001 Sec. IV-A: right-hand traversal
+          if (first_contact_t_ < 0) {
+            first_contact_t_ = in.t;
+            first_contact_p_ = p2;
+            started_path_ = true;
+          }
+          enter(XplorerState::kTactileTraversal, in, std::string("contact ") + to_string(c));
+        }
+        break;
+      }
+      out.position = XVec3(p2.x(), p2.y(), p_.hover_height);
+      out.position.head<2>() += (p_.explore_speed / p_.position_gain) * explore_dir_;
+      out.yaw = hold_yaw_;
+      break;
+    }
+    case XplorerState::kTactileTraversal: {
+      // Loop closure: back at the first contact point after going round.
+      if (path_ > p_.loop_min_path && (p2 - first_contact_p_).norm() < p_.loop_closure_radius) {
+        loop_closed_ = true;
+        loop_closure_t_ = in.t;
+        enter(XplorerState::kDone, in, "loop closed");
+        break;
+      }
+      // 001 Sec. IV-A: a yaw-rate peak (release at a corner) starts Tactile-turning.
+      if (in.t - t_quiet_ > p_.settle_time && std::abs(yaw_rate_f_) > p_.yaw_rate_trigger) {
+        turn_sign_ = yaw_rate_f_ > 0 ? 1.0 : -1.0;
+        ++turns_;
+        enter(XplorerState::kTactileTurning, in, "yaw rate peak");
+        break;
+      }
+      // A new contact in the move direction (concave corner): C_n <- latest contact.
+      const XDir c = detect_contact(p_.delta_0);
+      if (c != XDir::kNone && c == move_ && in.t - t_quiet_ > p_.settle_time) {
+        contact_ = c;
+        move_ = right_hand(c);
+        t_quiet_ = in.t;
+        reason_ = std::string("new contact ") + to_string(c);
+      }
+      if (f_body_avg_.norm() < p_.release_force) {
+        if (low_force_since_ < 0) low_force_since_ = in.t;
+        if (in.t - low_force_since_ > p_.release_time) {
+          explore_dir_ = rot(in.yaw, unit(contact_));
+          hold_yaw_ = in.yaw;
+          enter(XplorerState::kExploration, in, "contact lost");
+          break;
+        }
+      } else {
+        low_force_since_ = -1.0;
+      }
+      const XVec2 n = rot(in.yaw, unit(contact_)), t = rot(in.yaw, unit(move_));
+      XVec3 r_star(p2.x() + lead_t * t.x(), p2.y() + lead_t * t.y(), p_.hover_height);
+      XVec3 f_des(-p_.contact_force * n.x(), -p_.contact_force * n.y(), 0.0);
+      adm_.update(in.force, f_des, r_star, in.torque_z, 0.0, in.yaw, dt);  // 001 eq. 8
+      out.position = adm_.position();
+      out.yaw = adm_.yaw();
+      break;
+    }
+    case XplorerState::kTactileTurning: {
+      const double turned = std::min(p_.turn_rate * (in.t - t_enter_), p_.turn_limit);  // 001: limited to 180 deg
+      out.yaw = wrap(yaw_enter_ + turn_sign_ * turned);
+      const XVec2 n = rot(in.yaw, unit(contact_)), t = rot(in.yaw, unit(move_));
+      out.position = XVec3(p2.x(), p2.y(), p_.hover_height);
+      out.position.head<2>() += p_.turn_push * n + lead_t * t;
+      // Re-contact (|b_delta_f_x| or |b_delta_f_y| > delta_psi0), once the moving
+      // average no longer holds the force of the face just left.
+      if (in.t - t_enter_ > p_.settle_time &&
+          (std::abs(f_body_avg_.x()) > p_.delta_psi0 || std::abs(f_body_avg_.y()) > p_.delta_psi0)) {
+        contact_ = detect_contact(p_.delta_psi0);
+        move_ = right_hand(contact_);
+        enter(XplorerState::kTactileTraversal, in, std::string("re-contact ") + to_string(contact_));
+        out.position = XVec3(p2.x(), p2.y(), p_.hover_height);
+        out.yaw = in.yaw;
+      } else if (in.t - t_enter_ > p_.turn_limit / p_.turn_rate + 3.0) {
+        explore_dir_ = rot(in.yaw, unit(contact_));
+        hold_yaw_ = in.yaw;
+        enter(XplorerState::kExploration, in, "turn limit without re-contact");
+      }
+      break;
+    }
+    case XplorerState::kStaticWrench: {
+      // 001 Sec. V-B: delta_f_ref = 1 N onto the surface, r* = current position
+      // (the setpoint is reshaped by the force error only).
+      const XVec2 n = rot(in.yaw, unit(contact_));
+      XVec3 f_des(-p_.static_force * n.x(), -p_.static_force * n.y(), 0.0);
+      adm_.update(in.force, f_des, XVec3(p2.x(), p2.y(), p_.hover_height), in.torque_z, 0.0, in.yaw, dt);
+      out.position = adm_.position();
+      out.yaw = adm_.yaw();
+      break;
+    }
+    case XplorerState::kRicocheting: {
+      // 001 Sec. IV-C: fly at the maximum speed along the line to the goal (beyond
+      // it), collide, recover (setpoint away from the collision, proportional to
+      // its intensity), then regulate at the goal.
+      const XVec2 dir = (p_.goal - hold_.head<2>()).normalized();
+      const double fmag = in.force.head<2>().norm();
+      if (collision_peak_ == 0.0 && fmag > p_.collision_force) {
+        ++collisions_;
+        collision_normal_ = in.force.head<2>().normalized();  // out of the obstacle
+        collision_peak_ = fmag;
+        t_quiet_ = in.t;
+      }
+      if (collision_peak_ > 0.0) {
+        collision_peak_ = std::max(collision_peak_, fmag);
+        recovery_sp_ = XVec3(p2.x(), p2.y(), p_.hover_height);
+        recovery_sp_.head<2>() += p_.recovery_gain * collision_peak_ * collision_normal_;
+        if (in.t - t_quiet_ > p_.recovery_time) {
+          enter(XplorerState::kGoTo, in, "collision recovered");
+        }
+        out.position = recovery_sp_;
+      } else {
+        out.position = XVec3(p2.x(), p2.y(), p_.hover_height);
+        out.position.head<2>() += (p_.ricochet_speed / p_.position_gain + 1.0) * dir;  // saturates the vehicle's speed
+        // Past the goal without a collision: regulate there.
+        if ((p2 - hold_.head<2>()).dot(dir) > (p_.goal - hold_.head<2>()).norm()) {
+          enter(XplorerState::kGoTo, in, "goal passed without collision");
+        }
+      }
+      out.yaw = yaw_enter_;
+      break;
+    }
+    case XplorerState::kGoTo: {
+      out.position = XVec3(p_.goal.x(), p_.goal.y(), p_.hover_height);
+      out.yaw = hold_yaw_;
+      break;
+    }
+    case XplorerState::kDone: {
+      out.position = hold_;
+      out.yaw = hold_yaw_;
+      break;
+    }
+  }
+  out.state = state_;
+  out.transitioned = state_ != before;
+  if (out.transitioned && state_ != XplorerState::kTactileTraversal && state_ != XplorerState::kStaticWrench &&
+      state_ != XplorerState::kTactileTurning && state_ != XplorerState::kRicocheting) {
+    // First tick of a plain state: its own setpoint next tick; hold now.
+    out.position = XVec3(p2.x(), p2.y(), p_.hover_height);
+    if (state_ == XplorerState::kGoTo) out.position = XVec3(p_.goal.x(), p_.goal.y(), p_.hover_height);
+    out.yaw = hold_yaw_;
+  }
+  return out;
+}
+
+}  // namespace tactile_fsm

@@ -1,0 +1,217 @@
+#include "tactile_fsm/xplorer_fsm_logic.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <vector>
+
+#include "tactile_common/time.hpp"
+
+namespace tactile_fsm {
+
+using tactile_common::ParamMap;
+
+namespace {
+double yaw_of(const geometry_msgs::msg::Quaternion& q) {
+  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+}
+}  // namespace
+
+void XplorerFsmLogic::Params::validate() const {
+  fsm.validate();
+  if (frame_id.empty()) throw std::invalid_argument("XplorerFsmLogic.frame_id: must not be empty");
+  if (!(max_input_age_s > 0.0)) throw std::invalid_argument("XplorerFsmLogic.max_input_age_s: must be > 0, got " + std::to_string(max_input_age_s));
+}
+
+ParamMap XplorerFsmLogic::default_parameters() {
+  const Params d;
+  const XplorerParams& f = d.fsm;
+  ParamMap m(kNodeName, "defaults");
+  m.set("mission", std::string(to_string(f.mission)));
+  m.set("hover_height", f.hover_height);
+  m.set("takeoff_tolerance", f.takeoff_tolerance);
+  m.set("explore_speed", f.explore_speed);
+  m.set("traverse_speed", f.traverse_speed);
+  m.set("position_gain", f.position_gain);
+  m.set("force_average_samples", static_cast<int64_t>(f.force_average_samples));
+  m.set("delta_0", f.delta_0);
+  m.set("delta_psi0", f.delta_psi0);
+  m.set("yaw_rate_trigger", f.yaw_rate_trigger);
+  m.set("yaw_rate_lowpass_hz", f.yaw_rate_lowpass_hz);
+  m.set("turn_rate", f.turn_rate);
+  m.set("turn_limit", f.turn_limit);
+  m.set("turn_push", f.turn_push);
+  m.set("contact_force", f.contact_force);
+  m.set("release_force", f.release_force);
+  m.set("release_time", f.release_time);
+  m.set("settle_time", f.settle_time);
+  m.set("loop_closure_radius", f.loop_closure_radius);
+  m.set("loop_min_path", f.loop_min_path);
+  m.set("static_force", f.static_force);
+  m.set("goal", std::vector<double>{f.goal.x(), f.goal.y()});
+  m.set("ricochet_speed", f.ricochet_speed);
+  m.set("collision_force", f.collision_force);
+  m.set("restitution", f.restitution);
+  m.set("recovery_gain", f.recovery_gain);
+  m.set("recovery_time", f.recovery_time);
+  m.set("virtual_mass", f.admittance.virtual_mass);
+  m.set("virtual_inertia", f.admittance.virtual_inertia);
+  m.set("damping", std::vector<double>(f.admittance.damping.begin(), f.admittance.damping.end()));
+  m.set("stiffness", std::vector<double>(f.admittance.stiffness.begin(), f.admittance.stiffness.end()));
+  m.set("frame_id", d.frame_id);
+  m.set("max_input_age_s", d.max_input_age_s);
+  return m;
+}
+
+XplorerFsmLogic::Params XplorerFsmLogic::params_from(const ParamMap& m) {
+  Params p;
+  XplorerParams& f = p.fsm;
+  const std::string mission = m.get_string("mission");
+  try {
+    f.mission = mission_from_string(mission);
+  } catch (const std::invalid_argument&) {
+    throw m.error("mission", "must be explore, static_wrench, ricochet or waypoint, got \"" + mission + "\"");
+  }
+  f.hover_height = m.get_double("hover_height");
+  f.takeoff_tolerance = m.get_double("takeoff_tolerance");
+  f.explore_speed = m.get_double("explore_speed");
+  f.traverse_speed = m.get_double("traverse_speed");
+  f.position_gain = m.get_double("position_gain");
+  f.force_average_samples = static_cast<int>(m.get_int("force_average_samples"));
+  f.delta_0 = m.get_double("delta_0");
+  f.delta_psi0 = m.get_double("delta_psi0");
+  f.yaw_rate_trigger = m.get_double("yaw_rate_trigger");
+  f.yaw_rate_lowpass_hz = m.get_double("yaw_rate_lowpass_hz");
+  f.turn_rate = m.get_double("turn_rate");
+  f.turn_limit = m.get_double("turn_limit");
+  f.turn_push = m.get_double("turn_push");
+  f.contact_force = m.get_double("contact_force");
+  f.release_force = m.get_double("release_force");
+  f.release_time = m.get_double("release_time");
+  f.settle_time = m.get_double("settle_time");
+  f.loop_closure_radius = m.get_double("loop_closure_radius");
+  f.loop_min_path = m.get_double("loop_min_path");
+  f.static_force = m.get_double("static_force");
+  const auto g = m.get_double_array("goal");
+  if (g.size() != 2) throw m.error("goal", "must be [x, y], got " + std::to_string(g.size()) + " elements");
+  f.goal = XVec2(g[0], g[1]);
+  f.ricochet_speed = m.get_double("ricochet_speed");
+  f.collision_force = m.get_double("collision_force");
+  f.restitution = m.get_double("restitution");
+  f.recovery_gain = m.get_double("recovery_gain");
+  f.recovery_time = m.get_double("recovery_time");
+  f.admittance.virtual_mass = m.get_double("virtual_mass");
+  f.admittance.virtual_inertia = m.get_double("virtual_inertia");
+  for (const char* key : {"damping", "stiffness"}) {
+    const auto v = m.get_double_array(key);
+    if (v.size() != 4) throw m.error(key, "must have 4 elements (x, y, z, yaw), got " + std::to_string(v.size()));
+    auto& dst = std::string(key) == "damping" ? f.admittance.damping : f.admittance.stiffness;
+    for (size_t i = 0; i < 4; ++i) dst[i] = v[i];
+  }
+  p.frame_id = m.get_string("frame_id");
+  p.max_input_age_s = m.get_double("max_input_age_s");
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    const auto dot = what.find('.');
+    const auto end = what.find_first_of(":[", dot);
+    const auto colon = what.find(": ");
+    throw m.error(what.substr(dot + 1, end - dot - 1), colon == std::string::npos ? what : what.substr(colon + 2));
+  }
+  return p;
+}
+
+XplorerFsmLogic::XplorerFsmLogic(const Params& params) : params_((params.validate(), params)), fsm_(params.fsm) {}
+
+void XplorerFsmLogic::on_wrench(const geometry_msgs::msg::WrenchStamped& msg) {
+  ++stats_.received_wrench;
+  const auto& f = msg.wrench.force;
+  if (!std::isfinite(f.x) || !std::isfinite(f.y) || !std::isfinite(f.z) || !std::isfinite(msg.wrench.torque.z)) {
+    ++stats_.dropped_nonfinite;
+    return;
+  }
+  if (msg.header.frame_id == "base_link") {
+    ++stats_.dropped_wrong_frame;
+    return;
+  }
+  if (wrench_ && tactile_common::from_stamp(msg.header.stamp) < tactile_common::from_stamp(wrench_->header.stamp)) {
+    ++stats_.dropped_out_of_order;
+    return;
+  }
+  wrench_ = msg;
+}
+
+void XplorerFsmLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
+  ++stats_.received_odom;
+  const auto& p = msg.pose.pose.position;
+  const auto& q = msg.pose.pose.orientation;
+  if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) || !std::isfinite(q.w) ||
+      !std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z) || !std::isfinite(msg.twist.twist.angular.z) ||
+      (q.w * q.w + q.x * q.x + q.y * q.y + q.z * q.z) < 1e-12) {
+    ++stats_.dropped_nonfinite;
+    return;
+  }
+  if (odom_ && tactile_common::from_stamp(msg.header.stamp) < tactile_common::from_stamp(odom_->header.stamp)) {
+    ++stats_.dropped_out_of_order;
+    return;
+  }
+  odom_ = msg;
+}
+
+XplorerFsmLogic::Outputs XplorerFsmLogic::on_timer(int64_t now_ns) {
+  ++stats_.ticks;
+  Outputs out;
+  const double dt = last_tick_ns_ < 0 ? tactile_common::to_seconds(kTimerPeriodNs)
+                                      : tactile_common::to_seconds(now_ns - last_tick_ns_);
+  last_tick_ns_ = now_ns;
+  const double max_age = params_.max_input_age_s;
+  const bool odom_ok = odom_ && tactile_common::to_seconds(now_ns - tactile_common::from_stamp(odom_->header.stamp)) <= max_age;
+  const bool wrench_ok =
+      wrench_ && tactile_common::to_seconds(now_ns - tactile_common::from_stamp(wrench_->header.stamp)) <= max_age;
+  geometry_msgs::msg::PoseStamped sp;
+  tactile_common::to_stamp(now_ns, sp.header.stamp);
+  sp.header.frame_id = params_.frame_id;
+  if (!odom_ok || !wrench_ok) {
+    // Stale input: hold the last setpoint (or nothing before the first one).
+    ++stats_.ticks_stale;
+    if (!have_hold_) return out;
+  } else {
+    const auto& o = *odom_;
+    XplorerInput in;
+    in.t = tactile_common::to_seconds(now_ns);
+    in.position = XVec3(o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z);
+    in.yaw = yaw_of(o.pose.pose.orientation);
+    in.yaw_rate = o.twist.twist.angular.z;  // body z rate ~ yaw rate near hover
+    in.force = XVec3(wrench_->wrench.force.x, wrench_->wrench.force.y, wrench_->wrench.force.z);
+    in.torque_z = wrench_->wrench.torque.z;
+    const XplorerOutput r = fsm_.update(in, dt);
+    hold_ = r.position;
+    hold_yaw_ = r.yaw;
+    have_hold_ = true;
+    if (r.transitioned || last_state_ns_ < 0 || now_ns - last_state_ns_ >= kStatePeriodNs) {
+      tactile_msgs::msg::FsmState s;
+      s.header.stamp = sp.header.stamp;
+      s.header.frame_id = params_.frame_id;
+      s.behaviour = kBehaviour;
+      s.state = to_string(r.state);
+      if (r.transitioned) previous_state_ = to_string(last_state_);
+      s.previous_state = previous_state_;
+      s.reason = fsm_.reason();
+      s.time_in_state = fsm_.time_in_state(in.t);
+      s.transitions = fsm_.transitions();
+      out.state = s;
+      last_state_ns_ = now_ns;
+      ++stats_.state_messages;
+    }
+    last_state_ = r.state;
+  }
+  sp.pose.position.x = hold_.x();
+  sp.pose.position.y = hold_.y();
+  sp.pose.position.z = hold_.z();
+  sp.pose.orientation.w = std::cos(0.5 * hold_yaw_);
+  sp.pose.orientation.z = std::sin(0.5 * hold_yaw_);
+  out.setpoint = sp;
+  return out;
+}
+
+}  // namespace tactile_fsm

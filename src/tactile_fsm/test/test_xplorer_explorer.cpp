@@ -1,0 +1,193 @@
+// XPLORER behaviours (001 Sec. III-B, IV): eq. 8 against its closed-form
+// solution, the state machine's transitions on scripted inputs, ricocheting
+// and the post-collision model by hand.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "tactile_fsm/xplorer_explorer.hpp"
+
+using namespace tactile_fsm;
+
+TEST(Admittance, StepResponseMatchesTheClosedForm) {
+  AdmittanceController a;  // m_v = 1, D = K = 24.5 (001 Sec. V-A3)
+  a.reset(XVec3::Zero(), 0.0);
+  const double e = 1.0, dt = 1e-4, D = 24.5, K = 24.5;
+  // x'' + D x' + K x = e, x(0) = x'(0) = 0: x = e/K (1 + (s2 e^{s1 t} - s1 e^{s2 t}) / (s1 - s2)).
+  const double disc = std::sqrt(D * D - 4 * K), s1 = (-D + disc) / 2, s2 = (-D - disc) / 2;
+  double t = 0.0;
+  for (int k = 0; k < 100000; ++k) {
+    a.update(XVec3(e, 0, 0), XVec3::Zero(), XVec3::Zero(), 0.0, 0.0, 0.0, dt);
+    t += dt;
+    if (k % 5000 == 4999) {
+      const double x = e / K * (1 + (s2 * std::exp(s1 * t) - s1 * std::exp(s2 * t)) / (s1 - s2));
+      ASSERT_NEAR(a.position().x(), x, 2e-4) << "t = " << t;
+    }
+  }
+  EXPECT_NEAR(a.position().x(), e / K, 1e-3);  // 1 N error -> 4.1 cm
+  EXPECT_NEAR(a.position().y(), 0.0, 1e-12);
+}
+
+TEST(Admittance, ForceErrorSetsTheOffsetZPassesThroughYawYields) {
+  AdmittanceController a;
+  a.reset(XVec3(1, 2, 0.7), 0.3);
+  for (int k = 0; k < 20000; ++k)
+    a.update(XVec3(-0.5, 0.2, 5.0), XVec3(-1.25, 0, 0), XVec3(1, 2, 0.9), 0.05, 0.0, 0.3, 1e-3);
+  EXPECT_NEAR(a.position().x(), 1.0 + 0.75 / 24.5, 1e-4);  // (f - f_des) / K
+  EXPECT_NEAR(a.position().y(), 2.0 + 0.2 / 24.5, 1e-4);
+  EXPECT_DOUBLE_EQ(a.position().z(), 0.9);                 // D_zz = K_zz = 0: r_d,z = r*_z
+  EXPECT_NEAR(a.yaw(), 0.3 + 0.05 / 1.0, 1e-3);            // tau / K_yaw
+}
+
+TEST(Directions, RightHandTraversalAndPostCollisionModel) {
+  EXPECT_EQ(right_hand(XDir::kPlusX), XDir::kMinusY);
+  EXPECT_EQ(right_hand(XDir::kMinusY), XDir::kMinusX);
+  EXPECT_EQ(right_hand(XDir::kMinusX), XDir::kPlusY);
+  EXPECT_EQ(right_hand(XDir::kPlusY), XDir::kPlusX);
+  // 1.5 m/s into a wall with normal -x (out of the wall), 0.3 m/s along it, e = 0.2:
+  // normal -> -0.3 m/s, tangential kept.
+  const XVec2 v = post_collision_velocity(XVec2(1.5, 0.3), XVec2(-1, 0), 0.2);
+  EXPECT_NEAR(v.x(), -0.3, 1e-12);
+  EXPECT_NEAR(v.y(), 0.3, 1e-12);
+}
+
+namespace {
+XplorerInput input(double t, XVec3 p, double yaw, XVec3 f, double rate = 0.0) {
+  XplorerInput in;
+  in.t = t;
+  in.position = p;
+  in.yaw = yaw;
+  in.force = f;
+  in.yaw_rate = rate;
+  return in;
+}
+}  // namespace
+
+TEST(XplorerExplorer, TakeoffExplorationContactTraversalTurningAndReContact) {
+  XplorerExplorer x{XplorerParams{}};
+  const double dt = 0.02;
+  double t = 0.0;
+  XplorerOutput o = x.update(input(t, XVec3(0, 0, 0), 0.0, XVec3::Zero()), dt);
+  EXPECT_EQ(o.state, XplorerState::kTakeoff);
+  EXPECT_DOUBLE_EQ(o.position.z(), 0.7);
+  o = x.update(input(t += dt, XVec3(0, 0, 0.7), 0.0, XVec3::Zero()), dt);
+  EXPECT_EQ(o.state, XplorerState::kExploration);
+  o = x.update(input(t += dt, XVec3(0.1, 0, 0.7), 0.0, XVec3::Zero()), dt);
+  EXPECT_NEAR(o.position.x(), 0.1 + 0.3 / 1.5, 1e-12);  // lead = speed / position gain, along body +x
+  // A 2 N push back (obstacle ahead): with the three force-free samples of the
+  // take-off and exploration already in the average, 2k / (k + 3) > 1.5 at k = 10.
+  int k = 0;
+  while (x.state() == XplorerState::kExploration && k < 100) {
+    x.update(input(t += dt, XVec3(0.79, 0, 0.7), 0.0, XVec3(-2, 0, 0)), dt);
+    ++k;
+  }
+  EXPECT_EQ(k, 10);
+  EXPECT_EQ(x.state(), XplorerState::kTactileTraversal);
+  EXPECT_EQ(x.contact(), XDir::kPlusX);
+  EXPECT_EQ(x.move(), XDir::kMinusY);
+  // Traversal pressing with exactly 1.25 N: moves along -y, no normal offset.
+  for (int i = 0; i < 100; ++i) o = x.update(input(t += dt, XVec3(0.79, 0, 0.7), 0.0, XVec3(-1.25, 0, 0)), dt);
+  EXPECT_NEAR(o.position.x(), 0.79, 1e-3);
+  EXPECT_LT(o.position.y(), -0.05);
+  // A yaw-rate peak (release at a corner) -> Tactile-turning, same direction, 0.26 rad/s.
+  for (int i = 0; i < 10 && x.state() == XplorerState::kTactileTraversal; ++i)
+    x.update(input(t += dt, XVec3(0.79, -1.0, 0.7), 0.0, XVec3(-0.5, 0, 0), 1.0), dt);
+  ASSERT_EQ(x.state(), XplorerState::kTactileTurning);
+  const double t_turn = t;
+  for (int i = 0; i < 50; ++i) o = x.update(input(t += dt, XVec3(0.79, -1.0, 0.7), 0.0, XVec3::Zero()), dt);
+  EXPECT_NEAR(o.yaw, 0.26 * (t - t_turn), 0.03);
+  // Re-contact above delta_psi0 = 1.6 N along world +y at yaw 90 deg: body -x force... obstacle at body +x.
+  for (int i = 0; i < 200 && x.state() == XplorerState::kTactileTurning; ++i)
+    x.update(input(t += dt, XVec3(1.0, -1.2, 0.7), M_PI / 2, XVec3(0, -2.5, 0)), dt);
+  EXPECT_EQ(x.state(), XplorerState::kTactileTraversal);
+  EXPECT_EQ(x.contact(), XDir::kPlusX);
+  EXPECT_EQ(x.turns(), 1u);
+}
+
+TEST(XplorerExplorer, TurnIsLimitedTo180Degrees) {
+  XplorerExplorer x{XplorerParams{}};
+  double t = 0;
+  x.update(input(t, XVec3(0, 0, 0.7), 0.0, XVec3::Zero()), 0.02);
+  for (int i = 0; i < 60; ++i) x.update(input(t += 0.02, XVec3(0, 0, 0.7), 0.0, XVec3(-2, 0, 0)), 0.02);
+  ASSERT_EQ(x.state(), XplorerState::kTactileTraversal);
+  XplorerOutput o;
+  for (int i = 0; i < 100 && x.state() != XplorerState::kTactileTurning; ++i)
+    o = x.update(input(t += 0.02, XVec3(0, 0, 0.7), 0.0, XVec3(-1, 0, 0), -2.0), 0.02);
+  ASSERT_EQ(x.state(), XplorerState::kTactileTurning);
+  for (int i = 0; i < 700; ++i) o = x.update(input(t += 0.02, XVec3(0, 0, 0.7), 0.0, XVec3::Zero()), 0.02);
+  EXPECT_NEAR(std::abs(o.yaw), M_PI, 1e-9);  // -pi limit (13 s > pi / 0.26 = 12.1 s)
+}
+
+TEST(XplorerExplorer, StaticWrenchHoldsWhenTheForceMatchesTheReference) {
+  XplorerParams p;
+  p.mission = XplorerMission::kStaticWrench;
+  XplorerExplorer x(p);
+  double t = 0;
+  x.update(input(t, XVec3(0, 0, 0.7), 0.0, XVec3::Zero()), 0.02);
+  for (int i = 0; i < 60; ++i) x.update(input(t += 0.02, XVec3(0.79, 0, 0.7), 0.0, XVec3(-2, 0, 0)), 0.02);
+  ASSERT_EQ(x.state(), XplorerState::kStaticWrench);
+  XplorerOutput o;
+  for (int i = 0; i < 200; ++i) o = x.update(input(t += 0.02, XVec3(0.79, 0, 0.7), 0.0, XVec3(-1.0, 0, 0)), 0.02);
+  EXPECT_NEAR(o.position.x(), 0.79, 1e-3);  // delta_f = delta_f_ref = [-1 0 0]
+  for (int i = 0; i < 200; ++i) o = x.update(input(t += 0.02, XVec3(0.79, 0, 0.7), 0.0, XVec3(-0.5, 0, 0)), 0.02);
+  EXPECT_NEAR(o.position.x(), 0.79 + 0.5 / 24.5, 2e-3);  // pushes harder
+}
+
+TEST(XplorerExplorer, RicochetCollidesRecoversAndRegulatesAtTheGoal) {
+  XplorerParams p;
+  p.mission = XplorerMission::kRicochet;
+  p.goal = XVec2(2.0, 0.0);
+  XplorerExplorer x(p);
+  double t = 0;
+  x.update(input(t, XVec3(0, 0, 0.7), 0.0, XVec3::Zero()), 0.02);
+  XplorerOutput o = x.update(input(t += 0.02, XVec3(0, 0, 0.7), 0.0, XVec3::Zero()), 0.02);
+  EXPECT_EQ(o.state, XplorerState::kRicocheting);
+  o = x.update(input(t += 0.02, XVec3(0.5, 0, 0.7), 0.0, XVec3::Zero()), 0.02);
+  EXPECT_NEAR(o.position.x(), 0.5 + 1.5 / 1.5 + 1.0, 1e-12);  // carrot beyond the goal line
+  // Collision peak 5 N pushing back: recovery setpoint 0.02 m/N x 5 N away from the wall.
+  o = x.update(input(t += 0.02, XVec3(1.8, 0, 0.7), 0.0, XVec3(-5, 0, 0)), 0.02);
+  EXPECT_EQ(x.collisions(), 1u);
+  EXPECT_NEAR(o.position.x(), 1.8 - 0.1, 1e-12);
+  for (int i = 0; i < 20; ++i) o = x.update(input(t += 0.02, XVec3(1.75, 0, 0.7), 0.0, XVec3::Zero()), 0.02);
+  EXPECT_EQ(x.state(), XplorerState::kGoTo);
+  EXPECT_NEAR(o.position.x(), 2.0, 1e-12);
+}
+
+TEST(XplorerExplorer, LoopClosureEndsTheExploration) {
+  XplorerExplorer x{XplorerParams{}};
+  double t = 0;
+  x.update(input(t, XVec3(0, 0, 0.7), 0.0, XVec3::Zero()), 0.02);
+  for (int i = 0; i < 60; ++i) x.update(input(t += 0.02, XVec3(0, 0, 0.7), 0.0, XVec3(-1.6, 0, 0)), 0.02);
+  ASSERT_EQ(x.state(), XplorerState::kTactileTraversal);
+  // Go round a 1 m square (traversal path) and come back.
+  for (int i = 1; i <= 400 && x.state() == XplorerState::kTactileTraversal; ++i) {
+    const double s = 4.0 * i / 400.0;  // perimeter position
+    XVec3 p(0, 0, 0.7);
+    if (s < 1) p.y() = -s;
+    else if (s < 2) p = XVec3(-(s - 1), -1, 0.7);
+    else if (s < 3) p = XVec3(-1, -1 + (s - 2), 0.7);
+    else p = XVec3(-1 + (s - 3), 0, 0.7);
+    x.update(input(t += 0.02, p, 0.0, XVec3(-1.3, 0, 0)), 0.02);
+  }
+  EXPECT_TRUE(x.loop_closed());
+  EXPECT_EQ(x.state(), XplorerState::kDone);
+  EXPECT_GT(x.traversed_path(), 3.5);
+}
+
+TEST(XplorerParams, ValidateNamesTheField) {
+  XplorerParams p;
+  p.delta_psi0 = 1.4;  // must exceed delta_0 = 1.5
+  try {
+    p.validate();
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("XplorerParams.delta_psi0"), std::string::npos) << e.what();
+  }
+  p = XplorerParams{};
+  p.turn_limit = 4.0;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = XplorerParams{};
+  p.admittance.damping[1] = -1;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  EXPECT_THROW(mission_from_string("fly"), std::invalid_argument);
+}
