@@ -1,5 +1,6 @@
 #include "mapping_pcl/xplorer_map_logic.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <vector>
@@ -20,6 +21,7 @@ void XplorerMapLogic::Params::validate() const {
   if (!std::isfinite(floor_z)) bad("floor_z", "must be finite");
   if (!(publish_rate_hz >= 0.0) || !std::isfinite(publish_rate_hz)) bad("publish_rate_hz", "must be finite and >= 0 (0: never)");
   if (!(max_odometry_age_s > 0.0)) bad("max_odometry_age_s", "must be > 0");
+  if (!(min_state_time_s >= 0.0) || !std::isfinite(min_state_time_s)) bad("min_state_time_s", "must be finite and >= 0");
   if (frame_id.empty()) bad("frame_id", "must not be empty");
 }
 
@@ -33,6 +35,7 @@ ParamMap XplorerMapLogic::default_parameters() {
   m.set("rate_hz", d.stamping.rate_hz);
   m.set("slab_spacing", d.stamping.slab_spacing);
   m.set("min_flight_height", d.stamping.min_flight_height);
+  m.set("normal_from_force", d.stamping.normal_from_force);
   m.set("voxel_leaf", d.map.voxel_leaf);
   m.set("outlier_mean_k", static_cast<int64_t>(d.map.outlier_mean_k));
   m.set("outlier_stddev", d.map.outlier_stddev);
@@ -43,6 +46,8 @@ ParamMap XplorerMapLogic::default_parameters() {
   m.set("frame_id", d.frame_id);
   m.set("ply_file", d.ply_file);
   m.set("ply_binary", d.ply_binary);
+  m.set("stamp_states", d.stamp_states);
+  m.set("min_state_time_s", d.min_state_time_s);
   return m;
 }
 
@@ -57,6 +62,7 @@ XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
   p.stamping.rate_hz = m.get_double("rate_hz");
   p.stamping.slab_spacing = m.get_double("slab_spacing");
   p.stamping.min_flight_height = m.get_double("min_flight_height");
+  p.stamping.normal_from_force = m.get_bool("normal_from_force");
   p.map.voxel_leaf = m.get_double("voxel_leaf");
   p.map.outlier_mean_k = static_cast<int>(m.get_int("outlier_mean_k"));
   p.map.outlier_stddev = m.get_double("outlier_stddev");
@@ -67,6 +73,8 @@ XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
   p.frame_id = m.get_string("frame_id");
   p.ply_file = m.get_string("ply_file");
   p.ply_binary = m.get_bool("ply_binary");
+  p.stamp_states = m.get_string_array("stamp_states");
+  p.min_state_time_s = m.get_double("min_state_time_s");
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {
@@ -115,8 +123,19 @@ void XplorerMapLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
   odom_ = msg;
 }
 
+void XplorerMapLogic::on_fsm_state(const tactile_msgs::msg::FsmState& msg) {
+  fsm_state_ = msg.state;
+  fsm_state_since_s_ = tactile_common::to_seconds(tactile_common::from_stamp(msg.header.stamp)) - msg.time_in_state;
+}
+
 std::optional<sensor_msgs::msg::PointCloud2> XplorerMapLogic::on_timer(int64_t now_ns) {
-  if (!odom_ || forces_.empty() ||
+  const bool gated =
+      fsm_state_ && !params_.stamp_states.empty() &&
+      (std::find(params_.stamp_states.begin(), params_.stamp_states.end(), *fsm_state_) == params_.stamp_states.end() ||
+       tactile_common::to_seconds(now_ns) - fsm_state_since_s_ < params_.min_state_time_s);
+  if (gated) {
+    ++stats_.ticks_gated;
+  } else if (!odom_ || forces_.empty() ||
       tactile_common::to_seconds(now_ns - tactile_common::from_stamp(odom_->header.stamp)) > params_.max_odometry_age_s) {
     ++stats_.ticks_without_input;
   } else {

@@ -66,7 +66,10 @@ XplorerContactMapper::XplorerContactMapper(const XplorerMapParams& params, Point
     : p_((params.validate(), params)), map_(&map) {}
 
 Box XplorerContactMapper::face_slab(const ContactSample& s, BodyDirection contact) const {
-  const Eigen::Vector2d d = Eigen::Rotation2Dd(s.yaw) * unit(contact);  // C_n in the world
+  return face_slab_world(s, Eigen::Rotation2Dd(s.yaw) * unit(contact));  // C_n in the world
+}
+
+Box XplorerContactMapper::face_slab_world(const ContactSample& s, const Eigen::Vector2d& d) const {
   Box b;
   const double reach = p_.slab_offset + 0.5 * p_.slab_size.y();  // near face at slab_offset
   b.center = Vec3(s.position.x() + reach * d.x(), s.position.y() + reach * d.y(), s.position.z());
@@ -116,12 +119,12 @@ int XplorerContactMapper::update(const ContactSample& s) {
   }
   last_stamp_t_ = s.t;
   int stamped = 0;
-  map_->insert_box(face_slab(s, *c), p_.slab_spacing);
+  const Eigen::Rotation2Dd R(s.yaw);
+  const Eigen::Vector2d c_w = p_.normal_from_force ? Eigen::Vector2d(-(R * s.force_body).normalized()) : Eigen::Vector2d(R * unit(*c));
+  map_->insert_box(face_slab_world(s, c_w), p_.slab_spacing);
   ++stats_.slabs;
   ++stamped;
-  const Eigen::Rotation2Dd R(s.yaw);
-  const Eigen::Vector2d c_w = R * unit(*c);
-  const Eigen::Vector2d m_w = R * unit(right_hand_move(*c));  // lambda in the world
+  const Eigen::Vector2d m_w = Eigen::Rotation2Dd(-M_PI / 2) * c_w;  // lambda in the world (right-hand)
   const double ang = std::atan2(m_w.y(), m_w.x());
   const int move_world = static_cast<int>(std::lround(ang / (M_PI / 2))) & 3;  // nearest world axis
   if (last_move_world_ && *last_move_world_ != move_world) {  // 001 Sec. IV-B: corner

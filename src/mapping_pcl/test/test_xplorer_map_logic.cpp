@@ -87,6 +87,27 @@ TEST(XplorerMapLogic, StampsWhilePressingAndPublishesPointCloud2) {
   EXPECT_NEAR(m.width, 0.08, 0.011);
 }
 
+TEST(XplorerMapLogic, FsmStateGatesTheStamping) {
+  XplorerMapLogic logic(XplorerMapLogic::params_from(XplorerMapLogic::default_parameters()));
+  tactile_msgs::msg::FsmState st;
+  st.state = "tactile_turning";
+  logic.on_fsm_state(st);
+  logic.on_odometry(odom(0, 0, 0, 0.7, 0));
+  logic.on_wrench_body(wrench(-2.0, 0.0));
+  logic.on_timer(0);
+  EXPECT_EQ(logic.stats().ticks_gated, 1u);
+  EXPECT_EQ(logic.map().size(), 0u);
+  st.state = "tactile_traversal";  // entered 0.5 s ago: still gated (min_state_time_s = 2 s)
+  tactile_common::to_stamp(tactile_common::from_seconds(0.5), st.header.stamp);
+  st.time_in_state = 0.5;
+  logic.on_fsm_state(st);
+  logic.on_timer(tactile_common::from_seconds(0.5));
+  EXPECT_EQ(logic.stats().ticks_gated, 2u);
+  logic.on_odometry(odom(tactile_common::from_seconds(2.0), 0, 0, 0.7, 0));
+  logic.on_timer(tactile_common::from_seconds(2.0));
+  EXPECT_EQ(logic.mapper().stats().slabs, 1u);
+}
+
 TEST(XplorerMapLogic, BadInputIsCountedAndNothingIsStamped) {
   XplorerMapLogic logic(XplorerMapLogic::params_from(XplorerMapLogic::default_parameters()));
   logic.on_timer(0);  // no input yet

@@ -153,6 +153,8 @@ void XplorerParams::validate() const {
   if (!(turn_limit > 0.0 && turn_limit <= M_PI)) bad("XplorerParams", "turn_limit", "must be in (0, pi] (001: 180 deg)", turn_limit);
   pos("turn_push", turn_push);
   pos("contact_force", contact_force);
+  if (!(reshape_gain >= 0.0) || !std::isfinite(reshape_gain)) bad("XplorerParams", "reshape_gain", "must be >= 0", reshape_gain);
+  pos("reshape_limit", reshape_limit);
   pos("release_force", release_force);
   pos("release_time", release_time);
   if (!(settle_time >= 0.0)) bad("XplorerParams", "settle_time", "must be >= 0", settle_time);
@@ -171,6 +173,14 @@ void XplorerParams::validate() const {
 // --- the state machine ---------------------------------------------------------------------
 XplorerExplorer::XplorerExplorer(const XplorerParams& p) : p_((p.validate(), p)), adm_(p.admittance) {}
 
+double XplorerExplorer::reshape(const XVec2& n, const XVec2& p, const XVec3& force, const XVec3& f_des, double dt) {
+  // 001 Sec. III-B1: r* reshaped by the external wrench (integral of the force error along C_n).
+  double rn = r_star_.dot(n) + p_.reshape_gain * (force - f_des).head<2>().dot(n) * dt;
+  rn = std::clamp(rn, p.dot(n) - p_.reshape_limit, p.dot(n) + p_.reshape_limit);
+  r_star_ = r_star_ + (rn - r_star_.dot(n)) * n;
+  return rn;
+}
+
 void XplorerExplorer::enter(XplorerState s, const XplorerInput& in, const std::string& why) {
   state_ = s;
   t_enter_ = in.t;
@@ -182,6 +192,7 @@ void XplorerExplorer::enter(XplorerState s, const XplorerInput& in, const std::s
   yaw_enter_ = in.yaw;
   if (s == XplorerState::kTactileTraversal || s == XplorerState::kStaticWrench) {
     adm_.reset(XVec3(in.position.x(), in.position.y(), p_.hover_height), in.yaw);
+    r_star_ = in.position.head<2>();
     t_quiet_ = in.t;
   }
 }
@@ -214,8 +225,7 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
   have_rate_ = true;
 
   const XVec2 p2 = in.position.head<2>();
-  if (started_path_ && (state_ == XplorerState::kTactileTraversal || state_ == XplorerState::kTactileTurning))
-    path_ += (p2 - last_p_).norm();
+  if (started_path_ && state_ != XplorerState::kDone) path_ += (p2 - last_p_).norm();
   last_p_ = p2;
 
   if (!initialised_) {  // take off where the vehicle stands
@@ -226,6 +236,13 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
   }
   XplorerOutput out;
   const XplorerState before = state_;
+  // Loop closure (001 Sec. V-C2): back at the first contact point after going round.
+  if (started_path_ && !loop_closed_ && path_ > p_.loop_min_path &&
+      (p2 - first_contact_p_).norm() < p_.loop_closure_radius) {
+    loop_closed_ = true;
+    loop_closure_t_ = in.t;
+    enter(XplorerState::kDone, in, "loop closed");
+  }
   const double lead_t = p_.traverse_speed / p_.position_gain;
   switch (state_) {
     case XplorerState::kTakeoff: {
@@ -267,13 +284,6 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
       break;
     }
     case XplorerState::kTactileTraversal: {
-      // Loop closure: back at the first contact point after going round.
-      if (path_ > p_.loop_min_path && (p2 - first_contact_p_).norm() < p_.loop_closure_radius) {
-        loop_closed_ = true;
-        loop_closure_t_ = in.t;
-        enter(XplorerState::kDone, in, "loop closed");
-        break;
-      }
       // 001 Sec. IV-A: a yaw-rate peak (release at a corner) starts Tactile-turning.
       if (in.t - t_quiet_ > p_.settle_time && std::abs(yaw_rate_f_) > p_.yaw_rate_trigger) {
         turn_sign_ = yaw_rate_f_ > 0 ? 1.0 : -1.0;
@@ -301,9 +311,11 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
         low_force_since_ = -1.0;
       }
       const XVec2 n = rot(in.yaw, unit(contact_)), t = rot(in.yaw, unit(move_));
-      XVec3 r_star(p2.x() + lead_t * t.x(), p2.y() + lead_t * t.y(), p_.hover_height);
-      XVec3 f_des(-p_.contact_force * n.x(), -p_.contact_force * n.y(), 0.0);
-      adm_.update(in.force, f_des, r_star, in.torque_z, 0.0, in.yaw, dt);  // 001 eq. 8
+      const XVec3 f_des(-p_.contact_force * n.x(), -p_.contact_force * n.y(), 0.0);
+      // r*: along lambda a lead ahead of the vehicle, along C_n reshaped by the force error.
+      const double rn = reshape(n, p2, in.force, f_des, dt);
+      const XVec2 rs = p2 + (rn - p2.dot(n)) * n + lead_t * t;
+      adm_.update(in.force, f_des, XVec3(rs.x(), rs.y(), p_.hover_height), in.torque_z, 0.0, in.yaw, dt);  // 001 eq. 8
       out.position = adm_.position();
       out.yaw = adm_.yaw();
       break;
@@ -334,8 +346,11 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
       // 001 Sec. V-B: delta_f_ref = 1 N onto the surface, r* = current position
       // (the setpoint is reshaped by the force error only).
       const XVec2 n = rot(in.yaw, unit(contact_));
-      XVec3 f_des(-p_.static_force * n.x(), -p_.static_force * n.y(), 0.0);
-      adm_.update(in.force, f_des, XVec3(p2.x(), p2.y(), p_.hover_height), in.torque_z, 0.0, in.yaw, dt);
+      const XVec3 f_des(-p_.static_force * n.x(), -p_.static_force * n.y(), 0.0);
+      const double rn = reshape(n, p2, in.force, f_des, dt);
+      const XVec2 h = hold_.head<2>();
+      const XVec2 rs = h + (rn - h.dot(n)) * n;  // tangentially at the contact point
+      adm_.update(in.force, f_des, XVec3(rs.x(), rs.y(), p_.hover_height), in.torque_z, 0.0, in.yaw, dt);
       out.position = adm_.position();
       out.yaw = adm_.yaw();
       break;
@@ -363,8 +378,8 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
       } else {
         out.position = XVec3(p2.x(), p2.y(), p_.hover_height);
         out.position.head<2>() += (p_.ricochet_speed / p_.position_gain + 1.0) * dir;  // saturates the vehicle's speed
-        // Past the goal without a collision: regulate there.
-        if ((p2 - hold_.head<2>()).dot(dir) > (p_.goal - hold_.head<2>()).norm()) {
+        // Well past the goal without a collision (no wall there): regulate at the goal.
+        if ((p2 - hold_.head<2>()).dot(dir) > (p_.goal - hold_.head<2>()).norm() + 0.3) {
           enter(XplorerState::kGoTo, in, "goal passed without collision");
         }
       }

@@ -41,6 +41,8 @@ ParamMap XplorerFsmLogic::default_parameters() {
   m.set("turn_limit", f.turn_limit);
   m.set("turn_push", f.turn_push);
   m.set("contact_force", f.contact_force);
+  m.set("reshape_gain", f.reshape_gain);
+  m.set("reshape_limit", f.reshape_limit);
   m.set("release_force", f.release_force);
   m.set("release_time", f.release_time);
   m.set("settle_time", f.settle_time);
@@ -85,6 +87,8 @@ XplorerFsmLogic::Params XplorerFsmLogic::params_from(const ParamMap& m) {
   f.turn_limit = m.get_double("turn_limit");
   f.turn_push = m.get_double("turn_push");
   f.contact_force = m.get_double("contact_force");
+  f.reshape_gain = m.get_double("reshape_gain");
+  f.reshape_limit = m.get_double("reshape_limit");
   f.release_force = m.get_double("release_force");
   f.release_time = m.get_double("release_time");
   f.settle_time = m.get_double("settle_time");

@@ -7,6 +7,7 @@
 #include <deque>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "geometry_msgs/msg/wrench_stamped.hpp"
 #include "mapping_pcl/point_cloud2.hpp"
@@ -15,6 +16,7 @@
 #include "nav_msgs/msg/odometry.hpp"
 #include "sensor_msgs/msg/point_cloud2.hpp"
 #include "tactile_common/parameters.hpp"
+#include "tactile_msgs/msg/fsm_state.hpp"
 
 namespace mapping_pcl {
 
@@ -24,6 +26,7 @@ class XplorerMapLogic {
   static constexpr const char* kWrenchBodyTopic = "/xplorer/wrench_body";  // geometry_msgs/msg/WrenchStamped
   static constexpr const char* kOdometryTopic = "/odom";                   // nav_msgs/msg/Odometry
   static constexpr const char* kCloudTopic = "/xplorer/map";               // sensor_msgs/msg/PointCloud2
+  static constexpr const char* kFsmStateTopic = "/xplorer/fsm_state";      // tactile_msgs/msg/FsmState (optional)
 
   struct Params {
     XplorerMapParams stamping;
@@ -35,6 +38,11 @@ class XplorerMapLogic {
     std::string frame_id = "map";
     std::string ply_file;            ///< written by save_ply() ("" = none)
     bool ply_binary = false;         ///< false: ASCII as 001; true: binary little endian
+    /// Stamp only while the exploration FSM is in one of these states (once an
+    /// FsmState has arrived; empty = always). Keeps slabs out of turns, where
+    /// the body force points across the corner (choice; 001 gates on force only).
+    std::vector<std::string> stamp_states = {"tactile_traversal"};
+    double min_state_time_s = 2.0;   ///< ... and has been in it this long (choice: skips post-turn transients)
     void validate() const;
   };
 
@@ -45,6 +53,7 @@ class XplorerMapLogic {
     uint64_t dropped_wrong_frame = 0; ///< wrench not in the body frame of the odometry / base_link
     uint64_t ticks_without_input = 0; ///< timer ticks with no or stale odometry/force
     uint64_t published = 0;
+    uint64_t ticks_gated = 0;         ///< timer ticks skipped: FSM state not in stamp_states
   };
 
   static tactile_common::ParamMap default_parameters();
@@ -54,6 +63,7 @@ class XplorerMapLogic {
 
   void on_wrench_body(const geometry_msgs::msg::WrenchStamped& msg);
   void on_odometry(const nav_msgs::msg::Odometry& msg);
+  void on_fsm_state(const tactile_msgs::msg::FsmState& msg);
   /// Timer at stamping.rate_hz (30 Hz): stamps slabs; returns the cloud when
   /// a publication is due.
   std::optional<sensor_msgs::msg::PointCloud2> on_timer(int64_t now_ns);
@@ -77,6 +87,8 @@ class XplorerMapLogic {
   std::deque<Eigen::Vector2d> forces_;
   Eigen::Vector2d force_sum_ = Eigen::Vector2d::Zero();
   std::optional<nav_msgs::msg::Odometry> odom_;
+  std::optional<std::string> fsm_state_;
+  double fsm_state_since_s_ = 0.0;  ///< stamp time of entering the current state
   int64_t last_publish_ns_ = -1;
 };
 

@@ -35,6 +35,10 @@ struct XplorerMapParams {
   double rate_hz = 30.0;                       ///< stamping rate (001 Sec. IV-B)
   double slab_spacing = 0.02;                  ///< point spacing inside a slab [m] (choice; the map is voxel-filtered at 1 cm)
   double min_flight_height = 0.2;              ///< "mapping only when flying": height above the floor [m] (choice)
+  /// Direction of the slab: false = the contact axis C_n (a body axis, 001);
+  /// true = opposite to the measured force (the actual contact normal; for a
+  /// vehicle whose yaw is not square to the wall) (choice).
+  bool normal_from_force = false;
   void validate() const;                       ///< throws std::invalid_argument "XplorerMapParams.<field>: <reason>"
 };
 
@@ -66,6 +70,8 @@ class XplorerContactMapper {
 
   /// The slab that `update` would stamp for a contact direction (tests, pictures).
   Box face_slab(const ContactSample& s, BodyDirection contact) const;
+  /// Face slab along an arbitrary world direction `d` (unit, x-y).
+  Box face_slab_world(const ContactSample& s, const Eigen::Vector2d& d) const;
   Box corner_slab(const ContactSample& s, const Eigen::Vector2d& previous_contact_world,
                   const Eigen::Vector2d& contact_world) const;
 

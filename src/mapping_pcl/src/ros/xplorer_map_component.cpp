@@ -24,6 +24,9 @@ class XplorerMapComponent : public rclcpp::Node {
     odom_sub_ = create_subscription<nav_msgs::msg::Odometry>(
       XplorerMapLogic::kOdometryTopic, rclcpp::SensorDataQoS(),
       [this](const nav_msgs::msg::Odometry & msg) {logic_.on_odometry(msg);});
+    state_sub_ = create_subscription<tactile_msgs::msg::FsmState>(
+      XplorerMapLogic::kFsmStateTopic, 10,
+      [this](const tactile_msgs::msg::FsmState & msg) {logic_.on_fsm_state(msg);});
     timer_ = create_wall_timer(std::chrono::nanoseconds(logic_.period_ns()), [this]() {
         if (auto cloud = logic_.on_timer(now().nanoseconds())) {cloud_pub_->publish(*cloud);}
       });
@@ -42,6 +45,7 @@ class XplorerMapComponent : public rclcpp::Node {
   rclcpp::Publisher<sensor_msgs::msg::PointCloud2>::SharedPtr cloud_pub_;
   rclcpp::Subscription<geometry_msgs::msg::WrenchStamped>::SharedPtr wrench_sub_;
   rclcpp::Subscription<nav_msgs::msg::Odometry>::SharedPtr odom_sub_;
+  rclcpp::Subscription<tactile_msgs::msg::FsmState>::SharedPtr state_sub_;
   rclcpp::TimerBase::SharedPtr timer_;
 };
 

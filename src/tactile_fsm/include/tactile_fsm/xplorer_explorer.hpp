@@ -98,6 +98,11 @@ struct XplorerParams {
   double turn_limit = M_PI;          ///< |yaw change| limit of one turn [rad] (001: 180 deg)
   double turn_push = 0.05;           ///< setpoint lead towards C_n while turning [m] (choice)
   double contact_force = 1.25;       ///< |delta_f_des| in traversal [N] (001)
+  /// r* along C_n is "reshaped according to the external wrench" (001 Sec.
+  /// III-B1): r*_n += reshape_gain (delta_f - delta_f_des).n dt, so the force
+  /// error integrates to zero whatever the contact stiffness [m/(N s)] (choice).
+  double reshape_gain = 0.1;
+  double reshape_limit = 0.3;        ///< |r*_n - p_n| limit [m] (choice)
   double release_force = 0.3;        ///< averaged |force| below which contact is lost [N] (choice)
   double release_time = 1.0;         ///< ... for this long -> Exploration [s] (choice)
   double settle_time = 1.0;          ///< no turning trigger this long after a contact / turn [s] (choice)
@@ -161,6 +166,7 @@ class XplorerExplorer {
  private:
   void enter(XplorerState s, const XplorerInput& in, const std::string& why);
   XDir detect_contact(double threshold) const;
+  double reshape(const XVec2& n, const XVec2& p, const XVec3& force, const XVec3& f_des, double dt);
 
   XplorerParams p_;
   AdmittanceController adm_;
@@ -182,6 +188,7 @@ class XplorerExplorer {
   XVec2 first_contact_p_ = XVec2::Zero(), last_p_ = XVec2::Zero();
   XVec2 collision_normal_ = XVec2::Zero();
   XVec3 recovery_sp_ = XVec3::Zero();
+  XVec2 r_star_ = XVec2::Zero();  ///< reshaped setpoint r* (x-y) in contact states
 };
 
 }  // namespace tactile_fsm
