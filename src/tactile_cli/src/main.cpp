@@ -9,6 +9,7 @@
 
 #include "tactile_cli/hardware.hpp"
 #include "tactile_cli/sim_run.hpp"
+#include "tactile_cli/xplorer_export.hpp"
 #include "tactile_cli/whisker_demo.hpp"
 #include "tactile_cli/whisker_replay.hpp"
 #include "whisker_localization/protocols.hpp"
@@ -96,6 +97,11 @@ int main(int argc, char** argv) {
   stage_cmd->add_option("scenario", stage_scenario, "bench scenario file")->required();
   stage_cmd->add_option("--out", stage_out, "output directory (metrics.json)")->required();
   auto* stage_seed_opt = stage_cmd->add_option("--seed", stage_seed, "seed (default: the scenario's)");
+  tactile_cli::ExportOptions exp;
+  auto* export_cmd = app.add_subcommand("export", "rebuild the XPLORER contact map from a bag and write it as PLY (001)");
+  export_cmd->add_option("bag", exp.bag, "input rosbag2 directory")->required();
+  export_cmd->add_option("--ply", exp.ply, "output PLY file (frame map, metres)")->required();
+  export_cmd->add_flag("--binary", exp.binary, "binary little endian instead of ASCII");
 
   CLI11_PARSE(app, argc, argv);
 
@@ -148,6 +154,12 @@ int main(int argc, char** argv) {
         std::printf("tactile bench: %.1f s, %llu messages -> %s\n", m["wall_time_s"].get<double>(),
                     m["bag_messages"].get<unsigned long long>(), bench.out_dir.c_str());
       }
+    } else if (*export_cmd) {
+      exp.config_dir = config_dir;
+      const auto m = tactile_cli::run_export(exp);
+      std::printf("tactile export: %s -> %s (%llu points, %.3f x %.3f m)\n", exp.bag.c_str(), exp.ply.c_str(),
+                  static_cast<unsigned long long>(m["points"].get<uint64_t>()), m["map_length_m"].get<double>(),
+                  m["map_width_m"].get<double>());
     } else if (*replay_cmd) {
       replay.config_dir = config_dir;
       const auto m = tactile_cli::run_replay(replay);

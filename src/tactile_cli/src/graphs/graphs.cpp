@@ -11,6 +11,7 @@ const std::vector<GraphInfo>& sim_graphs() {
       graphs::pilot_graph(),
       graphs::whisker_fsm_graph(),
       graphs::gpis_explore_graph(),
+      graphs::xplorer_graph(),
   };
   return table;
 }

@@ -9,5 +9,6 @@ GraphInfo none_graph();         // none.cpp
 GraphInfo pilot_graph();        // pilot.cpp
 GraphInfo whisker_fsm_graph();  // whisker_fsm.cpp
 GraphInfo gpis_explore_graph();  // gpis_explore.cpp
+GraphInfo xplorer_graph();      // xplorer.cpp
 
 }  // namespace tactile_cli::graphs

@@ -1,0 +1,70 @@
+"""SITL of XPLORER (paper 001) with ROS 2: simulator -> xplorer_force_est -> XPLORER
+behaviours (admittance, exploration FSM, static wrench, ricocheting) -> position setpoints
+back to the simulator, and the contact mapper, composed in one container on simulated
+time.
+
+    ros2 launch launch/sitl_xplorer.launch.py scenario:=config/scenarios/xplorer_box_traversal.yaml mission:=explore
+
+The standalone host runs the same graph without ROS:
+
+    tactile sim config/scenarios/xplorer_box_traversal.yaml --out out/box
+
+Parameters come from the files in config/ (the ones `tactile sim` reads); the scenario,
+seed, mission and the PLY file written at shutdown are launch arguments (the scenario's
+node_parameters are applied by `tactile sim` only, so pass the mission here).
+"""
+
+import os
+
+from launch import LaunchDescription
+from launch.actions import DeclareLaunchArgument
+from launch.substitutions import LaunchConfiguration
+from launch_ros.actions import ComposableNodeContainer
+from launch_ros.descriptions import ComposableNode
+
+CONFIG_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config')
+
+
+def config(name):
+    return os.path.join(CONFIG_DIR, name + '.yaml')
+
+
+def generate_launch_description():
+    sim_time = {'use_sim_time': True}
+    intra = [{'use_intra_process_comms': True}]
+    nodes = [
+        ComposableNode(
+            package='tactile_sim', plugin='tactile_sim::TactileSimComponent', name='tactile_sim',
+            parameters=[{'scenario': LaunchConfiguration('scenario'),
+                         'seed': LaunchConfiguration('seed')}],
+            extra_arguments=intra),
+        ComposableNode(
+            package='xplorer_force_est', plugin='xplorer_force_est::XplorerForceEstComponent',
+            name='xplorer_force_est', parameters=[config('xplorer_force_est'), sim_time],
+            extra_arguments=intra),
+        ComposableNode(
+            package='tactile_fsm', plugin='tactile_fsm::XplorerFsmComponent', name='xplorer_fsm',
+            parameters=[config('xplorer_fsm'), sim_time,
+                        {'mission': LaunchConfiguration('mission')}],
+            extra_arguments=intra),
+        ComposableNode(
+            package='mapping_pcl', plugin='mapping_pcl::XplorerMapComponent', name='xplorer_mapping',
+            parameters=[config('xplorer_mapping'), sim_time,
+                        {'ply_file': LaunchConfiguration('ply_file')}],
+            extra_arguments=intra),
+    ]
+    return LaunchDescription([
+        DeclareLaunchArgument('scenario', default_value=os.path.join(
+            CONFIG_DIR, 'scenarios', 'xplorer_box_traversal.yaml'),
+            description='scenario file of the simulator'),
+        DeclareLaunchArgument('seed', default_value='-1',
+                              description="noise seed (-1: the scenario's)"),
+        DeclareLaunchArgument('mission', default_value='explore',
+                              description='explore | static_wrench | ricochet | waypoint'),
+        DeclareLaunchArgument('ply_file', default_value='xplorer_map.ply',
+                              description='contact map written at shutdown (ASCII PLY, frame map)'),
+        ComposableNodeContainer(
+            name='sitl_xplorer_container', namespace='', package='rclcpp_components',
+            executable='component_container', composable_node_descriptions=nodes,
+            output='screen'),
+    ])

@@ -1,0 +1,80 @@
+#include "tactile_cli/xplorer_export.hpp"
+
+#include <stdexcept>
+
+#include "graphs/xplorer_nodes.hpp"
+#include "tactile_bag/bag.hpp"
+#include "tactile_bag/typed.hpp"
+#include "tactile_cli/host.hpp"
+#include "tactile_common/time.hpp"
+
+namespace tactile_cli {
+
+nlohmann::json run_export(const ExportOptions& o) {
+  using xplorer_force_est::XplorerForceEstLogic;
+  using MapLogic = mapping_pcl::XplorerMapLogic;
+  tactile_bag::Reader reader(o.bag);
+  const bool have_odom = reader.find_topic(MapLogic::kOdometryTopic) != nullptr;
+  if (!have_odom) throw std::runtime_error(o.bag + ": no " + std::string(MapLogic::kOdometryTopic) + " topic (the map needs the pose)");
+  const bool have_wrench = reader.find_topic(MapLogic::kWrenchBodyTopic) != nullptr;
+  if (!have_wrench && (!reader.find_topic(XplorerForceEstLogic::kArmImuTopic) || !reader.find_topic(XplorerForceEstLogic::kImuTopic) ||
+                       !reader.find_topic(XplorerForceEstLogic::kThrustTopic))) {
+    throw std::runtime_error(o.bag + ": neither " + std::string(MapLogic::kWrenchBodyTopic) + " nor the force-estimator inputs (" +
+                             XplorerForceEstLogic::kArmImuTopic + ", " + XplorerForceEstLogic::kImuTopic + ", " +
+                             XplorerForceEstLogic::kThrustTopic + ")");
+  }
+  Host host(o.config_dir);
+  host.executor().set_time(reader.start_time_ns());  // timers start at the bag's first message
+  auto map = add_xplorer_mapping(host, overrides({{"publish_rate_hz", 0.0}}));
+  std::shared_ptr<XplorerForceEstLogic> force;
+  std::vector<std::string> topics = {MapLogic::kOdometryTopic};
+  if (reader.find_topic(MapLogic::kFsmStateTopic)) topics.push_back(MapLogic::kFsmStateTopic);
+  if (have_wrench) {
+    topics.push_back(MapLogic::kWrenchBodyTopic);
+  } else {
+    force = add_xplorer_force_est(host, {});
+    topics.insert(topics.end(), {XplorerForceEstLogic::kArmImuTopic, XplorerForceEstLogic::kImuTopic,
+                                 XplorerForceEstLogic::kThrustTopic});
+  }
+  reader.set_topic_filter(topics);
+  tactile_bag::SerializedMessage m;
+  uint64_t used = 0;
+  while (reader.read_next(m)) {
+    host.executor().run_until(m.timestamp_ns);  // mapping timer ticks up to this message
+    const int64_t now = m.timestamp_ns;
+    if (m.topic == MapLogic::kOdometryTopic) {
+      host.bus().publish(m.topic, tactile_bag::decode<nav_msgs::msg::Odometry>(m), now);
+    } else if (m.topic == MapLogic::kFsmStateTopic) {
+      host.bus().publish(m.topic, tactile_bag::decode<tactile_msgs::msg::FsmState>(m), now);
+    } else if (m.topic == MapLogic::kWrenchBodyTopic) {
+      host.bus().publish(m.topic, tactile_bag::decode<geometry_msgs::msg::WrenchStamped>(m), now);
+    } else if (m.topic == XplorerForceEstLogic::kArmImuTopic) {
+      host.bus().publish(m.topic, tactile_bag::decode<tactile_msgs::msg::ArmImuArray>(m), now);
+    } else if (m.topic == XplorerForceEstLogic::kImuTopic) {
+      host.bus().publish(m.topic, tactile_bag::decode<sensor_msgs::msg::Imu>(m), now);
+    } else if (m.topic == XplorerForceEstLogic::kThrustTopic) {
+      host.bus().publish(m.topic, tactile_bag::decode<tactile_msgs::msg::ThrustCommand>(m), now);
+    }
+    ++used;
+  }
+  const auto r = map->finalize();
+  mapping_pcl::PlyInfo info;
+  info.frame = map->params().frame_id;
+  info.comment = "XPLORER contact map rebuilt from a bag (paper 001 Sec. IV-B)";
+  mapping_pcl::write_ply(o.ply, map->map().cloud(),
+                         o.binary ? mapping_pcl::PlyFormat::kBinaryLittleEndian : mapping_pcl::PlyFormat::kAscii, info);
+  nlohmann::json s;
+  s["bag"] = o.bag;
+  s["ply"] = o.ply;
+  s["format"] = o.binary ? "binary_little_endian" : "ascii";
+  s["wrench_source"] = have_wrench ? MapLogic::kWrenchBodyTopic : "xplorer_force_est (re-run)";
+  s["messages"] = used;
+  s["slabs"] = map->mapper().stats().slabs;
+  s["points"] = r.points;
+  s["map_length_m"] = r.length;
+  s["map_width_m"] = r.width;
+  s["map_area_m2"] = r.obb_area;
+  return s;
+}
+
+}  // namespace tactile_cli

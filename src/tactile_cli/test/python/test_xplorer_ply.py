@@ -1,0 +1,64 @@
+"""XPLORER contact maps (paper 001 Sec. IV-B) read by an independent PLY
+reader (plyfile): the maps `tactile sim` writes for the box traversal and
+the map `tactile export BAG --ply` rebuilds from a recorded wall traversal
+open with the point count of metrics.json and bounds at the obstacle."""
+import json
+import os
+import subprocess
+
+import numpy as np
+import pytest
+from plyfile import PlyData
+
+TACTILE = os.environ["TACTILE_EXE"]
+CONFIG = os.environ["TACTILE_CONFIG_DIR"]
+
+
+def sim(scenario, out, *extra):
+    subprocess.run([TACTILE, "--config", CONFIG, "sim", os.path.join(CONFIG, "scenarios", scenario),
+                    "--out", str(out), "--quiet", "--no-png", *extra], check=True, capture_output=True)
+    return json.loads((out / "metrics.json").read_text())
+
+
+def xyz(path):
+    v = PlyData.read(str(path))["vertex"]
+    return np.stack([v["x"], v["y"], v["z"]], axis=1).astype(np.float64)
+
+
+def test_box_traversal_maps_open_with_count_and_bounds(tmp_path):
+    m = sim("xplorer_box_traversal.yaml", tmp_path, "--no-bag")["xplorer"]
+    a = xyz(tmp_path / "map.ply")
+    b = xyz(tmp_path / "map_binary.ply")
+    assert len(a) == len(b) == m["map_raw_points"] > 0
+    np.testing.assert_array_equal(a, b)
+    ply = PlyData.read(str(tmp_path / "map.ply"))
+    assert ply.text and "frame map" in " ".join(ply.comments)
+    assert PlyData.read(str(tmp_path / "map_binary.ply")).byte_order == "<"
+    # Box of config/scenarios/arenas/xplorer_box.yaml: x in [0.8, 1.8], y in [-0.61, 0.61].
+    lo, hi = a.min(axis=0), a.max(axis=0)
+    assert lo[0] > 0.8 - 0.1 and hi[0] < 1.8 + 0.1
+    assert lo[1] > -0.61 - 0.1 and hi[1] < 0.61 + 0.1
+    # Slabs 0.5 m tall at the 0.7 m hover height.
+    assert abs(lo[2] - 0.45) < 0.1 and abs(hi[2] - 0.95) < 0.1
+
+
+def test_export_rebuilds_the_map_from_a_bag(tmp_path):
+    m = sim("xplorer_wall_traversal.yaml", tmp_path)["xplorer"]
+    for fmt in ([], ["--binary"]):
+        out = tmp_path / ("export_bin.ply" if fmt else "export.ply")
+        r = subprocess.run([TACTILE, "--config", CONFIG, "export", str(tmp_path / "bag"), "--ply", str(out), *fmt],
+                           check=True, capture_output=True, text=True)
+        assert "points" in r.stdout
+        p = xyz(out)
+        # Same filtered map as the run's metrics (voxel 1 cm + outlier removal).
+        assert len(p) == m["map_points"] > 0
+        # The wall of xplorer_wall.yaml is at x = 1 m: slabs lie in [1.0, 1.08].
+        assert p[:, 0].min() > 1.0 - 0.02 and p[:, 0].max() < 1.08 + 0.03
+
+
+def test_export_names_the_missing_topic(tmp_path):
+    (tmp_path / "empty").mkdir()
+    r = subprocess.run([TACTILE, "--config", CONFIG, "export", str(tmp_path / "empty"), "--ply", str(tmp_path / "x.ply")],
+                       capture_output=True, text=True)
+    assert r.returncode != 0
+    assert "error" in r.stderr

@@ -1,0 +1,87 @@
+// SITL scenario tests of the XPLORER graph (paper 001): simulator ->
+// xplorer_force_est -> xplorer_fsm -> /cmd_position, xplorer_mapping. Each
+// scenario is one seeded run (< 1 s of wall time each) asserting the paper's
+// metrics as measured in this SITL (src/tactile_fsm/README.md, "XPLORER").
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <string>
+
+#include "tactile_cli/sim_run.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path kConfig = TACTILE_CONFIG_DIR;
+
+nlohmann::json run(const std::string& scenario) {
+  const fs::path out = fs::temp_directory_path() /
+                       ("tactile_xplorer_sitl_" + fs::path(scenario).stem().string() + "_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  tactile_cli::SimOptions o;
+  o.scenario = (kConfig / "scenarios" / scenario).string();
+  o.out_dir = out.string();
+  o.config_dir = kConfig.string();
+  o.progress = false;
+  o.write_bag = false;
+  o.write_png = false;
+  auto m = tactile_cli::run_sim(o);
+  fs::remove_all(out);
+  return m;
+}
+
+}  // namespace
+
+// 001 Sec. V-B: push the wall with 1 N; the fused estimate within the paper's
+// hardware accuracy (0.3 N) of the simulated contact force, the CoM collision
+// peak kept by the fusion.
+TEST(XplorerSitl, StaticWrenchEstimateMatchesTheContactForce) {
+  const auto m = run("xplorer_static_wrench.yaml");
+  ASSERT_TRUE(m["success"].get<bool>());
+  const auto& x = m["xplorer"];
+  EXPECT_EQ(x["final_state"], "static_wrench");
+  EXPECT_LT(x["force_error_n"].get<double>(), 0.3);
+  EXPECT_NEAR(x["force_estimate_n"].get<double>(), 1.0, 0.1);  // regulated to the 1 N reference
+  EXPECT_NEAR(x["force_true_n"].get<double>(), 1.0, 0.15);
+  EXPECT_TRUE(x["fusion_keeps_peak"].get<bool>());
+  EXPECT_LT(x["force_settle_s"].get<double>(), 10.0);
+}
+
+// 001 Sec. V-C2 / V-D: start outside the 1.22 m x 1.0 m box, traverse it with
+// all three states, close the loop, map it (001: 1.231 x 1.019 m, 96.72 %).
+TEST(XplorerSitl, BoxTraversalClosesTheLoopAndMapsTheBox) {
+  const auto m = run("xplorer_box_traversal.yaml");
+  ASSERT_TRUE(m["success"].get<bool>());
+  const auto& x = m["xplorer"];
+  EXPECT_TRUE(x["loop_closed"].get<bool>());
+  EXPECT_GE(x["turns"].get<int>(), 3);
+  EXPECT_NEAR(x["map_length_m"].get<double>(), 1.22, 0.05);
+  EXPECT_NEAR(x["map_width_m"].get<double>(), 1.0, 0.05);
+  EXPECT_GT(x["map_area_accuracy"].get<double>(), 0.95);
+}
+
+// 001 Sec. V-C1: wall traversal (Exploration and Tactile-traversal).
+TEST(XplorerSitl, WallTraversalFollowsTheWall) {
+  const auto m = run("xplorer_wall_traversal.yaml");
+  EXPECT_TRUE(m["success"].get<bool>());
+  EXPECT_GE(m["xplorer"]["traversed_path_m"].get<double>(), 2.0);
+}
+
+// 001 Sec. V-E: ricocheting reaches a goal at the wall faster than the
+// conventional waypoint flight (001: tau_r 1.046 s vs 2.27 s).
+TEST(XplorerSitl, RicochetRisesFasterThanWaypointFlight) {
+  const auto r = run("xplorer_ricochet_wall.yaml");
+  const auto w = run("xplorer_waypoint_wall.yaml");
+  ASSERT_TRUE(r["success"].get<bool>());
+  ASSERT_TRUE(w["success"].get<bool>());
+  EXPECT_GE(r["xplorer"]["collisions_detected"].get<int>(), 1);
+  EXPECT_EQ(w["xplorer"]["collisions_detected"].get<int>(), 0);
+  ASSERT_FALSE(r["xplorer"]["rise_time_s"].is_null());
+  ASSERT_FALSE(r["xplorer"]["settling_time_s"].is_null());
+  ASSERT_FALSE(w["xplorer"]["settling_time_s"].is_null());
+  EXPECT_LT(r["xplorer"]["rise_time_s"].get<double>(), w["xplorer"]["rise_time_s"].get<double>());
+  EXPECT_LT(r["xplorer"]["settling_time_s"].get<double>(), w["xplorer"]["settling_time_s"].get<double>());
+}
