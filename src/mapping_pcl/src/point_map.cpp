@@ -33,6 +33,13 @@ void PointMap::clear() {
   size_after_filter_ = 0;
 }
 
+void PointMap::reserve_for(std::size_t extra) {
+  // Geometric growth: reserving the exact size on every insert would copy the
+  // whole map each time.
+  const std::size_t need = cloud_->size() + extra;
+  if (need > cloud_->points.capacity()) cloud_->reserve(std::max(need, 2 * cloud_->points.capacity()));
+}
+
 void PointMap::insert(const Vec3& p) {
   if (!p.allFinite()) throw std::invalid_argument("PointMap::insert: non-finite point");
   cloud_->push_back(pcl::PointXYZ(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())));
@@ -43,7 +50,7 @@ void PointMap::insert(const std::vector<Vec3>& points) {
   for (const auto& p : points) {
     if (!p.allFinite()) throw std::invalid_argument("PointMap::insert: non-finite point");
   }
-  cloud_->reserve(cloud_->size() + points.size());
+  reserve_for(points.size());
   for (const auto& p : points)
     cloud_->push_back(pcl::PointXYZ(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())));
   maybe_auto_filter();
@@ -56,7 +63,7 @@ std::size_t PointMap::insert_box(const Box& b, double spacing) {
   std::array<int, 3> n{};
   for (int a = 0; a < 3; ++a) n[a] = std::max(2, static_cast<int>(std::ceil(b.size[a] / spacing - 1e-9)) + 1);
   const double c = std::cos(b.yaw), s = std::sin(b.yaw);
-  cloud_->reserve(cloud_->size() + static_cast<std::size_t>(n[0]) * n[1] * n[2]);
+  reserve_for(static_cast<std::size_t>(n[0]) * n[1] * n[2]);
   for (int i = 0; i < n[0]; ++i) {
     const double u = -0.5 * b.size.x() + b.size.x() * i / (n[0] - 1);
     for (int j = 0; j < n[1]; ++j) {

@@ -40,6 +40,9 @@ void XplorerForceEstLogic::Params::validate() const {
   if (!std::isfinite(max_sample_gap_s) || max_sample_gap_s <= 0.0)
     throw std::invalid_argument("XplorerForceEstLogic.max_sample_gap_s: must be finite and > 0, got " +
                                 std::to_string(max_sample_gap_s));
+  if (!(max_arm_angle > 0.0) || !std::isfinite(max_arm_angle))
+    throw std::invalid_argument("XplorerForceEstLogic.max_arm_angle: must be finite and > 0, got " +
+                                std::to_string(max_arm_angle));
   if (world_frame.empty()) throw std::invalid_argument("XplorerForceEstLogic.world_frame: must not be empty");
   if (body_frame.empty()) throw std::invalid_argument("XplorerForceEstLogic.body_frame: must not be empty");
 }
@@ -77,6 +80,7 @@ ParamMap XplorerForceEstLogic::default_parameters() {
   m.set("world_frame", n.world_frame);
   m.set("body_frame", n.body_frame);
   m.set("max_sample_gap_s", n.max_sample_gap_s);
+  m.set("max_arm_angle", n.max_arm_angle);
   return m;
 }
 
@@ -117,6 +121,7 @@ XplorerForceEstLogic::Params XplorerForceEstLogic::params_from(const ParamMap& m
   p.world_frame = m.get_string("world_frame");
   p.body_frame = m.get_string("body_frame");
   p.max_sample_gap_s = m.get_double("max_sample_gap_s");
+  p.max_arm_angle = m.get_double("max_arm_angle");
   try {
     p.validate();
   } catch (const std::invalid_argument& ex) {
@@ -211,6 +216,10 @@ XplorerForceEstLogic::Outputs XplorerForceEstLogic::on_arm_imu(const tactile_msg
     }
     seen[arm.arm_id] = true;
     double th = arm.arm_angle;
+    if (std::isfinite(th) && std::abs(th) > params_.max_arm_angle) {
+      ++stats_.arm_out_of_range;
+      th = std::numeric_limits<double>::quiet_NaN();
+    }
     if (!std::isfinite(th) && have_attitude_) {
       // BNO055-style attitude of the arm (arm -> world): theta = yaw of
       // (body^-1 arm) minus the arm's undeflected direction (001 Sec. V-A2).
@@ -219,7 +228,11 @@ XplorerForceEstLogic::Outputs XplorerForceEstLogic::on_arm_imu(const tactile_msg
       if (finite(q.x, q.y, q.z) && std::isfinite(q.w) && std::abs(qn - 1.0) < 1e-3) {
         const Mat3 rel = (q_wb_.conjugate() * Quat(q.w, q.x, q.y, q.z)).toRotationMatrix();
         th = std::remainder(std::atan2(rel(1, 0), rel(0, 0)) - params_.estimator.arm_directions[arm.arm_id], 2 * M_PI);
-        ++stats_.arm_from_orientation;
+        if (std::abs(th) > params_.max_arm_angle) {
+          th = std::numeric_limits<double>::quiet_NaN();
+        } else {
+          ++stats_.arm_from_orientation;
+        }
       }
     }
     theta[arm.arm_id] = th;

@@ -125,6 +125,14 @@ TEST(XplorerForceEstLogic, BadInputIsCountedNeverPassedOn) {
   EXPECT_EQ(logic.stats().arm_missing[2], 1u);
   EXPECT_EQ(logic.stats().published_degraded, 1u);
   EXPECT_FALSE(logic.estimate().arm_valid[2]);
+  // An impossible deflection (1e9 rad, the simulator's out_of_range fault) is missing, not a force.
+  auto big = arms(40'000'000, {1e9, 0.0, 0.0, 0.0});
+  big.arms[0].orientation.w = 0.0;  // and no usable attitude either
+  logic.on_arm_imu(big);
+  EXPECT_EQ(logic.stats().arm_out_of_range, 1u);
+  EXPECT_EQ(logic.stats().arm_missing[0], 1u);
+  EXPECT_TRUE(std::isfinite(logic.estimate().force_world.x()));
+  EXPECT_LT(std::abs(logic.estimate().arm_force[0]), 1.0);
   // Out of order.
   EXPECT_FALSE(logic.on_arm_imu(arms(10'000'000, {0, 0, 0, 0})).world);
   EXPECT_EQ(logic.stats().dropped_out_of_order, 1u);

@@ -82,6 +82,7 @@ class PointMap {
 
  private:
   void maybe_auto_filter();
+  void reserve_for(std::size_t extra);
 
   MapParams params_;
   Cloud::Ptr cloud_;

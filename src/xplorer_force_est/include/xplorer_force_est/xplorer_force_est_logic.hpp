@@ -34,6 +34,9 @@ class XplorerForceEstLogic {
     /// A stamp gap larger than this on the arm or IMU stream resets the
     /// filters (choice: 0.5 s = 25 arm samples).
     double max_sample_gap_s = 0.5;
+    /// |arm_angle| above this is not a deflection (the arms stop at 30 deg,
+    /// 001 Sec. II): treated as missing (choice: 0.8 rad).
+    double max_arm_angle = 0.8;
     void validate() const;
   };
 
@@ -48,6 +51,7 @@ class XplorerForceEstLogic {
     uint64_t dropped_out_of_order = 0;   ///< arm or IMU stamp not after the previous one
     uint64_t arm_bad_id = 0;             ///< arm_id > 3 or repeated within one message (entry ignored)
     uint64_t arm_from_orientation = 0;   ///< arm_angle NaN, angle derived from the arm IMU attitude
+    uint64_t arm_out_of_range = 0;       ///< |arm_angle| > max_arm_angle (treated as missing)
     std::array<uint64_t, 4> arm_missing{};  ///< per arm: absent or unusable in an ArmImuArray
     uint64_t resets_on_gap = 0;
   };
