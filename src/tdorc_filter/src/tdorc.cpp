@@ -55,6 +55,8 @@ void Params::validate() const {
   if (absolute_threshold && contact_threshold < 0.0) {
     bad("contact_threshold", "must be >= 0 with absolute_threshold, got " + num(contact_threshold));
   }
+  if (learn_delay < 0 || learn_delay > 10000) bad("learn_delay", "must be in [0, 10000], got " + std::to_string(learn_delay));
+  if (max_contact_hold < 1) bad("max_contact_hold", "must be >= 1, got " + std::to_string(max_contact_hold));
   for (int i = 0; i < 3; ++i) {
     if (!std::isfinite(bandpass_b[i])) bad("bandpass_b[" + std::to_string(i) + "]", "must be finite, got " + num(bandpass_b[i]));
     if (!std::isfinite(bandpass_a[i])) bad("bandpass_a[" + std::to_string(i) + "]", "must be finite, got " + num(bandpass_a[i]));
@@ -202,7 +204,10 @@ const Params& validated(const Params& p) {
 }  // namespace
 
 TdorcChannel::TdorcChannel(const Params& params)
-    : params_(validated(params)), fit_(params.window), filter_(params.bandpass_b, params.bandpass_a) {}
+    : params_(validated(params)),
+      fit_(params.window),
+      filter_(params.bandpass_b, params.bandpass_a),
+      pending_(static_cast<std::size_t>(params.learn_delay) + 1) {}
 
 void TdorcChannel::reset() {
   fit_.reset();
@@ -211,6 +216,8 @@ void TdorcChannel::reset() {
   ready_ = false;
   filter_started_ = false;
   fit_count_ = 0;
+  pending_head_ = 0;
+  pending_count_ = 0;
 }
 
 ChannelOutput TdorcChannel::compensate(int64_t sample_index, double value) {
@@ -251,11 +258,23 @@ void TdorcChannel::learn(int64_t sample_index, double value, bool contact) {
       ++fit_count_;
       ready_ = true;
     }
-  } else if (params_.mode == Mode::kTdorc && !contact) {
-    // 000 eq. 8: free flight -> slide the window and re-fit a, b.
-    fit_.push(sample_index, value);
-    line_ = fit_.fit();  // 000 eq. 6, 7
-    ++fit_count_;
+  } else if (params_.mode == Mode::kTdorc && contact) {
+    // Contact: the samples still waiting may hold the contact's rising edge.
+    pending_count_ = 0;
+  } else if (params_.mode == Mode::kTdorc) {
+    // 000 eq. 8: free flight -> slide the window and re-fit a, b, with the
+    // sample of learn_delay samples ago (this one, when learn_delay = 0).
+    const int cap = static_cast<int>(pending_.size());
+    pending_[static_cast<std::size_t>((pending_head_ + pending_count_) % cap)] = {sample_index, value};
+    ++pending_count_;
+    if (pending_count_ > params_.learn_delay) {
+      const auto [k, v] = pending_[static_cast<std::size_t>(pending_head_)];
+      pending_head_ = (pending_head_ + 1) % cap;
+      --pending_count_;
+      fit_.push(k, v);
+      line_ = fit_.fit();  // 000 eq. 6, 7
+      ++fit_count_;
+    }
   }
   // TDOC after its fit, or TDORC in contact: the line stays frozen.
 }
@@ -267,7 +286,7 @@ ChannelOutput TdorcChannel::update(int64_t sample_index, double value) {
 }
 
 std::size_t TdorcChannel::state_size_bytes() const {
-  return sizeof(*this) - sizeof(fit_) + fit_.state_size_bytes();
+  return sizeof(*this) - sizeof(fit_) + fit_.state_size_bytes() + pending_.capacity() * sizeof(pending_[0]);
 }
 
 // ---------------------------------------------------------------- TdorcWhisker
@@ -279,6 +298,7 @@ void TdorcWhisker::reset() {
   for (auto& c : channels_) c.reset();
   next_index_ = 0;
   contact_ = false;
+  contact_samples_ = 0;
 }
 
 WhiskerOutput TdorcWhisker::update(const std::array<double, 3>& raw) {
@@ -292,11 +312,22 @@ WhiskerOutput TdorcWhisker::update(const std::array<double, 3>& raw) {
     all_ready = all_ready && out.channel[i].ready;
   }
   // Whisker-level contact freezes every channel's fit (000 eq. 8).
-  for (std::size_t i = 0; i < channels_.size(); ++i) channels_[i].learn(k, raw[i], any);
-  contact_ = any;
-  out.contact = any;
+  // Sustained contact (Params::contact_hold): after an S_p onset the whisker
+  // stays in contact while the calibrated signal of any channel is over T_c.
+  bool held = false;
+  if (params_.contact_hold && params_.mode != Mode::kBandpass && !any && contact_ && all_ready && contact_samples_ < params_.max_contact_hold) {
+    for (const auto& c : out.channel) held = held || c.calibrated > params_.contact_threshold;
+  }
+  const bool contact = any || held;
+  contact_samples_ = contact ? contact_samples_ + 1 : 0;
+  // Freeze while in contact (000 eq. 8).
+  const bool freeze = contact;
+  for (std::size_t i = 0; i < channels_.size(); ++i) channels_[i].learn(k, raw[i], freeze);
+  contact_ = contact;
+  out.contact = contact;
+  out.contact_held = held;
   out.ready = all_ready;
-  out.drift_frozen = params_.mode == Mode::kTdorc && all_ready && any;
+  out.drift_frozen = params_.mode == Mode::kTdorc && all_ready && freeze;
   out.window_fill = channels_[0].window_fill();
   return out;
 }

@@ -26,6 +26,9 @@ ParamMap TdorcFilterLogic::default_parameters() {
   m.set("window", static_cast<int64_t>(d.window));                 // 000 eq. 6-7, n = 100
   m.set("contact_threshold", d.contact_threshold);                 // 000 Results, T_c = 20
   m.set("absolute_threshold", d.absolute_threshold);
+  m.set("learn_delay", static_cast<int64_t>(d.learn_delay));       // workspace extension (README)
+  m.set("contact_hold", d.contact_hold);                           // workspace extension (README)
+  m.set("max_contact_hold", static_cast<int64_t>(d.max_contact_hold));
   m.set("bandpass_b", std::vector<double>(d.bandpass_b.begin(), d.bandpass_b.end()));  // 000 eq. 9-11
   m.set("bandpass_a", std::vector<double>(d.bandpass_a.begin(), d.bandpass_a.end()));  // 000 eq. 9-11
   m.set("max_sample_gap_s", Params{}.max_sample_gap_s);
@@ -57,6 +60,13 @@ TdorcFilterLogic::Params TdorcFilterLogic::params_from(const ParamMap& m) {
   p.tdorc.window = static_cast<int>(window);
   p.tdorc.contact_threshold = m.get_double("contact_threshold");
   p.tdorc.absolute_threshold = m.get_bool("absolute_threshold");
+  const int64_t delay = m.get_int("learn_delay");
+  if (delay < 0 || delay > 10000) throw m.error("learn_delay", "must be in [0, 10000], got " + std::to_string(delay));
+  p.tdorc.learn_delay = static_cast<int>(delay);
+  p.tdorc.contact_hold = m.get_bool("contact_hold");
+  const int64_t hold = m.get_int("max_contact_hold");
+  if (hold < 1 || hold > 100000000) throw m.error("max_contact_hold", "must be in [1, 1e8], got " + std::to_string(hold));
+  p.tdorc.max_contact_hold = static_cast<int>(hold);
   p.tdorc.bandpass_b = three(m, "bandpass_b");
   p.tdorc.bandpass_a = three(m, "bandpass_a");
   p.max_sample_gap_s = m.get_double("max_sample_gap_s");

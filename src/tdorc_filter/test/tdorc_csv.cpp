@@ -1,7 +1,7 @@
 // Test helper (not installed): runs TdorcWhisker over CSV samples so an
 // independent Python implementation can be compared sample by sample.
 //
-//   tdorc_csv <mode> <window> <contact_threshold> <absolute 0|1>
+//   tdorc_csv <mode> <window> <contact_threshold> <absolute 0|1> [learn_delay contact_hold 0|1 max_contact_hold]
 //   stdin:  one sample per line: S_r0,S_r1,S_r2
 //   stdout: ready,contact,drift_frozen,S_c0,S_c1,S_c2,S_p0,S_p1,S_p2,contact0,contact1,contact2
 #include <cstdio>
@@ -14,8 +14,9 @@
 #include "tdorc_filter/tdorc.hpp"
 
 int main(int argc, char** argv) {
-  if (argc != 5) {
-    std::cerr << "usage: tdorc_csv <tdorc|tdoc|bandpass> <window> <threshold> <absolute 0|1>\n";
+  if (argc != 5 && argc != 8) {
+    std::cerr << "usage: tdorc_csv <tdorc|tdoc|bandpass> <window> <threshold> <absolute 0|1>"
+                 " [<learn_delay> <contact_hold 0|1> <max_contact_hold>]\n";
     return 2;
   }
   try {
@@ -24,6 +25,11 @@ int main(int argc, char** argv) {
     p.window = std::atoi(argv[2]);
     p.contact_threshold = std::strtod(argv[3], nullptr);
     p.absolute_threshold = std::atoi(argv[4]) != 0;
+    if (argc == 8) {
+      p.learn_delay = std::atoi(argv[5]);
+      p.contact_hold = std::atoi(argv[6]) != 0;
+      p.max_contact_hold = std::atoi(argv[7]);
+    }
     tdorc_filter::TdorcWhisker w(p);
     std::string line;
     while (std::getline(std::cin, line)) {

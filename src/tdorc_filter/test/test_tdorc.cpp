@@ -2,6 +2,7 @@
 // hand from the equations in the comments next to them.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -304,6 +305,122 @@ TEST(TdorcWhisker, ContactOnsetNeverEntersTheWindow) {
   EXPECT_NEAR(o2.channel[1].drift_slope, -0.03, 1e-9);
 }
 
+// ------------------------------------------------------ sustained contact
+
+namespace {
+// Drifting whisker pressed for samples [start, end) with a held +200 Pa on
+// channel 1 (no other dynamics): the case the band-pass alone loses.
+struct HeldRun {
+  int first = -1, last = -1, samples = 0, held = 0;
+  bool lost_while_pressed = false;  // a free sample inside [first, end)
+  bool contact_after = false;       // contact at any sample >= end + 50
+  double sc_at_onset = 0.0, max_abs_sc_after = 0.0;  // channel 1, after = [end, total)
+};
+HeldRun run_held(Params p, int start, int end, int total = 2000) {
+  TdorcWhisker w(p);
+  HeldRun r;
+  for (int k = 0; k < total; ++k) {
+    const double drift = 0.03 * k;
+    const double push = (k >= start && k < end) ? 200.0 : 0.0;
+    const auto o = w.update({{100000.0 + drift, 99000.0 - drift + push, 101000.0}});
+    if (o.contact) {
+      if (r.first < 0) r.sc_at_onset = o.channel[1].calibrated, r.first = k;
+      r.last = k;
+      ++r.samples;
+      if (k >= end + 50) r.contact_after = true;
+    } else if (r.first >= 0 && k < end) {
+      r.lost_while_pressed = true;
+    }
+    if (o.contact_held) ++r.held;
+    if (k >= end) r.max_abs_sc_after = std::max(r.max_abs_sc_after, std::fabs(o.channel[1].calibrated));
+  }
+  return r;
+}
+}  // namespace
+
+TEST(TdorcWhisker, PaperRuleLosesAHeldContactAndThenLocks) {
+  // 200 Pa step: S_p = 0.0564 * 200 = 11.3 < T_c at the step sample (which
+  // therefore enters the window), over T_c from the next one, then decaying
+  // with the high-pass pole 0.9935 (tau ~ 3 s): the paper's S_p > T_c flag
+  // ends while the whisker is still pressed, the window learns pressed
+  // samples, and after the release the frozen line keeps S_p over T_c (lock).
+  Params p;  // paper defaults: no hold, no learn delay
+  const HeldRun r = run_held(p, 300, 800);
+  EXPECT_EQ(r.first, 301);
+  EXPECT_TRUE(r.lost_while_pressed);
+  EXPECT_TRUE(r.contact_after);
+  EXPECT_EQ(r.held, 0);
+}
+
+TEST(TdorcWhisker, LearnDelayKeepsTheRisingEdgeOutOfTheWindow) {
+  // The step sample (S_p = 11.3 < T_c) waits learn_delay samples; the onset
+  // at the next sample discards it, so the frozen line is the exact drift:
+  // S_c = 200 at the onset (instead of 192 with the step in the window).
+  Params p;
+  p.learn_delay = 10;
+  const HeldRun r = run_held(p, 300, 800);
+  EXPECT_EQ(r.first, 301);
+  EXPECT_NEAR(r.sc_at_onset, 200.0, 1e-6);
+  Params q;
+  const HeldRun paper = run_held(q, 300, 800);
+  // Without the delay the step sample tilts the 100-sample fit by
+  // 200 * 49.5 / 83325 = 0.119 Pa/sample: S_c at the onset is ~192.
+  EXPECT_LT(paper.sc_at_onset, 195.0);
+}
+
+TEST(TdorcWhisker, ContactHoldKeepsAPressedWhiskerInContactUntilRelease) {
+  Params p;
+  p.contact_hold = true;
+  p.learn_delay = 10;
+  const HeldRun r = run_held(p, 300, 800);
+  EXPECT_EQ(r.first, 301);
+  // Held (S_c = 200 > T_c against the exactly extrapolated drift) through the
+  // last pressed sample, released at the first free one, no lock after.
+  EXPECT_FALSE(r.lost_while_pressed);
+  EXPECT_EQ(r.last, 799);
+  EXPECT_EQ(r.samples, 499);
+  EXPECT_EQ(r.held, 800 - 668);  // S_p alone holds it until sample 668 (see ContactHoldIsLimited)
+  EXPECT_FALSE(r.contact_after);
+  EXPECT_LT(r.max_abs_sc_after, 1e-6);
+}
+
+TEST(TdorcWhisker, ContactHoldIsLimited) {
+  Params p;
+  p.contact_hold = true;
+  p.learn_delay = 10;
+  p.max_contact_hold = 200;
+  // Pressed for 1200 samples: S_p alone (decaying) keeps the contact until it
+  // falls under T_c (sample 668, later than the 200-sample hold limit), then
+  // the expired hold lets it go while the push goes on.
+  const HeldRun r = run_held(p, 300, 1500);
+  EXPECT_TRUE(r.lost_while_pressed);
+  EXPECT_EQ(r.held, 0);
+  p.max_contact_hold = 1000;
+  const HeldRun longer = run_held(p, 300, 1500);
+  EXPECT_TRUE(longer.lost_while_pressed);  // 1000 < 1199 pressed samples
+  EXPECT_EQ(longer.first + 999, [&] {
+    // the last held sample: onset + max_contact_hold - 1
+    TdorcWhisker w(p);
+    int last_held = -1;
+    for (int k = 0; k < 1500; ++k) {
+      const double drift = 0.03 * k;
+      const auto o = w.update({{100000.0 + drift, 99000.0 - drift + (k >= 300 ? 200.0 : 0.0), 101000.0}});
+      if (o.contact_held) last_held = k;
+    }
+    return last_held;
+  }());
+}
+
+TEST(TdorcWhisker, BandpassModeNeverHolds) {
+  // No drift model: S_c is the raw pressure, which must not hold a contact.
+  Params p;
+  p.mode = Mode::kBandpass;
+  p.contact_hold = true;
+  const HeldRun r = run_held(p, 300, 800);
+  EXPECT_EQ(r.held, 0);
+  EXPECT_TRUE(r.lost_while_pressed);
+}
+
 TEST(TdorcWhisker, TdocNeverRefits) {
   Params p;
   p.mode = Mode::kTdoc;
@@ -376,6 +493,15 @@ TEST(TdorcWhisker, StateSize) {
 }
 
 // ------------------------------------------------------------------ validation
+
+TEST(Params, ValidateSustainedContactFields) {
+  Params p;
+  p.max_contact_hold = 0;
+  EXPECT_EQ(error_of(p), "TdorcParams.max_contact_hold: must be >= 1, got 0");
+  p = Params{};
+  p.learn_delay = -1;
+  EXPECT_EQ(error_of(p), "TdorcParams.learn_delay: must be in [0, 10000], got -1");
+}
 
 TEST(Params, ValidateNamesTheField) {
   Params p;

@@ -48,6 +48,8 @@ TEST(TdorcFilterLogic, DefaultsArePaperValues) {
   EXPECT_EQ(p.tdorc.window, 100);
   EXPECT_EQ(p.tdorc.contact_threshold, 20.0);
   EXPECT_FALSE(p.tdorc.absolute_threshold);
+  EXPECT_EQ(p.tdorc.learn_delay, 0);      // eq. 8 as written
+  EXPECT_FALSE(p.tdorc.contact_hold);
   EXPECT_EQ(p.tdorc.bandpass_b, (std::array<double, 3>{{0.0564, 0.0, -0.0564}}));
   EXPECT_EQ(p.tdorc.bandpass_a, (std::array<double, 3>{{1.0, -1.8865, 0.8872}}));
   EXPECT_EQ(p.max_sample_gap_s, 0.5);
@@ -55,7 +57,7 @@ TEST(TdorcFilterLogic, DefaultsArePaperValues) {
   EXPECT_STREQ(TdorcFilterLogic::kOutputTopic, "signal");
 }
 
-TEST(TdorcFilterLogic, RepositoryConfigMatchesDefaults) {
+TEST(TdorcFilterLogic, RepositoryConfigIsPaperValuesPlusSustainedContact) {
   // The test runs in the package source directory.
   const ParamMap m = tactile_common::load_node_parameters("../../config/tdorc_filter.yaml", "/whisker/left/tdorc_filter",
                                                           TdorcFilterLogic::default_parameters());
@@ -67,6 +69,10 @@ TEST(TdorcFilterLogic, RepositoryConfigMatchesDefaults) {
   EXPECT_EQ(p.tdorc.bandpass_b, d.tdorc.bandpass_b);
   EXPECT_EQ(p.tdorc.bandpass_a, d.tdorc.bandpass_a);
   EXPECT_EQ(p.max_sample_gap_s, d.max_sample_gap_s);
+  // The workspace extensions the repository runs with (README "Sustained contact").
+  EXPECT_EQ(p.tdorc.learn_delay, 10);
+  EXPECT_TRUE(p.tdorc.contact_hold);
+  EXPECT_EQ(p.tdorc.max_contact_hold, 1000);
 }
 
 TEST(TdorcFilterLogic, ParameterErrorsNameTheKey) {

@@ -23,9 +23,9 @@ B = np.array([0.0564, 0.0, -0.0564])
 A = np.array([1.0, -1.8865, 0.8872])
 
 
-def synthetic_trace(seed=1, n=3000, rate=50.0, contact_amp=600.0):
+def synthetic_trace(seed=1, n=3000, rate=50.0, contact_amp=600.0, contact_end=1650):
     """Three barometer channels: offsets, thermal drift whose slope changes,
-    noise, propeller ringing and one contact episode (samples 1400-1650)."""
+    noise, propeller ringing and one contact episode (samples 1400-contact_end)."""
     rng = np.random.default_rng(seed)
     k = np.arange(n)
     t = k / rate
@@ -38,18 +38,22 @@ def synthetic_trace(seed=1, n=3000, rate=50.0, contact_amp=600.0):
     ringing = 2.0 * np.sin(2 * np.pi * 7.0 * t)[:, None]
     noise = rng.normal(0.0, 1.0, size=(n, 3))
     # contact: 0.1 s raised-cosine rise, 4.8 s hold, 0.1 s fall
-    rise = np.clip((k - 1400) / 5.0, 0.0, 1.0) * np.clip((1650 - k) / 5.0, 0.0, 1.0)
+    rise = np.clip((k - 1400) / 5.0, 0.0, 1.0) * np.clip((contact_end - k) / 5.0, 0.0, 1.0)
     contact = contact_amp * np.sin(0.5 * np.pi * rise) ** 2
     gains = np.array([1.0, 0.6, 0.2])
     return offsets + drift + ringing + noise + contact[:, None] * gains
 
 
-def reference(S, mode, n=100, threshold=20.0, absolute=False):
+def reference(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=False, max_hold=1000):
+    """delay, hold, max_hold: the README's sustained-contact extension (learn_delay,
+    contact_hold, max_contact_hold); defaults = eq. 8 as written."""
     N = S.shape[0]
     rows = np.zeros((N, 12))
     window = []          # sample indices in the least-squares window
+    pending = []         # free samples waiting `delay` samples before entering the window
     fit = None           # (slope[3], intercept[3], first index)
     zi = None
+    prev_contact, run = False, 0   # contact at the previous sample, samples since its onset
     for k in range(N):
         # 1. compensate with the fit of the previous samples
         if mode == "bandpass":
@@ -69,18 +73,27 @@ def reference(S, mode, n=100, threshold=20.0, absolute=False):
                 sp[ch] = y[0]
             ch_contact = np.abs(sp) > threshold if absolute else sp > threshold
             contact = bool(ch_contact.any())
+            if hold and mode != "bandpass" and not contact and prev_contact and run < max_hold:
+                contact = bool((sc > threshold).any())  # held while S_c is over T_c
             frozen = mode == "tdorc" and contact
             rows[k] = [1, contact, frozen, *sc, *sp, *ch_contact]
-        # 2. learn: first window, then (TDORC) re-fit while not in contact (eq. 8)
+        run = run + 1 if contact else 0
+        prev_contact = contact
+        # 2. learn: first window, then (TDORC) re-fit while not in contact (eq. 8),
+        #    with the sample of `delay` samples ago; a contact drops the waiting ones
         refit = False
         if mode != "bandpass":
             if fit is None:
                 window.append(k)
                 refit = len(window) == n
-            elif mode == "tdorc" and not contact:
-                window.append(k)
-                window = window[-n:]
-                refit = True
+            elif mode == "tdorc" and contact:
+                pending = []
+            elif mode == "tdorc":
+                pending.append(k)
+                if len(pending) > delay:
+                    window.append(pending.pop(0))
+                    window = window[-n:]
+                    refit = True
         if refit:
             t = np.array(window) - window[0]
             coef = [np.polyfit(t, S[window, ch], 1) for ch in range(3)]  # eq. 6, 7
@@ -88,12 +101,13 @@ def reference(S, mode, n=100, threshold=20.0, absolute=False):
     return rows
 
 
-def run_cpp(S, mode, n=100, threshold=20.0, absolute=False):
+def run_cpp(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=False, max_hold=1000):
     exe = os.environ.get("TDORC_CSV")
     if not exe:
         pytest.skip("TDORC_CSV not set (run through ctest)")
     text = "\n".join(",".join(repr(float(v)) for v in row) for row in S) + "\n"
-    res = subprocess.run([exe, mode, str(n), repr(threshold), "1" if absolute else "0"],
+    res = subprocess.run([exe, mode, str(n), repr(threshold), "1" if absolute else "0",
+                          str(delay), "1" if hold else "0", str(max_hold)],
                          input=text, capture_output=True, text=True, check=True)
     return np.array([[float(v) for v in line.split(",")] for line in res.stdout.strip().splitlines()])
 
@@ -122,6 +136,22 @@ def test_matches_reference(mode, window, absolute):
             # (With |S_p| > T the release undershoot keeps the fit frozen
             # while the extrapolated drift line diverges: see README.)
             assert not ref[2000:, 1].any(), "TDORC: contact ends after the release"
+
+
+@pytest.mark.parametrize("mode", ["tdorc", "tdoc", "bandpass"])
+@pytest.mark.parametrize("delay,hold,max_hold", [(10, True, 1000), (3, True, 40), (0, True, 1000), (10, False, 1000)])
+def test_sustained_contact_extension_matches_reference(mode, delay, hold, max_hold):
+    # A 20 s push (samples 1400-2400): S_p alone decays below T_c long before it ends.
+    S = synthetic_trace(contact_amp=200.0, contact_end=2400)
+    ref = reference(S, mode, delay=delay, hold=hold, max_hold=max_hold)
+    cpp = run_cpp(S, mode, delay=delay, hold=hold, max_hold=max_hold)
+    np.testing.assert_array_equal(cpp[:, [0, 1, 2, 9, 10, 11]], ref[:, [0, 1, 2, 9, 10, 11]])
+    scale = np.abs(S).max()
+    for col in range(3, 9):
+        np.testing.assert_allclose(cpp[:, col], ref[:, col], rtol=1e-9, atol=1e-9 * scale if col < 6 else 1e-9 * 100)
+    if mode == "tdorc" and hold:
+        # The hold changes the result on this trace (the comparison is not vacuous).
+        assert (ref[:, 1] != reference(S, mode)[:, 1]).any()
 
 
 def test_tdorc_has_no_false_positives_in_free_flight():

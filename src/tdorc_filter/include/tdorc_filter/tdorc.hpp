@@ -46,6 +46,27 @@ struct Params {
   /// the band-pass undershoot after a release as contact (more conservative:
   /// the drift stays frozen a little longer).
   bool absolute_threshold = false;
+  // --- Sustained contact (workspace extension; paper defaults: off) -------
+  // The band-pass (high-pass at 0.05 Hz, tau ~3 s) turns a held contact into
+  // a decaying S_p. With eq. 8 as written, a whisker pressed against a wall
+  // for more than a few seconds loses its contact flag while it still
+  // touches; the drift window then learns contact samples, and their slope,
+  // extrapolated while frozen, can hold S_p over T_c long after the release
+  // (a "lock"). Likewise the rising edge of a contact, below T_c for a few
+  // samples, enters the window and bends the line (one +200 Pa sample at the
+  // window's end tilts a 100-sample fit by 0.12 Pa/sample).
+  /// A free-flight sample enters the drift window only after `learn_delay`
+  /// further samples were free too; a contact onset discards the pending
+  /// ones, so a contact's rising edge never enters the window. 0: eq. 8 as
+  /// written (learn every free sample at once).
+  int learn_delay = 0;
+  /// Once in contact (onset by S_p > T_c, the paper's rule), the whisker stays
+  /// in contact while any channel's S_c (relative to the frozen drift line)
+  /// exceeds T_c, for at most max_contact_hold samples; then only S_p decides
+  /// again (so a drift-line error cannot hold the contact for ever).
+  bool contact_hold = false;
+  /// Limit of a held contact [samples] (1000 = 20 s at 50 Hz).
+  int max_contact_hold = 1000;
   /// Band-pass numerator b0, b1, b2 (000 eq. 9-11, first-order Butterworth 0.05-1 Hz at 50 Hz).
   std::array<double, 3> bandpass_b{{0.0564, 0.0, -0.0564}};
   /// Band-pass denominator a0, a1, a2; a0 must be 1 (000 eq. 9-11).
@@ -194,12 +215,18 @@ class TdorcChannel {
   bool ready_ = false;
   bool filter_started_ = false;
   uint64_t fit_count_ = 0;
+  // Free samples waiting learn_delay samples before entering the window
+  // (ring of capacity learn_delay + 1).
+  std::vector<std::pair<int64_t, double>> pending_;
+  int pending_head_ = 0;
+  int pending_count_ = 0;
 };
 
 /// Output of one whisker (three channels) for one sample.
 struct WhiskerOutput {
   std::array<ChannelOutput, 3> channel{};
-  bool contact = false;       ///< any channel in contact
+  bool contact = false;       ///< any channel in contact, or a held contact (Params::contact_hold)
+  bool contact_held = false;  ///< contact only by the hold rule (S_c > T_c after the S_p onset)
   bool ready = false;         ///< all channels ready
   /// TDORC only: the whisker is in contact at this sample, so the sample is
   /// not added to the window and the drift fit stays frozen (000 eq. 8).
@@ -226,6 +253,8 @@ class TdorcWhisker {
   const TdorcChannel& channel(int i) const { return channels_[static_cast<std::size_t>(i)]; }
   int64_t samples() const { return next_index_; }
   bool contact() const { return contact_; }
+  /// Samples since the current contact began (0 out of contact).
+  int64_t contact_samples() const { return contact_samples_; }
   /// Bytes of state of the whole whisker (three channels, window buffers included).
   std::size_t state_size_bytes() const;
 
@@ -234,6 +263,7 @@ class TdorcWhisker {
   std::array<TdorcChannel, 3> channels_;
   int64_t next_index_ = 0;
   bool contact_ = false;
+  int64_t contact_samples_ = 0;
 };
 
 }  // namespace tdorc_filter
