@@ -221,7 +221,7 @@ class Reader {
   SensorModelFile file(const json& root) const {
     SensorModelFile f;
     f.source = source_;
-    object(root, "", {"format", "version", "whiskers", "units", "provenance"});
+    object(root, "", {"format", "version", "whiskers", "units", "input_signal", "provenance"});
     const std::string format = string(member(root, "", "format"), "format");
     if (format != SensorModelFile::kFormat) fail("format", "must be \"" + std::string(SensorModelFile::kFormat) + "\", got \"" + format + "\"");
     const json& version = member(root, "", "version");
@@ -234,6 +234,16 @@ class Reader {
     f.input_units = string(member(units, "units", "input"), "units.input");
     const std::string out_units = string(member(units, "units", "output"), "units.output");
     if (out_units != "m") fail("units.output", "must be \"m\" (depth in metres), got \"" + out_units + "\"");
+    if (root.contains("input_signal")) {
+      const std::string in = string(root.at("input_signal"), "input_signal");
+      if (in == "compensated") {
+        f.input_signal = InputSignal::kCompensated;
+      } else if (in == "calibrated") {
+        f.input_signal = InputSignal::kCalibrated;
+      } else {
+        fail("input_signal", "must be \"compensated\" (S_p, 000 eq. 12) or \"calibrated\" (S_c, eq. 5), got \"" + in + "\"");
+      }
+    }
     const json& prov = member(root, "", "provenance");
     if (!prov.is_object()) fail("provenance", std::string("must be an object, got ") + kind(prov));
     f.provenance_json = prov.dump();
@@ -249,6 +259,10 @@ class Reader {
 };
 
 }  // namespace
+
+const char* to_string(InputSignal s) {
+  return s == InputSignal::kCalibrated ? "calibrated" : "compensated";
+}
 
 SensorModelFile SensorModelFile::parse(const std::string& json_text, const std::string& source) {
   Reader reader(source);

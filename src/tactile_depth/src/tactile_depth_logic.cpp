@@ -152,7 +152,7 @@ std::optional<TactileDepth> TactileDepthLogic::on_signal(int side, const Whisker
     ++stats_.dropped_wrong_whisker;
     return std::nullopt;
   }
-  for (double v : msg.compensated) {
+  for (double v : input_of(msg)) {
     if (!std::isfinite(v)) {
       ++stats_.dropped_nonfinite;
       return std::nullopt;
@@ -198,8 +198,8 @@ std::optional<TactileDepth> TactileDepthLogic::on_signal(int side, const Whisker
 
 TactileDepth TactileDepthLogic::tick(const WhiskerSignal& left, const WhiskerSignal& right, int64_t stamp_ns) {
   TickInput in;
-  in.sp_left = left.compensated;
-  in.sp_right = right.compensated;
+  in.sp_left = input_of(left);
+  in.sp_right = input_of(right);
   in.contact_left = left.contact && left.calibrated_ready;
   in.contact_right = right.contact && right.calibrated_ready;
   const int64_t max_age_ns = tactile_common::from_seconds(params_.max_input_age_s);

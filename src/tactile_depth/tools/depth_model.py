@@ -3,7 +3,9 @@ export from scikit-learn, load, and a pure-numpy forward pass that is the refere
 the C++ loader (src/tactile_depth).
 
 File format (`tactile_depth_mlp`, version 1), per whisker:
-    s_n    = (S_p - input_mean) / input_std                 000 eq. 12
+    s_n    = (S - input_mean) / input_std                   000 eq. 12; S = S_p (input_signal
+                                                             "compensated", the paper) or S_c
+                                                             ("calibrated"), optional key
     h^k    = act_k(W^k h^(k-1) + b^k)                       000 eq. 13 (relu), eq. 14 (identity)
     depth  = output_scale * h^(L+1) + output_offset         [m]
 `weights[k]` is out x in (scikit-learn `coefs_[k].T`).
@@ -38,12 +40,19 @@ def export_whisker(mlp, input_mean, input_std, output_scale=1.0, output_offset=0
     }
 
 
-def make_model(whiskers, provenance):
+INPUT_SIGNALS = {"compensated": "Pa (TDORC compensated S_p, 000 eq. 9-11)",
+                 "calibrated": "Pa (TDORC calibrated S_c, 000 eq. 5)"}
+
+
+def make_model(whiskers, provenance, input_signal="compensated"):
+    if input_signal not in INPUT_SIGNALS:
+        raise ValueError(f"input_signal: expected one of {sorted(INPUT_SIGNALS)}, got {input_signal!r}")
     return {
         "format": FORMAT,
         "version": VERSION,
         "whiskers": whiskers,
-        "units": {"input": "Pa (TDORC compensated S_p)", "output": "m"},
+        "units": {"input": INPUT_SIGNALS[input_signal], "output": "m"},
+        "input_signal": input_signal,
         "provenance": provenance,
     }
 
@@ -68,6 +77,8 @@ def validate_model(model):
         raise ValueError(f"format: expected {FORMAT!r}, got {model.get('format')!r}")
     if model.get("version") != VERSION:
         raise ValueError(f"version: expected {VERSION}, got {model.get('version')!r}")
+    if model.get("input_signal", "compensated") not in INPUT_SIGNALS:
+        raise ValueError(f"input_signal: expected one of {sorted(INPUT_SIGNALS)}, got {model.get('input_signal')!r}")
     for side in ("left", "right"):
         w = model.get("whiskers", {}).get(side)
         if w is None:

@@ -43,6 +43,7 @@ DATASET_KEYS = {
     "flight": "(N,) int: flight id (= seed)",
     "t": "(N,) float: stamp [s] (simulated clock of the flight)",
     "sp": "(N, 2, 3) float: compensated S_p [Pa] of (left, right) x 3 barometers (000 eq. 11)",
+    "sc": "(N, 2, 3) float: calibrated S_c = S_r - N_td [Pa] before the band-pass (000 eq. 5)",
     "depth": "(N, 2) float: true depth [m] along body x, NaN without contact",
     "contact": "(N, 2) bool: true contact (ground truth)",
     "ready": "(N, 2) bool: TDORC calibrated_ready",
@@ -107,6 +108,7 @@ def extract_flight(bag_dir, flight_id, min_height=MIN_HEIGHT):
 
     n = len(stamps)
     sp = np.full((n, 2, 3), np.nan)
+    sc = np.full((n, 2, 3), np.nan)
     depth = np.full((n, 2), np.nan)
     contact = np.zeros((n, 2), bool)
     ready = np.zeros((n, 2), bool)
@@ -115,6 +117,7 @@ def extract_flight(bag_dir, flight_id, min_height=MIN_HEIGHT):
         for i, st in enumerate(stamps):
             m, g = sig[st], gt[st]
             sp[i, j] = list(m.compensated)
+            sc[i, j] = list(m.calibrated)
             ready[i, j] = bool(m.calibrated_ready)
             detected[i, j] = bool(m.contact)
             contact[i, j] = bool(g.contact)
@@ -133,13 +136,14 @@ def extract_flight(bag_dir, flight_id, min_height=MIN_HEIGHT):
 
     # Usable sample of a whisker: true contact, ready TDORC, finite values, airborne
     # (true height >= min_height: excludes touching the wall while landed, motors off).
-    usable = contact & ready & np.isfinite(depth) & np.all(np.isfinite(sp), axis=2) & (z >= min_height)[:, None]
+    usable = contact & ready & np.isfinite(depth) & np.all(np.isfinite(sp), axis=2) & np.all(np.isfinite(sc), axis=2) & (z >= min_height)[:, None]
     keep = usable.any(axis=1)
     contact = contact & usable  # a whisker's sample is used only when it is usable
     return {
         "flight": np.full(int(keep.sum()), flight_id, dtype=np.int64),
         "t": st[keep] * 1e-9,
         "sp": sp[keep],
+        "sc": sc[keep],
         "depth": np.where(contact[keep], depth[keep], np.nan),
         "contact": contact[keep],
         "ready": ready[keep],

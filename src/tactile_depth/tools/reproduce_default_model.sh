@@ -30,7 +30,7 @@ done
 
 "${PY}" "${TOOLS}/train_depth_model.py" \
   --dataset "whiteboard=${OUT}/whiteboard/dataset.npz" --dataset "glass=${OUT}/glass/dataset.npz" \
-  --train-on all --seed 0 --out "${OUT}/report" --model-out "${MODEL_OUT}"
+  --train-on all --seed 0 --input calibrated --out "${OUT}/report" --model-out "${MODEL_OUT}"
 
 echo "model:  ${MODEL_OUT}"
 echo "report: ${OUT}/report/report.md, ${OUT}/report/report.json"

@@ -313,6 +313,9 @@ def main(argv=None):
     ap.add_argument("--train-flights", type=int, default=9)
     ap.add_argument("--val-flights", type=int, default=2)
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--input", choices=("compensated", "calibrated"), default="compensated",
+                    help="MLP input: the band-passed S_p of 000 eq. 12 (compensated) or the drift-"
+                         "corrected S_c before the band-pass (calibrated; the model file says which)")
     ap.add_argument("--gp-max-samples", type=int, default=600)
     ap.add_argument("--no-per-dataset", action="store_true", help="skip the models trained on each dataset alone")
     ap.add_argument("--fast", action="store_true", help="small grids and few epochs (tests)")
@@ -327,6 +330,10 @@ def main(argv=None):
             ap.error(f"--dataset {spec}: expected NAME=PATH")
         name, path = spec.split("=", 1)
         d = load_dataset(path)
+        if args.input == "calibrated":
+            if "sc" not in d:
+                ap.error(f"--dataset {spec}: no calibrated signals ('sc'); rebuild it with make_dataset.py")
+            d["sp"] = d["sc"]  # every model below reads its input from 'sp'
         datasets[name] = (d, split_flights(d["flight"], args.train_flights, args.val_flights))
     train_on = list(datasets) if args.train_on == "all" else args.train_on.split(",")
     for n in train_on:
@@ -368,6 +375,7 @@ def main(argv=None):
         "numpy": np.__version__,
         "scipy": scipy.__version__,
         "seed": args.seed,
+        "input_signal": args.input,
         "date": datetime.date.today().isoformat(),
         "hidden_layers": list(HIDDEN),
         "training": {side: {k: v for k, v in rec.items() if k != "seconds"}  # no timing: reproducible file
@@ -375,7 +383,7 @@ def main(argv=None):
         "metrics": {n: {c: report["datasets"][n]["results"][f"MLP@{'+'.join(train_on)}"][c] for c in CATEGORIES}
                     for n in datasets},
     }
-    model = depth_model.make_model(default_entries, provenance)
+    model = depth_model.make_model(default_entries, provenance, input_signal=args.input)
     depth_model.validate_model(model)
     model_path = Path(args.model_out) if args.model_out else out / "model.json"
     model_path.parent.mkdir(parents=True, exist_ok=True)

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from rosbags.rosbag2 import Reader
+import yaml
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 HERE = Path(__file__).resolve().parent
@@ -62,7 +63,13 @@ def test_rosbags_reads_every_message_and_tdorc_matches_numpy(demo, case):
         S = np.array([list(m.pressure) for _, m in pressure])
         # The replay passes the raw samples through unchanged.
         np.testing.assert_array_equal(np.array([list(m.raw) for _, m in signal]), S)
-        ref = reference(S, "tdorc")
+        # The repository's TDORC settings (config/tdorc_filter.yaml), incl. the
+        # sustained-contact extension, given to the numpy reference.
+        with open(Path(CONFIG) / "tdorc_filter.yaml") as f:
+            tp = yaml.safe_load(f)["/**/tdorc_filter"]["ros__parameters"]
+        ref = reference(S, tp["mode"], n=tp["window"], threshold=tp["contact_threshold"],
+                        absolute=tp["absolute_threshold"], delay=tp["learn_delay"], hold=tp["contact_hold"],
+                        max_hold=tp["max_contact_hold"])
         ready = ref[:, 0] == 1
         got_sp = np.array([list(m.compensated) for _, m in signal])
         got_ready = np.array([m.calibrated_ready for _, m in signal])

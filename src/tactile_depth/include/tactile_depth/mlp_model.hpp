@@ -15,6 +15,7 @@
 //   {"format": "tactile_depth_mlp", "version": 1,
 //    "whiskers": {"left": W, "right": W},
 //    "units": {"input": "...", "output": "m"},
+//    "input_signal": "compensated" | "calibrated",   (optional, default compensated)
 //    "provenance": {...}}
 //   W = {"input_mean": [3], "input_std": [3],
 //        "layers": [{"weights": out x in, "bias": [out], "activation": "relu"|"identity"}, ...],
@@ -89,6 +90,13 @@ class MlpModel {
   mutable std::vector<double> buf_b_;
 };
 
+/// Which WhiskerSignal field feeds the MLP: the paper's band-passed S_p
+/// (000 eq. 12, `compensated`) or the drift-corrected S_c before the band-pass
+/// (000 eq. 5, `calibrated`), which keeps a held contact's level instead of
+/// decaying it with the 0.05 Hz high-pass (see README "Input signal").
+enum class InputSignal { kCompensated, kCalibrated };
+const char* to_string(InputSignal s);
+
 /// Both whiskers' models read from one model file.
 struct SensorModelFile {
   static constexpr const char* kFormat = "tactile_depth_mlp";
@@ -102,6 +110,7 @@ struct SensorModelFile {
   MlpModel left;
   MlpModel right;
   std::string input_units;
+  InputSignal input_signal = InputSignal::kCompensated;  ///< "input_signal" (optional; default: the paper's S_p)
   std::string provenance_json;  ///< the provenance object, serialised (free-form)
   std::string source;           ///< file path or source name
 

@@ -86,6 +86,11 @@ class TactileDepthLogic {
   tactile_msgs::msg::TactileDepth tick(const tactile_msgs::msg::WhiskerSignal& left,
                                        const tactile_msgs::msg::WhiskerSignal& right, int64_t stamp_ns);
 
+  /// The MLP input of the model file: S_p (compensated) or S_c (calibrated).
+  const std::array<double, 3>& input_of(const tactile_msgs::msg::WhiskerSignal& msg) const {
+    return models_.input_signal == InputSignal::kCalibrated ? msg.calibrated : msg.compensated;
+  }
+
   Params params_;
   SensorModelFile models_;
   TactileDepthEstimator estimator_;

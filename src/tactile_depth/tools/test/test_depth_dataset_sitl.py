@@ -57,12 +57,13 @@ def test_extractor_on_a_short_sitl_flight(tmp_path):
         g = gt[(m.header.stamp.sec, m.header.stamp.nanosec)]
         t = m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec
         if g.contact and m.calibrated_ready and np.interp(t, odom_t, odom_z) >= 0.2:
-            expected.append((t, list(m.compensated), g.depth))
+            expected.append((t, list(m.compensated), g.depth, list(m.calibrated)))
     assert len(expected) > 20, "the short flight must touch the wall with a ready TDORC"
     left = d["contact"][:, 0]
     assert int(left.sum()) == len(expected)
     np.testing.assert_allclose(d["t"][left], [e[0] for e in expected], atol=1e-9)
     np.testing.assert_array_equal(d["sp"][left, 0], [e[1] for e in expected])
+    np.testing.assert_array_equal(d["sc"][left, 0], [e[3] for e in expected])
     np.testing.assert_array_equal(d["depth"][left, 0], [e[2] for e in expected])
     assert np.all(d["flight"] == 4) and list(d["seeds"]) == [4]
     assert np.all(d["ready"][d["contact"]])

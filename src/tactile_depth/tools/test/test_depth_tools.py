@@ -155,8 +155,9 @@ def test_train_writes_model_and_report_with_every_key(tmp_path):
     assert tdm.main(["--dataset", f"wb={a}", "--dataset", f"gl={b}", "--out", str(out), "--fast", "--seed", "7"]) == 0
     report = json.loads((out / "report.json").read_text())
     model = depth_model.load_model(out / "model.json")
-    assert set(model) == {"format", "version", "whiskers", "units", "provenance"}
-    assert model["units"] == {"input": "Pa (TDORC compensated S_p)", "output": "m"}
+    assert set(model) == {"format", "version", "whiskers", "units", "input_signal", "provenance"}
+    assert model["input_signal"] == "compensated"  # the default: the paper's S_p (000 eq. 12)
+    assert model["units"] == {"input": "Pa (TDORC compensated S_p, 000 eq. 9-11)", "output": "m"}
     for key in ("datasets", "train_flights", "test_flights", "tool", "python", "sklearn", "numpy", "seed", "date",
                 "metrics"):
         assert key in model["provenance"], key
@@ -187,6 +188,33 @@ def test_train_writes_model_and_report_with_every_key(tmp_path):
             assert res["whisker_left"]["mae"] < 10.0
     md = (out / "report.md").read_text()
     assert "| MLP | wb+gl |" in md and "### gl" in md
+
+
+def test_calibrated_input_trains_on_sc_and_says_so(tmp_path):
+    # --input calibrated: every model reads S_c ('sc') instead of S_p; the file records it.
+    d = synthetic_dataset(seed=3)
+    d["sc"] = d["sp"] * 2.0 + 5.0  # a different, equally learnable input
+    a = tmp_path / "a.npz"
+    np.savez(a, **d)
+    out = tmp_path / "out"
+    assert tdm.main(["--dataset", f"wb={a}", "--out", str(out), "--fast", "--no-per-dataset",
+                     "--input", "calibrated"]) == 0
+    model = depth_model.load_model(out / "model.json")
+    assert model["input_signal"] == "calibrated"
+    assert model["provenance"]["input_signal"] == "calibrated"
+    assert model["units"]["input"] == "Pa (TDORC calibrated S_c, 000 eq. 5)"
+    # The standardisation is that of S_c on the fit flights, not of S_p.
+    m = np.isin(d["flight"], model["provenance"]["train_flights"][0]["flights"]) & d["contact"][:, 0]
+    np.testing.assert_allclose(model["whiskers"]["left"]["input_mean"], d["sc"][m, 0].mean(axis=0), rtol=1e-12)
+    # A dataset without 'sc' is refused by name.
+    del d["sc"]
+    b = tmp_path / "b.npz"
+    np.savez(b, **d)
+    with pytest.raises(SystemExit):
+        tdm.main(["--dataset", f"wb={b}", "--out", str(tmp_path / "o2"), "--fast", "--input", "calibrated"])
+    bad = dict(model, input_signal="raw")
+    with pytest.raises(ValueError, match="input_signal"):
+        depth_model.validate_model(bad)
 
 
 def test_training_is_deterministic(tmp_path):

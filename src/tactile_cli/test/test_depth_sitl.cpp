@@ -1,0 +1,73 @@
+// Scenario test of tactile depth in the SITL (paper 000 Table 1): the two
+// tactile-depth datasets (whiteboard: rigid wall + mocap; glass: glass wall +
+// flow deck) are flown with a few seeded trials, and the MLP + KF with the full
+// process model (000 eq. 21-30) must estimate the depth of each whisker better
+// than the MLP alone (eq. 12-14), against the simulator's true depth
+// (tactile_cli/whisker_eval.cpp). Seeds 21.. are outside the flights the
+// default model was trained/validated/tested on (seeds 1..12).
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <iostream>
+#include <string>
+
+#include "tactile_cli/sim_run.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path kConfig = TACTILE_CONFIG_DIR;
+
+nlohmann::json fly(const std::string& scenario, int trials) {
+  const fs::path dir = fs::temp_directory_path() /
+                       ("tactile_cli_test_depth_" + scenario + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  tactile_cli::SimOptions o;
+  o.scenario = (kConfig / "scenarios" / ("depth_" + scenario + ".yaml")).string();
+  o.out_dir = dir.string();
+  o.config_dir = kConfig.string();
+  o.seed = 21;
+  o.trials = trials;
+  o.progress = false;
+  o.write_bag = false;
+  o.write_png = false;
+  nlohmann::json m = tactile_cli::run_sim(o);
+  fs::remove_all(dir);
+  return m;
+}
+
+double stat(const nlohmann::json& m, const std::string& model, const std::string& key) {
+  const auto& s = m.at("statistics").at("depth." + model + "." + key);
+  return s.at("mean").get<double>();
+}
+
+void expect_full_kf_beats_mlp(const std::string& scenario) {
+  const nlohmann::json m = fly(scenario, 12);
+  for (const char* key : {"mae_left_mm", "mae_right_mm", "rmse_left_mm", "rmse_right_mm"}) {
+    const double mlp = stat(m, "mlp", key), simplified = stat(m, "mlp_kf_simplified", key),
+                 full = stat(m, "mlp_kf_full", key);
+    std::cout << scenario << " " << key << ": mlp " << mlp << ", kf_simplified " << simplified << ", kf_full "
+              << full << "\n";
+    // The errors are of the order of 000 Table 1 (4-15 mm; ours up to ~23 mm
+    // RMSE on the whiteboard, whose stick-slip scatters S_c), not a
+    // degenerate run (no contact gives no samples and throws above).
+    EXPECT_GT(mlp, 1.0) << scenario << " " << key;
+    EXPECT_LT(mlp, 30.0) << scenario << " " << key;
+    // Asserted on the MAE of each whisker; the RMSE is reported (on glass the
+    // right whisker's RMSE is a tie within the trial spread).
+    if (std::string(key).rfind("mae", 0) == 0) EXPECT_LT(full, mlp) << scenario << " " << key;
+  }
+  for (const char* key : {"mae_orientation_deg", "mae_reconstruction_mm"}) {
+    std::cout << scenario << " " << key << ": mlp " << stat(m, "mlp", key) << ", kf_full "
+              << stat(m, "mlp_kf_full", key) << "\n";
+  }
+}
+
+}  // namespace
+
+TEST(DepthSitl, WhiteboardFullKfBeatsMlp) { expect_full_kf_beats_mlp("whiteboard"); }
+
+TEST(DepthSitl, GlassFullKfBeatsMlp) { expect_full_kf_beats_mlp("glass"); }
