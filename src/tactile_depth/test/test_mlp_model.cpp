@@ -192,6 +192,18 @@ TEST(ModelFile, ErrorsNamePathAndReason) {
                "whiskers.right.layers[2].weights[5]: must have 32 numbers (outputs of layers[1]), got 31");
 }
 
+TEST(ModelFile, InputSignal) {
+  // Absent: the paper's S_p (000 eq. 12); "calibrated": S_c (eq. 5); anything else is an error.
+  EXPECT_EQ(SensorModelFile::parse(hand_file(), "x").input_signal, tactile_depth::InputSignal::kCompensated);
+  const std::string cal = hand_file(kHandWhisker, kHandWhisker, R"(, "input_signal": "calibrated")");
+  EXPECT_EQ(SensorModelFile::parse(cal, "x").input_signal, tactile_depth::InputSignal::kCalibrated);
+  const std::string cmp = hand_file(kHandWhisker, kHandWhisker, R"(, "input_signal": "compensated")");
+  EXPECT_EQ(SensorModelFile::parse(cmp, "x").input_signal, tactile_depth::InputSignal::kCompensated);
+  expect_error(hand_file(kHandWhisker, kHandWhisker, R"(, "input_signal": "raw")"),
+               "input_signal: must be \"compensated\" (S_p, 000 eq. 12) or \"calibrated\" (S_c, eq. 5), got \"raw\"");
+  expect_error(hand_file(kHandWhisker, kHandWhisker, R"(, "input_signal": 3)"), "input_signal:");
+}
+
 TEST(ModelFile, LoadFromDisk) {
   namespace fs = std::filesystem;
   const fs::path dir = fs::temp_directory_path() / ("tactile_depth_test_" + std::to_string(::getpid()));

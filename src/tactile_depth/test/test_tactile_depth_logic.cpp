@@ -261,6 +261,35 @@ TEST(TactileDepthLogic, RepoConfigMatchesDefaults) {
   }
 }
 
+TEST(TactileDepthLogic, ModelFileChoosesTheInputField) {
+  // The same signals with different S_p and S_c: the file's input_signal picks the field.
+  auto sig = [](int side, int64_t ns, double sp0, double sc0) {
+    WhiskerSignal s = signal(side, ns, sp0);
+    s.calibrated = {{sc0, 1.0, 2.0}};
+    return s;
+  };
+  SensorModelFile f = linear_models();
+  TactileDepthLogic on_sp(params(EstimatorModel::kMlp), f);
+  on_sp.on_left_signal(sig(0, 20 * kMs, 80, 60));
+  auto a = on_sp.on_right_signal(sig(1, 20 * kMs, 90, 70));
+  ASSERT_TRUE(a);
+  EXPECT_DOUBLE_EQ(a->depth_left, 0.080);
+  f.input_signal = tactile_depth::InputSignal::kCalibrated;
+  TactileDepthLogic on_sc(params(EstimatorModel::kMlp), f);
+  on_sc.on_left_signal(sig(0, 20 * kMs, 80, 60));
+  auto b = on_sc.on_right_signal(sig(1, 20 * kMs, 90, 70));
+  ASSERT_TRUE(b);
+  EXPECT_DOUBLE_EQ(b->depth_left, 0.060);
+  EXPECT_DOUBLE_EQ(b->depth_right, 0.070);
+  // NaN in the field the model reads is dropped; NaN in the other one is not.
+  WhiskerSignal bad = sig(0, 40 * kMs, 80, 60);
+  bad.calibrated[1] = std::nan("");
+  EXPECT_FALSE(on_sc.on_left_signal(bad));
+  EXPECT_EQ(on_sc.stats().dropped_nonfinite, 1u);
+  EXPECT_FALSE(on_sp.on_left_signal(bad));
+  EXPECT_EQ(on_sp.stats().dropped_nonfinite, 0u);
+}
+
 TEST(TactileDepthLogic, ShippedDefaultModelFollowsTheContract) {
   // Contract check with the training tool's output; the other tests never use it.
   if (!std::ifstream("models/default_model.json")) GTEST_SKIP() << "no models/default_model.json yet";
@@ -268,4 +297,5 @@ TEST(TactileDepthLogic, ShippedDefaultModelFollowsTheContract) {
   EXPECT_EQ(f.left.layers().front().in, 3);
   EXPECT_EQ(f.left.layers().back().out, 1);
   EXPECT_TRUE(std::isfinite(f.right.predict({{30.0, 5.0, -3.0}})));
+  EXPECT_EQ(f.input_signal, tactile_depth::InputSignal::kCalibrated);  // README "Input signal"
 }
