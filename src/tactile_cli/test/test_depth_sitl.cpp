@@ -56,9 +56,11 @@ void expect_full_kf_beats_mlp(const std::string& scenario) {
     // degenerate run (no contact gives no samples and throws above).
     EXPECT_GT(mlp, 1.0) << scenario << " " << key;
     EXPECT_LT(mlp, 30.0) << scenario << " " << key;
-    // Asserted on the MAE of each whisker; the RMSE is reported (on glass the
-    // right whisker's RMSE is a tie within the trial spread).
-    if (std::string(key).rfind("mae", 0) == 0) EXPECT_LT(full, mlp) << scenario << " " << key;
+    // Asserted on the MAE of each whisker; the RMSE is reported (measured
+    // lower for the full KF too, see tactile_depth/README.md).
+    if (std::string(key).rfind("mae", 0) == 0) {
+      EXPECT_LT(full, mlp) << scenario << " " << key;
+    }
   }
   for (const char* key : {"mae_orientation_deg", "mae_reconstruction_mm"}) {
     std::cout << scenario << " " << key << ": mlp " << stat(m, "mlp", key) << ", kf_full "

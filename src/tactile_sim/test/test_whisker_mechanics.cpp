@@ -2,6 +2,7 @@
 // and the contact geometry in the plane.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -187,6 +188,74 @@ TEST(WhiskerParams, ValidateRejectsBadValues) {
   p = WhiskerParams{};
   p.length = NAN;
   EXPECT_THROW(p.validate(), std::invalid_argument);
+}
+
+// ----------------------------------------------------------------- stick-slip
+
+TEST(WhiskerStickSlip, ProfileIsASawtoothPerCycle) {
+  const double L = 0.0015;
+  const uint64_t seed = 42;
+  for (int cycle = -3; cycle < 20; ++cycle) {
+    // Within a cycle: linear in the phase, from -a to +a, a in [0.5, 1).
+    const double u0 = cycle * L;
+    const double lo = tactile_sim::stick_slip_profile(u0 + 1e-9 * L, L, seed, 2);
+    const double mid = tactile_sim::stick_slip_profile(u0 + 0.5 * L, L, seed, 2);
+    const double q = tactile_sim::stick_slip_profile(u0 + 0.75 * L, L, seed, 2);
+    const double a = -lo;
+    EXPECT_GE(a, 0.5 - 1e-6) << cycle;
+    EXPECT_LT(a, 1.0) << cycle;
+    EXPECT_NEAR(mid, 0.0, 1e-9) << cycle;
+    EXPECT_NEAR(q, 0.5 * a, 1e-9) << cycle;  // a (2 * 0.75 - 1)
+    // The slip: the load drops from +a to the next cycle's -a'.
+    const double before = tactile_sim::stick_slip_profile(u0 + L * (1.0 - 1e-9), L, seed, 2);
+    EXPECT_NEAR(before, a, 1e-6) << cycle;
+  }
+  // Deterministic; other obstacles / seeds give other amplitudes.
+  EXPECT_EQ(tactile_sim::stick_slip_profile(0.0101, L, seed, 2), tactile_sim::stick_slip_profile(0.0101, L, seed, 2));
+  EXPECT_NE(tactile_sim::stick_slip_profile(0.0101, L, seed, 2), tactile_sim::stick_slip_profile(0.0101, L, seed, 3));
+  EXPECT_NE(tactile_sim::stick_slip_profile(0.0101, L, seed, 2), tactile_sim::stick_slip_profile(0.0101, L, seed + 1, 2));
+  // Bad input gives no fluctuation.
+  EXPECT_EQ(tactile_sim::stick_slip_profile(std::nan(""), L, seed, 2), 0.0);
+  EXPECT_EQ(tactile_sim::stick_slip_profile(0.01, 0.0, seed, 2), 0.0);
+}
+
+TEST(WhiskerStickSlip, ProfileHasZeroMeanAlongTheWall) {
+  // Each cycle integrates to zero, so the mean over whole cycles is 0.
+  const double L = 0.0015;
+  double sum = 0.0;
+  const int n = 200000;  // 100 cycles, 2000 samples each
+  for (int i = 0; i < n; ++i) sum += tactile_sim::stick_slip_profile((i + 0.5) * 100 * L / n, L, 7, 0);
+  EXPECT_NEAR(sum / n, 0.0, 1e-9);
+}
+
+TEST(WhiskerStickSlip, MomentIsGainMuNLoTimesSlipTimesProfile) {
+  WhiskerParams p;
+  const Vec2 base(0.0, 0.0), fwd(1.0, 0.0), n(-1.0, 0.0);
+  const double mu = 0.4;
+  const Vec2 hit(0.07, 0.0123);
+  // Full slip (|v_t| >= eps): moment = gain * mu * N * l_o sin(alpha) * profile(u), u = hit . tangent.
+  const WhiskerContact c = whisker_contact(p, base, fwd, Vec2(0.0, 0.2), true, 0.07, hit, n, mu, 1);
+  ASSERT_TRUE(c.contact);
+  const Vec2 tangent(-n.y(), n.x());
+  const double expected = p.stick_slip_gain * mu * c.normal_force * p.contact_height() *
+                          tactile_sim::stick_slip_profile(hit.dot(tangent), p.stick_slip_length, p.stick_slip_seed, 1);
+  EXPECT_NEAR(c.stick_slip_moment, expected, 1e-15);
+  EXPECT_NE(c.stick_slip_moment, 0.0);
+  EXPECT_NEAR(c.base_moment, std::max(c.prbm.base_moment + expected, 0.0), 1e-15);
+  // Half the regularisation speed: half the fluctuation.
+  const WhiskerContact half =
+      whisker_contact(p, base, fwd, Vec2(0.0, 0.5 * p.friction_speed_eps), true, 0.07, hit, n, mu, 1);
+  EXPECT_NEAR(half.stick_slip_moment, 0.5 * expected, 1e-15);
+  // No sliding, no friction, or no gain: no fluctuation, moment = PRBM moment.
+  for (const WhiskerContact& z :
+       {whisker_contact(p, base, fwd, Vec2(0.0, 0.0), true, 0.07, hit, n, mu, 1),
+        whisker_contact(p, base, fwd, Vec2(0.0, 0.2), true, 0.07, hit, n, 0.0, 1)}) {
+    EXPECT_EQ(z.stick_slip_moment, 0.0);
+    EXPECT_EQ(z.base_moment, z.prbm.base_moment);
+  }
+  WhiskerParams off = p;
+  off.stick_slip_gain = 0.0;
+  EXPECT_EQ(whisker_contact(off, base, fwd, Vec2(0.0, 0.2), true, 0.07, hit, n, mu, 1).stick_slip_moment, 0.0);
 }
 
 }  // namespace
