@@ -42,7 +42,9 @@ def generate_launch_description():
     for side in ('left', 'right'):
         nodes.append(ComposableNode(
             package='tdorc_filter', plugin='tdorc_filter::TdorcFilterComponent', name='tdorc_filter',
-            namespace='whisker/' + side, parameters=[config('tdorc_filter'), sim_time],
+            namespace='whisker/' + side,
+            # Probing: a held contact also ends at 1/4 of its peak S_c (tdorc_filter README).
+            parameters=[config('tdorc_filter'), {'hold_release_fraction': 0.25}, sim_time],
             extra_arguments=intra))
     nodes.append(ComposableNode(
         package='tactile_depth', plugin='tactile_depth::TactileDepthComponent', name='tactile_depth',

@@ -56,6 +56,9 @@ void Params::validate() const {
     bad("contact_threshold", "must be >= 0 with absolute_threshold, got " + num(contact_threshold));
   }
   if (learn_delay < 0 || learn_delay > 10000) bad("learn_delay", "must be in [0, 10000], got " + std::to_string(learn_delay));
+  if (!(hold_release_fraction >= 0.0 && hold_release_fraction < 1.0)) {
+    bad("hold_release_fraction", "must be in [0, 1), got " + num(hold_release_fraction));
+  }
   if (max_contact_hold < 1) bad("max_contact_hold", "must be >= 1, got " + std::to_string(max_contact_hold));
   for (int i = 0; i < 3; ++i) {
     if (!std::isfinite(bandpass_b[i])) bad("bandpass_b[" + std::to_string(i) + "]", "must be finite, got " + num(bandpass_b[i]));
@@ -299,6 +302,7 @@ void TdorcWhisker::reset() {
   next_index_ = 0;
   contact_ = false;
   contact_samples_ = 0;
+  contact_peak_ = {};
 }
 
 WhiskerOutput TdorcWhisker::update(const std::array<double, 3>& raw) {
@@ -316,10 +320,16 @@ WhiskerOutput TdorcWhisker::update(const std::array<double, 3>& raw) {
   // stays in contact while the calibrated signal of any channel is over T_c.
   bool held = false;
   if (params_.contact_hold && params_.mode != Mode::kBandpass && !any && contact_ && all_ready && contact_samples_ < params_.max_contact_hold) {
-    for (const auto& c : out.channel) held = held || c.calibrated > params_.contact_threshold;
+    for (std::size_t i = 0; i < out.channel.size(); ++i) {
+      const double sc = out.channel[i].calibrated;
+      held = held || (sc > params_.contact_threshold && sc > params_.hold_release_fraction * contact_peak_[i]);
+    }
   }
   const bool contact = any || held;
   contact_samples_ = contact ? contact_samples_ + 1 : 0;
+  for (std::size_t i = 0; i < out.channel.size(); ++i) {
+    contact_peak_[i] = contact ? std::max(contact_peak_[i], out.channel[i].calibrated) : 0.0;
+  }
   // Freeze while in contact (000 eq. 8).
   const bool freeze = contact;
   for (std::size_t i = 0; i < channels_.size(); ++i) channels_[i].learn(k, raw[i], freeze);

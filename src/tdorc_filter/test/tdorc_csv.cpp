@@ -1,7 +1,7 @@
 // Test helper (not installed): runs TdorcWhisker over CSV samples so an
 // independent Python implementation can be compared sample by sample.
 //
-//   tdorc_csv <mode> <window> <contact_threshold> <absolute 0|1> [learn_delay contact_hold 0|1 max_contact_hold]
+//   tdorc_csv <mode> <window> <contact_threshold> <absolute 0|1> [learn_delay contact_hold 0|1 max_contact_hold [hold_release_fraction]]
 //   stdin:  one sample per line: S_r0,S_r1,S_r2
 //   stdout: ready,contact,drift_frozen,S_c0,S_c1,S_c2,S_p0,S_p1,S_p2,contact0,contact1,contact2
 #include <cstdio>
@@ -14,7 +14,7 @@
 #include "tdorc_filter/tdorc.hpp"
 
 int main(int argc, char** argv) {
-  if (argc != 5 && argc != 8) {
+  if (argc != 5 && argc != 8 && argc != 9) {
     std::cerr << "usage: tdorc_csv <tdorc|tdoc|bandpass> <window> <threshold> <absolute 0|1>"
                  " [<learn_delay> <contact_hold 0|1> <max_contact_hold>]\n";
     return 2;
@@ -25,11 +25,12 @@ int main(int argc, char** argv) {
     p.window = std::atoi(argv[2]);
     p.contact_threshold = std::strtod(argv[3], nullptr);
     p.absolute_threshold = std::atoi(argv[4]) != 0;
-    if (argc == 8) {
+    if (argc >= 8) {
       p.learn_delay = std::atoi(argv[5]);
       p.contact_hold = std::atoi(argv[6]) != 0;
       p.max_contact_hold = std::atoi(argv[7]);
     }
+    if (argc == 9) p.hold_release_fraction = std::strtod(argv[8], nullptr);
     tdorc_filter::TdorcWhisker w(p);
     std::string line;
     while (std::getline(std::cin, line)) {

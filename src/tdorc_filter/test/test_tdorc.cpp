@@ -411,6 +411,32 @@ TEST(TdorcWhisker, ContactHoldIsLimited) {
   }());
 }
 
+TEST(TdorcWhisker, HoldReleaseFractionEndsAHoldWhoseSignalCollapsed) {
+  // Pressed with +200 Pa, then at sample 800 eased to +40 (still over T_c): a
+  // partial retreat to 20 % of the peak. Fraction 0 keeps holding (S_c = 40 >
+  // T_c); fraction 0.25 releases at once (40 < 50); fraction 0.1 keeps it.
+  auto last_contact = [](double fraction) {
+    Params p;
+    p.contact_hold = true;
+    p.learn_delay = 10;
+    p.hold_release_fraction = fraction;
+    TdorcWhisker w(p);
+    int last = -1;
+    for (int k = 0; k < 1200; ++k) {
+      const double drift = 0.03 * k;
+      const double push = k < 300 ? 0.0 : (k < 800 ? 200.0 : 40.0);
+      if (w.update({{100000.0 + drift, 99000.0 - drift + push, 101000.0}}).contact) last = k;
+    }
+    return last;
+  };
+  EXPECT_EQ(last_contact(0.0), 1199);
+  EXPECT_EQ(last_contact(0.1), 1199);
+  EXPECT_EQ(last_contact(0.25), 799);
+  Params bad;
+  bad.hold_release_fraction = 1.0;
+  EXPECT_THROW(TdorcWhisker{bad}, std::invalid_argument);
+}
+
 TEST(TdorcWhisker, BandpassModeNeverHolds) {
   // No drift model: S_c is the raw pressure, which must not hold a contact.
   Params p;

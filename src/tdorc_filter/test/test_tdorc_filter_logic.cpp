@@ -73,6 +73,7 @@ TEST(TdorcFilterLogic, RepositoryConfigIsPaperValuesPlusSustainedContact) {
   EXPECT_EQ(p.tdorc.learn_delay, 10);
   EXPECT_TRUE(p.tdorc.contact_hold);
   EXPECT_EQ(p.tdorc.max_contact_hold, 1000);
+  EXPECT_EQ(p.tdorc.hold_release_fraction, 0.0);
 }
 
 TEST(TdorcFilterLogic, ParameterErrorsNameTheKey) {

@@ -44,9 +44,9 @@ def synthetic_trace(seed=1, n=3000, rate=50.0, contact_amp=600.0, contact_end=16
     return offsets + drift + ringing + noise + contact[:, None] * gains
 
 
-def reference(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=False, max_hold=1000):
-    """delay, hold, max_hold: the README's sustained-contact extension (learn_delay,
-    contact_hold, max_contact_hold); defaults = eq. 8 as written."""
+def reference(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=False, max_hold=1000, release=0.0):
+    """delay, hold, max_hold, release: the README's sustained-contact extension (learn_delay,
+    contact_hold, max_contact_hold, hold_release_fraction); defaults = eq. 8 as written."""
     N = S.shape[0]
     rows = np.zeros((N, 12))
     window = []          # sample indices in the least-squares window
@@ -54,6 +54,7 @@ def reference(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=Fals
     fit = None           # (slope[3], intercept[3], first index)
     zi = None
     prev_contact, run = False, 0   # contact at the previous sample, samples since its onset
+    peak = np.zeros(3)             # largest S_c per channel during the current contact
     for k in range(N):
         # 1. compensate with the fit of the previous samples
         if mode == "bandpass":
@@ -74,10 +75,11 @@ def reference(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=Fals
             ch_contact = np.abs(sp) > threshold if absolute else sp > threshold
             contact = bool(ch_contact.any())
             if hold and mode != "bandpass" and not contact and prev_contact and run < max_hold:
-                contact = bool((sc > threshold).any())  # held while S_c is over T_c
+                contact = bool(((sc > threshold) & (sc > release * peak)).any())  # held while S_c is over T_c
             frozen = mode == "tdorc" and contact
             rows[k] = [1, contact, frozen, *sc, *sp, *ch_contact]
         run = run + 1 if contact else 0
+        peak = np.maximum(peak, sc) if (contact and sc is not None) else np.zeros(3)
         prev_contact = contact
         # 2. learn: first window, then (TDORC) re-fit while not in contact (eq. 8),
         #    with the sample of `delay` samples ago; a contact drops the waiting ones
@@ -101,13 +103,13 @@ def reference(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=Fals
     return rows
 
 
-def run_cpp(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=False, max_hold=1000):
+def run_cpp(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=False, max_hold=1000, release=0.0):
     exe = os.environ.get("TDORC_CSV")
     if not exe:
         pytest.skip("TDORC_CSV not set (run through ctest)")
     text = "\n".join(",".join(repr(float(v)) for v in row) for row in S) + "\n"
     res = subprocess.run([exe, mode, str(n), repr(threshold), "1" if absolute else "0",
-                          str(delay), "1" if hold else "0", str(max_hold)],
+                          str(delay), "1" if hold else "0", str(max_hold), repr(float(release))],
                          input=text, capture_output=True, text=True, check=True)
     return np.array([[float(v) for v in line.split(",")] for line in res.stdout.strip().splitlines()])
 
@@ -139,12 +141,14 @@ def test_matches_reference(mode, window, absolute):
 
 
 @pytest.mark.parametrize("mode", ["tdorc", "tdoc", "bandpass"])
-@pytest.mark.parametrize("delay,hold,max_hold", [(10, True, 1000), (3, True, 40), (0, True, 1000), (10, False, 1000)])
-def test_sustained_contact_extension_matches_reference(mode, delay, hold, max_hold):
+@pytest.mark.parametrize("delay,hold,max_hold,release",
+                         [(10, True, 1000, 0.0), (3, True, 40, 0.0), (0, True, 1000, 0.0), (10, False, 1000, 0.0),
+                          (10, True, 1000, 0.25), (10, True, 1000, 0.9)])
+def test_sustained_contact_extension_matches_reference(mode, delay, hold, max_hold, release):
     # A 20 s push (samples 1400-2400): S_p alone decays below T_c long before it ends.
     S = synthetic_trace(contact_amp=200.0, contact_end=2400)
-    ref = reference(S, mode, delay=delay, hold=hold, max_hold=max_hold)
-    cpp = run_cpp(S, mode, delay=delay, hold=hold, max_hold=max_hold)
+    ref = reference(S, mode, delay=delay, hold=hold, max_hold=max_hold, release=release)
+    cpp = run_cpp(S, mode, delay=delay, hold=hold, max_hold=max_hold, release=release)
     np.testing.assert_array_equal(cpp[:, [0, 1, 2, 9, 10, 11]], ref[:, [0, 1, 2, 9, 10, 11]])
     scale = np.abs(S).max()
     for col in range(3, 9):

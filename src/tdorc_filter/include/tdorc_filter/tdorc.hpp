@@ -67,6 +67,10 @@ struct Params {
   bool contact_hold = false;
   /// Limit of a held contact [samples] (1000 = 20 s at 50 Hz).
   int max_contact_hold = 1000;
+  /// A held contact also ends when no channel's S_c is above this fraction of
+  /// the largest S_c of that channel during the contact (a release drops S_c
+  /// to the drift-line error, a partial retreat only part of the way); 0: off.
+  double hold_release_fraction = 0.0;
   /// Band-pass numerator b0, b1, b2 (000 eq. 9-11, first-order Butterworth 0.05-1 Hz at 50 Hz).
   std::array<double, 3> bandpass_b{{0.0564, 0.0, -0.0564}};
   /// Band-pass denominator a0, a1, a2; a0 must be 1 (000 eq. 9-11).
@@ -264,6 +268,7 @@ class TdorcWhisker {
   int64_t next_index_ = 0;
   bool contact_ = false;
   int64_t contact_samples_ = 0;
+  std::array<double, 3> contact_peak_{};  // largest S_c per channel during the current contact
 };
 
 }  // namespace tdorc_filter
