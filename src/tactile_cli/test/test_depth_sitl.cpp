@@ -13,30 +13,14 @@
 #include <iostream>
 #include <string>
 
-#include "tactile_cli/sim_run.hpp"
+#include "sim_test_util.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-const fs::path kConfig = TACTILE_CONFIG_DIR;
-
 nlohmann::json fly(const std::string& scenario, int trials) {
-  const fs::path dir = fs::temp_directory_path() /
-                       ("tactile_cli_test_depth_" + scenario + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  tactile_cli::SimOptions o;
-  o.scenario = (kConfig / "scenarios" / ("depth_" + scenario + ".yaml")).string();
-  o.out_dir = dir.string();
-  o.config_dir = kConfig.string();
-  o.seed = 21;
-  o.trials = trials;
-  o.progress = false;
-  o.write_bag = false;
-  o.write_png = false;
-  nlohmann::json m = tactile_cli::run_sim(o);
-  fs::remove_all(dir);
-  return m;
+  return tactile_cli::test::run_scenario("depth_" + scenario + ".yaml", trials, 21);
 }
 
 double stat(const nlohmann::json& m, const std::string& model, const std::string& key) {

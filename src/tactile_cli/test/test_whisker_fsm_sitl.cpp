@@ -20,30 +20,13 @@
 #include <filesystem>
 #include <string>
 
-#include "tactile_cli/sim_run.hpp"
+#include "sim_test_util.hpp"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-const fs::path kConfig = TACTILE_CONFIG_DIR;
-
-nlohmann::json run_trials(const std::string& scenario, int trials) {
-  const fs::path out = fs::temp_directory_path() /
-                       ("tactile_fsm_sitl_" + fs::path(scenario).stem().string() + "_" + std::to_string(::getpid()));
-  fs::remove_all(out);
-  tactile_cli::SimOptions o;
-  o.scenario = (kConfig / "scenarios" / scenario).string();
-  o.out_dir = out.string();
-  o.config_dir = kConfig.string();
-  o.trials = trials;
-  o.progress = false;
-  o.write_bag = false;
-  o.write_png = false;
-  auto m = tactile_cli::run_sim(o);
-  fs::remove_all(out);
-  return m;
-}
+nlohmann::json run_trials(const std::string& scenario, int trials) { return tactile_cli::test::run_scenario(scenario, trials); }
 
 /// Paper-level acceptance of one scenario: all trials succeed, band and heading.
 void expect_course_flown(const std::string& scenario, int trials, double min_band, double max_heading_deg) {
