@@ -183,6 +183,7 @@ TEST(BridgeLogic, ParametersDefaultsAndValidation) {
   const auto m = CrazyflieBridgeLogic::default_parameters();
   const auto p = CrazyflieBridgeLogic::params_from(m);
   EXPECT_EQ(p.whisker_period_ms, 20);
+  EXPECT_EQ(p.state_period_ms, 10);
   EXPECT_EQ(p.uri, "radio://0/80/2M/E7E7E7E7E7?safelink=1");
   auto bad = m;
   bad.set("setpoint_rate_hz", 1.0);

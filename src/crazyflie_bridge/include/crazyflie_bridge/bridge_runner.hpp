@@ -32,8 +32,9 @@ class BridgeRunner {
   explicit BridgeRunner(const CrazyflieBridgeLogic::Params& params, ClientOptions client_options = {},
                         std::unique_ptr<Link> link = nullptr);
 
-  /// Receives for at most `timeout`, stamping messages with now_ns(); returns
-  /// the number of log samples handled.
+  /// Receives for at most `timeout` (then drains what already arrived),
+  /// stamping messages with now_ns(); returns the number of log samples handled.
+  static constexpr int kMaxSamplesPerPump = 1000;
   int pump(std::chrono::milliseconds timeout, const std::function<int64_t()>& now_ns, const Sinks& sinks);
   void on_hover_setpoint(const tactile_msgs::msg::HoverSetpoint& msg, int64_t now_ns);
   /// Sends the logic's packet (if any); returns true if one was sent.

@@ -45,7 +45,10 @@ class CrazyflieBridgeLogic {
     std::vector<std::string> state_vars{"stateEstimate.x", "stateEstimate.y", "stateEstimate.z",
                                         "stateEstimate.yaw", "stateEstimate.vx", "stateEstimate.vy"};
     int64_t whisker_period_ms = 20;  ///< 000: 50 Hz
-    int64_t state_period_ms = 20;
+    /// 100 Hz: the rate of the state estimate the pipeline was tuned with (SITL
+  /// /odom); at 50 Hz the darkness wall-following FSM reached its target in
+  /// 6/10 seeded trials instead of 10/10 (crazyflie_bridge/README.md).
+  int64_t state_period_ms = 10;
     double setpoint_rate_hz = 50.0;  ///< commander packets (firmware expects >= 2 Hz: 500 ms watchdog)
     double max_velocity = 0.5;       ///< |vx|, |vy| clamp [m/s]
     double max_yaw_rate = 1.0;       ///< [rad/s]

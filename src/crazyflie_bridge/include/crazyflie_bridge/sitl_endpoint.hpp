@@ -7,12 +7,8 @@
 // vehicle through its hover-setpoint controller; the firmware's commander
 // watchdog (500 ms hover in place, 2 s motors off) applies when setpoints stop.
 //
-// Log TOC: Whisker.Barometer1_1..3, Whisker1.Barometer2_1..3 [Pa, float],
-// stateEstimate.x/y/z [m], yaw [deg], vx/vy/vz [m/s world], pm.vbat [V],
-// sitl.truthX/Y/Z [m] (ground truth, simulator only).
-// Params: deck.bcWhisker (u8, RO, 1), commander.enHighLevel (u8),
-// stabilizer.stop (u8: 1 stops the motors), sitl.lossPct (u8: uplink and
-// downlink packet loss in %, for fault tests).
+// Log variables and parameters: crazyflie_bridge/sim_firmware.hpp
+// (sitl.lossPct sets the injected uplink and downlink loss at run time).
 #pragma once
 
 #include <atomic>
@@ -24,7 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "crazyflie_bridge/firmware.hpp"
+#include "crazyflie_bridge/sim_firmware.hpp"
 #include "crazyflie_bridge/link.hpp"
 #include "tactile_sim/logic/sim_logic.hpp"
 #include "tactile_sim/scenario.hpp"
@@ -60,7 +56,7 @@ class SitlEndpoint {
   void run(double duration_s, const std::atomic<bool>* stop = nullptr);
 
   const tactile_sim::SimLogic& sim() const { return *sim_; }
-  const FirmwareEmulator& firmware() const { return fw_; }
+  const FirmwareEmulator& firmware() const { return fw_.emulator(); }
   const UdpServer& server() const { return server_; }
   const Stats& stats() const { return stats_; }
   int64_t sim_time_ns() const { return now_ns_; }
@@ -80,7 +76,7 @@ class SitlEndpoint {
 
   SitlEndpointOptions opt_;
   std::unique_ptr<tactile_sim::SimLogic> sim_;
-  FirmwareEmulator fw_;
+  SimulatedCrazyflieFirmware fw_;
   UdpServer server_;
   tactile_sim::SimLogic::Outputs out_;
   int64_t now_ns_ = 0;
@@ -99,6 +95,7 @@ class SitlEndpoint {
   mutable std::mutex truth_mutex_;
   tactile_sim::Vec3 truth_ = tactile_sim::Vec3::Zero();
   std::atomic<double> loss_request_{-1.0};
+  double param_loss_ = 0.0;  ///< last sitl.lossPct seen
   int last_mode_ = -1;
   Stats stats_;
 };

@@ -12,6 +12,7 @@ const std::vector<GraphInfo>& sim_graphs() {
       graphs::whisker_fsm_graph(),
       graphs::gpis_explore_graph(),
       graphs::xplorer_graph(),
+      graphs::whisker_fsm_crtp_graph(),
   };
   return table;
 }

@@ -10,5 +10,6 @@ GraphInfo pilot_graph();        // pilot.cpp
 GraphInfo whisker_fsm_graph();  // whisker_fsm.cpp
 GraphInfo gpis_explore_graph();  // gpis_explore.cpp
 GraphInfo xplorer_graph();      // xplorer.cpp
+GraphInfo whisker_fsm_crtp_graph();  // whisker_fsm_crtp.cpp
 
 }  // namespace tactile_cli::graphs
