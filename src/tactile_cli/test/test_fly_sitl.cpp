@@ -1,19 +1,16 @@
 // `tactile fly` against the simulated Crazyflie: the whisker pipeline of the
 // darkness wall-following scenario flies over CRTP/UDP (bridge -> simulated
-// firmware -> SITL, in wall-clock time, ~30 s) through the same phases as the
-// in-process `tactile sim` run (take-off, forward, contact, wall following);
-// metrics carry the link counters and the bag holds every message the host
-// published. Reaching the target is not asserted: the darkness wall is flown
-// to the target in 2 of 5 seeds in process (tactile_fsm/README.md, a long
-// continuous contact lets the frozen drift line of TDORC walk), so a wall-clock
-// run over UDP, which is another sample of the same chaotic flight, reaches it
-// or not by chance; both outcomes are printed. `tactile scan` finds the
+// firmware -> SITL, in wall-clock time, ~15 s): it takes off, reaches the wall
+// and follows it, and when the run ends the bridge lands the drone; metrics
+// carry the link counters and the bag holds every message the host published.
+// The FSM's outcome depends on wall-clock timing here (a loaded machine delays
+// ticks), so it is compared with the in-process run by the lockstep graph
+// whisker_fsm_crtp (test_crtp_graph.cpp), not here. `tactile scan` finds the
 // simulated Crazyflie on the UDP scan ports.
 #include <gtest/gtest.h>
 
 #include <atomic>
 #include <filesystem>
-#include <iostream>
 #include <thread>
 
 #include "crazyflie_bridge/sitl_endpoint.hpp"
@@ -22,40 +19,27 @@
 
 namespace fs = std::filesystem;
 
-TEST(FlySitl, DarknessWallFollowingOverUdpMatchesInProcess) {
+TEST(FlySitl, DarknessWallFollowingOverUdp) {
   const std::string scenario = TACTILE_CONFIG_DIR "/scenarios/whisker_darkness_rigid_fsm.yaml";
   const fs::path out = fs::temp_directory_path() / ("tactile_fly_sitl_" + std::to_string(::getpid()));
   fs::remove_all(out);
-
-  tactile_cli::SimOptions so;
-  so.scenario = scenario;
-  so.out_dir = (out / "inproc").string();
-  so.config_dir = TACTILE_CONFIG_DIR;
-  so.write_bag = false;
-  so.write_png = false;
-  so.progress = false;
-  const auto ref = tactile_cli::run_sim(so);
 
   tactile_cli::FlyOptions fo;
   fo.sim_scenario = scenario;
   fo.out_dir = (out / "fly").string();
   fo.config_dir = TACTILE_CONFIG_DIR;
-  fo.duration_s = 30.0;
+  fo.duration_s = 11.0;  // contact at ~6.5 s, then wall following
   fo.progress = false;
   const auto m = tactile_cli::run_fly(fo);
 
-  // The same phases as in process: both touch the wall and follow it; the
-  // bridge then lands and stops the Crazyflie.
-  std::cout << "reached target: in process " << ref["fsm"]["reached_target"] << ", over UDP "
-            << m["reached_target"] << "\n";
-  EXPECT_GT(ref["fsm"]["wall_following_contact_samples"].get<int>(), 100);
-  const std::string fsm_state = m["fsm_state"].get<std::string>();
-  EXPECT_TRUE(fsm_state.rfind("WALL_FOLLOWING", 0) == 0 || fsm_state == "LANDING" || fsm_state == "LANDED" ||
-              fsm_state == "RESUME_FORWARD")
-      << fsm_state;
+  // The pipeline flew the drone to the wall over the link and followed it;
+  // after the run the bridge landed it.
+  EXPECT_GT(m["sitl"]["first_whisker_contact_s"].get<double>(), 3.0);
+  EXPECT_GT(m["sitl"]["whisker_contact_fraction_left"].get<double>() +
+                m["sitl"]["whisker_contact_fraction_right"].get<double>(), 0.1);
   EXPECT_EQ(m["bridge_mode"], "stopped");
+  EXPECT_GE(m["landings"].get<uint64_t>(), 1u);
   EXPECT_LT(m["sitl"]["final_z_m"].get<double>(), 0.15);
-  EXPECT_GT(m["sitl"]["first_whisker_contact_s"].get<double>(), 0.0);
   // Link metrics: every setpoint the pipeline produced went out; the log
   // stream (2 blocks at 50 Hz) arrived nearly complete on a clean link.
   const auto sent = m["link_packets_sent"].get<uint64_t>();
