@@ -1,0 +1,224 @@
+#include "wall_effect_ekf/indi_control_logic.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "tactile_common/time.hpp"
+
+namespace wall_effect_ekf {
+
+using tactile_common::ParamMap;
+
+Mat3 wall_frame_attitude(const Mat3& R_wb, double psi) {
+  // Direction to the wall: body (cos psi, sin psi, 0) -> world, horizontal.
+  Vec3 u = R_wb * Vec3(std::cos(psi), std::sin(psi), 0.0);
+  u.z() = 0.0;
+  if (u.norm() < 1e-9) u = Vec3::UnitX();
+  u.normalize();
+  const Vec3 y_w = -u, z_w = Vec3::UnitZ();
+  const Vec3 x_w = y_w.cross(z_w);
+  Mat3 W;  // rows: wall axes in world coordinates
+  W.row(0) = x_w.transpose();
+  W.row(1) = y_w.transpose();
+  W.row(2) = z_w.transpose();
+  return W * R_wb;
+}
+
+void IndiControlLogic::Params::validate() const {
+  indi.validate();
+  auto fail = [](const char* f, double v) {
+    throw std::invalid_argument(std::string("IndiControlLogic.") + f + ": must be finite and > 0, got " + std::to_string(v));
+  };
+  if (!(rate_hz > 0.0) || !std::isfinite(rate_hz)) fail("rate_hz", rate_hz);
+  if (!(outer_rate_hz > 0.0) || !std::isfinite(outer_rate_hz) || outer_rate_hz > rate_hz)
+    throw std::invalid_argument("IndiControlLogic.outer_rate_hz: must be in (0, rate_hz], got " + std::to_string(outer_rate_hz));
+  if (!(max_input_age_s > 0.0) || !std::isfinite(max_input_age_s)) fail("max_input_age_s", max_input_age_s);
+}
+
+ParamMap IndiControlLogic::default_parameters() {
+  const Params d;
+  const IndiParams& i = d.indi;
+  ParamMap m(kNodeName, "defaults");
+  auto v3 = [](const Vec3& v) { return std::vector<double>{v.x(), v.y(), v.z()}; };
+  m.set("rate_hz", d.rate_hz);
+  m.set("outer_rate_hz", d.outer_rate_hz);
+  m.set("use_wall_in_allocation", d.use_wall_in_allocation);
+  m.set("max_input_age_s", d.max_input_age_s);
+  m.set("k_p", v3(i.k_p));
+  m.set("k_d", v3(i.k_d));
+  m.set("k_i", v3(i.k_i));
+  m.set("integral_limit", i.integral_limit);
+  m.set("integral_zone", i.integral_zone);
+  m.set("max_accel_xy", i.max_accel_xy);
+  m.set("attitude_time_constant", i.attitude_time_constant);
+  m.set("max_rate_xy", i.max_rate_xy);
+  m.set("max_tilt", i.max_tilt);
+  m.set("kappa_d", v3(i.kappa_d));
+  m.set("kappa_p_yaw", i.kappa_p_yaw);
+  m.set("max_yaw_accel", i.max_yaw_accel);
+  m.set("vehicle.mass", i.vehicle.mass);
+  m.set("vehicle.inertia_diag", v3(i.vehicle.inertia_diag));
+  m.set("vehicle.rotor_offset", i.vehicle.rotor_offset);
+  m.set("vehicle.torque_coefficient", i.vehicle.torque_coefficient);
+  m.set("vehicle.max_rotor_thrust", i.vehicle.max_rotor_thrust);
+  return m;
+}
+
+IndiControlLogic::Params IndiControlLogic::params_from(const ParamMap& map) {
+  Params p;
+  auto v3 = [&map](const char* key) {
+    const std::vector<double> v = map.get_double_array(key);
+    if (v.size() != 3) throw map.error(key, "must have 3 entries, got " + std::to_string(v.size()));
+    return Vec3(v[0], v[1], v[2]);
+  };
+  IndiParams& i = p.indi;
+  p.rate_hz = map.get_double("rate_hz");
+  p.outer_rate_hz = map.get_double("outer_rate_hz");
+  p.use_wall_in_allocation = map.get_bool("use_wall_in_allocation");
+  p.max_input_age_s = map.get_double("max_input_age_s");
+  i.k_p = v3("k_p");
+  i.k_d = v3("k_d");
+  i.k_i = v3("k_i");
+  i.integral_limit = map.get_double("integral_limit");
+  i.integral_zone = map.get_double("integral_zone");
+  i.max_accel_xy = map.get_double("max_accel_xy");
+  i.attitude_time_constant = map.get_double("attitude_time_constant");
+  i.max_rate_xy = map.get_double("max_rate_xy");
+  i.max_tilt = map.get_double("max_tilt");
+  i.kappa_d = v3("kappa_d");
+  i.kappa_p_yaw = map.get_double("kappa_p_yaw");
+  i.max_yaw_accel = map.get_double("max_yaw_accel");
+  i.vehicle.mass = map.get_double("vehicle.mass");
+  i.vehicle.inertia_diag = v3("vehicle.inertia_diag");
+  i.vehicle.rotor_offset = map.get_double("vehicle.rotor_offset");
+  i.vehicle.torque_coefficient = map.get_double("vehicle.torque_coefficient");
+  i.vehicle.max_rotor_thrust = map.get_double("vehicle.max_rotor_thrust");
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    const std::string field = what.substr(0, what.find(':'));
+    std::string leaf = field.substr(field.rfind('.') + 1);
+    leaf = leaf.substr(0, leaf.find('['));
+    const std::string key = map.has(leaf) ? leaf : (map.has("vehicle." + leaf) ? "vehicle." + leaf : "rate_hz");
+    throw map.error(key, what);
+  }
+  return p;
+}
+
+IndiControlLogic::IndiControlLogic(const Params& params)
+    : params_((params.validate(), params)), ctl_(params.indi) {
+  outer_every_ = std::max(1, static_cast<int>(std::lround(params_.rate_hz / params_.outer_rate_hz)));
+}
+
+int64_t IndiControlLogic::period_ns() const { return tactile_common::from_seconds(1.0 / params_.rate_hz); }
+
+void IndiControlLogic::on_setpoint(const nav_msgs::msg::Odometry& msg) {
+  ++stats_.setpoints;
+  const auto& q = msg.pose.pose.orientation;
+  const Vec3 v(msg.twist.twist.linear.x, msg.twist.twist.linear.y, msg.twist.twist.linear.z);
+  const Quat qq(q.w, q.x, q.y, q.z);
+  if (!v.allFinite() || !qq.coeffs().allFinite() || qq.norm() < 0.5) {
+    ++stats_.dropped_nonfinite;
+    return;
+  }
+  const double p[3] = {msg.pose.pose.position.x, msg.pose.pose.position.y, msg.pose.pose.position.z};
+  for (int i = 0; i < 3; ++i) {
+    sp_.position_control[static_cast<size_t>(i)] = std::isfinite(p[i]);
+    sp_.position[i] = std::isfinite(p[i]) ? p[i] : 0.0;
+  }
+  sp_.velocity = v;
+  const Vec3 x = qq.normalized() * Vec3::UnitX();
+  sp_.yaw = std::atan2(x.y(), x.x());
+  have_sp_ = true;
+}
+
+void IndiControlLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
+  ++stats_.odometry;
+  const auto& pp = msg.pose.pose;
+  const Vec3 p(pp.position.x, pp.position.y, pp.position.z);
+  const Quat q(pp.orientation.w, pp.orientation.x, pp.orientation.y, pp.orientation.z);
+  const Vec3 vb(msg.twist.twist.linear.x, msg.twist.twist.linear.y, msg.twist.twist.linear.z);
+  if (!p.allFinite() || !q.coeffs().allFinite() || !vb.allFinite() || q.norm() < 0.5) {
+    ++stats_.dropped_nonfinite;
+    return;
+  }
+  pos_ = p;
+  vel_ = q.normalized() * vb;  // REP-105: twist in the body frame
+  odom_ns_ = tactile_common::from_stamp(msg.header.stamp);
+  if (!have_odom_ && !have_sp_) {  // hold where we are until a setpoint comes
+    sp_.position = p;
+    const Vec3 x = q.normalized() * Vec3::UnitX();
+    sp_.yaw = std::atan2(x.y(), x.x());
+  }
+  have_odom_ = true;
+}
+
+void IndiControlLogic::on_imu(const sensor_msgs::msg::Imu& msg) {
+  ++stats_.imu;
+  const Quat q(msg.orientation.w, msg.orientation.x, msg.orientation.y, msg.orientation.z);
+  const Vec3 a(msg.linear_acceleration.x, msg.linear_acceleration.y, msg.linear_acceleration.z);
+  const Vec3 w(msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z);
+  if (!q.coeffs().allFinite() || q.norm() < 0.5 || !a.allFinite() || !w.allFinite()) {
+    ++stats_.dropped_nonfinite;
+    return;
+  }
+  R_ = q.normalized().toRotationMatrix();
+  acc_ = a;
+  gyro_ = w;
+  imu_ns_ = tactile_common::from_stamp(msg.header.stamp);
+  have_imu_ = true;
+}
+
+void IndiControlLogic::on_wall(const tactile_msgs::msg::WallEstimate& msg) {
+  ++stats_.walls;
+  if (!std::isfinite(msg.distance) || !std::isfinite(msg.direction)) {
+    ++stats_.dropped_nonfinite;
+    wall_detected_ = false;
+    return;
+  }
+  wall_detected_ = msg.wall_detected;
+  wall_distance_ = msg.distance;
+  wall_direction_ = msg.direction;
+  wall_ns_ = tactile_common::from_stamp(msg.header.stamp);
+  have_wall_ = true;
+}
+
+std::optional<tactile_msgs::msg::ThrustCommand> IndiControlLogic::on_timer(int64_t now_ns) {
+  const int64_t max_age = tactile_common::from_seconds(params_.max_input_age_s);
+  if (!have_odom_ || !have_imu_ || now_ns - odom_ns_ > max_age || now_ns - imu_ns_ > max_age) {
+    ++stats_.ticks_without_input;
+    return std::nullopt;  // the vehicle keeps its last command (the simulator holds it)
+  }
+  if (ticks_ % outer_every_ == 0) {
+    IndiFeedback fb;
+    fb.position = pos_;
+    fb.velocity = vel_;
+    fb.R = R_;
+    fb.specific_force = acc_;
+    ctl_.outer(sp_, fb, outer_every_ / params_.rate_hz);  // 004 eq. 26, 30-34
+  }
+  ++ticks_;
+  AllocationWall wall;
+  if (params_.use_wall_in_allocation && have_wall_ && wall_detected_ && now_ns - wall_ns_ <= max_age) {
+    wall.present = true;
+    wall.y = wall_distance_;
+    wall.R = wall_frame_attitude(R_, wall_direction_);
+  }
+  const Vec3 xb = R_.col(0);
+  const auto f = ctl_.inner(gyro_, std::atan2(xb.y(), xb.x()), sp_.yaw, wall);  // 004 eq. 35-36
+  tactile_msgs::msg::ThrustCommand out;
+  tactile_common::to_stamp(now_ns, out.header.stamp);
+  out.header.frame_id = "base_link";
+  out.normalized = std::numeric_limits<double>::quiet_NaN();
+  out.rotor_thrust.assign(f.begin(), f.end());
+  out.total_thrust = f[0] + f[1] + f[2] + f[3];
+  ++stats_.published;
+  return out;
+}
+
+}  // namespace wall_effect_ekf

@@ -1,0 +1,119 @@
+#include "wall_effect_ekf/wall_trajectory.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "tactile_common/time.hpp"
+
+namespace wall_effect_ekf {
+
+void TrajectoryParams::validate() const {
+  if (mode != "estimation_flight" && mode != "hold")
+    throw std::invalid_argument("TrajectoryParams.mode: must be 'estimation_flight' or 'hold', got '" + mode + "'");
+  auto pos = [](const char* f, double v) {
+    if (!(v > 0.0) || !std::isfinite(v))
+      throw std::invalid_argument(std::string("TrajectoryParams.") + f + ": must be finite and > 0, got " + std::to_string(v));
+  };
+  pos("start_y", start_y);
+  pos("height", height);
+  pos("wall_distance", wall_distance);
+  pos("yaw_ramp_s", yaw_ramp_s);
+  if (!(amplitude >= 0.0 && amplitude < wall_distance))
+    throw std::invalid_argument("TrajectoryParams.amplitude: must be in [0, wall_distance), got " + std::to_string(amplitude));
+  if (!(t_start >= 0.0 && t_sine >= t_start && t_sine_end >= t_sine && t_yaw1 >= t_start && t_yaw2 >= t_yaw1))
+    throw std::invalid_argument("TrajectoryParams.t_start: times must be ordered t_start <= t_sine <= t_sine_end, t_start <= t_yaw1 <= t_yaw2");
+}
+
+TrajectorySetpoint trajectory_setpoint(const TrajectoryParams& p, double t) {
+  TrajectorySetpoint s;
+  const double yaw0 = p.yaw_deg * M_PI / 180.0;
+  s.yaw = yaw0;
+  if (t < p.t_start) {  // take off at the start point
+    s.position = Vec3(p.x, p.start_y, p.height);
+    return s;
+  }
+  s.position = Vec3(p.x, p.wall_distance, p.height);
+  if (p.mode == "hold") return s;
+  auto sine = [&](double t0, double t1) {
+    if (t >= t0 && t < t1) {
+      const double w = p.angular_frequency;
+      s.position.y() = p.wall_distance - p.amplitude * std::sin(w * (t - t0));  // 004: 0.18 - 0.03 sin(t - 25)
+      s.velocity.y() = -p.amplitude * w * std::cos(w * (t - t0));
+    }
+  };
+  sine(p.t_sine, p.t_sine_end);
+  // Between the ramps the sinusoid repeats (004: "in between ... repeated").
+  const double hold_start = p.t_yaw1 + p.yaw_ramp_s;
+  sine(hold_start, std::min(hold_start + (p.t_sine_end - p.t_sine), p.t_yaw2));
+  auto ramp = [&](double t0) { return std::clamp((t - t0) / p.yaw_ramp_s, 0.0, 1.0); };
+  s.yaw = yaw0 - M_PI / 2.0 * (ramp(p.t_yaw1) + ramp(p.t_yaw2));
+  s.yaw = std::atan2(std::sin(s.yaw), std::cos(s.yaw));
+  return s;
+}
+
+tactile_common::ParamMap WallTrajectoryLogic::default_parameters() {
+  const TrajectoryParams d;
+  tactile_common::ParamMap m(kNodeName, "defaults");
+  m.set("mode", d.mode);
+  m.set("x", d.x);
+  m.set("start_y", d.start_y);
+  m.set("height", d.height);
+  m.set("wall_distance", d.wall_distance);
+  m.set("amplitude", d.amplitude);
+  m.set("angular_frequency", d.angular_frequency);
+  m.set("t_start", d.t_start);
+  m.set("t_sine", d.t_sine);
+  m.set("t_sine_end", d.t_sine_end);
+  m.set("t_yaw1", d.t_yaw1);
+  m.set("t_yaw2", d.t_yaw2);
+  m.set("yaw_ramp_s", d.yaw_ramp_s);
+  m.set("yaw_deg", d.yaw_deg);
+  return m;
+}
+
+TrajectoryParams WallTrajectoryLogic::params_from(const tactile_common::ParamMap& m) {
+  TrajectoryParams p;
+  p.mode = m.get_string("mode");
+  p.x = m.get_double("x");
+  p.start_y = m.get_double("start_y");
+  p.height = m.get_double("height");
+  p.wall_distance = m.get_double("wall_distance");
+  p.amplitude = m.get_double("amplitude");
+  p.angular_frequency = m.get_double("angular_frequency");
+  p.t_start = m.get_double("t_start");
+  p.t_sine = m.get_double("t_sine");
+  p.t_sine_end = m.get_double("t_sine_end");
+  p.t_yaw1 = m.get_double("t_yaw1");
+  p.t_yaw2 = m.get_double("t_yaw2");
+  p.yaw_ramp_s = m.get_double("yaw_ramp_s");
+  p.yaw_deg = m.get_double("yaw_deg");
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    const std::string field = what.substr(0, what.find(':'));
+    throw m.error(field.substr(field.rfind('.') + 1), what);
+  }
+  return p;
+}
+
+WallTrajectoryLogic::WallTrajectoryLogic(const TrajectoryParams& p) : p_(p) { p_.validate(); }
+
+nav_msgs::msg::Odometry WallTrajectoryLogic::on_timer(int64_t now_ns) const {
+  const TrajectorySetpoint s = trajectory_setpoint(p_, tactile_common::to_seconds(now_ns));
+  nav_msgs::msg::Odometry m;
+  tactile_common::to_stamp(now_ns, m.header.stamp);
+  m.header.frame_id = "map";
+  m.pose.pose.position.x = s.position.x();
+  m.pose.pose.position.y = s.position.y();
+  m.pose.pose.position.z = s.position.z();
+  m.pose.pose.orientation.z = std::sin(0.5 * s.yaw);
+  m.pose.pose.orientation.w = std::cos(0.5 * s.yaw);
+  m.twist.twist.linear.x = s.velocity.x();
+  m.twist.twist.linear.y = s.velocity.y();
+  m.twist.twist.linear.z = s.velocity.z();
+  return m;
+}
+
+}  // namespace wall_effect_ekf
