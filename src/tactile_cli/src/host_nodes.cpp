@@ -267,4 +267,114 @@ void add_scenario_pilot(Host& host, std::shared_ptr<tactile_sim::ScriptedPilotLo
   host.keep(pilot);
 }
 
+std::shared_ptr<wall_effect_ekf::WallEffectEkfLogic> add_wall_effect_ekf(Host& host, const tactile_common::ParamMap& over) {
+  using Logic = wall_effect_ekf::WallEffectEkfLogic;
+  auto params = host.load_parameters("", Logic::kNodeName, Logic::default_parameters(), over);
+  auto logic = std::make_shared<Logic>(Logic::params_from(params));
+  Host* h = &host;
+  Logic* l = logic.get();
+  host.bus().subscribe<sensor_msgs::msg::Imu>(Logic::kImuTopic, [l](const sensor_msgs::msg::Imu& m) { l->on_imu(m); });
+  host.bus().subscribe<tactile_msgs::msg::OpticalFlow>(
+      Logic::kFlowTopic, [l](const tactile_msgs::msg::OpticalFlow& m) { l->on_flow(m); });
+  host.bus().subscribe<sensor_msgs::msg::Range>(Logic::kRangeTopic,
+                                                [l](const sensor_msgs::msg::Range& m) { l->on_range(m); });
+  host.bus().subscribe<tactile_msgs::msg::ThrustCommand>(
+      Logic::kThrustTopic, [l](const tactile_msgs::msg::ThrustCommand& m) { l->on_thrust(m); });
+  host.executor().add_timer(
+      l->period_ns(),
+      [h, l](int64_t now_ns) {
+        if (auto out = l->on_timer(now_ns)) h->bus().publish(Logic::kOutputTopic, *out, now_ns);
+      },
+      host.executor().now_ns());
+  host.add_reporter([l] {
+    const auto& s = l->stats();
+    return NodeReport{std::string("/") + Logic::kNodeName,
+                      {{"published", s.published},
+                       {"dropped_nonfinite", s.dropped_nonfinite},
+                       {"dropped_bad_thrust", s.dropped_bad_thrust},
+                       {"dropped_low_quality", s.dropped_low_quality},
+                       {"dropped_out_of_range", s.dropped_out_of_range},
+                       {"ticks_without_input", s.ticks_without_input},
+                       {"ticks_without_imu", s.ticks_without_imu},
+                       {"flow_gated", l->ekf().stats().flow_gated},
+                       {"tof_gated", l->ekf().stats().tof_gated},
+                       {"reacquisitions", l->ekf().stats().reacquisitions}}};
+  });
+  host.keep(logic);
+  return logic;
+}
+
+std::shared_ptr<wall_effect_ekf::IndiControlLogic> add_indi_controller(Host& host, const tactile_common::ParamMap& over) {
+  using Logic = wall_effect_ekf::IndiControlLogic;
+  auto params = host.load_parameters("", Logic::kNodeName, Logic::default_parameters(), over);
+  auto logic = std::make_shared<Logic>(Logic::params_from(params));
+  Host* h = &host;
+  Logic* l = logic.get();
+  host.bus().subscribe<nav_msgs::msg::Odometry>(Logic::kSetpointTopic,
+                                                [l](const nav_msgs::msg::Odometry& m) { l->on_setpoint(m); });
+  host.bus().subscribe<nav_msgs::msg::Odometry>(Logic::kOdometryTopic,
+                                                [l](const nav_msgs::msg::Odometry& m) { l->on_odometry(m); });
+  host.bus().subscribe<sensor_msgs::msg::Imu>(Logic::kImuTopic, [l](const sensor_msgs::msg::Imu& m) { l->on_imu(m); });
+  host.bus().subscribe<tactile_msgs::msg::WallEstimate>(
+      Logic::kWallTopic, [l](const tactile_msgs::msg::WallEstimate& m) { l->on_wall(m); });
+  host.executor().add_timer(
+      l->period_ns(),
+      [h, l](int64_t now_ns) {
+        if (auto out = l->on_timer(now_ns)) h->bus().publish(Logic::kOutputTopic, *out, now_ns);
+      },
+      host.executor().now_ns());
+  host.add_reporter([l] {
+    const auto& s = l->stats();
+    return NodeReport{std::string("/") + Logic::kNodeName,
+                      {{"published", s.published},
+                       {"dropped_nonfinite", s.dropped_nonfinite},
+                       {"ticks_without_input", s.ticks_without_input}}};
+  });
+  host.keep(logic);
+  return logic;
+}
+
+std::shared_ptr<wall_effect_ekf::WallTrajectoryLogic> add_wall_trajectory(Host& host,
+                                                                          const tactile_common::ParamMap& over) {
+  using Logic = wall_effect_ekf::WallTrajectoryLogic;
+  auto params = host.load_parameters("", Logic::kNodeName, Logic::default_parameters(), over);
+  auto logic = std::make_shared<Logic>(Logic::params_from(params));
+  Host* h = &host;
+  Logic* l = logic.get();
+  host.executor().add_timer(
+      Logic::kPeriodNs, [h, l](int64_t now_ns) { h->bus().publish(Logic::kOutputTopic, l->on_timer(now_ns), now_ns); },
+      host.executor().now_ns());
+  host.keep(logic);
+  return logic;
+}
+
+std::shared_ptr<tactile_fsm::WallEffectNavLogic> add_wall_effect_nav(Host& host, const tactile_common::ParamMap& over) {
+  using Logic = tactile_fsm::WallEffectNavLogic;
+  auto params = host.load_parameters("", Logic::kNodeName, Logic::default_parameters(), over);
+  auto logic = std::make_shared<Logic>(Logic::params_from(params));
+  Host* h = &host;
+  Logic* l = logic.get();
+  host.bus().subscribe<tactile_msgs::msg::WallEstimate>(Logic::kWallTopic,
+                                                        [l](const tactile_msgs::msg::WallEstimate& m) { l->on_wall(m); });
+  host.bus().subscribe<nav_msgs::msg::Odometry>(Logic::kOdomTopic,
+                                                [l](const nav_msgs::msg::Odometry& m) { l->on_odometry(m); });
+  host.executor().add_timer(
+      Logic::kTimerPeriodNs,
+      [h, l](int64_t now_ns) {
+        auto out = l->on_timer(now_ns);
+        if (out.setpoint) h->bus().publish(Logic::kSetpointTopic, *out.setpoint, now_ns);
+        if (out.state) h->bus().publish(Logic::kStateTopic, *out.state, now_ns);
+      },
+      host.executor().now_ns());
+  host.add_reporter([l] {
+    const auto& s = l->stats();
+    return NodeReport{std::string("/") + Logic::kNodeName,
+                      {{"ticks", s.ticks},
+                       {"dropped_nonfinite", s.dropped_nonfinite},
+                       {"ticks_without_odometry", s.ticks_without_odometry}}};
+  });
+  host.keep(logic);
+  return logic;
+}
+
 }  // namespace tactile_cli

@@ -39,6 +39,8 @@ std::vector<std::pair<std::string, double*>> doubles(WallEffectEkfLogic::Params&
       {"ekf.q_attitude", &e.q_attitude},
       {"ekf.q_rate", &e.q_rate},
       {"ekf.r_accel", &e.r_accel},
+      {"ekf.r_accel_z", &e.r_accel_z},
+      {"motor_time_constant", &p.motor_time_constant},
       {"ekf.r_gyro", &e.r_gyro},
       {"ekf.r_flow", &e.r_flow},
       {"ekf.r_tof", &e.r_tof},
@@ -68,6 +70,7 @@ void WallEffectEkfLogic::Params::validate() const {
   if (!(detection_range > 0.0) || !std::isfinite(detection_range)) fail("detection_range", "must be finite and > 0", detection_range);
   if (!(detection_sigma > 0.0) || !std::isfinite(detection_sigma)) fail("detection_sigma", "must be finite and > 0", detection_sigma);
   if (!(max_input_age_s > 0.0) || !std::isfinite(max_input_age_s)) fail("max_input_age_s", "must be finite and > 0", max_input_age_s);
+  if (!(motor_time_constant >= 0.0) || !std::isfinite(motor_time_constant)) fail("motor_time_constant", "must be finite and >= 0", motor_time_constant);
   ekf.validate();
   if (std::abs(ekf.dt * rate_hz - 1.0) > 1e-9) fail("rate_hz", "ekf.dt must be 1 / rate_hz", rate_hz);
 }
@@ -197,7 +200,13 @@ std::optional<tactile_msgs::msg::WallEstimate> WallEffectEkfLogic::on_timer(int6
     ekf_.reset(range_new_ ? range_ : 0.0);
     started_ = true;
   }
-  ekf_.predict(thrust_);                                   // 004 eq. 21-22
+  if (!lag_started_ || params_.motor_time_constant <= 0.0) {
+    thrust_lag_ = thrust_;
+    lag_started_ = true;
+  } else {
+    thrust_lag_ += (thrust_ - thrust_lag_) * (1.0 - std::exp(-params_.ekf.dt / params_.motor_time_constant));
+  }
+  ekf_.predict(thrust_lag_);                               // 004 eq. 21-22
   if (imu_count_ > 0) {
     ekf_.update_accel(acc_sum_ / imu_count_);              // 004 eq. 23-25
     ekf_.update_gyro(gyro_sum_ / imu_count_);

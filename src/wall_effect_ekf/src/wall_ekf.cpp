@@ -65,6 +65,7 @@ void EkfParams::validate() const {
   non_negative("q_attitude", q_attitude);
   non_negative("q_rate", q_rate);
   positive("r_accel", r_accel);
+  positive("r_accel_z", r_accel_z);
   positive("r_gyro", r_gyro);
   positive("r_flow", r_flow);
   positive("r_tof", r_tof);
@@ -261,9 +262,9 @@ void WallEkf::predict(const Vec4& thrust) {
 
 template <int M>
 bool WallEkf::update(const Eigen::Matrix<double, M, 1>& r, const Eigen::Matrix<double, M, kErrorDim>& H,
-                     double sigma, double gate) {
+                     const Eigen::Matrix<double, M, 1>& sigma, double gate) {
   using MatM = Eigen::Matrix<double, M, M>;
-  const MatM Rm = sigma * sigma * MatM::Identity();
+  const MatM Rm = sigma.cwiseProduct(sigma).asDiagonal();
   const MatM S = H * P_ * H.transpose() + Rm;                       // 004 eq. 24
   const Eigen::LDLT<MatM> ldlt(S);
   if (gate > 0.0 && r.dot(ldlt.solve(r)) > gate) return false;
@@ -306,7 +307,7 @@ void WallEkf::update_accel(const Vec3& a_m) {
   reacquire(a_m);
   const ModelJacobians J = jacobians(x_, thrust_, p_.vehicle);
   const Vec3 r = a_m - predict_accel(x_, thrust_, p_.vehicle);
-  update<3>(r, J.H_accel, p_.r_accel, 0.0);
+  update<3>(r, J.H_accel, Vec3(p_.r_accel, p_.r_accel, p_.r_accel_z), 0.0);
   ++stats_.accel_updates;
 }
 
@@ -317,7 +318,7 @@ void WallEkf::update_gyro(const Vec3& w_m) {
   }
   Eigen::Matrix<double, 3, kErrorDim> H = Eigen::Matrix<double, 3, kErrorDim>::Zero();
   H.block<3, 3>(0, idx::kOmega) = Mat3::Identity();  // 004 eq. 23: w_m = w + v_w
-  update<3>(Vec3(w_m - x_.omega), H, p_.r_gyro, 0.0);
+  update<3>(Vec3(w_m - x_.omega), H, Vec3::Constant(p_.r_gyro), 0.0);
   ++stats_.gyro_updates;
 }
 
@@ -328,7 +329,7 @@ void WallEkf::update_flow(const Vec2& n_m) {
   }
   if (x_.z < p_.min_height) return;
   const ModelJacobians J = jacobians(x_, thrust_, p_.vehicle);
-  if (update<2>(Vec2(n_m - predict_flow(x_)), J.H_flow, p_.r_flow, p_.gate_chi2)) ++stats_.flow_updates;
+  if (update<2>(Vec2(n_m - predict_flow(x_)), J.H_flow, Vec2::Constant(p_.r_flow), p_.gate_chi2)) ++stats_.flow_updates;
   else ++stats_.flow_gated;
 }
 
@@ -340,7 +341,7 @@ void WallEkf::update_tof(double range) {
   const ModelJacobians J = jacobians(x_, thrust_, p_.vehicle);
   Eigen::Matrix<double, 1, 1> r;
   r[0] = range - predict_tof(x_);
-  if (update<1>(r, J.H_tof, p_.r_tof, p_.gate_chi2)) ++stats_.tof_updates;
+  if (update<1>(r, J.H_tof, Eigen::Matrix<double, 1, 1>::Constant(p_.r_tof), p_.gate_chi2)) ++stats_.tof_updates;
   else ++stats_.tof_gated;
 }
 

@@ -8,9 +8,25 @@
 
 namespace wall_effect_ekf {
 
+namespace {
+void pos_check(const char* f, double v) {
+  if (!(v > 0.0) || !std::isfinite(v))
+    throw std::invalid_argument(std::string("TrajectoryParams.") + f + ": must be finite and > 0, got " + std::to_string(v));
+}
+}  // namespace
+
+int sweep_segment(const TrajectoryParams& p, double t) {
+  if (t < p.t_start) return -1;
+  const auto k = static_cast<size_t>((t - p.t_start) / p.sweep_hold_s);
+  return k < p.sweep_distances.size() ? static_cast<int>(k) : -1;
+}
+
 void TrajectoryParams::validate() const {
-  if (mode != "estimation_flight" && mode != "hold")
-    throw std::invalid_argument("TrajectoryParams.mode: must be 'estimation_flight' or 'hold', got '" + mode + "'");
+  if (mode != "estimation_flight" && mode != "hold" && mode != "sweep")
+    throw std::invalid_argument("TrajectoryParams.mode: must be 'estimation_flight', 'hold' or 'sweep', got '" + mode + "'");
+  pos_check("sweep_hold_s", sweep_hold_s);
+  if (sweep_distances.empty()) throw std::invalid_argument("TrajectoryParams.sweep_distances: must not be empty");
+  for (double d : sweep_distances) pos_check("sweep_distances", d);
   auto pos = [](const char* f, double v) {
     if (!(v > 0.0) || !std::isfinite(v))
       throw std::invalid_argument(std::string("TrajectoryParams.") + f + ": must be finite and > 0, got " + std::to_string(v));
@@ -35,6 +51,11 @@ TrajectorySetpoint trajectory_setpoint(const TrajectoryParams& p, double t) {
   }
   s.position = Vec3(p.x, p.wall_distance, p.height);
   if (p.mode == "hold") return s;
+  if (p.mode == "sweep") {
+    const int k = sweep_segment(p, t);
+    s.position.y() = k >= 0 ? p.sweep_distances[static_cast<size_t>(k)] : p.start_y;
+    return s;
+  }
   auto sine = [&](double t0, double t1) {
     if (t >= t0 && t < t1) {
       const double w = p.angular_frequency;
@@ -69,6 +90,8 @@ tactile_common::ParamMap WallTrajectoryLogic::default_parameters() {
   m.set("t_yaw2", d.t_yaw2);
   m.set("yaw_ramp_s", d.yaw_ramp_s);
   m.set("yaw_deg", d.yaw_deg);
+  m.set("sweep_distances", d.sweep_distances);
+  m.set("sweep_hold_s", d.sweep_hold_s);
   return m;
 }
 
@@ -88,6 +111,8 @@ TrajectoryParams WallTrajectoryLogic::params_from(const tactile_common::ParamMap
   p.t_yaw2 = m.get_double("t_yaw2");
   p.yaw_ramp_s = m.get_double("yaw_ramp_s");
   p.yaw_deg = m.get_double("yaw_deg");
+  p.sweep_distances = m.get_double_array("sweep_distances");
+  p.sweep_hold_s = m.get_double("sweep_hold_s");
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {

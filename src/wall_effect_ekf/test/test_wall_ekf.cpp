@@ -148,6 +148,7 @@ struct ModelRun {
     // Process noise of the truth (and the filter): a calm flight.
     p.q_velocity = 0.1;
     p.q_rate = 0.5;
+    p.r_accel_z = p.r_accel;  // the truth has the same accelerometer noise on every axis
     truth.y = 0.18;
     truth.z = 1.0;
     truth.R = so3_exp(Vec3(0, 0, 0.3));

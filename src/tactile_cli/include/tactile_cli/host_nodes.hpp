@@ -13,6 +13,10 @@
 #include "tactile_sim/logic/pilot_logic.hpp"
 #include "tactile_sim/logic/sim_logic.hpp"
 #include "tdorc_filter/tdorc_filter_logic.hpp"
+#include "tactile_fsm/wall_effect_nav_logic.hpp"
+#include "wall_effect_ekf/indi_control_logic.hpp"
+#include "wall_effect_ekf/wall_effect_ekf_logic.hpp"
+#include "wall_effect_ekf/wall_trajectory.hpp"
 #include "whisker_driver/whisker_driver_logic.hpp"
 #include "whisker_localization/whisker_localization_logic.hpp"
 
@@ -51,5 +55,22 @@ void add_tactile_sim(Host& host, std::shared_ptr<tactile_sim::SimLogic> sim);
 
 /// The scenario pilot: /whisker/*/signal, /collisions, /odom in; setpoints out at 50 Hz.
 void add_scenario_pilot(Host& host, std::shared_ptr<tactile_sim::ScriptedPilotLogic> pilot);
+
+/// wall_effect_ekf (004 eq. 20-25): /imu, /flow, /tof, /thrust_command -> /wall_effect/estimate at 100 Hz.
+std::shared_ptr<wall_effect_ekf::WallEffectEkfLogic> add_wall_effect_ekf(Host& host,
+                                                                         const tactile_common::ParamMap& overrides);
+
+/// indi_controller (004 eq. 26-36): /wall_effect/setpoint, /odom, /imu, /wall_effect/estimate
+/// -> /cmd_rotor_thrust at rate_hz.
+std::shared_ptr<wall_effect_ekf::IndiControlLogic> add_indi_controller(Host& host,
+                                                                       const tactile_common::ParamMap& overrides);
+
+/// wall_effect_nav (004 wall following / vector field): /wall_effect/estimate, /odom
+/// -> /wall_effect/setpoint, /fsm_state at 100 Hz.
+std::shared_ptr<tactile_fsm::WallEffectNavLogic> add_wall_effect_nav(Host& host, const tactile_common::ParamMap& overrides);
+
+/// wall_trajectory (004 estimation flight, hold, sweep): /wall_effect/setpoint at 100 Hz.
+std::shared_ptr<wall_effect_ekf::WallTrajectoryLogic> add_wall_trajectory(Host& host,
+                                                                          const tactile_common::ParamMap& overrides);
 
 }  // namespace tactile_cli

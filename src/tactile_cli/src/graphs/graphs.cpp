@@ -13,6 +13,8 @@ const std::vector<GraphInfo>& sim_graphs() {
       graphs::gpis_explore_graph(),
       graphs::xplorer_graph(),
       graphs::whisker_fsm_crtp_graph(),
+      graphs::wall_effect_graph(),
+      graphs::wall_effect_nav_graph(),
   };
   return table;
 }

@@ -11,5 +11,7 @@ GraphInfo whisker_fsm_graph();  // whisker_fsm.cpp
 GraphInfo gpis_explore_graph();  // gpis_explore.cpp
 GraphInfo xplorer_graph();      // xplorer.cpp
 GraphInfo whisker_fsm_crtp_graph();  // whisker_fsm_crtp.cpp
+GraphInfo wall_effect_graph();  // wall_effect.cpp
+GraphInfo wall_effect_nav_graph();  // wall_effect_nav.cpp
 
 }  // namespace tactile_cli::graphs

@@ -9,7 +9,7 @@
 //   eq. 32-34: w_d,x = -m / (T0 tau) y_B^T e,  w_d,y = m / (T0 tau) x_B^T e,
 //              T_d,0 = T0(t_k-1) + m z_B^T e,     e = p_dd_t - p_dd_meas
 //     with tau = Delta t of the outer loop in 004; here a parameter
-//     (attitude_time_constant, default 0 = use the outer-loop period as 004).
+//     (attitude_time_constant, default 0.1 s; 0 = the outer-loop period as 004).
 //   inner (eq. 35):  w_dot_d = -kappa_d (w - [w_d,x, w_d,y, 0]) - kappa_p [0, 0, psi - psi_d]
 //   allocation (eq. 36): T0 = [B; 1 1 1 1]^-1 [J w_dot_d + w x J w; T_d,0],
 //     B of eq. 8 with the wall effect when a wall estimate is given.
@@ -34,8 +34,12 @@ struct IndiParams {
   /// (anti-windup during large transients; choice) [m].
   double integral_zone = 0.05;
   double max_accel_xy = 4.0;        ///< |p_dd_t| horizontal limit [m/s^2]
-  /// tau of eq. 32-33 [s]; 0 uses the outer-loop period (004).
-  double attitude_time_constant = 0.0;
+  /// tau of eq. 32-33 [s]; 0 uses the outer-loop period (004's literal
+  /// Delta t). Default 0.1 s (choice): with the outer loop at 100 Hz and a
+  /// first-order rate loop of 25 /s, tau = Delta t = 0.01 s makes the tilt
+  /// loop faster than the rate loop and the simulated vehicle diverges
+  /// after ~3 s of hover; 0.05-0.1 s is stable.
+  double attitude_time_constant = 0.1;
   double max_rate_xy = 4.0;         ///< |w_d,x|, |w_d,y| limit [rad/s]
   double max_tilt = 0.5;            ///< no rate setpoint that tilts further [rad]
   Vec3 kappa_d = Vec3(25.0, 25.0, 6.0);  ///< kappa_d of eq. 35 [1/s] (choice)

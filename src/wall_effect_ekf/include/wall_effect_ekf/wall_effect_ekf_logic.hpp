@@ -35,6 +35,10 @@ class WallEffectEkfLogic {
     double detection_sigma = 0.05;   ///< [m] (choice)
     double max_input_age_s = 0.1;    ///< thrust/IMU older than this: no step (choice)
     uint64_t min_flow_quality = 1;   ///< flow samples below this quality are dropped
+    /// The commanded thrusts pass a first-order lag of this time constant
+    /// before the prediction (the motors' response; 0 = none; choice: the
+    /// simulated motors' 20 ms).
+    double motor_time_constant = 0.02;  ///< [s]
     void validate() const;
   };
 
@@ -71,7 +75,9 @@ class WallEffectEkfLogic {
   WallEkf ekf_;
   Stats stats_;
   bool started_ = false;
-  Vec4 thrust_ = Vec4::Zero();
+  Vec4 thrust_ = Vec4::Zero();      ///< latest command
+  Vec4 thrust_lag_ = Vec4::Zero();  ///< after the motor lag
+  bool lag_started_ = false;
   bool have_thrust_ = false;
   int64_t thrust_ns_ = 0, imu_ns_ = 0;
   bool have_imu_ = false;

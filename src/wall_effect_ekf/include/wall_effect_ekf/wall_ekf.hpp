@@ -64,7 +64,11 @@ struct EkfParams {
   double q_attitude = 0.02;  ///< [rad/sqrt(s)]
   double q_rate = 2.0;       ///< unmodelled torque, motor lag [rad/s^2/sqrt(Hz)]
   // Measurement noise std (v of eq. 23). Choices, sized for BMI088 + PMW3901 + VL53L1x.
-  double r_accel = 0.06;     ///< [m/s^2]
+  double r_accel = 0.06;     ///< horizontal (body x, y) [m/s^2]
+  /// Body z: larger, it also absorbs the error of the thrust magnitude
+  /// (motor lag, thrust constant), which would otherwise leak into y
+  /// through gamma_v (choice).
+  double r_accel_z = 0.3;    ///< [m/s^2]
   double r_gyro = 0.01;      ///< [rad/s]
   double r_flow = 0.05;      ///< [rad/s]
   double r_tof = 0.01;       ///< [m]
@@ -153,7 +157,7 @@ class WallEkf {
  private:
   template <int M>
   bool update(const Eigen::Matrix<double, M, 1>& r, const Eigen::Matrix<double, M, kErrorDim>& H,
-              double sigma, double gate);
+              const Eigen::Matrix<double, M, 1>& sigma, double gate);
   void finish();
   void reacquire(const Vec3& a_m);
 

@@ -9,14 +9,16 @@
 //   further -90 deg (from 66 s). 004 says "varied by 90 deg in 30 s twice,
 //   starting at t = 41 s and t = 66 s"; the ramp length is a parameter
 //   (yaw_ramp_s, default 10 s so the two ramps do not overlap).
-// - "hold" (004 Fig. 5 distance sweep): from t_start hold y_d = wall_distance,
-//   psi_d = yaw_deg.
+// - "hold": from t_start hold y_d = wall_distance, psi_d = yaw_deg.
+// - "sweep" (004 Fig. 5): from t_start hold each of sweep_distances for
+//   sweep_hold_s (004: 11 hovers of 60 s, 13 to 23 cm), psi_d = yaw_deg.
 //
 // Core + node logic in one header (no ROS).
 #pragma once
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "nav_msgs/msg/odometry.hpp"
 #include "tactile_common/parameters.hpp"
@@ -25,7 +27,7 @@
 namespace wall_effect_ekf {
 
 struct TrajectoryParams {
-  std::string mode = "estimation_flight";  ///< "estimation_flight" or "hold"
+  std::string mode = "estimation_flight";  ///< "estimation_flight", "hold" or "sweep"
   double x = 0.0;                ///< position along the wall [m]
   double start_y = 0.4;          ///< take-off distance (004: ~40 cm) [m]
   double height = 1.0;           ///< [m] (004: 1.0 m)
@@ -38,7 +40,10 @@ struct TrajectoryParams {
   double t_yaw1 = 41.0;          ///< [s] (004: 41 s)
   double t_yaw2 = 66.0;          ///< [s] (004: 66 s)
   double yaw_ramp_s = 10.0;      ///< duration of each 90 deg ramp [s] (choice, see above)
-  double yaw_deg = 0.0;          ///< psi_d of "hold" and before the ramps [deg] (004: 0)
+  double yaw_deg = 0.0;          ///< psi_d of "hold"/"sweep" and before the ramps [deg] (004: 0)
+  /// y_d of the "sweep" segments [m] (004 Fig. 5: 13 to 23 cm, 11 flights).
+  std::vector<double> sweep_distances = {0.13, 0.14, 0.15, 0.16, 0.17, 0.18, 0.19, 0.20, 0.21, 0.22, 0.23};
+  double sweep_hold_s = 60.0;    ///< [s] (004: 60 s each)
   void validate() const;
 };
 
@@ -48,6 +53,8 @@ struct TrajectorySetpoint {
   double yaw = 0.0;
 };
 
+/// Index of the sweep segment at time t (-1 before t_start or after the last).
+int sweep_segment(const TrajectoryParams& p, double t);
 /// The setpoint at time t [s] (004 protocol above).
 TrajectorySetpoint trajectory_setpoint(const TrajectoryParams& p, double t);
 

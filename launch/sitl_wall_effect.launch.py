@@ -1,0 +1,79 @@
+"""SITL of the ducted quadrotor (paper 004) with ROS 2: simulator -> wall-effect EKF ->
+wall following / vector field (or 004's estimation-flight script) -> INDI controller ->
+rotor thrusts back to the simulator, composed in one container on simulated time.
+
+    ros2 launch launch/sitl_wall_effect.launch.py scenario:=config/scenarios/ducted_track_0.yaml
+    ros2 launch launch/sitl_wall_effect.launch.py \\
+        scenario:=config/scenarios/ducted_estimation.yaml behaviour:=trajectory
+
+The standalone host runs the same graphs without ROS (`graph: wall_effect_nav` /
+`graph: wall_effect` in the scenario):
+
+    tactile sim config/scenarios/ducted_track_0.yaml --out out/track0
+
+Parameters come from the files in config/ (the ones `tactile sim` reads); a scenario's
+node_parameters are the host's per-node overrides and are not applied here: pass them as
+launch parameters or edit the config files. The simulator publishes /clock.
+"""
+
+import os
+
+from launch import LaunchDescription
+from launch.actions import DeclareLaunchArgument, OpaqueFunction
+from launch.substitutions import LaunchConfiguration
+from launch_ros.actions import ComposableNodeContainer
+from launch_ros.descriptions import ComposableNode
+
+CONFIG_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config')
+
+
+def config(name):
+    return os.path.join(CONFIG_DIR, name + '.yaml')
+
+
+def nodes(context):
+    sim_time = {'use_sim_time': True}
+    intra = [{'use_intra_process_comms': True}]
+    behaviour = LaunchConfiguration('behaviour').perform(context)
+    out = [
+        ComposableNode(
+            package='tactile_sim', plugin='tactile_sim::TactileSimComponent', name='tactile_sim',
+            parameters=[{'scenario': LaunchConfiguration('scenario'),
+                         'seed': LaunchConfiguration('seed')}],
+            extra_arguments=intra),
+        ComposableNode(
+            package='wall_effect_ekf', plugin='wall_effect_ekf::WallEffectEkfComponent',
+            name='wall_effect_ekf', parameters=[config('wall_effect_ekf'), sim_time],
+            extra_arguments=intra),
+        ComposableNode(
+            package='wall_effect_ekf', plugin='wall_effect_ekf::IndiControlComponent',
+            name='indi_controller', parameters=[config('indi_controller'), sim_time],
+            extra_arguments=intra),
+    ]
+    if behaviour == 'trajectory':
+        out.append(ComposableNode(
+            package='wall_effect_ekf', plugin='wall_effect_ekf::WallTrajectoryComponent',
+            name='wall_trajectory', parameters=[config('wall_trajectory'), sim_time],
+            extra_arguments=intra))
+    else:
+        out.append(ComposableNode(
+            package='tactile_fsm', plugin='tactile_fsm::WallEffectNavComponent',
+            name='wall_effect_nav', parameters=[config('wall_effect_nav'), sim_time],
+            extra_arguments=intra))
+    return [ComposableNodeContainer(
+        name='sitl_wall_effect_container', namespace='', package='rclcpp_components',
+        executable='component_container', composable_node_descriptions=out, output='screen')]
+
+
+def generate_launch_description():
+    return LaunchDescription([
+        DeclareLaunchArgument('scenario', default_value=os.path.join(
+            CONFIG_DIR, 'scenarios', 'ducted_track_0.yaml'),
+            description='scenario file of the simulator'),
+        DeclareLaunchArgument('seed', default_value='-1',
+                              description="noise seed (-1: the scenario's)"),
+        DeclareLaunchArgument('behaviour', default_value='navigation',
+                              description="'navigation' (wall_effect_nav) or 'trajectory' "
+                                          "(004 estimation-flight script)"),
+        OpaqueFunction(function=nodes),
+    ])

@@ -1,0 +1,159 @@
+// Graph `wall_effect` (paper 004): the ducted quadrotor flown by the INDI
+// controller (eq. 26-36) on motion-capture odometry along 004's setpoint
+// scripts (wall_trajectory: estimation flight, hold, distance sweep), while
+// the wall-effect EKF (eq. 20-25) estimates the wall distance and direction
+// from the IMU, flow, ToF and rotor thrusts. The estimate is evaluated
+// against /ground_truth/wall: RMSE of distance and direction while the
+// vehicle is within 20 cm of the wall (004: 1.8 cm, 13.6 deg over t = 10-70 s),
+// NEES of (distance, direction), tracking errors, per-setpoint errors of a sweep.
+#include <cmath>
+#include <map>
+#include <vector>
+
+#include "graphs.hpp"
+#include "tactile_cli/host_nodes.hpp"
+#include "tactile_common/time.hpp"
+
+namespace tactile_cli::graphs {
+
+namespace {
+
+double wrap(double a) { return std::atan2(std::sin(a), std::cos(a)); }
+
+struct Accumulator {
+  double sum = 0.0, sum2 = 0.0;
+  size_t n = 0;
+  void add(double x) {
+    sum += x;
+    sum2 += x * x;
+    ++n;
+  }
+  double mean() const { return n ? sum / static_cast<double>(n) : NAN; }
+  double rms() const { return n ? std::sqrt(sum2 / static_cast<double>(n)) : NAN; }
+  double std() const {
+    if (n < 2) return NAN;
+    const double m = mean();
+    return std::sqrt(std::max(0.0, sum2 / static_cast<double>(n) - m * m));
+  }
+};
+
+nlohmann::json num(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
+
+class WallEffectGraph : public SimGraph {
+ public:
+  explicit WallEffectGraph(GraphContext& ctx) {
+    ekf_ = add_wall_effect_ekf(ctx.host, ctx.overrides("wall_effect_ekf"));
+    indi_ = add_indi_controller(ctx.host, ctx.overrides("indi_controller"));
+    traj_ = add_wall_trajectory(ctx.host, ctx.overrides("wall_trajectory"));
+    const auto& tp = traj_->params();
+    if (tp.mode == "estimation_flight") {
+      t0_ = 10.0;  // 004: RMSE over t = 10 s to 70 s
+      t1_ = 70.0;
+    } else {
+      t0_ = tp.t_start + 5.0;
+      t1_ = INFINITY;
+    }
+    auto& bus = ctx.host.bus();
+    bus.subscribe<tactile_msgs::msg::WallEstimate>("/ground_truth/wall",
+                                                   [this](const tactile_msgs::msg::WallEstimate& m) { truth_ = m; have_truth_ = true; });
+    bus.subscribe<nav_msgs::msg::Odometry>("/ground_truth/odom", [this](const nav_msgs::msg::Odometry& m) { odom_ = m; have_odom_ = true; });
+    bus.subscribe<nav_msgs::msg::Odometry>(wall_effect_ekf::WallTrajectoryLogic::kOutputTopic,
+                                           [this](const nav_msgs::msg::Odometry& m) { sp_ = m; have_sp_ = true; });
+    bus.subscribe<tactile_msgs::msg::WallEstimate>(wall_effect_ekf::WallEffectEkfLogic::kOutputTopic,
+                                                   [this](const tactile_msgs::msg::WallEstimate& m) { on_estimate(m); });
+  }
+
+  void on_estimate(const tactile_msgs::msg::WallEstimate& est) {
+    if (!have_truth_ || !truth_.wall_detected) return;
+    const double t = tactile_common::to_seconds(tactile_common::from_stamp(est.header.stamp));
+    const auto& tp = traj_->params();
+    if (tp.mode == "sweep") {
+      const int k = wall_effect_ekf::sweep_segment(tp, t);
+      // Skip the first 10 s of each hover (transition to the new setpoint).
+      if (k >= 0 && t - tp.t_start - k * tp.sweep_hold_s > 10.0) {
+        auto& s = sweep_[k];
+        s.truth.add(truth_.distance);
+        s.dist.add(est.distance - truth_.distance);
+        s.angle.add(std::abs(wrap(est.direction - truth_.direction)) * 180.0 / M_PI);
+      }
+    }
+    if (t < t0_ || t > t1_) return;
+    const double e_d = est.distance - truth_.distance;
+    const double e_a = wrap(est.direction - truth_.direction);
+    all_dist_.add(e_d);
+    if (truth_.distance < 0.20) {  // 004: "within 20 cm from the wall"
+      dist_.add(e_d);
+      dir_.add(e_a * 180.0 / M_PI);
+      // NEES of (distance, direction) with the published covariance.
+      const double a = est.covariance[0], b = est.covariance[1], d = est.covariance[4];
+      const double det = a * d - b * b;
+      if (det > 0.0) nees_.add((d * e_d * e_d - 2.0 * b * e_d * e_a + a * e_a * e_a) / det);
+    }
+    if (have_odom_ && have_sp_) {
+      track_y_.add(odom_.pose.pose.position.y - sp_.pose.pose.position.y);
+      const auto& q = odom_.pose.pose.orientation;
+      const auto& qs = sp_.pose.pose.orientation;
+      const double yaw = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+      const double yaw_sp = 2.0 * std::atan2(qs.z, qs.w);
+      track_yaw_.add(wrap(yaw - yaw_sp) * 180.0 / M_PI);
+    }
+  }
+
+  nlohmann::json metrics() const override {
+    nlohmann::json m;
+    m["mode"] = traj_->params().mode;
+    m["window_s"] = {t0_, std::isfinite(t1_) ? nlohmann::json(t1_) : nlohmann::json(nullptr)};
+    m["samples_within_20cm"] = dist_.n;
+    m["rmse_distance_cm"] = num(100.0 * dist_.rms());
+    m["rmse_direction_deg"] = num(dir_.rms());
+    m["mean_distance_error_cm"] = num(100.0 * dist_.mean());
+    m["rmse_distance_all_cm"] = num(100.0 * all_dist_.rms());
+    m["nees_distance_direction"] = num(nees_.mean());  // 2 for a consistent filter
+    m["tracking_rms_y_cm"] = num(100.0 * track_y_.rms());
+    m["tracking_rms_yaw_deg"] = num(track_yaw_.rms());
+    const auto& es = ekf_->ekf().stats();
+    m["ekf_reacquisitions"] = es.reacquisitions;
+    if (!sweep_.empty()) {
+      nlohmann::json rows = nlohmann::json::array();
+      for (const auto& [k, s] : sweep_) {
+        rows.push_back({{"setpoint_m", traj_->params().sweep_distances[static_cast<size_t>(k)]},
+                        {"mean_distance_m", num(s.truth.mean())},
+                        {"mean_distance_error_cm", num(100.0 * s.dist.mean())},
+                        {"std_distance_error_cm", num(100.0 * s.dist.std())},
+                        {"mean_abs_angle_error_deg", num(s.angle.mean())},
+                        {"std_abs_angle_error_deg", num(s.angle.std())}});
+      }
+      m["sweep"] = rows;
+    }
+    return m;
+  }
+
+ private:
+  struct Segment {
+    Accumulator truth, dist, angle;
+  };
+  std::shared_ptr<wall_effect_ekf::WallEffectEkfLogic> ekf_;
+  std::shared_ptr<wall_effect_ekf::IndiControlLogic> indi_;
+  std::shared_ptr<wall_effect_ekf::WallTrajectoryLogic> traj_;
+  double t0_ = 0.0, t1_ = INFINITY;
+  tactile_msgs::msg::WallEstimate truth_;
+  nav_msgs::msg::Odometry odom_, sp_;
+  bool have_truth_ = false, have_odom_ = false, have_sp_ = false;
+  Accumulator dist_, dir_, all_dist_, nees_, track_y_, track_yaw_;
+  std::map<int, Segment> sweep_;
+};
+
+}  // namespace
+
+GraphInfo wall_effect_graph() {
+  GraphInfo g;
+  g.name = "wall_effect";
+  g.description = "ducted quadrotor: INDI on motion capture along 004's setpoint scripts, wall-effect EKF evaluated (004)";
+  g.vehicles = {tactile_sim::VehicleType::kDuctedQuadrotor};
+  g.nodes = {"wall_effect_ekf", "indi_controller", "wall_trajectory"};
+  g.metrics_key = "wall_effect";
+  g.build = [](GraphContext& ctx) { return std::make_unique<WallEffectGraph>(ctx); };
+  return g;
+}
+
+}  // namespace tactile_cli::graphs

@@ -1,0 +1,91 @@
+// SITL scenario tests of the ducted quadrotor (paper 004) in the graphs
+// `wall_effect` (INDI on motion capture along 004's setpoint scripts, EKF
+// evaluated) and `wall_effect_nav` (EKF -> wall following / vector field ->
+// INDI). Each flight is seeded and short in wall time (~1-2 s).
+//
+// The simulator implements the same wall-effect model as the EKF, so the
+// estimation numbers of ducted_estimation are those of a filter with a
+// perfect model; ducted_estimation_model_error (15 % coefficient error, 5 %
+// mass error) is the test of the paper-level accuracy.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <string>
+
+#include "tactile_cli/sim_run.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const fs::path kConfig = TACTILE_CONFIG_DIR;
+
+/// One seeded trial; returns the trial's metrics object.
+nlohmann::json fly(const std::string& scenario) {
+  const fs::path out = fs::temp_directory_path() /
+                       ("tactile_wall_effect_sitl_" + fs::path(scenario).stem().string() + "_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  tactile_cli::SimOptions o;
+  o.scenario = (kConfig / "scenarios" / scenario).string();
+  o.out_dir = out.string();
+  o.config_dir = kConfig.string();
+  o.trials = 1;
+  o.progress = false;
+  o.write_bag = false;
+  o.write_png = false;
+  nlohmann::json m = tactile_cli::run_sim(o);
+  fs::remove_all(out);
+  if (m.contains("per_trial")) return m["per_trial"][0];
+  return m;
+}
+
+}  // namespace
+
+TEST(WallEffectSitl, EstimationFlightMeetsThePaperAccuracy) {
+  const auto m = fly("ducted_estimation.yaml");
+  const auto& w = m["wall_effect"];
+  EXPECT_EQ(m["collisions"].get<int>(), 0);
+  EXPECT_GT(w["samples_within_20cm"].get<int>(), 3000);   // most of t = 10-70 s within 20 cm
+  EXPECT_LE(w["rmse_distance_cm"].get<double>(), 1.5);    // 004: 1.8 cm; goal <= 1.5 cm
+  EXPECT_LE(w["rmse_direction_deg"].get<double>(), 10.0); // 004: 13.6 deg; goal <= 10 deg
+  EXPECT_LE(w["tracking_rms_y_cm"].get<double>(), 1.7);   // 004: 1.7 cm
+  EXPECT_LT(w["nees_distance_direction"].get<double>(), 6.0);  // not over-confident
+}
+
+TEST(WallEffectSitl, EstimationFlightWithAModelErrorStaysAtPaperLevel) {
+  const auto m = fly("ducted_estimation_model_error.yaml");
+  const auto& w = m["wall_effect"];
+  EXPECT_EQ(m["collisions"].get<int>(), 0);
+  EXPECT_LE(w["rmse_distance_cm"].get<double>(), 2.0);
+  EXPECT_LE(w["rmse_direction_deg"].get<double>(), 10.0);
+}
+
+TEST(WallEffectSitl, RecoversFromAHalfSecondFlowAndTofDropout) {
+  const auto m = fly("ducted_dropout.yaml");
+  const auto& w = m["wall_effect"];
+  EXPECT_EQ(m["collisions"].get<int>(), 0);
+  EXPECT_LE(w["rmse_distance_cm"].get<double>(), 1.0);
+  EXPECT_EQ(w["ekf_reacquisitions"].get<int>(), 0);
+}
+
+TEST(WallEffectSitl, WallTrackingAtZeroDegrees) {
+  const auto m = fly("ducted_track_0.yaml");
+  const auto& w = m["wall_effect_nav"];
+  EXPECT_EQ(m["collisions"].get<int>(), 0);
+  EXPECT_GT(w["wall_following_time_s"].get<double>(), 15.0);
+  EXPECT_LE(w["rms_tracking_error_cm"].get<double>(), 0.4);  // 004: 0.4 cm
+  EXPECT_NEAR(w["mean_following_speed_mps"].get<double>(), 0.10, 0.02);  // v* = 10 cm/s
+}
+
+TEST(WallEffectSitl, CornerConvexObstacleAndVectorFieldScenesReachTheGoal) {
+  for (const char* s : {"ducted_corner95.yaml", "ducted_convex.yaml", "ducted_vf_three_round.yaml",
+                        "ducted_vf_round_flat.yaml"}) {
+    SCOPED_TRACE(s);
+    const auto m = fly(s);
+    EXPECT_EQ(m["collisions"].get<int>(), 0);
+    EXPECT_TRUE(m["wall_effect_nav"]["goal_reached"].get<bool>());
+    EXPECT_TRUE(m["success"].get<bool>());
+  }
+}

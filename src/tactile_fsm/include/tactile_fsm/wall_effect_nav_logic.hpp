@@ -1,0 +1,78 @@
+// Node logic of the wall-effect behaviours (004 wall following and vector
+// field, wall_effect_navigation.hpp): the wall estimate and odometry in, the
+// INDI controller's setpoint and the behaviour state out at 100 Hz.
+#pragma once
+
+#include <cstdint>
+#include <array>
+#include <optional>
+#include <string>
+
+#include "nav_msgs/msg/odometry.hpp"
+#include "tactile_common/parameters.hpp"
+#include "tactile_fsm/wall_effect_navigation.hpp"
+#include "tactile_msgs/msg/fsm_state.hpp"
+#include "tactile_msgs/msg/wall_estimate.hpp"
+
+namespace tactile_fsm {
+
+class WallEffectNavLogic {
+ public:
+  static constexpr const char* kNodeName = "wall_effect_nav";
+  static constexpr const char* kWallTopic = "/wall_effect/estimate";     // tactile_msgs/msg/WallEstimate
+  static constexpr const char* kOdomTopic = "/odom";                     // nav_msgs/msg/Odometry
+  static constexpr const char* kSetpointTopic = "/wall_effect/setpoint"; // nav_msgs/msg/Odometry (world; NaN x, y = velocity only)
+  static constexpr const char* kStateTopic = "/fsm_state";               // tactile_msgs/msg/FsmState
+  static constexpr int64_t kTimerPeriodNs = 10'000'000;                  // 100 Hz
+
+  struct Params {
+    WallEffectNavParams nav;
+    /// "position" (goal_x, goal_y in the world), "gps" (gps_goal as ENU of
+    /// gps_origin through GeographicLib) or "direction" (pilot heading direction_deg).
+    std::string goal_mode = "position";
+    double goal_x = 0.0, goal_y = 0.0;
+    std::array<double, 3> gps_origin{{0.0, 0.0, 0.0}};  ///< lat, lon [deg], alt [m]
+    std::array<double, 3> gps_goal{{0.0, 0.0, 0.0}};
+    double direction_deg = 0.0;
+    double max_input_age_s = 0.2;  ///< older odometry: hold position (no new setpoint)
+    NavGoal goal() const;          ///< resolved goal (GPS -> ENU)
+    void validate() const;
+  };
+
+  struct Stats {
+    uint64_t ticks = 0, walls = 0, odometry = 0;
+    uint64_t dropped_nonfinite = 0;
+    uint64_t ticks_without_odometry = 0;  ///< nothing published
+  };
+
+  struct Outputs {
+    std::optional<nav_msgs::msg::Odometry> setpoint;
+    std::optional<tactile_msgs::msg::FsmState> state;  ///< on transitions and at 2 Hz
+  };
+
+  static tactile_common::ParamMap default_parameters();
+  static Params params_from(const tactile_common::ParamMap& map);
+  explicit WallEffectNavLogic(const Params& params);
+
+  void on_wall(const tactile_msgs::msg::WallEstimate& msg);
+  void on_odometry(const nav_msgs::msg::Odometry& msg);
+  Outputs on_timer(int64_t now_ns);
+
+  const WallEffectNavigator& navigator() const { return nav_; }
+  const Params& params() const { return params_; }
+  const Stats& stats() const { return stats_; }
+
+ private:
+  Params params_;
+  WallEffectNavigator nav_;
+  Stats stats_;
+  bool have_wall_ = false, have_odom_ = false;
+  double wall_distance_ = 0.0, wall_direction_ = 0.0;
+  Vec2 position_ = Vec2::Zero();
+  double yaw_ = 0.0;
+  int64_t odom_ns_ = 0, state_since_ns_ = 0, last_state_pub_ns_ = -1;
+  NavState last_state_;
+  std::string previous_state_, reason_ = "start";
+};
+
+}  // namespace tactile_fsm

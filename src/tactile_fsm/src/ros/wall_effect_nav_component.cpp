@@ -1,0 +1,48 @@
+// rclcpp component of the wall-effect behaviours (004 wall following and
+// vector field): a mechanical adapter around WallEffectNavLogic. ROS builds only.
+#include <chrono>
+#include <memory>
+
+#include "rclcpp/rclcpp.hpp"
+#include "rclcpp_components/register_node_macro.hpp"
+#include "tactile_common/ros_parameters.hpp"
+#include "tactile_fsm/wall_effect_nav_logic.hpp"
+
+namespace tactile_fsm {
+
+class WallEffectNavComponent : public rclcpp::Node {
+ public:
+  explicit WallEffectNavComponent(const rclcpp::NodeOptions & options)
+  : Node(WallEffectNavLogic::kNodeName, options),
+    logic_(WallEffectNavLogic::params_from(
+      tactile_common::declare_parameters(*this, WallEffectNavLogic::default_parameters())))
+  {
+    setpoint_ = create_publisher<nav_msgs::msg::Odometry>(WallEffectNavLogic::kSetpointTopic, 10);
+    state_ = create_publisher<tactile_msgs::msg::FsmState>(WallEffectNavLogic::kStateTopic, 10);
+    wall_ = create_subscription<tactile_msgs::msg::WallEstimate>(
+      WallEffectNavLogic::kWallTopic, rclcpp::SensorDataQoS(),
+      [this](const tactile_msgs::msg::WallEstimate & msg) {logic_.on_wall(msg);});
+    odom_ = create_subscription<nav_msgs::msg::Odometry>(
+      WallEffectNavLogic::kOdomTopic, rclcpp::SensorDataQoS(),
+      [this](const nav_msgs::msg::Odometry & msg) {logic_.on_odometry(msg);});
+    timer_ = create_wall_timer(
+      std::chrono::nanoseconds(WallEffectNavLogic::kTimerPeriodNs),
+      [this]() {
+        auto out = logic_.on_timer(now().nanoseconds());
+        if (out.setpoint) {setpoint_->publish(*out.setpoint);}
+        if (out.state) {state_->publish(*out.state);}
+      });
+  }
+
+ private:
+  WallEffectNavLogic logic_;
+  rclcpp::Publisher<nav_msgs::msg::Odometry>::SharedPtr setpoint_;
+  rclcpp::Publisher<tactile_msgs::msg::FsmState>::SharedPtr state_;
+  rclcpp::Subscription<tactile_msgs::msg::WallEstimate>::SharedPtr wall_;
+  rclcpp::Subscription<nav_msgs::msg::Odometry>::SharedPtr odom_;
+  rclcpp::TimerBase::SharedPtr timer_;
+};
+
+}  // namespace tactile_fsm
+
+RCLCPP_COMPONENTS_REGISTER_NODE(tactile_fsm::WallEffectNavComponent)

@@ -1,0 +1,201 @@
+#include "tactile_fsm/wall_effect_nav_logic.hpp"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "tactile_common/time.hpp"
+#include "tactile_fsm/geo_goal.hpp"
+
+namespace tactile_fsm {
+
+using tactile_common::ParamMap;
+
+NavGoal WallEffectNavLogic::Params::goal() const {
+  NavGoal g;
+  if (goal_mode == "direction") {
+    g.is_position = false;
+    g.direction = direction_deg * M_PI / 180.0;
+  } else if (goal_mode == "gps") {
+    const auto enu = wgs84_to_enu(gps_origin, gps_goal);  // WGS84 -> local ENU (GeographicLib)
+    g.position = Vec2(enu[0], enu[1]);
+  } else {
+    g.position = Vec2(goal_x, goal_y);
+  }
+  return g;
+}
+
+void WallEffectNavLogic::Params::validate() const {
+  nav.validate();
+  if (goal_mode != "position" && goal_mode != "gps" && goal_mode != "direction")
+    throw std::invalid_argument("WallEffectNavLogic.goal_mode: must be 'position', 'gps' or 'direction', got '" + goal_mode + "'");
+  if (!std::isfinite(goal_x) || !std::isfinite(goal_y) || !std::isfinite(direction_deg))
+    throw std::invalid_argument("WallEffectNavLogic.goal_x: goal_x, goal_y and direction_deg must be finite");
+  if (!(max_input_age_s > 0.0)) throw std::invalid_argument("WallEffectNavLogic.max_input_age_s: must be > 0");
+  if (goal_mode == "gps") (void)goal();  // throws naming origin/point and the field
+}
+
+ParamMap WallEffectNavLogic::default_parameters() {
+  const Params d;
+  const WallEffectNavParams& n = d.nav;
+  ParamMap m(kNodeName, "defaults");
+  m.set("behaviour", n.behaviour);
+  m.set("average_window_s", n.average_window_s);
+  m.set("enter_distance", n.enter_distance);
+  m.set("follow_distance", n.follow_distance);
+  m.set("follow_speed", n.follow_speed);
+  m.set("free_speed", n.free_speed);
+  m.set("safety_distance", n.safety_distance);
+  m.set("attract_speed", n.attract_speed);
+  m.set("repulse_gain", n.repulse_gain);
+  m.set("repulse_base", n.repulse_base);
+  m.set("repulse_max", n.repulse_max);
+  m.set("repulse_distance", n.repulse_distance);
+  m.set("goal_tolerance", n.goal_tolerance);
+  m.set("height", n.height);
+  m.set("yaw_deg", n.yaw * 180.0 / M_PI);
+  m.set("goal_mode", d.goal_mode);
+  m.set("goal_x", d.goal_x);
+  m.set("goal_y", d.goal_y);
+  m.set("gps_origin", std::vector<double>(d.gps_origin.begin(), d.gps_origin.end()));
+  m.set("gps_goal", std::vector<double>(d.gps_goal.begin(), d.gps_goal.end()));
+  m.set("direction_deg", d.direction_deg);
+  m.set("max_input_age_s", d.max_input_age_s);
+  return m;
+}
+
+WallEffectNavLogic::Params WallEffectNavLogic::params_from(const ParamMap& m) {
+  Params p;
+  WallEffectNavParams& n = p.nav;
+  n.behaviour = m.get_string("behaviour");
+  n.average_window_s = m.get_double("average_window_s");
+  n.enter_distance = m.get_double("enter_distance");
+  n.follow_distance = m.get_double("follow_distance");
+  n.follow_speed = m.get_double("follow_speed");
+  n.free_speed = m.get_double("free_speed");
+  n.safety_distance = m.get_double("safety_distance");
+  n.attract_speed = m.get_double("attract_speed");
+  n.repulse_gain = m.get_double("repulse_gain");
+  n.repulse_base = m.get_double("repulse_base");
+  n.repulse_max = m.get_double("repulse_max");
+  n.repulse_distance = m.get_double("repulse_distance");
+  n.goal_tolerance = m.get_double("goal_tolerance");
+  n.height = m.get_double("height");
+  n.yaw = m.get_double("yaw_deg") * M_PI / 180.0;
+  p.goal_mode = m.get_string("goal_mode");
+  p.goal_x = m.get_double("goal_x");
+  p.goal_y = m.get_double("goal_y");
+  auto triple = [&m](const char* key) {
+    const std::vector<double> v = m.get_double_array(key);
+    if (v.size() != 3) throw m.error(key, "must be [lat_deg, lon_deg, alt_m], got " + std::to_string(v.size()) + " values");
+    return std::array<double, 3>{{v[0], v[1], v[2]}};
+  };
+  p.gps_origin = triple("gps_origin");
+  p.gps_goal = triple("gps_goal");
+  p.direction_deg = m.get_double("direction_deg");
+  p.max_input_age_s = m.get_double("max_input_age_s");
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    std::string field = what.substr(0, what.find(':'));
+    const std::string head = field.substr(0, field.find('.'));
+    if (head == "WallEffectNavParams" || head == "WallEffectNavLogic") {
+      field = field.substr(field.find('.') + 1);
+      field = field.substr(0, field.find('.'));
+    } else {
+      field = head;
+    }
+    if (field == "origin") field = "gps_origin";
+    if (field == "point") field = "gps_goal";
+    if (field == "yaw") field = "yaw_deg";
+    throw m.error(m.has(field) ? field : "goal_mode", what);
+  }
+  return p;
+}
+
+WallEffectNavLogic::WallEffectNavLogic(const Params& params)
+    : params_((params.validate(), params)), nav_(params.nav), last_state_(nav_.state()) {
+  nav_.set_goal(params_.goal());
+}
+
+void WallEffectNavLogic::on_wall(const tactile_msgs::msg::WallEstimate& msg) {
+  ++stats_.walls;
+  if (!std::isfinite(msg.distance) || !std::isfinite(msg.direction)) {
+    ++stats_.dropped_nonfinite;
+    return;
+  }
+  wall_distance_ = msg.distance;
+  wall_direction_ = msg.direction;
+  have_wall_ = true;
+}
+
+void WallEffectNavLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
+  ++stats_.odometry;
+  const auto& p = msg.pose.pose;
+  const auto& q = p.orientation;
+  if (!std::isfinite(p.position.x) || !std::isfinite(p.position.y) || !std::isfinite(q.w) || !std::isfinite(q.z) ||
+      !std::isfinite(q.x) || !std::isfinite(q.y)) {
+    ++stats_.dropped_nonfinite;
+    return;
+  }
+  position_ = Vec2(p.position.x, p.position.y);
+  yaw_ = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+  odom_ns_ = tactile_common::from_stamp(msg.header.stamp);
+  have_odom_ = true;
+}
+
+WallEffectNavLogic::Outputs WallEffectNavLogic::on_timer(int64_t now_ns) {
+  Outputs out;
+  ++stats_.ticks;
+  if (!have_odom_ || now_ns - odom_ns_ > tactile_common::from_seconds(params_.max_input_age_s)) {
+    ++stats_.ticks_without_odometry;
+    return out;
+  }
+  NavInput in;
+  in.t = tactile_common::to_seconds(now_ns);
+  in.wall_valid = have_wall_;
+  in.wall_distance = wall_distance_;
+  in.wall_direction = wall_direction_;
+  in.position = position_;
+  in.yaw = yaw_;
+  const NavSetpoint sp = nav_.step(in);
+  nav_msgs::msg::Odometry m;
+  tactile_common::to_stamp(now_ns, m.header.stamp);
+  m.header.frame_id = "map";
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  m.pose.pose.position.x = sp.position_valid ? sp.position.x() : nan;
+  m.pose.pose.position.y = sp.position_valid ? sp.position.y() : nan;
+  m.pose.pose.position.z = sp.height;
+  m.pose.pose.orientation.z = std::sin(0.5 * sp.yaw);
+  m.pose.pose.orientation.w = std::cos(0.5 * sp.yaw);
+  m.twist.twist.linear.x = sp.velocity.x();
+  m.twist.twist.linear.y = sp.velocity.y();
+  out.setpoint = m;
+  const bool changed = nav_.state() != last_state_;
+  if (changed) {
+    previous_state_ = to_string(last_state_);
+    reason_ = nav_.state() == NavState::kWallFollowing ? "y_bar below d_dagger"
+              : nav_.state() == NavState::kGoalReached ? "goal reached"
+                                                       : "y_bar above d_dagger or goal away from the wall";
+    last_state_ = nav_.state();
+    state_since_ns_ = now_ns;
+  }
+  if (changed || last_state_pub_ns_ < 0 || now_ns - last_state_pub_ns_ >= 500'000'000) {
+    tactile_msgs::msg::FsmState s;
+    tactile_common::to_stamp(now_ns, s.header.stamp);
+    s.behaviour = params_.nav.behaviour == "vector_field" ? "wall_effect_vector_field" : "wall_effect_following";
+    s.state = to_string(nav_.state());
+    s.previous_state = previous_state_;
+    s.reason = reason_;
+    s.time_in_state = tactile_common::to_seconds(now_ns - state_since_ns_);
+    s.transitions = nav_.transitions();
+    out.state = s;
+    last_state_pub_ns_ = now_ns;
+  }
+  return out;
+}
+
+}  // namespace tactile_fsm
