@@ -133,7 +133,7 @@ TEST(WallEffectEkfLogic, DetectsAWallFromModelMessages) {
     logic.on_flow(f);
     if (k % 2 == 0) {
       sensor_msgs::msg::Range r;
-      r.range = truth.z + 0.003 * n(rng);
+      r.range = static_cast<float>(truth.z + 0.003 * n(rng));
       logic.on_range(r);
     }
     last = logic.on_timer(ns);
