@@ -9,34 +9,15 @@
 // mass error) is the test of the paper-level accuracy.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
-#include <filesystem>
 #include <string>
 
-#include "tactile_cli/sim_run.hpp"
-
-namespace fs = std::filesystem;
+#include "sim_test_util.hpp"
 
 namespace {
 
-const fs::path kConfig = TACTILE_CONFIG_DIR;
-
 /// One seeded trial; returns the trial's metrics object.
 nlohmann::json fly(const std::string& scenario) {
-  const fs::path out = fs::temp_directory_path() /
-                       ("tactile_wall_effect_sitl_" + fs::path(scenario).stem().string() + "_" + std::to_string(::getpid()));
-  fs::remove_all(out);
-  tactile_cli::SimOptions o;
-  o.scenario = (kConfig / "scenarios" / scenario).string();
-  o.out_dir = out.string();
-  o.config_dir = kConfig.string();
-  o.trials = 1;
-  o.progress = false;
-  o.write_bag = false;
-  o.write_png = false;
-  nlohmann::json m = tactile_cli::run_sim(o);
-  fs::remove_all(out);
+  nlohmann::json m = tactile_cli::test::run_scenario(scenario);
   if (m.contains("per_trial")) return m["per_trial"][0];
   return m;
 }
