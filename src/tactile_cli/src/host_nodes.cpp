@@ -7,8 +7,7 @@ namespace tactile_cli {
 std::shared_ptr<whisker_driver::WhiskerDriverLogic> add_whisker_driver(
     Host& host, const std::string& ns, const tactile_common::ParamMap& over) {
   using Logic = whisker_driver::WhiskerDriverLogic;
-  auto params = host.load_parameters(ns, Logic::kNodeName, Logic::default_parameters(), over);
-  auto logic = std::make_shared<Logic>(Logic::params_from(params));
+  auto logic = add_logic<Logic>(host, ns, over);
   const std::string out = resolve_topic(ns, Logic::kOutputTopic);
   Host* h = &host;
   Logic* l = logic.get();
@@ -29,15 +28,13 @@ std::shared_ptr<whisker_driver::WhiskerDriverLogic> add_whisker_driver(
                        {"parse_dropped_lines", s.parse.dropped_lines()},
                        {"parse_dropped_frames", s.parse.dropped_frames()}}};
   });
-  host.keep(logic);
   return logic;
 }
 
 std::shared_ptr<tdorc_filter::TdorcFilterLogic> add_tdorc_filter(
     Host& host, const std::string& ns, const tactile_common::ParamMap& over) {
   using Logic = tdorc_filter::TdorcFilterLogic;
-  auto params = host.load_parameters(ns, Logic::kNodeName, Logic::default_parameters(), over);
-  auto logic = std::make_shared<Logic>(Logic::params_from(params));
+  auto logic = add_logic<Logic>(host, ns, over);
   const std::string out = resolve_topic(ns, Logic::kOutputTopic);
   Host* h = &host;
   Logic* l = logic.get();
@@ -56,7 +53,6 @@ std::shared_ptr<tdorc_filter::TdorcFilterLogic> add_tdorc_filter(
                        {"resets_on_gap", s.resets_on_gap},
                        {"sequence_gaps", s.sequence_gaps}}};
   });
-  host.keep(logic);
   return logic;
 }
 
@@ -64,8 +60,7 @@ std::shared_ptr<tactile_depth::TactileDepthLogic> add_tactile_depth(Host& host,
                                                                    const tactile_common::ParamMap& over,
                                                                    const std::string& output_topic) {
   using Logic = tactile_depth::TactileDepthLogic;
-  auto params = host.load_parameters("", Logic::kNodeName, Logic::default_parameters(), over);
-  auto logic = std::make_shared<Logic>(Logic::params_from(params));
+  auto logic = add_logic<Logic>(host, "", over);
   Host* h = &host;
   Logic* l = logic.get();
   auto publish = [h, output_topic](const std::optional<tactile_msgs::msg::TactileDepth>& d) {
@@ -89,14 +84,12 @@ std::shared_ptr<tactile_depth::TactileDepthLogic> add_tactile_depth(Host& host,
                        {"ticks_without_odometry", s.ticks_without_odometry},
                        {"prediction_skipped", s.prediction_skipped}}};
   });
-  host.keep(logic);
   return logic;
 }
 
 std::shared_ptr<tactile_fsm::WhiskerFsmLogic> add_whisker_fsm(Host& host, const tactile_common::ParamMap& over) {
   using Logic = tactile_fsm::WhiskerFsmLogic;
-  auto params = host.load_parameters("", Logic::kNodeName, Logic::default_parameters(), over);
-  auto logic = std::make_shared<Logic>(Logic::params_from(params));
+  auto logic = add_logic<Logic>(host, "", over);
   Host* h = &host;
   Logic* l = logic.get();
   host.bus().subscribe<tactile_msgs::msg::TactileDepth>(
@@ -123,14 +116,12 @@ std::shared_ptr<tactile_fsm::WhiskerFsmLogic> add_whisker_fsm(Host& host, const 
                        {"dropped_out_of_order", s.dropped_out_of_order},
                        {"dropped_wrong_whisker", s.dropped_wrong_whisker}}};
   });
-  host.keep(logic);
   return logic;
 }
 
 std::shared_ptr<gpis_explorer::GpisExplorerLogic> add_gpis_explorer(Host& host, const tactile_common::ParamMap& over) {
   using Logic = gpis_explorer::GpisExplorerLogic;
-  auto params = host.load_parameters("", Logic::kNodeName, Logic::default_parameters(), over);
-  auto logic = std::make_shared<Logic>(Logic::params_from(params));
+  auto logic = add_logic<Logic>(host, "", over);
   Host* h = &host;
   Logic* l = logic.get();
   host.bus().subscribe<tactile_msgs::msg::TactileDepth>(
@@ -156,15 +147,13 @@ std::shared_ptr<gpis_explorer::GpisExplorerLogic> add_gpis_explorer(Host& host, 
                        {"dropped_nonfinite", s.dropped_nonfinite},
                        {"dropped_out_of_order", s.dropped_out_of_order}}};
   });
-  host.keep(logic);
   return logic;
 }
 
 std::shared_ptr<whisker_localization::WhiskerLocalizationLogic> add_whisker_localization(
     Host& host, const tactile_common::ParamMap& over) {
   using Logic = whisker_localization::WhiskerLocalizationLogic;
-  auto params = host.load_parameters("", Logic::kNodeName, Logic::default_parameters(), over);
-  auto logic = std::make_shared<Logic>(Logic::params_from(params));
+  auto logic = add_logic<Logic>(host, "", over);
   Host* h = &host;
   Logic* l = logic.get();
   host.bus().subscribe<nav_msgs::msg::Odometry>(Logic::kOdomTopic,
@@ -187,7 +176,6 @@ std::shared_ptr<whisker_localization::WhiskerLocalizationLogic> add_whisker_loca
                        {"no_contact", s.no_contact},
                        {"resets", s.resets}}};
   });
-  host.keep(logic);
   return logic;
 }
 
@@ -269,8 +257,7 @@ void add_scenario_pilot(Host& host, std::shared_ptr<tactile_sim::ScriptedPilotLo
 
 std::shared_ptr<wall_effect_ekf::WallEffectEkfLogic> add_wall_effect_ekf(Host& host, const tactile_common::ParamMap& over) {
   using Logic = wall_effect_ekf::WallEffectEkfLogic;
-  auto params = host.load_parameters("", Logic::kNodeName, Logic::default_parameters(), over);
-  auto logic = std::make_shared<Logic>(Logic::params_from(params));
+  auto logic = add_logic<Logic>(host, "", over);
   Host* h = &host;
   Logic* l = logic.get();
   host.bus().subscribe<sensor_msgs::msg::Imu>(Logic::kImuTopic, [l](const sensor_msgs::msg::Imu& m) { l->on_imu(m); });
@@ -300,14 +287,12 @@ std::shared_ptr<wall_effect_ekf::WallEffectEkfLogic> add_wall_effect_ekf(Host& h
                        {"tof_gated", l->ekf().stats().tof_gated},
                        {"reacquisitions", l->ekf().stats().reacquisitions}}};
   });
-  host.keep(logic);
   return logic;
 }
 
 std::shared_ptr<wall_effect_ekf::IndiControlLogic> add_indi_controller(Host& host, const tactile_common::ParamMap& over) {
   using Logic = wall_effect_ekf::IndiControlLogic;
-  auto params = host.load_parameters("", Logic::kNodeName, Logic::default_parameters(), over);
-  auto logic = std::make_shared<Logic>(Logic::params_from(params));
+  auto logic = add_logic<Logic>(host, "", over);
   Host* h = &host;
   Logic* l = logic.get();
   host.bus().subscribe<nav_msgs::msg::Odometry>(Logic::kSetpointTopic,
@@ -330,28 +315,24 @@ std::shared_ptr<wall_effect_ekf::IndiControlLogic> add_indi_controller(Host& hos
                        {"dropped_nonfinite", s.dropped_nonfinite},
                        {"ticks_without_input", s.ticks_without_input}}};
   });
-  host.keep(logic);
   return logic;
 }
 
 std::shared_ptr<wall_effect_ekf::WallTrajectoryLogic> add_wall_trajectory(Host& host,
                                                                           const tactile_common::ParamMap& over) {
   using Logic = wall_effect_ekf::WallTrajectoryLogic;
-  auto params = host.load_parameters("", Logic::kNodeName, Logic::default_parameters(), over);
-  auto logic = std::make_shared<Logic>(Logic::params_from(params));
+  auto logic = add_logic<Logic>(host, "", over);
   Host* h = &host;
   Logic* l = logic.get();
   host.executor().add_timer(
       Logic::kPeriodNs, [h, l](int64_t now_ns) { h->bus().publish(Logic::kOutputTopic, l->on_timer(now_ns), now_ns); },
       host.executor().now_ns());
-  host.keep(logic);
   return logic;
 }
 
 std::shared_ptr<tactile_fsm::WallEffectNavLogic> add_wall_effect_nav(Host& host, const tactile_common::ParamMap& over) {
   using Logic = tactile_fsm::WallEffectNavLogic;
-  auto params = host.load_parameters("", Logic::kNodeName, Logic::default_parameters(), over);
-  auto logic = std::make_shared<Logic>(Logic::params_from(params));
+  auto logic = add_logic<Logic>(host, "", over);
   Host* h = &host;
   Logic* l = logic.get();
   host.bus().subscribe<tactile_msgs::msg::WallEstimate>(Logic::kWallTopic,
@@ -373,7 +354,6 @@ std::shared_ptr<tactile_fsm::WallEffectNavLogic> add_wall_effect_nav(Host& host,
                        {"dropped_nonfinite", s.dropped_nonfinite},
                        {"ticks_without_odometry", s.ticks_without_odometry}}};
   });
-  host.keep(logic);
   return logic;
 }
 

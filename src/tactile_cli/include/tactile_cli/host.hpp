@@ -74,6 +74,17 @@ class Host {
   std::vector<std::function<NodeReport()>> reporters_;
 };
 
+/// The logic object of node `Logic` in namespace `ns`, built from its
+/// parameters (defaults <- config/<node>.yaml <- `over`, Host::load_parameters)
+/// and kept alive by the host; the add_<node> functions wire its topics.
+template <class Logic>
+std::shared_ptr<Logic> add_logic(Host& host, const std::string& ns, const tactile_common::ParamMap& over) {
+  auto logic = std::make_shared<Logic>(
+      Logic::params_from(host.load_parameters(ns, Logic::kNodeName, Logic::default_parameters(), over)));
+  host.keep(logic);
+  return logic;
+}
+
 /// Overrides for a node, like the parameter dicts of a launch file.
 tactile_common::ParamMap overrides(
     std::initializer_list<std::pair<const char*, tactile_common::ParamValue>> values);

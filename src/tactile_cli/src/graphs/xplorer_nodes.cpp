@@ -5,8 +5,7 @@ namespace tactile_cli {
 std::shared_ptr<xplorer_force_est::XplorerForceEstLogic> add_xplorer_force_est(
     Host& host, const tactile_common::ParamMap& over) {
   using Logic = xplorer_force_est::XplorerForceEstLogic;
-  auto params = host.load_parameters("", Logic::kNodeName, Logic::default_parameters(), over);
-  auto logic = std::make_shared<Logic>(Logic::params_from(params));
+  auto logic = add_logic<Logic>(host, "", over);
   Host* h = &host;
   Logic* l = logic.get();
   host.bus().subscribe<tactile_msgs::msg::ArmImuArray>(Logic::kArmImuTopic, [h, l](const tactile_msgs::msg::ArmImuArray& m) {
@@ -35,14 +34,12 @@ std::shared_ptr<xplorer_force_est::XplorerForceEstLogic> add_xplorer_force_est(
     for (size_t i = 0; i < 4; ++i) r.counters.emplace_back("arm" + std::to_string(i) + "_missing", s.arm_missing[i]);
     return r;
   });
-  host.keep(logic);
   return logic;
 }
 
 std::shared_ptr<tactile_fsm::XplorerFsmLogic> add_xplorer_fsm(Host& host, const tactile_common::ParamMap& over) {
   using Logic = tactile_fsm::XplorerFsmLogic;
-  auto params = host.load_parameters("", Logic::kNodeName, Logic::default_parameters(), over);
-  auto logic = std::make_shared<Logic>(Logic::params_from(params));
+  auto logic = add_logic<Logic>(host, "", over);
   Host* h = &host;
   Logic* l = logic.get();
   host.bus().subscribe<geometry_msgs::msg::WrenchStamped>(
@@ -66,14 +63,12 @@ std::shared_ptr<tactile_fsm::XplorerFsmLogic> add_xplorer_fsm(Host& host, const 
                        {"dropped_out_of_order", s.dropped_out_of_order},
                        {"state_messages", s.state_messages}}};
   });
-  host.keep(logic);
   return logic;
 }
 
 std::shared_ptr<mapping_pcl::XplorerMapLogic> add_xplorer_mapping(Host& host, const tactile_common::ParamMap& over) {
   using Logic = mapping_pcl::XplorerMapLogic;
-  auto params = host.load_parameters("", Logic::kNodeName, Logic::default_parameters(), over);
-  auto logic = std::make_shared<Logic>(Logic::params_from(params));
+  auto logic = add_logic<Logic>(host, "", over);
   Host* h = &host;
   Logic* l = logic.get();
   host.bus().subscribe<geometry_msgs::msg::WrenchStamped>(
@@ -102,7 +97,6 @@ std::shared_ptr<mapping_pcl::XplorerMapLogic> add_xplorer_mapping(Host& host, co
                        {"slabs", m.slabs},
                        {"corner_slabs", m.corner_slabs}}};
   });
-  host.keep(logic);
   return logic;
 }
 
