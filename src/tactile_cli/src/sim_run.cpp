@@ -258,6 +258,12 @@ nlohmann::json run_sim(const SimOptions& options) {
   nlohmann::json stats;
   aggregate(runs, "", runs.front(), stats);
   stats.erase("seed");
+  for (const std::string& path : find_sim_graph(scenario.graph, scenario.source).summary_metrics) {
+    if (!stats.contains(path)) continue;  // no trial reported it
+    const std::string leaf = path.substr(path.rfind('.') + 1);
+    agg["mean_" + leaf] = stats[path]["mean"];
+    agg["std_" + leaf] = stats[path]["std"];
+  }
   agg["statistics"] = stats;
   agg["per_trial"] = runs;
   write_text(fs::path(options.out_dir) / "metrics.json", agg.dump(2) + "\n");

@@ -52,6 +52,14 @@ void expect_exit_found(const std::string& scenario, int budget_points) {
   EXPECT_GE(out, 4);
   ASSERT_GT(n_err, 0);
   EXPECT_LE(err / n_err, 0.08);
+  // The aggregate's top-level summary (issue / 000 Fig. 5 names) is the mean over the trials.
+  ASSERT_TRUE(m.contains("mean_reconstruction_error_m"));
+  EXPECT_NEAR(m["mean_reconstruction_error_m"].get<double>(), err / n_err, 1e-12);
+  EXPECT_GE(m["std_reconstruction_error_m"].get<double>(), 0.0);
+  double travel = 0.0;
+  for (const auto& r : m["per_trial"]) travel += r["gpis"]["travel_distance_m"].get<double>();
+  EXPECT_NEAR(m["mean_travel_distance_m"].get<double>(), travel / 5.0, 1e-9);
+  EXPECT_GE(m["mean_gpis_updates"].get<double>(), 1.0);
 }
 
 }  // namespace

@@ -75,6 +75,10 @@ struct GraphInfo {
   std::vector<tactile_sim::VehicleType> vehicles;  ///< vehicles it can fly (empty: any)
   std::vector<std::string> nodes;                  ///< node names accepted under node_parameters
   std::string metrics_key;                         ///< key of SimGraph::metrics() in metrics.json
+  /// Metrics (paths like "gpis.travel_distance_m") whose mean and std over the
+  /// trials the aggregate metrics.json also reports at the top level as
+  /// mean_<leaf> and std_<leaf> (the names the papers' tables use).
+  std::vector<std::string> summary_metrics;
   std::function<std::unique_ptr<SimGraph>(GraphContext&)> build;
 };
 

@@ -190,6 +190,8 @@ GraphInfo gpis_explore_graph() {
   g.vehicles = {tactile_sim::VehicleType::kWhiskerCrazyflie};
   g.nodes = {"tdorc_filter", "tactile_depth", "gpis_explorer"};
   g.metrics_key = "gpis";
+  // 000 Fig. 5 / issue: mean and std of the reconstruction error and travel, GPIS updates.
+  g.summary_metrics = {"gpis.reconstruction_error_m", "gpis.travel_distance_m", "gpis.gpis_updates"};
   g.build = [](GraphContext& ctx) { return std::make_unique<GpisExploreGraph>(ctx); };
   return g;
 }
