@@ -16,6 +16,9 @@ namespace fs = std::filesystem;
 namespace {
 
 nlohmann::json run(const std::string& scenario) { return tactile_cli::test::run_scenario(scenario); }
+nlohmann::json run_trials(const std::string& scenario, int trials) {
+  return tactile_cli::test::run_scenario(scenario, trials);
+}
 
 }  // namespace
 
@@ -57,9 +60,34 @@ TEST(XplorerSitl, BoxTraversalClosesTheLoopAndMapsTheBox) {
   const auto& x = m["xplorer"];
   EXPECT_TRUE(x["loop_closed"].get<bool>());
   EXPECT_GE(x["turns"].get<int>(), 3);
+  EXPECT_GE(x["turns_recontacted"].get<int>(), 3);  // unlike the rigid chassis (below)
   EXPECT_NEAR(x["map_length_m"].get<double>(), 1.22, 0.05);
   EXPECT_NEAR(x["map_width_m"].get<double>(), 1.0, 0.05);
   EXPECT_GT(x["map_area_accuracy"].get<double>(), 0.95);
+}
+
+// 001 Sec. V-C4, Fig. 5(iii): the same box with a rigid chassis
+// (vehicle.params.rigid_arms) fails in all four trials, the way the paper
+// reports: it traverses the first face, but at the convex corner it turns
+// (or loses the face) and never re-establishes contact to enter
+// Tactile-traversal again, so the loop never closes. The compliant vehicle
+// (same seeds, test above) re-contacts after its turns and closes the loop.
+TEST(XplorerSitl, RigidArmsFailBoxTraversalAtTheConvexCorner) {
+  const auto m = run_trials("xplorer_box_traversal_rigid.yaml", 4);
+  EXPECT_EQ(m["success_count"].get<int>(), 0);
+  int turned = 0;
+  for (const auto& t : m["per_trial"]) {
+    const auto& x = t["xplorer"];
+    const auto seed = t["seed"].get<int>();
+    EXPECT_FALSE(x["loop_closed"].get<bool>()) << seed;
+    ASSERT_FALSE(x["first_contact_time_s"].is_null()) << seed;  // it found and traversed the first face
+    EXPECT_GT(x["traversed_path_m"].get<double>(), 0.5) << seed;
+    EXPECT_EQ(x["turns_recontacted"].get<int>(), 0) << seed;    // never back to traversal after a turn
+    EXPECT_GE(x["turns_without_recontact"].get<int>() + x["traversal_contact_lost"].get<int>(), 1) << seed;
+    EXPECT_EQ(x["final_state"], "exploration") << seed;         // flew off the box
+    turned += x["turns_without_recontact"].get<int>();
+  }
+  EXPECT_GE(turned, 1);  // the paper's case: Tactile-turning entered, re-contact never made
 }
 
 // 001 Sec. V-C1: wall traversal (Exploration and Tactile-traversal).

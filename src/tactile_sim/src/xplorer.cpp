@@ -178,6 +178,12 @@ void Xplorer::step(double dt, const Arena& arena) {
                                              c.impact_speed, c.obstacle_id});
       }
     }
+    if (p_.rigid_arms) {  // 001 Sec. V-C4: rigid chassis, the hinge moment goes to the body
+      torque_body += rho.cross(c.contact ? Vec3(R.transpose() * arm_force_[i]) : Vec3::Zero()) +
+                     rho.cross(arm_tip_force_[i]) + arm_ext_torque_[i] * Vec3::UnitZ();
+      theta_[i] = theta_dot_[i] = theta_ddot_[i] = 0.0;
+      continue;
+    }
     // 001 eq. 2: J_zz theta_dd + b theta_d + k theta = tau, plus end stops at +-30 deg.
     double tau_spring = -p_.arm_stiffness * theta_[i] - p_.arm_damping * theta_dot_[i];
     const double over = std::abs(theta_[i]) - p_.arm_max_deflection;

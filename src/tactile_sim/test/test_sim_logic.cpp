@@ -2,11 +2,13 @@
 // validation.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
 #include "tactile_common/time.hpp"
 #include "tactile_sim/logic/sim_logic.hpp"
+#include "tactile_sim/scenario.hpp"
 
 using tactile_sim::SimLogic;
 
@@ -75,4 +77,55 @@ TEST(SimLogic, NonFiniteOrWrongKindSetpointsAreDroppedAndCounted) {
   good.height = 0.4;
   sim->on_hover_setpoint(good);
   EXPECT_EQ(sim->dropped_setpoints(), 3u);
+}
+
+namespace {
+tactile_sim::Scenario xplorer_scenario(const std::string& params) {
+  return tactile_sim::load_scenario_from_string(
+      "name: x\nduration_s: 5\narena:\n  walls:\n    - points: [[1, -1], [1, 1]]\n"
+      "vehicle:\n  type: xplorer\n  params: " + params + "\n"
+      "pilot:\n  - {hover: 1}\n",
+      "x.yaml", ".");
+}
+std::string construct_error(const std::string& params) {
+  try {
+    SimLogic sim(xplorer_scenario(params), 1);
+  } catch (const tactile_sim::ScenarioError& e) {
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
+// 001 Sec. V-C4: the rigid-chassis comparison vehicle and the arm's
+// spring-damper are set from the scenario; bad values name file, key, reason.
+TEST(SimLogic, XplorerArmParametersFromTheScenario) {
+  const auto fly = [](const std::string& params) {
+    SimLogic sim(xplorer_scenario(params), 1);
+    SimLogic::Outputs out;
+    geometry_msgs::msg::PoseStamped sp;  // 0.06 m into the wall's reach (contact at x = 0.79)
+    sp.pose.position.x = 0.85;
+    sp.pose.position.z = 0.7;
+    sp.pose.orientation.w = 1.0;
+    sim.on_position_setpoint(sp);
+    double max_arm = 0.0;
+    for (int64_t k = 0; k < 6000; ++k) {
+      out.clear();
+      sim.step(k * sim.period_ns(), out);
+      for (const auto& a : out.arm_imu)
+        for (const auto& arm : a.msg.arms) max_arm = std::max(max_arm, std::abs(static_cast<double>(arm.arm_angle)));
+    }
+    return max_arm;
+  };
+  EXPECT_GT(fly("{}"), 0.02);                  // compliant arms deflect on the wall
+  EXPECT_EQ(fly("{rigid_arms: true}"), 0.0);   // locked hinges
+  EXPECT_LT(fly("{arm_stiffness: 20.0}"), 0.5 * fly("{}"));
+  const auto err = construct_error("{arm_stiffness: -1.0}");
+  EXPECT_NE(err.find("x.yaml: vehicle.params: XplorerParams.arm_stiffness: must be > 0"), std::string::npos) << err;
+  EXPECT_NE(construct_error("{rigid_arms: 3}").find("vehicle.params.rigid_arms: expected true or false"),
+            std::string::npos);
+  EXPECT_NE(construct_error("{arm_stifness: 2.0}").find("vehicle.params.arm_stifness: unknown parameter of xplorer"),
+            std::string::npos);
+  EXPECT_NE(construct_error("{arm_max_deflection_deg: 95}").find("arm_max_deflection"), std::string::npos);
+  EXPECT_EQ(construct_error("{rigid_arms: false, arm_damping: 0.02, arm_inertia: 0.002, mass: 1.2}"), "");
 }

@@ -210,6 +210,18 @@ class XplorerGraph : public SimGraph {
     m["first_contact_time_s"] = f.first_contact_time() >= 0 ? nlohmann::json(f.first_contact_time()) : nlohmann::json(nullptr);
     m["traversed_path_m"] = f.traversed_path();
     m["turns"] = f.turns();
+    // How each Tactile-turning ended (001 Sec. V-C4: the rigid UAV turns but
+    // never re-establishes contact) and how often traversal lost the contact.
+    int recontacted = 0, turn_failed = 0, contact_lost = 0;
+    for (size_t i = 1; i < states_.size(); ++i) {
+      const auto& a = states_[i - 1].second;
+      const auto& b = states_[i].second;
+      if (a == "tactile_turning") (b == "tactile_traversal" ? recontacted : turn_failed)++;
+      if (a == "tactile_traversal" && b == "exploration") ++contact_lost;
+    }
+    m["turns_recontacted"] = recontacted;
+    m["turns_without_recontact"] = turn_failed;
+    m["traversal_contact_lost"] = contact_lost;
     const auto& ms = map_->mapper().stats();
     m["slabs"] = ms.slabs;
     m["map_raw_points"] = map_->map().size();  // as written to map.ply

@@ -38,6 +38,10 @@ struct XplorerParams {
   double arm_max_deflection = 30.0 * M_PI / 180.0;  ///< end stops [rad] (001 Sec. II)
   double end_stop_stiffness = 30.0;  ///< stiffness beyond the stop [N m/rad] (choice)
   double end_stop_damping = 0.1;     ///< damping beyond the stop [N m s/rad] (choice)
+  /// The rigid-chassis comparison vehicle of 001 Sec. V-C4 ("a similar
+  /// dimension rigid UAV"): the hinges are locked (theta_i = 0), an arm's
+  /// contact force and its moment reach the body directly.
+  bool rigid_arms = false;
   double guard_radius = 0.07;     ///< propeller guard around each motor [m] (estimate)
   double body_radius = 0.08;      ///< central body circle [m] (estimate)
   double thrust_scale = 32.5;     ///< thrust = normalised command x 32.5 N (001 Sec. V-A3)

@@ -222,6 +222,29 @@ Params mass_override(const Scenario& s) {
   return p;
 }
 
+/// XPLORER parameters from the scenario's vehicle.params (001): the arm's
+/// spring-damper (eq. 2) and the rigid-chassis comparison vehicle (Sec. V-C4).
+/// Values are checked by XplorerParams::validate, reported with the file.
+XplorerParams xplorer_params(const Scenario& s) {
+  XplorerParams p;
+  ParamOverrides o(s);
+  o.number("mass", p.mass);
+  o.number("arm_inertia", p.arm_inertia);
+  o.number("arm_damping", p.arm_damping);
+  o.number("arm_stiffness", p.arm_stiffness);
+  double max_deg = p.arm_max_deflection * 180.0 / M_PI;
+  o.number("arm_max_deflection_deg", max_deg);
+  p.arm_max_deflection = max_deg * M_PI / 180.0;
+  o.flag("rigid_arms", p.rigid_arms);
+  o.check_all_used("mass, arm_inertia, arm_damping, arm_stiffness, arm_max_deflection_deg, rigid_arms");
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    throw ScenarioError(s.source + ": vehicle.params: " + e.what());
+  }
+  return p;
+}
+
 RigidBodyState initial_state(const Scenario& s) {
   RigidBodyState x;
   x.position = s.initial_position;
@@ -452,7 +475,7 @@ class DuctedVehicle : public SimLogic::Vehicle {
 class XplorerVehicle : public SimLogic::Vehicle {
  public:
   XplorerVehicle(const Scenario& s, uint64_t seed)
-      : x_(mass_override<XplorerParams>(s), initial_state(s)), imu_(imu_at(kImuHz), seed) {
+      : x_(xplorer_params(s), initial_state(s)), imu_(imu_at(kImuHz), seed) {
     for (size_t i = 0; i < 4; ++i) {
       arm_imus_[i] = std::make_unique<ImuModel>(imu_at(kArmImuHz), seed, sensor_streams::kArmImuStreamBase + i);
     }
