@@ -37,6 +37,26 @@ TEST(XplorerSitl, StaticWrenchEstimateMatchesTheContactForce) {
   EXPECT_LT(x["force_settle_s"].get<double>(), 10.0);
 }
 
+// 001 Fig. 4 with the CoM estimate of real hardware: the thrust of eq. 5 is
+// command x 32.5 N on a nonlinear rotor curve (exact at hover only) and the
+// accelerometer carries vibration and a calibration bias. The CoM-only
+// estimate then stays out of a 0.1 N band of the contact force far longer
+// than the fused one, which converges to the arm-based estimate and keeps the
+// collision peak. (With the ideal CoM model of xplorer_static_wrench.yaml the
+// CoM estimate is nearly exact and settles first: 1.6 s vs 6.7 s, README.)
+TEST(XplorerSitl, FusionSettlesBeforeTheImperfectComEstimate) {
+  const auto m = run("xplorer_static_wrench_imperfect.yaml");
+  ASSERT_TRUE(m["success"].get<bool>());
+  const auto& x = m["xplorer"];
+  EXPECT_LT(x["force_error_n"].get<double>(), 0.3);
+  EXPECT_NEAR(x["force_true_n"].get<double>(), 1.0, 0.15);
+  EXPECT_LT(x["force_settle_s"].get<double>(), 10.0);
+  EXPECT_GT(x["force_settle_com_only_s"].get<double>(), x["force_settle_s"].get<double>() + 5.0);
+  EXPECT_TRUE(x["fusion_faster_than_com"].get<bool>());
+  EXPECT_TRUE(x["fusion_keeps_peak"].get<bool>());
+  EXPECT_GT(x["collision_peak_fused_n"].get<double>(), 2.0);  // the impact shows (steady push: 1 N)
+}
+
 // The same with NaN and out-of-range arm angles, lost arm IMU sets and
 // accelerometer spikes: handled (counted, attitude fallback, median), the
 // estimate stays within 0.3 N.

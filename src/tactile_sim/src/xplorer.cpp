@@ -54,6 +54,8 @@ void XplorerParams::validate() const {
   positive("body_radius", body_radius);
   positive("thrust_scale", thrust_scale);
   if (thrust_scale <= mass * kGravity) bad("thrust_scale", "cannot carry the weight", thrust_scale);
+  if (!(thrust_curve_factor >= 0.0 && thrust_curve_factor <= 1.0))
+    bad("thrust_curve_factor", "must be in [0, 1]", thrust_curve_factor);
   non_negative("torque_coefficient", torque_coefficient);
   positive("motor_time_constant", motor_time_constant);
   non_negative("linear_drag", linear_drag);
@@ -76,6 +78,9 @@ Xplorer::Xplorer(const XplorerParams& params, const RigidBodyState& initial)
   nominal_.spin_sign = {1.0, -1.0, 1.0, -1.0};
   nominal_.torque_coefficient = p_.torque_coefficient;
   for (int i = 0; i < 4; ++i) nominal_.position_body[i] = arm_point_body(i, p_.arm_length);
+  // Thrust curve through the hover point: 4 T_max ((1 - f) u_h + f u_h^2) = m g, u_h = m g / thrust_scale.
+  const double u_h = p_.mass * kGravity / p_.thrust_scale, f = p_.thrust_curve_factor;
+  rotor_max_ = 0.25 * p_.mass * kGravity / ((1.0 - f) * u_h + f * u_h * u_h);
   setpoint_.position = initial.position;
   setpoint_.yaw = initial.yaw();
   collisions_.reserve(16);
@@ -94,6 +99,11 @@ RotorGeometry Xplorer::geometry() const {
   RotorGeometry g = nominal_;
   for (int i = 0; i < 4; ++i) g.position_body[i] = arm_point_body(i, p_.arm_length);
   return g;
+}
+
+double Xplorer::rotor_static_thrust(double u) const {
+  const double f = p_.thrust_curve_factor, c = std::clamp(u, 0.0, 1.0);
+  return rotor_max_ * ((1.0 - f) * c + f * c * c);
 }
 
 double Xplorer::collective_thrust() const { return thrust_[0] + thrust_[1] + thrust_[2] + thrust_[3]; }
@@ -139,7 +149,10 @@ void Xplorer::step(double dt, const Arena& arena) {
   command_ = allocate_rotors(nominal_, u.thrust, u.torque, max_rotor);
   thrust_command_ = (command_[0] + command_[1] + command_[2] + command_[3]) / p_.thrust_scale;  // 001 V-A3
   const double km = 1.0 - std::exp(-dt / p_.motor_time_constant);
-  for (int i = 0; i < 4; ++i) thrust_[i] += (command_[i] - thrust_[i]) * km;
+  for (int i = 0; i < 4; ++i) {
+    // 001 Sec. V-A3: the firmware's normalised command; the rotor's static thrust curve (see thrust_curve_factor).
+    thrust_[i] += (rotor_static_thrust(command_[i] / max_rotor) - thrust_[i]) * km;
+  }
 
   const Mat3 R = state_.orientation.toRotationMatrix();
   const Vec3& p = state_.position;

@@ -54,6 +54,29 @@ TEST(Xplorer, HoverThrustEqualsWeightAndNormalisedCommand) {
   for (int i = 0; i < 4; ++i) EXPECT_NEAR(v.arm_angles()[i], 0.0, 1e-12);
 }
 
+TEST(Xplorer, ThrustCurveIsExactAtHoverOnly) {
+  // 001 Sec. V-A3: thrust = command x 32.5 N, calibrated at hover. The rotors
+  // follow T_max ((1 - f) u + f u^2), here f = 0.65: hover command
+  // u_h = 1.12 g / 32.5 = 0.33806; T_max = (W / 4) / (0.35 u_h + 0.65 u_h^2)
+  // = 2.7468 / 0.19261 = 14.261 N. At 2 u_h: 14.261 (0.35 * 0.67614 + 0.65
+  // * 0.45715) = 7.6124 N per rotor vs the linear model's 5.4936 N (+38.6 %);
+  // at u_h / 2: 1.1085 N vs 1.3734 N (-19.3 %).
+  XplorerParams p;
+  EXPECT_EQ(p.thrust_curve_factor, 0.0);  // default: ideal, thrust = command x 32.5
+  p.thrust_curve_factor = 0.65;
+  Xplorer v(p, at(0, 0, 0.7));
+  const double W = 1.12 * 9.81, uh = W / 32.5;
+  EXPECT_NEAR(v.rotor_static_thrust(uh), W / 4, 1e-9);
+  EXPECT_NEAR(v.rotor_static_thrust(2 * uh), 7.6124, 1e-3);
+  EXPECT_NEAR(v.rotor_static_thrust(0.5 * uh), 1.1085, 1e-3);
+  EXPECT_NEAR(v.rotor_static_thrust(1.5), v.rotor_static_thrust(1.0), 0.0);  // saturates
+  p.thrust_curve_factor = 0.0;  // linear: exactly command x 32.5 / 4
+  Xplorer lin(p, at(0, 0, 0.7));
+  EXPECT_NEAR(lin.rotor_static_thrust(0.6), 0.6 * 32.5 / 4, 1e-9);
+  p.thrust_curve_factor = 1.2;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+}
+
 TEST(Xplorer, TakesOffAndTracksAPositionAndYaw) {
   Xplorer v(XplorerParams{}, at(0, 0, 0));
   Arena empty;

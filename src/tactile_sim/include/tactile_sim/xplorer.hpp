@@ -45,6 +45,16 @@ struct XplorerParams {
   double guard_radius = 0.07;     ///< propeller guard around each motor [m] (estimate)
   double body_radius = 0.08;      ///< central body circle [m] (estimate)
   double thrust_scale = 32.5;     ///< thrust = normalised command x 32.5 N (001 Sec. V-A3)
+  /// The rotors' real static thrust is not linear in the command (001 Sec.
+  /// V-A3: the 32.5 N scale is "obtained empirically by calculating the hover
+  /// thrust" and gives "the approximate value of the actual thrust"): rotor
+  /// thrust = T_max ((1 - f) u + f u^2), u = command / (thrust_scale / 4),
+  /// the PX4 THR_MDL_FAC form, with T_max such that the scale is exact at
+  /// hover. Default 0: the thrust is exactly command x 32.5 (the ideal
+  /// model the behaviours were tuned on); 0.65, ArduPilot's default
+  /// MOT_THST_EXPO for typical ESC/motor pairs, in
+  /// xplorer_static_wrench_imperfect.yaml.
+  double thrust_curve_factor = 0.0;
   double torque_coefficient = 0.016;  ///< rotor drag torque per thrust [m] (choice, 5" props)
   double motor_time_constant = 0.03;  ///< [s] (choice)
   double linear_drag = 0.1;       ///< [N s/m] (choice)
@@ -90,6 +100,8 @@ class Xplorer {
   /// Normalised collective thrust command (001: thrust = command x 32.5 N), in [0, 1].
   double thrust_command() const { return thrust_command_; }
   double collective_thrust() const;  ///< actual sum of rotor thrusts [N]
+  /// Static thrust of one rotor at normalised command u in [0, 1] (thrust_curve_factor) [N].
+  double rotor_static_thrust(double u) const;
   const std::array<double, 4>& rotor_thrusts() const { return thrust_; }
   /// Contact forces on arms and body in the last step (world) [N].
   const Vec3& external_force_world() const { return contact_force_; }
@@ -115,6 +127,7 @@ class Xplorer {
   PositionSetpoint setpoint_;
   std::array<double, 4> command_{}, thrust_{};
   double thrust_command_ = 0.0;
+  double rotor_max_ = 0.0;  ///< T_max of the thrust curve [N]
   std::array<double, 4> theta_{}, theta_dot_{}, theta_ddot_{}, arm_ext_torque_{};
   std::array<Vec3, 4> arm_tip_force_{Vec3::Zero(), Vec3::Zero(), Vec3::Zero(), Vec3::Zero()};
   std::array<CircleContact, 4> arm_contacts_;

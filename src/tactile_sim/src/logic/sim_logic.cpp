@@ -222,11 +222,18 @@ Params mass_override(const Scenario& s) {
   return p;
 }
 
-/// XPLORER parameters from the scenario's vehicle.params (001): the arm's
-/// spring-damper (eq. 2) and the rigid-chassis comparison vehicle (Sec. V-C4).
-/// Values are checked by XplorerParams::validate, reported with the file.
-XplorerParams xplorer_params(const Scenario& s) {
-  XplorerParams p;
+/// XPLORER and its flight-controller IMU from the scenario's vehicle.params
+/// (001): the arm's spring-damper (eq. 2), the rigid-chassis comparison
+/// vehicle (Sec. V-C4), the thrust curve behind the 32.5 N scale (Sec. V-A3)
+/// and the accelerometer's errors. Values are checked by the models'
+/// validate(), reported with the file.
+struct XplorerSetup {
+  XplorerParams vehicle;
+  ImuParams imu;
+};
+XplorerSetup xplorer_setup(const Scenario& s, double imu_hz) {
+  XplorerSetup x;
+  XplorerParams& p = x.vehicle;
   ParamOverrides o(s);
   o.number("mass", p.mass);
   o.number("arm_inertia", p.arm_inertia);
@@ -236,13 +243,24 @@ XplorerParams xplorer_params(const Scenario& s) {
   o.number("arm_max_deflection_deg", max_deg);
   p.arm_max_deflection = max_deg * M_PI / 180.0;
   o.flag("rigid_arms", p.rigid_arms);
-  o.check_all_used("mass, arm_inertia, arm_damping, arm_stiffness, arm_max_deflection_deg, rigid_arms");
+  o.number("thrust_curve_factor", p.thrust_curve_factor);
+  // The flight controller's accelerometer (001: PIXHAWK; the paper gives no
+  // figures): ImuParams' BMI088-class defaults (no vibration, no turn-on
+  // bias) unless the scenario sets accel_noise_density (propeller vibration)
+  // and accel_bias_sigma (residual bias after calibration, 1 sigma per axis).
+  x.imu = imu_at(imu_hz);
+  o.number("accel_noise_density", x.imu.accel_noise_density);
+  o.number("accel_bias_sigma", x.imu.accel_bias_initial_sigma);
+  o.check_all_used(
+      "mass, arm_inertia, arm_damping, arm_stiffness, arm_max_deflection_deg, rigid_arms, thrust_curve_factor, "
+      "accel_noise_density, accel_bias_sigma");
   try {
     p.validate();
+    x.imu.validate();
   } catch (const std::invalid_argument& e) {
     throw ScenarioError(s.source + ": vehicle.params: " + e.what());
   }
-  return p;
+  return x;
 }
 
 RigidBodyState initial_state(const Scenario& s) {
@@ -474,8 +492,9 @@ class DuctedVehicle : public SimLogic::Vehicle {
 // --- XPLORER (paper 001) ------------------------------------------------------------
 class XplorerVehicle : public SimLogic::Vehicle {
  public:
-  XplorerVehicle(const Scenario& s, uint64_t seed)
-      : x_(xplorer_params(s), initial_state(s)), imu_(imu_at(kImuHz), seed) {
+  XplorerVehicle(const Scenario& s, uint64_t seed) : XplorerVehicle(s, seed, xplorer_setup(s, kImuHz)) {}
+  XplorerVehicle(const Scenario& s, uint64_t seed, const XplorerSetup& x)
+      : x_(x.vehicle, initial_state(s)), imu_(x.imu, seed) {
     for (size_t i = 0; i < 4; ++i) {
       arm_imus_[i] = std::make_unique<ImuModel>(imu_at(kArmImuHz), seed, sensor_streams::kArmImuStreamBase + i);
     }
