@@ -60,6 +60,9 @@ void Params::validate() const {
     bad("hold_release_fraction", "must be in [0, 1), got " + num(hold_release_fraction));
   }
   if (max_contact_hold < 1) bad("max_contact_hold", "must be >= 1, got " + std::to_string(max_contact_hold));
+  if (hold_release_samples < 1 || hold_release_samples > 10000) {
+    bad("hold_release_samples", "must be in [1, 10000], got " + std::to_string(hold_release_samples));
+  }
   for (int i = 0; i < 3; ++i) {
     if (!std::isfinite(bandpass_b[i])) bad("bandpass_b[" + std::to_string(i) + "]", "must be finite, got " + num(bandpass_b[i]));
     if (!std::isfinite(bandpass_a[i])) bad("bandpass_a[" + std::to_string(i) + "]", "must be finite, got " + num(bandpass_a[i]));
@@ -303,6 +306,7 @@ void TdorcWhisker::reset() {
   contact_ = false;
   contact_samples_ = 0;
   contact_peak_ = {};
+  below_samples_ = 0;
 }
 
 WhiskerOutput TdorcWhisker::update(const std::array<double, 3>& raw) {
@@ -317,15 +321,20 @@ WhiskerOutput TdorcWhisker::update(const std::array<double, 3>& raw) {
   }
   // Whisker-level contact freezes every channel's fit (000 eq. 8).
   // Sustained contact (Params::contact_hold): after an S_p onset the whisker
-  // stays in contact while the calibrated signal of any channel is over T_c.
+  // stays in contact while the calibrated signal of any channel is over T_c,
+  // and until hold_release_samples consecutive samples had none over it.
   bool held = false;
   if (params_.contact_hold && params_.mode != Mode::kBandpass && !any && contact_ && all_ready && contact_samples_ < params_.max_contact_hold) {
+    bool over = false;
     for (std::size_t i = 0; i < out.channel.size(); ++i) {
       const double sc = out.channel[i].calibrated;
-      held = held || (sc > params_.contact_threshold && sc > params_.hold_release_fraction * contact_peak_[i]);
+      over = over || (sc > params_.contact_threshold && sc > params_.hold_release_fraction * contact_peak_[i]);
     }
+    below_samples_ = over ? 0 : below_samples_ + 1;
+    held = below_samples_ < params_.hold_release_samples;
   }
   const bool contact = any || held;
+  if (!contact || any) below_samples_ = 0;
   contact_samples_ = contact ? contact_samples_ + 1 : 0;
   for (std::size_t i = 0; i < out.channel.size(); ++i) {
     contact_peak_[i] = contact ? std::max(contact_peak_[i], out.channel[i].calibrated) : 0.0;

@@ -30,6 +30,7 @@ ParamMap TdorcFilterLogic::default_parameters() {
   m.set("contact_hold", d.contact_hold);                           // workspace extension (README)
   m.set("max_contact_hold", static_cast<int64_t>(d.max_contact_hold));
   m.set("hold_release_fraction", d.hold_release_fraction);         // workspace extension (README)
+  m.set("hold_release_samples", static_cast<int64_t>(d.hold_release_samples));  // workspace extension (README)
   m.set("bandpass_b", std::vector<double>(d.bandpass_b.begin(), d.bandpass_b.end()));  // 000 eq. 9-11
   m.set("bandpass_a", std::vector<double>(d.bandpass_a.begin(), d.bandpass_a.end()));  // 000 eq. 9-11
   m.set("max_sample_gap_s", Params{}.max_sample_gap_s);
@@ -69,6 +70,11 @@ TdorcFilterLogic::Params TdorcFilterLogic::params_from(const ParamMap& m) {
   if (hold < 1 || hold > 100000000) throw m.error("max_contact_hold", "must be in [1, 1e8], got " + std::to_string(hold));
   p.tdorc.max_contact_hold = static_cast<int>(hold);
   p.tdorc.hold_release_fraction = m.get_double("hold_release_fraction");
+  const int64_t release = m.get_int("hold_release_samples");
+  if (release < 1 || release > 10000) {
+    throw m.error("hold_release_samples", "must be in [1, 10000], got " + std::to_string(release));
+  }
+  p.tdorc.hold_release_samples = static_cast<int>(release);
   p.tdorc.bandpass_b = three(m, "bandpass_b");
   p.tdorc.bandpass_a = three(m, "bandpass_a");
   p.max_sample_gap_s = m.get_double("max_sample_gap_s");

@@ -437,6 +437,44 @@ TEST(TdorcWhisker, HoldReleaseFractionEndsAHoldWhoseSignalCollapsed) {
   EXPECT_THROW(TdorcWhisker{bad}, std::invalid_argument);
 }
 
+TEST(TdorcWhisker, HoldReleaseSamplesBridgesStickSlipSamples) {
+  // Pressed with +200 Pa from sample 300 to 1099, with a slip sample every
+  // 50th pressed sample whose load drops to 0 (a whisker sliding along a
+  // wall). Once S_p has decayed (sample 668), release after one sample loses
+  // the contact at the first slip and learns pressed samples; two samples
+  // bridge every slip and end one sample after the push.
+  auto run = [](int release_samples) {
+    Params p;
+    p.contact_hold = true;
+    p.learn_delay = 10;
+    p.hold_release_samples = release_samples;
+    TdorcWhisker w(p);
+    int pressed_in_contact = 0;
+    int last = -1;
+    for (int k = 0; k < 2000; ++k) {
+      const double drift = 0.03 * k;
+      const bool pressed = k >= 300 && k < 1100;
+      const bool slip = pressed && (k - 300) % 50 == 25;
+      const double push = pressed && !slip ? 200.0 : 0.0;
+      const auto o = w.update({{100000.0 + drift, 99000.0 - drift + push, 101000.0}});
+      if (pressed && o.contact) ++pressed_in_contact;
+      if (o.contact) last = k;
+    }
+    return std::make_pair(pressed_in_contact, last);
+  };
+  const auto one = run(1);
+  EXPECT_LT(one.first, 799);  // lost at the first slip after sample 668
+  const auto two = run(2);
+  EXPECT_EQ(two.first, 799);    // every pressed sample from the onset (301) to 1099
+  EXPECT_EQ(two.second, 1100);  // the first free sample is still held, the second releases
+  const auto ten = run(10);
+  EXPECT_EQ(ten.first, 799);
+  EXPECT_EQ(ten.second, 1108);  // held through the 9 free samples after the push
+  Params bad;
+  bad.hold_release_samples = 0;
+  EXPECT_THROW(TdorcWhisker{bad}, std::invalid_argument);
+}
+
 TEST(TdorcWhisker, BandpassModeNeverHolds) {
   // No drift model: S_c is the raw pressure, which must not hold a contact.
   Params p;
@@ -527,6 +565,9 @@ TEST(Params, ValidateSustainedContactFields) {
   p = Params{};
   p.learn_delay = -1;
   EXPECT_EQ(error_of(p), "TdorcParams.learn_delay: must be in [0, 10000], got -1");
+  p = Params{};
+  p.hold_release_samples = 0;
+  EXPECT_EQ(error_of(p), "TdorcParams.hold_release_samples: must be in [1, 10000], got 0");
 }
 
 TEST(Params, ValidateNamesTheField) {

@@ -73,7 +73,8 @@ TEST(TdorcFilterLogic, RepositoryConfigIsPaperValuesPlusSustainedContact) {
   EXPECT_EQ(p.tdorc.learn_delay, 10);
   EXPECT_TRUE(p.tdorc.contact_hold);
   EXPECT_EQ(p.tdorc.max_contact_hold, 1000);
-  EXPECT_EQ(p.tdorc.hold_release_fraction, 0.0);
+  EXPECT_EQ(p.tdorc.hold_release_fraction, 0.1);
+  EXPECT_EQ(p.tdorc.hold_release_samples, 3);
 }
 
 TEST(TdorcFilterLogic, ParameterErrorsNameTheKey) {
@@ -93,6 +94,10 @@ TEST(TdorcFilterLogic, ParameterErrorsNameTheKey) {
   m = TdorcFilterLogic::default_parameters();
   m.set("bandpass_a", std::vector<double>{1.0, -2.0, 1.0});
   EXPECT_NE(param_error(m).find("bandpass_a: poles"), std::string::npos);
+
+  m = TdorcFilterLogic::default_parameters();
+  m.set("hold_release_samples", int64_t{0});
+  EXPECT_NE(param_error(m).find("hold_release_samples: must be in [1, 10000], got 0"), std::string::npos);
 
   m = TdorcFilterLogic::default_parameters();
   m.set("contact_threshold", std::nan(""));

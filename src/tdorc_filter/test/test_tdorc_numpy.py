@@ -44,9 +44,11 @@ def synthetic_trace(seed=1, n=3000, rate=50.0, contact_amp=600.0, contact_end=16
     return offsets + drift + ringing + noise + contact[:, None] * gains
 
 
-def reference(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=False, max_hold=1000, release=0.0):
-    """delay, hold, max_hold, release: the README's sustained-contact extension (learn_delay,
-    contact_hold, max_contact_hold, hold_release_fraction); defaults = eq. 8 as written."""
+def reference(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=False, max_hold=1000, release=0.0,
+              release_samples=1):
+    """delay, hold, max_hold, release, release_samples: the README's sustained-contact extension
+    (learn_delay, contact_hold, max_contact_hold, hold_release_fraction, hold_release_samples);
+    defaults = eq. 8 as written."""
     N = S.shape[0]
     rows = np.zeros((N, 12))
     window = []          # sample indices in the least-squares window
@@ -55,6 +57,7 @@ def reference(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=Fals
     zi = None
     prev_contact, run = False, 0   # contact at the previous sample, samples since its onset
     peak = np.zeros(3)             # largest S_c per channel during the current contact
+    below = 0                      # consecutive held samples with no channel over the hold condition
     for k in range(N):
         # 1. compensate with the fit of the previous samples
         if mode == "bandpass":
@@ -64,7 +67,7 @@ def reference(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=Fals
             sc = S[k] - (slope * (k - first) + intercept)  # eq. 4, 5
         else:
             sc = None  # first window filling: not ready, zeros
-        contact = False
+        contact = any_sp = False
         if sc is not None:
             if zi is None:
                 zi = [lfilter_zi(B, A) * sc[ch] for ch in range(3)]
@@ -74,10 +77,15 @@ def reference(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=Fals
                 sp[ch] = y[0]
             ch_contact = np.abs(sp) > threshold if absolute else sp > threshold
             contact = bool(ch_contact.any())
+            any_sp = contact
             if hold and mode != "bandpass" and not contact and prev_contact and run < max_hold:
-                contact = bool(((sc > threshold) & (sc > release * peak)).any())  # held while S_c is over T_c
+                over = bool(((sc > threshold) & (sc > release * peak)).any())  # held while S_c is over T_c
+                below = 0 if over else below + 1
+                contact = below < release_samples  # ... and until release_samples samples were not
             frozen = mode == "tdorc" and contact
             rows[k] = [1, contact, frozen, *sc, *sp, *ch_contact]
+        if not contact or any_sp:
+            below = 0
         run = run + 1 if contact else 0
         peak = np.maximum(peak, sc) if (contact and sc is not None) else np.zeros(3)
         prev_contact = contact
@@ -103,13 +111,14 @@ def reference(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=Fals
     return rows
 
 
-def run_cpp(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=False, max_hold=1000, release=0.0):
+def run_cpp(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=False, max_hold=1000, release=0.0,
+            release_samples=1):
     exe = os.environ.get("TDORC_CSV")
     if not exe:
         pytest.skip("TDORC_CSV not set (run through ctest)")
     text = "\n".join(",".join(repr(float(v)) for v in row) for row in S) + "\n"
     res = subprocess.run([exe, mode, str(n), repr(threshold), "1" if absolute else "0",
-                          str(delay), "1" if hold else "0", str(max_hold), repr(float(release))],
+                          str(delay), "1" if hold else "0", str(max_hold), repr(float(release)), str(release_samples)],
                          input=text, capture_output=True, text=True, check=True)
     return np.array([[float(v) for v in line.split(",")] for line in res.stdout.strip().splitlines()])
 
@@ -156,6 +165,44 @@ def test_sustained_contact_extension_matches_reference(mode, delay, hold, max_ho
     if mode == "tdorc" and hold:
         # The hold changes the result on this trace (the comparison is not vacuous).
         assert (ref[:, 1] != reference(S, mode)[:, 1]).any()
+
+
+def slipping_trace(period=53):
+    """The 20 s push of the sustained-contact test with stick-slip: every
+    `period`-th pressed sample is a slip sample whose load drops to zero."""
+    pressed = synthetic_trace(contact_amp=200.0, contact_end=2400)
+    free = synthetic_trace(contact_amp=0.0)
+    S = pressed.copy()
+    slips = np.arange(1410, 2390, period)
+    S[slips] = free[slips]
+    return S, slips
+
+
+@pytest.mark.parametrize("release_samples", [1, 3, 10])
+def test_hold_release_samples_matches_reference(release_samples):
+    S, _ = slipping_trace()
+    ref = reference(S, "tdorc", delay=10, hold=True, release_samples=release_samples)
+    cpp = run_cpp(S, "tdorc", delay=10, hold=True, release_samples=release_samples)
+    np.testing.assert_array_equal(cpp[:, [0, 1, 2, 9, 10, 11]], ref[:, [0, 1, 2, 9, 10, 11]])
+    scale = np.abs(S).max()
+    for col in range(3, 9):
+        np.testing.assert_allclose(cpp[:, col], ref[:, col], rtol=1e-9, atol=1e-9 * scale if col < 6 else 1e-9 * 100)
+
+
+def test_hold_release_samples_bridges_slip_samples():
+    """One slip sample releases a held contact with release_samples = 1, and the
+    pressed samples that follow are learned as drift; with 3 the contact lasts
+    through every slip to the end of the push, and still ends after it."""
+    S, slips = slipping_trace()
+    one = reference(S, "tdorc", delay=10, hold=True, release_samples=1)
+    three = reference(S, "tdorc", delay=10, hold=True, release_samples=3)
+    pushed = slice(1404, 2395)  # onset at 1404 (S_p > T_c), last pressed sample 2399
+    assert not one[pushed, 1].all(), "a slip sample must release the paper-length hold"
+    assert three[pushed, 1].all(), "release_samples = 3 keeps the contact through the slips"
+    assert not three[2420:, 1].any(), "and releases it after the push"
+    # The bridged run never learns a pressed sample: S_c after the push is the drift error only.
+    assert np.abs(three[2500:, 3:6]).max() < 10.0
+    assert np.abs(one[2500:, 3:6]).max() > np.abs(three[2500:, 3:6]).max()
 
 
 def test_tdorc_has_no_false_positives_in_free_flight():

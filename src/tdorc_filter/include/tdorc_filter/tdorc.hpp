@@ -71,6 +71,14 @@ struct Params {
   /// the largest S_c of that channel during the contact (a release drops S_c
   /// to the drift-line error, a partial retreat only part of the way); 0: off.
   double hold_release_fraction = 0.0;
+  /// A held contact ends only after this many consecutive samples in which no
+  /// channel's S_c is over the hold condition (T_c and the release fraction);
+  /// the samples in between stay in contact (frozen drift, not learned). A
+  /// whisker sliding along a wall stick-slips: single samples of the slip
+  /// phase drop S_c of every channel near zero while the whisker is still
+  /// pressed, and a release there lets the window learn pressed samples.
+  /// 1: release at the first such sample.
+  int hold_release_samples = 1;
   /// Band-pass numerator b0, b1, b2 (000 eq. 9-11, first-order Butterworth 0.05-1 Hz at 50 Hz).
   std::array<double, 3> bandpass_b{{0.0564, 0.0, -0.0564}};
   /// Band-pass denominator a0, a1, a2; a0 must be 1 (000 eq. 9-11).
@@ -268,7 +276,8 @@ class TdorcWhisker {
   int64_t next_index_ = 0;
   bool contact_ = false;
   int64_t contact_samples_ = 0;
-  std::array<double, 3> contact_peak_{};  // largest S_c per channel during the current contact
+  std::array<double, 3> contact_peak_{};
+  int below_samples_ = 0;  // consecutive held samples with no channel over the hold condition  // largest S_c per channel during the current contact
 };
 
 }  // namespace tdorc_filter
