@@ -135,6 +135,7 @@ nlohmann::json run_once(const Scenario& scenario, const SimOptions& options, uin
   m["real_time_factor"] = wall_s > 0 ? sim_s / wall_s : 0.0;
   m["physics_rate_hz"] = scenario.physics_rate_hz;
   m["collisions"] = sim->collisions().size();
+  m["collision_events"] = nlohmann::json::array();  // present (empty) without collisions too
   for (const auto& c : sim->collisions()) {
     m["collision_events"].push_back({{"t", c.time_s}, {"part", c.part}, {"x", c.point.x()}, {"y", c.point.y()},
                                      {"impact_speed", c.impact_speed}, {"obstacle_id", c.obstacle_id}});

@@ -108,11 +108,19 @@ nlohmann::json WallFollowingEvaluation::metrics() const {
   double heading_sum = 0.0;
   size_t episodes = 0;
   std::string prev;
+  // First wall-following episode [sweep_start, sweep_end) (000 Fig. 6 sweeps).
+  int64_t sweep_start = -1, sweep_end = -1;
   for (const auto& [t, state] : states_) {
     const bool wf = state.rfind("WALL_FOLLOWING", 0) == 0;
-    if (wf && prev.rfind("WALL_FOLLOWING", 0) != 0) ++episodes;
+    if (wf && prev.rfind("WALL_FOLLOWING", 0) != 0) {
+      ++episodes;
+      if (sweep_start < 0) sweep_start = t;
+    }
+    if (!wf && sweep_start >= 0 && sweep_end < 0) sweep_end = t;
     prev = state;
   }
+  size_t sweep_samples = 0, sweep_in_band = 0;
+  int64_t last_sample = -1;
   for (int64_t t = states_.empty() ? 0 : states_.front().first; !states_.empty() && t <= states_.back().first + tactile_common::kNanosPerSecond * 60; t += 20000000) {
     const WhiskerTruth::Sample* l = truth_.at(0, t);
     const WhiskerTruth::Sample* r = truth_.at(1, t);
@@ -126,9 +134,15 @@ nlohmann::json WallFollowingEvaluation::metrics() const {
     if (std::prev(it)->second.rfind("WALL_FOLLOWING", 0) != 0) continue;
     if (!l->contact && !r->contact) continue;
     ++wall_samples;
+    last_sample = t;
     const bool ok_l = !l->contact || (l->depth >= t_min_ && l->depth <= t_max_);
     const bool ok_r = !r->contact || (r->depth >= t_min_ && r->depth <= t_max_);
     if (ok_l && ok_r) ++in_band;
+    if (sweep_start >= 0 && t >= sweep_start && (sweep_end < 0 || t < sweep_end) &&
+        t < sweep_start + static_cast<int64_t>(kSweepWindowS * tactile_common::kNanosPerSecond)) {
+      ++sweep_samples;
+      if (ok_l && ok_r) ++sweep_in_band;
+    }
     if (l->contact && r->contact) {
       heading_sum += std::abs(std::atan((l->depth - r->depth) / spacing_)) * 180.0 / M_PI;
       ++heading_n;
@@ -141,6 +155,19 @@ nlohmann::json WallFollowingEvaluation::metrics() const {
                                              : nlohmann::json(nullptr);
   m["mean_abs_heading_error_deg"] =
       heading_n ? nlohmann::json(heading_sum / static_cast<double>(heading_n)) : nlohmann::json(nullptr);
+  const auto seconds = [](int64_t ns) { return static_cast<double>(ns) / tactile_common::kNanosPerSecond; };
+  if (sweep_start >= 0) {
+    // An episode still running at the end lasts to the last evaluated sample.
+    const int64_t end = sweep_end >= 0 ? sweep_end : std::max(last_sample, sweep_start);
+    m["first_sweep_start_s"] = seconds(sweep_start);
+    m["first_sweep_s"] = seconds(end - sweep_start);
+  } else {
+    m["first_sweep_start_s"] = nullptr;
+    m["first_sweep_s"] = 0.0;
+  }
+  m["first_sweep_in_band_fraction"] =
+      sweep_samples ? nlohmann::json(static_cast<double>(sweep_in_band) / static_cast<double>(sweep_samples))
+                    : nlohmann::json(nullptr);
   m["final_state"] = state_;
   m["band_m"] = {t_min_, t_max_};
   return m;

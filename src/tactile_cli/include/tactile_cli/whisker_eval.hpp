@@ -61,9 +61,15 @@ class DepthEvaluation {
 /// (every touching whisker's true depth in [T_min, T_max]) and
 /// mean_abs_heading_error_deg (|atan((d_l - d_r) / s)| of the true depths
 /// where both whiskers touch: 0 when the drone faces the wall squarely).
+/// The first wall-following episode is also reported on its own, as the
+/// paper's darkness sweeps (000 Fig. 6: 7 s along the wall): its start
+/// (first_sweep_start_s, simulation time), its length (first_sweep_s) and the
+/// in-band fraction over its first sweep_window_s (first_sweep_in_band_fraction).
 class WallFollowingEvaluation {
  public:
   WallFollowingEvaluation(Host& host, const WhiskerTruth& truth, double t_min, double t_max, double spacing);
+  /// Window of first_sweep_in_band_fraction [s] (000 Fig. 6: 7 s sweeps).
+  static constexpr double kSweepWindowS = 7.0;
   nlohmann::json metrics() const;
   const std::string& last_state() const { return state_; }
 
