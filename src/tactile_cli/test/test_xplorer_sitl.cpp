@@ -6,8 +6,10 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <string>
+#include <utility>
 
 #include "sim_test_util.hpp"
 
@@ -108,6 +110,26 @@ TEST(XplorerSitl, RigidArmsFailBoxTraversalAtTheConvexCorner) {
     turned += x["turns_without_recontact"].get<int>();
   }
   EXPECT_GE(turned, 1);  // the paper's case: Tactile-turning entered, re-contact never made
+}
+
+// 001 Sec. V-C3, Fig. 6: the pipe (0.4 m) and the trash can (0.5 m) are
+// traversed round to loop closure in Tactile-traversal (yaw in admittance
+// follows the surface, no Tactile-turning), and the map's footprint matches
+// the cylinder (hull vs pi r^2, bounding dimensions vs the diameter).
+TEST(XplorerSitl, PipeAndBinTraversalCloseTheLoop) {
+  for (const auto& [file, radius] : {std::pair<std::string, double>{"xplorer_pipe_traversal.yaml", 0.2},
+                                     std::pair<std::string, double>{"xplorer_bin_traversal.yaml", 0.25}}) {
+    const auto m = run(file);
+    EXPECT_TRUE(m["success"].get<bool>()) << file;
+    const auto& x = m["xplorer"];
+    EXPECT_TRUE(x["loop_closed"].get<bool>()) << file;
+    EXPECT_EQ(x["final_state"], "done") << file;
+    EXPECT_EQ(x["traversal_contact_lost"].get<int>(), 0) << file;
+    EXPECT_GE(x["traversed_path_m"].get<double>(), 2.0) << file;
+    EXPECT_NEAR(x["map_length_m"].get<double>(), 2 * radius, 0.03) << file;
+    EXPECT_NEAR(x["map_width_m"].get<double>(), 2 * radius, 0.03) << file;
+    EXPECT_NEAR(x["map_hull_area_m2"].get<double>(), M_PI * radius * radius, 0.05 * M_PI * radius * radius) << file;
+  }
 }
 
 // 001 Sec. V-C1: wall traversal (Exploration and Tactile-traversal).

@@ -177,7 +177,14 @@ double XplorerExplorer::reshape(const XVec2& n, const XVec2& p, const XVec3& for
   // 001 Sec. III-B1: r* reshaped by the external wrench (integral of the force error along C_n).
   double rn = r_star_.dot(n) + p_.reshape_gain * (force - f_des).head<2>().dot(n) * dt;
   rn = std::clamp(rn, p.dot(n) - p_.reshape_limit, p.dot(n) + p_.reshape_limit);
-  r_star_ = r_star_ + (rn - r_star_.dot(n)) * n;
+  if (p_.reshape_follows_contact) {
+    // Keep only the offset along C_n, with the tangential part at the vehicle: when C_n turns
+    // with the yaw (a curved surface: pipe, bin), a stale tangential part projected onto the
+    // new C_n would drive r* into the surface (and the force up) as the vehicle goes round.
+    r_star_ = p + (rn - p.dot(n)) * n;
+  } else {
+    r_star_ = r_star_ + (rn - r_star_.dot(n)) * n;
+  }
   return rn;
 }
 

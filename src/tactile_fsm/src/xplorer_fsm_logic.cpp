@@ -43,6 +43,7 @@ ParamMap XplorerFsmLogic::default_parameters() {
   m.set("contact_force", f.contact_force);
   m.set("reshape_gain", f.reshape_gain);
   m.set("reshape_limit", f.reshape_limit);
+  m.set("reshape_follows_contact", f.reshape_follows_contact);
   m.set("release_force", f.release_force);
   m.set("release_time", f.release_time);
   m.set("settle_time", f.settle_time);
@@ -89,6 +90,7 @@ XplorerFsmLogic::Params XplorerFsmLogic::params_from(const ParamMap& m) {
   f.contact_force = m.get_double("contact_force");
   f.reshape_gain = m.get_double("reshape_gain");
   f.reshape_limit = m.get_double("reshape_limit");
+  f.reshape_follows_contact = m.get_bool("reshape_follows_contact");
   f.release_force = m.get_double("release_force");
   f.release_time = m.get_double("release_time");
   f.settle_time = m.get_double("settle_time");

@@ -104,6 +104,47 @@ TEST(XplorerExplorer, TakeoffExplorationContactTraversalTurningAndReContact) {
   EXPECT_EQ(x.turns(), 1u);
 }
 
+// Traversal round a cylinder (vehicle path radius 0.38 m, yaw facing the
+// centre so C_n = body +x points at it, force exactly delta_f_des): the
+// force error is zero, so r* should stay at the vehicle along C_n. With
+// reshape_follows_contact the setpoint's offset along C_n stays ~0 after a
+// quarter turn; with a fixed world r* the stale point projects onto the
+// turned C_n as rho (1 - cos 90 deg) = 0.38 m, clamped at reshape_limit 0.3 m,
+// and the setpoint is driven into the surface.
+TEST(XplorerExplorer, ReshapedSetpointFollowsATurningContactDirection) {
+  for (bool follow : {true, false}) {
+    XplorerParams p;
+    p.reshape_follows_contact = follow;
+    XplorerExplorer x{p};
+    const double dt = 0.02, rho = 0.38;
+    const XVec2 c(1.0, 0.0);
+    double t = 0.0;
+    auto at = [&](double phi) { return XVec3(c.x() + rho * std::cos(phi), c.y() + rho * std::sin(phi), 0.7); };
+    x.update(input(t, XVec3(0.62, 0, 0), 0.0, XVec3::Zero()), dt);
+    x.update(input(t += dt, at(M_PI), 0.0, XVec3::Zero()), dt);
+    for (int k = 0; k < 20 && x.state() != XplorerState::kTactileTraversal; ++k)
+      x.update(input(t += dt, at(M_PI), 0.0, XVec3(-2, 0, 0)), dt);
+    ASSERT_EQ(x.state(), XplorerState::kTactileTraversal);
+    XplorerOutput o;
+    XVec3 pos;
+    XVec2 n;
+    const double omega = 0.15 / rho;  // traverse speed round the path
+    for (double phi = M_PI; phi < 1.5 * M_PI; phi += omega * dt) {
+      pos = at(phi);
+      const double yaw = phi - M_PI;  // facing the centre
+      n = XVec2(std::cos(yaw), std::sin(yaw));
+      o = x.update(input(t += dt, pos, yaw, XVec3(-1.25 * n.x(), -1.25 * n.y(), 0.0), omega), dt);
+      ASSERT_EQ(x.state(), XplorerState::kTactileTraversal);
+    }
+    const double offset_n = (o.position - pos).head<2>().dot(n);
+    if (follow) {
+      EXPECT_NEAR(offset_n, 0.0, 0.02);
+    } else {
+      EXPECT_GT(offset_n, 0.2);
+    }
+  }
+}
+
 TEST(XplorerExplorer, TurnIsLimitedTo180Degrees) {
   XplorerExplorer x{XplorerParams{}};
   double t = 0;

@@ -52,6 +52,8 @@ TEST(ArenaFiles, EveryFileLoadsWithExpectedContents) {
       {"xplorer_wall", {1, 0, {1.0, -2.0}, {1.0, 2.0}}},
       {"xplorer_box", {4, 0, {0.8, -0.61}, {1.8, 0.61}}},
       {"xplorer_pipe", {0, 1, {0.85, -0.15}, {1.15, 0.15}}},
+      {"xplorer_pipe_d40", {0, 1, {0.8, -0.2}, {1.2, 0.2}}},
+      {"xplorer_bin", {0, 1, {0.8, -0.25}, {1.3, 0.25}}},
       {"ducted_wall", {1, 0, {-2.0, 0.0}, {2.0, 0.0}}},
   };
   for (const auto& [name, e] : files) {

@@ -103,6 +103,13 @@ struct XplorerParams {
   /// error integrates to zero whatever the contact stiffness [m/(N s)] (choice).
   double reshape_gain = 0.1;
   double reshape_limit = 0.3;        ///< |r*_n - p_n| limit [m] (choice)
+  /// false: r* is a world point whose coordinate along C_n is reshaped (fine
+  /// while C_n keeps its direction: planar faces, the box); true: only the
+  /// offset along C_n is kept and carried with the vehicle as C_n turns with
+  /// the yaw, which a curved surface (pipe, bin) needs: there a stale world
+  /// point projected onto the turning C_n drives r* into the surface and the
+  /// force up until contact breaks (choice; see README).
+  bool reshape_follows_contact = false;
   double release_force = 0.3;        ///< averaged |force| below which contact is lost [N] (choice)
   double release_time = 1.0;         ///< ... for this long -> Exploration [s] (choice)
   double settle_time = 1.0;          ///< no turning trigger this long after a contact / turn [s] (choice)
