@@ -57,6 +57,12 @@ ParamMap GpisExplorerLogic::default_parameters() {
   m.set("exit_confirm_distance", s.exit_confirm_distance);
   m.set("min_target_distance", s.min_target_distance);
   m.set("side_clearance", s.side_clearance);
+  m.set("approach_standoff", s.approach_standoff);
+  m.set("path_clearance", s.path_clearance);
+  m.set("approach_clearance", s.approach_clearance);
+  m.set("slow_distance", s.slow_distance);
+  m.set("slow_fraction", s.slow_fraction);
+  m.set("align_probes", s.align_probes);
   m.set("max_updates", static_cast<int64_t>(s.max_updates));
   m.set("max_time_s", s.max_time_s);
   m.set("landing_duration_s", s.landing_duration_s);
@@ -107,6 +113,12 @@ GpisExplorerLogic::Params GpisExplorerLogic::params_from(const ParamMap& m) {
   s.exit_confirm_distance = m.get_double("exit_confirm_distance");
   s.min_target_distance = m.get_double("min_target_distance");
   s.side_clearance = m.get_double("side_clearance");
+  s.approach_standoff = m.get_double("approach_standoff");
+  s.path_clearance = m.get_double("path_clearance");
+  s.approach_clearance = m.get_double("approach_clearance");
+  s.slow_distance = m.get_double("slow_distance");
+  s.slow_fraction = m.get_double("slow_fraction");
+  s.align_probes = m.get_bool("align_probes");
   s.max_updates = static_cast<int>(std::min<int64_t>(nonneg_int("max_updates"), 1000000));
   s.max_time_s = m.get_double("max_time_s");
   s.landing_duration_s = m.get_double("landing_duration_s");

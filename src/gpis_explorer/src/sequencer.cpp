@@ -39,6 +39,7 @@ const char* to_string(Phase p) {
     case Phase::kReturn: return "RETURN";
     case Phase::kFollowWall: return "FOLLOW_WALL";
     case Phase::kRetreat: return "RETREAT";
+    case Phase::kGoToStaging: return "GO_TO_STAGING";
     case Phase::kGoToTarget: return "GO_TO_TARGET";
     case Phase::kExitThrough: return "EXIT_THROUGH";
     case Phase::kLanding: return "LANDING";
@@ -79,6 +80,13 @@ void SequencerParams::validate() const {
   positive("exit_confirm_distance", exit_confirm_distance);
   if (!(std::isfinite(min_target_distance) && min_target_distance >= 0.0)) fail("min_target_distance", "must be >= 0");
   if (!(std::isfinite(side_clearance) && side_clearance >= 0.0)) fail("side_clearance", "must be >= 0");
+  if (!(std::isfinite(approach_standoff) && approach_standoff >= 0.0)) fail("approach_standoff", "must be >= 0");
+  if (!(std::isfinite(path_clearance) && path_clearance >= 0.0)) fail("path_clearance", "must be >= 0");
+  if (!(std::isfinite(approach_clearance) && approach_clearance >= 0.0)) fail("approach_clearance", "must be >= 0");
+  if (!(std::isfinite(slow_distance) && slow_distance >= 0.0)) fail("slow_distance", "must be >= 0");
+  if (!(std::isfinite(slow_fraction) && slow_fraction > 0.0 && slow_fraction <= 1.0)) {
+    fail("slow_fraction", "must be in (0, 1], got " + std::to_string(slow_fraction));
+  }
   if (max_updates < 1) fail("max_updates", "must be >= 1");
   positive("max_time_s", max_time_s);
   positive("landing_duration_s", landing_duration_s);
@@ -135,6 +143,89 @@ void ExplorationSequencer::add(const Eigen::Vector2d& q, double label) {
   if (explorer_.add_point(q, label) != AddStatus::kAdded) ++points_rejected_;
 }
 
+double ExplorationSequencer::surface_clearance(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
+  double best = std::numeric_limits<double>::infinity();
+  const Gpis& g = explorer_.gpis();
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    if (g.label(i) == kSurfaceLabel) best = std::min(best, segment_distance(a, b, g.point(i)));
+  }
+  return best;
+}
+
+bool ExplorationSequencer::corner_clear(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
+  // Keep corner_exclusion from every corner centroid (000 eq. 45 region); from
+  // a start already closer than that, do not get any closer.
+  for (const auto& c : explorer_.last().corners) {
+    const double limit = std::min(p_.explorer.corner_exclusion, (a - c).norm() - 1e-3);
+    if (segment_distance(a, b, c) < limit) return false;
+  }
+  return true;
+}
+
+bool ExplorationSequencer::staging_for(const Eigen::Vector2d& from, const Eigen::Vector2d& q, Eigen::Vector2d* staging,
+                                       double* approach_heading) const {
+  // Outward normal of the implicit surface at the target: the mean grows from
+  // -1 (interior) to 0 (surface), so grad f (000 eq. 36) points out of the room.
+  const Gpis& g = explorer_.gpis();
+  const Eigen::Vector2d grad = g.gradient(q);
+  if (!(grad.allFinite() && grad.norm() > 1e-9)) return false;
+  const Eigen::Vector2d n = grad.normalized();
+  const Eigen::Vector2d s = q - p_.approach_standoff * n;
+  if (!explorer_.grid().contains(s) || near_corner(s)) return false;
+  if (!(g.mean(s) < 0.0)) return false;  // the staging point must be on the interior side
+  // Leg 1 (from -> staging): clear of known surface points and corners, and
+  // not through the predicted surface (mean < 0 along it).
+  const double d0 = surface_clearance(from, from);
+  if (surface_clearance(from, s) < std::min(p_.path_clearance, d0 - 1e-3)) return false;
+  if (!corner_clear(from, s)) return false;
+  const int samples = std::max(2, static_cast<int>(std::ceil((s - from).norm() / 0.1)));
+  for (int k = 1; k <= samples; ++k) {
+    if (!(g.mean(from + (s - from) * (static_cast<double>(k) / samples)) < 0.0)) return false;
+  }
+  // Leg 2 (staging -> target, head-on): no known surface point beside it.
+  const Eigen::Vector2d q_short = q - std::min(p_.approach_clearance, p_.approach_standoff) * n;
+  if (surface_clearance(s, q_short) < p_.approach_clearance) return false;
+  if (!corner_clear(s, q)) return false;
+  *staging = s;
+  *approach_heading = std::atan2(n.y(), n.x());
+  return true;
+}
+
+double ExplorationSequencer::forward_speed(const SequencerInput& in) const {
+  const Eigen::Vector2d tips = Eigen::Vector2d(in.x, in.y) + 0.19 * Eigen::Vector2d(std::cos(in.yaw), std::sin(in.yaw));
+  return surface_clearance(tips, tips) < p_.slow_distance ? p_.slow_fraction * p_.wall.v_max : p_.wall.v_max;
+}
+
+void ExplorationSequencer::align_to_wall(const SequencerInput& in) {
+  // The wall of the first contact: principal direction of the contact points
+  // of its wall follow (>= 8 cm spread), else the heading the wall follow
+  // settled to with both whiskers on the wall (it faces the wall's normal).
+  double facing = NAN;
+  const std::size_t n = follow_points_.size();
+  if (n >= 2) {
+    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+    for (const auto& q : follow_points_) mean += q;
+    mean /= static_cast<double>(n);
+    Eigen::Matrix2d C = Eigen::Matrix2d::Zero();
+    for (const auto& q : follow_points_) C += (q - mean) * (q - mean).transpose();
+    C /= static_cast<double>(n);
+    const double tr = C.trace(), det = C(0, 0) * C(1, 1) - C(0, 1) * C(1, 0);
+    const double l1 = 0.5 * tr + std::sqrt(std::max(0.0, 0.25 * tr * tr - det));
+    if (2.0 * std::sqrt(l1) >= 0.08) {  // spread (2 sigma along the wall) >= 8 cm
+      Eigen::Vector2d t = std::abs(C(0, 1)) > 1e-12 ? Eigen::Vector2d(l1 - C(1, 1), C(0, 1)) :
+                          (C(0, 0) >= C(1, 1) ? Eigen::Vector2d(1, 0) : Eigen::Vector2d(0, 1));
+      t.normalize();
+      Eigen::Vector2d nrm(-t.y(), t.x());
+      if (nrm.dot(mean - Eigen::Vector2d(in.x, in.y)) < 0.0) nrm = -nrm;
+      facing = std::atan2(nrm.y(), nrm.x());
+    }
+  }
+  if (!std::isfinite(facing) && both_touched_) facing = in.yaw;
+  if (!std::isfinite(facing)) return;
+  start_yaw_ = facing - 2.0 * M_PI * probe_ / p_.probe_directions;
+  aligned_ = true;
+}
+
 void ExplorationSequencer::start_follow(const SequencerInput& in, bool probing) {
   probing_ = probing;
   follow_points_.clear();
@@ -177,30 +268,51 @@ void ExplorationSequencer::commit_points(const SequencerInput& in) {
 bool ExplorationSequencer::choose_target(const Eigen::Vector2d& from) {
   const UpdateResult& r = explorer_.last();
   has_target_ = false;
-  double best = -std::numeric_limits<double>::infinity();
+  has_staging_ = false;
   const GridSpec& g = explorer_.grid();
+  // Candidates: contour points by penalised uncertainty a~ (000 eq. 46), best first.
+  struct Candidate {
+    double acq, var;
+    Eigen::Vector2d q;
+  };
+  std::vector<Candidate> cands;
   for (const auto& info : r.contours) {
     const auto& P = info.contour.points;
     for (std::size_t i = 0; i < P.size(); ++i) {
-      if (!(info.acquisition[i] > best)) continue;
+      if (!std::isfinite(info.acquisition[i])) continue;
       if ((P[i] - from).norm() < p_.min_target_distance) continue;
       if (!g.contains(P[i])) continue;
-      // The path must keep corner_exclusion from every corner; from a start
-      // already closer than that, it must not get any closer than the start.
-      bool blocked = near_corner(P[i]);
-      for (const auto& c : r.corners) {
-        const double limit = std::min(p_.explorer.corner_exclusion, (from - c).norm() - 1e-3);
-        blocked = blocked || segment_distance(from, P[i], c) < limit;
-      }
-      if (blocked) continue;  // never into (or past) a penalised corner
-      best = info.acquisition[i];
-      has_target_ = true;
-      target_ = P[i];
-      target_acq_ = info.acquisition[i];
-      target_var_ = info.variance[i];
+      if (near_corner(P[i])) continue;  // never into a penalised corner
+      cands.push_back({info.acquisition[i], info.variance[i], P[i]});
     }
   }
-  return has_target_;
+  std::stable_sort(cands.begin(), cands.end(), [](const Candidate& x, const Candidate& y) { return x.acq > y.acq; });
+  auto take = [&](const Candidate& c) {
+    has_target_ = true;
+    target_ = c.q;
+    target_acq_ = c.acq;
+    target_var_ = c.var;
+  };
+  // 1. The best target that can be approached head-on through a staging
+  //    point with clear legs (workspace rule, see SequencerParams).
+  if (p_.approach_standoff > 0.0) {
+    for (const auto& c : cands) {
+      if (staging_for(from, c.q, &staging_, &approach_heading_)) {
+        take(c);
+        has_staging_ = true;
+        ++staged_targets_;
+        return true;
+      }
+    }
+  }
+  // 2. Otherwise the best target whose straight path keeps away from corners.
+  for (const auto& c : cands) {
+    if (!corner_clear(from, c.q)) continue;
+    take(c);
+    ++direct_targets_;
+    return true;
+  }
+  return false;
 }
 
 void ExplorationSequencer::refit_and_choose(const SequencerInput& in) {
@@ -213,7 +325,13 @@ void ExplorationSequencer::refit_and_choose(const SequencerInput& in) {
     finish(Outcome::kNoTarget, "no reachable target", in.t);
     return;
   }
-  heading_ = std::atan2(target_.y() - in.y, target_.x() - in.x);
+  if (has_staging_ && (staging_ - Eigen::Vector2d(in.x, in.y)).norm() > p_.target_radius) {
+    heading_ = std::atan2(staging_.y() - in.y, staging_.x() - in.x);
+    after_turn_ = Phase::kGoToStaging;
+    enter(Phase::kTurn, "target chosen: to its staging point", in.t);
+    return;
+  }
+  heading_ = has_staging_ ? approach_heading_ : std::atan2(target_.y() - in.y, target_.x() - in.x);
   after_turn_ = Phase::kGoToTarget;
   enter(Phase::kTurn, "target chosen", in.t);
 }
@@ -282,13 +400,16 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       break;
     }
     case Phase::kProbe:
-      sp.vx = v;  // 000 Methods "Flying Forward" at V_max
+      sp.vx = forward_speed(in);  // 000 Methods "Flying Forward" at V_max
       sp.yaw_rate = yaw_rate_to(heading_, in.yaw);
       if (contact) {
         start_follow(in, true);
       } else if ((pos - leg_start_).norm() >= p_.probe_max_distance) {
         add(pos, kInteriorLabel);  // free all the way
-        if (open_probe_ < 0) open_probe_ = probe_;
+        if (open_probe_ < 0) {
+          open_probe_ = probe_;
+          open_heading_ = heading_;
+        }
         enter(Phase::kReturn, "probe found no wall", in.t);
       }
       break;
@@ -296,6 +417,17 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       const Eigen::Vector2d d = start_ - pos;
       if (d.norm() < p_.target_radius) {
         ++probe_;
+        if (exit_via_probe_) {
+          // Through the opening along the probe's own line (flown without
+          // contact), not a parallel line from wherever the last probe ended.
+          exit_via_probe_ = false;
+          heading_ = open_heading_;
+          exit_from_ = pos;
+          exit_distance_ = p_.probe_max_distance + p_.exit_confirm_distance;
+          after_turn_ = Phase::kExitThrough;
+          enter(Phase::kTurn, "a probe found the opening", in.t);
+          break;
+        }
         if (probe_ < p_.probe_directions) {
           heading_ = start_yaw_ + 2.0 * M_PI * probe_ / p_.probe_directions;
           after_turn_ = Phase::kProbe;
@@ -352,6 +484,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
     case Phase::kRetreat:
       sp.vx = -p_.retreat_speed;  // 000: "flies backward for 1 second"
       if (in.t - entered_ >= p_.retreat_time_s) {
+        if (p_.align_probes && probing_ && !aligned_ && previous_ != Phase::kReturn) align_to_wall(in);
         if (previous_ != Phase::kReturn) commit_points(in);
         if (probing_ && probe_ + 1 < p_.probe_directions && previous_ != Phase::kReturn) {
           // Back to the start, then the next probe.
@@ -362,11 +495,8 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         if (open_probe_ >= 0 && explorer_.gpis().surface_count() > 0 && explorer_.updates() == 0) {
           // A probe flew 2 m without touching anything in a walled place: an opening.
           explorer_.update();
-          heading_ = start_yaw_ + 2.0 * M_PI * open_probe_ / p_.probe_directions;
-          exit_from_ = pos;
-          exit_distance_ = p_.probe_max_distance + p_.exit_confirm_distance;
-          after_turn_ = Phase::kExitThrough;
-          enter(Phase::kTurn, "a probe found the opening", in.t);
+          exit_via_probe_ = true;
+          enter(Phase::kReturn, "a probe found the opening: back to the start", in.t);
           break;
         }
         if (explorer_.gpis().surface_count() == 0) {
@@ -379,9 +509,30 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         out.gpis_updated = true;
       }
       break;
+    case Phase::kGoToStaging: {
+      sp.yaw_rate = yaw_rate_to(heading_, in.yaw);
+      sp.vx = forward_speed(in);
+      if (contact) {
+        start_follow(in, false);
+        break;
+      }
+      if (near_corner(pos + Eigen::Vector2d(std::cos(in.yaw), std::sin(in.yaw)) * 0.1)) {
+        ++corner_aborts_;
+        follow_points_.clear();
+        enter(Phase::kRetreat, "approaching a penalised corner", in.t);
+        break;
+      }
+      const Eigen::Vector2d dir(std::cos(heading_), std::sin(heading_));
+      if ((staging_ - pos).norm() < p_.target_radius || (staging_ - pos).dot(dir) < 0.0) {
+        heading_ = approach_heading_;  // face the wall along its normal: head-on
+        after_turn_ = Phase::kGoToTarget;
+        enter(Phase::kTurn, "at the staging point: face the wall", in.t);
+      }
+      break;
+    }
     case Phase::kGoToTarget: {
       sp.yaw_rate = yaw_rate_to(heading_, in.yaw);
-      sp.vx = v;
+      sp.vx = forward_speed(in);
       if (contact) {
         start_follow(in, false);
         break;
@@ -403,7 +554,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       break;
     }
     case Phase::kExitThrough:
-      sp.vx = v;
+      sp.vx = forward_speed(in);
       sp.yaw_rate = yaw_rate_to(heading_, in.yaw);
       if (contact) {
         start_follow(in, false);

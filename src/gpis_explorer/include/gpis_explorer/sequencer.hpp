@@ -36,6 +36,7 @@ enum class Phase : uint8_t {
   kReturn,      ///< a probe found no wall: back to the start point
   kFollowWall,  ///< 2 s of wall following (000 Fig. S4e rule), collecting surface points
   kRetreat,     ///< 1 s backward, then an interior point
+  kGoToStaging, ///< forward to the staging point inside the target's wall (head-on approach)
   kGoToTarget,  ///< forward toward the GPIS target
   kExitThrough, ///< target reached without contact: keep going through the opening
   kLanding,     ///< land (exit flown through, open space, or gave up)
@@ -82,6 +83,34 @@ struct SequencerParams {
   /// sideways in a corner would be hit (000 Results: corners "risk
   /// collisions"). [m] (choice)
   double side_clearance = 0.25;
+  // --- Collision avoidance of the sequencing (workspace rules; 000 gives the
+  // corner penalty eq. 45 and "discourage entry into concave, high-risk
+  // areas" but no path rule). The whiskers see only what is ahead within
+  // +-2.5 cm of the axis, the guard is 16 cm wide: walls met at grazing
+  // incidence or wall ends beside the axis are not felt before the guard.
+  /// Approach each target head-on: fly first to a staging point this far
+  /// inside along the GPIS normal at the target (-grad f / |grad f|, 000
+  /// eq. 36), turn to face the normal, then go forward to the target. 0 = fly
+  /// straight to the target (the previous behaviour). [m]
+  double approach_standoff = 0.4;
+  /// Legs to a staging point keep this distance from every known surface
+  /// point (training points labelled 0); from a start already closer, they
+  /// must not get closer. [m]
+  double path_clearance = 0.25;
+  /// The head-on leg (staging point -> target, shortened by this much) keeps
+  /// approach_clearance from known surface points: a wall end beside the leg
+  /// would meet the guard, not the whiskers. [m]
+  double approach_clearance = 0.14;
+  /// Forward legs fly at slow_fraction * V_max while a known surface point is
+  /// within slow_distance of the whisker tips (more time for the contact to
+  /// be detected before the guard reaches the wall). [m], [-]
+  double slow_distance = 0.3;
+  double slow_fraction = 0.5;
+  /// After the first probe's wall follow, the remaining probes are turned to
+  /// be orthogonal to that wall (four orthogonal directions, 000, aligned with
+  /// the first wall so that in a rectangular room every probe meets its wall
+  /// head-on). false: the probes keep the start heading.
+  bool align_probes = true;
   int max_updates = 40;                 ///< give up after this many GPIS updates (choice)
   double max_time_s = 600.0;            ///< give up after this long [s] (choice)
   double landing_duration_s = 2.0;      ///< LANDING -> DONE [s]
@@ -139,6 +168,9 @@ class ExplorationSequencer {
   std::size_t points_rejected() const { return points_rejected_; }
   std::size_t corner_aborts() const { return corner_aborts_; }
   std::size_t side_stops() const { return side_stops_; }
+  /// Targets approached head-on through a staging point / flown at directly.
+  std::size_t staged_targets() const { return staged_targets_; }
+  std::size_t direct_targets() const { return direct_targets_; }
   const SequencerParams& params() const { return p_; }
 
  private:
@@ -150,6 +182,14 @@ class ExplorationSequencer {
   void commit_points(const SequencerInput& in);
   void refit_and_choose(const SequencerInput& in);
   bool choose_target(const Eigen::Vector2d& from);
+  /// Staging point for a head-on approach of candidate q, or false when no
+  /// collision-free staging point / legs exist (clearance rules above).
+  bool staging_for(const Eigen::Vector2d& from, const Eigen::Vector2d& q, Eigen::Vector2d* staging,
+                   double* approach_heading) const;
+  double surface_clearance(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
+  bool corner_clear(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
+  double forward_speed(const SequencerInput& in) const;
+  void align_to_wall(const SequencerInput& in);
   bool near_corner(const Eigen::Vector2d& p) const;
   bool side_blocked(const SequencerInput& in) const;
   void add(const Eigen::Vector2d& p, double label);
@@ -176,6 +216,12 @@ class ExplorationSequencer {
   tactile_fsm::WallSubState sub_ = tactile_fsm::WallSubState::kNone;
   std::vector<Eigen::Vector2d> follow_points_;
   bool has_target_ = false;
+  bool has_staging_ = false;
+  bool aligned_ = false;  ///< probes aligned to the first wall
+  Eigen::Vector2d staging_{0, 0};
+  double approach_heading_ = 0.0;
+  double open_heading_ = 0.0;  ///< heading of the probe that found no wall
+  bool exit_via_probe_ = false;  ///< RETURN to the start, then out along the open probe
   Eigen::Vector2d target_{0, 0};
   double target_acq_ = 0.0, target_var_ = 0.0;
   Eigen::Vector2d exit_from_{0, 0};
@@ -189,6 +235,8 @@ class ExplorationSequencer {
   std::size_t points_rejected_ = 0;
   std::size_t corner_aborts_ = 0;
   std::size_t side_stops_ = 0;
+  std::size_t staged_targets_ = 0;
+  std::size_t direct_targets_ = 0;
 };
 
 }  // namespace gpis_explorer

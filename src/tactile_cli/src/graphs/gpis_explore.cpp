@@ -11,6 +11,7 @@
 #include "gpis_explorer/gpis_plot.hpp"
 #include "mapping_pcl/point_map.hpp"
 #include "tactile_cli/host_nodes.hpp"
+#include "tactile_common/time.hpp"
 
 namespace tactile_cli::graphs {
 
@@ -43,6 +44,13 @@ class GpisExploreGraph : public SimGraph {
                         gpis_explorer::to_string(seq.explorer().last().status));
           pic.title = title;
           pictures_.push_back(std::move(pic));
+        });
+    // Phase log (transitions only) to name the exploration phase of every
+    // guard collision in metrics.json (diagnosis of collisions).
+    ctx.host.bus().subscribe<tactile_msgs::msg::FsmState>(
+        GpisExplorerLogic::kStateTopic, [this](const tactile_msgs::msg::FsmState& s) {
+          if (!phases_.empty() && phases_.back().state == s.state && phases_.back().transitions == s.transitions) return;
+          phases_.push_back({tactile_common::to_seconds(tactile_common::from_stamp(s.header.stamp)), s.state, s.reason, s.transitions});
         });
   }
 
@@ -82,7 +90,20 @@ class GpisExploreGraph : public SimGraph {
     m["state_bytes"] = ex.state_bytes();
     m["corner_aborts"] = seq.corner_aborts();
     m["side_stops"] = seq.side_stops();
+    m["staged_targets"] = seq.staged_targets();
+    m["direct_targets"] = seq.direct_targets();
     m["last_update_status"] = gpis_explorer::to_string(ex.last().status);
+    // Exploration phase (and why it was entered) at each guard collision.
+    nlohmann::json cp = nlohmann::json::array();
+    for (const auto& c : sim_->collisions()) {
+      const PhaseEntry* e = nullptr;
+      for (const auto& p : phases_) {
+        if (p.t <= c.time_s + 1e-9) e = &p;
+      }
+      cp.push_back({{"t", c.time_s}, {"phase", e ? e->state : std::string()}, {"reason", e ? e->reason : std::string()},
+                    {"phase_entered", e ? e->t : 0.0}});
+    }
+    m["collision_phases"] = cp;
     // Travel: true path length (100 Hz trajectory).
     double travel = 0.0;
     const auto& traj = sim_->trajectory();
@@ -179,6 +200,12 @@ class GpisExploreGraph : public SimGraph {
   std::shared_ptr<tactile_sim::SimLogic> sim_;
   std::shared_ptr<GpisExplorerLogic> explorer_;
   std::vector<gpis_explorer::GpisPicture> pictures_;
+  struct PhaseEntry {
+    double t;
+    std::string state, reason;
+    uint32_t transitions;
+  };
+  std::vector<PhaseEntry> phases_;
 };
 
 }  // namespace
