@@ -14,6 +14,7 @@
 #include "tactile_cli/host.hpp"
 #include "tactile_cli/host_nodes.hpp"
 #include "tactile_cli/sim_graph.hpp"
+#include "tactile_cli/whisker_eval.hpp"
 #include "tactile_sim/scenario.hpp"
 
 namespace tactile_cli {
@@ -97,6 +98,7 @@ nlohmann::json run_fly(const FlyOptions& o) {
     }
   }
   auto fsm = add_whisker_fsm(host, overrides("whisker_fsm", fsm_extra));
+  const FsmStateLog fsm_log(host);  // wall-following sweeps, as in the SITL evaluation
 
   // The bridge: parameters from config/crazyflie_bridge.yaml, --uri wins.
   tactile_common::ParamMap bridge_over;
@@ -140,6 +142,7 @@ nlohmann::json run_fly(const FlyOptions& o) {
   const int64_t end_ns = static_cast<int64_t>(o.duration_s * 1e9);
   const int64_t hard_end_ns = end_ns + 15'000'000'000LL;
   bool pipeline_on = true;
+  int64_t pipeline_end_ns = -1;
   int64_t next = 0;
   int64_t last_print = 0;
   while (!g_interrupted) {
@@ -148,7 +151,10 @@ nlohmann::json run_fly(const FlyOptions& o) {
     runner.pump(std::chrono::duration_cast<std::chrono::milliseconds>(wait), now_ns, sinks);
     const int64_t now = now_ns();
     // The pipeline stops at the end of the run: the bridge then hovers, lands, stops.
-    if (now >= end_ns) pipeline_on = false;
+    if (now >= end_ns && pipeline_on) {
+      pipeline_on = false;
+      pipeline_end_ns = now;
+    }
     if (pipeline_on) host.executor().run_until(now);
     runner.on_timer(now);
     if (runner.mode() == CrazyflieBridgeLogic::Mode::kStopped && (!pipeline_on || now > 2'000'000'000LL)) {
@@ -178,6 +184,9 @@ nlohmann::json run_fly(const FlyOptions& o) {
   m["interrupted"] = g_interrupted.load();
   m["bridge_mode"] = crazyflie_bridge::to_string(runner.mode());
   m["fsm_state"] = tactile_fsm::to_string(fsm->fsm().state());
+  // First wall-following episode (000 Fig. 6 sweep), host time; a sweep still
+  // running when the pipeline stopped lasts until then.
+  m["fsm"] = fsm_log.sweep_metrics(pipeline_end_ns >= 0 ? pipeline_end_ns : now_ns());
   m["link_packets_sent"] = link.packets_sent;
   m["link_packets_received"] = link.packets_received;
   // Log packets missing from the firmware timestamps of each block (exact
@@ -210,6 +219,10 @@ nlohmann::json run_fly(const FlyOptions& o) {
     nlohmann::json s;
     for (const auto& [k, v] : sitl->sim().summary()) s[k] = v;
     s["collisions"] = sitl->sim().collisions().size();
+    s["collision_events"] = nlohmann::json::array();  // simulator time
+    for (const auto& c : sitl->sim().collisions()) {
+      s["collision_events"].push_back({{"t", c.time_s}, {"part", c.part}, {"impact_speed", c.impact_speed}});
+    }
     s["sim_time_s"] = static_cast<double>(sitl->sim_time_ns()) * 1e-9;
     s["scenario"] = scenario->name;
     s["injected_loss_uplink"] = sitl->stats().dropped_in;

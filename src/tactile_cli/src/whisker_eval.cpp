@@ -92,54 +92,88 @@ nlohmann::json DepthEvaluation::metrics() const {
   return out;
 }
 
-WallFollowingEvaluation::WallFollowingEvaluation(Host& host, const WhiskerTruth& truth, double t_min, double t_max,
-                                                 double spacing)
-    : truth_(truth), t_min_(t_min), t_max_(t_max), spacing_(spacing) {
+namespace {
+bool is_wall_following(const std::string& state) { return state.rfind("WALL_FOLLOWING", 0) == 0; }
+}  // namespace
+
+FsmStateLog::FsmStateLog(Host& host) {
   host.bus().subscribe<tactile_msgs::msg::FsmState>("/fsm_state", [this](const tactile_msgs::msg::FsmState& m) {
     if (m.state != state_) states_.emplace_back(tactile_common::from_stamp(m.header.stamp), m.state);
     state_ = m.state;
   });
 }
 
+FsmStateLog::Episode FsmStateLog::first_wall_following() const {
+  Episode e;
+  for (const auto& [t, state] : states_) {
+    if (e.start_ns < 0 && is_wall_following(state)) e.start_ns = t;
+    if (e.start_ns >= 0 && !is_wall_following(state)) {
+      e.end_ns = t;
+      break;
+    }
+  }
+  return e;
+}
+
+size_t FsmStateLog::wall_following_episodes() const {
+  size_t episodes = 0;
+  bool prev = false;
+  for (const auto& [t, state] : states_) {
+    const bool wf = is_wall_following(state);
+    if (wf && !prev) ++episodes;
+    prev = wf;
+  }
+  return episodes;
+}
+
+nlohmann::json FsmStateLog::sweep_metrics(int64_t end_ns) const {
+  const Episode e = first_wall_following();
+  const auto seconds = [](int64_t ns) { return static_cast<double>(ns) / tactile_common::kNanosPerSecond; };
+  nlohmann::json m;
+  m["wall_following_episodes"] = wall_following_episodes();
+  if (e.start_ns >= 0) {
+    m["first_sweep_start_s"] = seconds(e.start_ns);
+    m["first_sweep_s"] = seconds(std::max(e.end_ns >= 0 ? e.end_ns : end_ns, e.start_ns) - e.start_ns);
+  } else {
+    m["first_sweep_start_s"] = nullptr;
+    m["first_sweep_s"] = 0.0;
+  }
+  return m;
+}
+
+WallFollowingEvaluation::WallFollowingEvaluation(Host& host, const WhiskerTruth& truth, double t_min, double t_max,
+                                                 double spacing)
+    : truth_(truth), t_min_(t_min), t_max_(t_max), spacing_(spacing), log_(host) {}
+
 nlohmann::json WallFollowingEvaluation::metrics() const {
   // Walk the 50 Hz truth samples of the left whisker; the FSM state at each
   // is the last transition at or before it.
+  const auto& states = log_.transitions();
   size_t in_band = 0, wall_samples = 0, heading_n = 0;
   double heading_sum = 0.0;
-  size_t episodes = 0;
-  std::string prev;
-  // First wall-following episode [sweep_start, sweep_end) (000 Fig. 6 sweeps).
-  int64_t sweep_start = -1, sweep_end = -1;
-  for (const auto& [t, state] : states_) {
-    const bool wf = state.rfind("WALL_FOLLOWING", 0) == 0;
-    if (wf && prev.rfind("WALL_FOLLOWING", 0) != 0) {
-      ++episodes;
-      if (sweep_start < 0) sweep_start = t;
-    }
-    if (!wf && sweep_start >= 0 && sweep_end < 0) sweep_end = t;
-    prev = state;
-  }
+  // First wall-following episode [start, end) (000 Fig. 6 sweeps).
+  const FsmStateLog::Episode sweep = log_.first_wall_following();
+  const int64_t window_end = sweep.start_ns + static_cast<int64_t>(kSweepWindowS * tactile_common::kNanosPerSecond);
   size_t sweep_samples = 0, sweep_in_band = 0;
   int64_t last_sample = -1;
-  for (int64_t t = states_.empty() ? 0 : states_.front().first; !states_.empty() && t <= states_.back().first + tactile_common::kNanosPerSecond * 60; t += 20000000) {
+  for (int64_t t = states.empty() ? 0 : states.front().first;
+       !states.empty() && t <= states.back().first + tactile_common::kNanosPerSecond * 60; t += 20000000) {
     const WhiskerTruth::Sample* l = truth_.at(0, t);
     const WhiskerTruth::Sample* r = truth_.at(1, t);
     if (!l || !r) {
-      if (t > states_.back().first) break;
+      if (t > states.back().first) break;
       continue;
     }
-    auto it = std::upper_bound(states_.begin(), states_.end(), t,
-                               [](int64_t v, const auto& s) { return v < s.first; });
-    if (it == states_.begin()) continue;
-    if (std::prev(it)->second.rfind("WALL_FOLLOWING", 0) != 0) continue;
+    auto it = std::upper_bound(states.begin(), states.end(), t, [](int64_t v, const auto& s) { return v < s.first; });
+    if (it == states.begin()) continue;
+    if (!is_wall_following(std::prev(it)->second)) continue;
     if (!l->contact && !r->contact) continue;
     ++wall_samples;
     last_sample = t;
     const bool ok_l = !l->contact || (l->depth >= t_min_ && l->depth <= t_max_);
     const bool ok_r = !r->contact || (r->depth >= t_min_ && r->depth <= t_max_);
     if (ok_l && ok_r) ++in_band;
-    if (sweep_start >= 0 && t >= sweep_start && (sweep_end < 0 || t < sweep_end) &&
-        t < sweep_start + static_cast<int64_t>(kSweepWindowS * tactile_common::kNanosPerSecond)) {
+    if (sweep.start_ns >= 0 && t >= sweep.start_ns && (sweep.end_ns < 0 || t < sweep.end_ns) && t < window_end) {
       ++sweep_samples;
       if (ok_l && ok_r) ++sweep_in_band;
     }
@@ -148,27 +182,17 @@ nlohmann::json WallFollowingEvaluation::metrics() const {
       ++heading_n;
     }
   }
-  nlohmann::json m;
-  m["wall_following_episodes"] = episodes;
+  // An episode still running at the end lasts to the last evaluated sample.
+  nlohmann::json m = log_.sweep_metrics(last_sample);
   m["wall_following_contact_samples"] = wall_samples;
   m["depth_in_band_fraction"] = wall_samples ? nlohmann::json(static_cast<double>(in_band) / static_cast<double>(wall_samples))
                                              : nlohmann::json(nullptr);
   m["mean_abs_heading_error_deg"] =
       heading_n ? nlohmann::json(heading_sum / static_cast<double>(heading_n)) : nlohmann::json(nullptr);
-  const auto seconds = [](int64_t ns) { return static_cast<double>(ns) / tactile_common::kNanosPerSecond; };
-  if (sweep_start >= 0) {
-    // An episode still running at the end lasts to the last evaluated sample.
-    const int64_t end = sweep_end >= 0 ? sweep_end : std::max(last_sample, sweep_start);
-    m["first_sweep_start_s"] = seconds(sweep_start);
-    m["first_sweep_s"] = seconds(end - sweep_start);
-  } else {
-    m["first_sweep_start_s"] = nullptr;
-    m["first_sweep_s"] = 0.0;
-  }
   m["first_sweep_in_band_fraction"] =
       sweep_samples ? nlohmann::json(static_cast<double>(sweep_in_band) / static_cast<double>(sweep_samples))
                     : nlohmann::json(nullptr);
-  m["final_state"] = state_;
+  m["final_state"] = log_.last_state();
   m["band_m"] = {t_min_, t_max_};
   return m;
 }

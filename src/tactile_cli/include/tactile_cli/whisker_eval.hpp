@@ -56,6 +56,31 @@ class DepthEvaluation {
   std::map<std::string, std::vector<tactile_msgs::msg::TactileDepth>> estimates_;
 };
 
+/// The whisker FSM's state transitions on /fsm_state (stamp, state), and its
+/// wall-following episodes (states WALL_FOLLOWING/...). Used by the SITL
+/// evaluation and by `tactile fly` (no truth there).
+class FsmStateLog {
+ public:
+  explicit FsmStateLog(Host& host);
+  struct Episode {
+    int64_t start_ns = -1;  ///< first WALL_FOLLOWING stamp; -1: never followed a wall
+    int64_t end_ns = -1;    ///< first stamp after it in another state; -1: still following
+  };
+  /// The first wall-following episode (000 Fig. 6: a sweep along the wall).
+  Episode first_wall_following() const;
+  /// Number of wall-following episodes.
+  size_t wall_following_episodes() const;
+  /// {first_sweep_start_s, first_sweep_s, wall_following_episodes}; an episode
+  /// still running lasts until `end_ns`.
+  nlohmann::json sweep_metrics(int64_t end_ns) const;
+  const std::vector<std::pair<int64_t, std::string>>& transitions() const { return states_; }
+  const std::string& last_state() const { return state_; }
+
+ private:
+  std::string state_;
+  std::vector<std::pair<int64_t, std::string>> states_;
+};
+
 /// Wall-following quality of the whisker FSM against the truth, over the
 /// 50 Hz samples while the FSM is in WALL_FOLLOWING: depth_in_band_fraction
 /// (every touching whisker's true depth in [T_min, T_max]) and
@@ -71,13 +96,12 @@ class WallFollowingEvaluation {
   /// Window of first_sweep_in_band_fraction [s] (000 Fig. 6: 7 s sweeps).
   static constexpr double kSweepWindowS = 7.0;
   nlohmann::json metrics() const;
-  const std::string& last_state() const { return state_; }
+  const std::string& last_state() const { return log_.last_state(); }
 
  private:
   const WhiskerTruth& truth_;
   double t_min_, t_max_, spacing_;
-  std::string state_;
-  std::vector<std::pair<int64_t, std::string>> states_;  // transitions (stamp, state)
+  FsmStateLog log_;
 };
 
 }  // namespace tactile_cli
