@@ -4,16 +4,13 @@
 #include <cmath>
 
 #include "tactile_common/time.hpp"
+#include "tactile_common/geometry.hpp"
 
 namespace crazyflie_bridge {
 
 namespace {
 constexpr double kRadToDeg = 180.0 / M_PI;
 constexpr double kDegToRad = M_PI / 180.0;
-
-double yaw_of(const geometry_msgs::msg::Quaternion& q) {
-  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
-}
 
 /// Body vector rotated to the world frame by q.
 void rotate(const geometry_msgs::msg::Quaternion& q, double bx, double by, double bz, double out[3]) {
@@ -54,7 +51,7 @@ void SimulatedCrazyflieFirmware::on_pressure(const tactile_msgs::msg::WhiskerPre
 
 void SimulatedCrazyflieFirmware::on_estimate(const nav_msgs::msg::Odometry& o) {
   const auto& pose = o.pose.pose;
-  yaw_ = yaw_of(pose.orientation);
+  yaw_ = tactile_common::yaw_of(pose.orientation);
   double vw[3];
   rotate(pose.orientation, o.twist.twist.linear.x, o.twist.twist.linear.y, o.twist.twist.linear.z, vw);
   const double vals[7] = {pose.position.x, pose.position.y, pose.position.z, yaw_ * kRadToDeg, vw[0], vw[1], vw[2]};

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "tactile_common/time.hpp"
+#include "tactile_common/geometry.hpp"
 
 namespace gpis_explorer {
 
@@ -170,7 +171,7 @@ void GpisExplorerLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
   odom_ns_ = stamp;
   in_.x = p.x;
   in_.y = p.y;
-  in_.yaw = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));  // ZYX yaw
+  in_.yaw = tactile_common::yaw_of(q);
 }
 
 tactile_msgs::msg::GpisMap GpisExplorerLogic::make_map(const GpisExplorer& ex, int64_t stamp_ns) {

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "tactile_common/time.hpp"
+#include "tactile_common/geometry.hpp"
 
 namespace mapping_pcl {
 
@@ -144,7 +145,7 @@ std::optional<sensor_msgs::msg::PointCloud2> XplorerMapLogic::on_timer(int64_t n
     ContactSample s;
     s.t = tactile_common::to_seconds(now_ns);
     s.position = Vec3(p.x, p.y, p.z);
-    s.yaw = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+    s.yaw = tactile_common::yaw_of(q);
     s.height = p.z - params_.floor_z;
     s.force_body = force_sum_ / static_cast<double>(forces_.size());
     mapper_.update(s);

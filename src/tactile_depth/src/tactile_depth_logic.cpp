@@ -9,6 +9,7 @@
 
 #include "tactile_common/time.hpp"
 #include "tactile_msgs/msg/whisker_pressure.hpp"
+#include "tactile_common/geometry.hpp"
 
 #ifndef TACTILE_DEPTH_INSTALL_SHARE_DIR
 #define TACTILE_DEPTH_INSTALL_SHARE_DIR ""
@@ -134,7 +135,7 @@ void TactileDepthLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
   }
   odom_pose_.x = p.x;
   odom_pose_.y = p.y;
-  odom_pose_.yaw = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+  odom_pose_.yaw = tactile_common::yaw_of(q);
   odom_ns_ = tactile_common::from_stamp(msg.header.stamp);
   odom_frame_ = msg.header.frame_id;
   body_frame_ = msg.child_frame_id.empty() ? std::string(kDefaultBodyFrame) : msg.child_frame_id;

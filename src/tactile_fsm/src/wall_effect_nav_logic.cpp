@@ -8,6 +8,7 @@
 
 #include "tactile_common/time.hpp"
 #include "tactile_fsm/geo_goal.hpp"
+#include "tactile_common/geometry.hpp"
 
 namespace tactile_fsm {
 
@@ -142,7 +143,7 @@ void WallEffectNavLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
     return;
   }
   position_ = Vec2(p.position.x, p.position.y);
-  yaw_ = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+  yaw_ = tactile_common::yaw_of(q);
   odom_ns_ = tactile_common::from_stamp(msg.header.stamp);
   have_odom_ = true;
 }

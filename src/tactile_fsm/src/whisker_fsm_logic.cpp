@@ -6,6 +6,7 @@
 
 #include "tactile_common/time.hpp"
 #include "tactile_msgs/msg/whisker_pressure.hpp"
+#include "tactile_common/geometry.hpp"
 
 namespace tactile_fsm {
 
@@ -168,7 +169,7 @@ void WhiskerFsmLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
   in_.odom_stamp = tactile_common::to_seconds(stamp);
   in_.x = p.x;
   in_.y = p.y;
-  in_.yaw = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));  // ZYX yaw
+  in_.yaw = tactile_common::yaw_of(q);
 }
 
 WhiskerFsmLogic::Outputs WhiskerFsmLogic::on_timer(int64_t now_ns) {

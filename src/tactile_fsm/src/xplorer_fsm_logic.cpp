@@ -5,16 +5,11 @@
 #include <vector>
 
 #include "tactile_common/time.hpp"
+#include "tactile_common/geometry.hpp"
 
 namespace tactile_fsm {
 
 using tactile_common::ParamMap;
-
-namespace {
-double yaw_of(const geometry_msgs::msg::Quaternion& q) {
-  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
-}
-}  // namespace
 
 void XplorerFsmLogic::Params::validate() const {
   fsm.validate();
@@ -186,7 +181,7 @@ XplorerFsmLogic::Outputs XplorerFsmLogic::on_timer(int64_t now_ns) {
     XplorerInput in;
     in.t = tactile_common::to_seconds(now_ns);
     in.position = XVec3(o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z);
-    in.yaw = yaw_of(o.pose.pose.orientation);
+    in.yaw = tactile_common::yaw_of(o.pose.pose.orientation);
     in.yaw_rate = o.twist.twist.angular.z;  // body z rate ~ yaw rate near hover
     in.force = XVec3(wrench_->wrench.force.x, wrench_->wrench.force.y, wrench_->wrench.force.z);
     in.torque_z = wrench_->wrench.torque.z;

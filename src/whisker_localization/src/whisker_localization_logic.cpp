@@ -8,16 +8,13 @@
 
 #include "tactile_common/time.hpp"
 #include "whisker_localization/stage_sim.hpp"
+#include "tactile_common/geometry.hpp"
 
 namespace whisker_localization {
 
 using tactile_common::ParamMap;
 
 namespace {
-
-double yaw_of(const geometry_msgs::msg::Quaternion& q) {
-  return std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
-}
 
 geometry_msgs::msg::Pose to_pose(const Pose2& p) {
   geometry_msgs::msg::Pose m;
@@ -188,7 +185,7 @@ WhiskerLocalizationLogic::WhiskerLocalizationLogic(const Params& params) : param
 void WhiskerLocalizationLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
   ++stats_.odom_received;
   const auto& p = msg.pose.pose;
-  const double yaw = yaw_of(p.orientation);
+  const double yaw = tactile_common::yaw_of(p.orientation);
   if (!std::isfinite(p.position.x) || !std::isfinite(p.position.y) || !std::isfinite(yaw)) {
     ++stats_.dropped_nonfinite;
     return;

@@ -13,6 +13,7 @@
 #include "graphs.hpp"
 #include "tactile_cli/host_nodes.hpp"
 #include "tactile_common/time.hpp"
+#include "tactile_common/geometry.hpp"
 
 namespace tactile_cli::graphs {
 
@@ -93,7 +94,7 @@ class WallEffectGraph : public SimGraph {
       track_y_.add(odom_.pose.pose.position.y - sp_.pose.pose.position.y);
       const auto& q = odom_.pose.pose.orientation;
       const auto& qs = sp_.pose.pose.orientation;
-      const double yaw = std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z));
+      const double yaw = tactile_common::yaw_of(q);
       const double yaw_sp = 2.0 * std::atan2(qs.z, qs.w);
       track_yaw_.add(wrap(yaw - yaw_sp) * 180.0 / M_PI);
     }
