@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -18,6 +19,7 @@ using tdorc_filter::Mode;
 using tdorc_filter::Params;
 using tdorc_filter::TdorcChannel;
 using tdorc_filter::TdorcWhisker;
+using tdorc_filter::WhiskerOutput;
 
 namespace {
 
@@ -316,13 +318,31 @@ struct HeldRun {
   bool contact_after = false;       // contact at any sample >= end + 50
   double sc_at_onset = 0.0, max_abs_sc_after = 0.0;  // channel 1, after = [end, total)
 };
-HeldRun run_held(Params p, int start, int end, int total = 2000) {
+/// The outputs of a drifting whisker (+-0.03 Pa/sample) whose channel 1 is
+/// pushed by push(k) Pa at sample k, for samples [0, total).
+std::vector<WhiskerOutput> run_pushed(const Params& p, int total, const std::function<double(int)>& push) {
   TdorcWhisker w(p);
-  HeldRun r;
+  std::vector<WhiskerOutput> out;
   for (int k = 0; k < total; ++k) {
     const double drift = 0.03 * k;
-    const double push = (k >= start && k < end) ? 200.0 : 0.0;
-    const auto o = w.update({{100000.0 + drift, 99000.0 - drift + push, 101000.0}});
+    out.push_back(w.update({{100000.0 + drift, 99000.0 - drift + push(k), 101000.0}}));
+  }
+  return out;
+}
+
+/// Last sample in contact, -1 if none.
+int last_contact(const std::vector<WhiskerOutput>& outs) {
+  for (int k = static_cast<int>(outs.size()) - 1; k >= 0; --k) {
+    if (outs[static_cast<size_t>(k)].contact) return k;
+  }
+  return -1;
+}
+
+HeldRun run_held(Params p, int start, int end, int total = 2000) {
+  HeldRun r;
+  const auto outs = run_pushed(p, total, [&](int k) { return (k >= start && k < end) ? 200.0 : 0.0; });
+  for (int k = 0; k < total; ++k) {
+    const auto& o = outs[static_cast<size_t>(k)];
     if (o.contact) {
       if (r.first < 0) r.sc_at_onset = o.channel[1].calibrated, r.first = k;
       r.last = k;
@@ -398,40 +418,29 @@ TEST(TdorcWhisker, ContactHoldIsLimited) {
   p.max_contact_hold = 1000;
   const HeldRun longer = run_held(p, 300, 1500);
   EXPECT_TRUE(longer.lost_while_pressed);  // 1000 < 1199 pressed samples
-  EXPECT_EQ(longer.first + 999, [&] {
-    // the last held sample: onset + max_contact_hold - 1
-    TdorcWhisker w(p);
-    int last_held = -1;
-    for (int k = 0; k < 1500; ++k) {
-      const double drift = 0.03 * k;
-      const auto o = w.update({{100000.0 + drift, 99000.0 - drift + (k >= 300 ? 200.0 : 0.0), 101000.0}});
-      if (o.contact_held) last_held = k;
-    }
-    return last_held;
-  }());
+  // The last held sample: onset + max_contact_hold - 1.
+  const auto outs = run_pushed(p, 1500, [](int k) { return k >= 300 ? 200.0 : 0.0; });
+  int last_held = -1;
+  for (int k = 0; k < 1500; ++k) {
+    if (outs[static_cast<size_t>(k)].contact_held) last_held = k;
+  }
+  EXPECT_EQ(longer.first + 999, last_held);
 }
 
 TEST(TdorcWhisker, HoldReleaseFractionEndsAHoldWhoseSignalCollapsed) {
   // Pressed with +200 Pa, then at sample 800 eased to +40 (still over T_c): a
   // partial retreat to 20 % of the peak. Fraction 0 keeps holding (S_c = 40 >
   // T_c); fraction 0.25 releases at once (40 < 50); fraction 0.1 keeps it.
-  auto last_contact = [](double fraction) {
+  auto last_with = [](double fraction) {
     Params p;
     p.contact_hold = true;
     p.learn_delay = 10;
     p.hold_release_fraction = fraction;
-    TdorcWhisker w(p);
-    int last = -1;
-    for (int k = 0; k < 1200; ++k) {
-      const double drift = 0.03 * k;
-      const double push = k < 300 ? 0.0 : (k < 800 ? 200.0 : 40.0);
-      if (w.update({{100000.0 + drift, 99000.0 - drift + push, 101000.0}}).contact) last = k;
-    }
-    return last;
+    return last_contact(run_pushed(p, 1200, [](int k) { return k < 300 ? 0.0 : (k < 800 ? 200.0 : 40.0); }));
   };
-  EXPECT_EQ(last_contact(0.0), 1199);
-  EXPECT_EQ(last_contact(0.1), 1199);
-  EXPECT_EQ(last_contact(0.25), 799);
+  EXPECT_EQ(last_with(0.0), 1199);
+  EXPECT_EQ(last_with(0.1), 1199);
+  EXPECT_EQ(last_with(0.25), 799);
   Params bad;
   bad.hold_release_fraction = 1.0;
   EXPECT_THROW(TdorcWhisker{bad}, std::invalid_argument);
@@ -448,19 +457,14 @@ TEST(TdorcWhisker, HoldReleaseSamplesBridgesStickSlipSamples) {
     p.contact_hold = true;
     p.learn_delay = 10;
     p.hold_release_samples = release_samples;
-    TdorcWhisker w(p);
+    const auto pressed = [](int k) { return k >= 300 && k < 1100; };
+    const auto outs = run_pushed(p, 2000, [&](int k) {
+      const bool slip = pressed(k) && (k - 300) % 50 == 25;
+      return pressed(k) && !slip ? 200.0 : 0.0;
+    });
     int pressed_in_contact = 0;
-    int last = -1;
-    for (int k = 0; k < 2000; ++k) {
-      const double drift = 0.03 * k;
-      const bool pressed = k >= 300 && k < 1100;
-      const bool slip = pressed && (k - 300) % 50 == 25;
-      const double push = pressed && !slip ? 200.0 : 0.0;
-      const auto o = w.update({{100000.0 + drift, 99000.0 - drift + push, 101000.0}});
-      if (pressed && o.contact) ++pressed_in_contact;
-      if (o.contact) last = k;
-    }
-    return std::make_pair(pressed_in_contact, last);
+    for (int k = 0; k < 2000; ++k) pressed_in_contact += pressed(k) && outs[static_cast<size_t>(k)].contact ? 1 : 0;
+    return std::make_pair(pressed_in_contact, last_contact(outs));
   };
   const auto one = run(1);
   EXPECT_LT(one.first, 799);  // lost at the first slip after sample 668
