@@ -169,6 +169,7 @@ void PreimageLocalizer::reset() {
   have_set_ = false;
   hist_.clear();
   have_tangent_ = false;
+  cost_.clear();
 }
 
 BeamShape PreimageLocalizer::tip_shape(double m0, double direction) const {
@@ -216,6 +217,23 @@ Pose2 best_pose(const PoseSet& s, double radius, double* spread) {
       best = i;
     }
   }
+  PoseSet near;
+  for (const auto& q : s.poses) {
+    if (std::hypot(q.x - s.poses[best].x, q.y - s.poses[best].y) <= radius) near.poses.push_back(q);
+  }
+  Pose2 m = mean_pose(near, nullptr);
+  if (spread) {
+    double r = 0.0;
+    for (const auto& q : s.poses) r = std::max(r, std::hypot(q.x - m.x, q.y - m.y));
+    *spread = r;
+  }
+  return m;
+}
+
+Pose2 best_pose(const PoseSet& s, const std::vector<double>& cost, double radius, double* spread) {
+  if (s.empty() || cost.size() != s.size()) return best_pose(s, radius, spread);
+  // The most consistent pose (least accumulated residual) and its neighbours.
+  const std::size_t best = static_cast<std::size_t>(std::min_element(cost.begin(), cost.end()) - cost.begin());
   PoseSet near;
   for (const auto& q : s.poses) {
     if (std::hypot(q.x - s.poses[best].x, q.y - s.poses[best].y) <= radius) near.poses.push_back(q);
@@ -279,6 +297,8 @@ bool PreimageLocalizer::geometry_for(double m0, ContactGeometry& g) {
     g.cx = newest.contact_x;
     g.cy = newest.contact_y;
     g.tangent = wrap_angle(line);
+    chord_ox_ = xs.back();
+    chord_oy_ = ys.back();
     last_tangent_ = g.tangent;
     have_tangent_ = true;
     direction = g.tangent + kPi / 2.0;
@@ -371,6 +391,7 @@ void PreimageLocalizer::seed_set() {
       set_.poses.push_back(Pose2{contact.x + c * rx - s * ry, contact.y + s * rx + c * ry, wrap_angle(q.theta + d)});
     }
   }
+  cost_.assign(set_.size(), 0.0);
 }
 
 PreimageLocalizer::StepResult PreimageLocalizer::step(const Pose2& motion, double m0) {
@@ -425,28 +446,62 @@ PreimageLocalizer::StepResult PreimageLocalizer::step(const Pose2& motion, doubl
     // observation: a forward-projected pose q is in h^-1(z) (eq. 16, 25) if
     // the observed contact point, placed by q, lies on the map boundary
     // (within contact_tolerance) with the observed boundary slope (within
-    // match_angle). Survivors keep their own motion-propagated value, so a
-    // wrong hypothesis accumulates its inconsistency instead of being
-    // re-anchored on the discretised preimage.
+    // match_angle). The observed slope is a line through the contacts of
+    // the last slope_samples observations, so it is compared with the map's
+    // chord between the oldest and newest of them as placed by q, not with
+    // the tangent at the newest (which a line fit lags by half the window
+    // times the curvature, and which made the truth fail the test where the
+    // curvature changes). Survivors keep their own motion-propagated value,
+    // so a wrong hypothesis accumulates its inconsistency instead of being
+    // re-anchored on the discretised preimage; its squared residuals are
+    // summed (cost_) and the best estimate is the least-cost pose.
     std::vector<char> keep(set_.size(), 0);
+    std::vector<double> res(set_.size(), 0.0);
     for (std::size_t j = 0; j < set_.size(); ++j) {
       const auto& q = set_.poses[j];
       const double c = std::cos(q.theta), s = std::sin(q.theta);
+      // The oldest history contact placed by q, on the map: with the newest
+      // one it gives the map's chord over the history window.
+      double obx = 0.0, oby = 0.0;
+      map_.signed_distance(q.x + c * chord_ox_ - s * chord_oy_, q.y + s * chord_ox_ + c * chord_oy_, &obx, &oby);
+      // Distance of a contact (robot frame) placed by q to the map, and the
+      // error of the observed slope against the map's slope over the same
+      // stretch of boundary (its chord; the local tangent if the contact did
+      // not move along the boundary).
+      auto residual = [&](double cx, double cy, double slope, double& d, double& err) {
+        const double wx = q.x + c * cx - s * cy, wy = q.y + s * cx + c * cy;
+        double tan = 0.0, nbx = 0.0, nby = 0.0;
+        d = map_.signed_distance(wx, wy, &nbx, &nby, &tan);
+        double map_slope = tan;
+        if (std::hypot(nbx - obx, nby - oby) > 2.0 * map_.spacing()) {
+          map_slope = std::atan2(nby - oby, nbx - obx);
+          if (std::cos(map_slope - tan) < 0.0) map_slope += kPi;
+        }
+        err = wrap_angle(map_slope - (q.theta + slope));
+      };
       for (const auto& cand : cands_) {
-        const double wx = q.x + c * cand.cx - s * cand.cy, wy = q.y + s * cand.cx + c * cand.cy;
-        double tan = 0.0;
-        const double d = map_.signed_distance(wx, wy, nullptr, nullptr, &tan);
-        if (std::fabs(d) > params_.contact_tolerance) continue;
-        const double err = wrap_angle(tan - (q.theta + cand.tangent));
-        if (std::fabs(err) <= params_.match_angle + cand.tangent_halfwidth) {
+        double d = 0.0, err = 0.0;
+        residual(cand.cx, cand.cy, cand.tangent, d, err);
+        if (std::fabs(d) <= params_.contact_tolerance &&
+            std::fabs(err) <= params_.match_angle + cand.tangent_halfwidth) {
           keep[j] = 1;
           break;
         }
       }
+      // Consistency with the observation itself (the middle of the
+      // possibilistic band), accumulated for the best estimate.
+      double d = 0.0, err = 0.0;
+      residual(g.cx, g.cy, g.tangent, d, err);
+      const double rd = d / params_.contact_tolerance, ra = err / params_.match_angle;
+      res[j] = rd * rd + ra * ra;
     }
     tmp_.poses.clear();
+    tmp_cost_.clear();
     for (std::size_t j = 0; j < set_.size(); ++j) {
-      if (keep[j]) tmp_.poses.push_back(set_.poses[j]);
+      if (keep[j]) {
+        tmp_.poses.push_back(set_.poses[j]);
+        tmp_cost_.push_back(cost_[j] + res[j]);
+      }
     }
     if (tmp_.empty()) {  // inconsistent: restart from the new preimage
       build_preimage(m0, g);
@@ -456,10 +511,11 @@ PreimageLocalizer::StepResult PreimageLocalizer::step(const Pose2& motion, doubl
       ++resets_;
     } else {
       std::swap(set_, tmp_);
+      std::swap(cost_, tmp_cost_);
     }
   }
   r.set_size = set_.size();
-  r.best = best_pose(set_, params_.mode_radius, &r.spread);
+  r.best = best_pose(set_, cost_, params_.mode_radius, &r.spread);
   return r;
 }
 

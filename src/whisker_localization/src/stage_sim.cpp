@@ -153,6 +153,39 @@ std::vector<std::array<double, 2>> concave_corner_polyline(double fillet_radius,
   return pts;
 }
 
+void concave_corner_point(double r, double s, double& x, double& y, double& tangent) {
+  const double arc = r * kPi2 / 2.0;
+  if (s <= 0.0) {
+    x = s;
+    y = 0.0;
+    tangent = 0.0;
+  } else if (s < arc) {
+    const double a = s / r;
+    x = r * std::sin(a);
+    y = r * (1.0 - std::cos(a));
+    tangent = a;
+  } else {
+    x = r;
+    y = r + (s - arc);
+    tangent = kPi2 / 2.0;
+  }
+}
+
+void table2_sweep(const Table2Params& p, std::size_t index, Pose2& start, Pose2& motion) {
+  const double s0 = p.sweep_starts.at(index);
+  double xc, yc, tangent, xe, ye, te;
+  concave_corner_point(p.fillet_radius, s0, xc, yc, tangent);
+  concave_corner_point(p.fillet_radius, s0 + p.steps * p.step, xe, ye, te);
+  const double inward = tangent - kPi2 / 2.0;  // into the obstacle
+  const double attack = p.attack_deg * kPi2 / 180.0;
+  const double heading = inward + attack;      // whisker axis
+  const double reach = p.beam.length - p.penetration / std::cos(attack);
+  start = Pose2{xc - reach * std::cos(heading), yc - reach * std::sin(heading), heading};
+  // A straight line along the chord of the swept part of the boundary.
+  const double chord = std::atan2(ye - yc, xe - xc);
+  motion = Pose2{p.step * std::cos(chord - heading), p.step * std::sin(chord - heading), 0.0};
+}
+
 void Table2Params::validate() const {
   beam.validate();
   localizer.validate();
@@ -170,9 +203,71 @@ void Table2Params::validate() const {
   if (!(attack_deg >= 0.0 && attack_deg < 80.0)) throw std::invalid_argument("Table2Params.attack_deg: must be in [0, 80), got " + std::to_string(attack_deg));
   if (steps < 4) throw std::invalid_argument("Table2Params.steps: must be >= 4, got " + std::to_string(steps));
   if (sweep_starts.empty()) throw std::invalid_argument("Table2Params.sweep_starts: must not be empty");
+  const double arc = fillet_radius * kPi2 / 2.0;
   for (double x : sweep_starts) {
-    if (!(x > -0.8 * leg && x <= 0.0)) throw std::invalid_argument("Table2Params.sweep_starts: each must be in (-0.8 leg, 0], got " + std::to_string(x));
+    if (!(x > -0.8 * leg && x + steps * step < arc + 0.8 * leg))
+      throw std::invalid_argument("Table2Params.sweep_starts: each sweep must stay within 0.8 leg of the arc, got " + std::to_string(x));
   }
+}
+
+SweepScore::SweepScore(int id, const Table2Params& p)
+    : truth_distance_(p.truth_distance), truth_angle_(p.truth_angle), localized_spread_(p.localized_spread) {
+  r_.id = id;
+}
+
+void SweepScore::add(const Pose2& truth, const std::vector<Pose2>& set, const Pose2& best, double spread, int step,
+                     bool second_half) {
+  ++r_.localizing_steps;
+  for (const auto& q : set) {
+    if (std::hypot(q.x - truth.x, q.y - truth.y) <= truth_distance_ &&
+        std::fabs(wrap_angle(q.theta - truth.theta)) <= truth_angle_) {
+      ++kept_;
+      break;
+    }
+  }
+  const double err = std::hypot(best.x - truth.x, best.y - truth.y) * 1e3;
+  r_.final_error_mm = err;
+  if (second_half) half_.push_back(err);
+  r_.final_spread_mm = spread * 1e3;
+  r_.final_set_size = set.size();
+  if (spread <= localized_spread_) {
+    if (r_.first_localized_step < 0) r_.first_localized_step = step;
+    ++r_.localized_steps;
+    localized_.push_back(err);
+  }
+}
+
+void SweepScore::add_profile_point(const BoundaryMap& world, const Pose2& base, double cx, double cy) {
+  // 002 Sec. VI-B: the estimated contact placed by the known base pose.
+  const double c = std::cos(base.theta), s = std::sin(base.theta);
+  const double d = std::fabs(world.signed_distance(base.x + c * cx - s * cy, base.y + s * cx + c * cy)) * 1e3;
+  ++r_.profile_points;
+  profile_sum_ += d;
+  r_.profile_max_error_mm = std::max(r_.profile_max_error_mm, d);
+}
+
+Table2Sweep SweepScore::finish(int steps, uint64_t resets) const {
+  Table2Sweep r = r_;
+  r.steps = steps;
+  r.resets = resets;
+  r.profile_mean_error_mm = r.profile_points > 0 ? profile_sum_ / static_cast<double>(r.profile_points) : 0.0;
+  r.truth_kept_fraction = r.localizing_steps > 0 ? static_cast<double>(kept_) / r.localizing_steps : 0.0;
+  auto stats = [](const std::vector<double>& e, double& mean, double& sd) {
+    if (e.empty()) {
+      mean = sd = std::nan("");
+      return;
+    }
+    double m = 0.0;
+    for (double x : e) m += x;
+    m /= static_cast<double>(e.size());
+    double v = 0.0;
+    for (double x : e) v += (x - m) * (x - m);
+    mean = m;
+    sd = std::sqrt(v / static_cast<double>(e.size()));
+  };
+  stats(half_, r.mean_error_mm, r.std_error_mm);
+  stats(localized_, r.localized_mean_error_mm, r.localized_std_error_mm);
+  return r;
 }
 
 std::vector<Table2Sweep> run_table2(const Table2Params& p) {
@@ -184,30 +279,16 @@ std::vector<Table2Sweep> run_table2(const Table2Params& p) {
   const BoundaryMap world({concave_corner_polyline(p.fillet_radius, p.leg, 0.00005)}, 0.001);
   std::mt19937_64 rng(p.seed);
   std::vector<Table2Sweep> out;
-  const double L = p.beam.length;
-  const double attack = p.attack_deg * kPi2 / 180.0;
   for (std::size_t sw = 0; sw < p.sweep_starts.size(); ++sw) {
-    Table2Sweep r;
-    r.id = static_cast<int>(sw) + 1;
-    r.steps = p.steps;
-    // Start: the wall point, its tangent and free-side normal.
-    const double xc = p.sweep_starts[sw], yc = 0.0;
-    const double tangent = 0.0;  // the floor
-    const double inward = tangent - kPi2 / 2.0;  // into the obstacle
-    const double heading = inward + attack;      // whisker axis
-    const double reach = L - p.penetration / std::cos(attack);
-    Pose2 base{xc - reach * std::cos(heading), yc - reach * std::sin(heading), heading};
-    // The stage moves along the wall tangent at the start (a straight line).
-    const Pose2 motion{p.step * std::cos(tangent - heading), p.step * std::sin(tangent - heading), 0.0};
+    SweepScore score(static_cast<int>(sw) + 1, p);
+    Pose2 base, motion;
+    table2_sweep(p, sw, base, motion);
     PreimageLocalizer loc(map, solver, p.localizer);
     loc.set_prior(base);  // 002 Sec. VII-D: the sweep starts at a known location
-    std::vector<double> errors, half;
-    ProfileEstimator profile;
-    int kept = 0;
     for (int k = 0; k < p.steps; ++k) {
       if (k > 0) base = compose(base, motion);
       const WallContact wc = tip_wall_contact(solver, world, base);
-      if (!wc.contact || !wc.ok) ++r.contact_failures;
+      if (!wc.contact || !wc.ok) score.contact_failure();
       double z = wc.contact && wc.ok ? wc.m0 : 0.0;
       if (z != 0.0) {
         if (p.bounded_noise) {
@@ -219,54 +300,11 @@ std::vector<Table2Sweep> run_table2(const Table2Params& p) {
       }
       const auto st = loc.step(k == 0 ? Pose2{} : motion, z);
       if (st.contact && (st.geometry.cx != 0.0 || st.geometry.cy != 0.0)) {
-        profile.add(base.x, base.y, base.theta, st.geometry.cx, st.geometry.cy);
+        score.add_profile_point(world, base, st.geometry.cx, st.geometry.cy);
       }
-      if (!st.localizing) continue;
-      ++r.localizing_steps;
-      bool in = false;
-      for (const auto& q : loc.set().poses) {
-        if (std::hypot(q.x - base.x, q.y - base.y) <= p.truth_distance &&
-            std::fabs(wrap_angle(q.theta - base.theta)) <= p.truth_angle) {
-          in = true;
-          break;
-        }
-      }
-      kept += in ? 1 : 0;
-      const double err = std::hypot(st.best.x - base.x, st.best.y - base.y);
-      r.final_error_mm = err * 1e3;
-      if (k >= p.steps / 2) half.push_back(err * 1e3);
-      r.final_spread_mm = st.spread * 1e3;
-      r.final_set_size = st.set_size;
-      if (st.spread <= p.localized_spread) {
-        if (r.first_localized_step < 0) r.first_localized_step = k;
-        ++r.localized_steps;
-        errors.push_back(err * 1e3);
-      }
+      if (st.localizing) score.add(base, loc.set().poses, st.best, st.spread, k, k >= p.steps / 2);
     }
-    r.resets = loc.resets();
-    r.profile_points = profile.size();
-    for (std::size_t i = 0; i < profile.size(); ++i) {
-      const double d = std::fabs(world.signed_distance(profile.x()[i], profile.y()[i])) * 1e3;
-      r.profile_mean_error_mm += d / static_cast<double>(profile.size());
-      r.profile_max_error_mm = std::max(r.profile_max_error_mm, d);
-    }
-    r.truth_kept_fraction = r.localizing_steps > 0 ? static_cast<double>(kept) / r.localizing_steps : 0.0;
-    auto stats = [](const std::vector<double>& e, double& mean, double& sd) {
-      if (e.empty()) {
-        mean = sd = std::nan("");
-        return;
-      }
-      double m = 0.0;
-      for (double x : e) m += x;
-      m /= static_cast<double>(e.size());
-      double v = 0.0;
-      for (double x : e) v += (x - m) * (x - m);
-      mean = m;
-      sd = std::sqrt(v / static_cast<double>(e.size()));
-    };
-    stats(half, r.mean_error_mm, r.std_error_mm);
-    stats(errors, r.localized_mean_error_mm, r.localized_std_error_mm);
-    out.push_back(r);
+    out.push_back(score.finish(p.steps, loc.resets()));
   }
   return out;
 }

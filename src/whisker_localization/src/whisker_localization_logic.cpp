@@ -48,6 +48,7 @@ void WhiskerLocalizationLogic::Params::validate() const {
     if (!std::isfinite(c)) throw std::invalid_argument("WhiskerLocalizationLogic.hall_coefficients: must be finite");
   }
   if (!(contact_threshold >= 0.0)) throw std::invalid_argument("WhiskerLocalizationLogic.contact_threshold: must be >= 0, got " + std::to_string(contact_threshold));
+  if (!(min_step >= 0.0) || !std::isfinite(min_step)) throw std::invalid_argument("WhiskerLocalizationLogic.min_step: must be finite and >= 0, got " + std::to_string(min_step));
   if (!(max_odom_age_s > 0.0)) throw std::invalid_argument("WhiskerLocalizationLogic.max_odom_age_s: must be > 0, got " + std::to_string(max_odom_age_s));
 }
 
@@ -83,6 +84,7 @@ ParamMap WhiskerLocalizationLogic::default_parameters() {
   m.set("hall_coefficients", d.hall_coefficients);             // 002 Sec. V-B, fitted B -> M(0)
   m.set("contact_threshold", d.contact_threshold);
   m.set("max_odom_age_s", d.max_odom_age_s);
+  m.set("min_step", d.min_step);
   return m;
 }
 
@@ -122,6 +124,7 @@ WhiskerLocalizationLogic::Params WhiskerLocalizationLogic::params_from(const Par
   p.hall_coefficients = m.get_double_array("hall_coefficients");
   p.contact_threshold = m.get_double("contact_threshold");
   p.max_odom_age_s = m.get_double("max_odom_age_s");
+  p.min_step = m.get_double("min_step");
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {
@@ -182,6 +185,12 @@ WhiskerLocalizationLogic::WhiskerLocalizationLogic(const Params& params) : param
   if (params_.use_prior) localizer_->set_prior(Pose2{params_.prior_x, params_.prior_y, params_.prior_yaw});
 }
 
+void WhiskerLocalizationLogic::restart(const Pose2* prior) {
+  localizer_->reset();
+  if (prior) localizer_->set_prior(*prior);
+  have_last_ = false;
+}
+
 void WhiskerLocalizationLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
   ++stats_.odom_received;
   const auto& p = msg.pose.pose;
@@ -217,6 +226,12 @@ WhiskerLocalizationLogic::Outputs WhiskerLocalizationLogic::on_moment(const geom
     ++stats_.dropped_no_odom;
     return out;
   }
+  const bool contact = std::fabs(m0) >= params_.contact_threshold;
+  if (contact && have_last_ && params_.min_step > 0.0 &&
+      std::hypot(odom_.x - last_odom_.x, odom_.y - last_odom_.y) < params_.min_step) {
+    ++stats_.skipped_small_motion;
+    return out;
+  }
   // Motion since the previous sample in the previous base frame (002 Sec. IV-D: T_local).
   Pose2 motion;
   if (have_last_) {
@@ -227,7 +242,6 @@ WhiskerLocalizationLogic::Outputs WhiskerLocalizationLogic::on_moment(const geom
   have_last_ = true;
   last_stamp_ = stamp;
   last_odom_ = odom_;
-  const bool contact = std::fabs(m0) >= params_.contact_threshold;
   if (!contact) ++stats_.no_contact;
   const PreimageLocalizer::StepResult r = localizer_->step(motion, contact ? m0 : 0.0);
   stats_.resets = localizer_->resets();

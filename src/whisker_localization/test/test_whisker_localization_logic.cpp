@@ -174,3 +174,39 @@ TEST(WhiskerLocalizationLogic, SweepAlongTheCornerLocalizesTheBase) {
   EXPECT_LT(set_size, 50u);
   EXPECT_EQ(logic.stats().published, 40u);
 }
+
+TEST(WhiskerLocalizationLogic, MinStepLocalizesEveryHalfMillimetreAndRestartEmptiesTheSet) {
+  // A continuously moving stage sampled every 0.1 mm: with min_step 0.49 mm
+  // only every fifth contact sample is localized, the others are counted.
+  ParamMap m = WhiskerLocalizationLogic::default_parameters();
+  m.set("min_step", 0.00049);
+  const Table2Params t;
+  Pose2 base, step;
+  table2_sweep(t, 1, base, step);
+  m.set("use_prior", true);
+  m.set("prior_x", base.x);
+  m.set("prior_y", base.y);
+  m.set("prior_yaw", base.theta);
+  WhiskerLocalizationLogic logic(WhiskerLocalizationLogic::params_from(m));
+  const ElasticaSolver solver{BeamParams{}};
+  const BoundaryMap world({concave_corner_polyline(0.05, 0.15, 0.00005)}, 0.001);
+  const Pose2 fine{0.2 * step.x, 0.2 * step.y, 0.0};  // 0.1 mm
+  int published = 0;
+  for (int k = 0; k < 100; ++k) {
+    if (k > 0) base = compose(base, fine);
+    const int64_t ns = 1000000 + k * 5000000LL;
+    logic.on_odometry(odom(ns, base));  // odometry in the map frame
+    const auto wc = tip_wall_contact(solver, world, base);
+    ASSERT_TRUE(wc.contact && wc.ok);
+    published += logic.on_moment(moment(ns, wc.m0)).result ? 1 : 0;
+  }
+  EXPECT_EQ(published, 20);  // samples 0, 5, 10, ...
+  EXPECT_EQ(logic.stats().skipped_small_motion, 80u);
+  EXPECT_FALSE(logic.localizer().set().empty());
+  logic.restart(&base);
+  EXPECT_TRUE(logic.localizer().set().empty());
+  // After the restart the next sample is localized whatever the motion.
+  const int64_t ns = 1000000 + 100 * 5000000LL;
+  logic.on_odometry(odom(ns, base));
+  EXPECT_TRUE(logic.on_moment(moment(ns, tip_wall_contact(solver, world, base).m0)).result);
+}

@@ -107,7 +107,7 @@ struct LocalizerParams {
   /// Heading hypotheses per aligned pose when a set is (re)built: rotations
   /// about the contact point over +-heading_spread (absorbs the error of the
   /// phi_E estimate, which the intersection then resolves). Choice.
-  int heading_samples = 7;
+  int heading_samples = 13;
   double heading_spread = 0.03;  ///< [rad]; choice (about 3 sigma of phi_E at 0.5 % noise)
   /// Only poses within this distance of the prior (the sweep's known start,
   /// 002 Sec. VII-D) start the set [m]; <= 0: the whole map. Choice: 30 mm.
@@ -147,6 +147,9 @@ class PreimageLocalizer {
   }
 
   const PoseSet& set() const { return set_; }
+  /// Accumulated squared residual of each pose of set() (same order): the
+  /// observations' consistency with the pose since the set was built.
+  const std::vector<double>& costs() const { return cost_; }
   const LocalizerParams& params() const { return params_; }
   uint64_t resets() const { return resets_; }
 
@@ -163,10 +166,17 @@ class PreimageLocalizer {
   PoseSet set_;
   PoseSet obs_;
   PoseSet tmp_;
+  /// Accumulated squared residual of each pose of set_ over the observations
+  /// it was tested against (same order as set_.poses).
+  std::vector<double> cost_, tmp_cost_;
   struct Cand {
     double cx, cy, tangent, tangent_halfwidth;
   };
   std::vector<Cand> cands_;  ///< observed contact geometries (several: possibilistic)
+  /// Oldest contact of the slope history in the current robot frame: the
+  /// slope phi_E is a chord over the history, compared with the map's chord
+  /// between the same two contacts (no lag where the curvature changes).
+  double chord_ox_ = 0.0, chord_oy_ = 0.0;
   bool have_set_ = false;
   Pose2 prior_;
   bool have_prior_ = false;
@@ -191,5 +201,9 @@ Pose2 mean_pose(const PoseSet& s, double* spread);
 /// the plain mean for sets larger than 2000). `spread` as in mean_pose, from
 /// the returned pose.
 Pose2 best_pose(const PoseSet& s, double radius, double* spread);
+/// Best estimate from the poses' accumulated residuals: the mean of the
+/// poses within `radius` of the least-cost pose (falls back to the densest
+/// mode when `cost` does not match the set).
+Pose2 best_pose(const PoseSet& s, const std::vector<double>& cost, double radius, double* spread);
 
 }  // namespace whisker_localization

@@ -72,29 +72,46 @@ struct WallContact {
 WallContact tip_wall_contact(const ElasticaSolver& solver, const BoundaryMap& map, const Pose2& base);
 
 /// The concave boundary of the Table II experiment: a floor y = 0 from
-/// x = -leg to 0, a concave fillet of radius r (centre (0, r)) turning up by
+/// x = -leg to 0, a concave arc of radius r (centre (0, r)) turning up by
 /// 90 deg, and a wall x = r up to y = r + leg. Walked floor -> wall, so the
 /// free space (inside the corner) is on the left. `spacing` is the
 /// polyline's point spacing [m].
 std::vector<std::array<double, 2>> concave_corner_polyline(double fillet_radius, double leg, double spacing);
 
-/// Table II protocol (002 Sec. VII-D): five sweeps of the stage along the
-/// concave boundary with tip contact; the preimage localizer runs from an
-/// unknown start pose (the whole map). Geometry values are choices (the paper
-/// gives its object only as a CAD drawing).
+/// A point of that boundary by arc length s from the start of the arc
+/// (s < 0 on the floor, s > pi r / 2 on the wall) and its tangent angle.
+void concave_corner_point(double fillet_radius, double s, double& x, double& y, double& tangent);
+
+/// Table II protocol (002 Sec. VII-D): five sweeps of the linear stage along
+/// the concave boundary with tip contact, each from a known start location
+/// (the sweep ID), localized by the preimage localizer. The paper gives its
+/// object only as a picture (Fig. 11) and describes the sweeps as the
+/// contact approaching a concave region with increasing curvature or moving
+/// away from it with decreasing curvature (Sec. VII-A, Fig. 13): sweeps
+/// 01-03 come from the straight floor into the arc, 04-05 leave the arc onto
+/// the straight wall. Geometry values are choices.
 struct Table2Params {
   BeamParams beam;
   LocalizerParams localizer;
   MomentNoise noise;
   bool bounded_noise = false;     ///< true: uniform relative noise in +-noise.relative (possibilistic test)
-  double fillet_radius = 0.05;    ///< concave fillet radius [m]; choice
+  double fillet_radius = 0.05;    ///< radius of the concave arc [m]; choice
   double leg = 0.15;              ///< length of the straight floor and wall [m]; choice
-  /// Tip contact x on the floor at the start of each sweep (sweep IDs 01-05)
-  /// [m]; the fillet starts at x = 0. Choice: every sweep reaches the fillet.
-  std::vector<double> sweep_starts{-0.020, -0.016, -0.012, -0.008, -0.004};
-  double attack_deg = 40.0;       ///< whisker axis from the wall's inward normal [deg]; choice
-  double penetration = 0.004;     ///< undeformed tip depth behind the wall at the start [m]; choice
-  double step = 0.0005;           ///< base motion per step along +x (the floor) [m] (< 1 mm, 002 Sec. VII-D)
+  /// Where the undeformed tip meets the boundary at the start of each sweep
+  /// (sweep IDs 01-05), as arc length along the boundary from the start of
+  /// the arc [m] (< 0: on the floor; the arc ends at pi r / 2 = 78.5 mm).
+  /// Choice: the deflected tip touches ~8 mm further on and, at 0.5 mm per
+  /// step, passes the curvature change in the first half of every sweep
+  /// (01-03 enter the arc after ~15, ~11, ~7 steps, 04-05 leave it after ~16,
+  /// ~12 steps). Along a stretch of constant curvature (a straight floor, the
+  /// arc itself) the position along the boundary is not observable.
+  std::vector<double> sweep_starts{-0.016, -0.014, -0.012, 0.060, 0.064};
+  double attack_deg = 40.0;       ///< whisker axis from the boundary's inward normal at the start [deg]; choice
+  double penetration = 0.004;     ///< undeformed tip depth behind the boundary at the start [m]; choice
+  /// Base motion per step [m] (< 1 mm, 002 Sec. VII-D), along the chord from
+  /// the start contact to the boundary point steps * step further (a linear
+  /// stage moves in a straight line).
+  double step = 0.0005;
   int steps = 40;
   /// Truth counts as inside the pose set if a pose is within these [m], [rad]; choice.
   double truth_distance = 0.003;
@@ -104,6 +121,10 @@ struct Table2Params {
   uint64_t seed = 1;
   void validate() const;
 };
+
+/// Start pose of sweep `index` (the whisker base) and the base motion per
+/// step in the base frame.
+void table2_sweep(const Table2Params& p, std::size_t index, Pose2& start, Pose2& motion);
 
 struct Table2Sweep {
   int id = 0;
@@ -127,6 +148,29 @@ struct Table2Sweep {
   std::size_t profile_points = 0;
   double profile_mean_error_mm = 0.0;
   double profile_max_error_mm = 0.0;
+};
+
+/// Score of one sweep (002 Table II: mean and std of the localization error),
+/// shared by run_table2 and the `tactile sim` graph of the whisker stage.
+class SweepScore {
+ public:
+  SweepScore(int id, const Table2Params& p);
+  /// One localizing step: the true base pose, the pose set, its best
+  /// estimate and spread; `second_half` steps enter mean_error_mm.
+  void add(const Pose2& truth, const std::vector<Pose2>& set, const Pose2& best, double spread, int step,
+           bool second_half);
+  /// An estimated contact (sensor frame) placed by the known base pose, for
+  /// the obstacle profile (002 Sec. VI-B, Fig. 12), against the true boundary.
+  void add_profile_point(const BoundaryMap& world, const Pose2& base, double cx, double cy);
+  void contact_failure() { ++r_.contact_failures; }
+  Table2Sweep finish(int steps, uint64_t resets) const;
+
+ private:
+  double truth_distance_, truth_angle_, localized_spread_;
+  Table2Sweep r_;
+  int kept_ = 0;
+  double profile_sum_ = 0.0;
+  std::vector<double> half_, localized_;
 };
 
 std::vector<Table2Sweep> run_table2(const Table2Params& p);

@@ -54,6 +54,11 @@ class WhiskerLocalizationLogic {
     double contact_threshold = 1e-6;
     /// Odometry older than this at a moment sample is stale [s]. Choice: 0.1 s.
     double max_odom_age_s = 0.1;
+    /// A contact sample is localized only once the base has moved at least
+    /// this far since the previous localized sample [m] (002 Sec. VII-D:
+    /// steps below 1 mm, e.g. 0.5 mm on a continuously moving stage); 0:
+    /// every sample. Choice.
+    double min_step = 0.0;
     void validate() const;
   };
 
@@ -66,6 +71,7 @@ class WhiskerLocalizationLogic {
     uint64_t dropped_no_odom = 0;       ///< no odometry yet, or older than max_odom_age_s
     uint64_t no_contact = 0;            ///< |M(0)| below contact_threshold
     uint64_t resets = 0;                ///< empty intersections (localizer restarted)
+    uint64_t skipped_small_motion = 0;  ///< contact samples within min_step of the previous localized one
   };
 
   struct Outputs {
@@ -82,6 +88,10 @@ class WhiskerLocalizationLogic {
   /// One base-moment sample: forward-projects the pose set by the odometry
   /// motion since the previous sample and intersects it with the preimage.
   Outputs on_moment(const geometry_msgs::msg::WrenchStamped& msg);
+
+  /// Starts over (a new sweep): empties the pose set and the contact
+  /// history; with `prior`, the new known start (002 Sec. VII-D).
+  void restart(const Pose2* prior);
 
   const Stats& stats() const { return stats_; }
   const Params& params() const { return params_; }
