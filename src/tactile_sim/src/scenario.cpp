@@ -234,6 +234,7 @@ const char* to_string(VehicleType type) {
     case VehicleType::kWhiskerCrazyflie: return "whisker_crazyflie";
     case VehicleType::kXplorer: return "xplorer";
     case VehicleType::kDuctedQuadrotor: return "ducted_quadrotor";
+    case VehicleType::kWhiskerStage: return "whisker_stage";
   }
   return "?";
 }
@@ -328,8 +329,10 @@ Scenario load_scenario_from_string(const std::string& yaml, const std::string& s
     s.vehicle = VehicleType::kXplorer;
   } else if (type == "ducted_quadrotor") {
     s.vehicle = VehicleType::kDuctedQuadrotor;
+  } else if (type == "whisker_stage") {
+    s.vehicle = VehicleType::kWhiskerStage;
   } else {
-    v.at("type").fail("unknown vehicle '" + type + "' (whisker_crazyflie, xplorer, ducted_quadrotor)");
+    v.at("type").fail("unknown vehicle '" + type + "' (whisker_crazyflie, xplorer, ducted_quadrotor, whisker_stage)");
   }
   if (v.has("initial")) {
     const Node i = v.at("initial");

@@ -22,7 +22,7 @@ class ScenarioError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-enum class VehicleType { kWhiskerCrazyflie, kXplorer, kDuctedQuadrotor };
+enum class VehicleType { kWhiskerCrazyflie, kXplorer, kDuctedQuadrotor, kWhiskerStage };
 const char* to_string(VehicleType type);
 
 /// One step of the scenario pilot's script.
