@@ -15,6 +15,7 @@ const std::vector<GraphInfo>& sim_graphs() {
       graphs::whisker_fsm_crtp_graph(),
       graphs::wall_effect_graph(),
       graphs::wall_effect_nav_graph(),
+      graphs::whisker_stage_graph(),
   };
   return table;
 }

@@ -13,5 +13,6 @@ GraphInfo xplorer_graph();      // xplorer.cpp
 GraphInfo whisker_fsm_crtp_graph();  // whisker_fsm_crtp.cpp
 GraphInfo wall_effect_graph();  // wall_effect.cpp
 GraphInfo wall_effect_nav_graph();  // wall_effect_nav.cpp
+GraphInfo whisker_stage_graph();  // whisker_stage.cpp
 
 }  // namespace tactile_cli::graphs
