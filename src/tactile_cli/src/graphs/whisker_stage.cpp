@@ -19,6 +19,7 @@
 
 #include "graphs.hpp"
 #include "tactile_cli/host_nodes.hpp"
+#include "tactile_common/geometry.hpp"
 #include "tactile_common/time.hpp"
 #include "tactile_sim/whisker_stage.hpp"
 #include "whisker_localization/contact_estimation.hpp"
@@ -69,10 +70,8 @@ geometry_msgs::msg::PoseStamped setpoint(const wl::Pose2& p, double z, int64_t n
   return m;
 }
 
-wl::Pose2 planar(const nav_msgs::msg::Odometry& o) {
-  const auto& q = o.pose.pose.orientation;
-  return {o.pose.pose.position.x, o.pose.pose.position.y,
-          std::atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))};
+wl::Pose2 planar(const geometry_msgs::msg::Pose& p) {
+  return {p.position.x, p.position.y, tactile_common::yaw_of(p.orientation)};
 }
 
 /// Base pose moved by (dx, dy) in its own frame.
@@ -111,7 +110,7 @@ class WhiskerStageGraph : public SimGraph {
     }
     auto& bus = ctx.host.bus();
     bus.subscribe<nav_msgs::msg::Odometry>("/ground_truth/odom", [this](const nav_msgs::msg::Odometry& m) {
-      truth_ = planar(m);
+      truth_ = planar(m.pose.pose);
       have_truth_ = true;
     });
     if (protocol_ == "table2") {
@@ -314,11 +313,8 @@ class WhiskerStageGraph : public SimGraph {
     if (r.pose_set.poses.empty()) return;  // not localizing yet (>= slope_samples observations)
     std::vector<wl::Pose2> set;
     set.reserve(r.pose_set.poses.size());
-    for (const auto& q : r.pose_set.poses) {
-      set.push_back({q.position.x, q.position.y, 2.0 * std::atan2(q.orientation.z, q.orientation.w)});
-    }
-    const auto& b = r.best_estimate;
-    const wl::Pose2 best{b.position.x, b.position.y, 2.0 * std::atan2(b.orientation.z, b.orientation.w)};
+    for (const auto& q : r.pose_set.poses) set.push_back(planar(q));
+    const wl::Pose2 best = planar(r.best_estimate);
     const double along = std::hypot(truth_.x - sweep_start_.x, truth_.y - sweep_start_.y);
     const double length = t2_.step * (t2_.steps - 1);
     score_->add(truth_, set, best, r.spread, steps_++, along >= 0.5 * length);
