@@ -80,7 +80,7 @@ TEST(DuctedQuad, ExternalThrustsGiveAnalyticAccelerationAndYawTorque) {
   // Vertical: m a_z = sum T - m g; yaw: J_zz w_z_dot = c_tau * sum s_i T_i = 0.01 * 4 d.
   EXPECT_NEAR(q.specific_force_body().z(), 4 * a / 0.280, 1e-6);
   EXPECT_NEAR(q.state().velocity.z(), (4 * a / 0.280 - 9.81) * kDt, 1e-8);
-  EXPECT_NEAR(q.state().angular_velocity.z(), 0.01 * 4 * d / 1.7e-3 * kDt, 1e-8);
+  EXPECT_NEAR(q.state().angular_velocity.z(), 0.01 * 4 * d / p.inertia_diag.z() * kDt, 1e-8);
   EXPECT_NEAR(q.state().angular_velocity.x(), 0.0, 1e-12);
   EXPECT_NEAR(q.state().angular_velocity.y(), 0.0, 1e-12);
   // Front rotors harder -> nose-up torque -r_x f: pitch negative about y... with
@@ -88,7 +88,7 @@ TEST(DuctedQuad, ExternalThrustsGiveAnalyticAccelerationAndYawTorque) {
   DuctedQuad q2(p, at(0, 0, 1.0));
   q2.set_rotor_thrusts({a + d, a + d, a - d, a - d});
   q2.step(kDt, empty);
-  EXPECT_NEAR(q2.state().angular_velocity.y(), -0.092 * 4 * d / 9.0e-4 * kDt, 1e-8);
+  EXPECT_NEAR(q2.state().angular_velocity.y(), -p.rotor_offset * 4 * d / p.inertia_diag.y() * kDt, 1e-8);
   // Commands are clamped to [0, max].
   q2.set_rotor_thrusts({-1.0, 5.0, std::nan(""), 0.5});
   EXPECT_EQ(q2.rotor_commands()[0], 0.0);
@@ -104,10 +104,11 @@ TEST(DuctedQuad, WallEffectPerRotorMatchesEq5NearAWall) {
   const double T = 0.7;
   q.set_rotor_thrusts({T, T, T, T});
   q.step(kDt, arena);
-  // Rotors 0, 3 at y = 0.15 - 0.092 = 0.058 (d = 0.058 - R = 0.020);
-  // rotors 1, 2 at y = 0.242 (d = 0.204).
-  const double R = 0.038;
-  const double dn = 0.15 - 0.092 - R, df = 0.15 + 0.092 - R;
+  // Rotors 0, 3 at y = 0.15 - L (L = 0.082: d = 0.15 - 0.082 - R = 0.030);
+  // rotors 1, 2 at y = 0.15 + L (d = 0.194).
+  const double R = 0.038, L = p.rotor_offset;
+  ASSERT_DOUBLE_EQ(L, 0.082);  // 004 geometry (docs/physics.md)
+  const double dn = 0.15 - L - R, df = 0.15 + L - R;
   // (positions moved by one step of motion only: < 1e-5 m)
   EXPECT_NEAR(q.rotor_walls()[0].distance, dn, 1e-5);
   EXPECT_NEAR(q.rotor_walls()[3].distance, dn, 1e-5);

@@ -66,7 +66,7 @@ TEST(GammaMatrix, Eq5) {
 }
 
 TEST(Wrench, LevelVehicleEq5To7ByHand) {
-  VehicleParams v;  // L = 0.092, c_tau = 0.01
+  VehicleParams v;  // L = 0.082, c_tau = 0.01
   const double L = v.rotor_offset, Rr = v.proximity.rotor_radius;
   // Level, yaw 0: rotors 0 (FR) and 3 (BR) at body y = -L are nearest.
   const double y = 0.18;

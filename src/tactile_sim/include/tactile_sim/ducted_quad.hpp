@@ -88,10 +88,13 @@ std::array<double, 4> allocate_rotors(const RotorGeometry& g, double thrust, con
 /// documented estimates/choices (docs/physics.md).
 struct DuctedQuadParams {
   double mass = 0.280;                            ///< [kg] (004: 280 g)
-  Vec3 inertia_diag = Vec3(9.0e-4, 9.0e-4, 1.7e-3);  ///< [kg m^2] (estimate)
-  /// Rotor centres at (+-rotor_offset, +-rotor_offset, 0): 004 flight at
-  /// y_d = 18 cm with ~5 cm from the nearest duct -> 0.18 - 0.05 - R = 0.092 m.
-  double rotor_offset = 0.092;                    ///< [m]
+  Vec3 inertia_diag = Vec3(7.5e-4, 7.5e-4, 1.5e-3);  ///< [kg m^2] (estimate)
+  /// Rotor centres at (+-rotor_offset, +-rotor_offset, 0) (X layout, arm
+  /// 0.116 m). From 004 at psi_d = 0: "d* = 17 cm (a 5 cm gap between the
+  /// ducted propeller and wall)" -> 0.17 - 0.05 - R = 0.082 m, and "0.2 m from
+  /// the wall corresponds to d_bar = 2.1 for the nearest propeller" ->
+  /// 0.20 - 2.1 R - R = 0.082 m (docs/physics.md).
+  double rotor_offset = 0.082;                    ///< [m]
   double torque_coefficient = 0.01;               ///< c_tau of 004 eq. 7 [m] (choice)
   double max_rotor_thrust = 0.44 * kGravity / 4;  ///< [N] (004: "over 440 g of thrust")
   double motor_time_constant = 0.02;              ///< first-order motor lag [s] (choice)

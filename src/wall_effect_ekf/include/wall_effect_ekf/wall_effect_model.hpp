@@ -66,8 +66,11 @@ Mat3 gamma_matrix(double y_i, const ProximityParams& p);
 /// (-1)^(i+1) of 004 eq. 7).
 struct VehicleParams {
   double mass = 0.280;                              ///< m [kg] (004: 280 g)
-  Vec3 inertia_diag = Vec3(9.0e-4, 9.0e-4, 1.7e-3);  ///< J [kg m^2] (choice)
-  double rotor_offset = 0.092;                      ///< r_i = (+-L, +-L, 0) [m] (choice)
+  Vec3 inertia_diag = Vec3(7.5e-4, 7.5e-4, 1.5e-3);  ///< J [kg m^2] (choice: the simulated vehicle's estimate)
+  /// r_i = (+-L, +-L, 0) [m]: 004 "d* = 17 cm (a 5 cm gap between the ducted
+  /// propeller and wall)" and "0.2 m ... d_bar = 2.1 for the nearest
+  /// propeller" at psi_d = 0 both give L = 0.082 m.
+  double rotor_offset = 0.082;
   double torque_coefficient = 0.01;                 ///< c_tau [m] (004 eq. 7, choice)
   /// Linear drag k [N s/m] subtracted from T_W in eq. 6 (choice; 004 eq. 6
   /// has none: set 0 for the paper's model).
