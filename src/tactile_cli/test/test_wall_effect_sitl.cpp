@@ -9,6 +9,7 @@
 // mass error) is the test of the paper-level accuracy.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <string>
 
 #include "sim_test_util.hpp"
@@ -51,13 +52,31 @@ TEST(WallEffectSitl, RecoversFromAHalfSecondFlowAndTofDropout) {
   EXPECT_EQ(w["ekf_reacquisitions"].get<int>(), 0);
 }
 
-TEST(WallEffectSitl, WallTrackingAtZeroDegrees) {
-  const auto m = fly("ducted_track_0.yaml");
-  const auto& w = m["wall_effect_nav"];
-  EXPECT_EQ(m["collisions"].get<int>(), 0);
-  EXPECT_GT(w["wall_following_time_s"].get<double>(), 15.0);
-  EXPECT_LE(w["rms_tracking_error_cm"].get<double>(), 0.4);  // 004: 0.4 cm
-  EXPECT_NEAR(w["mean_following_speed_mps"].get<double>(), 0.10, 0.02);  // v* = 10 cm/s
+// 004 Fig. 6b: wall tracking at d* = 17 cm, v* = 10 cm/s with psi_d = 0, 15,
+// 30, 45 deg; RMS of y - d* 0.4 / 3.2 / 1.0 / 1.3 cm in the paper. With 004's
+// geometry (rotor offset 0.082 m) the duct guards reach 0.140 / 0.152 /
+// 0.156 m towards the wall at 15 / 30 / 45 deg, so every flight must stay
+// collision-free; the paper's RMS is the limit at each angle.
+TEST(WallEffectSitl, WallTrackingAtThePapersFourAngles) {
+  const struct {
+    const char* scenario;
+    double paper_rms_cm;
+  } cases[] = {{"ducted_track_0.yaml", 0.4}, {"ducted_track_15.yaml", 3.2},
+               {"ducted_track_30.yaml", 1.0}, {"ducted_track_45.yaml", 1.3}};
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.scenario);
+    const auto m = fly(c.scenario);
+    const auto& w = m["wall_effect_nav"];
+    std::printf("%s: rms_tracking_error_cm %.3f (004: %.1f), min wall distance %.3f m, collisions %d\n",
+                c.scenario, w["rms_tracking_error_cm"].get<double>(), c.paper_rms_cm,
+                w["min_wall_distance_m"].get<double>(), m["collisions"].get<int>());
+    EXPECT_EQ(m["collisions"].get<int>(), 0);
+    EXPECT_EQ(w["ekf_reacquisitions"].get<int>(), 0);  // the wall estimate was never lost
+    EXPECT_GT(w["wall_following_time_s"].get<double>(), 15.0);
+    EXPECT_LE(w["rms_tracking_error_cm"].get<double>(), c.paper_rms_cm);
+    EXPECT_NEAR(w["mean_following_speed_mps"].get<double>(), 0.10, 0.02);  // v* = 10 cm/s
+    EXPECT_GT(w["min_wall_distance_m"].get<double>(), 0.16);  // no overshoot towards the wall
+  }
 }
 
 TEST(WallEffectSitl, CornerConvexObstacleAndVectorFieldScenesReachTheGoal) {

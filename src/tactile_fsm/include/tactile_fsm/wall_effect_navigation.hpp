@@ -49,7 +49,9 @@ struct WallEffectNavParams {
   /// Also enter wall following when the raw y_hat is below this, without
   /// waiting for the 1.5 s average (choice: approaching at 10 cm/s the
   /// average lags ~7.5 cm, so the vehicle would reach ~12 cm first; 0 = off).
-  double safety_distance = 0.17;
+  /// d_dagger: entering at d* = 17 cm instead left an overshoot of ~2.7 cm,
+  /// which at psi_d = 30 / 45 deg put a duct guard on the wall (SITL).
+  double safety_distance = 0.20;
   // Vector field (004 eq. 12).
   double attract_speed = 0.10;    ///< v_plus [m/s] (004: 10 cm/s)
   double repulse_gain = 9.0e5;    ///< v_minus = gain base^y_hat [m/s] (004: 9e5 m/s)
