@@ -5,7 +5,11 @@
 // from the IMU, flow, ToF and rotor thrusts. The estimate is evaluated
 // against /ground_truth/wall: RMSE of distance and direction while the
 // vehicle is within 20 cm of the wall (004: 1.8 cm, 13.6 deg over t = 10-70 s),
-// NEES of (distance, direction), tracking errors, per-setpoint errors of a sweep.
+// NEES of (distance, direction) and of the full 11-dim error state (truth
+// from the simulator's state and arena in 004's wall frame), tracking errors,
+// per-setpoint errors of a sweep.
+#include <Eigen/Cholesky>
+#include <array>
 #include <cmath>
 #include <map>
 #include <vector>
@@ -42,7 +46,7 @@ nlohmann::json num(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlo
 
 class WallEffectGraph : public SimGraph {
  public:
-  explicit WallEffectGraph(GraphContext& ctx) {
+  explicit WallEffectGraph(GraphContext& ctx) : sim_(ctx.sim) {
     ekf_ = add_wall_effect_ekf(ctx.host, ctx.overrides("wall_effect_ekf"));
     indi_ = add_indi_controller(ctx.host, ctx.overrides("indi_controller"));
     traj_ = add_wall_trajectory(ctx.host, ctx.overrides("wall_trajectory"));
@@ -89,6 +93,7 @@ class WallEffectGraph : public SimGraph {
       const double a = est.covariance[0], b = est.covariance[1], d = est.covariance[4];
       const double det = a * d - b * b;
       if (det > 0.0) nees_.add((d * e_d * e_d - 2.0 * b * e_d * e_a + a * e_a * e_a) / det);
+      if (have_odom_) add_state_nees();
     }
     if (have_odom_ && have_sp_) {
       track_y_.add(odom_.pose.pose.position.y - sp_.pose.pose.position.y);
@@ -97,6 +102,42 @@ class WallEffectGraph : public SimGraph {
       const double yaw = tactile_common::yaw_of(q);
       const double yaw_sp = 2.0 * std::atan2(qs.z, qs.w);
       track_yaw_.add(wrap(yaw - yaw_sp) * 180.0 / M_PI);
+    }
+  }
+
+  /// NEES of the EKF's 11-dim error state against the simulator's truth in
+  /// 004's wall frame W (y_W = wall normal into the free space, z_W up,
+  /// x_W = y_W x z_W): y, z, p_dot (W), R (body -> W), omega.
+  void add_state_nees() {
+    namespace we = wall_effect_ekf;
+    const auto& pp = odom_.pose.pose;
+    const tactile_sim::Vec3 p(pp.position.x, pp.position.y, pp.position.z);
+    const tactile_sim::Quat q(pp.orientation.w, pp.orientation.x, pp.orientation.y, pp.orientation.z);
+    const tactile_sim::Hit h = sim_->arena().closest(p.head<2>(), 1.0);
+    if (!h.hit) return;
+    const we::Vec3 yw(h.normal.x(), h.normal.y(), 0.0), zw(0.0, 0.0, 1.0);
+    we::Mat3 W;  // rows: the wall axes in the world frame (world -> W)
+    W.row(0) = yw.cross(zw).transpose();
+    W.row(1) = yw.transpose();
+    W.row(2) = zw.transpose();
+    we::WallState truth;
+    truth.y = h.distance;
+    truth.z = p.z() - sim_->arena().floor_z();
+    truth.R = W * q.toRotationMatrix();
+    const auto& tw = odom_.twist.twist;
+    truth.v = truth.R * we::Vec3(tw.linear.x, tw.linear.y, tw.linear.z);
+    truth.omega = we::Vec3(tw.angular.x, tw.angular.y, tw.angular.z);
+    const auto& ekf = ekf_->ekf();
+    const we::ErrVec e = we::boxminus(truth, ekf.state());  // R_true = R_est Exp(dtheta)
+    const Eigen::LDLT<we::ErrMat> ldlt(ekf.covariance());
+    const we::ErrVec Pe = ldlt.solve(e);
+    const double nees = e.dot(Pe);
+    state_nees_.add(nees);
+    // 95 % two-sided chi-square interval of one sample, 11 dof.
+    if (nees >= kChi2Lo11 && nees <= kChi2Hi11) ++state_nees_in95_;
+    for (int i = 0; i < we::kErrorDim; ++i) {
+      const double v = ekf.covariance()(i, i);
+      if (v > 0.0) component_nees_[static_cast<size_t>(i)].add(e[i] * e[i] / v);
     }
   }
 
@@ -110,6 +151,17 @@ class WallEffectGraph : public SimGraph {
     m["mean_distance_error_cm"] = num(100.0 * dist_.mean());
     m["rmse_distance_all_cm"] = num(100.0 * all_dist_.rms());
     m["nees_distance_direction"] = num(nees_.mean());  // 2 for a consistent filter
+    // Full error state (11 dof): mean NEES (11 for a consistent filter), the
+    // fraction of samples inside the 95 % chi-square interval of one sample
+    // [3.82, 21.92], and the normalised squared error of each component
+    // (y, z, v_W x3, dtheta x3, omega x3), 1 each when consistent.
+    m["nees_state"] = num(state_nees_.mean());
+    m["nees_state_dim"] = wall_effect_ekf::kErrorDim;
+    m["nees_state_samples"] = state_nees_.n;
+    m["nees_state_in_chi2_95"] = num(state_nees_.n ? static_cast<double>(state_nees_in95_) / static_cast<double>(state_nees_.n) : NAN);
+    nlohmann::json comp = nlohmann::json::array();
+    for (const auto& c : component_nees_) comp.push_back(num(c.mean()));
+    m["nees_components"] = comp;
     m["tracking_rms_y_cm"] = num(100.0 * track_y_.rms());
     m["tracking_rms_yaw_deg"] = num(track_yaw_.rms());
     const auto& es = ekf_->ekf().stats();
@@ -133,6 +185,8 @@ class WallEffectGraph : public SimGraph {
   struct Segment {
     Accumulator truth, dist, angle;
   };
+  static constexpr double kChi2Lo11 = 3.816, kChi2Hi11 = 21.920;  // chi2(11) 2.5 % / 97.5 %
+  std::shared_ptr<tactile_sim::SimLogic> sim_;
   std::shared_ptr<wall_effect_ekf::WallEffectEkfLogic> ekf_;
   std::shared_ptr<wall_effect_ekf::IndiControlLogic> indi_;
   std::shared_ptr<wall_effect_ekf::WallTrajectoryLogic> traj_;
@@ -140,7 +194,9 @@ class WallEffectGraph : public SimGraph {
   tactile_msgs::msg::WallEstimate truth_;
   nav_msgs::msg::Odometry odom_, sp_;
   bool have_truth_ = false, have_odom_ = false, have_sp_ = false;
-  Accumulator dist_, dir_, all_dist_, nees_, track_y_, track_yaw_;
+  Accumulator dist_, dir_, all_dist_, nees_, track_y_, track_yaw_, state_nees_;
+  size_t state_nees_in95_ = 0;
+  std::array<Accumulator, wall_effect_ekf::kErrorDim> component_nees_{};
   std::map<int, Segment> sweep_;
 };
 
