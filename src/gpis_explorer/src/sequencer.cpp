@@ -88,6 +88,7 @@ void SequencerParams::validate() const {
     fail("slow_fraction", "must be in (0, 1], got " + std::to_string(slow_fraction));
   }
   if (max_updates < 1) fail("max_updates", "must be >= 1");
+  if (!(std::isfinite(line_gain) && line_gain >= 0.0)) fail("line_gain", "must be >= 0");
   positive("max_time_s", max_time_s);
   positive("landing_duration_s", landing_duration_s);
 }
@@ -189,6 +190,15 @@ bool ExplorationSequencer::staging_for(const Eigen::Vector2d& from, const Eigen:
   *staging = s;
   *approach_heading = std::atan2(n.y(), n.x());
   return true;
+}
+
+double ExplorationSequencer::line_correction(const SequencerInput& in) const {
+  // Lateral (body y) velocity back onto the leg's line: a probe's line is
+  // known free of walls, a head-on leg is the one checked for clearance.
+  const Eigen::Vector2d nrm(-std::sin(heading_), std::cos(heading_));
+  const double e = (Eigen::Vector2d(in.x, in.y) - line_origin_).dot(nrm);
+  const double lim = 0.5 * p_.wall.v_max;
+  return std::clamp(-p_.line_gain * e, -lim, lim);
 }
 
 double ExplorationSequencer::forward_speed(const SequencerInput& in) const {
@@ -395,12 +405,20 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       sp.yaw_rate = yaw_rate_to(heading_, in.yaw);
       if (std::abs(err) < p_.yaw_tolerance) {
         leg_start_ = pos;
+        // The leg's line: from here along the heading, except the head-on leg
+        // (from the staging point along the normal) and the exit along an open
+        // probe (that probe's own line, flown without contact).
+        line_origin_ = pos;
+        if (after_turn_ == Phase::kGoToTarget && has_staging_) line_origin_ = staging_;
+        if (after_turn_ == Phase::kExitThrough && line_from_probe_) line_origin_ = open_origin_;
+        line_from_probe_ = false;
         enter(after_turn_, "aligned", in.t);
       }
       break;
     }
     case Phase::kProbe:
       sp.vx = forward_speed(in);  // 000 Methods "Flying Forward" at V_max
+      sp.vy = line_correction(in);
       sp.yaw_rate = yaw_rate_to(heading_, in.yaw);
       if (contact) {
         start_follow(in, true);
@@ -409,18 +427,21 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         if (open_probe_ < 0) {
           open_probe_ = probe_;
           open_heading_ = heading_;
+          open_origin_ = leg_start_;
         }
+        return_to_ = leg_start_;  // back along the probe's own line
         enter(Phase::kReturn, "probe found no wall", in.t);
       }
       break;
     case Phase::kReturn: {
-      const Eigen::Vector2d d = start_ - pos;
-      if (d.norm() < p_.target_radius) {
+      const Eigen::Vector2d d = return_to_ - pos;
+      if (d.norm() < 0.5 * p_.target_radius) {  // tighter: the next leg starts here
         ++probe_;
         if (exit_via_probe_) {
           // Through the opening along the probe's own line (flown without
           // contact), not a parallel line from wherever the last probe ended.
           exit_via_probe_ = false;
+          line_from_probe_ = true;
           heading_ = open_heading_;
           exit_from_ = pos;
           exit_distance_ = p_.probe_max_distance + p_.exit_confirm_distance;
@@ -488,6 +509,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         if (previous_ != Phase::kReturn) commit_points(in);
         if (probing_ && probe_ + 1 < p_.probe_directions && previous_ != Phase::kReturn) {
           // Back to the start, then the next probe.
+          return_to_ = leg_start_;
           enter(Phase::kReturn, "retreated: next probe", in.t);
           break;
         }
@@ -496,6 +518,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
           // A probe flew 2 m without touching anything in a walled place: an opening.
           explorer_.update();
           exit_via_probe_ = true;
+          return_to_ = open_origin_;
           enter(Phase::kReturn, "a probe found the opening: back to the start", in.t);
           break;
         }
@@ -512,6 +535,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
     case Phase::kGoToStaging: {
       sp.yaw_rate = yaw_rate_to(heading_, in.yaw);
       sp.vx = forward_speed(in);
+      sp.vy = line_correction(in);
       if (contact) {
         start_follow(in, false);
         break;
@@ -533,6 +557,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
     case Phase::kGoToTarget: {
       sp.yaw_rate = yaw_rate_to(heading_, in.yaw);
       sp.vx = forward_speed(in);
+      sp.vy = line_correction(in);
       if (contact) {
         start_follow(in, false);
         break;
@@ -555,6 +580,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
     }
     case Phase::kExitThrough:
       sp.vx = forward_speed(in);
+      sp.vy = line_correction(in);
       sp.yaw_rate = yaw_rate_to(heading_, in.yaw);
       if (contact) {
         start_follow(in, false);

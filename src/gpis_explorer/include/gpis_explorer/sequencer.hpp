@@ -111,6 +111,11 @@ struct SequencerParams {
   /// the first wall so that in a rectangular room every probe meets its wall
   /// head-on). false: the probes keep the start heading.
   bool align_probes = true;
+  /// Forward legs hold their line: body-y velocity -line_gain * lateral
+  /// offset (at most V_max / 2). An exit is flown out along the line that was
+  /// checked (the open probe's, or the head-on leg's), not a parallel line
+  /// up to target_radius beside it. [1/s]
+  double line_gain = 1.0;
   int max_updates = 40;                 ///< give up after this many GPIS updates (choice)
   double max_time_s = 600.0;            ///< give up after this long [s] (choice)
   double landing_duration_s = 2.0;      ///< LANDING -> DONE [s]
@@ -189,6 +194,7 @@ class ExplorationSequencer {
   double surface_clearance(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
   bool corner_clear(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
   double forward_speed(const SequencerInput& in) const;
+  double line_correction(const SequencerInput& in) const;
   void align_to_wall(const SequencerInput& in);
   bool near_corner(const Eigen::Vector2d& p) const;
   bool side_blocked(const SequencerInput& in) const;
@@ -221,7 +227,11 @@ class ExplorationSequencer {
   Eigen::Vector2d staging_{0, 0};
   double approach_heading_ = 0.0;
   double open_heading_ = 0.0;  ///< heading of the probe that found no wall
-  bool exit_via_probe_ = false;  ///< RETURN to the start, then out along the open probe
+  bool exit_via_probe_ = false;
+  bool line_from_probe_ = false;  ///< the next leg follows the open probe's line
+  Eigen::Vector2d open_origin_{0, 0};
+  Eigen::Vector2d return_to_{0, 0};  ///< RETURN goes here: the probe's origin (back along its line)  ///< where the open probe started
+  Eigen::Vector2d line_origin_{0, 0};  ///< the current forward leg's line passes here along heading_  ///< RETURN to the start, then out along the open probe
   Eigen::Vector2d target_{0, 0};
   double target_acq_ = 0.0, target_var_ = 0.0;
   Eigen::Vector2d exit_from_{0, 0};
