@@ -65,6 +65,7 @@ ParamMap GpisExplorerLogic::default_parameters() {
   m.set("slow_fraction", s.slow_fraction);
   m.set("align_probes", s.align_probes);
   m.set("line_gain", s.line_gain);
+  m.set("visited_radius", s.visited_radius);
   m.set("max_updates", static_cast<int64_t>(s.max_updates));
   m.set("max_time_s", s.max_time_s);
   m.set("landing_duration_s", s.landing_duration_s);
@@ -122,6 +123,7 @@ GpisExplorerLogic::Params GpisExplorerLogic::params_from(const ParamMap& m) {
   s.slow_fraction = m.get_double("slow_fraction");
   s.align_probes = m.get_bool("align_probes");
   s.line_gain = m.get_double("line_gain");
+  s.visited_radius = m.get_double("visited_radius");
   s.max_updates = static_cast<int>(std::min<int64_t>(nonneg_int("max_updates"), 1000000));
   s.max_time_s = m.get_double("max_time_s");
   s.landing_duration_s = m.get_double("landing_duration_s");

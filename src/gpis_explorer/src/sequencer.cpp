@@ -89,6 +89,7 @@ void SequencerParams::validate() const {
   }
   if (max_updates < 1) fail("max_updates", "must be >= 1");
   if (!(std::isfinite(line_gain) && line_gain >= 0.0)) fail("line_gain", "must be >= 0");
+  if (!(std::isfinite(visited_radius) && visited_radius >= 0.0)) fail("visited_radius", "must be >= 0");
   positive("max_time_s", max_time_s);
   positive("landing_duration_s", landing_duration_s);
 }
@@ -257,6 +258,7 @@ void ExplorationSequencer::start_follow(const SequencerInput& in, bool probing) 
     const double lateral = -std::sin(in.yaw) * d.x() + std::cos(in.yaw) * d.y();  // body y (left)
     if (std::abs(lateral) > p_.wall.side_deadband) side_ = lateral > 0 ? tactile_fsm::Side::kLeft : tactile_fsm::Side::kRight;
   }
+  if (!probing && has_target_ && visited_.size() < 1000) visited_.push_back(target_);
   enter(Phase::kFollowWall, "contact", in.t);
 }
 
@@ -293,6 +295,9 @@ bool ExplorationSequencer::choose_target(const Eigen::Vector2d& from) {
       if ((P[i] - from).norm() < p_.min_target_distance) continue;
       if (!g.contains(P[i])) continue;
       if (near_corner(P[i])) continue;  // never into a penalised corner
+      bool visited = false;  // a target already touched (its points may not fit in the budget)
+      for (const auto& v : visited_) visited = visited || (P[i] - v).norm() < p_.visited_radius;
+      if (visited) continue;
       cands.push_back({info.acquisition[i], info.variance[i], P[i]});
     }
   }

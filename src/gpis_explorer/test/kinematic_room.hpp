@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <vector>
 
@@ -21,12 +22,13 @@ struct Segment {
 
 /// Square room of side `side` centred at the origin, rotated by `yaw`, with a
 /// gap of `exit` metres centred on the wall at +y (before rotation).
-inline std::vector<Segment> room(double side, double exit, double yaw) {
+/// `offset` moves the gap's centre along that wall (+x before rotation).
+inline std::vector<Segment> room(double side, double exit, double yaw, double offset = 0.0) {
   const double h = side / 2;
   std::vector<Segment> w{{{-h, -h}, {h, -h}}, {{h, -h}, {h, h}}, {{-h, h}, {-h, -h}}};
   if (exit > 0) {
-    w.push_back({{h, h}, {exit / 2, h}});
-    w.push_back({{-exit / 2, h}, {-h, h}});
+    w.push_back({{h, h}, {offset + exit / 2, h}});
+    w.push_back({{offset - exit / 2, h}, {-h, h}});
   } else {
     w.push_back({{h, h}, {-h, h}});
   }
@@ -76,8 +78,11 @@ struct Run {
 /// Flies the sequencer in `walls` from the origin with heading yaw0.
 /// The closest approach to a wall is tracked while the drone is inside the
 /// room (room frame rotated by room_yaw, half side room_half).
+/// `on_step(seq, position, yaw)` is called after every step (optional).
 inline Run fly(gpis_explorer::ExplorationSequencer& seq, const std::vector<Segment>& walls, double yaw0,
-               double max_t = 400.0, double room_half = 1.0, double room_yaw = 0.0) {
+               double max_t = 400.0, double room_half = 1.0, double room_yaw = 0.0,
+               const std::function<void(const gpis_explorer::ExplorationSequencer&, const Eigen::Vector2d&, double)>&
+                   on_step = {}) {
   Run r;
   Eigen::Vector2d p(0, 0);
   double yaw = yaw0;
@@ -100,6 +105,7 @@ inline Run fly(gpis_explorer::ExplorationSequencer& seq, const std::vector<Segme
       (side == 0 ? in.point_left : in.point_right) = c ? Eigen::Vector2d(base + d * fx) : Eigen::Vector2d(NAN, NAN);
     }
     const auto out = seq.step(in);
+    if (on_step) on_step(seq, p, yaw);
     if (seq.phase() == gpis_explorer::Phase::kDone) break;
     p += dt * (out.setpoint.vx * fx + out.setpoint.vy * fy);
     yaw += dt * out.setpoint.yaw_rate;

@@ -96,3 +96,46 @@ TEST(Sequencer, RoomsItWasNotTunedOn) {
   }
   EXPECT_GE(found, 5);
 }
+
+TEST(Sequencer, TargetsAreApproachedHeadOnFromAStagingPoint) {
+  // An exit off the centre of its wall (0.25-0.85 m along it): the probes,
+  // turned orthogonal to the first wall, meet the four walls near their
+  // middles and miss it, so the exit is found through GPIS targets. Every
+  // target leg must start at the staging point approach_standoff inside the
+  // target along the GPIS normal (grad f / |grad f|, 000 eq. 36) and fly along
+  // that normal (head-on), and the staging point must keep path_clearance
+  // from the known surface points.
+  const double yaws[] = {0.3, -1.9};
+  for (double yaw : yaws) {
+    SequencerParams p;
+    ExplorationSequencer seq(p);
+    const auto walls = gpis_test::room(2.0, 0.6, yaw, 0.55);
+    int legs = 0;
+    Phase last = Phase::kHoverInit;
+    const auto r = gpis_test::fly(seq, walls, 0.0, 600.0, 1.0, yaw,
+                                  [&](const ExplorationSequencer& s, const Eigen::Vector2d& pos, double heading) {
+                                    if (s.phase() == Phase::kGoToTarget && last != Phase::kGoToTarget && s.has_staging()) {
+                                      ++legs;
+                                      const Eigen::Vector2d n = s.explorer().gpis().gradient(s.target()).normalized();
+                                      EXPECT_NEAR(s.approach_heading(), std::atan2(n.y(), n.x()), 1e-9);
+                                      EXPECT_LT((s.staging() - (s.target() - p.approach_standoff * n)).norm(), 1e-9);
+                                      EXPECT_LT((pos - s.staging()).norm(), p.target_radius + 0.02);
+                                      EXPECT_LT(std::abs(std::remainder(heading - s.approach_heading(), 2 * M_PI)),
+                                                p.yaw_tolerance + 0.01);
+                                      const auto& g = s.explorer().gpis();
+                                      for (std::size_t i = 0; i < g.size(); ++i) {
+                                        if (g.label(i) == 0.0) {
+                                          EXPECT_GE((g.point(i) - s.staging()).norm(), p.path_clearance - 1e-9);
+                                        }
+                                      }
+                                    }
+                                    last = s.phase();
+                                  });
+    std::printf("yaw %.2f: %s, updates %zu, staged %zu, direct %zu, min wall %.3f m in %s\n", yaw, to_string(r.outcome),
+                r.updates, seq.staged_targets(), seq.direct_targets(), r.min_wall_distance, to_string(r.min_wall_phase));
+    EXPECT_TRUE(r.exit_found && r.outside) << "yaw " << yaw;
+    EXPECT_GE(legs, 1) << "yaw " << yaw;
+    EXPECT_GE(r.updates, 1u);
+    EXPECT_GT(r.min_wall_distance, 0.05) << "yaw " << yaw;
+  }
+}

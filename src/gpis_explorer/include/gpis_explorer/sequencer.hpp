@@ -116,6 +116,11 @@ struct SequencerParams {
   /// checked (the open probe's, or the head-on leg's), not a parallel line
   /// up to target_radius beside it. [1/s]
   double line_gain = 1.0;
+  /// A target whose leg ended in a contact is visited: contour points within
+  /// this distance of it are not chosen again. Without it the drone re-flies
+  /// the same target once the onboard budget (50 points) is full and the
+  /// GPIS stops changing. [m]
+  double visited_radius = 0.3;
   int max_updates = 40;                 ///< give up after this many GPIS updates (choice)
   double max_time_s = 600.0;            ///< give up after this long [s] (choice)
   double landing_duration_s = 2.0;      ///< LANDING -> DONE [s]
@@ -163,6 +168,10 @@ class ExplorationSequencer {
   const GpisExplorer& explorer() const { return explorer_; }
   bool has_target() const { return has_target_; }
   Eigen::Vector2d target() const { return target_; }
+  /// The current target is approached head-on from staging() along approach_heading().
+  bool has_staging() const { return has_staging_; }
+  Eigen::Vector2d staging() const { return staging_; }
+  double approach_heading() const { return approach_heading_; }
   double target_acquisition() const { return target_acq_; }
   double target_variance() const { return target_var_; }
   /// Every contact point received (not downsampled), for maps and metrics.
@@ -236,6 +245,7 @@ class ExplorationSequencer {
   double target_acq_ = 0.0, target_var_ = 0.0;
   Eigen::Vector2d exit_from_{0, 0};
   double exit_distance_ = 0.8;  ///< contact-free distance from exit_from_ that confirms the exit
+  std::vector<Eigen::Vector2d> visited_;  ///< targets whose leg ended in a contact
   std::vector<ContactSample> contacts_;
   std::vector<Eigen::Vector2d> trajectory_;
   double last_traj_t_ = -1.0;
