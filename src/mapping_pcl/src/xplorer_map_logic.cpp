@@ -24,6 +24,7 @@ void XplorerMapLogic::Params::validate() const {
   if (!(max_odometry_age_s > 0.0)) bad("max_odometry_age_s", "must be > 0");
   if (!(min_state_time_s >= 0.0) || !std::isfinite(min_state_time_s)) bad("min_state_time_s", "must be finite and >= 0");
   if (frame_id.empty()) bad("frame_id", "must not be empty");
+  if (!(max_arm_age_s > 0.0)) bad("max_arm_age_s", "must be > 0");
 }
 
 ParamMap XplorerMapLogic::default_parameters() {
@@ -49,6 +50,11 @@ ParamMap XplorerMapLogic::default_parameters() {
   m.set("ply_binary", d.ply_binary);
   m.set("stamp_states", d.stamp_states);
   m.set("min_state_time_s", d.min_state_time_s);
+  m.set("edge_from_arms", d.stamping.edge_from_arms);
+  m.set("arm_hinge_offset", d.stamping.arm_hinge_offset);
+  m.set("arm_length", d.stamping.arm_length);
+  m.set("guard_radius", d.stamping.guard_radius);
+  m.set("max_arm_age_s", d.max_arm_age_s);
   return m;
 }
 
@@ -76,6 +82,11 @@ XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
   p.ply_binary = m.get_bool("ply_binary");
   p.stamp_states = m.get_string_array("stamp_states");
   p.min_state_time_s = m.get_double("min_state_time_s");
+  p.stamping.edge_from_arms = m.get_bool("edge_from_arms");
+  p.stamping.arm_hinge_offset = m.get_double("arm_hinge_offset");
+  p.stamping.arm_length = m.get_double("arm_length");
+  p.stamping.guard_radius = m.get_double("guard_radius");
+  p.max_arm_age_s = m.get_double("max_arm_age_s");
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {
@@ -129,6 +140,20 @@ void XplorerMapLogic::on_fsm_state(const tactile_msgs::msg::FsmState& msg) {
   fsm_state_since_s_ = tactile_common::to_seconds(tactile_common::from_stamp(msg.header.stamp)) - msg.time_in_state;
 }
 
+void XplorerMapLogic::on_arm_imu(const tactile_msgs::msg::ArmImuArray& msg) {
+  ++stats_.received_arm_imu;
+  const int64_t t = tactile_common::from_stamp(msg.header.stamp);
+  for (const auto& a : msg.arms) {
+    const double th = a.arm_angle;
+    if (a.arm_id > 3 || !std::isfinite(th) || std::abs(th) > 0.8) {  // 0.8 rad: beyond the 30 deg end stops
+      ++stats_.dropped_arm_samples;
+      continue;
+    }
+    arm_angles_[a.arm_id] = th;
+    arm_stamp_ns_[a.arm_id] = t;
+  }
+}
+
 std::optional<sensor_msgs::msg::PointCloud2> XplorerMapLogic::on_timer(int64_t now_ns) {
   const bool gated =
       fsm_state_ && !params_.stamp_states.empty() &&
@@ -148,6 +173,11 @@ std::optional<sensor_msgs::msg::PointCloud2> XplorerMapLogic::on_timer(int64_t n
     s.yaw = tactile_common::yaw_of(q);
     s.height = p.z - params_.floor_z;
     s.force_body = force_sum_ / static_cast<double>(forces_.size());
+    const int64_t max_age = tactile_common::from_seconds(params_.max_arm_age_s);
+    if (std::all_of(arm_stamp_ns_.begin(), arm_stamp_ns_.end(),
+                    [&](int64_t t) { return t >= 0 && now_ns - t <= max_age; })) {
+      s.arm_angles = arm_angles_;
+    }
     mapper_.update(s);
   }
   if (params_.publish_rate_hz <= 0.0) return std::nullopt;

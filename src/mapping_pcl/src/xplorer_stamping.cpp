@@ -1,6 +1,7 @@
 // XPLORER contact map stamping rules (001 Sec. IV-B, V-D).
 #include "mapping_pcl/xplorer_stamping.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -60,6 +61,20 @@ void XplorerMapParams::validate() const {
   if (!(rate_hz > 0.0) || !std::isfinite(rate_hz)) bad("rate_hz", "must be finite and > 0", rate_hz);
   if (!(slab_spacing > 0.0) || !std::isfinite(slab_spacing)) bad("slab_spacing", "must be finite and > 0", slab_spacing);
   if (!std::isfinite(min_flight_height)) bad("min_flight_height", "must be finite", min_flight_height);
+  if (!(arm_hinge_offset >= 0.0) || !std::isfinite(arm_hinge_offset)) bad("arm_hinge_offset", "must be finite and >= 0", arm_hinge_offset);
+  if (!(arm_length > 0.0) || !std::isfinite(arm_length)) bad("arm_length", "must be finite and > 0", arm_length);
+  if (!(guard_radius >= 0.0) || !std::isfinite(guard_radius)) bad("guard_radius", "must be finite and >= 0", guard_radius);
+}
+
+double outline_reach(const XplorerMapParams& p, const Eigen::Vector2d& d, const std::array<double, 4>& theta) {
+  static constexpr double kDir[4] = {-M_PI / 4, M_PI / 4, 3 * M_PI / 4, -3 * M_PI / 4};  // tactile_msgs/ArmImu.arm_id
+  double reach = -1e300;
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Vector2d tip = p.arm_hinge_offset * Eigen::Vector2d(std::cos(kDir[i]), std::sin(kDir[i])) +
+                                p.arm_length * Eigen::Vector2d(std::cos(kDir[i] + theta[i]), std::sin(kDir[i] + theta[i]));
+    reach = std::max(reach, tip.dot(d));
+  }
+  return reach + p.guard_radius;
 }
 
 XplorerContactMapper::XplorerContactMapper(const XplorerMapParams& params, PointMap& map)
@@ -69,9 +84,9 @@ Box XplorerContactMapper::face_slab(const ContactSample& s, BodyDirection contac
   return face_slab_world(s, Eigen::Rotation2Dd(s.yaw) * unit(contact));  // C_n in the world
 }
 
-Box XplorerContactMapper::face_slab_world(const ContactSample& s, const Eigen::Vector2d& d) const {
+Box XplorerContactMapper::face_slab_world(const ContactSample& s, const Eigen::Vector2d& d, double offset) const {
   Box b;
-  const double reach = p_.slab_offset + 0.5 * p_.slab_size.y();  // near face at slab_offset
+  const double reach = (offset >= 0.0 ? offset : p_.slab_offset) + 0.5 * p_.slab_size.y();  // near face at the offset
   b.center = Vec3(s.position.x() + reach * d.x(), s.position.y() + reach * d.y(), s.position.z());
   b.size = p_.slab_size;
   b.yaw = std::atan2(d.y(), d.x()) + M_PI / 2;  // box x along the face, y along C_n
@@ -121,7 +136,14 @@ int XplorerContactMapper::update(const ContactSample& s) {
   int stamped = 0;
   const Eigen::Rotation2Dd R(s.yaw);
   const Eigen::Vector2d c_w = p_.normal_from_force ? Eigen::Vector2d(-(R * s.force_body).normalized()) : Eigen::Vector2d(R * unit(*c));
-  map_->insert_box(face_slab_world(s, c_w), p_.slab_spacing);
+  double offset = p_.slab_offset;  // 001 Sec. IV-B: 0.21 m
+  if (p_.edge_from_arms && s.arm_angles && std::all_of(s.arm_angles->begin(), s.arm_angles->end(), [](double a) {
+        return std::isfinite(a);
+      })) {
+    offset = outline_reach(p_, R.inverse() * c_w, *s.arm_angles);  // the CAD outline with the arms as they are
+    ++stats_.offset_from_arms;
+  }
+  map_->insert_box(face_slab_world(s, c_w, offset), p_.slab_spacing);
   ++stats_.slabs;
   ++stamped;
   const Eigen::Vector2d m_w = Eigen::Rotation2Dd(-M_PI / 2) * c_w;  // lambda in the world (right-hand)

@@ -1,6 +1,7 @@
 // Node logic of the XPLORER contact mapper: parameters, inputs, PointCloud2, PLY.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -145,4 +146,48 @@ TEST(XplorerMapLogic, SavePlyWritesTheConfiguredFormat) {
   EXPECT_NE(s.find("comment frame map"), std::string::npos);
   EXPECT_NE(s.find("element vertex " + std::to_string(logic.map().size())), std::string::npos);
   std::remove(path.c_str());
+}
+
+// edge_from_arms: fresh angles of all four arms move the slab's near face to
+// the deflected outline (0.205988 m for arms 0/1 folded by -/+0.05 rad, see
+// test_xplorer_stamping); bad arm samples are counted and ignored; stale or
+// incomplete angles fall back to the fixed 0.21 m.
+TEST(XplorerMapLogic, ArmAnglesSetTheSlabOffset) {
+  auto arms = [](int64_t ns, std::array<double, 4> th) {
+    tactile_msgs::msg::ArmImuArray a;
+    tactile_common::to_stamp(ns, a.header.stamp);
+    for (uint8_t i = 0; i < 4; ++i) {
+      tactile_msgs::msg::ArmImu m;
+      m.arm_id = i;
+      m.arm_angle = th[i];
+      a.arms.push_back(m);
+    }
+    return a;
+  };
+  XplorerMapLogic logic(XplorerMapLogic::params_from(XplorerMapLogic::default_parameters()));
+  logic.on_odometry(odom(0, 0.0, 0.0, 0.7, 0.0));
+  logic.on_wrench_body(wrench(-2.0, 0.0));
+  auto bad = arms(0, {-0.05, 0.05, 0.0, 0.0});
+  bad.arms[2].arm_angle = std::nan("");
+  bad.arms[3].arm_angle = 1.0;  // beyond the end stops
+  bad.arms[1].arm_id = 7;
+  logic.on_arm_imu(bad);
+  EXPECT_EQ(logic.stats().dropped_arm_samples, 3u);
+  logic.on_timer(0);  // arms 1-3 never seen: fixed offset
+  EXPECT_EQ(logic.mapper().stats().offset_from_arms, 0u);
+  EXPECT_NEAR(logic.map().measure().min.x(), 0.21, 1e-6);
+
+  XplorerMapLogic fresh(XplorerMapLogic::params_from(XplorerMapLogic::default_parameters()));
+  fresh.on_odometry(odom(0, 0.0, 0.0, 0.7, 0.0));
+  fresh.on_wrench_body(wrench(-2.0, 0.0));
+  fresh.on_arm_imu(arms(0, {-0.05, 0.05, 0.0, 0.0}));
+  fresh.on_timer(0);
+  EXPECT_EQ(fresh.mapper().stats().offset_from_arms, 1u);
+  EXPECT_NEAR(fresh.map().measure().min.x(), 0.205988, 1e-6);
+  EXPECT_EQ(fresh.stats().received_arm_imu, 1u);
+  // 0.5 s later without new arm angles (max_arm_age_s 0.1): the fixed offset again.
+  fresh.on_odometry(odom(tactile_common::from_seconds(0.5), 0.0, 0.0, 0.7, 0.0));
+  fresh.on_timer(tactile_common::from_seconds(0.5));
+  EXPECT_EQ(fresh.mapper().stats().slabs, 2u);
+  EXPECT_EQ(fresh.mapper().stats().offset_from_arms, 1u);
 }

@@ -110,3 +110,43 @@ TEST(XplorerStamping, IdealBoxTraversalMapsTheBoxFootprint) {
   EXPECT_NEAR(r.obb_area / (L * W), 1.0, 0.02);
   EXPECT_NEAR(r.height, 0.5, 0.011);
 }
+
+// The CAD outline with the arms as they are (edge_from_arms). Undeflected,
+// along +b1: arms 0 and 1 reach (0.05 + 0.15) cos 45 deg = 0.141421 m, plus
+// the 0.07 m guard: 0.211421 m. Arm 0 (at -45 deg) folded back by -0.05 rad:
+// its motor at 0.05 (cos, sin)(-45 deg) + 0.15 (cos, sin)(-45 deg - 2.865 deg)
+// has x = 0.035355 + 0.15 cos(0.835398) = 0.035355 + 0.100633 = 0.135988; arm
+// 1 folded by +0.05 rad likewise: the reach drops to 0.205988 m.
+TEST(XplorerStamping, OutlineReachFromTheArmAnglesByHand) {
+  const XplorerMapParams p;
+  EXPECT_NEAR(outline_reach(p, {1, 0}, {0, 0, 0, 0}), 0.211421, 1e-6);
+  EXPECT_NEAR(outline_reach(p, {0, -1}, {0, 0, 0, 0}), 0.211421, 1e-6);
+  EXPECT_NEAR(outline_reach(p, {1, 0}, {-0.05, 0.05, 0, 0}), 0.205988, 1e-6);
+  // Only arm 0 folded: arm 1 still reaches 0.211421 m.
+  EXPECT_NEAR(outline_reach(p, {1, 0}, {-0.05, 0, 0, 0}), 0.211421, 1e-6);
+
+  // The stamped slab's near face follows the outline when arm angles come
+  // with the sample, the fixed 0.21 m when they do not (or are NaN).
+  PointMap map;
+  XplorerContactMapper m(p, map);
+  ContactSample s = sample(0, Vec3(0, 0, 0.7), 0.0, {-2, 0});
+  s.arm_angles = std::array<double, 4>{-0.05, 0.05, 0, 0};
+  ASSERT_EQ(m.update(s), 1);
+  EXPECT_NEAR(map.measure().min.x(), 0.205988, 1e-6);
+  EXPECT_EQ(m.stats().offset_from_arms, 1u);
+  PointMap map2;
+  XplorerContactMapper m2(p, map2);
+  s.arm_angles = std::array<double, 4>{std::nan(""), 0.05, 0, 0};
+  ASSERT_EQ(m2.update(s), 1);
+  EXPECT_NEAR(map2.measure().min.x(), 0.21, 1e-6);
+  EXPECT_EQ(m2.stats().offset_from_arms, 0u);
+  XplorerMapParams off;
+  off.edge_from_arms = false;
+  PointMap map3;
+  XplorerContactMapper m3(off, map3);
+  s.arm_angles = std::array<double, 4>{-0.05, 0.05, 0, 0};
+  ASSERT_EQ(m3.update(s), 1);
+  EXPECT_NEAR(map3.measure().min.x(), 0.21, 1e-6);
+  off.arm_length = 0.0;
+  EXPECT_THROW(off.validate(), std::invalid_argument);
+}

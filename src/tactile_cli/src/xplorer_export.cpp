@@ -31,6 +31,8 @@ nlohmann::json run_export(const ExportOptions& o) {
   if (reader.find_topic(MapLogic::kFsmStateTopic)) topics.push_back(MapLogic::kFsmStateTopic);
   if (have_wrench) {
     topics.push_back(MapLogic::kWrenchBodyTopic);
+    // The arm angles place the slabs at the deflected outline (mapping edge_from_arms).
+    if (reader.find_topic(MapLogic::kArmImuTopic)) topics.push_back(MapLogic::kArmImuTopic);
   } else {
     force = add_xplorer_force_est(host, {});
     topics.insert(topics.end(), {XplorerForceEstLogic::kArmImuTopic, XplorerForceEstLogic::kImuTopic,

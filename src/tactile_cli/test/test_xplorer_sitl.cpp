@@ -83,9 +83,11 @@ TEST(XplorerSitl, BoxTraversalClosesTheLoopAndMapsTheBox) {
   EXPECT_TRUE(x["loop_closed"].get<bool>());
   EXPECT_GE(x["turns"].get<int>(), 3);
   EXPECT_GE(x["turns_recontacted"].get<int>(), 3);  // unlike the rigid chassis (below)
-  EXPECT_NEAR(x["map_length_m"].get<double>(), 1.22, 0.05);
-  EXPECT_NEAR(x["map_width_m"].get<double>(), 1.0, 0.05);
-  EXPECT_GT(x["map_area_accuracy"].get<double>(), 0.95);
+  // Slab near faces at the deflected arms' outline (mapping edge_from_arms):
+  // 1.210 x 0.993 m, 98.5 % (the fixed 0.21 m gave 1.207 x 0.984 m, 97.4 %).
+  EXPECT_NEAR(x["map_length_m"].get<double>(), 1.22, 0.02);
+  EXPECT_NEAR(x["map_width_m"].get<double>(), 1.0, 0.02);
+  EXPECT_GE(x["map_area_accuracy"].get<double>(), 0.98);  // the goal (001: 96.72 %)
 }
 
 // 001 Sec. V-C4, Fig. 5(iii): the same box with a rigid chassis

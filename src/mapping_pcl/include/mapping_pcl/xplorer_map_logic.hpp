@@ -3,6 +3,7 @@
 // cloud out (sensor_msgs/PointCloud2) and, on request, a PLY file. No rclcpp.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <deque>
 #include <optional>
@@ -16,6 +17,7 @@
 #include "nav_msgs/msg/odometry.hpp"
 #include "sensor_msgs/msg/point_cloud2.hpp"
 #include "tactile_common/parameters.hpp"
+#include "tactile_msgs/msg/arm_imu_array.hpp"
 #include "tactile_msgs/msg/fsm_state.hpp"
 
 namespace mapping_pcl {
@@ -27,6 +29,7 @@ class XplorerMapLogic {
   static constexpr const char* kOdometryTopic = "/odom";                   // nav_msgs/msg/Odometry
   static constexpr const char* kCloudTopic = "/xplorer/map";               // sensor_msgs/msg/PointCloud2
   static constexpr const char* kFsmStateTopic = "/xplorer/fsm_state";      // tactile_msgs/msg/FsmState (optional)
+  static constexpr const char* kArmImuTopic = "/arm_imu";                  // tactile_msgs/msg/ArmImuArray (optional: edge_from_arms)
 
   struct Params {
     XplorerMapParams stamping;
@@ -43,6 +46,7 @@ class XplorerMapLogic {
     /// the body force points across the corner (choice; 001 gates on force only).
     std::vector<std::string> stamp_states = {"tactile_traversal"};
     double min_state_time_s = 2.0;   ///< ... and has been in it this long (choice: skips post-turn transients)
+    double max_arm_age_s = 0.1;      ///< older arm angles: the fixed slab_offset is used (choice; arm IMUs at 50 Hz)
     void validate() const;
   };
 
@@ -54,6 +58,8 @@ class XplorerMapLogic {
     uint64_t ticks_without_input = 0; ///< timer ticks with no or stale odometry/force
     uint64_t published = 0;
     uint64_t ticks_gated = 0;         ///< timer ticks skipped: FSM state not in stamp_states
+    uint64_t received_arm_imu = 0;
+    uint64_t dropped_arm_samples = 0; ///< arm samples with a bad arm_id or a non-finite / > 0.8 rad angle
   };
 
   static tactile_common::ParamMap default_parameters();
@@ -64,6 +70,8 @@ class XplorerMapLogic {
   void on_wrench_body(const geometry_msgs::msg::WrenchStamped& msg);
   void on_odometry(const nav_msgs::msg::Odometry& msg);
   void on_fsm_state(const tactile_msgs::msg::FsmState& msg);
+  /// Arm deflections for the CAD outline (stamping.edge_from_arms).
+  void on_arm_imu(const tactile_msgs::msg::ArmImuArray& msg);
   /// Timer at stamping.rate_hz (30 Hz): stamps slabs; returns the cloud when
   /// a publication is due.
   std::optional<sensor_msgs::msg::PointCloud2> on_timer(int64_t now_ns);
@@ -90,6 +98,8 @@ class XplorerMapLogic {
   std::optional<std::string> fsm_state_;
   double fsm_state_since_s_ = 0.0;  ///< stamp time of entering the current state
   int64_t last_publish_ns_ = -1;
+  std::array<double, 4> arm_angles_{};
+  std::array<int64_t, 4> arm_stamp_ns_{-1, -1, -1, -1};
 };
 
 }  // namespace mapping_pcl

@@ -39,6 +39,17 @@ struct XplorerMapParams {
   /// true = opposite to the measured force (the actual contact normal; for a
   /// vehicle whose yaw is not square to the wall) (choice).
   bool normal_from_force = false;
+  /// Face-slab offset from the CAD model with the arms as they are (001 Sec.
+  /// IV-B maps with "the CAD model of XPLORER"): the reach along C_n of the
+  /// deflected arms' propeller guards, from the arm IMU angles, instead of the
+  /// fixed slab_offset (kept when no arm angles are known). Under the
+  /// traversal force the compliant arms fold back and the vehicle centre sits
+  /// a few mm closer than 0.21 m, which the fixed offset maps into the
+  /// obstacle (choice).
+  bool edge_from_arms = true;
+  double arm_hinge_offset = 0.05;  ///< centre -> arm hinge along the diagonal [m] (vehicle CAD; the SITL's value)
+  double arm_length = 0.15;        ///< hinge -> motor [m] (vehicle CAD)
+  double guard_radius = 0.07;      ///< propeller guard radius round the motor [m] (vehicle CAD)
   void validate() const;                       ///< throws std::invalid_argument "XplorerMapParams.<field>: <reason>"
 };
 
@@ -49,7 +60,15 @@ struct ContactSample {
   double yaw = 0.0;                      ///< [rad]
   double height = 0.0;                   ///< above the floor [m]
   Eigen::Vector2d force_body = Eigen::Vector2d::Zero();  ///< filtered external force, body x-y [N]
+  /// Arm deflections theta_i (arm_id 0..3 at -45, 45, 135, -135 deg) [rad], if known.
+  std::optional<std::array<double, 4>> arm_angles;
 };
+
+/// Reach of the vehicle's outline along the body direction `d` (unit, x-y):
+/// max over the arms of (hinge_i + l (cos, sin)(dir_i + theta_i)) . d plus the
+/// guard radius [m]. Undeflected, along a body axis: (0.05 + 0.15) cos 45 deg
+/// + 0.07 = 0.2114 m (001: 0.21 m).
+double outline_reach(const XplorerMapParams& p, const Eigen::Vector2d& d, const std::array<double, 4>& theta);
 
 class XplorerContactMapper {
  public:
@@ -61,6 +80,7 @@ class XplorerContactMapper {
     uint64_t skipped_not_flying = 0;
     uint64_t skipped_low_force = 0;
     uint64_t rejected_nonfinite = 0;
+    uint64_t offset_from_arms = 0;    ///< slabs placed with the deflected-arm outline
   };
 
   XplorerContactMapper(const XplorerMapParams& params, PointMap& map);
@@ -70,8 +90,9 @@ class XplorerContactMapper {
 
   /// The slab that `update` would stamp for a contact direction (tests, pictures).
   Box face_slab(const ContactSample& s, BodyDirection contact) const;
-  /// Face slab along an arbitrary world direction `d` (unit, x-y).
-  Box face_slab_world(const ContactSample& s, const Eigen::Vector2d& d) const;
+  /// Face slab along an arbitrary world direction `d` (unit, x-y), near face
+  /// `offset` from the vehicle centre (default: slab_offset).
+  Box face_slab_world(const ContactSample& s, const Eigen::Vector2d& d, double offset = -1.0) const;
   Box corner_slab(const ContactSample& s, const Eigen::Vector2d& previous_contact_world,
                   const Eigen::Vector2d& contact_world) const;
 

@@ -27,6 +27,9 @@ class XplorerMapComponent : public rclcpp::Node {
     state_sub_ = create_subscription<tactile_msgs::msg::FsmState>(
       XplorerMapLogic::kFsmStateTopic, 10,
       [this](const tactile_msgs::msg::FsmState & msg) {logic_.on_fsm_state(msg);});
+    arm_sub_ = create_subscription<tactile_msgs::msg::ArmImuArray>(
+      XplorerMapLogic::kArmImuTopic, rclcpp::SensorDataQoS(),
+      [this](const tactile_msgs::msg::ArmImuArray & msg) {logic_.on_arm_imu(msg);});
     timer_ = create_wall_timer(std::chrono::nanoseconds(logic_.period_ns()), [this]() {
         if (auto cloud = logic_.on_timer(now().nanoseconds())) {cloud_pub_->publish(*cloud);}
       });
@@ -46,6 +49,7 @@ class XplorerMapComponent : public rclcpp::Node {
   rclcpp::Subscription<geometry_msgs::msg::WrenchStamped>::SharedPtr wrench_sub_;
   rclcpp::Subscription<nav_msgs::msg::Odometry>::SharedPtr odom_sub_;
   rclcpp::Subscription<tactile_msgs::msg::FsmState>::SharedPtr state_sub_;
+  rclcpp::Subscription<tactile_msgs::msg::ArmImuArray>::SharedPtr arm_sub_;
   rclcpp::TimerBase::SharedPtr timer_;
 };
 

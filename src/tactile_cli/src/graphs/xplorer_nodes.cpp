@@ -77,6 +77,8 @@ std::shared_ptr<mapping_pcl::XplorerMapLogic> add_xplorer_mapping(Host& host, co
                                                 [l](const nav_msgs::msg::Odometry& m) { l->on_odometry(m); });
   host.bus().subscribe<tactile_msgs::msg::FsmState>(Logic::kFsmStateTopic,
                                                     [l](const tactile_msgs::msg::FsmState& m) { l->on_fsm_state(m); });
+  host.bus().subscribe<tactile_msgs::msg::ArmImuArray>(Logic::kArmImuTopic,
+                                                       [l](const tactile_msgs::msg::ArmImuArray& m) { l->on_arm_imu(m); });
   host.executor().add_timer(
       logic->period_ns(),
       [h, l](int64_t now_ns) {
@@ -94,7 +96,10 @@ std::shared_ptr<mapping_pcl::XplorerMapLogic> add_xplorer_mapping(Host& host, co
                        {"ticks_without_input", s.ticks_without_input},
                        {"published", s.published},
                        {"ticks_gated", s.ticks_gated},
+                       {"received_arm_imu", s.received_arm_imu},
+                       {"dropped_arm_samples", s.dropped_arm_samples},
                        {"slabs", m.slabs},
+                       {"offset_from_arms", m.offset_from_arms},
                        {"corner_slabs", m.corner_slabs}}};
   });
   return logic;
