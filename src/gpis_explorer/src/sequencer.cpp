@@ -120,6 +120,26 @@ double ExplorationSequencer::yaw_rate_to(double heading, double yaw) const {
   return std::clamp(p_.yaw_gain * wrap(heading - yaw), -p_.wall.omega_max, p_.wall.omega_max);
 }
 
+bool ExplorationSequencer::fly_leg(const SequencerInput& in, bool contact, tactile_fsm::Setpoint* sp) {
+  // Forward along heading_ on its line; a contact starts a wall follow, a
+  // penalised corner 0.1 m ahead a retreat (000: never fly into a corner).
+  sp->yaw_rate = yaw_rate_to(heading_, in.yaw);
+  sp->vx = forward_speed(in);
+  sp->vy = line_correction(in);
+  if (contact) {
+    start_follow(in, false);
+    return true;
+  }
+  const Eigen::Vector2d pos(in.x, in.y);
+  if (near_corner(pos + Eigen::Vector2d(std::cos(in.yaw), std::sin(in.yaw)) * 0.1)) {
+    ++corner_aborts_;
+    follow_points_.clear();
+    enter(Phase::kRetreat, "approaching a penalised corner", in.t);
+    return true;
+  }
+  return false;
+}
+
 bool ExplorationSequencer::near_corner(const Eigen::Vector2d& q) const {
   for (const auto& c : explorer_.last().corners) {
     if ((q - c).norm() < p_.explorer.corner_exclusion) return true;
@@ -538,19 +558,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       }
       break;
     case Phase::kGoToStaging: {
-      sp.yaw_rate = yaw_rate_to(heading_, in.yaw);
-      sp.vx = forward_speed(in);
-      sp.vy = line_correction(in);
-      if (contact) {
-        start_follow(in, false);
-        break;
-      }
-      if (near_corner(pos + Eigen::Vector2d(std::cos(in.yaw), std::sin(in.yaw)) * 0.1)) {
-        ++corner_aborts_;
-        follow_points_.clear();
-        enter(Phase::kRetreat, "approaching a penalised corner", in.t);
-        break;
-      }
+      if (fly_leg(in, contact, &sp)) break;
       const Eigen::Vector2d dir(std::cos(heading_), std::sin(heading_));
       if ((staging_ - pos).norm() < p_.target_radius || (staging_ - pos).dot(dir) < 0.0) {
         heading_ = approach_heading_;  // face the wall along its normal: head-on
@@ -560,19 +568,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       break;
     }
     case Phase::kGoToTarget: {
-      sp.yaw_rate = yaw_rate_to(heading_, in.yaw);
-      sp.vx = forward_speed(in);
-      sp.vy = line_correction(in);
-      if (contact) {
-        start_follow(in, false);
-        break;
-      }
-      if (near_corner(pos + Eigen::Vector2d(std::cos(in.yaw), std::sin(in.yaw)) * 0.1)) {
-        ++corner_aborts_;
-        follow_points_.clear();
-        enter(Phase::kRetreat, "approaching a penalised corner", in.t);
-        break;
-      }
+      if (fly_leg(in, contact, &sp)) break;
       // Past the target along the leg (or within the radius): free space there.
       const Eigen::Vector2d dir(std::cos(heading_), std::sin(heading_));
       if ((target_ - pos).norm() < p_.target_radius || (target_ - pos).dot(dir) < 0.0) {

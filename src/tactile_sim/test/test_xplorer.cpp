@@ -39,6 +39,18 @@ Arena wall_x(double xw) {
   return a;
 }
 
+/// Fly at 0.1 m/s (setpoint ramp with velocity feed-forward) from x = 0 to a
+/// setpoint at x = 0.35 m and hold it, 6 s in all (the wall_x(0.5) press).
+void press_into_wall(Xplorer& v, const Arena& arena) {
+  for (int k = 0; k < 6000; ++k) {
+    const double x = std::min(0.1 * k * kDt, 0.35);
+    PositionSetpoint sp = sp_at(x, 0, 0.7);
+    if (x < 0.35) sp.velocity_ff = Vec3(0.1, 0, 0);
+    v.set_setpoint(sp);
+    v.step(kDt, arena);
+  }
+}
+
 }  // namespace
 
 TEST(Xplorer, HoverThrustEqualsWeightAndNormalisedCommand) {
@@ -161,13 +173,7 @@ TEST(Xplorer, WallContactDeflectsArmsConsistentlyAndLogsEachArmOnce) {
   // Approach at 0.1 m/s (setpoint ramp with velocity feed-forward). First
   // contact at x = 0.5 - 0.141 - 0.07 = 0.289 (motor 0.2 m out along the
   // diagonal, guard 0.07 m); the setpoint 0.35 presses 6 cm further.
-  for (int k = 0; k < 6000; ++k) {
-    const double x = std::min(0.1 * k * kDt, 0.35);
-    PositionSetpoint sp = sp_at(x, 0, 0.7);
-    if (x < 0.35) sp.velocity_ff = Vec3(0.1, 0, 0);
-    v.set_setpoint(sp);
-    v.step(kDt, arena);
-  }
+  press_into_wall(v, arena);
   const auto ev = v.take_collisions();
   int n0 = 0, n1 = 0;
   for (const auto& e : ev) {
@@ -300,13 +306,7 @@ TEST(Xplorer, RigidArmsAgainstAWallGiveNoDeflection) {
   p.rigid_arms = true;
   Xplorer v(p, at(0, 0, 0.7));
   const Arena arena = wall_x(0.5);
-  for (int k = 0; k < 6000; ++k) {
-    const double x = std::min(0.1 * k * kDt, 0.35);
-    PositionSetpoint sp = sp_at(x, 0, 0.7);
-    if (x < 0.35) sp.velocity_ff = Vec3(0.1, 0, 0);
-    v.set_setpoint(sp);
-    v.step(kDt, arena);
-  }
+  press_into_wall(v, arena);
   EXPECT_LT(v.external_force_world().x(), -0.02);  // in contact
   for (int i = 0; i < 4; ++i) EXPECT_EQ(v.arm_angles()[i], 0.0) << i;
   // Rigid: the guard edge stays 0.2114 m ahead of the centre (compliant arms fold back).

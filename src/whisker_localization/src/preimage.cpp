@@ -202,6 +202,24 @@ Pose2 mean_pose(const PoseSet& s, double* spread) {
   return m;
 }
 
+namespace {
+/// Mean of the poses within `radius` of pose `centre` of s; *spread = the
+/// largest distance of any pose of s from that mean.
+Pose2 mean_near(const PoseSet& s, std::size_t centre, double radius, double* spread) {
+  PoseSet near;
+  for (const auto& q : s.poses) {
+    if (std::hypot(q.x - s.poses[centre].x, q.y - s.poses[centre].y) <= radius) near.poses.push_back(q);
+  }
+  Pose2 m = mean_pose(near, nullptr);
+  if (spread) {
+    double r = 0.0;
+    for (const auto& q : s.poses) r = std::max(r, std::hypot(q.x - m.x, q.y - m.y));
+    *spread = r;
+  }
+  return m;
+}
+}  // namespace
+
 Pose2 best_pose(const PoseSet& s, double radius, double* spread) {
   if (s.size() > 2000 || s.size() < 3) return mean_pose(s, spread);
   const double r2 = radius * radius;
@@ -217,34 +235,14 @@ Pose2 best_pose(const PoseSet& s, double radius, double* spread) {
       best = i;
     }
   }
-  PoseSet near;
-  for (const auto& q : s.poses) {
-    if (std::hypot(q.x - s.poses[best].x, q.y - s.poses[best].y) <= radius) near.poses.push_back(q);
-  }
-  Pose2 m = mean_pose(near, nullptr);
-  if (spread) {
-    double r = 0.0;
-    for (const auto& q : s.poses) r = std::max(r, std::hypot(q.x - m.x, q.y - m.y));
-    *spread = r;
-  }
-  return m;
+  return mean_near(s, best, radius, spread);
 }
 
 Pose2 best_pose(const PoseSet& s, const std::vector<double>& cost, double radius, double* spread) {
   if (s.empty() || cost.size() != s.size()) return best_pose(s, radius, spread);
   // The most consistent pose (least accumulated residual) and its neighbours.
   const std::size_t best = static_cast<std::size_t>(std::min_element(cost.begin(), cost.end()) - cost.begin());
-  PoseSet near;
-  for (const auto& q : s.poses) {
-    if (std::hypot(q.x - s.poses[best].x, q.y - s.poses[best].y) <= radius) near.poses.push_back(q);
-  }
-  Pose2 m = mean_pose(near, nullptr);
-  if (spread) {
-    double r = 0.0;
-    for (const auto& q : s.poses) r = std::max(r, std::hypot(q.x - m.x, q.y - m.y));
-    *spread = r;
-  }
-  return m;
+  return mean_near(s, best, radius, spread);
 }
 
 // Contact point of the newest observation and the boundary slope phi_E from

@@ -33,6 +33,15 @@ geometry_msgs::msg::WrenchStamped moment(int64_t ns, double m) {
   return w;
 }
 
+
+/// Node parameters m with the localization started from a prior pose.
+WhiskerLocalizationLogic::Params with_prior(ParamMap m, const Pose2& base) {
+  m.set("use_prior", true);
+  m.set("prior_x", base.x);
+  m.set("prior_y", base.y);
+  m.set("prior_yaw", base.theta);
+  return WhiskerLocalizationLogic::params_from(m);
+}
 }  // namespace
 
 TEST(WhiskerLocalizationLogic, RepoConfigEqualsDefaults) {
@@ -136,11 +145,7 @@ TEST(WhiskerLocalizationLogic, SweepAlongTheCornerLocalizesTheBase) {
   const double heading = -3.14159265358979 / 2 + attack;
   const double reach = L - t.penetration / std::cos(attack);
   Pose2 base{-0.012 - reach * std::cos(heading), -reach * std::sin(heading), heading};
-  m.set("use_prior", true);
-  m.set("prior_x", base.x);
-  m.set("prior_y", base.y);
-  m.set("prior_yaw", base.theta);
-  WhiskerLocalizationLogic logic(WhiskerLocalizationLogic::params_from(m));
+  WhiskerLocalizationLogic logic(with_prior(m, base));
   const ElasticaSolver solver{BeamParams{}};
   const BoundaryMap world({concave_corner_polyline(0.05, 0.15, 0.00005)}, 0.001);
   const Pose2 motion{t.step * std::cos(-heading), t.step * std::sin(-heading), 0.0};
@@ -183,11 +188,7 @@ TEST(WhiskerLocalizationLogic, MinStepLocalizesEveryHalfMillimetreAndRestartEmpt
   const Table2Params t;
   Pose2 base, step;
   table2_sweep(t, 1, base, step);
-  m.set("use_prior", true);
-  m.set("prior_x", base.x);
-  m.set("prior_y", base.y);
-  m.set("prior_yaw", base.theta);
-  WhiskerLocalizationLogic logic(WhiskerLocalizationLogic::params_from(m));
+  WhiskerLocalizationLogic logic(with_prior(m, base));
   const ElasticaSolver solver{BeamParams{}};
   const BoundaryMap world({concave_corner_polyline(0.05, 0.15, 0.00005)}, 0.001);
   const Pose2 fine{0.2 * step.x, 0.2 * step.y, 0.0};  // 0.1 mm

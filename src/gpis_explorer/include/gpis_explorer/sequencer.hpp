@@ -206,6 +206,9 @@ class ExplorationSequencer {
   double line_correction(const SequencerInput& in) const;
   void align_to_wall(const SequencerInput& in);
   bool near_corner(const Eigen::Vector2d& p) const;
+  /// One step of a forward leg (target or staging point): setpoint into *sp;
+  /// true when a contact or a penalised corner ahead changed the phase.
+  bool fly_leg(const SequencerInput& in, bool contact, tactile_fsm::Setpoint* sp);
   bool side_blocked(const SequencerInput& in) const;
   void add(const Eigen::Vector2d& p, double label);
 
