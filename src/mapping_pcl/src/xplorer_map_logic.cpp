@@ -90,11 +90,7 @@ XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {
-    const std::string what = e.what();
-    const auto dot = what.find('.');
-    const auto end = what.find_first_of(":[", dot);
-    const auto colon = what.find(": ");
-    throw m.error(what.substr(dot + 1, end - dot - 1), colon == std::string::npos ? what : what.substr(colon + 2));
+    throw m.error_from(e);  // "<Type>.<field>: <reason>" -> parameter <field>
   }
   return p;
 }

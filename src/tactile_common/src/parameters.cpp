@@ -205,6 +205,14 @@ ParamError ParamMap::error(const std::string& key, const std::string& reason) co
   return ParamError(origin(key) + ": " + node_ + ".ros__parameters." + key + ": " + reason);
 }
 
+ParamError ParamMap::error_from(const std::invalid_argument& e) const {
+  const std::string what = e.what();
+  const auto dot = what.find('.');
+  const auto end = what.find_first_of(":[", dot);
+  const auto colon = what.find(": ");
+  return error(what.substr(dot + 1, end - dot - 1), colon == std::string::npos ? what : what.substr(colon + 2));
+}
+
 const ParamValue& ParamMap::at(const std::string& key) const {
   auto it = values_.find(key);
   if (it == values_.end()) throw error(key, "missing (not declared by the node)");

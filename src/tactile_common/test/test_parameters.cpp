@@ -151,3 +151,15 @@ TEST(Time, StampRoundTrip) {
   EXPECT_EQ(tactile_common::from_stamp(s), 3'250'000'001LL);
   EXPECT_EQ(tactile_common::from_seconds(0.02), 20'000'000LL);
 }
+
+TEST(Parameters, ErrorFromValidateMessageNamesTheField) {
+  ParamMap m("tdorc_filter", "defaults");
+  m.set("window", int64_t{1});
+  m.set("bandpass_a", std::vector<double>{1.0, -2.0, 1.0});
+  // "<Type>.<field>: <reason>" -> key <field>, reason after ": ".
+  EXPECT_EQ(std::string(m.error_from(std::invalid_argument("TdorcParams.window: must be >= 2, got 1")).what()),
+            "defaults: tdorc_filter.ros__parameters.window: must be >= 2, got 1");
+  // An indexed field "<field>[i]" names the array parameter.
+  EXPECT_EQ(std::string(m.error_from(std::invalid_argument("TdorcParams.bandpass_a[0]: must be 1")).what()),
+            "defaults: tdorc_filter.ros__parameters.bandpass_a: must be 1");
+}

@@ -81,13 +81,7 @@ TdorcFilterLogic::Params TdorcFilterLogic::params_from(const ParamMap& m) {
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {
-    // "TdorcParams.<field>[i]: <reason>" -> parameter <field>.
-    const std::string what = e.what();
-    const auto dot = what.find('.');
-    const auto end = what.find_first_of(":[", dot);
-    const auto colon = what.find(": ");
-    const std::string key = what.substr(dot + 1, end - dot - 1);
-    throw m.error(key, colon == std::string::npos ? what : what.substr(colon + 2));
+    throw m.error_from(e);  // "<Type>.<field>: <reason>" -> parameter <field>
   }
   return p;
 }

@@ -125,12 +125,7 @@ XplorerForceEstLogic::Params XplorerForceEstLogic::params_from(const ParamMap& m
   try {
     p.validate();
   } catch (const std::invalid_argument& ex) {
-    // "Params.<field>[i]: <reason>" / "XplorerForceEstLogic.<field>: <reason>" -> parameter <field>.
-    const std::string what = ex.what();
-    const auto dot = what.find('.');
-    const auto end = what.find_first_of(":[", dot);
-    const auto colon = what.find(": ");
-    throw m.error(what.substr(dot + 1, end - dot - 1), colon == std::string::npos ? what : what.substr(colon + 2));
+    throw m.error_from(ex);  // "<Type>.<field>: <reason>" -> parameter <field>
   }
   return p;
 }

@@ -60,6 +60,11 @@ class ParamMap {
   /// it, or the map's own source for defaults).
   /// Node logic uses it when a value has the right type but is invalid.
   ParamError error(const std::string& key, const std::string& reason) const;
+  /// The parameter error for a core Params::validate() failure whose message
+  /// reads "<Type>.<field>[<i>]: <reason>" (the workspace convention): the
+  /// key is <field>, the reason the text after ": " (the whole message when
+  /// it has no ": ").
+  ParamError error_from(const std::invalid_argument& e) const;
 
   /// Overlays `other` onto this map: keys of `other` must exist here (unknown
   /// keys are typos) and have a compatible type; the source of each error is
