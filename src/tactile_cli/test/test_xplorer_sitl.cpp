@@ -75,43 +75,51 @@ TEST(XplorerSitl, StaticWrenchSurvivesFaultyArmImusAndSpikes) {
 }
 
 // 001 Sec. V-C2 / V-D: start outside the 1.22 m x 1.0 m box, traverse it with
-// all three states, close the loop, map it (001: 1.231 x 1.019 m, 96.72 %).
-TEST(XplorerSitl, BoxTraversalClosesTheLoopAndMapsTheBox) {
-  const auto m = run("xplorer_box_traversal.yaml");
-  ASSERT_TRUE(m["success"].get<bool>());
-  const auto& x = m["xplorer"];
-  EXPECT_TRUE(x["loop_closed"].get<bool>());
-  EXPECT_GE(x["turns"].get<int>(), 3);
-  EXPECT_GE(x["turns_recontacted"].get<int>(), 3);  // unlike the rigid chassis (below)
-  // Slab near faces at the deflected arms' outline (mapping edge_from_arms):
-  // 1.210 x 0.993 m, 98.5 % (the fixed 0.21 m gave 1.207 x 0.984 m, 97.4 %).
-  EXPECT_NEAR(x["map_length_m"].get<double>(), 1.22, 0.02);
-  EXPECT_NEAR(x["map_width_m"].get<double>(), 1.0, 0.02);
-  EXPECT_GE(x["map_area_accuracy"].get<double>(), 0.98);  // the issue's goal (001: 96.72 %)
+// all three states, close the loop, map it (001: 1.231 x 1.019 m, 96.72 %;
+// issue goal >= 98 %), on every one of five seeded trials. Each convex corner
+// is one Tactile-turning that re-contacts the next face (turn_pivot: the
+// vehicle orbits the corner instead of being spun round it by the released
+// push; with the previous rule seeds 2 and 3 failed, src/tactile_fsm/README.md).
+TEST(XplorerSitl, BoxTraversalClosesTheLoopAndMapsTheBoxOnEverySeed) {
+  const auto m = run_trials("xplorer_box_traversal.yaml", 5);
+  EXPECT_EQ(m["success_count"].get<int>(), 5);
+  for (const auto& t : m["per_trial"]) {
+    const auto& x = t["xplorer"];
+    const auto seed = t["seed"].get<int>();
+    EXPECT_TRUE(x["loop_closed"].get<bool>()) << seed;
+    EXPECT_EQ(x["turns"].get<int>(), 4) << seed;               // one per convex corner
+    EXPECT_EQ(x["turns_recontacted"].get<int>(), 4) << seed;   // unlike the rigid chassis (below)
+    EXPECT_EQ(x["traversal_contact_lost"].get<int>(), 0) << seed;
+    // Slab near faces at the deflected arms' outline (mapping edge_from_arms).
+    EXPECT_NEAR(x["map_length_m"].get<double>(), 1.22, 0.02) << seed;
+    EXPECT_NEAR(x["map_width_m"].get<double>(), 1.0, 0.02) << seed;
+    EXPECT_GE(x["map_area_accuracy"].get<double>(), 0.98) << seed;  // the issue's goal (001: 96.72 %)
+  }
 }
 
 // 001 Sec. V-C4, Fig. 5(iii): the same box with a rigid chassis
 // (vehicle.params.rigid_arms) fails in all four trials, the way the paper
-// reports: it traverses the first face, but at the convex corner it turns
-// (or loses the face) and never re-establishes contact to enter
-// Tactile-traversal again, so the loop never closes. The compliant vehicle
-// (same seeds, test above) re-contacts after its turns and closes the loop.
+// reports: it traverses the first face, but at the convex corner it cannot
+// hold the face (without the arms' give the contact torque yaws it slowly
+// round the edge, below the turning trigger), loses contact, and ends flying
+// off the box in Exploration; the loop never closes. The compliant vehicle
+// (test above) turns every corner and never loses the face. (Before the
+// corner pivot, the rigid vehicle's Tactile-turning never re-contacted; now
+// a late turn may re-contact a face sideways, and it is lost at the next
+// corner: README.)
 TEST(XplorerSitl, RigidArmsFailBoxTraversalAtTheConvexCorner) {
   const auto m = run_trials("xplorer_box_traversal_rigid.yaml", 4);
   EXPECT_EQ(m["success_count"].get<int>(), 0);
-  int turned = 0;
   for (const auto& t : m["per_trial"]) {
     const auto& x = t["xplorer"];
     const auto seed = t["seed"].get<int>();
     EXPECT_FALSE(x["loop_closed"].get<bool>()) << seed;
     ASSERT_FALSE(x["first_contact_time_s"].is_null()) << seed;  // it found and traversed the first face
     EXPECT_GT(x["traversed_path_m"].get<double>(), 0.5) << seed;
-    EXPECT_EQ(x["turns_recontacted"].get<int>(), 0) << seed;    // never back to traversal after a turn
-    EXPECT_GE(x["turns_without_recontact"].get<int>() + x["traversal_contact_lost"].get<int>(), 1) << seed;
+    EXPECT_GE(x["turns_without_recontact"].get<int>() + x["traversal_contact_lost"].get<int>(), 2) << seed;
+    EXPECT_LT(x["turns_recontacted"].get<int>(), 3) << seed;    // never round three corners
     EXPECT_EQ(x["final_state"], "exploration") << seed;         // flew off the box
-    turned += x["turns_without_recontact"].get<int>();
   }
-  EXPECT_GE(turned, 1);  // the paper's case: Tactile-turning entered, re-contact never made
 }
 
 // 001 Sec. V-C3, Fig. 6: the pipe (0.4 m) and the trash can (0.5 m) are

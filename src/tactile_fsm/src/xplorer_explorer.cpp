@@ -152,6 +152,13 @@ void XplorerParams::validate() const {
   pos("turn_rate", turn_rate);
   if (!(turn_limit > 0.0 && turn_limit <= M_PI)) bad("XplorerParams", "turn_limit", "must be in (0, pi] (001: 180 deg)", turn_limit);
   pos("turn_push", turn_push);
+  pos("contact_reach", contact_reach);
+  pos("turn_radius", turn_radius);
+  if (!(turn_slide >= 0.0) || !std::isfinite(turn_slide)) bad("XplorerParams", "turn_slide", "must be finite and >= 0", turn_slide);
+  if (!(turn_backoff >= 0.0) || !std::isfinite(turn_backoff)) bad("XplorerParams", "turn_backoff", "must be finite and >= 0", turn_backoff);
+  pos("turn_backoff_tau", turn_backoff_tau);
+  if (!(corner_lookback >= 0.0) || !std::isfinite(corner_lookback))
+    bad("XplorerParams", "corner_lookback", "must be finite and >= 0", corner_lookback);
   pos("contact_force", contact_force);
   if (!(reshape_gain >= 0.0) || !std::isfinite(reshape_gain)) bad("XplorerParams", "reshape_gain", "must be >= 0", reshape_gain);
   pos("reshape_limit", reshape_limit);
@@ -201,6 +208,7 @@ void XplorerExplorer::enter(XplorerState s, const XplorerInput& in, const std::s
     adm_.reset(XVec3(in.position.x(), in.position.y(), p_.hover_height), in.yaw);
     r_star_ = in.position.head<2>();
     t_quiet_ = in.t;
+    traverse_history_.clear();
   }
 }
 
@@ -292,9 +300,22 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
     }
     case XplorerState::kTactileTraversal: {
       // 001 Sec. IV-A: a yaw-rate peak (release at a corner) starts Tactile-turning.
+      traverse_history_.push_back({in.t, p2, in.yaw});
+      while (traverse_history_.size() > 1 && in.t - traverse_history_[1].t >= p_.corner_lookback)
+        traverse_history_.pop_front();
       if (in.t - t_quiet_ > p_.settle_time && std::abs(yaw_rate_f_) > p_.yaw_rate_trigger) {
         turn_sign_ = yaw_rate_f_ > 0 ? 1.0 : -1.0;
         ++turns_;
+        // The face as it was before the release (the yaw has already turned by the
+        // time the low-passed rate crosses the trigger): its yaw, its normal C_n and
+        // the pivot on it in front of the vehicle.
+        const PoseSample& f = traverse_history_.front();
+        face_yaw_ = f.yaw;
+        face_n_ = rot(f.yaw, unit(contact_));
+        const XVec2 t0 = rot(f.yaw, unit(move_));
+        pivot_ = f.p + p_.contact_reach * face_n_ + (p2 - f.p).dot(t0) * t0;
+        face_t_ = t0;
+        phi0_ = std::clamp(turn_sign_ * wrap(in.yaw - face_yaw_), 0.0, p_.turn_limit);
         enter(XplorerState::kTactileTurning, in, "yaw rate peak");
         break;
       }
@@ -305,6 +326,7 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
         move_ = right_hand(c);
         t_quiet_ = in.t;
         reason_ = std::string("new contact ") + to_string(c);
+        traverse_history_.clear();  // the face ahead is the new one
       }
       if (f_body_avg_.norm() < p_.release_force) {
         if (low_force_since_ < 0) low_force_since_ = in.t;
@@ -328,11 +350,24 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
       break;
     }
     case XplorerState::kTactileTurning: {
-      const double turned = std::min(p_.turn_rate * (in.t - t_enter_), p_.turn_limit);  // 001: limited to 180 deg
-      out.yaw = wrap(yaw_enter_ + turn_sign_ * turned);
-      const XVec2 n = rot(in.yaw, unit(contact_)), t = rot(in.yaw, unit(move_));
-      out.position = XVec3(p2.x(), p2.y(), p_.hover_height);
-      out.position.head<2>() += p_.turn_push * n + lead_t * t;
+      if (p_.turn_pivot) {
+        // Orbit the pivot: yaw and position setpoints turn together at psi_c (001 Sec.
+        // V-C: 0.26 rad/s), from the angle the vehicle has already turned, limited to 180 deg.
+        const double phi = std::min(phi0_ + p_.turn_rate * (in.t - t_enter_), p_.turn_limit);
+        out.yaw = wrap(face_yaw_ + turn_sign_ * phi);
+        const double radius = p_.turn_radius + p_.turn_backoff * std::exp(-(in.t - t_enter_) / p_.turn_backoff_tau);
+        // The pivot is abreast of the vehicle along lambda at the trigger; from there it
+        // moves on along lambda at traverse_speed to turn_slide past the pivot.
+        const double slide = std::min(p_.turn_slide, p_.traverse_speed * (in.t - t_enter_));
+        const XVec2 sp = pivot_ + rot(turn_sign_ * phi, slide * face_t_ - radius * face_n_);
+        out.position = XVec3(sp.x(), sp.y(), p_.hover_height);
+      } else {
+        const double turned = std::min(p_.turn_rate * (in.t - t_enter_), p_.turn_limit);  // 001: limited to 180 deg
+        out.yaw = wrap(yaw_enter_ + turn_sign_ * turned);
+        const XVec2 n = rot(in.yaw, unit(contact_)), t = rot(in.yaw, unit(move_));
+        out.position = XVec3(p2.x(), p2.y(), p_.hover_height);
+        out.position.head<2>() += p_.turn_push * n + lead_t * t;
+      }
       // Re-contact (|b_delta_f_x| or |b_delta_f_y| > delta_psi0), once the moving
       // average no longer holds the force of the face just left.
       if (in.t - t_enter_ > p_.settle_time &&

@@ -35,6 +35,13 @@ ParamMap XplorerFsmLogic::default_parameters() {
   m.set("turn_rate", f.turn_rate);
   m.set("turn_limit", f.turn_limit);
   m.set("turn_push", f.turn_push);
+  m.set("turn_pivot", f.turn_pivot);
+  m.set("contact_reach", f.contact_reach);
+  m.set("turn_radius", f.turn_radius);
+  m.set("turn_slide", f.turn_slide);
+  m.set("turn_backoff", f.turn_backoff);
+  m.set("turn_backoff_tau", f.turn_backoff_tau);
+  m.set("corner_lookback", f.corner_lookback);
   m.set("contact_force", f.contact_force);
   m.set("reshape_gain", f.reshape_gain);
   m.set("reshape_limit", f.reshape_limit);
@@ -82,6 +89,13 @@ XplorerFsmLogic::Params XplorerFsmLogic::params_from(const ParamMap& m) {
   f.turn_rate = m.get_double("turn_rate");
   f.turn_limit = m.get_double("turn_limit");
   f.turn_push = m.get_double("turn_push");
+  f.turn_pivot = m.get_bool("turn_pivot");
+  f.contact_reach = m.get_double("contact_reach");
+  f.turn_radius = m.get_double("turn_radius");
+  f.turn_slide = m.get_double("turn_slide");
+  f.turn_backoff = m.get_double("turn_backoff");
+  f.turn_backoff_tau = m.get_double("turn_backoff_tau");
+  f.corner_lookback = m.get_double("corner_lookback");
   f.contact_force = m.get_double("contact_force");
   f.reshape_gain = m.get_double("reshape_gain");
   f.reshape_limit = m.get_double("reshape_limit");

@@ -159,6 +159,45 @@ TEST(XplorerExplorer, TurnIsLimitedTo180Degrees) {
   EXPECT_NEAR(std::abs(o.yaw), M_PI, 1e-9);  // -pi limit (13 s > pi / 0.26 = 12.1 s)
 }
 
+// Convex corner with turn_pivot (default): the face is the one of 0.6 s
+// before the trigger (yaw 0, C_n = +x, lambda = -y), the pivot on it abreast
+// of the vehicle, phi starts at the 0.2 rad the vehicle has already turned;
+// after tau: phi = 0.2 + 0.26 tau, radius 0.15 + 0.2 exp(-tau / 1.5), slide
+// min(0.2, 0.15 tau), setpoint = pivot + R(phi) (slide lambda - radius C_n).
+TEST(XplorerExplorer, ConvexCornerTurnOrbitsThePivot) {
+  XplorerExplorer x{XplorerParams{}};
+  const double dt = 0.02;
+  double t = 0;
+  x.update(input(t, XVec3(0.79, 0, 0.7), 0.0, XVec3::Zero()), dt);
+  for (int i = 0; i < 60; ++i) x.update(input(t += dt, XVec3(0.79, 0, 0.7), 0.0, XVec3(-2, 0, 0)), dt);
+  ASSERT_EQ(x.state(), XplorerState::kTactileTraversal);
+  double y = 0;
+  for (int i = 0; i < 100; ++i) x.update(input(t += dt, XVec3(0.79, y -= 0.002, 0.7), 0.0, XVec3(-1.25, 0, 0)), dt);
+  ASSERT_EQ(x.state(), XplorerState::kTactileTraversal);
+  for (int i = 0; i < 20 && x.state() == XplorerState::kTactileTraversal; ++i)
+    x.update(input(t += dt, XVec3(0.80, -0.5, 0.7), 0.2, XVec3(-1.0, 0, 0), 1.0), dt);
+  ASSERT_EQ(x.state(), XplorerState::kTactileTurning);
+  EXPECT_NEAR(x.pivot().x(), 0.79 + 0.21, 1e-12);  // on the face (x = 0.79 + contact_reach)
+  EXPECT_NEAR(x.pivot().y(), -0.5, 1e-12);         // abreast of the vehicle along lambda
+  const double t_turn = t;
+  XplorerOutput o;
+  for (int i = 0; i < 50; ++i) o = x.update(input(t += dt, XVec3(0.8, -0.5, 0.7), 0.3, XVec3::Zero()), dt);
+  ASSERT_EQ(x.state(), XplorerState::kTactileTurning);
+  const double tau = t - t_turn, phi = 0.2 + 0.26 * tau, r = 0.15 + 0.2 * std::exp(-tau / 1.5);
+  const double slide = std::min(0.2, 0.15 * tau);
+  // R(phi) (slide (0, -1) - r (1, 0)) by hand:
+  const double ox = -r * std::cos(phi) + slide * std::sin(phi), oy = -r * std::sin(phi) - slide * std::cos(phi);
+  EXPECT_NEAR(o.position.x(), 1.0 + ox, 1e-9);
+  EXPECT_NEAR(o.position.y(), -0.5 + oy, 1e-9);
+  EXPECT_NEAR(o.yaw, phi, 1e-9);
+  // Without re-contact the orbit stops at the 180 deg limit (0.2 + 0.26 x 11.4 s > pi).
+  for (int i = 0; i < 520; ++i) o = x.update(input(t += dt, XVec3(0.8, -0.5, 0.7), 0.3, XVec3::Zero()), dt);
+  ASSERT_EQ(x.state(), XplorerState::kTactileTurning);
+  EXPECT_NEAR(o.yaw, M_PI, 1e-9);
+  EXPECT_NEAR(o.position.x(), 1.0 + 0.15 + 0.2 * std::exp(-(t - t_turn) / 1.5), 1e-9);  // R(pi): +radius along x
+  EXPECT_NEAR(o.position.y(), -0.5 + 0.2, 1e-9);                                       // and slide along -lambda
+}
+
 TEST(XplorerExplorer, StaticWrenchHoldsWhenTheForceMatchesTheReference) {
   XplorerParams p;
   p.mission = XplorerMission::kStaticWrench;

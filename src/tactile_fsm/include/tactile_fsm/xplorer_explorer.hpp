@@ -96,7 +96,29 @@ struct XplorerParams {
   double yaw_rate_lowpass_hz = 2.0;  ///< low-pass of the yaw rate (choice; 001 Sec. V-C)
   double turn_rate = 0.26;           ///< controlled yaw rate in Tactile-turning [rad/s] (001 Sec. V-C)
   double turn_limit = M_PI;          ///< |yaw change| limit of one turn [rad] (001: 180 deg)
-  double turn_push = 0.05;           ///< setpoint lead towards C_n while turning [m] (choice)
+  double turn_push = 0.05;           ///< setpoint lead towards C_n while turning [m] (choice; turn_pivot false)
+  /// true: Tactile-turning pivots about the corner (001 Sec. IV-A "turning around a point"):
+  /// the face (its normal C_n and yaw) is taken from before the release, the pivot on the
+  /// face in front of the vehicle, and the setpoint orbits the pivot at turn_radius while
+  /// the yaw setpoint turns at turn_rate, so the contact torque of the guard sliding off
+  /// the edge and the push stored in the position loop no longer spin the vehicle into the
+  /// next face. false: the previous rule (push turn_push along C_n, lead along lambda,
+  /// C_n turning with the measured yaw) (choice; README "convex corners").
+  bool turn_pivot = true;
+  double contact_reach = 0.21;       ///< centre -> edge of the vehicle along a body axis [m] (001 Sec. IV-B: 0.21 m)
+  double turn_radius = 0.15;         ///< orbit radius about the pivot [m] (< contact_reach: the guards meet the next face) (choice)
+  /// While turning, the vehicle also moves along lambda at traverse_speed, from where it
+  /// is (behind the corner) to turn_slide past the pivot: the pivot ends at the trailing
+  /// guard, so both front guards meet the next face (a single guard pressed alone
+  /// yaws the vehicle back round the corner) (choice).
+  double turn_slide = 0.2;           ///< [m] (choice)
+  /// The orbit starts turn_backoff further out and closes to turn_radius with time
+  /// constant turn_backoff_tau: the push the position loop stored against the face
+  /// (its velocity integrator) is released at the corner; a setpoint behind the vehicle
+  /// takes it out instead of letting it carry the vehicle into the corner (choice).
+  double turn_backoff = 0.2;         ///< [m] (choice)
+  double turn_backoff_tau = 1.5;     ///< [s] (choice)
+  double corner_lookback = 0.6;      ///< the face pose is taken this long before the yaw-rate trigger [s] (choice)
   double contact_force = 1.25;       ///< |delta_f_des| in traversal [N] (001)
   /// r* along C_n is "reshaped according to the external wrench" (001 Sec.
   /// III-B1): r*_n += reshape_gain (delta_f - delta_f_des).n dt, so the force
@@ -166,6 +188,7 @@ class XplorerExplorer {
   double first_contact_time() const { return first_contact_t_; }
   double traversed_path() const { return path_; }
   uint32_t turns() const { return turns_; }
+  const XVec2& pivot() const { return pivot_; }  ///< corner pivot of the last Tactile-turning (turn_pivot)
   uint32_t collisions() const { return collisions_; }
   double collision_peak() const { return collision_peak_; }
   const XplorerParams& params() const { return p_; }
@@ -196,6 +219,14 @@ class XplorerExplorer {
   XVec2 collision_normal_ = XVec2::Zero();
   XVec3 recovery_sp_ = XVec3::Zero();
   XVec2 r_star_ = XVec2::Zero();  ///< reshaped setpoint r* (x-y) in contact states
+  struct PoseSample {
+    double t;
+    XVec2 p;
+    double yaw;
+  };
+  std::deque<PoseSample> traverse_history_;  ///< last corner_lookback s of Tactile-traversal
+  XVec2 pivot_ = XVec2::Zero(), face_n_ = XVec2(1, 0), face_t_ = XVec2(0, -1);
+  double face_yaw_ = 0.0, phi0_ = 0.0;
 };
 
 }  // namespace tactile_fsm
