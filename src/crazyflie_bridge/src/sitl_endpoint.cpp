@@ -54,6 +54,10 @@ void SitlEndpoint::step_physics() {
   sim_->step(now_ns_, out_);
   ++stats_.sim_steps;
   for (const auto& p : out_.pressure) fw_.on_pressure(p.msg);
+  for (const auto& w : out_.whisker_truth) {
+    const int side = w.topic.find("/right/") != std::string::npos ? 1 : 0;
+    whisker_truth_.push_back({tactile_common::from_stamp(w.msg.header.stamp), side, w.msg.contact, w.msg.depth});
+  }
   for (const auto& o : out_.odometry) {
     if (o.topic == "/odom") {
       fw_.on_estimate(o.msg);
@@ -102,6 +106,7 @@ void SitlEndpoint::flush(Clock::time_point now) {
 
 void SitlEndpoint::run(double duration_s, const std::atomic<bool>* stop) {
   const auto t0 = Clock::now();
+  start_ticks_ = t0.time_since_epoch().count();
   const int64_t period = sim_->period_ns();
   const int64_t end_ns = duration_s > 0.0 ? tactile_common::from_seconds(duration_s) : INT64_MAX;
   while (!(stop && stop->load()) && now_ns_ <= end_ns) {

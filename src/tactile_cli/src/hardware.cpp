@@ -98,7 +98,11 @@ nlohmann::json run_fly(const FlyOptions& o) {
     }
   }
   auto fsm = add_whisker_fsm(host, overrides("whisker_fsm", fsm_extra));
-  const FsmStateLog fsm_log(host);  // wall-following sweeps, as in the SITL evaluation
+  // Wall-following sweeps, as in the SITL evaluation; against the simulated
+  // Crazyflie also the whiskers' true depth in band (filled after the run).
+  WhiskerTruth truth;
+  const auto& fp = fsm->params().fsm;
+  const WallFollowingEvaluation sweeps(host, truth, fp.t_min, fp.t_max, fp.whisker_spacing);
 
   // The bridge: parameters from config/crazyflie_bridge.yaml, --uri wins.
   tactile_common::ParamMap bridge_over;
@@ -184,9 +188,7 @@ nlohmann::json run_fly(const FlyOptions& o) {
   m["interrupted"] = g_interrupted.load();
   m["bridge_mode"] = crazyflie_bridge::to_string(runner.mode());
   m["fsm_state"] = tactile_fsm::to_string(fsm->fsm().state());
-  // First wall-following episode (000 Fig. 6 sweep), host time; a sweep still
-  // running when the pipeline stopped lasts until then.
-  m["fsm"] = fsm_log.sweep_metrics(pipeline_end_ns >= 0 ? pipeline_end_ns : now_ns());
+  const int64_t fsm_end_ns = pipeline_end_ns >= 0 ? pipeline_end_ns : now_ns();
   m["link_packets_sent"] = link.packets_sent;
   m["link_packets_received"] = link.packets_received;
   // Log packets missing from the firmware timestamps of each block (exact
@@ -229,11 +231,20 @@ nlohmann::json run_fly(const FlyOptions& o) {
     s["injected_loss_downlink"] = sitl->stats().dropped_out;
     s["firmware_log_packets"] = sitl->firmware().stats().log_packets;
     s["firmware_setpoints"] = sitl->firmware().stats().setpoints;
+    // Simulated time runs from the endpoint's start in wall-clock time (speed
+    // 1): host time = simulated time - clock_offset.
+    const int64_t offset_ns = std::chrono::duration_cast<std::chrono::nanoseconds>(t0 - sitl->start_time()).count();
+    s["clock_offset_s"] = static_cast<double>(offset_ns) * 1e-9;
     m["sitl"] = s;
+    for (const auto& w : sitl->whisker_truth()) truth.add(w.side, w.sim_ns - offset_ns, {w.contact, w.depth});
     // Same goal as graph whisker_fsm: the FSM reached the target (landing).
     const auto st = fsm->fsm().state();
     m["reached_target"] = st == tactile_fsm::FsmState::kLanding || st == tactile_fsm::FsmState::kLanded;
   }
+  // First wall-following episode (000 Fig. 6 sweep), host time; a sweep still
+  // running when the pipeline stopped lasts until then. With the simulated
+  // Crazyflie: depth in band and heading error from its truth, as `tactile sim`.
+  m["fsm"] = sweeps.metrics(fsm_end_ns);
   write_json(dir / "metrics.json", m);
   return m;
 }

@@ -145,9 +145,9 @@ WallFollowingEvaluation::WallFollowingEvaluation(Host& host, const WhiskerTruth&
                                                  double spacing)
     : truth_(truth), t_min_(t_min), t_max_(t_max), spacing_(spacing), log_(host) {}
 
-nlohmann::json WallFollowingEvaluation::metrics() const {
-  // Walk the 50 Hz truth samples of the left whisker; the FSM state at each
-  // is the last transition at or before it.
+nlohmann::json WallFollowingEvaluation::metrics(int64_t end_ns) const {
+  // Walk the 50 Hz truth samples of the left whisker (the right one has the
+  // same stamps); the FSM state at each is the last transition at or before it.
   const auto& states = log_.transitions();
   size_t in_band = 0, wall_samples = 0, heading_n = 0;
   double heading_sum = 0.0;
@@ -156,14 +156,11 @@ nlohmann::json WallFollowingEvaluation::metrics() const {
   const int64_t window_end = sweep.start_ns + static_cast<int64_t>(kSweepWindowS * tactile_common::kNanosPerSecond);
   size_t sweep_samples = 0, sweep_in_band = 0;
   int64_t last_sample = -1;
-  for (int64_t t = states.empty() ? 0 : states.front().first;
-       !states.empty() && t <= states.back().first + tactile_common::kNanosPerSecond * 60; t += 20000000) {
-    const WhiskerTruth::Sample* l = truth_.at(0, t);
+  for (const auto& [t, left] : truth_.samples(0)) {
+    if (end_ns >= 0 && t > end_ns) break;
+    const WhiskerTruth::Sample* l = &left;
     const WhiskerTruth::Sample* r = truth_.at(1, t);
-    if (!l || !r) {
-      if (t > states.back().first) break;
-      continue;
-    }
+    if (!r) continue;
     auto it = std::upper_bound(states.begin(), states.end(), t, [](int64_t v, const auto& s) { return v < s.first; });
     if (it == states.begin()) continue;
     if (!is_wall_following(std::prev(it)->second)) continue;
@@ -182,8 +179,9 @@ nlohmann::json WallFollowingEvaluation::metrics() const {
       ++heading_n;
     }
   }
-  // An episode still running at the end lasts to the last evaluated sample.
-  nlohmann::json m = log_.sweep_metrics(last_sample);
+  // An episode still running at the end lasts to end_ns, or else to the last
+  // evaluated sample.
+  nlohmann::json m = log_.sweep_metrics(end_ns >= 0 ? end_ns : last_sample);
   m["wall_following_contact_samples"] = wall_samples;
   m["depth_in_band_fraction"] = wall_samples ? nlohmann::json(static_cast<double>(in_band) / static_cast<double>(wall_samples))
                                              : nlohmann::json(nullptr);

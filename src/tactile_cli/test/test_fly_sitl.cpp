@@ -3,7 +3,8 @@
 // firmware -> SITL, in wall-clock time, ~16 s): it takes off, reaches the wall
 // when the in-process run does and sweeps it without a collision (000 Fig. 6;
 // the 7 s bound is asserted in process, see below), and when the run ends the
-// bridge lands the drone; metrics carry the link counters and the bag holds
+// bridge lands the drone; the simulator's truth gives the sweep's depth in
+// band; metrics carry the link counters and the bag holds
 // every message the host published. The FSM's exact trajectory depends on
 // wall-clock timing here (a loaded machine delays ticks); the trial-by-trial
 // identity with the in-process run is shown by the lockstep graph
@@ -46,19 +47,28 @@ TEST(FlySitl, DarknessWallFollowingOverUdp) {
     EXPECT_GT(c["t"].get<double>(), fp["first_sweep_start_s"].get<double>() + 7.0);
   }
   // Over the link the flight is a different realisation (wall-clock timing
-  // of every tick): measured 13 of 14 runs sweep >= 7 s without a collision
-  // (the 14th lost the contact after 5.8 s and touched the wall on the
-  // re-approach, 2 s after the sweep ended), as in process where the sweep of
-  // every seed 1-10 lasts >= 7 s. Asserted here, so that the test does not
-  // fail on that realisation: a sweep of >= 5 s without a collision during it.
+  // of every tick), so the outcome is compared with the spread of in-process
+  // seeds, not with one trial. Measured (README "The bridge flies the SITL"):
+  // in process, seeds 1-20, every first sweep >= 7 s, true depth in band over
+  // its first 7 s 0.37-0.98; over UDP 43 of 48 runs swept >= 7 s (the others
+  // 5.6-7.0 s, 3 of them with 2-3 flights on the 2 cores at once: the contact
+  // dropped at the band's far edge and the FSM resumed forward, as in the
+  // longer in-process courses), in band 0.46-0.99, never a collision during
+  // the sweep. Asserted: a sweep of >= 5 s with no collision
+  // during it, in band as in process (>= 0.3, from the simulator's truth).
   const auto& fu = m["fsm"];
   ASSERT_TRUE(fu["first_sweep_start_s"].is_number()) << "never followed the wall over the link";
   const double sweep_end = fu["first_sweep_start_s"].get<double>() + fu["first_sweep_s"].get<double>();
   EXPECT_GE(fu["first_sweep_s"].get<double>(), 5.0);
+  ASSERT_TRUE(fu["first_sweep_in_band_fraction"].is_number()) << "no simulator truth during the sweep";
+  EXPECT_GE(fu["first_sweep_in_band_fraction"].get<double>(), 0.3);
+  // Truth samples of the sweep at 50 Hz (the truth and pipeline clocks line up).
+  EXPECT_GE(fu["wall_following_contact_samples"].get<double>(), 40.0 * fu["first_sweep_s"].get<double>());
+  const double offset = m["sitl"]["clock_offset_s"].get<double>();  // host time = simulated - offset
+  EXPECT_GE(offset, 0.0);
+  EXPECT_LT(offset, 1.0);
   for (const auto& c : m["sitl"]["collision_events"]) {
-    // Simulator time: it starts with the simulated Crazyflie, just before the
-    // pipeline's clock (by the connection time, metrics connect_s, ~0 s).
-    EXPECT_GT(c["t"].get<double>(), sweep_end + 0.5) << m["sitl"]["collision_events"].dump();
+    EXPECT_GT(c["t"].get<double>() - offset, sweep_end) << m["sitl"]["collision_events"].dump();
   }
   // Both reach the wall at about the same time (the approach is the same flight).
   EXPECT_NEAR(fu["first_sweep_start_s"].get<double>(), fp["first_sweep_start_s"].get<double>(), 1.0);

@@ -63,6 +63,22 @@ class SitlEndpoint {
   /// Ground-truth position of the vehicle (for tests and metrics); safe to
   /// call from another thread while run() is going.
   tactile_sim::Vec3 truth_position() const;
+  /// Wall-clock (steady_clock) instant of simulated time 0: the start of
+  /// run(); the epoch before run() starts. Thread-safe. At speed 1 a
+  /// simulated time t happened at start_time() + t.
+  std::chrono::steady_clock::time_point start_time() const {
+    return std::chrono::steady_clock::time_point(std::chrono::steady_clock::duration(start_ticks_.load()));
+  }
+  /// The simulated whiskers' ground truth (000 Fig. 6 sweeps: depth in band),
+  /// one entry per physics step and whisker, stamped in simulated time. Read
+  /// it after run() has returned.
+  struct WhiskerTruthSample {
+    int64_t sim_ns = 0;
+    int side = 0;  ///< 0 left, 1 right
+    bool contact = false;
+    double depth = 0.0;  ///< [m]
+  };
+  const std::vector<WhiskerTruthSample>& whisker_truth() const { return whisker_truth_; }
   /// Sets the injected loss rate (thread-safe; also settable over CRTP with
   /// the sitl.lossPct parameter).
   void set_loss_rate(double p) { loss_request_ = p; }
@@ -95,6 +111,8 @@ class SitlEndpoint {
   mutable std::mutex truth_mutex_;
   tactile_sim::Vec3 truth_ = tactile_sim::Vec3::Zero();
   std::atomic<double> loss_request_{-1.0};
+  std::atomic<std::chrono::steady_clock::duration::rep> start_ticks_{0};
+  std::vector<WhiskerTruthSample> whisker_truth_;
   double param_loss_ = 0.0;  ///< last sitl.lossPct seen
   int last_mode_ = -1;
   Stats stats_;

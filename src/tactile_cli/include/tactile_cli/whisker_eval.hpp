@@ -19,9 +19,11 @@
 
 namespace tactile_cli {
 
-/// Ground truth of both whiskers by stamp, from /ground_truth/whisker/*/contact.
+/// Ground truth of both whiskers by stamp, from /ground_truth/whisker/*/contact
+/// (or filled with add(): `tactile fly` takes it from the simulated Crazyflie).
 class WhiskerTruth {
  public:
+  WhiskerTruth() = default;
   explicit WhiskerTruth(Host& host);
   struct Sample {
     bool contact = false;
@@ -29,6 +31,9 @@ class WhiskerTruth {
   };
   /// Truth of whisker `side` (0 left, 1 right) at `stamp_ns`, if recorded.
   const Sample* at(int side, int64_t stamp_ns) const;
+  void add(int side, int64_t stamp_ns, const Sample& s) { samples_[side][stamp_ns] = s; }
+  /// Every sample of whisker `side`, by stamp.
+  const std::map<int64_t, Sample>& samples(int side) const { return samples_[side]; }
 
  private:
   std::map<int64_t, Sample> samples_[2];
@@ -95,7 +100,9 @@ class WallFollowingEvaluation {
   WallFollowingEvaluation(Host& host, const WhiskerTruth& truth, double t_min, double t_max, double spacing);
   /// Window of first_sweep_in_band_fraction [s] (000 Fig. 6: 7 s sweeps).
   static constexpr double kSweepWindowS = 7.0;
-  nlohmann::json metrics() const;
+  /// `end_ns`: end of a wall-following episode still running (< 0: the last
+  /// evaluated sample). Without truth samples the truth-based fields are null.
+  nlohmann::json metrics(int64_t end_ns = -1) const;
   const std::string& last_state() const { return log_.last_state(); }
 
  private:
