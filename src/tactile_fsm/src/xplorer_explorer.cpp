@@ -251,8 +251,10 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
   }
   XplorerOutput out;
   const XplorerState before = state_;
-  // Loop closure (001 Sec. V-C2): back at the first contact point after going round.
-  if (started_path_ && !loop_closed_ && path_ > p_.loop_min_path &&
+  // Loop closure (001 Sec. V-C2): back at the first contact point after going round,
+  // traversing its face (001: "continues traversing all the edges until it returns to
+  // the initial contact position"), not while a turn swings past it.
+  if (started_path_ && !loop_closed_ && state_ == XplorerState::kTactileTraversal && path_ > p_.loop_min_path &&
       (p2 - first_contact_p_).norm() < p_.loop_closure_radius) {
     loop_closed_ = true;
     loop_closure_t_ = in.t;

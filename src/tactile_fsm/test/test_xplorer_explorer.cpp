@@ -267,6 +267,24 @@ TEST(XplorerExplorer, LoopClosureEndsTheExploration) {
   EXPECT_GT(x.traversed_path(), 3.5);
 }
 
+// A turn swinging past the first contact point does not close the loop (the
+// last face would not be traversed): only Tactile-traversal there does.
+TEST(XplorerExplorer, LoopDoesNotCloseWhileTurning) {
+  XplorerExplorer x{XplorerParams{}};
+  double t = 0;
+  x.update(input(t, XVec3(0, 0, 0.7), 0.0, XVec3::Zero()), 0.02);
+  for (int i = 0; i < 60; ++i) x.update(input(t += 0.02, XVec3(0, 0, 0.7), 0.0, XVec3(-1.6, 0, 0)), 0.02);
+  ASSERT_EQ(x.state(), XplorerState::kTactileTraversal);
+  for (int i = 1; i <= 300; ++i) x.update(input(t += 0.02, XVec3(0, -3.0 * i / 300, 0.7), 0.0, XVec3(-1.3, 0, 0)), 0.02);
+  ASSERT_GT(x.traversed_path(), 2.0);
+  for (int i = 0; i < 20 && x.state() == XplorerState::kTactileTraversal; ++i)
+    x.update(input(t += 0.02, XVec3(0, -3.0, 0.7), 0.0, XVec3(-1.0, 0, 0), 1.0), 0.02);
+  ASSERT_EQ(x.state(), XplorerState::kTactileTurning);
+  for (int i = 0; i < 10; ++i) x.update(input(t += 0.02, XVec3(0.05, 0.0, 0.7), 0.3, XVec3::Zero()), 0.02);
+  EXPECT_FALSE(x.loop_closed());  // at the first contact point, but turning
+  EXPECT_EQ(x.state(), XplorerState::kTactileTurning);
+}
+
 TEST(XplorerParams, ValidateNamesTheField) {
   XplorerParams p;
   p.delta_psi0 = 1.4;  // must exceed delta_0 = 1.5
