@@ -97,6 +97,24 @@ TEST(XplorerSitl, BoxTraversalClosesTheLoopAndMapsTheBoxOnEverySeed) {
   }
 }
 
+// Not a paper experiment: the same box turned by a random angle in [-30, 30]
+// deg per trial (the corner handling was tuned on the axis-aligned box). Every
+// trial still turns the four corners and closes the loop; the oblique first
+// contact leaves the map 1-2.5 cm long on one side (97.7-99.0 % on seeds 1-5;
+// 89.5 % on seed 8, README), so the area is asserted at 97 %.
+TEST(XplorerSitl, TurnedBoxTraversalClosesTheLoop) {
+  const auto m = run_trials("xplorer_box_traversal_turned.yaml", 5);
+  EXPECT_EQ(m["success_count"].get<int>(), 5);
+  for (const auto& t : m["per_trial"]) {
+    const auto& x = t["xplorer"];
+    const auto seed = t["seed"].get<int>();
+    EXPECT_TRUE(x["loop_closed"].get<bool>()) << seed;
+    EXPECT_EQ(x["turns_recontacted"].get<int>(), 4) << seed;
+    EXPECT_EQ(x["traversal_contact_lost"].get<int>(), 0) << seed;
+    EXPECT_GE(x["map_area_accuracy"].get<double>(), 0.97) << seed;
+  }
+}
+
 // 001 Sec. V-C4, Fig. 5(iii): the same box with a rigid chassis
 // (vehicle.params.rigid_arms) fails in all four trials, the way the paper
 // reports: it traverses the first face, but at the convex corner it cannot
