@@ -106,9 +106,44 @@ void expect_dark_sweep(const std::string& scenario, int trials, double min_mean_
   EXPECT_GE(m["statistics"]["fsm.first_sweep_in_band_fraction"]["mean"].get<double>(), min_mean_band);
 }
 
+/// Trials of `scenario` whose first wall-following episode lasts >= 7 s with
+/// nothing touching the wall before its 7 s are over (000 Fig. 6), and their
+/// mean true depth-in-band fraction over those 7 s.
+std::pair<int, double> count_dark_sweeps(const std::string& scenario, int trials) {
+  const auto m = run_trials(scenario, trials);
+  int swept = 0;
+  double band = 0.0;
+  for (const auto& r : m["per_trial"]) {
+    const auto& f = r["fsm"];
+    if (!f["first_sweep_start_s"].is_number()) continue;
+    const double start = f["first_sweep_start_s"].get<double>();
+    bool ok = f["first_sweep_s"].get<double>() >= 7.0;
+    for (const auto& c : r["collision_events"]) ok = ok && c["t"].get<double>() > start + 7.0;
+    if (!ok) continue;
+    ++swept;
+    band += f["first_sweep_in_band_fraction"].get<double>();
+  }
+  return {swept, swept ? band / swept : 0.0};
+}
+
 }  // namespace
 
-// 000 Fig. 6a-b: rigid wall, onboard state estimate, band 40-100 mm
+// 000 Fig. 6 with the paper's state estimate, IMU + ToF only (no optical flow):
+// the horizontal velocity is dead-reckoned from the accelerometer, so contacts
+// and turns leave a velocity error no flow measurement corrects. Measured
+// 2026-11-22: rigid 9/10 (seeds 1-10) and 7/10 (11-20) sweeps, textile 8/10 and
+// 9/10; seeds 1-5 4/5 on both walls (rigid seed 3 and textile seed 2 touch the
+// wall within the sweep). Asserted on seeds 1-5: at least 4 sweeps per wall.
+TEST(WhiskerFsmSitl, DarknessImuTofOnlySweepsBothWalls) {
+  const auto [rigid, rigid_band] = count_dark_sweeps("whisker_darkness_rigid_imu_fsm.yaml", 5);
+  EXPECT_GE(rigid, 4);
+  EXPECT_GE(rigid_band, 0.5);
+  const auto [textile, textile_band] = count_dark_sweeps("whisker_darkness_textile_imu_fsm.yaml", 5);
+  EXPECT_GE(textile, 4);
+  EXPECT_GE(textile_band, 0.4);
+}
+
+// 000 Fig. 6a-b: rigid wall, flow-deck state estimate, band 40-100 mm
 // (measured seeds 1-5: in band 0.72 of the sweep on average, 0.39-0.98).
 TEST(WhiskerFsmSitl, DarknessRigidWallSweptWithoutCollision) {
   expect_dark_sweep("whisker_darkness_rigid_fsm.yaml", 5, 0.6);

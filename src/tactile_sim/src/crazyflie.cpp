@@ -193,7 +193,7 @@ void WhiskerCrazyflie::sense_whiskers(const Arena& arena) {
 }
 
 void WhiskerCrazyflie::update_estimate(double dt, const Vec3& accel_world, double floor_z) {
-  if (p_.estimate_mode == StateEstimateMode::kFlowDeck) {
+  if (p_.estimate_mode != StateEstimateMode::kMocap) {
     flow_deck_.step(dt, state_, accel_world, floor_z);
     estimate_ = flow_deck_.estimate();
     return;

@@ -30,6 +30,8 @@ void FlowDeckParams::validate() const {
   require(flow_gain > 0.0 && flow_gain <= 1.0, "flow_gain", "must be in (0, 1]", flow_gain);
   require(std::isfinite(height_filter_bandwidth) && height_filter_bandwidth > 0.0,
           "height_filter_bandwidth", "must be > 0", height_filter_bandwidth);
+  require(std::isfinite(accel_bias) && accel_bias >= 0.0 && accel_bias < 1.0, "accel_bias",
+          "must be in [0, 1) m/s^2", accel_bias);
 }
 
 FlowDeckEstimator::FlowDeckEstimator(const FlowDeckParams& params, uint64_t seed)
@@ -38,6 +40,10 @@ FlowDeckEstimator::FlowDeckEstimator(const FlowDeckParams& params, uint64_t seed
       range_model_(params.range, seed, flow_deck_streams::kRange),
       rng_(stream_seed(seed, flow_deck_streams::kGyro)) {
   p_.validate();
+  // Direction of the accelerometer bias in the body frame, from its own stream.
+  Rng bias_rng(stream_seed(seed, flow_deck_streams::kAccelBias));
+  const double dir = std::uniform_real_distribution<double>(-M_PI, M_PI)(bias_rng);
+  accel_bias_body_ = p_.accel_bias * Vec2(std::cos(dir), std::sin(dir));
 }
 
 void FlowDeckEstimator::reset(const RigidBodyState& truth) {
@@ -64,9 +70,14 @@ void FlowDeckEstimator::step(double dt, const RigidBodyState& truth, const Vec3&
   // Accelerometer (truth + white noise) drives the prediction.
   Vec3 acc = accel_world;
   for (int i = 0; i < 3; ++i) acc[i] += p_.accel_noise_density * sqrt_rate * n01_(rng_);
+  // Horizontal bias, fixed in the body frame (rotated with the true yaw here;
+  // the estimated yaw's error is applied below with the rest of the reading).
+  const double yaw_true = truth.yaw();
+  acc.x() += std::cos(yaw_true) * accel_bias_body_.x() - std::sin(yaw_true) * accel_bias_body_.y();
+  acc.y() += std::sin(yaw_true) * accel_bias_body_.x() + std::cos(yaw_true) * accel_bias_body_.y();
   // The accelerometer measures in the body frame; rotating it with the
   // estimated yaw instead of the true one is part of the drift.
-  const double dyaw = yaw_ - truth.yaw();
+  const double dyaw = yaw_ - yaw_true;
   const Vec2 a_h(std::cos(dyaw) * acc.x() - std::sin(dyaw) * acc.y(),
                  std::sin(dyaw) * acc.x() + std::cos(dyaw) * acc.y());
   v_world_ += a_h * dt;
@@ -94,7 +105,7 @@ void FlowDeckEstimator::step(double dt, const RigidBodyState& truth, const Vec3&
 
   // Flow at its rate: body velocity = (flow + rotation) * height (004 eq. 9-10 inverted).
   flow_timer_ += dt;
-  if (flow_timer_ + 1e-12 >= 1.0 / p_.flow.rate_hz) {
+  if (p_.use_flow && flow_timer_ + 1e-12 >= 1.0 / p_.flow.rate_hz) {
     flow_timer_ -= 1.0 / p_.flow.rate_hz;
     flow_ = flow_model_.sample(truth.velocity, truth.orientation, w_true, h_true);
     flow_updated_ = true;

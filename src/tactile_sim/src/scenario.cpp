@@ -344,11 +344,11 @@ Scenario load_scenario_from_string(const std::string& yaml, const std::string& s
   }
   if (v.has("state_estimate")) {
     s.state_estimate = v.at("state_estimate").text();
-    if (s.state_estimate != "mocap" && s.state_estimate != "flow_deck") {
-      v.at("state_estimate").fail("must be 'mocap' or 'flow_deck', got '" + s.state_estimate + "'");
+    if (s.state_estimate != "mocap" && s.state_estimate != "flow_deck" && s.state_estimate != "imu_tof") {
+      v.at("state_estimate").fail("must be 'mocap', 'flow_deck' or 'imu_tof', got '" + s.state_estimate + "'");
     }
-    if (s.state_estimate == "flow_deck" && s.vehicle != VehicleType::kWhiskerCrazyflie) {
-      v.at("state_estimate").fail("flow_deck is the whiskered Crazyflie's estimator");
+    if (s.state_estimate != "mocap" && s.vehicle != VehicleType::kWhiskerCrazyflie) {
+      v.at("state_estimate").fail(s.state_estimate + " is the whiskered Crazyflie's estimator");
     }
   }
   if (v.has("params")) {

@@ -87,6 +87,45 @@ TEST(FlowDeck, Deterministic) {
   EXPECT_NE(a.estimate().position, c.estimate().position);
 }
 
+// IMU + ToF only (000 Fig. 6, darkness): no flow samples, the velocity is the
+// integrated accelerometer. A constant-velocity flight with the estimate
+// reset to the truth stays on it up to the noise random walk; a horizontal
+// accelerometer bias b makes the velocity estimate wrong by b t and the
+// position by b t^2 / 2 (hand computation), in the seeded body direction.
+TEST(FlowDeck, ImuOnlyIntegratesTheAccelerometerAndItsBias) {
+  FlowDeckParams p;
+  p.use_flow = false;
+  p.gyro_bias = 0.0;
+  FlowDeckEstimator est(p, 7);
+  RigidBodyState truth = moving(0.0, 0.3, 0.5);
+  est.reset(truth);
+  int flows = 0;
+  for (int i = 0; i < 10000; ++i) {  // 10 s at 0.3 m/s
+    truth.position.x() += truth.velocity.x() * kDt;
+    est.step(kDt, truth, Vec3::Zero(), 0.0);
+    flows += est.flow_updated();
+  }
+  EXPECT_EQ(flows, 0);
+  // Random walk of 1.6e-3 m/s^2/sqrt(Hz) over 10 s: sigma_v = 5e-3 m/s.
+  EXPECT_NEAR(est.estimate().velocity.x(), 0.3, 0.02);
+  EXPECT_NEAR(est.estimate().position.x(), truth.position.x(), 0.1);
+  EXPECT_NEAR(est.height(), 0.5, 0.01);  // the ToF still corrects the height
+
+  p.accel_bias = 0.02;
+  p.accel_noise_density = 0.0;
+  FlowDeckEstimator biased(p, 7);
+  truth = moving(0.0, 0.0, 0.5);
+  biased.reset(truth);
+  for (int i = 0; i < 10000; ++i) biased.step(kDt, truth, Vec3::Zero(), 0.0);
+  const Vec2 v = biased.estimate().velocity.head<2>();
+  const Vec2 x = biased.estimate().position.head<2>();
+  EXPECT_NEAR(v.norm(), 0.02 * 10.0, 1e-6);
+  EXPECT_NEAR(x.norm(), 0.5 * 0.02 * 100.0, 1e-3);
+  EXPECT_NEAR(std::abs(v.normalized().dot(x.normalized())), 1.0, 1e-9);  // same direction
+  p.accel_bias = -0.1;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+}
+
 TEST(FlowDeck, ValidateRejectsBadParams) {
   FlowDeckParams p;
   EXPECT_NO_THROW(p.validate());

@@ -27,7 +27,9 @@ struct HoverSetpoint {
   bool land = false;
 };
 
-enum class StateEstimateMode { kMocap, kFlowDeck };
+/// kMocap: truth + noise; kFlowDeck: flow deck + IMU (drifts); kImuTof: IMU +
+/// ToF only, the flow deck's estimator without flow (000 Fig. 6, darkness).
+enum class StateEstimateMode { kMocap, kFlowDeck, kImuTof };
 
 /// Stream ids of the vehicle's own random sources (see stream_seed).
 namespace crazyflie_streams {

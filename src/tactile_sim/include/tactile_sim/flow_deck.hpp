@@ -31,6 +31,16 @@ struct FlowDeckParams {
   double flow_gain = 0.25;
   /// Bandwidth of the height/vertical-velocity complementary filter (ToF + accel) [rad/s].
   double height_filter_bandwidth = 10.0;
+  /// false: IMU + ToF only, no flow corrections — the horizontal velocity is
+  /// the integrated accelerometer (000 Fig. 6: flight in darkness "using only
+  /// the onboard IMU and a downward-facing ToF sensor").
+  bool use_flow = true;
+  /// Residual horizontal accelerometer bias after the take-off calibration
+  /// [m/s^2], fixed in the body frame in a direction drawn from the seed; it
+  /// integrates into the velocity estimate (the controller then flies the
+  /// drone at -bias x t). 0 by default: with flow the flow corrections bound
+  /// it. Choice for IMU + ToF flight: docs/physics.md.
+  double accel_bias = 0.0;
 
   void validate() const;  ///< throws std::invalid_argument naming the field
 };
@@ -40,6 +50,7 @@ namespace flow_deck_streams {
 constexpr uint64_t kFlow = 120;
 constexpr uint64_t kRange = 121;
 constexpr uint64_t kGyro = 122;
+constexpr uint64_t kAccelBias = 123;
 }  // namespace flow_deck_streams
 
 class FlowDeckEstimator {
@@ -71,6 +82,7 @@ class FlowDeckEstimator {
   RangeModel range_model_;
   Rng rng_;
   std::normal_distribution<double> n01_{0.0, 1.0};
+  Vec2 accel_bias_body_ = Vec2::Zero();
 
   RigidBodyState est_;
   double yaw_ = 0.0;

@@ -297,10 +297,14 @@ class CrazyflieVehicle : public SimLogic::Vehicle {
     o.number("mocap_position_noise", p.mocap_position_noise);
     o.number("flow_scale_error", p.flow_deck.flow_scale_error);
     o.number("gyro_bias", p.flow_deck.gyro_bias);
+    o.number("accel_bias", p.flow_deck.accel_bias);
     o.check_all_used(
         "mass, drag_coeff, guard_radius, whiskers_enabled, whisker_spacing, whisker_base_x, whisker_length, "
-        "whisker_placement_deg, mocap_position_noise, flow_scale_error, gyro_bias");
-    p.estimate_mode = s.state_estimate == "flow_deck" ? StateEstimateMode::kFlowDeck : StateEstimateMode::kMocap;
+        "whisker_placement_deg, mocap_position_noise, flow_scale_error, gyro_bias, accel_bias");
+    p.estimate_mode = s.state_estimate == "flow_deck" ? StateEstimateMode::kFlowDeck
+                      : s.state_estimate == "imu_tof" ? StateEstimateMode::kImuTof
+                                                      : StateEstimateMode::kMocap;
+    p.flow_deck.use_flow = p.estimate_mode != StateEstimateMode::kImuTof;
     p.validate();
     return p;
   }
@@ -360,7 +364,7 @@ class CrazyflieVehicle : public SimLogic::Vehicle {
       }
     }
     const auto& deck = cf_.flow_deck();
-    if (cf_.params().estimate_mode == StateEstimateMode::kFlowDeck) {
+    if (cf_.params().estimate_mode != StateEstimateMode::kMocap) {
       if (deck.flow_updated()) out.flow.push_back({"/flow", flow_msg(deck.last_flow(), now_ns)});
       if (deck.range_updated()) {
         out.range.push_back({"/tof", range_msg(deck.last_range(), deck.params().range, now_ns)});
@@ -375,10 +379,8 @@ class CrazyflieVehicle : public SimLogic::Vehicle {
         {"/whisker/right/pressure", kPressure},
         {"/ground_truth/whisker/left/contact", kTruthType},
         {"/ground_truth/whisker/right/contact", kTruthType}};
-    if (cf_.params().estimate_mode == StateEstimateMode::kFlowDeck) {
-      t.emplace_back("/flow", kFlowType);
-      t.emplace_back("/tof", kRangeType);
-    }
+    if (cf_.params().estimate_mode == StateEstimateMode::kFlowDeck) t.emplace_back("/flow", kFlowType);
+    if (cf_.params().estimate_mode != StateEstimateMode::kMocap) t.emplace_back("/tof", kRangeType);
     return t;
   }
 
