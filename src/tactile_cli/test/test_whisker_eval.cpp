@@ -23,15 +23,26 @@ void publish_state(tactile_cli::Host& host, int64_t t_ns, const std::string& sta
   host.bus().publish("/fsm_state", m, t_ns);
 }
 
+/// A host with the evaluation (band [40, 100] mm, spacing 50 mm) on an
+/// initially empty truth; the FSM flies forward from t = 0 and starts
+/// following the wall at 1 s.
+struct Fixture {
+  tactile_cli::Host host{TACTILE_CONFIG_DIR};
+  WhiskerTruth truth;
+  WallFollowingEvaluation eval{host, truth, 0.040, 0.100, 0.05};
+  Fixture() {
+    publish_state(host, 0, "FLY_FORWARD");
+    publish_state(host, 1000 * kMs, "WALL_FOLLOWING/FLY_SIDEWAYS");
+  }
+};
+
 }  // namespace
 
 TEST(WallFollowingEvaluation, CountsTruthSamplesOfTheFirstSweep) {
-  tactile_cli::Host host(TACTILE_CONFIG_DIR);
-  WhiskerTruth truth;
-  // Band [40, 100] mm, spacing 50 mm.
-  const WallFollowingEvaluation eval(host, truth, 0.040, 0.100, 0.05);
-  publish_state(host, 0, "FLY_FORWARD");
-  publish_state(host, 1000 * kMs, "WALL_FOLLOWING/FLY_SIDEWAYS");
+  Fixture f;
+  tactile_cli::Host& host = f.host;
+  WhiskerTruth& truth = f.truth;
+  const WallFollowingEvaluation& eval = f.eval;
   publish_state(host, 1100 * kMs, "WALL_FOLLOWING/TURN_LEFT");  // same episode
   publish_state(host, 2000 * kMs, "RESUME_FORWARD");
   // 50 Hz truth from 0 to 2.98 s. Samples 1.00..1.98 s (50) are in the sweep:
@@ -59,11 +70,9 @@ TEST(WallFollowingEvaluation, CountsTruthSamplesOfTheFirstSweep) {
 }
 
 TEST(WallFollowingEvaluation, EndOfRunCutsARunningSweepAndNoTruthGivesNull) {
-  tactile_cli::Host host(TACTILE_CONFIG_DIR);
-  WhiskerTruth truth;
-  const WallFollowingEvaluation eval(host, truth, 0.040, 0.100, 0.05);
-  publish_state(host, 0, "FLY_FORWARD");
-  publish_state(host, 1000 * kMs, "WALL_FOLLOWING/FLY_SIDEWAYS");
+  Fixture f;
+  WhiskerTruth& truth = f.truth;
+  const WallFollowingEvaluation& eval = f.eval;
   // Without truth (a real Crazyflie): the sweep lasts to the end of the run,
   // the truth-based fields are null.
   auto m = eval.metrics(3500 * kMs);
