@@ -59,6 +59,12 @@ void Params::validate() const {
   if (!(hold_release_fraction >= 0.0 && hold_release_fraction < 1.0)) {
     bad("hold_release_fraction", "must be in [0, 1), got " + num(hold_release_fraction));
   }
+  if (!(hold_release_drop >= 0.0 && hold_release_drop < 1.0)) {
+    bad("hold_release_drop", "must be in [0, 1), got " + num(hold_release_drop));
+  }
+  if (hold_level_samples < 1 || hold_level_samples > 100000) {
+    bad("hold_level_samples", "must be in [1, 100000], got " + std::to_string(hold_level_samples));
+  }
   if (max_contact_hold < 1) bad("max_contact_hold", "must be >= 1, got " + std::to_string(max_contact_hold));
   if (hold_release_samples < 1 || hold_release_samples > 10000) {
     bad("hold_release_samples", "must be in [1, 10000], got " + std::to_string(hold_release_samples));
@@ -306,6 +312,7 @@ void TdorcWhisker::reset() {
   contact_ = false;
   contact_samples_ = 0;
   contact_peak_ = {};
+  contact_level_ = 0.0;
   below_samples_ = 0;
 }
 
@@ -326,19 +333,30 @@ WhiskerOutput TdorcWhisker::update(const std::array<double, 3>& raw) {
   bool held = false;
   if (params_.contact_hold && params_.mode != Mode::kBandpass && !any && contact_ && all_ready && contact_samples_ < params_.max_contact_hold) {
     bool over = false;
+    double sum = 0.0;
     for (std::size_t i = 0; i < out.channel.size(); ++i) {
       const double sc = out.channel[i].calibrated;
       over = over || (sc > params_.contact_threshold && sc > params_.hold_release_fraction * contact_peak_[i]);
+      sum += sc;
     }
+    // A release drops the whisker's S_c (sum of the channels) to a small part
+    // of its recent level, whatever offset the gel hysteresis leaves.
+    if (params_.hold_release_drop > 0.0) over = over && sum > params_.hold_release_drop * contact_level_;
     below_samples_ = over ? 0 : below_samples_ + 1;
     held = below_samples_ < params_.hold_release_samples;
   }
   const bool contact = any || held;
   if (!contact || any) below_samples_ = 0;
   contact_samples_ = contact ? contact_samples_ + 1 : 0;
+  double sum = 0.0;
   for (std::size_t i = 0; i < out.channel.size(); ++i) {
     contact_peak_[i] = contact ? std::max(contact_peak_[i], out.channel[i].calibrated) : 0.0;
+    sum += out.channel[i].calibrated;
   }
+  // Recent level of the whisker's S_c (sum of the channels): the onset's
+  // value, then an exponential average over hold_level_samples samples.
+  const double level_gain = 1.0 / static_cast<double>(params_.hold_level_samples);
+  contact_level_ = !contact ? 0.0 : (contact_samples_ == 1 ? sum : contact_level_ + level_gain * (sum - contact_level_));
   // Freeze while in contact (000 eq. 8).
   const bool freeze = contact;
   for (std::size_t i = 0; i < channels_.size(); ++i) channels_[i].learn(k, raw[i], freeze);

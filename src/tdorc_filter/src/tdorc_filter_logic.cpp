@@ -31,6 +31,8 @@ ParamMap TdorcFilterLogic::default_parameters() {
   m.set("max_contact_hold", static_cast<int64_t>(d.max_contact_hold));
   m.set("hold_release_fraction", d.hold_release_fraction);         // workspace extension (README)
   m.set("hold_release_samples", static_cast<int64_t>(d.hold_release_samples));  // workspace extension (README)
+  m.set("hold_release_drop", d.hold_release_drop);                 // workspace extension (README)
+  m.set("hold_level_samples", static_cast<int64_t>(d.hold_level_samples));  // workspace extension (README)
   m.set("bandpass_b", std::vector<double>(d.bandpass_b.begin(), d.bandpass_b.end()));  // 000 eq. 9-11
   m.set("bandpass_a", std::vector<double>(d.bandpass_a.begin(), d.bandpass_a.end()));  // 000 eq. 9-11
   m.set("max_sample_gap_s", Params{}.max_sample_gap_s);
@@ -75,6 +77,12 @@ TdorcFilterLogic::Params TdorcFilterLogic::params_from(const ParamMap& m) {
     throw m.error("hold_release_samples", "must be in [1, 10000], got " + std::to_string(release));
   }
   p.tdorc.hold_release_samples = static_cast<int>(release);
+  p.tdorc.hold_release_drop = m.get_double("hold_release_drop");
+  const int64_t level = m.get_int("hold_level_samples");
+  if (level < 1 || level > 100000) {
+    throw m.error("hold_level_samples", "must be in [1, 100000], got " + std::to_string(level));
+  }
+  p.tdorc.hold_level_samples = static_cast<int>(level);
   p.tdorc.bandpass_b = three(m, "bandpass_b");
   p.tdorc.bandpass_a = three(m, "bandpass_a");
   p.max_sample_gap_s = m.get_double("max_sample_gap_s");

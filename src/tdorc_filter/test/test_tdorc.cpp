@@ -446,6 +446,66 @@ TEST(TdorcWhisker, HoldReleaseFractionEndsAHoldWhoseSignalCollapsed) {
   EXPECT_THROW(TdorcWhisker{bad}, std::invalid_argument);
 }
 
+TEST(TdorcWhisker, HoldReleaseDropEndsAHoldOverAHysteresisOffset) {
+  // Pressed with +200 Pa from sample 300 to 1099; after the release the gel
+  // keeps +40 Pa (000 eq. 1, N_h), over T_c and over 0.1 of the peak, so the
+  // hold of the previous rules lasts until max_contact_hold (onset 301 + 999).
+  // With hold_release_drop 0.25 the whisker's S_c (here channel 1 alone, the
+  // other two are exact lines) falls from its level 200 to 40 < 0.25 * level:
+  // by hand the level is 196.8 after sample 1100 and 193.66 after 1101, still
+  // over 160, so samples 1100, 1101 are held (hold_release_samples 3) and
+  // 1102 is free.
+  auto last_with = [](double drop, int level_samples) {
+    Params p;
+    p.contact_hold = true;
+    p.learn_delay = 10;
+    p.hold_release_fraction = 0.1;
+    p.hold_release_samples = 3;
+    p.hold_release_drop = drop;
+    p.hold_level_samples = level_samples;
+    return last_contact(run_pushed(p, 1600, [](int k) { return k < 300 ? 0.0 : (k < 1100 ? 200.0 : 40.0); }));
+  };
+  EXPECT_EQ(last_with(0.0, 50), 1300);
+  EXPECT_EQ(last_with(0.25, 50), 1101);
+  // A level that follows every sample (1) forgets the fall at once: only
+  // sample 1100 is below, 1101 is over again (40 > 0.25 * 40), held to the limit.
+  EXPECT_EQ(last_with(0.25, 1), 1300);
+  EXPECT_EQ(last_with(0.15, 50), 1300);  // 40 > 0.15 * level: an offset of 20 % is not a release at 0.15
+}
+
+TEST(TdorcWhisker, HoldReleaseDropFollowsAGradualEaseOff) {
+  // The level is a recent average, not the peak: a whisker eased off from
+  // +200 to +40 Pa over 400 samples (the drone backing away) stays in
+  // contact with hold_release_drop 0.25, and a quick fall from +200 to +40
+  // within 5 samples is a release.
+  auto last_with = [](int ramp) {
+    Params p;
+    p.contact_hold = true;
+    p.learn_delay = 10;
+    p.hold_release_samples = 3;
+    p.hold_release_drop = 0.25;
+    p.hold_level_samples = 50;
+    return last_contact(run_pushed(p, 1600, [ramp](int k) {
+      if (k < 300) return 0.0;
+      if (k < 800) return 200.0;
+      if (k < 800 + ramp) return 200.0 - 160.0 * (k - 800) / ramp;
+      return k < 1250 ? 40.0 : 0.0;
+    }));
+  };
+  EXPECT_EQ(last_with(400), 1251);  // held through the ease-off; released 2 samples after the push ends
+  // By hand: level 193.73 after sample 804 (72 > 48.4 still over), 805 and
+  // 806 below (40 < 48.4, < 47.7) and held, 807 free.
+  EXPECT_EQ(last_with(5), 806);
+  Params bad;
+  bad.hold_release_drop = 1.0;
+  EXPECT_THROW(TdorcWhisker{bad}, std::invalid_argument);
+  bad.hold_release_drop = -0.1;
+  EXPECT_THROW(TdorcWhisker{bad}, std::invalid_argument);
+  bad.hold_release_drop = 0.25;
+  bad.hold_level_samples = 0;
+  EXPECT_THROW(TdorcWhisker{bad}, std::invalid_argument);
+}
+
 TEST(TdorcWhisker, HoldReleaseSamplesBridgesStickSlipSamples) {
   // Pressed with +200 Pa from sample 300 to 1099, with a slip sample every
   // 50th pressed sample whose load drops to 0 (a whisker sliding along a
@@ -572,6 +632,12 @@ TEST(Params, ValidateSustainedContactFields) {
   p = Params{};
   p.hold_release_samples = 0;
   EXPECT_EQ(error_of(p), "TdorcParams.hold_release_samples: must be in [1, 10000], got 0");
+  p = Params{};
+  p.hold_release_drop = 1.0;
+  EXPECT_EQ(error_of(p), "TdorcParams.hold_release_drop: must be in [0, 1), got 1");
+  p = Params{};
+  p.hold_level_samples = 0;
+  EXPECT_EQ(error_of(p), "TdorcParams.hold_level_samples: must be in [1, 100000], got 0");
 }
 
 TEST(Params, ValidateNamesTheField) {

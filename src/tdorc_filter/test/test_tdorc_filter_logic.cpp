@@ -75,6 +75,8 @@ TEST(TdorcFilterLogic, RepositoryConfigIsPaperValuesPlusSustainedContact) {
   EXPECT_EQ(p.tdorc.max_contact_hold, 1000);
   EXPECT_EQ(p.tdorc.hold_release_fraction, 0.1);
   EXPECT_EQ(p.tdorc.hold_release_samples, 3);
+  EXPECT_EQ(p.tdorc.hold_release_drop, 0.25);
+  EXPECT_EQ(p.tdorc.hold_level_samples, 50);
 }
 
 TEST(TdorcFilterLogic, ParameterErrorsNameTheKey) {
@@ -98,6 +100,14 @@ TEST(TdorcFilterLogic, ParameterErrorsNameTheKey) {
   m = TdorcFilterLogic::default_parameters();
   m.set("hold_release_samples", int64_t{0});
   EXPECT_NE(param_error(m).find("hold_release_samples: must be in [1, 10000], got 0"), std::string::npos);
+
+  m = TdorcFilterLogic::default_parameters();
+  m.set("hold_release_drop", 1.0);
+  EXPECT_NE(param_error(m).find("hold_release_drop: must be in [0, 1), got 1"), std::string::npos);
+
+  m = TdorcFilterLogic::default_parameters();
+  m.set("hold_level_samples", int64_t{0});
+  EXPECT_NE(param_error(m).find("hold_level_samples: must be in [1, 100000], got 0"), std::string::npos);
 
   m = TdorcFilterLogic::default_parameters();
   m.set("contact_threshold", std::nan(""));

@@ -45,9 +45,10 @@ def synthetic_trace(seed=1, n=3000, rate=50.0, contact_amp=600.0, contact_end=16
 
 
 def reference(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=False, max_hold=1000, release=0.0,
-              release_samples=1):
-    """delay, hold, max_hold, release, release_samples: the README's sustained-contact extension
-    (learn_delay, contact_hold, max_contact_hold, hold_release_fraction, hold_release_samples);
+              release_samples=1, drop=0.0, level_samples=25):
+    """delay, hold, max_hold, release, release_samples, drop, level_samples: the README's
+    sustained-contact extension (learn_delay, contact_hold, max_contact_hold,
+    hold_release_fraction, hold_release_samples, hold_release_drop, hold_level_samples);
     defaults = eq. 8 as written."""
     N = S.shape[0]
     rows = np.zeros((N, 12))
@@ -58,6 +59,7 @@ def reference(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=Fals
     prev_contact, run = False, 0   # contact at the previous sample, samples since its onset
     peak = np.zeros(3)             # largest S_c per channel during the current contact
     below = 0                      # consecutive held samples with no channel over the hold condition
+    level = 0.0                    # recent level of sum(S_c) during the current contact
     for k in range(N):
         # 1. compensate with the fit of the previous samples
         if mode == "bandpass":
@@ -80,6 +82,8 @@ def reference(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=Fals
             any_sp = contact
             if hold and mode != "bandpass" and not contact and prev_contact and run < max_hold:
                 over = bool(((sc > threshold) & (sc > release * peak)).any())  # held while S_c is over T_c
+                if drop > 0.0:
+                    over = over and sc.sum() > drop * level  # ... and the whisker's S_c has not fallen
                 below = 0 if over else below + 1
                 contact = below < release_samples  # ... and until release_samples samples were not
             frozen = mode == "tdorc" and contact
@@ -88,6 +92,10 @@ def reference(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=Fals
             below = 0
         run = run + 1 if contact else 0
         peak = np.maximum(peak, sc) if (contact and sc is not None) else np.zeros(3)
+        if contact and sc is not None:
+            level = sc.sum() if run == 1 else level + (sc.sum() - level) / level_samples
+        else:
+            level = 0.0
         prev_contact = contact
         # 2. learn: first window, then (TDORC) re-fit while not in contact (eq. 8),
         #    with the sample of `delay` samples ago; a contact drops the waiting ones
@@ -112,13 +120,14 @@ def reference(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=Fals
 
 
 def run_cpp(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=False, max_hold=1000, release=0.0,
-            release_samples=1):
+            release_samples=1, drop=0.0, level_samples=25):
     exe = os.environ.get("TDORC_CSV")
     if not exe:
         pytest.skip("TDORC_CSV not set (run through ctest)")
     text = "\n".join(",".join(repr(float(v)) for v in row) for row in S) + "\n"
     res = subprocess.run([exe, mode, str(n), repr(threshold), "1" if absolute else "0",
-                          str(delay), "1" if hold else "0", str(max_hold), repr(float(release)), str(release_samples)],
+                          str(delay), "1" if hold else "0", str(max_hold), repr(float(release)), str(release_samples),
+                          repr(float(drop)), str(level_samples)],
                          input=text, capture_output=True, text=True, check=True)
     return np.array([[float(v) for v in line.split(",")] for line in res.stdout.strip().splitlines()])
 
@@ -203,6 +212,43 @@ def test_hold_release_samples_bridges_slip_samples():
     # The bridged run never learns a pressed sample: S_c after the push is the drift error only.
     assert np.abs(three[2500:, 3:6]).max() < 10.0
     assert np.abs(one[2500:, 3:6]).max() > np.abs(three[2500:, 3:6]).max()
+
+
+def hysteresis_trace(offset=40.0, tau=750.0, end=2000):
+    """A 12 s push (samples 1400-2000), then the gel's partial recovery (000
+    eq. 1, N_h): an offset of `offset` Pa on channel 0 (scaled by the channel
+    gains) decaying with `tau` samples after the release."""
+    S = synthetic_trace(contact_amp=200.0, contact_end=end)
+    k = np.arange(S.shape[0])
+    after = np.where(k >= end, offset * np.exp(-(k - end) / tau), 0.0)
+    return S + after[:, None] * np.array([1.0, 0.6, 0.2])
+
+
+@pytest.mark.parametrize("drop,level_samples", [(0.0, 25), (0.25, 50), (0.25, 1), (0.6, 25)])
+def test_hold_release_drop_matches_reference(drop, level_samples):
+    S = hysteresis_trace()
+    kw = dict(delay=10, hold=True, max_hold=2000, release=0.1, release_samples=3, drop=drop, level_samples=level_samples)
+    ref = reference(S, "tdorc", **kw)
+    cpp = run_cpp(S, "tdorc", **kw)
+    np.testing.assert_array_equal(cpp[:, [0, 1, 2, 9, 10, 11]], ref[:, [0, 1, 2, 9, 10, 11]])
+    scale = np.abs(S).max()
+    for col in range(3, 9):
+        np.testing.assert_allclose(cpp[:, col], ref[:, col], rtol=1e-9, atol=1e-9 * scale if col < 6 else 1e-9 * 100)
+
+
+def test_hold_release_drop_ends_a_hold_over_hysteresis():
+    """The hysteresis offset (40 Pa, over T_c and 0.1 of the peak; with the
+    drift-line error S_c is 27 / 33 / 13 Pa on the three channels after the
+    release) holds a released whisker to the end of the trace with the
+    fraction rule alone; the drop rule (sum of S_c below 0.25 of its 1 s
+    level) releases it right after the push."""
+    S = hysteresis_trace()
+    kw = dict(delay=10, hold=True, max_hold=2000, release=0.1, release_samples=3)
+    without = reference(S, "tdorc", **kw)
+    with_drop = reference(S, "tdorc", drop=0.25, level_samples=50, **kw)
+    assert without[1404:, 1].all(), "the offset holds the contact with the fraction rule alone"
+    assert with_drop[1404:2000, 1].all(), "the drop rule keeps the 12 s push in contact"
+    assert not with_drop[2010:, 1].any(), "and releases it within a few samples of the push's end"
 
 
 def test_tdorc_has_no_false_positives_in_free_flight():

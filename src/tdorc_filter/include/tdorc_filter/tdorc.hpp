@@ -79,6 +79,19 @@ struct Params {
   /// pressed, and a release there lets the window learn pressed samples.
   /// 1: release at the first such sample.
   int hold_release_samples = 1;
+  /// A held contact also ends when the whisker's S_c (sum of its three
+  /// channels) falls below this fraction of its recent level in the contact
+  /// (an exponential average over hold_level_samples samples, updated while
+  /// in contact); 0: off.
+  /// Gel hysteresis (000 eq. 1, N_h: "partial inelastic strain recovery")
+  /// leaves an offset after every release that the frozen drift line does not
+  /// remove; a whisker ticking a baffle's end piles these offsets up until
+  /// they exceed any fraction of the contact's peak and hold the whisker "in
+  /// contact" after it left. A release is a fall of S_c to a small part of
+  /// the level just before it, whatever the offset.
+  double hold_release_drop = 0.0;
+  /// Time constant of the recent level [samples] (25 = 0.5 s at 50 Hz).
+  int hold_level_samples = 25;
   /// Band-pass numerator b0, b1, b2 (000 eq. 9-11, first-order Butterworth 0.05-1 Hz at 50 Hz).
   std::array<double, 3> bandpass_b{{0.0564, 0.0, -0.0564}};
   /// Band-pass denominator a0, a1, a2; a0 must be 1 (000 eq. 9-11).
@@ -276,8 +289,9 @@ class TdorcWhisker {
   int64_t next_index_ = 0;
   bool contact_ = false;
   int64_t contact_samples_ = 0;
-  std::array<double, 3> contact_peak_{};
-  int below_samples_ = 0;  // consecutive held samples with no channel over the hold condition  // largest S_c per channel during the current contact
+  std::array<double, 3> contact_peak_{};  // largest S_c per channel during the current contact
+  int below_samples_ = 0;  // consecutive held samples with no channel over the hold condition
+  double contact_level_ = 0.0;  // recent level of the sum of the channels' S_c in the current contact (hold_release_drop)
 };
 
 }  // namespace tdorc_filter
