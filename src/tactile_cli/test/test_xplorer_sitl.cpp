@@ -101,7 +101,7 @@ TEST(XplorerSitl, BoxTraversalClosesTheLoopAndMapsTheBoxOnEverySeed) {
 // deg per trial (the corner handling was tuned on the axis-aligned box). Every
 // trial still turns the four corners and closes the loop; the oblique first
 // contact leaves the map 1-2.5 cm long on one side (97.7-99.0 % on seeds 1-5;
-// 89.5 % on seed 8, README), so the area is asserted at 97 %.
+// 88.9 % on seed 8, README), so the area is asserted at 97 %.
 TEST(XplorerSitl, TurnedBoxTraversalClosesTheLoop) {
   const auto m = run_trials("xplorer_box_traversal_turned.yaml", 5);
   EXPECT_EQ(m["success_count"].get<int>(), 5);
@@ -121,10 +121,9 @@ TEST(XplorerSitl, TurnedBoxTraversalClosesTheLoop) {
 // hold the face (without the arms' give the contact torque yaws it slowly
 // round the edge, below the turning trigger), loses contact, and ends flying
 // off the box in Exploration; the loop never closes. The compliant vehicle
-// (test above) turns every corner and never loses the face. (Before the
-// corner pivot, the rigid vehicle's Tactile-turning never re-contacted; now
-// a late turn may re-contact a face sideways, and it is lost at the next
-// corner: README.)
+// (test above) turns every corner and never loses the face. (001 saw the
+// rigid vehicle enter Tactile-turning and fail to re-contact; here it fails
+// one step earlier, at the same corner: README.)
 TEST(XplorerSitl, RigidArmsFailBoxTraversalAtTheConvexCorner) {
   const auto m = run_trials("xplorer_box_traversal_rigid.yaml", 4);
   EXPECT_EQ(m["success_count"].get<int>(), 0);
@@ -134,7 +133,7 @@ TEST(XplorerSitl, RigidArmsFailBoxTraversalAtTheConvexCorner) {
     EXPECT_FALSE(x["loop_closed"].get<bool>()) << seed;
     ASSERT_FALSE(x["first_contact_time_s"].is_null()) << seed;  // it found and traversed the first face
     EXPECT_GT(x["traversed_path_m"].get<double>(), 0.5) << seed;
-    EXPECT_GE(x["turns_without_recontact"].get<int>() + x["traversal_contact_lost"].get<int>(), 2) << seed;
+    EXPECT_GE(x["turns_without_recontact"].get<int>() + x["traversal_contact_lost"].get<int>(), 1) << seed;
     EXPECT_LT(x["turns_recontacted"].get<int>(), 3) << seed;    // never round three corners
     EXPECT_EQ(x["final_state"], "exploration") << seed;         // flew off the box
   }

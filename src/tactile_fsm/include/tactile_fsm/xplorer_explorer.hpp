@@ -130,8 +130,10 @@ struct XplorerParams {
   /// offset along C_n is kept and carried with the vehicle as C_n turns with
   /// the yaw, which a curved surface (pipe, bin) needs: there a stale world
   /// point projected onto the turning C_n drives r* into the surface and the
-  /// force up until contact breaks (choice; see README).
-  bool reshape_follows_contact = false;
+  /// force up until contact breaks. Default true since the corner pivot: the
+  /// box then does as well as with false, so one setting serves faces and
+  /// cylinders (choice; see README).
+  bool reshape_follows_contact = true;
   double release_force = 0.3;        ///< averaged |force| below which contact is lost [N] (choice)
   double release_time = 1.0;         ///< ... for this long -> Exploration [s] (choice)
   double settle_time = 1.0;          ///< no turning trigger this long after a contact / turn [s] (choice)
