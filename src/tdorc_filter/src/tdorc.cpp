@@ -62,6 +62,9 @@ void Params::validate() const {
   if (!(hold_release_drop >= 0.0 && hold_release_drop < 1.0)) {
     bad("hold_release_drop", "must be in [0, 1), got " + num(hold_release_drop));
   }
+  if (!(max_drift_slope >= 0.0) || !std::isfinite(max_drift_slope)) {
+    bad("max_drift_slope", "must be finite and >= 0, got " + num(max_drift_slope));
+  }
   if (hold_level_samples < 1 || hold_level_samples > 100000) {
     bad("hold_level_samples", "must be in [1, 100000], got " + std::to_string(hold_level_samples));
   }
@@ -228,6 +231,7 @@ void TdorcChannel::reset() {
   ready_ = false;
   filter_started_ = false;
   fit_count_ = 0;
+  implausible_fits_ = 0;
   pending_head_ = 0;
   pending_count_ = 0;
 }
@@ -284,8 +288,13 @@ void TdorcChannel::learn(int64_t sample_index, double value, bool contact) {
       pending_head_ = (pending_head_ + 1) % cap;
       --pending_count_;
       fit_.push(k, v);
-      line_ = fit_.fit();  // 000 eq. 6, 7
-      ++fit_count_;
+      const LineFit fit = fit_.fit();  // 000 eq. 6, 7
+      if (params_.max_drift_slope > 0.0 && std::fabs(fit.slope) > params_.max_drift_slope) {
+        ++implausible_fits_;  // the window straddles a contact step: keep the last line
+      } else {
+        line_ = fit;
+        ++fit_count_;
+      }
     }
   }
   // TDOC after its fit, or TDORC in contact: the line stays frozen.

@@ -33,6 +33,7 @@ ParamMap TdorcFilterLogic::default_parameters() {
   m.set("hold_release_samples", static_cast<int64_t>(d.hold_release_samples));  // workspace extension (README)
   m.set("hold_release_drop", d.hold_release_drop);                 // workspace extension (README)
   m.set("hold_level_samples", static_cast<int64_t>(d.hold_level_samples));  // workspace extension (README)
+  m.set("max_drift_slope", d.max_drift_slope);                     // workspace extension (README)
   m.set("bandpass_b", std::vector<double>(d.bandpass_b.begin(), d.bandpass_b.end()));  // 000 eq. 9-11
   m.set("bandpass_a", std::vector<double>(d.bandpass_a.begin(), d.bandpass_a.end()));  // 000 eq. 9-11
   m.set("max_sample_gap_s", Params{}.max_sample_gap_s);
@@ -83,6 +84,7 @@ TdorcFilterLogic::Params TdorcFilterLogic::params_from(const ParamMap& m) {
     throw m.error("hold_level_samples", "must be in [1, 100000], got " + std::to_string(level));
   }
   p.tdorc.hold_level_samples = static_cast<int>(level);
+  p.tdorc.max_drift_slope = m.get_double("max_drift_slope");
   p.tdorc.bandpass_b = three(m, "bandpass_b");
   p.tdorc.bandpass_a = three(m, "bandpass_a");
   p.max_sample_gap_s = m.get_double("max_sample_gap_s");

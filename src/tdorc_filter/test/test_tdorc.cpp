@@ -506,6 +506,36 @@ TEST(TdorcWhisker, HoldReleaseDropFollowsAGradualEaseOff) {
   EXPECT_THROW(TdorcWhisker{bad}, std::invalid_argument);
 }
 
+TEST(TdorcWhisker, MaxDriftSlopeKeepsAStepFromLockingTheWhisker) {
+  // eq. 8 as written on a 10 s push (+200 Pa, samples 300-799): the band-pass
+  // loses the contact after ~7 s, the window learns pressed samples, and after
+  // the release the least-squares line through the step is steep; its ramp
+  // holds S_p over T_c (a ramp of c Pa/sample settles at ~161 c), the fit
+  // freezes and the whisker stays "in contact" to the end (the lock). With
+  // max_drift_slope the steep fits are not used and the lock never forms.
+  auto run = [](double max_slope) {
+    Params p;
+    p.max_drift_slope = max_slope;
+    return run_pushed(p, 3000, [](int k) { return k >= 300 && k < 800 ? 200.0 : 0.0; });
+  };
+  const auto paper = run(0.0);
+  EXPECT_TRUE(paper[2999].contact) << "eq. 8 as written locks on this push";
+  const auto bounded = run(0.5);
+  EXPECT_FALSE(bounded[2999].contact);
+  EXPECT_LT(last_contact(bounded), 1100);  // measured 1054, then free to the end
+  // Free flight of the drifting whisker (+-0.03 Pa/sample) is never bounded.
+  TdorcWhisker w = [] {
+    Params p;
+    p.max_drift_slope = 0.5;
+    return TdorcWhisker(p);
+  }();
+  for (int k = 0; k < 1000; ++k) w.update({{100000.0 + 0.03 * k, 99000.0 - 0.03 * k, 101000.0}});
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(w.channel(i).implausible_fits(), 0u);
+  Params bad;
+  bad.max_drift_slope = -1.0;
+  EXPECT_THROW(TdorcWhisker{bad}, std::invalid_argument);
+}
+
 TEST(TdorcWhisker, HoldReleaseSamplesBridgesStickSlipSamples) {
   // Pressed with +200 Pa from sample 300 to 1099, with a slip sample every
   // 50th pressed sample whose load drops to 0 (a whisker sliding along a
@@ -638,6 +668,9 @@ TEST(Params, ValidateSustainedContactFields) {
   p = Params{};
   p.hold_level_samples = 0;
   EXPECT_EQ(error_of(p), "TdorcParams.hold_level_samples: must be in [1, 100000], got 0");
+  p = Params{};
+  p.max_drift_slope = -1.0;
+  EXPECT_EQ(error_of(p), "TdorcParams.max_drift_slope: must be finite and >= 0, got -1");
 }
 
 TEST(Params, ValidateNamesTheField) {

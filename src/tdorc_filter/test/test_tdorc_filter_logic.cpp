@@ -77,6 +77,7 @@ TEST(TdorcFilterLogic, RepositoryConfigIsPaperValuesPlusSustainedContact) {
   EXPECT_EQ(p.tdorc.hold_release_samples, 3);
   EXPECT_EQ(p.tdorc.hold_release_drop, 0.25);
   EXPECT_EQ(p.tdorc.hold_level_samples, 50);
+  EXPECT_EQ(p.tdorc.max_drift_slope, 0.5);
 }
 
 TEST(TdorcFilterLogic, ParameterErrorsNameTheKey) {
@@ -108,6 +109,10 @@ TEST(TdorcFilterLogic, ParameterErrorsNameTheKey) {
   m = TdorcFilterLogic::default_parameters();
   m.set("hold_level_samples", int64_t{0});
   EXPECT_NE(param_error(m).find("hold_level_samples: must be in [1, 100000], got 0"), std::string::npos);
+
+  m = TdorcFilterLogic::default_parameters();
+  m.set("max_drift_slope", -0.5);
+  EXPECT_NE(param_error(m).find("max_drift_slope: must be finite and >= 0, got -0.5"), std::string::npos);
 
   m = TdorcFilterLogic::default_parameters();
   m.set("contact_threshold", std::nan(""));

@@ -45,16 +45,16 @@ def synthetic_trace(seed=1, n=3000, rate=50.0, contact_amp=600.0, contact_end=16
 
 
 def reference(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=False, max_hold=1000, release=0.0,
-              release_samples=1, drop=0.0, level_samples=25):
-    """delay, hold, max_hold, release, release_samples, drop, level_samples: the README's
-    sustained-contact extension (learn_delay, contact_hold, max_contact_hold,
-    hold_release_fraction, hold_release_samples, hold_release_drop, hold_level_samples);
-    defaults = eq. 8 as written."""
+              release_samples=1, drop=0.0, level_samples=25, max_slope=0.0):
+    """delay, hold, max_hold, release, release_samples, drop, level_samples, max_slope: the
+    README's sustained-contact extension (learn_delay, contact_hold, max_contact_hold,
+    hold_release_fraction, hold_release_samples, hold_release_drop, hold_level_samples,
+    max_drift_slope); defaults = eq. 8 as written."""
     N = S.shape[0]
     rows = np.zeros((N, 12))
     window = []          # sample indices in the least-squares window
     pending = []         # free samples waiting `delay` samples before entering the window
-    fit = None           # (slope[3], intercept[3], first index)
+    fit = None           # (slope[3], intercept[3], first index[3])
     zi = None
     prev_contact, run = False, 0   # contact at the previous sample, samples since its onset
     peak = np.zeros(3)             # largest S_c per channel during the current contact
@@ -115,19 +115,24 @@ def reference(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=Fals
         if refit:
             t = np.array(window) - window[0]
             coef = [np.polyfit(t, S[window, ch], 1) for ch in range(3)]  # eq. 6, 7
-            fit = (np.array([c[0] for c in coef]), np.array([c[1] for c in coef]), window[0])
+            new = (np.array([c[0] for c in coef]), np.array([c[1] for c in coef]), np.full(3, window[0]))
+            if fit is None or max_slope <= 0.0:
+                fit = new
+            else:  # a channel's fit steeper than max_slope is not used: that channel keeps its line
+                use = np.abs(new[0]) <= max_slope
+                fit = tuple(np.where(use, n_, o_) for n_, o_ in zip(new, fit))
     return rows
 
 
 def run_cpp(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=False, max_hold=1000, release=0.0,
-            release_samples=1, drop=0.0, level_samples=25):
+            release_samples=1, drop=0.0, level_samples=25, max_slope=0.0):
     exe = os.environ.get("TDORC_CSV")
     if not exe:
         pytest.skip("TDORC_CSV not set (run through ctest)")
     text = "\n".join(",".join(repr(float(v)) for v in row) for row in S) + "\n"
     res = subprocess.run([exe, mode, str(n), repr(threshold), "1" if absolute else "0",
                           str(delay), "1" if hold else "0", str(max_hold), repr(float(release)), str(release_samples),
-                          repr(float(drop)), str(level_samples)],
+                          repr(float(drop)), str(level_samples), repr(float(max_slope))],
                          input=text, capture_output=True, text=True, check=True)
     return np.array([[float(v) for v in line.split(",")] for line in res.stdout.strip().splitlines()])
 
@@ -249,6 +254,25 @@ def test_hold_release_drop_ends_a_hold_over_hysteresis():
     assert without[1404:, 1].all(), "the offset holds the contact with the fraction rule alone"
     assert with_drop[1404:2000, 1].all(), "the drop rule keeps the 12 s push in contact"
     assert not with_drop[2010:, 1].any(), "and releases it within a few samples of the push's end"
+
+
+@pytest.mark.parametrize("hold", [False, True])
+def test_max_drift_slope_matches_reference(hold):
+    """A 10 s push under eq. 8 as written (hold False) locks the whisker after the
+    release: the window learned pressed samples, the line through the step is
+    steep and its frozen ramp holds S_p over T_c. The slope bound prevents it;
+    C++ and the reference agree sample by sample either way."""
+    S = synthetic_trace(contact_amp=200.0, contact_end=1900)
+    kw = dict(delay=10 if hold else 0, hold=hold, release=0.1 if hold else 0.0, release_samples=3 if hold else 1)
+    ref = reference(S, "tdorc", max_slope=0.5, **kw)
+    cpp = run_cpp(S, "tdorc", max_slope=0.5, **kw)
+    np.testing.assert_array_equal(cpp[:, [0, 1, 2, 9, 10, 11]], ref[:, [0, 1, 2, 9, 10, 11]])
+    scale = np.abs(S).max()
+    for col in range(3, 9):
+        np.testing.assert_allclose(cpp[:, col], ref[:, col], rtol=1e-9, atol=1e-9 * scale if col < 6 else 1e-9 * 100)
+    if not hold:
+        assert reference(S, "tdorc", **kw)[2900:, 1].all(), "eq. 8 as written locks on this push"
+        assert not ref[2200:, 1].any(), "the bound keeps the steep line out"
 
 
 def test_tdorc_has_no_false_positives_in_free_flight():

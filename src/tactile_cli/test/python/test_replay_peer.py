@@ -71,7 +71,7 @@ def test_rosbags_reads_every_message_and_tdorc_matches_numpy(demo, case):
                         absolute=tp["absolute_threshold"], delay=tp["learn_delay"], hold=tp["contact_hold"],
                         max_hold=tp["max_contact_hold"], release=tp["hold_release_fraction"],
                         release_samples=tp["hold_release_samples"], drop=tp["hold_release_drop"],
-                        level_samples=tp["hold_level_samples"])
+                        level_samples=tp["hold_level_samples"], max_slope=tp["max_drift_slope"])
         ready = ref[:, 0] == 1
         got_sp = np.array([list(m.compensated) for _, m in signal])
         got_ready = np.array([m.calibrated_ready for _, m in signal])

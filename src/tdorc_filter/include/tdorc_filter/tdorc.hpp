@@ -92,6 +92,14 @@ struct Params {
   double hold_release_drop = 0.0;
   /// Time constant of the recent level [samples] (25 = 0.5 s at 50 Hz).
   int hold_level_samples = 25;
+  /// Largest drift slope a re-fit may have [Pa per sample]; a fit beyond it
+  /// is not used (the last line stays, as while frozen). Thermal drift is
+  /// slow (the SITL's peaks at ~0.2 Pa/sample); a least-squares line through
+  /// a window that holds pressed samples and then free ones (a release missed
+  /// or mistaken) is steep, and frozen at the next contact its extrapolated
+  /// ramp holds S_p over T_c for good (S_p of a ramp of c Pa/sample settles
+  /// at ~161 c). 0: off (eq. 8 as written: every fit is used).
+  double max_drift_slope = 0.0;
   /// Band-pass numerator b0, b1, b2 (000 eq. 9-11, first-order Butterworth 0.05-1 Hz at 50 Hz).
   std::array<double, 3> bandpass_b{{0.0564, 0.0, -0.0564}};
   /// Band-pass denominator a0, a1, a2; a0 must be 1 (000 eq. 9-11).
@@ -228,6 +236,8 @@ class TdorcChannel {
   bool ready() const { return ready_; }
   /// Fits so far (0 before the first window is full; TDOC stays at 1).
   uint64_t fit_count() const { return fit_count_; }
+  /// Re-fits not used because their slope exceeded Params::max_drift_slope.
+  uint64_t implausible_fits() const { return implausible_fits_; }
   const LineFit& line() const { return line_; }
   int window_fill() const { return fit_.count(); }
   std::size_t state_size_bytes() const;
@@ -240,6 +250,7 @@ class TdorcChannel {
   bool ready_ = false;
   bool filter_started_ = false;
   uint64_t fit_count_ = 0;
+  uint64_t implausible_fits_ = 0;
   // Free samples waiting learn_delay samples before entering the window
   // (ring of capacity learn_delay + 1).
   std::vector<std::pair<int64_t, double>> pending_;
