@@ -66,6 +66,14 @@ ParamMap GpisExplorerLogic::default_parameters() {
   m.set("align_probes", s.align_probes);
   m.set("line_gain", s.line_gain);
   m.set("visited_radius", s.visited_radius);
+  m.set("whisk_amplitude", s.whisk_amplitude);
+  m.set("whisk_rate", s.whisk_rate);
+  m.set("whisk_speed", s.whisk_speed);
+  m.set("corridor_half_width", s.corridor_half_width);
+  m.set("check_dwell_s", s.check_dwell_s);
+  m.set("check_sample_s", s.check_sample_s);
+  m.set("follow_min_forward", s.follow_min_forward);
+
   m.set("max_updates", static_cast<int64_t>(s.max_updates));
   m.set("max_time_s", s.max_time_s);
   m.set("landing_duration_s", s.landing_duration_s);
@@ -124,6 +132,14 @@ GpisExplorerLogic::Params GpisExplorerLogic::params_from(const ParamMap& m) {
   s.align_probes = m.get_bool("align_probes");
   s.line_gain = m.get_double("line_gain");
   s.visited_radius = m.get_double("visited_radius");
+  s.whisk_amplitude = m.get_double("whisk_amplitude");
+  s.whisk_rate = m.get_double("whisk_rate");
+  s.whisk_speed = m.get_double("whisk_speed");
+  s.corridor_half_width = m.get_double("corridor_half_width");
+  s.check_dwell_s = m.get_double("check_dwell_s");
+  s.check_sample_s = m.get_double("check_sample_s");
+  s.follow_min_forward = m.get_double("follow_min_forward");
+
   s.max_updates = static_cast<int>(std::min<int64_t>(nonneg_int("max_updates"), 1000000));
   s.max_time_s = m.get_double("max_time_s");
   s.landing_duration_s = m.get_double("landing_duration_s");

@@ -42,6 +42,7 @@ const char* to_string(Phase p) {
     case Phase::kGoToStaging: return "GO_TO_STAGING";
     case Phase::kGoToTarget: return "GO_TO_TARGET";
     case Phase::kExitThrough: return "EXIT_THROUGH";
+    case Phase::kCheckAhead: return "CHECK_AHEAD";
     case Phase::kLanding: return "LANDING";
     case Phase::kDone: return "DONE";
   }
@@ -90,6 +91,15 @@ void SequencerParams::validate() const {
   if (max_updates < 1) fail("max_updates", "must be >= 1");
   if (!(std::isfinite(line_gain) && line_gain >= 0.0)) fail("line_gain", "must be >= 0");
   if (!(std::isfinite(visited_radius) && visited_radius >= 0.0)) fail("visited_radius", "must be >= 0");
+  if (!(std::isfinite(whisk_amplitude) && whisk_amplitude >= 0.0 && whisk_amplitude < 0.5 * M_PI)) {
+    fail("whisk_amplitude", "must be in [0, pi/2), got " + std::to_string(whisk_amplitude));
+  }
+  positive("whisk_rate", whisk_rate);
+  positive("whisk_speed", whisk_speed);
+  positive("check_dwell_s", check_dwell_s);
+  positive("corridor_half_width", corridor_half_width);
+  if (!(std::isfinite(check_sample_s) && check_sample_s >= 0.0)) fail("check_sample_s", "must be >= 0");
+  if (!(std::isfinite(follow_min_forward) && follow_min_forward >= 0.0)) fail("follow_min_forward", "must be >= 0");
   positive("max_time_s", max_time_s);
   positive("landing_duration_s", landing_duration_s);
 }
@@ -123,12 +133,16 @@ double ExplorationSequencer::yaw_rate_to(double heading, double yaw) const {
 bool ExplorationSequencer::fly_leg(const SequencerInput& in, bool contact, tactile_fsm::Setpoint* sp) {
   // Forward along heading_ on its line; a contact starts a wall follow, a
   // penalised corner 0.1 m ahead a retreat (000: never fly into a corner).
-  sp->yaw_rate = yaw_rate_to(heading_, in.yaw);
-  sp->vx = forward_speed(in);
-  sp->vy = line_correction(in);
+  whisking_ = leg_motion(in, whisk_leg() ? p_.whisk_speed : forward_speed(in), whisk_leg(), sp);
   if (contact) {
-    start_follow(in, false);
-    return true;
+    if (!whisking_) {
+      start_follow(in, false);
+      return true;
+    }
+    if (whisk_blocked(in)) {
+      start_check(in);
+      return true;
+    }
   }
   const Eigen::Vector2d pos(in.x, in.y);
   if (near_corner(pos + Eigen::Vector2d(std::cos(in.yaw), std::sin(in.yaw)) * 0.1)) {
@@ -220,6 +234,138 @@ double ExplorationSequencer::line_correction(const SequencerInput& in) const {
   const double e = (Eigen::Vector2d(in.x, in.y) - line_origin_).dot(nrm);
   const double lim = 0.5 * p_.wall.v_max;
   return std::clamp(-p_.line_gain * e, -lim, lim);
+}
+
+bool ExplorationSequencer::whisk_leg() const {
+  if (!(p_.whisk_amplitude > 0.0)) return false;
+  switch (phase_) {
+    case Phase::kProbe:
+    case Phase::kGoToStaging:
+    case Phase::kGoToTarget: return true;
+    case Phase::kExitThrough: return exit_whisk_;
+    default: return false;
+  }
+}
+
+bool ExplorationSequencer::in_corridor(const Eigen::Vector2d& q, const Eigen::Vector2d& pos) const {
+  const Eigen::Vector2d h(std::cos(heading_), std::sin(heading_)), n(-h.y(), h.x());
+  const Eigen::Vector2d d = q - pos;
+  return d.dot(h) > -0.05 && std::abs(d.dot(n)) < p_.corridor_half_width;
+}
+
+bool ExplorationSequencer::whisk_blocked(const SequencerInput& in) {
+  // A whisk contact blocks the leg when a touched point lies in the guard's
+  // corridor ahead (or its position is unknown); a point beside the corridor
+  // (a wall end or a wall along the leg, touched by a whisker yawed toward it)
+  // leaves the leg free: the leg goes on and the first such point of the leg
+  // becomes a surface point.
+  const Eigen::Vector2d pos(in.x, in.y);
+  bool blocked = false, beside = false;
+  Eigen::Vector2d q_beside{0, 0};
+  auto look = [&](bool c, const Eigen::Vector2d& q) {
+    if (!c) return;
+    if (!q.allFinite() || in_corridor(q, pos)) {
+      blocked = true;
+    } else {
+      beside = true;
+      q_beside = q;
+    }
+  };
+  look(in.contact_left, in.point_left);
+  look(in.contact_right, in.point_right);
+  if (!blocked && beside) {
+    if (!beside_added_) add(q_beside, kSurfaceLabel);
+    beside_added_ = true;
+    ++beside_contacts_;
+  }
+  return blocked;
+}
+
+void ExplorationSequencer::start_check(const SequencerInput& in) {
+  check_from_ = phase_;
+  check_stage_ = 0;
+  check_t_ = in.t;
+  check_started_ = in.t;
+  check_points_.clear();
+  if (in.contact_left && in.point_left.allFinite()) check_points_.push_back(in.point_left);
+  if (in.contact_right && in.point_right.allFinite()) check_points_.push_back(in.point_right);
+  ++whisk_contacts_;
+  enter(Phase::kCheckAhead, "whisk contact", in.t);
+}
+
+void ExplorationSequencer::check_ahead(const SequencerInput& in, tactile_fsm::Setpoint* sp) {
+  // Stop; whisk back to the leg's heading; dwell; then decide from where the
+  // whisk touched (the points of the first check_sample_s after the contact,
+  // while the whisker still points where it touched; later ones re-project a
+  // held depth along the turning axis): the nearest touched point in the
+  // corridor at least follow_min_forward ahead -> a wall far enough to be
+  // followed (wall follow, as on an unwhisked leg; a wall end beside the axis
+  // is then passed outside the guard); nearer -> back off along the leg (its
+  // corridor was whisked), the touched points become surface points and the
+  // GPIS is refitted (a wall end near an opening: the opening beside it stays
+  // open; 000: the exit "emerges").
+  const Eigen::Vector2d pos(in.x, in.y);
+  if (in.depth_valid && in.t - check_started_ <= p_.check_sample_s && check_points_.size() < 64) {
+    if (in.contact_left && in.point_left.allFinite()) check_points_.push_back(in.point_left);
+    if (in.contact_right && in.point_right.allFinite()) check_points_.push_back(in.point_right);
+  }
+  const double err = wrap(heading_ - in.yaw);
+  if (check_stage_ == 0) {
+    sp->yaw_rate = std::clamp(p_.yaw_gain * 4.0 * err, -p_.whisk_rate, p_.whisk_rate);
+    whisking_ = true;  // the whisk back may exceed omega_max
+    if (std::abs(err) < p_.yaw_tolerance) {
+      check_stage_ = 1;
+      check_t_ = in.t;
+    }
+    return;
+  }
+  sp->yaw_rate = yaw_rate_to(heading_, in.yaw);
+  if (in.t - check_t_ < p_.check_dwell_s) return;
+  const Eigen::Vector2d h(std::cos(heading_), std::sin(heading_));
+  double nearest = std::numeric_limits<double>::infinity();
+  for (const auto& q : check_points_) {
+    if (in_corridor(q, pos)) nearest = std::min(nearest, (q - pos).dot(h));
+  }
+  if (check_points_.empty()) {  // contact without a position estimate: as an unwhisked leg
+    ++whisk_walls_;
+    start_follow(in, check_from_ == Phase::kProbe);
+    return;
+  }
+  if (!std::isfinite(nearest)) {
+    enter(check_from_, "whisk contact beside the corridor: leg goes on", in.t);
+    return;
+  }
+  if (nearest >= p_.follow_min_forward) {
+    ++whisk_walls_;
+    start_follow(in, check_from_ == Phase::kProbe);
+    return;
+  }
+  ++whisk_jambs_;
+  probing_ = check_from_ == Phase::kProbe;
+  if (!probing_ && has_target_ && visited_.size() < 1000) visited_.push_back(target_);
+  follow_points_ = check_points_;
+  both_touched_ = false;
+  enter(Phase::kRetreat, "touched too near the guard: back off", in.t);
+}
+
+bool ExplorationSequencer::leg_motion(const SequencerInput& in, double speed, bool whisk, tactile_fsm::Setpoint* sp) {
+  const double c = line_correction(in);
+  if (!whisk || p_.whisk_amplitude <= 0.0) {
+    sp->vx = speed;
+    sp->vy = c;
+    sp->yaw_rate = yaw_rate_to(heading_, in.yaw);
+    return false;
+  }
+  // Triangle-wave yaw about the leg's heading (bang-bang on the measured yaw).
+  const double d = wrap(in.yaw - heading_);
+  if (d > p_.whisk_amplitude) whisk_dir_ = -1;
+  else if (d < -p_.whisk_amplitude) whisk_dir_ = 1;
+  sp->yaw_rate = whisk_dir_ * p_.whisk_rate;
+  // The motion stays on the leg's line whatever the yaw: world velocity
+  // speed * heading + c * normal, expressed in the body frame.
+  sp->vx = speed * std::cos(d) + c * std::sin(d);
+  sp->vy = -speed * std::sin(d) + c * std::cos(d);
+  return true;
 }
 
 double ExplorationSequencer::forward_speed(const SequencerInput& in) const {
@@ -437,16 +583,17 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         if (after_turn_ == Phase::kGoToTarget && has_staging_) line_origin_ = staging_;
         if (after_turn_ == Phase::kExitThrough && line_from_probe_) line_origin_ = open_origin_;
         line_from_probe_ = false;
+        beside_added_ = false;
         enter(after_turn_, "aligned", in.t);
       }
       break;
     }
     case Phase::kProbe:
-      sp.vx = forward_speed(in);  // 000 Methods "Flying Forward" at V_max
-      sp.vy = line_correction(in);
-      sp.yaw_rate = yaw_rate_to(heading_, in.yaw);
-      if (contact) {
-        start_follow(in, true);
+      // 000 Methods "Flying Forward" at V_max; whisking at whisk_speed when enabled.
+      whisking_ = leg_motion(in, whisk_leg() ? p_.whisk_speed : forward_speed(in), whisk_leg(), &sp);
+      if (contact && (!whisking_ || whisk_blocked(in))) {
+        if (whisking_) start_check(in);
+        else start_follow(in, true);
       } else if ((pos - leg_start_).norm() >= p_.probe_max_distance) {
         add(pos, kInteriorLabel);  // free all the way
         if (open_probe_ < 0) {
@@ -471,6 +618,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
           exit_from_ = pos;
           exit_distance_ = p_.probe_max_distance + p_.exit_confirm_distance;
           after_turn_ = Phase::kExitThrough;
+          exit_whisk_ = false;  // along the open probe's line: its corridor was whisked
           enter(Phase::kTurn, "a probe found the opening", in.t);
           break;
         }
@@ -575,26 +723,32 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         add(target_, kInteriorLabel);
         exit_from_ = pos;
         exit_distance_ = p_.exit_confirm_distance;
+        exit_whisk_ = true;  // beyond the target: unexplored
         enter(Phase::kExitThrough, "target reached without contact", in.t);
       }
       break;
     }
     case Phase::kExitThrough:
-      sp.vx = forward_speed(in);
-      sp.vy = line_correction(in);
-      sp.yaw_rate = yaw_rate_to(heading_, in.yaw);
-      if (contact) {
-        start_follow(in, false);
+      whisking_ = leg_motion(in, whisk_leg() ? p_.whisk_speed : forward_speed(in), whisk_leg(), &sp);
+      if (contact && (!whisking_ || whisk_blocked(in))) {
+        if (whisking_) start_check(in);
+        else start_follow(in, false);
       } else if ((pos - exit_from_).norm() >= exit_distance_) {
         finish(Outcome::kExitFound, "flew through the opening", in.t);
         out.gpis_updated = true;  // publish the final target with exit_found
       }
       break;
+    case Phase::kCheckAhead:
+      check_ahead(in, &sp);
+      break;
     case Phase::kLanding:
     case Phase::kDone:
       break;
   }
+  const double whisk_rate = whisking_ ? out.setpoint.yaw_rate : 0.0;
   out.setpoint = tactile_fsm::saturate(out.setpoint, p_.wall);
+  if (whisking_) out.setpoint.yaw_rate = std::clamp(whisk_rate, -p_.whisk_rate, p_.whisk_rate);
+  whisking_ = false;
   out.transitioned = transitions_ != tr || phase_ != before;
   return out;
 }

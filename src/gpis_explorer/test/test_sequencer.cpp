@@ -2,7 +2,10 @@
 // probes, wall follow / retreat downsampling, GPIS refits, exit through an
 // opening, open space, parameter validation.
 #include <cmath>
+#include <memory>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -138,4 +141,66 @@ TEST(Sequencer, TargetsAreApproachedHeadOnFromAStagingPoint) {
     EXPECT_GE(r.updates, 1u);
     EXPECT_GT(r.min_wall_distance, 0.05) << "yaw " << yaw;
   }
+}
+
+namespace {
+
+struct JambPass {
+  double closest = 1e9;  ///< closest approach of the frame's centre to the wall [m]
+  std::size_t whisk_stops = 0;
+};
+
+/// First probe (heading +x from the origin) past a wall end `lateral` metres
+/// to the left of its axis, 0.8 m ahead: the wall runs from the end to +y.
+/// Closest approach of the frame's centre to that wall during the probe and
+/// the stop that follows it (PROBE, CHECK_AHEAD).
+JambPass pass_jamb(double whisk_amplitude, double lateral) {
+  SequencerParams p;
+  p.whisk_amplitude = whisk_amplitude;
+  ExplorationSequencer seq(p);
+  const std::vector<gpis_test::Segment> walls{{{0.8, lateral}, {0.8, 2.0}}};
+  JambPass r;
+  gpis_test::fly(seq, walls, 0.0, 30.0, 100.0, 0.0, [&](const ExplorationSequencer& s, const Eigen::Vector2d& pos, double) {
+    if (s.phase() == Phase::kProbe || s.phase() == Phase::kCheckAhead) {
+      r.closest = std::min(r.closest, gpis_test::wall_distance(walls, pos));
+    }
+  });
+  r.whisk_stops = seq.whisk_contacts();
+  return r;
+}
+
+}  // namespace
+
+TEST(Sequencer, WhiskingProbeFeelsAWallEndBesideItsAxis) {
+  // The whiskers reach +-2.5 cm beside the axis, the guard 8 cm: a straight
+  // probe passes a wall end 4-7 cm beside its axis without a whisker contact
+  // and its guard reaches the wall end (the untuned-room collisions). Whisking
+  // (+-whisk_amplitude about the heading) sweeps the guard's corridor: a whisker
+  // shaft touches the wall beyond the end and the probe stops with the frame
+  // clear of it (guard radius 0.08 m).
+  for (double lateral : {0.04, 0.055, 0.07}) {
+    SCOPED_TRACE(lateral);
+    const JambPass straight = pass_jamb(0.0, lateral);
+    const JambPass whisked = pass_jamb(SequencerParams{}.whisk_amplitude, lateral);
+    std::printf("wall end %.3f m beside: closest %.3f m straight, %.3f m whisked (%zu whisk stops)\n", lateral,
+                straight.closest, whisked.closest, whisked.whisk_stops);
+    EXPECT_LT(straight.closest, 0.08);  // control: the guard would touch
+    EXPECT_EQ(straight.whisk_stops, 0u);
+    EXPECT_GT(whisked.closest, 0.09);
+    EXPECT_GE(whisked.whisk_stops, 1u);
+  }
+}
+TEST(Sequencer, WhiskContactBesideTheCorridorLetsTheLegGoOn) {
+  // A wall end 0.2 m beside the axis (outside the guard's corridor,
+  // corridor_half_width 0.11 m) may be touched by a whisk but must not stop
+  // the probe: it flies its 2 m and finds "no wall" in that direction.
+  SequencerParams p;
+  ExplorationSequencer seq(p);
+  const std::vector<gpis_test::Segment> walls{{{0.8, 0.2}, {0.8, 2.0}}};
+  bool returned_open = false;
+  gpis_test::fly(seq, walls, 0.0, 40.0, 100.0, 0.0, [&](const ExplorationSequencer& s, const Eigen::Vector2d&, double) {
+    returned_open = returned_open || (s.phase() == Phase::kReturn && std::string(s.reason()) == "probe found no wall");
+  });
+  EXPECT_TRUE(returned_open);
+  EXPECT_EQ(seq.whisk_contacts(), 0u);
 }

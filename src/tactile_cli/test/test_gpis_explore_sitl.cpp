@@ -72,3 +72,29 @@ TEST(GpisExploreSitl, RoomExitCollisionFreeOnboardBudget) {
 TEST(GpisExploreSitl, RoomExitCollisionFreeGroundBudget) {
   expect_collision_free_exits("whisker_room_exit_gpis_ground.yaml", 5000);
 }
+
+// Rooms the exploration was not tuned on (issue: sizes 1.5-3 m, exits on
+// other walls, 60-100 cm wide): the paper's success rate, 4 of 5 seeded trials
+// (seeds 11-15, random room yaw) find the exit, fly out and never touch a wall
+// with the guard. Before whisking (straight probes at V_max) the 1.5 m room
+// with its off-centre 60 cm exit was 2/5 and the 3 m room 3/5: an aligned
+// probe crossed the exit with the jamb 2.5-8 cm beside its axis, outside the
+// whiskers (+-2.5 cm) but inside the guard (8 cm).
+void expect_untuned_room(const std::string& scenario) {
+  SCOPED_TRACE(scenario);
+  const auto m = run_trials(scenario, 5);
+  std::string phases;
+  int whisk_stops = 0;
+  for (const auto& r : m["per_trial"]) {
+    const auto& g = r["gpis"];
+    phases += r["gpis"]["collision_phases"].dump() + " ";
+    EXPECT_LE(g["training_points"].get<int>(), 50);
+    whisk_stops += g["whisk_contacts"].get<int>();
+  }
+  EXPECT_GE(m["success_count"].get<int>(), 4) << "collisions by phase per trial: " << phases;
+  EXPECT_GE(whisk_stops, 5 * 3);  // the probes were whisked: every trial met >= 3 walls while whisking
+}
+
+TEST(GpisExploreSitl, UntunedSmallRoomOffCentreExit) { expect_untuned_room("whisker_room_exit_gpis_small.yaml"); }
+
+TEST(GpisExploreSitl, UntunedLargeRoom) { expect_untuned_room("whisker_room_exit_gpis_large.yaml"); }

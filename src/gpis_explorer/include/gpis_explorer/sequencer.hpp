@@ -9,6 +9,10 @@
 //      contact -> 2.; target reached without contact -> it is free space
 //      (interior point) and the drone keeps going: still no contact after
 //      exit_confirm_distance -> the exit has "emerged" and is flown through.
+// Legs into unexplored space are whisked (yaw +-whisk_amplitude about the
+// heading while moving along the leg's line) so that the two forward whiskers
+// sweep the guard's corridor; a whisk contact in it stops the leg
+// (CHECK_AHEAD: wall follow, or back off when touched close to the guard).
 // The drone never heads into a penalised corner: targets near corners are
 // excluded (GpisExplorer), targets whose straight path passes a corner are
 // skipped, and approaching a corner centroid aborts the leg (retreat, refit).
@@ -39,6 +43,7 @@ enum class Phase : uint8_t {
   kGoToStaging, ///< forward to the staging point inside the target's wall (head-on approach)
   kGoToTarget,  ///< forward toward the GPIS target
   kExitThrough, ///< target reached without contact: keep going through the opening
+  kCheckAhead,  ///< a whisk touched the corridor: stop, face the leg's heading: wall to follow, or back off?
   kLanding,     ///< land (exit flown through, open space, or gave up)
   kDone,        ///< terminal
 };
@@ -121,6 +126,30 @@ struct SequencerParams {
   /// the same target once the onboard budget (50 points) is full and the
   /// GPIS stops changing. [m]
   double visited_radius = 0.3;
+  /// Whisking (000 Fig. 1d: "similar to how a rat uses rhythmic whisking to
+  /// scan"; our choice, 000 flies straight): on legs into unexplored space
+  /// (probes, staging and target legs, the exit after a target) the drone yaws back and
+  /// forth by +-whisk_amplitude about the leg's heading at whisk_rate while it
+  /// moves along the leg at whisk_speed. The two forward whiskers (+-2.5 cm)
+  /// then sweep the guard's corridor (+-8 cm): a wall end 2.5-8 cm beside the
+  /// axis (an exit's jamb) is touched by a whisker shaft before the guard
+  /// reaches it. 0 = no whisking (straight legs at V_max). [rad], [rad/s], [m/s]
+  double whisk_amplitude = 0.5;
+  double whisk_rate = 2.5;
+  double whisk_speed = 0.1;
+  /// A whisk contact whose point lies within corridor_half_width of the leg's
+  /// axis (guard radius 8 cm + 3 cm) stops the leg; one beside it does not.
+  /// After a stop the drone whisks back to the leg's heading and hovers
+  /// check_dwell_s. The points touched in the first check_sample_s decide:
+  /// the nearest in the corridor at least follow_min_forward ahead of the
+  /// centre (the near edge of the wall-following band, whisker base 5 cm +
+  /// t_min 6 cm) -> wall follow; nearer -> retreat along the leg (a wall end
+  /// beside the axis close to the guard: a wall follow toward it would slide
+  /// the guard into it; seen in the SITL). [m], [s], [s], [m]
+  double corridor_half_width = 0.11;
+  double check_dwell_s = 0.4;
+  double check_sample_s = 0.06;
+  double follow_min_forward = 0.11;
   int max_updates = 40;                 ///< give up after this many GPIS updates (choice)
   double max_time_s = 600.0;            ///< give up after this long [s] (choice)
   double landing_duration_s = 2.0;      ///< LANDING -> DONE [s]
@@ -185,6 +214,12 @@ class ExplorationSequencer {
   /// Targets approached head-on through a staging point / flown at directly.
   std::size_t staged_targets() const { return staged_targets_; }
   std::size_t direct_targets() const { return direct_targets_; }
+  /// Legs stopped by a whisk contact; of these, walls ahead (wall follow) and
+  /// wall ends in the corridor (retreat); whisk contacts beside the corridor (leg went on).
+  std::size_t whisk_contacts() const { return whisk_contacts_; }
+  std::size_t whisk_walls() const { return whisk_walls_; }
+  std::size_t whisk_jambs() const { return whisk_jambs_; }
+  std::size_t beside_contacts() const { return beside_contacts_; }
   const SequencerParams& params() const { return p_; }
 
  private:
@@ -210,6 +245,16 @@ class ExplorationSequencer {
   /// true when a contact or a penalised corner ahead changed the phase.
   bool fly_leg(const SequencerInput& in, bool contact, tactile_fsm::Setpoint* sp);
   bool side_blocked(const SequencerInput& in) const;
+  /// Forward motion along heading_ (its line held); whisking when asked and
+  /// enabled. Returns true when the yaw rate is a whisk (beyond omega_max).
+  bool leg_motion(const SequencerInput& in, double speed, bool whisk, tactile_fsm::Setpoint* sp);
+  /// Whisking on the current forward leg (probe, GPIS legs, exit after a target).
+  bool whisk_leg() const;
+  void start_check(const SequencerInput& in);
+  void check_ahead(const SequencerInput& in, tactile_fsm::Setpoint* sp);
+  bool in_corridor(const Eigen::Vector2d& q, const Eigen::Vector2d& pos) const;
+  /// A whisk contact in the guard's corridor (see corridor_half_width).
+  bool whisk_blocked(const SequencerInput& in);
   void add(const Eigen::Vector2d& p, double label);
 
   SequencerParams p_;
@@ -248,6 +293,16 @@ class ExplorationSequencer {
   double target_acq_ = 0.0, target_var_ = 0.0;
   Eigen::Vector2d exit_from_{0, 0};
   double exit_distance_ = 0.8;  ///< contact-free distance from exit_from_ that confirms the exit
+  int whisk_dir_ = 1;  ///< current whisk direction (+1 left, -1 right)
+  bool whisking_ = false;  ///< this tick's yaw rate is a whisk
+  bool exit_whisk_ = false;  ///< EXIT_THROUGH crosses unexplored space (after a GPIS target, not along an open probe)
+  Phase check_from_ = Phase::kProbe;  ///< leg interrupted by the check
+  int check_stage_ = 0;  ///< 0 facing the heading, 1 dwelling
+  double check_t_ = 0.0;
+  double check_started_ = 0.0;
+  std::vector<Eigen::Vector2d> check_points_;
+  bool beside_added_ = false;  ///< this leg already added a point touched beside its corridor
+  std::size_t whisk_contacts_ = 0, whisk_walls_ = 0, whisk_jambs_ = 0, beside_contacts_ = 0;
   std::vector<Eigen::Vector2d> visited_;  ///< targets whose leg ended in a contact
   std::vector<ContactSample> contacts_;
   std::vector<Eigen::Vector2d> trajectory_;

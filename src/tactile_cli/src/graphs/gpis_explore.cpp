@@ -91,6 +91,10 @@ class GpisExploreGraph : public SimGraph {
     m["corner_aborts"] = seq.corner_aborts();
     m["side_stops"] = seq.side_stops();
     m["staged_targets"] = seq.staged_targets();
+    m["whisk_contacts"] = seq.whisk_contacts();
+    m["whisk_walls"] = seq.whisk_walls();
+    m["whisk_jambs"] = seq.whisk_jambs();
+    m["beside_contacts"] = seq.beside_contacts();
     m["direct_targets"] = seq.direct_targets();
     m["last_update_status"] = gpis_explorer::to_string(ex.last().status);
     // Exploration phase (and why it was entered) at each guard collision.
