@@ -50,10 +50,10 @@ TEST(FlySitl, DarknessWallFollowingOverUdp) {
   // of every tick), so the outcome is compared with the spread of in-process
   // seeds, not with one trial. Measured (README "The bridge flies the SITL"):
   // in process, seeds 1-20, every first sweep >= 7 s, true depth in band over
-  // its first 7 s 0.37-0.98; over UDP 43 of 48 runs swept >= 7 s (the others
+  // its first 7 s 0.37-0.98; over UDP 53 of 58 runs swept >= 7 s (the others
   // 5.6-7.0 s, 3 of them with 2-3 flights on the 2 cores at once: the contact
   // dropped at the band's far edge and the FSM resumed forward, as in the
-  // longer in-process courses), in band 0.46-0.99, never a collision during
+  // longer in-process courses), in band 0.40-0.99, never a collision during
   // the sweep. Asserted: a sweep of >= 5 s with no collision
   // during it, in band as in process (>= 0.3, from the simulator's truth).
   const auto& fu = m["fsm"];
