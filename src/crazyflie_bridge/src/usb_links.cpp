@@ -46,15 +46,15 @@ std::string serial_of(libusb_device_handle* h, const libusb_device_descriptor& d
   return n > 0 ? std::string(reinterpret_cast<char*>(buf), static_cast<size_t>(n)) : "";
 }
 
-std::string open_error(const std::string& what, int rc) {
+}  // namespace
+
+std::string usb_error_message(const std::string& what, int rc) {
   std::string s = what + ": " + usb_error(rc);
   if (rc == LIBUSB_ERROR_ACCESS) s += " — no permission: install the Bitcraze udev rules (see the crazyflie_bridge README)";
   if (rc == LIBUSB_ERROR_BUSY) s += " — the device is busy: another program (cfclient, another bridge) has claimed it";
   if (rc == LIBUSB_ERROR_NO_DEVICE) s += " — the device was unplugged";
   return s;
 }
-
-}  // namespace
 
 struct CrazyradioLink::Usb {
   Context ctx;
@@ -100,17 +100,17 @@ CrazyradioLink::CrazyradioLink(const LinkUri& uri) : usb_(std::make_unique<Usb>(
   version_ = desc.bcdDevice;
   int rc = libusb_open(dev, &usb_->h);
   libusb_free_device_list(list, 1);
-  if (rc != 0) throw LinkError(open_error(name + ": open", rc));
+  if (rc != 0) throw LinkError(usb_error_message(name + ": open", rc));
   rc = libusb_set_configuration(usb_->h, 1);  // cflib: set_configuration(1)
-  if (rc != 0 && rc != LIBUSB_ERROR_BUSY) throw LinkError(open_error(name + ": set configuration", rc));
+  if (rc != 0 && rc != LIBUSB_ERROR_BUSY) throw LinkError(usb_error_message(name + ": set configuration", rc));
   rc = libusb_claim_interface(usb_->h, 0);
-  if (rc != 0) throw LinkError(open_error(name + ": claim interface", rc));
+  if (rc != 0) throw LinkError(usb_error_message(name + ": claim interface", rc));
   if (version_ < 0x0003) throw LinkError(name + ": Crazyradio firmware older than 0.3 is not supported");
   for (const auto& r : radio::init_sequence(version_, uri)) {
     rc = libusb_control_transfer(usb_->h, LIBUSB_REQUEST_TYPE_VENDOR | LIBUSB_ENDPOINT_OUT, r.request, r.value, r.index,
                                  const_cast<unsigned char*>(r.data.data()), static_cast<uint16_t>(r.data.size()),
                                  kCtrlTimeoutMs);
-    if (rc < 0) throw LinkError(open_error(name + ": vendor request " + std::to_string(r.request), rc));
+    if (rc < 0) throw LinkError(usb_error_message(name + ": vendor request " + std::to_string(r.request), rc));
   }
   // Safelink handshake (cflib: up to 10 tries of FF 05 01, echoed back).
   if (uri.safelink) {
@@ -118,11 +118,11 @@ CrazyradioLink::CrazyradioLink(const LinkUri& uri) : usb_(std::make_unique<Usb>(
       unsigned char out[3] = {0xFF, 0x05, 0x01};
       int sent = 0;
       rc = libusb_bulk_transfer(usb_->h, radio::kEndpointOut, out, 3, &sent, kRadioBulkTimeoutMs);
-      if (rc != 0) throw LinkError(open_error(name + ": safelink handshake", rc));
+      if (rc != 0) throw LinkError(usb_error_message(name + ": safelink handshake", rc));
       unsigned char in[64];
       int got = 0;
       rc = libusb_bulk_transfer(usb_->h, radio::kEndpointIn, in, sizeof in, &got, kRadioBulkTimeoutMs);
-      if (rc != 0) throw LinkError(open_error(name + ": safelink handshake", rc));
+      if (rc != 0) throw LinkError(usb_error_message(name + ": safelink handshake", rc));
       if (radio::is_safelink_echo(radio::parse_ack(in, static_cast<size_t>(got)))) safelink_.enable();
     }
   }
@@ -137,7 +137,7 @@ void CrazyradioLink::transfer(const std::vector<uint8_t>& out_bytes) {
   int rc = libusb_bulk_transfer(usb_->h, radio::kEndpointOut, out.data(), static_cast<int>(out.size()), &sent,
                                 kRadioBulkTimeoutMs);
   if (rc == LIBUSB_ERROR_NO_DEVICE || rc == LIBUSB_ERROR_IO || rc == LIBUSB_ERROR_PIPE) {
-    throw LinkError(open_error("Crazyradio for " + to_string(uri_) + ": send", rc) +
+    throw LinkError(usb_error_message("Crazyradio for " + to_string(uri_) + ": send", rc) +
                     " (error communicating with the Crazyradio, it has probably been unplugged)");
   }
   if (rc != 0) {
@@ -148,7 +148,7 @@ void CrazyradioLink::transfer(const std::vector<uint8_t>& out_bytes) {
   int got = 0;
   rc = libusb_bulk_transfer(usb_->h, radio::kEndpointIn, in, sizeof in, &got, kRadioBulkTimeoutMs);
   if (rc == LIBUSB_ERROR_NO_DEVICE) {
-    throw LinkError(open_error("Crazyradio for " + to_string(uri_) + ": receive", rc));
+    throw LinkError(usb_error_message("Crazyradio for " + to_string(uri_) + ": receive", rc));
   }
   if (rc != 0) {
     ++stats_.send_errors;
@@ -240,14 +240,14 @@ CfUsbLink::CfUsbLink(const LinkUri& uri) : usb_(std::make_unique<Usb>()), uri_(u
   }
   int rc = libusb_open(devs[static_cast<size_t>(uri.devid)], &usb_->h);
   libusb_free_device_list(list, 1);
-  if (rc != 0) throw LinkError(open_error(name + ": open", rc));
+  if (rc != 0) throw LinkError(usb_error_message(name + ": open", rc));
   libusb_set_auto_detach_kernel_driver(usb_->h, 1);
   rc = libusb_claim_interface(usb_->h, 0);
-  if (rc != 0) throw LinkError(open_error(name + ": claim interface", rc));
+  if (rc != 0) throw LinkError(usb_error_message(name + ": claim interface", rc));
   // cflib cfusb.set_crtp_to_usb(True): vendor request 0x01, value 0x01, index 1.
   rc = libusb_control_transfer(usb_->h, LIBUSB_REQUEST_TYPE_VENDOR | LIBUSB_ENDPOINT_OUT, 0x01, 0x01, 1, nullptr, 0,
                                kCtrlTimeoutMs);
-  if (rc < 0) throw LinkError(open_error(name + ": enable CRTP over USB", rc));
+  if (rc < 0) throw LinkError(usb_error_message(name + ": enable CRTP over USB", rc));
 }
 
 CfUsbLink::~CfUsbLink() = default;
@@ -257,7 +257,7 @@ void CfUsbLink::send(const CrtpPacket& pk) {
   int sent = 0;
   const int rc = libusb_bulk_transfer(usb_->h, radio::kEndpointOut, bytes.data(), static_cast<int>(bytes.size()), &sent,
                                       kCfUsbBulkTimeoutMs);
-  if (rc == LIBUSB_ERROR_NO_DEVICE) throw LinkError(open_error("Crazyflie on " + to_string(uri_) + ": send", rc));
+  if (rc == LIBUSB_ERROR_NO_DEVICE) throw LinkError(usb_error_message("Crazyflie on " + to_string(uri_) + ": send", rc));
   if (rc != 0) {
     ++stats_.send_errors;
     return;
@@ -272,7 +272,7 @@ std::optional<CrtpPacket> CfUsbLink::receive(std::chrono::milliseconds timeout) 
     int got = 0;
     const int rc = libusb_bulk_transfer(usb_->h, radio::kEndpointIn, in, sizeof in, &got, kCfUsbBulkTimeoutMs);
     if (rc == LIBUSB_ERROR_NO_DEVICE || rc == LIBUSB_ERROR_PIPE || rc == LIBUSB_ERROR_IO) {
-      throw LinkError(open_error("Crazyflie on " + to_string(uri_) + ": receive", rc) + " (Crazyflie disconnected)");
+      throw LinkError(usb_error_message("Crazyflie on " + to_string(uri_) + ": receive", rc) + " (Crazyflie disconnected)");
     }
     if (rc == 0 && got > 0) {
       auto pk = CrtpPacket::try_decode(in, static_cast<size_t>(got));

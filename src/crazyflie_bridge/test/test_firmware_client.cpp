@@ -276,6 +276,23 @@ TEST(FirmwareClient, OverUdpSockets) {
   }
 }
 
+// A busy, unplugged or forbidden device (no hardware here: the messages the
+// links throw for those libusb codes; LIBUSB_ERROR_* values of libusb-1.0).
+TEST(Links, BusyUnpluggedAndForbiddenDevicesAreNamed) {
+  const std::string what = "Crazyradio for radio://0/80/2M/E7E7E7E7E7: claim interface";
+  const std::string busy = usb_error_message(what, -6);  // LIBUSB_ERROR_BUSY
+  EXPECT_EQ(busy.rfind(what + ": LIBUSB_ERROR_BUSY", 0), 0u) << busy;
+  EXPECT_NE(busy.find("another program (cfclient, another bridge) has claimed it"), std::string::npos) << busy;
+  const std::string gone = usb_error_message("Crazyflie on usb://0: send", -4);  // LIBUSB_ERROR_NO_DEVICE
+  EXPECT_NE(gone.find("LIBUSB_ERROR_NO_DEVICE"), std::string::npos) << gone;
+  EXPECT_NE(gone.find("unplugged"), std::string::npos) << gone;
+  const std::string access = usb_error_message("Crazyradio: open", -3);  // LIBUSB_ERROR_ACCESS
+  EXPECT_NE(access.find("udev rules"), std::string::npos) << access;
+  const std::string timeout = usb_error_message("Crazyradio: vendor request 1", -7);  // LIBUSB_ERROR_TIMEOUT
+  EXPECT_NE(timeout.find("LIBUSB_ERROR_TIMEOUT"), std::string::npos) << timeout;
+  EXPECT_EQ(timeout.find("unplugged"), std::string::npos) << timeout;
+}
+
 TEST(Links, MissingDevicesGiveClearErrors) {
   // No Crazyradio / Crazyflie is attached to the test machine (or libusb cannot
   // see one): opening must fail with a message naming the device, not crash.

@@ -119,6 +119,11 @@ struct FoundDevice {
 /// the air is found with its URI, e.g. from the cfclient).
 std::vector<FoundDevice> scan(const std::string& udp_host = "127.0.0.1");
 
+/// The LinkError message of a failed libusb call `what` with libusb error
+/// code `rc` (LIBUSB_ERROR_*): the libusb name and text, and for a missing
+/// permission, a busy device or an unplugged one what happened and what to do.
+std::string usb_error_message(const std::string& what, int rc);
+
 /// Crazyradio link (libusb). Throws LinkError when no dongle matches, the
 /// dongle is claimed by another process (busy), or it is unplugged (any later
 /// send/receive then throws).
