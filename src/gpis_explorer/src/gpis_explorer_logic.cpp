@@ -70,6 +70,8 @@ ParamMap GpisExplorerLogic::default_parameters() {
   m.set("whisk_rate", s.whisk_rate);
   m.set("whisk_speed", s.whisk_speed);
   m.set("corridor_half_width", s.corridor_half_width);
+  m.set("exit_beyond", s.exit_beyond);
+  m.set("retreat_clearance", s.retreat_clearance);
   m.set("check_dwell_s", s.check_dwell_s);
   m.set("check_sample_s", s.check_sample_s);
   m.set("follow_min_forward", s.follow_min_forward);
@@ -136,6 +138,8 @@ GpisExplorerLogic::Params GpisExplorerLogic::params_from(const ParamMap& m) {
   s.whisk_rate = m.get_double("whisk_rate");
   s.whisk_speed = m.get_double("whisk_speed");
   s.corridor_half_width = m.get_double("corridor_half_width");
+  s.exit_beyond = m.get_double("exit_beyond");
+  s.retreat_clearance = m.get_double("retreat_clearance");
   s.check_dwell_s = m.get_double("check_dwell_s");
   s.check_sample_s = m.get_double("check_sample_s");
   s.follow_min_forward = m.get_double("follow_min_forward");

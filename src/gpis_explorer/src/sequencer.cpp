@@ -79,6 +79,7 @@ void SequencerParams::validate() const {
   positive("yaw_tolerance", yaw_tolerance);
   positive("target_radius", target_radius);
   positive("exit_confirm_distance", exit_confirm_distance);
+  if (!(std::isfinite(exit_beyond) && exit_beyond >= 0.0)) fail("exit_beyond", "must be >= 0");
   if (!(std::isfinite(min_target_distance) && min_target_distance >= 0.0)) fail("min_target_distance", "must be >= 0");
   if (!(std::isfinite(side_clearance) && side_clearance >= 0.0)) fail("side_clearance", "must be >= 0");
   if (!(std::isfinite(approach_standoff) && approach_standoff >= 0.0)) fail("approach_standoff", "must be >= 0");
@@ -98,6 +99,7 @@ void SequencerParams::validate() const {
   positive("whisk_speed", whisk_speed);
   positive("check_dwell_s", check_dwell_s);
   positive("corridor_half_width", corridor_half_width);
+  if (!(std::isfinite(retreat_clearance) && retreat_clearance >= 0.0)) fail("retreat_clearance", "must be >= 0");
   if (!(std::isfinite(check_sample_s) && check_sample_s >= 0.0)) fail("check_sample_s", "must be >= 0");
   if (!(std::isfinite(follow_min_forward) && follow_min_forward >= 0.0)) fail("follow_min_forward", "must be >= 0");
   positive("max_time_s", max_time_s);
@@ -108,6 +110,7 @@ ExplorationSequencer::ExplorationSequencer(const SequencerParams& params)
     : p_(params), explorer_((params.validate(), params.explorer)) {}
 
 void ExplorationSequencer::enter(Phase p, const char* reason, double t) {
+  if (p == Phase::kRetreat) retreat_held_ = false;
   previous_ = phase_;
   phase_ = p;
   reason_ = reason;
@@ -234,6 +237,36 @@ double ExplorationSequencer::line_correction(const SequencerInput& in) const {
   const double e = (Eigen::Vector2d(in.x, in.y) - line_origin_).dot(nrm);
   const double lim = 0.5 * p_.wall.v_max;
   return std::clamp(-p_.line_gain * e, -lim, lim);
+}
+
+bool ExplorationSequencer::beyond_known_surface(const Eigen::Vector2d& pos) const {
+  // Flown through an opening: every known surface point lies at least
+  // exit_beyond behind the drone along the leg's heading (a convex room's
+  // walls all end at the exit's wall line). A contour point inside a large
+  // room (few points, the GPIS contour well inside the walls) followed by
+  // exit_confirm_distance of free flight is not yet an exit.
+  const Eigen::Vector2d h(std::cos(heading_), std::sin(heading_));
+  const Gpis& g = explorer_.gpis();
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    if (g.label(i) == kSurfaceLabel && (g.point(i) - pos).dot(h) > -p_.exit_beyond) return false;
+  }
+  return true;
+}
+
+bool ExplorationSequencer::retreat_blocked(const SequencerInput& in) const {
+  // The backward leg (retreat_speed for what is left of retreat_time_s plus a
+  // margin) must not bring the centre closer than retreat_clearance to a known
+  // surface point it is not already that close to.
+  const Eigen::Vector2d pos(in.x, in.y), back(-std::cos(in.yaw), -std::sin(in.yaw));
+  const Eigen::Vector2d end = pos + back * (p_.retreat_speed * p_.retreat_time_s + 0.05);
+  const Gpis& g = explorer_.gpis();
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    if (g.label(i) != kSurfaceLabel) continue;
+    const Eigen::Vector2d q = g.point(i);
+    const double now = (q - pos).norm();
+    if (segment_distance(pos, end, q) < std::min(p_.retreat_clearance, now - 1e-3)) return true;
+  }
+  return false;
 }
 
 bool ExplorationSequencer::whisk_leg() const {
@@ -676,7 +709,14 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       break;
     }
     case Phase::kRetreat:
-      sp.vx = -p_.retreat_speed;  // 000: "flies backward for 1 second"
+      // 000: "flies backward for 1 second"; hover instead where that would
+      // bring the frame near a known surface point behind it (a corner).
+      if (retreat_blocked(in)) {
+        if (!retreat_held_) ++retreats_held_;
+        retreat_held_ = true;
+      } else {
+        sp.vx = -p_.retreat_speed;
+      }
       if (in.t - entered_ >= p_.retreat_time_s) {
         if (p_.align_probes && probing_ && !aligned_ && previous_ != Phase::kReturn) align_to_wall(in);
         if (previous_ != Phase::kReturn) commit_points(in);
@@ -733,7 +773,8 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       if (contact && (!whisking_ || whisk_blocked(in))) {
         if (whisking_) start_check(in);
         else start_follow(in, false);
-      } else if ((pos - exit_from_).norm() >= exit_distance_) {
+      } else if ((pos - exit_from_).norm() >= exit_distance_ &&
+                 (beyond_known_surface(pos) || (pos - exit_from_).norm() >= exit_distance_ + p_.probe_max_distance)) {
         finish(Outcome::kExitFound, "flew through the opening", in.t);
         out.gpis_updated = true;  // publish the final target with exit_found
       }

@@ -26,6 +26,30 @@ TEST(SequencerParams, ValidateNamesField) {
     EXPECT_NE(std::string(e.what()).find("SequencerParams.follow_time_s"), std::string::npos);
   }
   EXPECT_NO_THROW(SequencerParams{}.validate());
+  // The whisking / corridor / retreat / exit fields name themselves too.
+  auto expect_field = [](SequencerParams q, const char* field) {
+    try {
+      q.validate();
+      ADD_FAILURE() << field;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(std::string("SequencerParams.") + field), std::string::npos) << e.what();
+    }
+  };
+  SequencerParams q;
+  q.whisk_amplitude = 2.0;  // >= pi/2: the whiskers would point sideways
+  expect_field(q, "whisk_amplitude");
+  q = SequencerParams{};
+  q.whisk_rate = 0.0;
+  expect_field(q, "whisk_rate");
+  q = SequencerParams{};
+  q.corridor_half_width = -0.1;
+  expect_field(q, "corridor_half_width");
+  q = SequencerParams{};
+  q.retreat_clearance = NAN;
+  expect_field(q, "retreat_clearance");
+  q = SequencerParams{};
+  q.exit_beyond = -1.0;
+  expect_field(q, "exit_beyond");
 }
 
 TEST(Sequencer, OpenSpaceLandsWithStatus) {

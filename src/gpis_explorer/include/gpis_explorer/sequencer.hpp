@@ -81,6 +81,9 @@ struct SequencerParams {
   /// Beyond a contact-free target, this much more contact-free flight = exit
   /// flown through [m] (choice: about the whisker-to-frame margin plus a room wall).
   double exit_confirm_distance = 0.8;
+  /// ... and every known surface point at least this far behind the drone
+  /// along the leg (else it keeps going, at most probe_max_distance more). [m]
+  double exit_beyond = 0.3;
   double min_target_distance = 0.3;     ///< targets closer than this to the drone are skipped [m] (choice)
   /// Sideways wall following ends early when a known surface point (an
   /// earlier contact) lies within this distance ahead of the frame in the
@@ -147,6 +150,10 @@ struct SequencerParams {
   /// beside the axis close to the guard: a wall follow toward it would slide
   /// the guard into it; seen in the SITL). [m], [s], [s], [m]
   double corridor_half_width = 0.11;
+  /// A retreat (backward, blind) hovers instead when it would bring the
+  /// centre closer than this to a known surface point behind or beside it
+  /// (guard 8 cm + 6 cm; retreats into the other wall of a corner). [m]
+  double retreat_clearance = 0.14;
   double check_dwell_s = 0.4;
   double check_sample_s = 0.06;
   double follow_min_forward = 0.11;
@@ -220,6 +227,8 @@ class ExplorationSequencer {
   std::size_t whisk_walls() const { return whisk_walls_; }
   std::size_t whisk_jambs() const { return whisk_jambs_; }
   std::size_t beside_contacts() const { return beside_contacts_; }
+  /// Retreats held in place (a known surface point behind).
+  std::size_t retreats_held() const { return retreats_held_; }
   const SequencerParams& params() const { return p_; }
 
  private:
@@ -255,6 +264,8 @@ class ExplorationSequencer {
   bool in_corridor(const Eigen::Vector2d& q, const Eigen::Vector2d& pos) const;
   /// A whisk contact in the guard's corridor (see corridor_half_width).
   bool whisk_blocked(const SequencerInput& in);
+  bool retreat_blocked(const SequencerInput& in) const;
+  bool beyond_known_surface(const Eigen::Vector2d& pos) const;
   void add(const Eigen::Vector2d& p, double label);
 
   SequencerParams p_;
@@ -301,6 +312,8 @@ class ExplorationSequencer {
   double check_t_ = 0.0;
   double check_started_ = 0.0;
   std::vector<Eigen::Vector2d> check_points_;
+  bool retreat_held_ = false;
+  std::size_t retreats_held_ = 0;
   bool beside_added_ = false;  ///< this leg already added a point touched beside its corridor
   std::size_t whisk_contacts_ = 0, whisk_walls_ = 0, whisk_jambs_ = 0, beside_contacts_ = 0;
   std::vector<Eigen::Vector2d> visited_;  ///< targets whose leg ended in a contact
