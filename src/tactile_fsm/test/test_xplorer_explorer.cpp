@@ -61,6 +61,16 @@ XplorerInput input(double t, XVec3 p, double yaw, XVec3 f, double rate = 0.0) {
   in.yaw_rate = rate;
   return in;
 }
+
+/// Takes off at `takeoff` (t = 0, no force), then presses with force `f` at
+/// `p` for 60 ticks of 0.02 s (into Tactile-traversal or the static wrench);
+/// returns the time of the last tick.
+double take_off_and_press(XplorerExplorer& x, const XVec3& takeoff, const XVec3& p, const XVec3& f) {
+  double t = 0;
+  x.update(input(t, takeoff, 0.0, XVec3::Zero()), 0.02);
+  for (int i = 0; i < 60; ++i) x.update(input(t += 0.02, p, 0.0, f), 0.02);
+  return t;
+}
 }  // namespace
 
 TEST(XplorerExplorer, TakeoffExplorationContactTraversalTurningAndReContact) {
@@ -147,9 +157,7 @@ TEST(XplorerExplorer, ReshapedSetpointFollowsATurningContactDirection) {
 
 TEST(XplorerExplorer, TurnIsLimitedTo180Degrees) {
   XplorerExplorer x{XplorerParams{}};
-  double t = 0;
-  x.update(input(t, XVec3(0, 0, 0.7), 0.0, XVec3::Zero()), 0.02);
-  for (int i = 0; i < 60; ++i) x.update(input(t += 0.02, XVec3(0, 0, 0.7), 0.0, XVec3(-2, 0, 0)), 0.02);
+  double t = take_off_and_press(x, XVec3(0, 0, 0.7), XVec3(0, 0, 0.7), XVec3(-2, 0, 0));
   ASSERT_EQ(x.state(), XplorerState::kTactileTraversal);
   XplorerOutput o;
   for (int i = 0; i < 100 && x.state() != XplorerState::kTactileTurning; ++i)
@@ -167,9 +175,7 @@ TEST(XplorerExplorer, TurnIsLimitedTo180Degrees) {
 TEST(XplorerExplorer, ConvexCornerTurnOrbitsThePivot) {
   XplorerExplorer x{XplorerParams{}};
   const double dt = 0.02;
-  double t = 0;
-  x.update(input(t, XVec3(0.79, 0, 0.7), 0.0, XVec3::Zero()), dt);
-  for (int i = 0; i < 60; ++i) x.update(input(t += dt, XVec3(0.79, 0, 0.7), 0.0, XVec3(-2, 0, 0)), dt);
+  double t = take_off_and_press(x, XVec3(0.79, 0, 0.7), XVec3(0.79, 0, 0.7), XVec3(-2, 0, 0));
   ASSERT_EQ(x.state(), XplorerState::kTactileTraversal);
   double y = 0;
   for (int i = 0; i < 100; ++i) x.update(input(t += dt, XVec3(0.79, y -= 0.002, 0.7), 0.0, XVec3(-1.25, 0, 0)), dt);
@@ -202,9 +208,7 @@ TEST(XplorerExplorer, StaticWrenchHoldsWhenTheForceMatchesTheReference) {
   XplorerParams p;
   p.mission = XplorerMission::kStaticWrench;
   XplorerExplorer x(p);
-  double t = 0;
-  x.update(input(t, XVec3(0, 0, 0.7), 0.0, XVec3::Zero()), 0.02);
-  for (int i = 0; i < 60; ++i) x.update(input(t += 0.02, XVec3(0.79, 0, 0.7), 0.0, XVec3(-2, 0, 0)), 0.02);
+  double t = take_off_and_press(x, XVec3(0, 0, 0.7), XVec3(0.79, 0, 0.7), XVec3(-2, 0, 0));
   ASSERT_EQ(x.state(), XplorerState::kStaticWrench);
   // delta_f = delta_f_ref = [-1 0 0]: r* no longer reshaped, the setpoint settles.
   XplorerOutput o, o1;
@@ -248,9 +252,7 @@ TEST(XplorerExplorer, RicochetCollidesRecoversAndRegulatesAtTheGoal) {
 
 TEST(XplorerExplorer, LoopClosureEndsTheExploration) {
   XplorerExplorer x{XplorerParams{}};
-  double t = 0;
-  x.update(input(t, XVec3(0, 0, 0.7), 0.0, XVec3::Zero()), 0.02);
-  for (int i = 0; i < 60; ++i) x.update(input(t += 0.02, XVec3(0, 0, 0.7), 0.0, XVec3(-1.6, 0, 0)), 0.02);
+  double t = take_off_and_press(x, XVec3(0, 0, 0.7), XVec3(0, 0, 0.7), XVec3(-1.6, 0, 0));
   ASSERT_EQ(x.state(), XplorerState::kTactileTraversal);
   // Go round a 1 m square (traversal path) and come back.
   for (int i = 1; i <= 400 && x.state() == XplorerState::kTactileTraversal; ++i) {
@@ -271,9 +273,7 @@ TEST(XplorerExplorer, LoopClosureEndsTheExploration) {
 // last face would not be traversed): only Tactile-traversal there does.
 TEST(XplorerExplorer, LoopDoesNotCloseWhileTurning) {
   XplorerExplorer x{XplorerParams{}};
-  double t = 0;
-  x.update(input(t, XVec3(0, 0, 0.7), 0.0, XVec3::Zero()), 0.02);
-  for (int i = 0; i < 60; ++i) x.update(input(t += 0.02, XVec3(0, 0, 0.7), 0.0, XVec3(-1.6, 0, 0)), 0.02);
+  double t = take_off_and_press(x, XVec3(0, 0, 0.7), XVec3(0, 0, 0.7), XVec3(-1.6, 0, 0));
   ASSERT_EQ(x.state(), XplorerState::kTactileTraversal);
   for (int i = 1; i <= 300; ++i) x.update(input(t += 0.02, XVec3(0, -3.0 * i / 300, 0.7), 0.0, XVec3(-1.3, 0, 0)), 0.02);
   ASSERT_GT(x.traversed_path(), 2.0);
