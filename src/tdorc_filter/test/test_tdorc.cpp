@@ -338,6 +338,15 @@ int last_contact(const std::vector<WhiskerOutput>& outs) {
   return -1;
 }
 
+/// The contact hold with a 10-sample learn delay (as in config/), the base of
+/// the hold and release tests.
+Params holding() {
+  Params p;
+  p.contact_hold = true;
+  p.learn_delay = 10;
+  return p;
+}
+
 HeldRun run_held(Params p, int start, int end, int total = 2000) {
   HeldRun r;
   const auto outs = run_pushed(p, total, [&](int k) { return (k >= start && k < end) ? 200.0 : 0.0; });
@@ -389,9 +398,7 @@ TEST(TdorcWhisker, LearnDelayKeepsTheRisingEdgeOutOfTheWindow) {
 }
 
 TEST(TdorcWhisker, ContactHoldKeepsAPressedWhiskerInContactUntilRelease) {
-  Params p;
-  p.contact_hold = true;
-  p.learn_delay = 10;
+  Params p = holding();
   const HeldRun r = run_held(p, 300, 800);
   EXPECT_EQ(r.first, 301);
   // Held (S_c = 200 > T_c against the exactly extrapolated drift) through the
@@ -405,9 +412,7 @@ TEST(TdorcWhisker, ContactHoldKeepsAPressedWhiskerInContactUntilRelease) {
 }
 
 TEST(TdorcWhisker, ContactHoldIsLimited) {
-  Params p;
-  p.contact_hold = true;
-  p.learn_delay = 10;
+  Params p = holding();
   p.max_contact_hold = 200;
   // Pressed for 1200 samples: S_p alone (decaying) keeps the contact until it
   // falls under T_c (sample 668, later than the 200-sample hold limit), then
@@ -432,9 +437,7 @@ TEST(TdorcWhisker, HoldReleaseFractionEndsAHoldWhoseSignalCollapsed) {
   // partial retreat to 20 % of the peak. Fraction 0 keeps holding (S_c = 40 >
   // T_c); fraction 0.25 releases at once (40 < 50); fraction 0.1 keeps it.
   auto last_with = [](double fraction) {
-    Params p;
-    p.contact_hold = true;
-    p.learn_delay = 10;
+    Params p = holding();
     p.hold_release_fraction = fraction;
     return last_contact(run_pushed(p, 1200, [](int k) { return k < 300 ? 0.0 : (k < 800 ? 200.0 : 40.0); }));
   };
@@ -456,9 +459,7 @@ TEST(TdorcWhisker, HoldReleaseDropEndsAHoldOverAHysteresisOffset) {
   // over 160, so samples 1100, 1101 are held (hold_release_samples 3) and
   // 1102 is free.
   auto last_with = [](double drop, int level_samples) {
-    Params p;
-    p.contact_hold = true;
-    p.learn_delay = 10;
+    Params p = holding();
     p.hold_release_fraction = 0.1;
     p.hold_release_samples = 3;
     p.hold_release_drop = drop;
@@ -479,9 +480,7 @@ TEST(TdorcWhisker, HoldReleaseDropFollowsAGradualEaseOff) {
   // contact with hold_release_drop 0.25, and a quick fall from +200 to +40
   // within 5 samples is a release.
   auto last_with = [](int ramp) {
-    Params p;
-    p.contact_hold = true;
-    p.learn_delay = 10;
+    Params p = holding();
     p.hold_release_samples = 3;
     p.hold_release_drop = 0.25;
     p.hold_level_samples = 50;
@@ -543,9 +542,7 @@ TEST(TdorcWhisker, HoldReleaseSamplesBridgesStickSlipSamples) {
   // the contact at the first slip and learns pressed samples; two samples
   // bridge every slip and end one sample after the push.
   auto run = [](int release_samples) {
-    Params p;
-    p.contact_hold = true;
-    p.learn_delay = 10;
+    Params p = holding();
     p.hold_release_samples = release_samples;
     const auto pressed = [](int k) { return k >= 300 && k < 1100; };
     const auto outs = run_pushed(p, 2000, [&](int k) {
