@@ -54,9 +54,11 @@ void SitlEndpoint::step_physics() {
   sim_->step(now_ns_, out_);
   ++stats_.sim_steps;
   for (const auto& p : out_.pressure) fw_.on_pressure(p.msg);
-  for (const auto& w : out_.whisker_truth) {
-    const int side = w.topic.find("/right/") != std::string::npos ? 1 : 0;
-    whisker_truth_.push_back({tactile_common::from_stamp(w.msg.header.stamp), side, w.msg.contact, w.msg.depth});
+  if (opt_.record_whisker_truth) {
+    for (const auto& w : out_.whisker_truth) {
+      const int side = w.topic.find("/right/") != std::string::npos ? 1 : 0;
+      whisker_truth_.push_back({tactile_common::from_stamp(w.msg.header.stamp), side, w.msg.contact, w.msg.depth});
+    }
   }
   for (const auto& o : out_.odometry) {
     if (o.topic == "/odom") {

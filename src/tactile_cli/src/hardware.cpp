@@ -77,6 +77,7 @@ nlohmann::json run_fly(const FlyOptions& o) {
     crazyflie_bridge::SitlEndpointOptions eo;
     eo.port = 0;
     eo.loss_rate = o.sim_loss;
+    eo.record_whisker_truth = true;  // the sweep's depth in band (fsm.*)
     sitl = std::make_unique<crazyflie_bridge::SitlEndpoint>(*scenario, scenario->seed, eo);
     uri = "udp://127.0.0.1:" + std::to_string(sitl->port());
     sitl_thread = std::thread([&] { sitl->run(0.0, &sitl_stop); });

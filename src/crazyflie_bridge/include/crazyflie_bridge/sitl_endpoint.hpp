@@ -36,6 +36,9 @@ struct SitlEndpointOptions {
   double spike_latency_s = 0.2;      ///< extra delay of every packet during a spike
   double spike_duration_s = 0.2;
   uint64_t fault_seed = 1;
+  /// Keep the whiskers' ground truth for whisker_truth() (a run's evaluation;
+  /// off for a server that runs indefinitely, where it would only grow).
+  bool record_whisker_truth = false;
 };
 
 class SitlEndpoint {
@@ -70,8 +73,9 @@ class SitlEndpoint {
     return std::chrono::steady_clock::time_point(std::chrono::steady_clock::duration(start_ticks_.load()));
   }
   /// The simulated whiskers' ground truth (000 Fig. 6 sweeps: depth in band),
-  /// one entry per physics step and whisker, stamped in simulated time. Read
-  /// it after run() has returned.
+  /// one entry per published sample and whisker, stamped in simulated time,
+  /// when options.record_whisker_truth is set (else empty). Read it after
+  /// run() has returned.
   struct WhiskerTruthSample {
     int64_t sim_ns = 0;
     int side = 0;  ///< 0 left, 1 right
