@@ -73,8 +73,10 @@ void FlowDeckEstimator::step(double dt, const RigidBodyState& truth, const Vec3&
   // Horizontal bias, fixed in the body frame (rotated with the true yaw here;
   // the estimated yaw's error is applied below with the rest of the reading).
   const double yaw_true = truth.yaw();
-  acc.x() += std::cos(yaw_true) * accel_bias_body_.x() - std::sin(yaw_true) * accel_bias_body_.y();
-  acc.y() += std::sin(yaw_true) * accel_bias_body_.x() + std::cos(yaw_true) * accel_bias_body_.y();
+  if (p_.accel_bias > 0.0) {
+    acc.x() += std::cos(yaw_true) * accel_bias_body_.x() - std::sin(yaw_true) * accel_bias_body_.y();
+    acc.y() += std::sin(yaw_true) * accel_bias_body_.x() + std::cos(yaw_true) * accel_bias_body_.y();
+  }
   // The accelerometer measures in the body frame; rotating it with the
   // estimated yaw instead of the true one is part of the drift.
   const double dyaw = yaw_ - yaw_true;
