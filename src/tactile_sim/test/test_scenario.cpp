@@ -114,6 +114,12 @@ TEST(Scenario, MalformedFilesNameFileKeyAndReason) {
   std::string bad = kMinimal;
   bad.replace(bad.find("whisker_crazyflie"), 17, "blimp");
   expect_error(bad, "vehicle.type", "unknown vehicle 'blimp'");
+  std::string estimate = kMinimal;
+  estimate.replace(estimate.find("whisker_crazyflie\n"), 18, "whisker_crazyflie\n  state_estimate: gps\n");
+  expect_error(estimate, "vehicle.state_estimate", "must be 'mocap', 'flow_deck' or 'imu_tof', got 'gps'");
+  estimate = kMinimal;
+  estimate.replace(estimate.find("whisker_crazyflie\n"), 18, "xplorer\n  state_estimate: imu_tof\n");
+  expect_error(estimate, "vehicle.state_estimate", "imu_tof is the whiskered Crazyflie's estimator");
   expect_error(kMinimal + "faults:\n  - {type: gremlin, topic: /x}\n", "faults[0].type", "unknown fault 'gremlin'");
   expect_error(kMinimal + "faults:\n  - {type: latency, topic: /x}\n", "faults[0]", "needs delay_s");
   expect_error(kMinimal + "faults:\n  - {type: loss, topic: x}\n", "faults[0].topic", "absolute topic");
