@@ -23,6 +23,7 @@ from launch.actions import DeclareLaunchArgument, OpaqueFunction
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import ComposableNodeContainer
 from launch_ros.descriptions import ComposableNode
+from launch_ros.parameter_descriptions import ParameterValue
 
 CONFIG_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config')
 
@@ -39,7 +40,9 @@ def nodes(context):
         ComposableNode(
             package='tactile_sim', plugin='tactile_sim::TactileSimComponent', name='tactile_sim',
             parameters=[{'scenario': LaunchConfiguration('scenario'),
-                         'seed': LaunchConfiguration('seed')}],
+                         'seed': LaunchConfiguration('seed'),
+                         'real_time_factor': ParameterValue(
+                             LaunchConfiguration('real_time_factor'), value_type=float)}],
             extra_arguments=intra),
         ComposableNode(
             package='wall_effect_ekf', plugin='wall_effect_ekf::WallEffectEkfComponent',
@@ -72,6 +75,9 @@ def generate_launch_description():
             description='scenario file of the simulator'),
         DeclareLaunchArgument('seed', default_value='-1',
                               description="noise seed (-1: the scenario's)"),
+        DeclareLaunchArgument('real_time_factor', default_value='1.0',
+                              description='simulated seconds per wall-clock second (1.0: real '
+                                          'time; the simulator publishes /sim/done at the end)'),
         DeclareLaunchArgument('behaviour', default_value='navigation',
                               description="'navigation' (wall_effect_nav) or 'trajectory' "
                                           "(004 estimation-flight script)"),

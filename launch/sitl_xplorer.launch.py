@@ -21,6 +21,7 @@ from launch.actions import DeclareLaunchArgument
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import ComposableNodeContainer
 from launch_ros.descriptions import ComposableNode
+from launch_ros.parameter_descriptions import ParameterValue
 
 CONFIG_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config')
 
@@ -36,7 +37,9 @@ def generate_launch_description():
         ComposableNode(
             package='tactile_sim', plugin='tactile_sim::TactileSimComponent', name='tactile_sim',
             parameters=[{'scenario': LaunchConfiguration('scenario'),
-                         'seed': LaunchConfiguration('seed')}],
+                         'seed': LaunchConfiguration('seed'),
+                         'real_time_factor': ParameterValue(
+                             LaunchConfiguration('real_time_factor'), value_type=float)}],
             extra_arguments=intra),
         ComposableNode(
             package='xplorer_force_est', plugin='xplorer_force_est::XplorerForceEstComponent',
@@ -59,6 +62,9 @@ def generate_launch_description():
             description='scenario file of the simulator'),
         DeclareLaunchArgument('seed', default_value='-1',
                               description="noise seed (-1: the scenario's)"),
+        DeclareLaunchArgument('real_time_factor', default_value='1.0',
+                              description='simulated seconds per wall-clock second (1.0: real '
+                                          'time; the simulator publishes /sim/done at the end)'),
         DeclareLaunchArgument('mission', default_value='explore',
                               description='explore | static_wrench | ricochet | waypoint'),
         DeclareLaunchArgument('ply_file', default_value='xplorer_map.ply',

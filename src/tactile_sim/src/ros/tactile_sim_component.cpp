@@ -1,15 +1,38 @@
 // rclcpp component of the simulator: a mechanical adapter around SimLogic
 // (all behaviour lives there). ROS builds only. The world runs on simulated
-// time from 0, stepped by a wall timer at the physics rate and published on
-// /clock, so the other nodes run with use_sim_time:=true.
+// time from 0, stepped by a wall timer and published on /clock, so the other
+// nodes run with use_sim_time:=true.
+//
+// Parameters besides SimLogic's (scenario, seed):
+//   real_time_factor (double, default 1.0): the timer period is the physics
+//     period divided by it. 1.0 flies in real time (what an operator at a
+//     ground station expects); CI flies faster. If the container cannot keep
+//     up, simulated time simply advances slower (every physics step is still
+//     taken); the achieved factor is logged at the end.
+//
+// At the scenario's end (duration_s) the simulator stops stepping and
+// publishing, logs one line "tactile_sim: scenario ... ended" with the
+// achieved real-time factor and the setpoint latency, and publishes
+// std_msgs/Bool true on /sim/done (reliable, transient local: a subscriber
+// that joins later still gets it).
+//
+// Setpoint latency: the age of each setpoint (/cmd_hover, /cmd_position,
+// /cmd_rotor_thrust) when it reaches the simulator, in simulated time (the
+// simulator's clock minus the setpoint's header stamp). The standalone host
+// applies a setpoint at most one physics step after its stamp; over DDS
+// (separate executors, /clock delivered per node) it can be older. A setpoint
+// older than two physics steps is counted as late.
+#include <algorithm>
 #include <chrono>
 #include <map>
 #include <memory>
+#include <stdexcept>
 #include <string>
 
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
 #include "rosgraph_msgs/msg/clock.hpp"
+#include "std_msgs/msg/bool.hpp"
 #include "tactile_common/ros_parameters.hpp"
 #include "tactile_common/time.hpp"
 #include "tactile_sim/logic/sim_logic.hpp"
@@ -18,23 +41,47 @@ namespace tactile_sim {
 
 class TactileSimComponent : public rclcpp::Node {
  public:
+  static constexpr const char * kDoneTopic = "/sim/done";
+
   explicit TactileSimComponent(const rclcpp::NodeOptions & options)
   : Node(SimLogic::kNodeName, options),
     logic_(SimLogic::from_parameters(
       tactile_common::declare_parameters(*this, SimLogic::default_parameters())))
   {
+    real_time_factor_ = declare_parameter<double>("real_time_factor", 1.0);
+    if (!(real_time_factor_ > 0.0) || real_time_factor_ > 1000.0) {
+      throw std::invalid_argument(
+        tactile_common::parameter_source(*this) + ": real_time_factor: must be in (0, 1000], got " +
+        std::to_string(real_time_factor_));
+    }
     clock_publisher_ = create_publisher<rosgraph_msgs::msg::Clock>("/clock", rclcpp::ClockQoS());
+    done_publisher_ = create_publisher<std_msgs::msg::Bool>(
+      kDoneTopic, rclcpp::QoS(1).reliable().transient_local());
     hover_subscription_ = create_subscription<tactile_msgs::msg::HoverSetpoint>(
       SimLogic::kHoverSetpointTopic, 10,
-      [this](const tactile_msgs::msg::HoverSetpoint & msg) {logic_->on_hover_setpoint(msg);});
+      [this](const tactile_msgs::msg::HoverSetpoint & msg) {
+        count_setpoint(msg.header.stamp);
+        logic_->on_hover_setpoint(msg);
+      });
     position_subscription_ = create_subscription<geometry_msgs::msg::PoseStamped>(
       SimLogic::kPositionSetpointTopic, 10,
-      [this](const geometry_msgs::msg::PoseStamped & msg) {logic_->on_position_setpoint(msg);});
+      [this](const geometry_msgs::msg::PoseStamped & msg) {
+        count_setpoint(msg.header.stamp);
+        logic_->on_position_setpoint(msg);
+      });
     thrust_subscription_ = create_subscription<tactile_msgs::msg::ThrustCommand>(
       SimLogic::kRotorThrustTopic, 10,
-      [this](const tactile_msgs::msg::ThrustCommand & msg) {logic_->on_rotor_thrust(msg);});
-    timer_ = create_wall_timer(
-      std::chrono::nanoseconds(logic_->period_ns()), [this]() {tick();});
+      [this](const tactile_msgs::msg::ThrustCommand & msg) {
+        count_setpoint(msg.header.stamp);
+        logic_->on_rotor_thrust(msg);
+      });
+    const auto period = std::max<int64_t>(
+      1, static_cast<int64_t>(static_cast<double>(logic_->period_ns()) / real_time_factor_));
+    timer_ = create_wall_timer(std::chrono::nanoseconds(period), [this]() {tick();});
+    RCLCPP_INFO(
+      get_logger(), "tactile_sim: scenario %s, seed %llu, %.1f s at %.2fx real time",
+      logic_->scenario().name.c_str(), static_cast<unsigned long long>(logic_->seed()),
+      logic_->scenario().duration_s, real_time_factor_);
   }
 
  private:
@@ -51,10 +98,27 @@ class TactileSimComponent : public rclcpp::Node {
     }
   }
 
+  void count_setpoint(const builtin_interfaces::msg::Time & stamp)
+  {
+    // now_ns_ is the time of the next step: the setpoint is applied there.
+    const int64_t age = now_ns_ - tactile_common::from_stamp(stamp);
+    ++setpoints_;
+    age_sum_ns_ += static_cast<double>(age);
+    max_age_ns_ = std::max(max_age_ns_, age);
+    if (age > 2 * logic_->period_ns()) {++late_setpoints_;}
+  }
+
   void tick()
   {
-    if (logic_->finished(now_ns_)) {
+    if (done_) {
       return;
+    }
+    if (logic_->finished(now_ns_)) {
+      finish();
+      return;
+    }
+    if (now_ns_ == 0) {
+      wall_start_ = std::chrono::steady_clock::now();
     }
     outputs_.clear();
     logic_->step(now_ns_, outputs_);
@@ -75,12 +139,41 @@ class TactileSimComponent : public rclcpp::Node {
     now_ns_ += logic_->period_ns();
   }
 
+  void finish()
+  {
+    done_ = true;
+    timer_->cancel();
+    const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start_).count();
+    const double sim_s = tactile_common::to_seconds(now_ns_);
+    RCLCPP_INFO(
+      get_logger(),
+      "tactile_sim: scenario %s ended: %.3f s simulated in %.2f s wall (%.2fx real time, "
+      "%.2fx requested), %zu collisions; setpoints %llu, late %llu (older than 2 physics "
+      "steps), mean age %.2f ms, max age %.2f ms",
+      logic_->scenario().name.c_str(), sim_s, wall_s, wall_s > 0 ? sim_s / wall_s : 0.0,
+      real_time_factor_, logic_->collisions().size(), static_cast<unsigned long long>(setpoints_),
+      static_cast<unsigned long long>(late_setpoints_),
+      setpoints_ ? age_sum_ns_ / static_cast<double>(setpoints_) * 1e-6 : 0.0,
+      static_cast<double>(max_age_ns_) * 1e-6);
+    std_msgs::msg::Bool done;
+    done.data = true;
+    done_publisher_->publish(done);
+  }
+
   template<class T>
   using Publishers = std::map<std::string, typename rclcpp::Publisher<T>::SharedPtr>;
 
   std::unique_ptr<SimLogic> logic_;
   SimLogic::Outputs outputs_;
   int64_t now_ns_ = 0;
+  double real_time_factor_ = 1.0;
+  bool done_ = false;
+  std::chrono::steady_clock::time_point wall_start_ = std::chrono::steady_clock::now();
+  uint64_t setpoints_ = 0;
+  uint64_t late_setpoints_ = 0;
+  double age_sum_ns_ = 0.0;
+  int64_t max_age_ns_ = 0;
   std::tuple<
     Publishers<tactile_msgs::msg::WhiskerPressure>, Publishers<tactile_msgs::msg::WhiskerGroundTruth>,
     Publishers<nav_msgs::msg::Odometry>, Publishers<sensor_msgs::msg::Imu>,
@@ -89,6 +182,7 @@ class TactileSimComponent : public rclcpp::Node {
     Publishers<geometry_msgs::msg::WrenchStamped>, Publishers<tactile_msgs::msg::WallEstimate>,
     Publishers<tactile_msgs::msg::CollisionEvent>> publishers_;
   rclcpp::Publisher<rosgraph_msgs::msg::Clock>::SharedPtr clock_publisher_;
+  rclcpp::Publisher<std_msgs::msg::Bool>::SharedPtr done_publisher_;
   rclcpp::Subscription<tactile_msgs::msg::HoverSetpoint>::SharedPtr hover_subscription_;
   rclcpp::Subscription<geometry_msgs::msg::PoseStamped>::SharedPtr position_subscription_;
   rclcpp::Subscription<tactile_msgs::msg::ThrustCommand>::SharedPtr thrust_subscription_;
