@@ -7,6 +7,7 @@
 #include <iostream>
 #include <optional>
 
+#include "tactile_cli/evaluate.hpp"
 #include "tactile_cli/hardware.hpp"
 #include "tactile_cli/sim_run.hpp"
 #include "tactile_cli/xplorer_export.hpp"
@@ -103,6 +104,15 @@ int main(int argc, char** argv) {
   export_cmd->add_option("--ply", exp.ply, "output PLY file (frame map, metres)")->required();
   export_cmd->add_flag("--binary", exp.binary, "binary little endian instead of ASCII");
 
+  tactile_cli::EvaluateOptions evaluate;
+  uint64_t evaluate_seed = 0;
+  auto* evaluate_cmd = app.add_subcommand(
+      "evaluate", "metrics of `tactile sim` from a bag of the scenario flown elsewhere (e.g. the SITL launch under ROS 2)");
+  evaluate_cmd->add_option("bag", evaluate.bag, "input rosbag2 directory")->required();
+  evaluate_cmd->add_option("--scenario", evaluate.scenario, "the scenario file that was flown")->required();
+  evaluate_cmd->add_option("--out", evaluate.out_dir, "output directory (metrics.json)")->required();
+  auto* evaluate_seed_opt = evaluate_cmd->add_option("--seed", evaluate_seed, "the flight's seed (default: the scenario's)");
+
   CLI11_PARSE(app, argc, argv);
 
   if (*stage_cmd) {  // needs no node parameter files
@@ -154,6 +164,15 @@ int main(int argc, char** argv) {
         std::printf("tactile bench: %.1f s, %llu messages -> %s\n", m["wall_time_s"].get<double>(),
                     m["bag_messages"].get<unsigned long long>(), bench.out_dir.c_str());
       }
+    } else if (*evaluate_cmd) {
+      evaluate.config_dir = config_dir;
+      if (*evaluate_seed_opt) evaluate.seed = evaluate_seed;
+      const auto m = tactile_cli::run_evaluate(evaluate);
+      std::printf("tactile evaluate: %s (%s, seed %llu) from %s: %zu collisions, %s -> %s/metrics.json\n",
+                  m["scenario"].get<std::string>().c_str(), m["graph"].get<std::string>().c_str(),
+                  static_cast<unsigned long long>(m["seed"].get<uint64_t>()), evaluate.bag.c_str(),
+                  m["collisions"].get<size_t>(), m["success"].get<bool>() ? "success" : "no success",
+                  evaluate.out_dir.c_str());
     } else if (*export_cmd) {
       exp.config_dir = config_dir;
       const auto m = tactile_cli::run_export(exp);

@@ -1,0 +1,171 @@
+#include "tactile_cli/evaluate.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+#include <stdexcept>
+#include <vector>
+
+#include "tactile_bag/bag.hpp"
+#include "tactile_bag/typed.hpp"
+#include "tactile_cli/host.hpp"
+#include "tactile_cli/sim_graph.hpp"
+#include "tactile_cli/whisker_eval.hpp"
+#include "tactile_common/time.hpp"
+#include "tactile_fsm/whisker_fsm_logic.hpp"
+#include "tactile_msgs/msg/collision_event.hpp"
+#include "tactile_msgs/msg/fsm_state.hpp"
+#include "tactile_msgs/msg/whisker_ground_truth.hpp"
+#include "tactile_sim/scenario.hpp"
+#include "tactile_sim/types.hpp"
+
+namespace tactile_cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+using tactile_msgs::msg::CollisionEvent;
+using tactile_msgs::msg::FsmState;
+using tactile_msgs::msg::WhiskerGroundTruth;
+
+constexpr uint64_t kStreamTrialYaw = 30;  // tactile_sim stream id of the trial's arena rotation (as sim_run.cpp)
+constexpr const char* kCollisionsTopic = "/collisions";
+constexpr const char* kTruthTopics[2] = {"/ground_truth/whisker/left/contact", "/ground_truth/whisker/right/contact"};
+
+/// The trial's random arena rotation, as `tactile sim` draws it from the seed.
+double trial_arena_yaw(const tactile_sim::Scenario& s, uint64_t seed) {
+  if (!s.randomize_arena_yaw) return 0.0;
+  tactile_sim::Rng rng(tactile_sim::stream_seed(seed, kStreamTrialYaw));
+  return std::uniform_real_distribution<double>(s.randomize_arena_yaw->first, s.randomize_arena_yaw->second)(rng);
+}
+
+void require_topic(const tactile_bag::Reader& in, const std::string& bag, const std::string& topic,
+                   const std::string& type, const std::string& why) {
+  const tactile_bag::TopicInfo* t = in.find_topic(topic);
+  if (!t) throw std::runtime_error(bag + ": no topic " + topic + " (" + why + ")");
+  if (t->type != type) throw std::runtime_error(bag + ": topic " + topic + " has type " + t->type + ", expected " + type);
+}
+
+/// Common top-level fields of metrics.json (the keys `tactile sim` writes
+/// that a bag can give).
+nlohmann::json header(const tactile_sim::Scenario& s, const EvaluateOptions& o, uint64_t seed, double arena_yaw,
+                      const tactile_bag::Reader& in) {
+  nlohmann::json m;
+  m["scenario"] = s.name;
+  m["scenario_file"] = s.source;
+  m["vehicle"] = tactile_sim::to_string(s.vehicle);
+  m["seed"] = seed;
+  m["arena_yaw_deg"] = (s.arena_yaw + arena_yaw) * 180.0 / M_PI;
+  m["graph"] = s.graph;
+  m["source"] = "bag";
+  m["bag"] = o.bag;
+  m["bag_messages"] = in.message_count();
+  m["physics_rate_hz"] = s.physics_rate_hz;
+  return m;
+}
+
+void add_collisions(nlohmann::json& m, const std::vector<CollisionEvent>& collisions) {
+  m["collisions"] = collisions.size();
+  m["collision_events"] = nlohmann::json::array();
+  for (const auto& c : collisions) {
+    m["collision_events"].push_back({{"t", tactile_common::to_seconds(tactile_common::from_stamp(c.header.stamp))},
+                                     {"part", c.part},
+                                     {"x", c.point.x},
+                                     {"y", c.point.y},
+                                     {"impact_speed", c.impact_speed},
+                                     {"obstacle_id", c.obstacle_id}});
+  }
+}
+
+/// Graph whisker_fsm (src/graphs/whisker_fsm.cpp): WallFollowingEvaluation
+/// over the recorded truth and FSM states, the FSM's parameters as the graph
+/// sets them (config/tactile_fsm.yaml <- scenario node_parameters <- target).
+nlohmann::json evaluate_whisker_fsm(const tactile_sim::Scenario& s, const EvaluateOptions& o, uint64_t seed) {
+  using Logic = tactile_fsm::WhiskerFsmLogic;
+  tactile_bag::Reader in(o.bag);
+  for (const char* t : kTruthTopics) {
+    require_topic(in, o.bag, t, tactile_msgs::cdr::MessageTraits<WhiskerGroundTruth>::type_name,
+                  "the whisker ground truth the wall-following evaluation compares with");
+  }
+  require_topic(in, o.bag, Logic::kStateTopic, tactile_msgs::cdr::MessageTraits<FsmState>::type_name,
+                "the FSM states: wall-following episodes and the target");
+  const bool have_collisions = in.find_topic(kCollisionsTopic) != nullptr;
+  if (have_collisions) {
+    require_topic(in, o.bag, kCollisionsTopic, tactile_msgs::cdr::MessageTraits<CollisionEvent>::type_name,
+                  "collision events");
+  }
+
+  const double arena_yaw = trial_arena_yaw(s, seed);
+  Host host(o.config_dir);
+  WhiskerTruth truth(host);
+  GraphContext ctx{s, host, nullptr, seed, arena_yaw, o.out_dir, &truth};
+  tactile_common::ParamMap extra;
+  if (auto t = ctx.target()) {
+    extra.set("target_x", t->x());
+    extra.set("target_y", t->y());
+  }
+  const auto params = Logic::params_from(
+      host.load_parameters("", Logic::kNodeName, Logic::default_parameters(), ctx.overrides("whisker_fsm", extra)));
+  const auto& fp = params.fsm;
+  WallFollowingEvaluation eval(host, truth, fp.t_min, fp.t_max, fp.whisker_spacing);
+  std::vector<CollisionEvent> collisions;
+  host.bus().subscribe<CollisionEvent>(kCollisionsTopic, [&collisions](const CollisionEvent& c) { collisions.push_back(c); });
+
+  std::vector<std::string> topics = {kTruthTopics[0], kTruthTopics[1], Logic::kStateTopic};
+  if (have_collisions) topics.push_back(kCollisionsTopic);
+  in.set_topic_filter(topics);
+  tactile_bag::SerializedMessage msg;
+  int64_t last_ns = 0;
+  std::map<std::string, uint64_t> counts;
+  while (in.read_next(msg)) {
+    last_ns = std::max(last_ns, msg.timestamp_ns);
+    ++counts[msg.topic];
+    if (msg.topic == Logic::kStateTopic) {
+      host.bus().publish(msg.topic, tactile_bag::decode<FsmState>(msg), msg.timestamp_ns);
+    } else if (msg.topic == kCollisionsTopic) {
+      host.bus().publish(msg.topic, tactile_bag::decode<CollisionEvent>(msg), msg.timestamp_ns);
+    } else {
+      host.bus().publish(msg.topic, tactile_bag::decode<WhiskerGroundTruth>(msg), msg.timestamp_ns);
+    }
+  }
+
+  nlohmann::json m = header(s, o, seed, arena_yaw, in);
+  m["sim_time_s"] = tactile_common::to_seconds(last_ns);
+  add_collisions(m, collisions);
+  nlohmann::json f = eval.metrics();
+  f["target"] = {params.target_x, params.target_y};
+  // 000 Methods: the FSM lands when the target is reached (as WhiskerFsmGraph::reached_goal).
+  const std::string& last = eval.last_state();
+  const bool reached = last == "LANDING" || last == "LANDED";
+  f["reached_target"] = reached;
+  m["fsm"] = f;
+  m["success"] = reached && (ctx.flag("allow_collisions") || collisions.empty());
+  for (const auto& [topic, n] : counts) m["topics"][topic] = n;
+  return m;
+}
+
+}  // namespace
+
+nlohmann::json run_evaluate(const EvaluateOptions& o) {
+  const tactile_sim::Scenario scenario = tactile_sim::load_scenario(o.scenario);
+  const uint64_t seed = o.seed.value_or(scenario.seed);
+  if (!fs::is_directory(o.bag)) throw std::runtime_error(o.bag + ": not a rosbag2 directory");
+  nlohmann::json m;
+  if (scenario.graph == "whisker_fsm") {
+    m = evaluate_whisker_fsm(scenario, o, seed);
+  } else {
+    throw std::runtime_error(scenario.source + ": graph: '" + scenario.graph +
+                             "': tactile evaluate knows the graph whisker_fsm only");
+  }
+  fs::create_directories(o.out_dir);
+  const fs::path path = fs::path(o.out_dir) / "metrics.json";
+  std::ofstream out(path);
+  if (!out) throw std::runtime_error(path.string() + ": cannot write");
+  out << m.dump(2) << "\n";
+  if (!out) throw std::runtime_error(path.string() + ": write failed");
+  return m;
+}
+
+}  // namespace tactile_cli
