@@ -42,7 +42,9 @@ def nodes(context):
             parameters=[{'scenario': LaunchConfiguration('scenario'),
                          'seed': LaunchConfiguration('seed'),
                          'real_time_factor': ParameterValue(
-                             LaunchConfiguration('real_time_factor'), value_type=float)}],
+                             LaunchConfiguration('real_time_factor'), value_type=float),
+                         # start the world when the controller (loaded last) is up
+                         'wait_for_publisher': '/wall_effect/setpoint'}],
             extra_arguments=intra),
         ComposableNode(
             package='wall_effect_ekf', plugin='wall_effect_ekf::WallEffectEkfComponent',

@@ -37,7 +37,9 @@ def generate_launch_description():
             parameters=[{'scenario': LaunchConfiguration('scenario'),
                          'seed': LaunchConfiguration('seed'),
                          'real_time_factor': ParameterValue(
-                             LaunchConfiguration('real_time_factor'), value_type=float)}],
+                             LaunchConfiguration('real_time_factor'), value_type=float),
+                         # start the world when the controller (loaded last) is up
+                         'wait_for_publisher': '/cmd_hover'}],
             extra_arguments=intra),
     ]
     for side in ('left', 'right'):

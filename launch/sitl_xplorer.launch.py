@@ -39,7 +39,9 @@ def generate_launch_description():
             parameters=[{'scenario': LaunchConfiguration('scenario'),
                          'seed': LaunchConfiguration('seed'),
                          'real_time_factor': ParameterValue(
-                             LaunchConfiguration('real_time_factor'), value_type=float)}],
+                             LaunchConfiguration('real_time_factor'), value_type=float),
+                         # start the world when the controller (loaded last) is up
+                         'wait_for_publisher': '/cmd_position'}],
             extra_arguments=intra),
         ComposableNode(
             package='xplorer_force_est', plugin='xplorer_force_est::XplorerForceEstComponent',

@@ -9,6 +9,10 @@
 //     ground station expects); CI flies faster. If the container cannot keep
 //     up, simulated time simply advances slower (every physics step is still
 //     taken); the achieved factor is logged at the end.
+//   wait_for_publisher (string, default ""): when set, the world stays at
+//     t = 0 (nothing published) until some node publishes on this topic, e.g.
+//     the graph's setpoint topic: a launch file loads the simulator first and
+//     the controller last, and the standalone host starts them together.
 //
 // At the scenario's end (duration_s) the simulator stops stepping and
 // publishing, logs one line "tactile_sim: scenario ... ended" with the
@@ -54,6 +58,7 @@ class TactileSimComponent : public rclcpp::Node {
         tactile_common::parameter_source(*this) + ": real_time_factor: must be in (0, 1000], got " +
         std::to_string(real_time_factor_));
     }
+    wait_for_publisher_ = declare_parameter<std::string>("wait_for_publisher", "");
     clock_publisher_ = create_publisher<rosgraph_msgs::msg::Clock>("/clock", rclcpp::ClockQoS());
     done_publisher_ = create_publisher<std_msgs::msg::Bool>(
       kDoneTopic, rclcpp::QoS(1).reliable().transient_local());
@@ -118,6 +123,19 @@ class TactileSimComponent : public rclcpp::Node {
       return;
     }
     if (now_ns_ == 0) {
+      if (!wait_for_publisher_.empty()) {
+        if (count_publishers(wait_for_publisher_) == 0) {
+          if (!waiting_logged_) {
+            RCLCPP_INFO(get_logger(), "tactile_sim: waiting for a publisher on %s",
+              wait_for_publisher_.c_str());
+            waiting_logged_ = true;
+          }
+          return;
+        }
+        RCLCPP_INFO(get_logger(), "tactile_sim: %s has a publisher, starting",
+          wait_for_publisher_.c_str());
+        wait_for_publisher_.clear();
+      }
       wall_start_ = std::chrono::steady_clock::now();
     }
     outputs_.clear();
@@ -169,6 +187,8 @@ class TactileSimComponent : public rclcpp::Node {
   int64_t now_ns_ = 0;
   double real_time_factor_ = 1.0;
   bool done_ = false;
+  std::string wait_for_publisher_;
+  bool waiting_logged_ = false;
   std::chrono::steady_clock::time_point wall_start_ = std::chrono::steady_clock::now();
   uint64_t setpoints_ = 0;
   uint64_t late_setpoints_ = 0;
