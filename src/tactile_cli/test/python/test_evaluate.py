@@ -1,0 +1,94 @@
+"""`tactile evaluate` against `tactile sim`:
+
+- the bag `tactile sim` records of a whisker_fsm flight, evaluated by `tactile evaluate`,
+  gives exactly the metrics `tactile sim` computed in process (same evaluation code, same
+  messages): the DDS end-to-end tests (tactile_ros_tests/test/test_e2e_*.py) rest on it;
+- a bag whose evaluation topics were thinned (some ground-truth samples lost, as a
+  best-effort DDS subscription may lose them) still evaluates, and the lost samples show in
+  the "topics" counts;
+- a bag without the FSM state topic and a scenario of an unsupported graph are refused,
+  naming the bag / scenario file and what is missing.
+"""
+import json
+import os
+import subprocess
+from pathlib import Path
+
+import pytest
+from rosbags.rosbag2 import Reader, Writer
+
+TACTILE = os.environ["TACTILE_EXE"]
+CONFIG = os.environ["TACTILE_CONFIG_DIR"]
+SCENARIOS = Path(CONFIG) / "scenarios"
+# The shortest whisker_fsm course (two baffles) keeps the test at a few seconds.
+SCENARIO = SCENARIOS / "whisker_baffles_two_fsm.yaml"
+SEED = 3
+
+
+def tactile(*args):
+    return subprocess.run([TACTILE, "--config", CONFIG, *map(str, args)], capture_output=True, text=True)
+
+
+@pytest.fixture(scope="module")
+def flown(tmp_path_factory):
+    out = tmp_path_factory.mktemp("sim")
+    r = tactile("sim", SCENARIO, "--out", out, "--seed", SEED, "--no-png", "--quiet")
+    assert r.returncode == 0, r.stderr
+    return out
+
+
+def test_evaluate_of_the_sim_bag_equals_the_sim_metrics(flown, tmp_path):
+    r = tactile("evaluate", flown / "bag", "--scenario", SCENARIO, "--seed", SEED, "--out", tmp_path)
+    assert r.returncode == 0, r.stderr
+    sim = json.loads((flown / "metrics.json").read_text())
+    ev = json.loads((tmp_path / "metrics.json").read_text())
+    assert ev["source"] == "bag"
+    for key in ("scenario", "seed", "graph", "vehicle", "success", "collisions", "arena_yaw_deg"):
+        assert ev[key] == sim[key], key
+    # Every wall-following metric, bit for bit.
+    assert ev["fsm"] == sim["fsm"]
+    assert sim["fsm"]["wall_following_contact_samples"] > 100  # the course was flown along walls
+    for topic in ("/ground_truth/whisker/left/contact", "/fsm_state"):
+        assert ev["topics"][topic] == sim["topics"][topic]
+
+
+def copy_bag(src: Path, dst: Path, keep):
+    """Copies the bag, keeping the messages for which keep(topic, index) is true."""
+    with Reader(src) as reader, Writer(dst, version=8) as writer:
+        conns = {c.id: writer.add_connection(c.topic, c.msgtype, msgdef=c.msgdef.data, rihs01=c.digest)
+                 for c in reader.connections}
+        seen = {}
+        for c, stamp, raw in reader.messages():
+            i = seen[c.topic] = seen.get(c.topic, -1) + 1
+            if keep(c.topic, i):
+                writer.write(conns[c.id], stamp, raw)
+
+
+def test_lost_truth_samples_show_in_the_counts(flown, tmp_path):
+    thinned = tmp_path / "thinned"
+    copy_bag(flown / "bag", thinned,
+             lambda t, i: not (t.startswith("/ground_truth/whisker/") and i % 10 == 0))
+    r = tactile("evaluate", thinned, "--scenario", SCENARIO, "--seed", SEED, "--out", tmp_path / "ev")
+    assert r.returncode == 0, r.stderr
+    sim = json.loads((flown / "metrics.json").read_text())
+    ev = json.loads((tmp_path / "ev" / "metrics.json").read_text())
+    n_sim = sim["topics"]["/ground_truth/whisker/left/contact"]
+    assert ev["topics"]["/ground_truth/whisker/left/contact"] == n_sim - (n_sim + 9) // 10
+    assert ev["fsm"]["reached_target"] == sim["fsm"]["reached_target"]
+    # A tenth of the samples gone: the fraction moves, but not far.
+    assert ev["fsm"]["depth_in_band_fraction"] == pytest.approx(sim["fsm"]["depth_in_band_fraction"], abs=0.05)
+
+
+def test_a_bag_without_the_fsm_state_is_refused(flown, tmp_path):
+    stripped = tmp_path / "stripped"
+    copy_bag(flown / "bag", stripped, lambda t, i: t != "/fsm_state")
+    r = tactile("evaluate", stripped, "--scenario", SCENARIO, "--out", tmp_path / "ev")
+    assert r.returncode == 1
+    assert str(stripped) in r.stderr and "/fsm_state" in r.stderr
+
+
+def test_an_unsupported_graph_is_refused(flown, tmp_path):
+    scenario = SCENARIOS / "whisker_hover.yaml"
+    r = tactile("evaluate", flown / "bag", "--scenario", scenario, "--out", tmp_path / "ev")
+    assert r.returncode == 1
+    assert "whisker_hover.yaml" in r.stderr and "whisker_fsm" in r.stderr

@@ -1,0 +1,157 @@
+"""Records topics of a SITL flight over DDS into a rosbag2 (sqlite3) bag, for
+`tactile evaluate BAG --scenario S --out DIR`.
+
+The toolchain this workspace is tested with has no rosbag2, so this is a small recorder:
+rclpy subscriptions with raw=True (the CDR bytes as they came over DDS, never
+deserialized) written with the `rosbags` package. Each message is stored at its header
+stamp (simulated time: every recorded type starts with a std_msgs/Header), so the bag's
+timeline is the simulator's, as in the bags `tactile sim` writes. The recording ends
+when the simulator publishes /sim/done (std_msgs/Bool, transient local) or at a timeout.
+
+    python sitl_recorder.py --out bag --scenario-graph whisker_fsm --timeout 120
+
+Topics per graph: GRAPH_TOPICS. Sensor topics are published best effort (SensorDataQoS):
+the subscriptions are best effort with a deep queue, and a sample lost anyway shows as a
+lower count in the evaluated metrics' "topics" than in `tactile sim`'s.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import struct
+import sys
+import threading
+import time
+from pathlib import Path
+
+WORKSPACE = Path(__file__).resolve().parents[3]
+MSG_DIR = WORKSPACE / 'src' / 'tactile_msgs' / 'msg'
+
+# topic -> (type, reliable). Reliable where the publisher is reliable (state topics are
+# published on transitions only: one lost message would be a lost transition).
+GRAPH_TOPICS = {
+    'whisker_fsm': {
+        '/ground_truth/whisker/left/contact': ('tactile_msgs/msg/WhiskerGroundTruth', False),
+        '/ground_truth/whisker/right/contact': ('tactile_msgs/msg/WhiskerGroundTruth', False),
+        '/fsm_state': ('tactile_msgs/msg/FsmState', True),
+        '/collisions': ('tactile_msgs/msg/CollisionEvent', False),
+    },
+}
+
+DONE_TOPIC = '/sim/done'
+
+
+def typestore():
+    """The Kilted types plus tactile_msgs from the .msg files of this workspace."""
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+    store = get_typestore(Stores.ROS2_KILTED)
+    types = {}
+    for f in sorted(MSG_DIR.glob('*.msg')):
+        types.update(get_types_from_msg(f.read_text(), f'tactile_msgs/msg/{f.stem}'))
+    store.register(types)
+    return store
+
+
+def header_stamp_ns(data: bytes) -> int:
+    """builtin_interfaces/Time at the start of a CDR message (after the 4-byte
+    encapsulation header): int32 sec, uint32 nanosec, in the encapsulation's byte order."""
+    if len(data) < 12:
+        raise ValueError(f'CDR message of {len(data)} bytes has no header stamp')
+    order = '<' if data[1] & 1 else '>'
+    sec, nanosec = struct.unpack_from(order + 'iI', data, 4)
+    return sec * 1_000_000_000 + nanosec
+
+
+def message_class(type_name: str):
+    pkg, _, name = type_name.split('/')
+    return getattr(importlib.import_module(f'{pkg}.msg'), name)
+
+
+class Recorder:
+    """Subscribes to `topics` ({topic: (type, reliable)}) and writes a bag at `out`
+    until /sim/done or stop()."""
+
+    def __init__(self, out: Path, topics: dict):
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile,
+                               ReliabilityPolicy)
+        from rosbags.rosbag2 import Writer
+        from std_msgs.msg import Bool
+
+        self.out = Path(out)
+        self.counts = {t: 0 for t in topics}
+        self.done = threading.Event()
+        self._store = typestore()
+        self._writer = Writer(self.out, version=8)
+        self._writer.open()
+        self._connections = {
+            t: self._writer.add_connection(t, typ, typestore=self._store)
+            for t, (typ, _) in topics.items()}
+        self._context = rclpy.Context()
+        rclpy.init(context=self._context)
+        self._node = rclpy.create_node('sitl_recorder', context=self._context)
+        for topic, (typ, reliable) in topics.items():
+            qos = QoSProfile(
+                history=HistoryPolicy.KEEP_LAST, depth=1000,
+                reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
+                durability=DurabilityPolicy.VOLATILE)
+            self._node.create_subscription(
+                message_class(typ), topic, lambda data, t=topic: self._on_message(t, data), qos,
+                raw=True)
+        done_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
+                              reliability=ReliabilityPolicy.RELIABLE,
+                              durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self._node.create_subscription(Bool, DONE_TOPIC, self._on_done, done_qos)
+        self._executor = SingleThreadedExecutor(context=self._context)
+        self._executor.add_node(self._node)
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._spin, daemon=True)
+        self._thread.start()
+
+    def _spin(self):
+        while not self._stop.is_set() and self._context.ok():
+            self._executor.spin_once(timeout_sec=0.1)
+
+    def _on_message(self, topic: str, data: bytes):
+        self._writer.write(self._connections[topic], header_stamp_ns(data), data)
+        self.counts[topic] += 1
+
+    def _on_done(self, msg):
+        if msg.data:
+            self.done.set()
+
+    def wait_done(self, timeout: float) -> bool:
+        return self.done.wait(timeout)
+
+    def stop(self):
+        """Stops spinning (the queues drained for 0.5 s first) and closes the bag."""
+        time.sleep(0.5)
+        self._stop.set()
+        self._thread.join()
+        self._executor.shutdown()
+        self._node.destroy_node()
+        self._context.try_shutdown()
+        self._writer.close()
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split('\n\n')[0])
+    p.add_argument('--out', required=True, help='bag directory to create')
+    p.add_argument('--graph', default='whisker_fsm', choices=sorted(GRAPH_TOPICS))
+    p.add_argument('--timeout', type=float, default=600.0, help='wall seconds to wait for /sim/done')
+    a = p.parse_args(argv)
+    rec = Recorder(Path(a.out), GRAPH_TOPICS[a.graph])
+    try:
+        ok = rec.wait_done(a.timeout)
+    except KeyboardInterrupt:
+        ok = False
+    rec.stop()
+    print(f'sitl_recorder: {sum(rec.counts.values())} messages -> {a.out}'
+          f'{"" if ok else " (no /sim/done)"}')
+    return 0 if ok else 1
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,92 @@
+"""End to end over DDS, paper 000: launch/sitl_whisker.launch.py flies
+whisker_three_baffles_fsm through the rclcpp components (simulator, TDORC x2, tactile
+depth, whisker FSM in one container, simulated time on /clock); the recorded ground truth
+and FSM states are evaluated by `tactile evaluate` (the evaluation code of `tactile sim`)
+and compared with `tactile sim` of the same scenario in process.
+
+A DDS flight is not bit-identical to the in-process flight of its seed (README: "End to
+end over DDS"): the same seed gives the same world and noise, but the nodes see their
+inputs at other instants. So the comparison is of outcomes against the in-process spread:
+
+- success (target reached, no collision) per seed equals the in-process success;
+- depth-in-band fraction and mean heading error of each DDS flight lie within
+  [min, max] of the in-process seeds widened by IN_BAND_MARGIN / HEADING_MARGIN_DEG;
+- the recorder lost at most 2 % of the ground-truth samples.
+
+How well the DDS pipeline kept up (achieved real-time factor, setpoint ages, late
+setpoints) is printed and written to e2e_whisker.json in the test's directory; it is
+reported, not asserted (no timing assertions in tests).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+
+import pytest
+
+from e2e import WORKSPACE, fly_over_dds, sim_in_process, spread
+
+SCENARIO = WORKSPACE / 'config' / 'scenarios' / 'whisker_three_baffles_fsm.yaml'
+# In-process seeds give the spread; the first DDS_SEEDS of them are flown over DDS too.
+IN_PROCESS_SEEDS = [1, 2, 3, 4, 5]
+DDS_SEEDS = [int(s) for s in os.environ.get('TACTILE_E2E_SEEDS', '1,2').split(',')]
+FACTOR = float(os.environ.get('TACTILE_E2E_FACTOR', '2.0'))
+# Margins around the in-process spread (README "End to end over DDS" for the reasoning).
+IN_BAND_MARGIN = 0.05
+HEADING_MARGIN_DEG = 1.0
+TRUTH_TOPIC = '/ground_truth/whisker/left/contact'
+
+
+@pytest.fixture(scope='module')
+def in_process(tmp_path_factory):
+    out = tmp_path_factory.mktemp('in_process')
+    return {s: sim_in_process(SCENARIO, s, out / f'seed_{s}') for s in IN_PROCESS_SEEDS}
+
+
+@pytest.fixture(scope='module')
+def report(tmp_path_factory):
+    rows = {}
+    yield rows
+    path = tmp_path_factory.getbasetemp() / 'e2e_whisker.json'
+    path.write_text(json.dumps(rows, indent=2) + '\n')
+    print(f'\nend to end over DDS (whisker_three_baffles_fsm, factor {FACTOR}): {path}')
+    for seed, r in rows.items():
+        print(f'  seed {seed}: {json.dumps(r)}')
+
+
+@pytest.mark.parametrize('seed', DDS_SEEDS)
+def test_whisker_fsm_over_dds_matches_in_process(seed, in_process, report, tmp_path):
+    flight = fly_over_dds('sitl_whisker.launch.py', SCENARIO, 'whisker_fsm', seed, FACTOR,
+                          tmp_path / 'dds')
+    dds = flight.metrics
+    ref = in_process[seed]
+    band = [m['fsm']['depth_in_band_fraction'] for m in in_process.values()]
+    heading = [m['fsm']['mean_abs_heading_error_deg'] for m in in_process.values()]
+    report[seed] = {
+        'dds': {k: dds['fsm'][k] for k in ('reached_target', 'depth_in_band_fraction',
+                                          'mean_abs_heading_error_deg', 'wall_following_episodes',
+                                          'final_state')}
+        | {'success': dds['success'], 'collisions': dds['collisions']},
+        'in_process': {k: ref['fsm'][k] for k in ('reached_target', 'depth_in_band_fraction',
+                                                 'mean_abs_heading_error_deg',
+                                                 'wall_following_episodes', 'final_state')}
+        | {'success': ref['success'], 'collisions': ref['collisions']},
+        'in_process_spread': {'depth_in_band_fraction': [min(band), max(band)],
+                              'mean_abs_heading_error_deg': [min(heading), max(heading)],
+                              'success': sum(m['success'] for m in in_process.values())},
+        'pipeline': flight.sim_line,
+        'truth_samples': [dds['topics'].get(TRUTH_TOPIC, 0), ref['topics'][TRUTH_TOPIC]],
+        'wall_s': round(flight.wall_s, 1),
+    }
+
+    assert dds['seed'] == seed and dds['scenario'] == ref['scenario']
+    assert flight.sim_line, 'the simulator did not log its end line'
+    # The recorder got (almost) every ground-truth sample the simulator published.
+    assert dds['topics'].get(TRUTH_TOPIC, 0) >= 0.98 * ref['topics'][TRUTH_TOPIC]
+    assert dds['success'] == ref['success'], (dds['fsm'], dds['collision_events'])
+    assert dds['fsm']['reached_target'] == ref['fsm']['reached_target']
+    lo, hi = spread(band, IN_BAND_MARGIN)
+    assert lo <= dds['fsm']['depth_in_band_fraction'] <= hi
+    lo, hi = spread(heading, HEADING_MARGIN_DEG)
+    assert lo <= dds['fsm']['mean_abs_heading_error_deg'] <= hi
