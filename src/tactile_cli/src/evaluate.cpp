@@ -3,11 +3,15 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <array>
 #include <map>
+#include <optional>
+#include <variant>
 #include <random>
 #include <stdexcept>
 #include <vector>
 
+#include "graphs/xplorer_nodes.hpp"
 #include "tactile_bag/bag.hpp"
 #include "tactile_bag/typed.hpp"
 #include "tactile_cli/host.hpp"
@@ -18,6 +22,7 @@
 #include "tactile_msgs/msg/collision_event.hpp"
 #include "tactile_msgs/msg/fsm_state.hpp"
 #include "tactile_msgs/msg/whisker_ground_truth.hpp"
+#include "tactile_sim/logic/sim_logic.hpp"
 #include "tactile_sim/scenario.hpp"
 #include "tactile_sim/types.hpp"
 
@@ -146,6 +151,142 @@ nlohmann::json evaluate_whisker_fsm(const tactile_sim::Scenario& s, const Evalua
   return m;
 }
 
+/// Graph xplorer, mission explore (src/graphs/xplorer.cpp, 001 Sec. V-C/V-D):
+/// loop closure from the recorded FSM states (the FSM enters "done" when it
+/// closes the loop) and the contact map rebuilt by xplorer_mapping from the
+/// recorded body wrench, odometry, arm IMUs and FSM states with the graph's
+/// mapping parameters, measured as XplorerGraph::explore_metrics does.
+nlohmann::json evaluate_xplorer(const tactile_sim::Scenario& s, const EvaluateOptions& o, uint64_t seed) {
+  using MapLogic = mapping_pcl::XplorerMapLogic;
+  using FsmLogic = tactile_fsm::XplorerFsmLogic;
+  tactile_bag::Reader in(o.bag);
+  const auto wrench_type = tactile_msgs::cdr::MessageTraits<geometry_msgs::msg::WrenchStamped>::type_name;
+  require_topic(in, o.bag, MapLogic::kWrenchBodyTopic, wrench_type, "the body wrench the contact map is built from");
+  require_topic(in, o.bag, MapLogic::kOdometryTopic, tactile_msgs::cdr::MessageTraits<nav_msgs::msg::Odometry>::type_name,
+                "the pose the contact map is built in");
+  require_topic(in, o.bag, FsmLogic::kStateTopic, tactile_msgs::cdr::MessageTraits<FsmState>::type_name,
+                "the FSM states: loop closure");
+  const bool have_arms = in.find_topic(MapLogic::kArmImuTopic) != nullptr;
+  const bool have_collisions = in.find_topic(kCollisionsTopic) != nullptr;
+
+  const double arena_yaw = trial_arena_yaw(s, seed);
+  const tactile_sim::SimLogic world(s, seed, arena_yaw);  // the arena's floor, as the graph
+  Host host(o.config_dir);
+  GraphContext ctx{s, host, nullptr, seed, arena_yaw, o.out_dir, nullptr};
+  const auto fsm_params = FsmLogic::params_from(host.load_parameters(
+      "", FsmLogic::kNodeName, FsmLogic::default_parameters(), ctx.overrides("xplorer_fsm")));
+  if (fsm_params.fsm.mission != tactile_fsm::XplorerMission::kExplore) {
+    throw std::runtime_error(s.source + ": xplorer_fsm mission '" + tactile_fsm::to_string(fsm_params.fsm.mission) +
+                             "': tactile evaluate knows the mission explore only");
+  }
+  std::optional<std::array<double, 2>> box_size;
+  if (auto it = s.metrics.find("box_size"); it != s.metrics.end()) {
+    const auto* v = std::get_if<std::vector<double>>(&it->second);
+    if (!v || v->size() != 2 || !((*v)[0] > 0) || !((*v)[1] > 0))
+      throw std::runtime_error(s.source + ": metrics.box_size: must be [length, width] > 0 in metres");
+    box_size = {std::max((*v)[0], (*v)[1]), std::min((*v)[0], (*v)[1])};
+  }
+  tactile_common::ParamMap map_extra;
+  map_extra.set("floor_z", world.arena().floor_z());
+  map_extra.set("publish_rate_hz", 0.1);
+  host.executor().set_time(in.start_time_ns());
+  auto map = add_xplorer_mapping(host, ctx.overrides("xplorer_mapping", map_extra));
+  std::vector<std::pair<double, std::string>> states;
+  host.bus().subscribe<FsmState>(FsmLogic::kStateTopic, [&states](const FsmState& m) {
+    if (states.empty() || states.back().second != m.state)
+      states.emplace_back(tactile_common::to_seconds(tactile_common::from_stamp(m.header.stamp)), m.state);
+  });
+  std::vector<CollisionEvent> collisions;
+  host.bus().subscribe<CollisionEvent>(kCollisionsTopic, [&collisions](const CollisionEvent& c) { collisions.push_back(c); });
+
+  std::vector<std::string> topics = {MapLogic::kWrenchBodyTopic, MapLogic::kOdometryTopic, FsmLogic::kStateTopic};
+  if (have_arms) topics.push_back(MapLogic::kArmImuTopic);
+  if (have_collisions) topics.push_back(kCollisionsTopic);
+  in.set_topic_filter(topics);
+  tactile_bag::SerializedMessage msg;
+  int64_t last_ns = 0;
+  std::map<std::string, uint64_t> counts;
+  while (in.read_next(msg)) {
+    host.executor().run_until(msg.timestamp_ns);
+    last_ns = std::max(last_ns, msg.timestamp_ns);
+    ++counts[msg.topic];
+    const int64_t now = msg.timestamp_ns;
+    if (msg.topic == MapLogic::kWrenchBodyTopic) {
+      host.bus().publish(msg.topic, tactile_bag::decode<geometry_msgs::msg::WrenchStamped>(msg), now);
+    } else if (msg.topic == MapLogic::kOdometryTopic) {
+      host.bus().publish(msg.topic, tactile_bag::decode<nav_msgs::msg::Odometry>(msg), now);
+    } else if (msg.topic == FsmLogic::kStateTopic) {
+      host.bus().publish(msg.topic, tactile_bag::decode<FsmState>(msg), now);
+    } else if (msg.topic == MapLogic::kArmImuTopic) {
+      host.bus().publish(msg.topic, tactile_bag::decode<tactile_msgs::msg::ArmImuArray>(msg), now);
+    } else {
+      host.bus().publish(msg.topic, tactile_bag::decode<CollisionEvent>(msg), now);
+    }
+  }
+
+  nlohmann::json x;
+  x["mission"] = "explore";
+  x["final_state"] = states.empty() ? "" : states.back().second;
+  double closure = -1.0;
+  for (const auto& [t, state] : states) {
+    if (state == "done") {
+      closure = t;
+      break;
+    }
+  }
+  x["loop_closed"] = closure >= 0;
+  x["loop_closure_time_s"] = closure >= 0 ? nlohmann::json(closure) : nlohmann::json(nullptr);
+  // As XplorerGraph::explore_metrics: how each Tactile-turning ended.
+  int recontacted = 0, turn_failed = 0, contact_lost = 0;
+  for (size_t i = 1; i < states.size(); ++i) {
+    const auto& a = states[i - 1].second;
+    const auto& b = states[i].second;
+    if (a == "tactile_turning") (b == "tactile_traversal" ? recontacted : turn_failed)++;
+    if (a == "tactile_traversal" && b == "exploration") ++contact_lost;
+  }
+  x["turns_recontacted"] = recontacted;
+  x["turns_without_recontact"] = turn_failed;
+  x["traversal_contact_lost"] = contact_lost;
+  const auto& ms = map->mapper().stats();
+  x["slabs"] = ms.slabs;
+  x["map_raw_points"] = map->map().size();
+  x["corner_slabs"] = ms.corner_slabs;
+  // The map as exported: 1 cm voxel filter + statistical outlier removal.
+  mapping_pcl::PointMap copy(map->params().map);
+  std::vector<mapping_pcl::Vec3> pts;
+  pts.reserve(map->map().size());
+  for (const auto& p : map->map().cloud()) pts.emplace_back(p.x, p.y, p.z);
+  copy.insert(pts);
+  copy.voxel_filter();
+  copy.remove_outliers();
+  const auto r = copy.measure();
+  x["map_points"] = r.points;
+  x["map_length_m"] = r.length;
+  x["map_width_m"] = r.width;
+  x["map_height_m"] = r.height;
+  x["map_area_m2"] = r.obb_area;
+  x["map_hull_area_m2"] = r.hull_area;
+  if (box_size) {
+    const double a_true = (*box_size)[0] * (*box_size)[1];
+    x["true_length_m"] = (*box_size)[0];
+    x["true_width_m"] = (*box_size)[1];
+    x["map_area_accuracy"] = r.points > 0 ? 1.0 - std::abs(r.obb_area - a_true) / a_true : 0.0;
+  }
+
+  nlohmann::json m = header(s, o, seed, arena_yaw, in);
+  m["sim_time_s"] = tactile_common::to_seconds(last_ns);
+  add_collisions(m, collisions);
+  m["xplorer"] = x;
+  // As XplorerGraph::reached_goal for explore without metrics.min_traversed_m.
+  if (s.metrics.count("min_traversed_m")) {
+    throw std::runtime_error(s.source + ": metrics.min_traversed_m: the traversed path is the FSM's own; "
+                                        "tactile evaluate judges explore flights by loop closure only");
+  }
+  m["success"] = closure >= 0 && (ctx.flag("allow_collisions") || collisions.empty());
+  for (const auto& [topic, n] : counts) m["topics"][topic] = n;
+  return m;
+}
+
 }  // namespace
 
 nlohmann::json run_evaluate(const EvaluateOptions& o) {
@@ -155,9 +296,11 @@ nlohmann::json run_evaluate(const EvaluateOptions& o) {
   nlohmann::json m;
   if (scenario.graph == "whisker_fsm") {
     m = evaluate_whisker_fsm(scenario, o, seed);
+  } else if (scenario.graph == "xplorer") {
+    m = evaluate_xplorer(scenario, o, seed);
   } else {
     throw std::runtime_error(scenario.source + ": graph: '" + scenario.graph +
-                             "': tactile evaluate knows the graph whisker_fsm only");
+                             "': tactile evaluate knows the graphs whisker_fsm and xplorer (explore)");
   }
   fs::create_directories(o.out_dir);
   const fs::path path = fs::path(o.out_dir) / "metrics.json";

@@ -37,6 +37,13 @@ GRAPH_TOPICS = {
         '/fsm_state': ('tactile_msgs/msg/FsmState', True),
         '/collisions': ('tactile_msgs/msg/CollisionEvent', False),
     },
+    'xplorer': {
+        '/odom': ('nav_msgs/msg/Odometry', False),
+        '/xplorer/wrench_body': ('geometry_msgs/msg/WrenchStamped', False),
+        '/arm_imu': ('tactile_msgs/msg/ArmImuArray', False),
+        '/xplorer/fsm_state': ('tactile_msgs/msg/FsmState', True),
+        '/collisions': ('tactile_msgs/msg/CollisionEvent', False),
+    },
 }
 
 DONE_TOPIC = '/sim/done'
