@@ -17,7 +17,11 @@
 #include "tactile_cli/host.hpp"
 #include "tactile_cli/sim_graph.hpp"
 #include "tactile_cli/whisker_eval.hpp"
+#include "tactile_common/geometry.hpp"
 #include "tactile_common/time.hpp"
+#include "tactile_msgs/msg/wall_estimate.hpp"
+#include "wall_effect_ekf/wall_effect_ekf_logic.hpp"
+#include "wall_effect_ekf/wall_trajectory.hpp"
 #include "tactile_fsm/whisker_fsm_logic.hpp"
 #include "tactile_msgs/msg/collision_event.hpp"
 #include "tactile_msgs/msg/fsm_state.hpp"
@@ -287,6 +291,134 @@ nlohmann::json evaluate_xplorer(const tactile_sim::Scenario& s, const EvaluateOp
   return m;
 }
 
+/// Graph wall_effect (src/graphs/wall_effect.cpp, 004 Fig. 4a): the EKF's
+/// published estimate against /ground_truth/wall -- RMSE of distance and
+/// direction within 20 cm of the wall over the scenario's window, NEES of
+/// (distance, direction) with the published covariance -- and the tracking
+/// errors of the motion-capture odometry against the setpoint script. These
+/// are WallEffectGraph's accumulations over the same messages, in the same
+/// order (test_evaluate.py checks that they equal the in-flight numbers); the
+/// full-state NEES needs the EKF's internal state and is not in a bag.
+nlohmann::json evaluate_wall_effect(const tactile_sim::Scenario& s, const EvaluateOptions& o, uint64_t seed) {
+  using tactile_msgs::msg::WallEstimate;
+  using Ekf = wall_effect_ekf::WallEffectEkfLogic;
+  using Traj = wall_effect_ekf::WallTrajectoryLogic;
+  constexpr const char* kTruthWall = "/ground_truth/wall";
+  constexpr const char* kTruthOdom = "/ground_truth/odom";
+  tactile_bag::Reader in(o.bag);
+  const auto wall_type = tactile_msgs::cdr::MessageTraits<WallEstimate>::type_name;
+  const auto odom_type = tactile_msgs::cdr::MessageTraits<nav_msgs::msg::Odometry>::type_name;
+  require_topic(in, o.bag, kTruthWall, wall_type, "the true wall distance and direction");
+  require_topic(in, o.bag, Ekf::kOutputTopic, wall_type, "the EKF's estimate");
+  require_topic(in, o.bag, kTruthOdom, odom_type, "the pose the tracking errors are taken of");
+  require_topic(in, o.bag, Traj::kOutputTopic, odom_type, "the setpoint script");
+  const bool have_collisions = in.find_topic(kCollisionsTopic) != nullptr;
+
+  const double arena_yaw = trial_arena_yaw(s, seed);
+  Host host(o.config_dir);
+  GraphContext ctx{s, host, nullptr, seed, arena_yaw, o.out_dir, nullptr};
+  const auto tp = Traj::params_from(
+      host.load_parameters("", Traj::kNodeName, Traj::default_parameters(), ctx.overrides("wall_trajectory")));
+  if (tp.mode == "sweep") {
+    throw std::runtime_error(s.source + ": wall_trajectory mode 'sweep': tactile evaluate knows the modes "
+                                        "estimation_flight and hold");
+  }
+  double t0 = tp.t_start + 5.0, t1 = INFINITY;
+  if (tp.mode == "estimation_flight") {
+    t0 = 10.0;  // 004: RMSE over t = 10 s to 70 s
+    t1 = 70.0;
+  }
+  struct Acc {
+    double sum = 0.0, sum2 = 0.0;
+    size_t n = 0;
+    void add(double x) {
+      sum += x;
+      sum2 += x * x;
+      ++n;
+    }
+    double mean() const { return n ? sum / static_cast<double>(n) : NAN; }
+    double rms() const { return n ? std::sqrt(sum2 / static_cast<double>(n)) : NAN; }
+  } dist, dir, all_dist, nees, track_y, track_yaw;
+  const auto wrap = [](double a) { return std::atan2(std::sin(a), std::cos(a)); };
+  WallEstimate truth;
+  nav_msgs::msg::Odometry odom, sp;
+  bool have_truth = false, have_odom = false, have_sp = false;
+  auto& bus = host.bus();
+  bus.subscribe<WallEstimate>(kTruthWall, [&](const WallEstimate& m) {
+    truth = m;
+    have_truth = true;
+  });
+  bus.subscribe<nav_msgs::msg::Odometry>(kTruthOdom, [&](const nav_msgs::msg::Odometry& m) {
+    odom = m;
+    have_odom = true;
+  });
+  bus.subscribe<nav_msgs::msg::Odometry>(Traj::kOutputTopic, [&](const nav_msgs::msg::Odometry& m) {
+    sp = m;
+    have_sp = true;
+  });
+  bus.subscribe<WallEstimate>(Ekf::kOutputTopic, [&](const WallEstimate& est) {
+    if (!have_truth || !truth.wall_detected) return;
+    const double t = tactile_common::to_seconds(tactile_common::from_stamp(est.header.stamp));
+    if (t < t0 || t > t1) return;
+    const double e_d = est.distance - truth.distance;
+    const double e_a = wrap(est.direction - truth.direction);
+    all_dist.add(e_d);
+    if (truth.distance < 0.20) {  // 004: "within 20 cm from the wall"
+      dist.add(e_d);
+      dir.add(e_a * 180.0 / M_PI);
+      const double a = est.covariance[0], b = est.covariance[1], d = est.covariance[4];
+      const double det = a * d - b * b;
+      if (det > 0.0) nees.add((d * e_d * e_d - 2.0 * b * e_d * e_a + a * e_a * e_a) / det);
+    }
+    if (have_odom && have_sp) {
+      track_y.add(odom.pose.pose.position.y - sp.pose.pose.position.y);
+      const auto& q = odom.pose.pose.orientation;
+      const auto& qs = sp.pose.pose.orientation;
+      track_yaw.add(wrap(tactile_common::yaw_of(q) - 2.0 * std::atan2(qs.z, qs.w)) * 180.0 / M_PI);
+    }
+  });
+  std::vector<CollisionEvent> collisions;
+  bus.subscribe<CollisionEvent>(kCollisionsTopic, [&collisions](const CollisionEvent& c) { collisions.push_back(c); });
+
+  std::vector<std::string> topics = {kTruthWall, kTruthOdom, Traj::kOutputTopic, Ekf::kOutputTopic};
+  if (have_collisions) topics.push_back(kCollisionsTopic);
+  in.set_topic_filter(topics);
+  tactile_bag::SerializedMessage msg;
+  int64_t last_ns = 0;
+  std::map<std::string, uint64_t> counts;
+  while (in.read_next(msg)) {
+    last_ns = std::max(last_ns, msg.timestamp_ns);
+    ++counts[msg.topic];
+    if (msg.topic == kTruthWall || msg.topic == Ekf::kOutputTopic) {
+      bus.publish(msg.topic, tactile_bag::decode<WallEstimate>(msg), msg.timestamp_ns);
+    } else if (msg.topic == kCollisionsTopic) {
+      bus.publish(msg.topic, tactile_bag::decode<CollisionEvent>(msg), msg.timestamp_ns);
+    } else {
+      bus.publish(msg.topic, tactile_bag::decode<nav_msgs::msg::Odometry>(msg), msg.timestamp_ns);
+    }
+  }
+  const auto num = [](double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); };
+  nlohmann::json w;
+  w["mode"] = tp.mode;
+  w["window_s"] = {t0, std::isfinite(t1) ? nlohmann::json(t1) : nlohmann::json(nullptr)};
+  w["samples_within_20cm"] = dist.n;
+  w["rmse_distance_cm"] = num(100.0 * dist.rms());
+  w["rmse_direction_deg"] = num(dir.rms());
+  w["mean_distance_error_cm"] = num(100.0 * dist.mean());
+  w["rmse_distance_all_cm"] = num(100.0 * all_dist.rms());
+  w["nees_distance_direction"] = num(nees.mean());
+  w["tracking_rms_y_cm"] = num(100.0 * track_y.rms());
+  w["tracking_rms_yaw_deg"] = num(track_yaw.rms());
+
+  nlohmann::json m = header(s, o, seed, arena_yaw, in);
+  m["sim_time_s"] = tactile_common::to_seconds(last_ns);
+  add_collisions(m, collisions);
+  m["wall_effect"] = w;
+  m["success"] = ctx.flag("allow_collisions") || collisions.empty();  // the graph has no goal
+  for (const auto& [topic, n] : counts) m["topics"][topic] = n;
+  return m;
+}
+
 }  // namespace
 
 nlohmann::json run_evaluate(const EvaluateOptions& o) {
@@ -298,9 +430,12 @@ nlohmann::json run_evaluate(const EvaluateOptions& o) {
     m = evaluate_whisker_fsm(scenario, o, seed);
   } else if (scenario.graph == "xplorer") {
     m = evaluate_xplorer(scenario, o, seed);
+  } else if (scenario.graph == "wall_effect") {
+    m = evaluate_wall_effect(scenario, o, seed);
   } else {
     throw std::runtime_error(scenario.source + ": graph: '" + scenario.graph +
-                             "': tactile evaluate knows the graphs whisker_fsm and xplorer (explore)");
+                             "': tactile evaluate knows the graphs whisker_fsm, xplorer (explore) and "
+                             "wall_effect (estimation_flight, hold)");
   }
   fs::create_directories(o.out_dir);
   const fs::path path = fs::path(o.out_dir) / "metrics.json";

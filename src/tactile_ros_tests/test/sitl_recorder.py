@@ -44,6 +44,13 @@ GRAPH_TOPICS = {
         '/xplorer/fsm_state': ('tactile_msgs/msg/FsmState', True),
         '/collisions': ('tactile_msgs/msg/CollisionEvent', False),
     },
+    'wall_effect': {
+        '/ground_truth/wall': ('tactile_msgs/msg/WallEstimate', False),
+        '/ground_truth/odom': ('nav_msgs/msg/Odometry', False),
+        '/wall_effect/setpoint': ('nav_msgs/msg/Odometry', True),
+        '/wall_effect/estimate': ('tactile_msgs/msg/WallEstimate', False),
+        '/collisions': ('tactile_msgs/msg/CollisionEvent', False),
+    },
 }
 
 DONE_TOPIC = '/sim/done'

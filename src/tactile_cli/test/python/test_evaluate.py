@@ -112,6 +112,27 @@ def test_evaluate_of_an_xplorer_sim_bag_equals_the_sim_metrics(tmp_path):
     assert ev["xplorer"]["loop_closure_time_s"] == pytest.approx(sim["xplorer"]["loop_closure_time_s"], abs=0.02)
 
 
+DUCTED = SCENARIOS / "ducted_estimation.yaml"
+
+
+def test_evaluate_of_a_wall_effect_sim_bag_equals_the_sim_metrics(tmp_path):
+    """004 estimation flight: RMSE of distance and direction, NEES of (distance,
+    direction), tracking errors recomputed from the bag equal the in-flight numbers."""
+    sim_dir = tmp_path / "sim"
+    r = tactile("sim", DUCTED, "--out", sim_dir, "--no-png", "--quiet")
+    assert r.returncode == 0, r.stderr
+    r = tactile("evaluate", sim_dir / "bag", "--scenario", DUCTED, "--out", tmp_path / "ev")
+    assert r.returncode == 0, r.stderr
+    sim = json.loads((sim_dir / "metrics.json").read_text())
+    ev = json.loads((tmp_path / "ev" / "metrics.json").read_text())
+    assert ev["success"] == sim["success"]
+    assert sim["wall_effect"]["samples_within_20cm"] > 1000
+    for key in ("mode", "window_s", "samples_within_20cm", "rmse_distance_cm", "rmse_direction_deg",
+                "mean_distance_error_cm", "rmse_distance_all_cm", "nees_distance_direction",
+                "tracking_rms_y_cm", "tracking_rms_yaw_deg"):
+        assert ev["wall_effect"][key] == sim["wall_effect"][key], key
+
+
 def test_an_unsupported_graph_is_refused(flown, tmp_path):
     scenario = SCENARIOS / "whisker_hover.yaml"
     r = tactile("evaluate", flown / "bag", "--scenario", scenario, "--out", tmp_path / "ev")

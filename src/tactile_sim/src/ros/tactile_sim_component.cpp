@@ -62,20 +62,24 @@ class TactileSimComponent : public rclcpp::Node {
     clock_publisher_ = create_publisher<rosgraph_msgs::msg::Clock>("/clock", rclcpp::ClockQoS());
     done_publisher_ = create_publisher<std_msgs::msg::Bool>(
       kDoneTopic, rclcpp::QoS(1).reliable().transient_local());
+    // Best effort matches reliable and best-effort publishers alike: the INDI
+    // controller publishes its rotor thrusts best effort (SensorDataQoS), the FSMs reliable;
+    // a reliable subscription would never match the former.
+    const auto setpoint_qos = rclcpp::QoS(10).best_effort();
     hover_subscription_ = create_subscription<tactile_msgs::msg::HoverSetpoint>(
-      SimLogic::kHoverSetpointTopic, 10,
+      SimLogic::kHoverSetpointTopic, setpoint_qos,
       [this](const tactile_msgs::msg::HoverSetpoint & msg) {
         count_setpoint(msg.header.stamp);
         logic_->on_hover_setpoint(msg);
       });
     position_subscription_ = create_subscription<geometry_msgs::msg::PoseStamped>(
-      SimLogic::kPositionSetpointTopic, 10,
+      SimLogic::kPositionSetpointTopic, setpoint_qos,
       [this](const geometry_msgs::msg::PoseStamped & msg) {
         count_setpoint(msg.header.stamp);
         logic_->on_position_setpoint(msg);
       });
     thrust_subscription_ = create_subscription<tactile_msgs::msg::ThrustCommand>(
-      SimLogic::kRotorThrustTopic, 10,
+      SimLogic::kRotorThrustTopic, setpoint_qos,
       [this](const tactile_msgs::msg::ThrustCommand & msg) {
         count_setpoint(msg.header.stamp);
         logic_->on_rotor_thrust(msg);
