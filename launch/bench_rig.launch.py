@@ -7,12 +7,15 @@ Run by path on a ROS 2 machine after building the workspace with colcon:
 Whisker 1 (left) speaks the text protocol (P1:/P2:/P3:/T1:/T2:/T3: lines), whisker 2
 (right) the CSV protocol, both at 115200 baud. Parameters come from the same YAML files
 the standalone host reads (config/whisker_driver.yaml, config/tdorc_filter.yaml); the
-launch arguments override the serial device per whisker.
+launch arguments override the serial device per whisker and the TDORC parameter file
+(tdorc_params:=my_tuning.yaml, to try another tuning on the bench). A node that cannot
+start (device missing, bad parameter) stops the launch with its message.
 
 Topics: /whisker/{left,right}/pressure (tactile_msgs/WhiskerPressure),
         /whisker/{left,right}/signal   (tactile_msgs/WhiskerSignal).
 """
 
+import importlib.util
 import os
 
 from launch import LaunchDescription
@@ -23,8 +26,13 @@ from launch_ros.descriptions import ComposableNode
 
 CONFIG_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config')
 
+_common_spec = importlib.util.spec_from_file_location(
+    'launch_common', os.path.join(os.path.dirname(os.path.abspath(__file__)), 'launch_common.py'))
+launch_common = importlib.util.module_from_spec(_common_spec)
+_common_spec.loader.exec_module(launch_common)
 
-def whisker_nodes(side, device):
+
+def whisker_nodes(side, device, tdorc_params):
     namespace = 'whisker/' + side
     return [
         ComposableNode(
@@ -45,7 +53,7 @@ def whisker_nodes(side, device):
             plugin='tdorc_filter::TdorcFilterComponent',
             name='tdorc_filter',
             namespace=namespace,
-            parameters=[os.path.join(CONFIG_DIR, 'tdorc_filter.yaml')],
+            parameters=[tdorc_params],
             extra_arguments=[{'use_intra_process_comms': True}],
         ),
     ]
@@ -54,13 +62,15 @@ def whisker_nodes(side, device):
 def generate_launch_description():
     left_device = LaunchConfiguration('left_device')
     right_device = LaunchConfiguration('right_device')
+    tdorc_params = LaunchConfiguration('tdorc_params')
     container = ComposableNodeContainer(
         name='bench_rig_container',
         namespace='',
         package='rclcpp_components',
         executable='component_container',
         composable_node_descriptions=(
-            whisker_nodes('left', left_device) + whisker_nodes('right', right_device)
+            whisker_nodes('left', left_device, tdorc_params) +
+            whisker_nodes('right', right_device, tdorc_params)
         ),
         output='screen',
     )
@@ -69,5 +79,8 @@ def generate_launch_description():
                               description='serial device of whisker 1 (text protocol)'),
         DeclareLaunchArgument('right_device', default_value='/dev/ttyUSB1',
                               description='serial device of whisker 2 (CSV protocol)'),
+        DeclareLaunchArgument('tdorc_params', default_value=os.path.join(CONFIG_DIR, 'tdorc_filter.yaml'),
+                              description='parameter file of both TDORC filters'),
         container,
+        launch_common.stop_on_load_failure(container),
     ])

@@ -15,9 +15,11 @@ commander hover setpoints, clamped, with the stale-input chain hover -> land -> 
 
 Parameters come from config/ (crazyflie_bridge.yaml, tdorc_filter.yaml,
 tactile_depth.yaml, tactile_fsm.yaml); `uri` overrides the bridge's. The Crazyradio needs
-the Bitcraze udev rules (or run as root / pass the device into the container).
+the Bitcraze udev rules (or run as root / pass the device into the container). Without a
+Crazyradio the bridge cannot start and the launch ends with its message ("no Crazyradio found").
 """
 
+import importlib.util
 import os
 
 from launch import LaunchDescription
@@ -27,6 +29,11 @@ from launch_ros.actions import ComposableNodeContainer
 from launch_ros.descriptions import ComposableNode
 
 CONFIG_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config')
+
+_common_spec = importlib.util.spec_from_file_location(
+    'launch_common', os.path.join(os.path.dirname(os.path.abspath(__file__)), 'launch_common.py'))
+launch_common = importlib.util.module_from_spec(_common_spec)
+_common_spec.loader.exec_module(launch_common)
 
 
 def config(name):
@@ -54,12 +61,14 @@ def pipeline_nodes(bridge_overrides):
 
 
 def generate_launch_description():
+    container = ComposableNodeContainer(
+        name='radio_container', namespace='', package='rclcpp_components',
+        executable='component_container',
+        composable_node_descriptions=pipeline_nodes({'uri': LaunchConfiguration('uri')}),
+        output='screen')
     return LaunchDescription([
         DeclareLaunchArgument('uri', default_value='radio://0/80/2M/E7E7E7E7E7?safelink=1',
                               description='Crazyflie link URI (radio://, usb://, udp://)'),
-        ComposableNodeContainer(
-            name='radio_container', namespace='', package='rclcpp_components',
-            executable='component_container',
-            composable_node_descriptions=pipeline_nodes({'uri': LaunchConfiguration('uri')}),
-            output='screen'),
+        container,
+        launch_common.stop_on_load_failure(container),
     ])

@@ -38,6 +38,11 @@ def generate_launch_description():
              LaunchConfiguration('scenario'), '--port', port, '--seed', LaunchConfiguration('seed')],
         output='screen')
     uri = PythonExpression(["'udp://127.0.0.1:' + '", port, "'"])
+    container = ComposableNodeContainer(
+        name='sitl_bridge_container', namespace='', package='rclcpp_components',
+        executable='component_container',
+        composable_node_descriptions=_radio.pipeline_nodes({'uri': uri}),
+        output='screen')
     return LaunchDescription([
         DeclareLaunchArgument('scenario', default_value=os.path.join(
             CONFIG_DIR, 'scenarios', 'whisker_darkness_rigid_fsm.yaml'),
@@ -45,9 +50,6 @@ def generate_launch_description():
         DeclareLaunchArgument('port', default_value='19850', description='UDP port (19850 + N)'),
         DeclareLaunchArgument('seed', default_value='-1', description="noise seed (-1: the scenario's)"),
         server,
-        ComposableNodeContainer(
-            name='sitl_bridge_container', namespace='', package='rclcpp_components',
-            executable='component_container',
-            composable_node_descriptions=_radio.pipeline_nodes({'uri': uri}),
-            output='screen'),
+        container,
+        _radio.launch_common.stop_on_load_failure(container),
     ])

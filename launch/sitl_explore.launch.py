@@ -14,6 +14,7 @@ and seed are launch arguments. gpis_explorer publishes /gpis/map (GpisMap) and
 /gpis/target (ExplorationTarget) after every GPIS update.
 """
 
+import importlib.util
 import os
 
 from launch import LaunchDescription
@@ -23,6 +24,11 @@ from launch_ros.actions import ComposableNodeContainer
 from launch_ros.descriptions import ComposableNode
 
 CONFIG_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config')
+
+_common_spec = importlib.util.spec_from_file_location(
+    'launch_common', os.path.join(os.path.dirname(os.path.abspath(__file__)), 'launch_common.py'))
+launch_common = importlib.util.module_from_spec(_common_spec)
+_common_spec.loader.exec_module(launch_common)
 
 
 def config(name):
@@ -62,4 +68,5 @@ def generate_launch_description():
             name='sitl_explore_container', namespace='', package='rclcpp_components',
             executable='component_container', composable_node_descriptions=nodes,
             output='screen'),
+        launch_common.stop_on_load_failure(),
     ])

@@ -9,6 +9,7 @@ bench protocols (Table I / II) run without ROS through `whisker_loc_sitl`.
 
     ros2 launch launch/sitl_localization.launch.py [params:=path/to.yaml] [possibilistic:=true]
 """
+import importlib.util
 import os
 
 from launch import LaunchDescription
@@ -20,6 +21,11 @@ from launch_ros.parameter_descriptions import ParameterValue
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 DEFAULT_PARAMS = os.path.join(HERE, "..", "config", "whisker_localization.yaml")
+
+_common_spec = importlib.util.spec_from_file_location(
+    'launch_common', os.path.join(os.path.dirname(os.path.abspath(__file__)), 'launch_common.py'))
+launch_common = importlib.util.module_from_spec(_common_spec)
+_common_spec.loader.exec_module(launch_common)
 
 
 def generate_launch_description():
@@ -45,4 +51,5 @@ def generate_launch_description():
             ],
             output="screen",
         ),
+        launch_common.stop_on_load_failure(),
     ])

@@ -16,6 +16,7 @@ node_parameters are the host's per-node overrides and are not applied here: pass
 launch parameters or edit the config files. The simulator publishes /clock.
 """
 
+import importlib.util
 import os
 
 from launch import LaunchDescription
@@ -26,6 +27,11 @@ from launch_ros.descriptions import ComposableNode
 from launch_ros.parameter_descriptions import ParameterValue
 
 CONFIG_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config')
+
+_common_spec = importlib.util.spec_from_file_location(
+    'launch_common', os.path.join(os.path.dirname(os.path.abspath(__file__)), 'launch_common.py'))
+launch_common = importlib.util.module_from_spec(_common_spec)
+_common_spec.loader.exec_module(launch_common)
 
 
 def config(name):
@@ -84,4 +90,5 @@ def generate_launch_description():
                               description="'navigation' (wall_effect_nav) or 'trajectory' "
                                           "(004 estimation-flight script)"),
         OpaqueFunction(function=nodes),
+        launch_common.stop_on_load_failure(),
     ])

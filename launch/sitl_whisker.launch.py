@@ -12,6 +12,7 @@ Parameters come from the files in config/ (the ones `tactile sim` reads); the sc
 and seed are launch arguments. The simulator publishes /clock; every node uses it.
 """
 
+import importlib.util
 import os
 
 from launch import LaunchDescription
@@ -22,6 +23,11 @@ from launch_ros.descriptions import ComposableNode
 from launch_ros.parameter_descriptions import ParameterValue
 
 CONFIG_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config')
+
+_common_spec = importlib.util.spec_from_file_location(
+    'launch_common', os.path.join(os.path.dirname(os.path.abspath(__file__)), 'launch_common.py'))
+launch_common = importlib.util.module_from_spec(_common_spec)
+_common_spec.loader.exec_module(launch_common)
 
 
 def config(name):
@@ -66,4 +72,5 @@ def generate_launch_description():
             name='sitl_whisker_container', namespace='', package='rclcpp_components',
             executable='component_container', composable_node_descriptions=nodes,
             output='screen'),
+        launch_common.stop_on_load_failure(),
     ])

@@ -14,6 +14,7 @@ seed, mission and the PLY file written at shutdown are launch arguments (the sce
 node_parameters are applied by `tactile sim` only, so pass the mission here).
 """
 
+import importlib.util
 import os
 
 from launch import LaunchDescription
@@ -24,6 +25,11 @@ from launch_ros.descriptions import ComposableNode
 from launch_ros.parameter_descriptions import ParameterValue
 
 CONFIG_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config')
+
+_common_spec = importlib.util.spec_from_file_location(
+    'launch_common', os.path.join(os.path.dirname(os.path.abspath(__file__)), 'launch_common.py'))
+launch_common = importlib.util.module_from_spec(_common_spec)
+_common_spec.loader.exec_module(launch_common)
 
 
 def config(name):
@@ -75,4 +81,5 @@ def generate_launch_description():
             name='sitl_xplorer_container', namespace='', package='rclcpp_components',
             executable='component_container', composable_node_descriptions=nodes,
             output='screen'),
+        launch_common.stop_on_load_failure(),
     ])
