@@ -1,6 +1,7 @@
 // rclcpp component of tactile_depth: a mechanical adapter around
 // TactileDepthLogic (all behaviour lives there). ROS builds only.
 #include <memory>
+#include <utility>
 
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
@@ -22,14 +23,16 @@ class TactileDepthComponent : public rclcpp::Node {
       TactileDepthLogic::kLeftSignalTopic, rclcpp::SensorDataQoS(),
       [this](const tactile_msgs::msg::WhiskerSignal & msg) {
         if (auto out = logic_.on_left_signal(msg)) {
-          publisher_->publish(*out);
+          publisher_->publish(
+            std::make_unique<tactile_msgs::msg::TactileDepth>(std::move(*out)));
         }
       });
     right_ = create_subscription<tactile_msgs::msg::WhiskerSignal>(
       TactileDepthLogic::kRightSignalTopic, rclcpp::SensorDataQoS(),
       [this](const tactile_msgs::msg::WhiskerSignal & msg) {
         if (auto out = logic_.on_right_signal(msg)) {
-          publisher_->publish(*out);
+          publisher_->publish(
+            std::make_unique<tactile_msgs::msg::TactileDepth>(std::move(*out)));
         }
       });
     odometry_ = create_subscription<nav_msgs::msg::Odometry>(

@@ -2,6 +2,7 @@
 // around WhiskerFsmLogic (all behaviour lives there). ROS builds only.
 #include <chrono>
 #include <memory>
+#include <utility>
 
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
@@ -38,9 +39,11 @@ class WhiskerFsmComponent : public rclcpp::Node {
       std::chrono::nanoseconds(WhiskerFsmLogic::kTimerPeriodNs),
       [this]() {
         auto out = logic_.on_timer(now().nanoseconds());
-        setpoint_pub_->publish(out.setpoint);
+        setpoint_pub_->publish(
+          std::make_unique<tactile_msgs::msg::HoverSetpoint>(std::move(out.setpoint)));
         if (out.state) {
-          state_pub_->publish(*out.state);
+          state_pub_->publish(
+            std::make_unique<tactile_msgs::msg::FsmState>(std::move(*out.state)));
         }
       });
   }

@@ -1,12 +1,15 @@
 // rclcpp component of tdorc_filter: a mechanical adapter around
 // TdorcFilterLogic (all behaviour lives there). ROS builds only.
 #include <memory>
+#include <utility>
 
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
 #include "tactile_common/ros_parameters.hpp"
 #include "tdorc_filter/tdorc_filter_logic.hpp"
 
+// Publishers take unique_ptr: with use_intra_process_comms the message then moves
+// to the subscriptions in the same container (publish(const T&) copies it first).
 namespace tdorc_filter {
 
 class TdorcFilterComponent : public rclcpp::Node {
@@ -22,7 +25,8 @@ class TdorcFilterComponent : public rclcpp::Node {
       TdorcFilterLogic::kInputTopic, rclcpp::SensorDataQoS(),
       [this](const tactile_msgs::msg::WhiskerPressure & msg) {
         if (auto out = logic_.on_pressure(msg)) {
-          publisher_->publish(*out);
+          publisher_->publish(
+            std::make_unique<tactile_msgs::msg::WhiskerSignal>(std::move(*out)));
         }
       });
   }

@@ -2,6 +2,7 @@
 // WhiskerDriverLogic (all behaviour lives there). ROS builds only.
 #include <chrono>
 #include <memory>
+#include <utility>
 
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
@@ -22,8 +23,9 @@ class WhiskerDriverComponent : public rclcpp::Node {
     timer_ = create_wall_timer(
       std::chrono::nanoseconds(logic_.period_ns()),
       [this]() {
-        for (const auto & msg : logic_.on_timer(now().nanoseconds()).pressure) {
-          publisher_->publish(msg);
+        for (auto & msg : logic_.on_timer(now().nanoseconds()).pressure) {
+          publisher_->publish(
+            std::make_unique<tactile_msgs::msg::WhiskerPressure>(std::move(msg)));
         }
       });
   }
