@@ -1,0 +1,194 @@
+"""launch/bench_rig.launch.py: the whisker deck on two serial ports (pseudo terminals here)
+-> whisker_driver x2 -> TDORC x2 in one container.
+
+Whisker 1 (left) gets the text protocol ("P1:<Pa>" ... "T3:<degC>", one value per line),
+whisker 2 (right) the CSV protocol ("p1,p2,p3"), at 50 frames per second, as the deck
+sends them (whisker_driver README "Protocols"); every frame carries values of its own, so
+each published message is matched to the frame it came from.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import threading
+import time
+import tty
+
+import pytest
+import yaml
+
+from launch_check import CONFIG_DIR, Graph, Launch, assert_rate
+
+NODES = ['/bench_rig_container', '/whisker/left/whisker_driver', '/whisker/left/tdorc_filter',
+         '/whisker/right/whisker_driver', '/whisker/right/tdorc_filter']
+TOPICS = {
+    '/whisker/left/pressure': 'tactile_msgs/msg/WhiskerPressure',
+    '/whisker/right/pressure': 'tactile_msgs/msg/WhiskerPressure',
+    '/whisker/left/signal': 'tactile_msgs/msg/WhiskerSignal',
+    '/whisker/right/signal': 'tactile_msgs/msg/WhiskerSignal',
+}
+RATE_HZ = 50.0  # the deck's frame rate (000 Methods) and the driver's rate_hz
+
+
+def left_frame(k: int):
+    """Frame k of whisker 1: pressures [Pa] and temperatures [degC]."""
+    return [100000.0 + 0.25 * k + 7.0 * i for i in range(3)], [21.5 + 0.5 * i for i in range(3)]
+
+
+def right_frame(k: int):
+    return [101000.0 + 0.25 * k + 9.0 * i for i in range(3)]
+
+
+class Deck:
+    """Two pseudo terminals fed at 50 frames per second by a thread."""
+
+    def __init__(self):
+        self.left_master, self.left_slave = os.openpty()
+        self.right_master, self.right_slave = os.openpty()
+        for fd in (self.left_slave, self.right_slave):
+            tty.setraw(fd)  # no echo back into the master before the driver sets raw 8N1
+        self.left_device = os.ttyname(self.left_slave)
+        self.right_device = os.ttyname(self.right_slave)
+        self.frames = 0
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def _run(self):
+        next_t = time.monotonic()
+        k = 0
+        while not self._stop.is_set():
+            p, t = left_frame(k)
+            text = ''.join(f'P{i + 1}:{p[i]:.2f}\n' for i in range(3)) + \
+                ''.join(f'T{i + 1}:{t[i]:.2f}\r\n' for i in range(3))
+            csv = ','.join(f'{v:.2f}' for v in right_frame(k)) + '\n'
+            try:
+                os.write(self.left_master, text.encode())
+                os.write(self.right_master, csv.encode())
+            except OSError:
+                return
+            k += 1
+            self.frames = k
+            next_t += 1.0 / RATE_HZ
+            time.sleep(max(0.0, next_t - time.monotonic()))
+
+    def close(self):
+        self._stop.set()
+        self._thread.join()
+        for fd in (self.left_master, self.left_slave, self.right_master, self.right_slave):
+            os.close(fd)
+
+
+@pytest.fixture
+def deck():
+    d = Deck()
+    yield d
+    d.close()
+
+
+def frame_index(pressure0: float, base: float) -> int:
+    k = (pressure0 - base) / 0.25
+    assert abs(k - round(k)) < 1e-6, f'pressure {pressure0} is no written frame'
+    return int(round(k))
+
+
+def test_bench_rig_streams_the_deck_frames(deck, tmp_path):
+    with Launch('bench_rig.launch.py', [f'left_device:={deck.left_device}',
+                                        f'right_device:={deck.right_device}'],
+                tmp_path / 'launch.log') as launch, Graph() as g:
+        g.wait_for_nodes(NODES, launch)
+        samples = g.sample(TOPICS, window_s=3.0)
+        params = {side: g.get_parameters(f'/whisker/{side}/whisker_driver',
+                                         ['device', 'protocol', 'whisker_id', 'frame_id', 'rate_hz'])
+                  for side in ('left', 'right')}
+        tdorc = g.get_parameters('/whisker/left/tdorc_filter', ['mode', 'window', 'contact_threshold'])
+
+    for topic, s in samples.items():
+        assert len(s.messages) >= 0.5 * RATE_HZ * 3.0, f'{topic}: {len(s.messages)} messages in 3 s'
+        assert_rate(s, RATE_HZ)
+
+    # Pressure: exactly the values written, in order, with the deck's temperatures (text) or
+    # NaN (CSV), the whisker id and frame of config/whisker_driver.yaml's sections.
+    left = samples['/whisker/left/pressure'].messages
+    ks = [frame_index(m.pressure[0], 100000.0) for m in left]
+    assert ks == list(range(ks[0], ks[0] + len(ks))), 'left frames lost or reordered'
+    for m, k in zip(left, ks):
+        p, t = left_frame(k)
+        assert list(m.pressure) == pytest.approx(p, abs=1e-9)
+        assert list(m.temperature) == pytest.approx(t, abs=1e-9)
+        assert (m.whisker_id, m.header.frame_id) == (0, 'whisker_left')
+    assert [m.sequence - left[0].sequence for m in left] == list(range(len(left)))
+    right = samples['/whisker/right/pressure'].messages
+    for m in right:
+        k = frame_index(m.pressure[0], 101000.0)
+        assert list(m.pressure) == pytest.approx(right_frame(k), abs=1e-9)
+        assert all(math.isnan(v) for v in m.temperature)
+        assert (m.whisker_id, m.header.frame_id) == (1, 'whisker_right')
+
+    # Signal: TDORC of those samples (raw = S_r), in the configured mode, window n = 100.
+    for side, base in (('left', 100000.0), ('right', 101000.0)):
+        sig = samples[f'/whisker/{side}/signal'].messages
+        for m in sig:
+            k = frame_index(m.raw[0], base)
+            want = left_frame(k)[0] if side == 'left' else right_frame(k)
+            assert list(m.raw) == pytest.approx(want, abs=1e-9)
+            assert m.mode == 0  # MODE_TDORC, config/tdorc_filter.yaml mode: "tdorc"
+            assert m.whisker_id == (0 if side == 'left' else 1)
+            assert m.window_fill <= 100
+        assert max(m.window_fill for m in sig) > 0
+
+    # Launch arguments and the per-whisker sections of the YAML reached the nodes.
+    assert params['left'] == {'device': deck.left_device, 'protocol': 'text', 'whisker_id': 0,
+                              'frame_id': 'whisker_left', 'rate_hz': 50.0}
+    assert params['right'] == {'device': deck.right_device, 'protocol': 'csv', 'whisker_id': 1,
+                               'frame_id': 'whisker_right', 'rate_hz': 50.0}
+    cfg = yaml.safe_load((CONFIG_DIR / 'tdorc_filter.yaml').read_text())['/**/tdorc_filter']['ros__parameters']
+    assert tdorc == {'mode': cfg['mode'], 'window': cfg['window'],
+                     'contact_threshold': cfg['contact_threshold']}
+
+
+def tdorc_file(tmp_path, **overrides):
+    cfg = yaml.safe_load((CONFIG_DIR / 'tdorc_filter.yaml').read_text())
+    cfg['/**/tdorc_filter']['ros__parameters'].update(overrides)
+    path = tmp_path / 'tdorc_filter.yaml'
+    path.write_text(yaml.safe_dump(cfg))
+    return path
+
+
+def test_bench_rig_tdorc_params_override_changes_the_signal(deck, tmp_path):
+    params = tdorc_file(tmp_path, mode='bandpass', window=20)
+    with Launch('bench_rig.launch.py', [f'left_device:={deck.left_device}',
+                                        f'right_device:={deck.right_device}',
+                                        f'tdorc_params:={params}'],
+                tmp_path / 'launch.log') as launch, Graph() as g:
+        g.wait_for_nodes(NODES, launch)
+        samples = g.sample({'/whisker/left/signal': TOPICS['/whisker/left/signal']}, window_s=1.0)
+        window = g.get_parameters('/whisker/right/tdorc_filter', ['window'])['window']
+    sig = samples['/whisker/left/signal'].messages
+    assert sig and all(m.mode == 2 for m in sig)  # MODE_BANDPASS
+    assert window == 20
+
+
+def test_bench_rig_bad_parameter_stops_the_launch_naming_key_and_reason(deck, tmp_path):
+    params = tdorc_file(tmp_path, window=1)
+    with Launch('bench_rig.launch.py', [f'left_device:={deck.left_device}',
+                                        f'right_device:={deck.right_device}',
+                                        f'tdorc_params:={params}'],
+                tmp_path / 'launch.log') as launch:
+        code = launch.wait_exit(60)
+        out = launch.output()
+    assert code is not None, f'the launch kept running with a bad parameter:\n{out[-3000:]}'
+    assert code != 0
+    assert 'a node failed to start' in out
+    assert 'tdorc_filter' in out and 'window' in out and 'got 1' in out, out[-3000:]
+
+
+def test_bench_rig_missing_device_stops_the_launch_naming_it(tmp_path):
+    missing = tmp_path / 'ttyACM_missing'
+    with Launch('bench_rig.launch.py', [f'left_device:={missing}', f'right_device:={missing}'],
+                tmp_path / 'launch.log') as launch:
+        code = launch.wait_exit(60)
+        out = launch.output()
+    assert code not in (None, 0), f'launch exit {code}:\n{out[-3000:]}'
+    assert str(missing) in out and 'does not exist' in out, out[-3000:]

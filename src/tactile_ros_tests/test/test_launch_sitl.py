@@ -1,0 +1,33 @@
+"""launch/sitl.launch.py: crazyflie_sim_server (the simulated Crazyflie behind CRTP on UDP,
+wall-clock physics) and the radio.launch.py pipeline with the bridge on
+udp://127.0.0.1:<port>: the bridge's log blocks -> TDORC x2 -> tactile_depth -> whisker_fsm
+-> hover setpoints back over CRTP."""
+
+from __future__ import annotations
+
+from launch_check import Graph, Launch, check_graph, unique_port
+
+NODES = ['/sitl_bridge_container', '/crazyflie_bridge', '/whisker/left/tdorc_filter',
+         '/whisker/right/tdorc_filter', '/tactile_depth', '/whisker_fsm']
+# The bridge's two 50 Hz log blocks (crazyflie_bridge README), the pipeline per sample,
+# the FSM's 50 Hz timer.
+RATE_TOPICS = {
+    '/whisker/left/pressure': ('tactile_msgs/msg/WhiskerPressure', 50.0, 'stamp'),
+    '/whisker/right/pressure': ('tactile_msgs/msg/WhiskerPressure', 50.0, 'stamp'),
+    '/odom': ('nav_msgs/msg/Odometry', 50.0, 'stamp'),
+    '/whisker/left/signal': ('tactile_msgs/msg/WhiskerSignal', 50.0, 'stamp'),
+    '/whisker/right/signal': ('tactile_msgs/msg/WhiskerSignal', 50.0, 'stamp'),
+    '/cmd_hover': ('tactile_msgs/msg/HoverSetpoint', 50.0, 'wall'),
+}
+EVENT_TOPICS = {'/whisker/depth': 'tactile_msgs/msg/TactileDepth',
+                '/fsm_state': 'tactile_msgs/msg/FsmState'}
+
+
+def test_sitl_bridge_over_udp(tmp_path):
+    port = unique_port()
+    with Launch('sitl.launch.py', [f'port:={port}', 'seed:=5'], tmp_path / 'launch.log') as launch, \
+            Graph() as g:
+        check_graph(g, launch, NODES, RATE_TOPICS, EVENT_TOPICS)
+        bridge = g.get_parameters('/crazyflie_bridge', ['uri'])
+    # The port argument reached the bridge (and the server: the bridge flies it, above).
+    assert bridge == {'uri': f'udp://127.0.0.1:{port}'}
