@@ -17,6 +17,12 @@ from pathlib import Path
 
 from sitl_recorder import GRAPH_TOPICS, Recorder
 
+try:
+    import rosbags  # noqa: F401  (the recorder writes its bags with it)
+except ImportError as e:  # pragma: no cover
+    raise ImportError('the end-to-end tests record with the rosbags package: '
+                      'python -m pip install rosbags (scripts/requirements.txt pins it)') from e
+
 WORKSPACE = Path(__file__).resolve().parents[3]
 
 # The simulator component's last line (tactile_sim_component.cpp).
