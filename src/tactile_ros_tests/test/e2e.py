@@ -21,7 +21,7 @@ try:
     import rosbags  # noqa: F401  (the recorder writes its bags with it)
 except ImportError as e:  # pragma: no cover
     raise ImportError('the end-to-end tests record with the rosbags package: '
-                      'python -m pip install rosbags (scripts/requirements.txt pins it)') from e
+                      'python -m pip install rosbags (listed in scripts/requirements.txt)') from e
 
 WORKSPACE = Path(__file__).resolve().parents[3]
 
