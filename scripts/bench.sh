@@ -17,3 +17,15 @@ for b in install/*/lib/*/bench_*; do
   echo "== $name"
   "$b" --benchmark_out="$out/$name.json" --benchmark_out_format=json
 done
+# The ROS 2 face (not a Google Benchmark): pressure -> depth / setpoint latency and CPU of
+# the whisker pipeline in a component container, with and without intra-process
+# communication (src/tactile_ros_tests/README.md). Only when ROS 2 is sourced and the ROS
+# build (scripts/ros2_test.sh) exists.
+if [[ -n "${ROS_DISTRO:-}" && -f install_ros/setup.bash ]]; then
+  echo "== bench_ros_latency"
+  set +u
+  # shellcheck disable=SC1091
+  source install_ros/setup.bash
+  set -u
+  python3 src/tactile_ros_tests/bench/bench_ros_latency.py --json "$out/bench_ros_latency.json"
+fi
