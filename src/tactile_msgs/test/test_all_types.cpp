@@ -16,6 +16,7 @@ using tactile_msgs::cdr::deserialize;
 using tactile_msgs::cdr::MessageTraits;
 using tactile_msgs::cdr::serialize;
 using tactile_msgs::cdr::testing::make_filled;
+using tactile_msgs::cdr::testing::make_random;
 
 template<class Tuple>
 struct ToTestTypes;
@@ -50,6 +51,20 @@ TYPED_TEST(AllTypesTest, RoundTripNonTrivial)
   const auto empty_bytes = serialize(TypeParam{});
   deserialize(empty_bytes.data(), empty_bytes.size(), empty_back);
   EXPECT_TRUE(empty_back == TypeParam{});
+}
+
+TYPED_TEST(AllTypesTest, RandomValuesRoundTrip)
+{
+  // Pseudo-random values, empty and long sequences and strings (the same generator the
+  // ROS 2 stage uses to compare these bytes with rclcpp's).
+  for (uint64_t seed = 1; seed <= 40; ++seed) {
+    const TypeParam msg = make_random<TypeParam>(seed);
+    const auto bytes = serialize(msg);
+    TypeParam back{};
+    deserialize(bytes.data(), bytes.size(), back);
+    EXPECT_TRUE(back == msg) << "seed " << seed;
+    EXPECT_EQ(serialize(back), bytes) << "seed " << seed;
+  }
 }
 
 TYPED_TEST(AllTypesTest, EveryTruncationThrowsDecodeError)
