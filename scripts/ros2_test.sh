@@ -1,0 +1,120 @@
+#!/usr/bin/env bash
+# ROS 2 stage: builds the workspace with ROS 2 found (rosidl message types, every rclcpp
+# component and its *_node executable) into build_ros/ and install_ros/ -- the ROS-free
+# build in build/ and install/ stays as it is -- and runs the ROS tests of the package
+# tactile_ros_tests (CDR bytes against rclcpp, launch files, flights over DDS).
+#
+# Usage: scripts/ros2_test.sh [pytest -k EXPR]
+#
+# The ROS 2 environment, in this order:
+#   1. the one already sourced (ROS_DISTRO set and `ros2` on PATH), e.g. /opt/ros/jazzy;
+#   2. /opt/ros/<distro>/setup.bash where exactly one distro is installed;
+#   3. the ROS 2 Kilted toolchain built from PyPI wheels and source tarballs by
+#      ../shared/ros2/build_ros2.sh beside the workspace (cached in
+#      ~/.cache/ros2-kilted after its first ~3 min build).
+# Without any of them it says so and exits 2.
+#
+# DDS traffic stays on this host (ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST), and each test
+# run takes a ROS_DOMAIN_ID of its own (tactile_ros_tests/test/conftest.py).
+#
+# Prints the test results and one line "ros2: N passed, N failed, N skipped";
+# exits non-zero when the build warns or fails, or any ROS test fails.
+set -eo pipefail
+here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$here"
+
+scripts/setup.sh
+
+# --- 1. a ROS 2 environment --------------------------------------------------------------
+if [[ -n "${ROS_DISTRO:-}" ]] && command -v ros2 >/dev/null 2>&1; then
+  echo "ros2_test: using the sourced ROS 2 ${ROS_DISTRO}"
+else
+  shopt -s nullglob
+  distros=(/opt/ros/*/setup.bash)
+  shopt -u nullglob
+  if ((${#distros[@]} == 1)); then
+    echo "ros2_test: sourcing ${distros[0]}"
+    # shellcheck disable=SC1090
+    source "${distros[0]}"
+  elif [[ -x "$here/../shared/ros2/build_ros2.sh" || -f "$here/../shared/ros2/build_ros2.sh" ]]; then
+    toolchain="${TACTILE_ROS2_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/ros2-kilted}"
+    echo "ros2_test: ROS 2 Kilted toolchain in $toolchain (built once from ../shared/ros2)"
+    bash "$here/../shared/ros2/build_ros2.sh" "$toolchain"
+    # shellcheck disable=SC1091
+    source "$toolchain/env.sh"
+  else
+    echo "ros2_test: no ROS 2 found: source a ROS 2 setup.bash (Humble, Jazzy or Kilted) first" >&2
+    exit 2
+  fi
+fi
+python -c 'import pytest' 2>/dev/null || python -m pip install -q pytest
+python -c 'import yaml, numpy' 2>/dev/null || python -m pip install -q pyyaml numpy
+
+export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
+export RMW_IMPLEMENTATION="${RMW_IMPLEMENTATION:-rmw_fastrtps_cpp}"
+export MAKEFLAGS="${MAKEFLAGS:--j$(nproc)}"
+
+# --- 2. build with ROS found --------------------------------------------------------------
+# -Wl,--as-needed: a consumer of a message package's <pkg>_TARGETS would otherwise keep the
+# Python type-support libraries, whose Python symbols stay undefined.
+launcher=()
+if command -v ccache >/dev/null 2>&1; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache); fi
+mkdir -p log_ros
+build_log="log_ros/build_output.txt"
+common=(--build-base build_ros --install-base install_ros)
+cmake_args=(-DCMAKE_BUILD_TYPE=Release -DTACTILE_BUILD_BENCHMARKS=OFF
+  "-DCMAKE_SHARED_LINKER_FLAGS=-Wl,--as-needed" "-DCMAKE_EXE_LINKER_FLAGS=-Wl,--as-needed"
+  "-DCMAKE_MODULE_LINKER_FLAGS=-Wl,--as-needed" "${launcher[@]}")
+set +e
+# The ROS-free layers' own tests run in scripts/test.sh; here only tactile_ros_tests builds its tests.
+colcon --log-base log_ros build "${common[@]}" --packages-skip tactile_ros_tests \
+  --event-handlers console_cohesion+ summary+ \
+  --cmake-args "${cmake_args[@]}" -DBUILD_TESTING=OFF 2>&1 | tee "$build_log"
+rc=${PIPESTATUS[0]}
+if ((rc == 0)); then
+  colcon --log-base log_ros build "${common[@]}" --packages-select tactile_ros_tests \
+    --event-handlers console_cohesion+ summary+ \
+    --cmake-args "${cmake_args[@]}" -DBUILD_TESTING=ON 2>&1 | tee -a "$build_log"
+  rc=${PIPESTATUS[0]}
+fi
+set -e
+if ((rc != 0)); then
+  echo "ROS 2 stage: build failed (log: $build_log)" >&2
+  echo "ros2: 0 passed, 1 failed"
+  exit 1
+fi
+warnings="$(grep -E '(warning:|CMake Warning)' "$build_log" || true)"
+if [[ -n "$warnings" ]]; then
+  echo "ROS 2 stage: the build has warnings (every package must build clean with ROS found):" >&2
+  echo "$warnings" | head -50 >&2
+  echo "ros2: 0 passed, 1 failed"
+  exit 1
+fi
+
+# --- 3. the ROS tests -----------------------------------------------------------------------
+set +u
+# shellcheck disable=SC1091
+source install_ros/setup.bash
+set -u
+status=0
+ctest_args=()
+if (($# > 0)); then export PYTEST_ADDOPTS="-k $1"; fi
+colcon --log-base log_ros test "${common[@]}" --packages-select tactile_ros_tests \
+  --event-handlers console_cohesion+ summary+ --return-code-on-test-failure "${ctest_args[@]}" || status=$?
+summary="$(colcon test-result --test-result-base build_ros/tactile_ros_tests --verbose --all 2>&1)" || true
+echo "$summary" | grep -v '^build_ros/.*: [0-9]* tests, 0 errors, 0 failures' || true
+line="$(echo "$summary" | grep -E '^Summary: [0-9]+ tests' | tail -n 1)"
+total=$(echo "$line" | sed -E 's/Summary: ([0-9]+) tests.*/\1/')
+errors=$(echo "$line" | sed -E 's/.* ([0-9]+) errors.*/\1/')
+failures=$(echo "$line" | sed -E 's/.* ([0-9]+) failures.*/\1/')
+skipped=$(echo "$line" | sed -E 's/.* ([0-9]+) skipped.*/\1/')
+if [[ -z "$total" || "$total" -eq 0 ]]; then
+  echo "ROS 2 stage: no test results found" >&2
+  echo "ros2: 0 passed, 1 failed"
+  exit 1
+fi
+failed=$((errors + failures))
+passed=$((total - failed - skipped))
+if ((failed > 0)); then status=1; fi
+echo "ros2: ${passed} passed, ${failed} failed, ${skipped} skipped"
+exit "$status"
