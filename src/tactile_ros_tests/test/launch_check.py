@@ -51,7 +51,8 @@ class Launch:
             env=os.environ.copy())
 
     def output(self) -> str:
-        self._log.flush()
+        if not self._log.closed:
+            self._log.flush()
         return self.log_path.read_text(errors='replace')
 
     def running(self) -> bool:
