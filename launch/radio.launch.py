@@ -6,7 +6,8 @@ container on wall-clock time.
     ros2 launch launch/radio.launch.py uri:=radio://0/80/2M/E7E7E7E7E7?safelink=1
 
 The bridge reads the whisker deck's log variables (Whisker.Barometer1_1..3,
-Whisker1.Barometer2_1..3) and stateEstimate.x/y/z/yaw/vx/vy in two 50 Hz log blocks and
+Whisker1.Barometer2_1..3) at 50 Hz and stateEstimate.x/y/z/yaw/vx/vy at 100 Hz in two
+log blocks (config/crazyflie_bridge.yaml) and
 publishes /whisker/{left,right}/pressure and /odom; /cmd_hover goes out as generic
 commander hover setpoints, clamped, with the stale-input chain hover -> land -> stop
 (crazyflie_bridge/README.md). The standalone host runs the same graph without ROS:

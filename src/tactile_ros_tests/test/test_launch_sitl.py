@@ -9,12 +9,13 @@ from launch_check import Graph, Launch, check_graph, unique_port
 
 NODES = ['/sitl_bridge_container', '/crazyflie_bridge', '/whisker/left/tdorc_filter',
          '/whisker/right/tdorc_filter', '/tactile_depth', '/whisker_fsm']
-# The bridge's two 50 Hz log blocks (crazyflie_bridge README), the pipeline per sample,
-# the FSM's 50 Hz timer.
+# The bridge's log blocks: whiskers every whisker_period_ms = 20 (50 Hz), the state
+# estimate every state_period_ms = 10 (100 Hz) (config/crazyflie_bridge.yaml); the
+# pipeline per sample, the FSM's 50 Hz timer.
 RATE_TOPICS = {
     '/whisker/left/pressure': ('tactile_msgs/msg/WhiskerPressure', 50.0, 'stamp'),
     '/whisker/right/pressure': ('tactile_msgs/msg/WhiskerPressure', 50.0, 'stamp'),
-    '/odom': ('nav_msgs/msg/Odometry', 50.0, 'stamp'),
+    '/odom': ('nav_msgs/msg/Odometry', 100.0, 'stamp'),
     '/whisker/left/signal': ('tactile_msgs/msg/WhiskerSignal', 50.0, 'stamp'),
     '/whisker/right/signal': ('tactile_msgs/msg/WhiskerSignal', 50.0, 'stamp'),
     '/cmd_hover': ('tactile_msgs/msg/HoverSetpoint', 50.0, 'wall'),
