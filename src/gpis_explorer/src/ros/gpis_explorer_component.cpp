@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "gpis_explorer/gpis_explorer_logic.hpp"
+#include "rclcpp/create_timer.hpp"
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
 #include "tactile_common/ros_parameters.hpp"
@@ -29,7 +30,9 @@ class GpisExplorerComponent : public rclcpp::Node {
     odometry_ = create_subscription<nav_msgs::msg::Odometry>(
       GpisExplorerLogic::kOdomTopic, rclcpp::SensorDataQoS(),
       [this](const nav_msgs::msg::Odometry & msg) {logic_.on_odometry(msg);});
-    timer_ = create_wall_timer(
+    // On the node clock: simulated time under use_sim_time (the SITL launches, any
+    // real_time_factor), system time otherwise.
+    timer_ = rclcpp::create_timer(this, get_clock(),
       std::chrono::nanoseconds(GpisExplorerLogic::kTimerPeriodNs), [this]() {
         auto out = logic_.on_timer(now().nanoseconds());
         setpoint_->publish(out.setpoint);

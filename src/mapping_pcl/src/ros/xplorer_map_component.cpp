@@ -4,6 +4,7 @@
 #include <memory>
 
 #include "mapping_pcl/xplorer_map_logic.hpp"
+#include "rclcpp/create_timer.hpp"
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
 #include "tactile_common/ros_parameters.hpp"
@@ -30,7 +31,9 @@ class XplorerMapComponent : public rclcpp::Node {
     arm_sub_ = create_subscription<tactile_msgs::msg::ArmImuArray>(
       XplorerMapLogic::kArmImuTopic, rclcpp::SensorDataQoS(),
       [this](const tactile_msgs::msg::ArmImuArray & msg) {logic_.on_arm_imu(msg);});
-    timer_ = create_wall_timer(std::chrono::nanoseconds(logic_.period_ns()), [this]() {
+    // On the node clock: simulated time under use_sim_time (the SITL launches, any
+    // real_time_factor), system time otherwise.
+    timer_ = rclcpp::create_timer(this, get_clock(), std::chrono::nanoseconds(logic_.period_ns()), [this]() {
         if (auto cloud = logic_.on_timer(now().nanoseconds())) {cloud_pub_->publish(*cloud);}
       });
   }

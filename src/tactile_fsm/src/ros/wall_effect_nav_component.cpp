@@ -3,6 +3,7 @@
 #include <chrono>
 #include <memory>
 
+#include "rclcpp/create_timer.hpp"
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
 #include "tactile_common/ros_parameters.hpp"
@@ -25,7 +26,9 @@ class WallEffectNavComponent : public rclcpp::Node {
     odom_ = create_subscription<nav_msgs::msg::Odometry>(
       WallEffectNavLogic::kOdomTopic, rclcpp::SensorDataQoS(),
       [this](const nav_msgs::msg::Odometry & msg) {logic_.on_odometry(msg);});
-    timer_ = create_wall_timer(
+    // On the node clock: simulated time under use_sim_time (the SITL launches, any
+    // real_time_factor), system time otherwise.
+    timer_ = rclcpp::create_timer(this, get_clock(),
       std::chrono::nanoseconds(WallEffectNavLogic::kTimerPeriodNs),
       [this]() {
         auto out = logic_.on_timer(now().nanoseconds());

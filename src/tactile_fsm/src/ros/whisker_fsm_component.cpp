@@ -4,6 +4,7 @@
 #include <memory>
 #include <utility>
 
+#include "rclcpp/create_timer.hpp"
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
 #include "tactile_common/ros_parameters.hpp"
@@ -35,7 +36,9 @@ class WhiskerFsmComponent : public rclcpp::Node {
       WhiskerFsmLogic::kOdomTopic, rclcpp::SensorDataQoS(),
       [this](const nav_msgs::msg::Odometry & msg) {logic_.on_odometry(msg);});
     // Wall timer at 50 Hz; the tick time is the node clock (sim time when use_sim_time).
-    timer_ = create_wall_timer(
+    // On the node clock: simulated time under use_sim_time (the SITL launches, any
+    // real_time_factor), system time otherwise.
+    timer_ = rclcpp::create_timer(this, get_clock(),
       std::chrono::nanoseconds(WhiskerFsmLogic::kTimerPeriodNs),
       [this]() {
         auto out = logic_.on_timer(now().nanoseconds());

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <memory>
 
+#include "rclcpp/create_timer.hpp"
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
 #include "tactile_common/ros_parameters.hpp"
@@ -25,7 +26,9 @@ class XplorerFsmComponent : public rclcpp::Node {
     odom_sub_ = create_subscription<nav_msgs::msg::Odometry>(
       XplorerFsmLogic::kOdomTopic, rclcpp::SensorDataQoS(),
       [this](const nav_msgs::msg::Odometry & msg) {logic_.on_odometry(msg);});
-    timer_ = create_wall_timer(std::chrono::nanoseconds(XplorerFsmLogic::kTimerPeriodNs), [this]() {
+    // On the node clock: simulated time under use_sim_time (the SITL launches, any
+    // real_time_factor), system time otherwise.
+    timer_ = rclcpp::create_timer(this, get_clock(), std::chrono::nanoseconds(XplorerFsmLogic::kTimerPeriodNs), [this]() {
         auto out = logic_.on_timer(now().nanoseconds());
         if (out.setpoint) {setpoint_pub_->publish(*out.setpoint);}
         if (out.state) {state_pub_->publish(*out.state);}

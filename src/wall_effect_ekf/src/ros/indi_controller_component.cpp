@@ -3,6 +3,7 @@
 #include <chrono>
 #include <memory>
 
+#include "rclcpp/create_timer.hpp"
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
 #include "tactile_common/ros_parameters.hpp"
@@ -31,7 +32,9 @@ class IndiControlComponent : public rclcpp::Node {
     wall_ = create_subscription<tactile_msgs::msg::WallEstimate>(
       IndiControlLogic::kWallTopic, rclcpp::SensorDataQoS(),
       [this](const tactile_msgs::msg::WallEstimate & msg) {logic_.on_wall(msg);});
-    timer_ = create_wall_timer(
+    // On the node clock: simulated time under use_sim_time (the SITL launches, any
+    // real_time_factor), system time otherwise.
+    timer_ = rclcpp::create_timer(this, get_clock(),
       std::chrono::nanoseconds(logic_.period_ns()),
       [this]() {
         if (auto out = logic_.on_timer(now().nanoseconds())) {

@@ -3,6 +3,7 @@
 #include <chrono>
 #include <memory>
 
+#include "rclcpp/create_timer.hpp"
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
 #include "tactile_common/ros_parameters.hpp"
@@ -18,7 +19,9 @@ class WallTrajectoryComponent : public rclcpp::Node {
       tactile_common::declare_parameters(*this, WallTrajectoryLogic::default_parameters())))
   {
     publisher_ = create_publisher<nav_msgs::msg::Odometry>(WallTrajectoryLogic::kOutputTopic, 10);
-    timer_ = create_wall_timer(
+    // On the node clock: simulated time under use_sim_time (the SITL launches, any
+    // real_time_factor), system time otherwise.
+    timer_ = rclcpp::create_timer(this, get_clock(),
       std::chrono::nanoseconds(WallTrajectoryLogic::kPeriodNs),
       [this]() {publisher_->publish(logic_.on_timer(now().nanoseconds()));});
   }
