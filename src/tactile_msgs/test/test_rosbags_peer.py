@@ -215,16 +215,37 @@ STD_TYPES = [
 ]
 
 
-@pytest.mark.parametrize('typename', STD_TYPES)
-def test_std_types_match_ros2_humble(typename):
-    """Field-for-field comparison of ros_free_std/*.msg with rosbags' ROS 2 Humble store."""
-    humble = get_typestore(Stores.ROS2_HUMBLE)
+def ros_free_fields(typename):
     pkg, _, typ = typename.split('/')
     text = (PKG_DIR / 'ros_free_std' / pkg / 'msg' / f'{typ}.msg').read_text()
     ours = get_types_from_msg(text, typename)[typename]
-    consts, fields = humble.fielddefs[typename]
-    assert [(n, t, v) for n, t, v in ours[0]] == [(n, t, v) for n, t, v in consts]
-    assert [(n, d) for n, d in ours[1]] == [(n, d) for n, d in fields]
+    return [(n, t, v) for n, t, v in ours[0]], [(n, d) for n, d in ours[1]]
+
+
+@pytest.mark.parametrize('store_name', ['ROS2_KILTED', 'ROS2_JAZZY'])
+@pytest.mark.parametrize('typename', STD_TYPES)
+def test_std_types_match_ros2_kilted_and_jazzy(typename, store_name):
+    """ros_free_std/*.msg field for field against rosbags' Kilted and Jazzy stores.
+
+    The ROS-free standard types follow Kilted (the distro whose toolchain the ROS build is
+    tested with); Jazzy has the same layouts for every type of the list.
+    """
+    store = get_typestore(getattr(Stores, store_name))
+    consts, fields = store.fielddefs[typename]
+    assert ros_free_fields(typename) == ([(n, t, v) for n, t, v in consts],
+                                         [(n, d) for n, d in fields])
+
+
+@pytest.mark.parametrize('typename', STD_TYPES)
+def test_std_types_vs_ros2_humble(typename):
+    """Humble differs in exactly one place: sensor_msgs/Range has no trailing variance."""
+    consts, fields = get_typestore(Stores.ROS2_HUMBLE).fielddefs[typename]
+    ours_consts, ours_fields = ros_free_fields(typename)
+    assert ours_consts == [(n, t, v) for n, t, v in consts]
+    if typename == 'sensor_msgs/msg/Range':
+        assert ours_fields[-1][0] == 'variance'
+        ours_fields = ours_fields[:-1]
+    assert ours_fields == [(n, d) for n, d in fields]
 
 
 def test_std_types_cover_list(dump):

@@ -88,6 +88,10 @@ sensor_msgs::msg::Range range_msg(double range, const RangeParams& p, int64_t no
   m.min_range = static_cast<float>(p.min_range);
   m.max_range = static_cast<float>(p.max_range);
   m.range = static_cast<float>(range);
+  // Jazzy/Kilted layout: the variance of the model's noise at this range (0 = unknown
+  // where the reading is not a range: -inf/+inf/NaN).
+  const double sigma = p.noise_std + p.noise_proportional * range;
+  m.variance = std::isfinite(range) ? static_cast<float>(sigma * sigma) : 0.0F;
   return m;
 }
 
