@@ -1,4 +1,4 @@
-// tactile_bag_tool: inspect, dump and create rosbag2 (sqlite3) bags without ROS.
+// tactile_bag_tool: inspect, dump and create rosbag2 (sqlite3, mcap) bags without ROS.
 //
 //   tactile_bag_tool info DIR           topics, types, counts, duration
 //   tactile_bag_tool dump DIR [TOPIC..] one JSON object per message:
@@ -40,14 +40,18 @@ std::string json_escape(const std::string& s) {
 int usage() {
   std::cerr << "usage: tactile_bag_tool info DIR\n"
                "       tactile_bag_tool dump DIR [TOPIC...]\n"
-               "       tactile_bag_tool write-sample DIR [--version 5|8|9]\n";
+               "       tactile_bag_tool write-sample DIR [--version 5|8|9] [--storage sqlite3|mcap]\n"
+               "                                    [--compression zstd|lz4] [--distro humble|iron|jazzy|kilted]\n";
   return 2;
 }
 
 int info(const std::string& dir) {
   tactile_bag::Reader r(dir);
   std::cout << "bag:          " << dir << "\n"
-            << "storage:      sqlite3\n"
+            << "storage:      " << r.storage_identifier()
+            << (r.compression_mode().empty() ? "" : " (" + r.compression_format() + ", " + r.compression_mode() + " mode)")
+            << "\n"
+            << "ros_distro:   " << (r.ros_distro().empty() ? "(not stored)" : r.ros_distro()) << "\n"
             << "metadata:     "
             << (r.metadata_version() > 0 ? "version " + std::to_string(r.metadata_version())
                                          : std::string("missing"))
@@ -100,6 +104,12 @@ int main(int argc, char** argv) {
       for (int i = 3; i < argc; ++i) {
         if (std::strcmp(argv[i], "--version") == 0 && i + 1 < argc) {
           opt.metadata_version = std::stoi(argv[++i]);
+        } else if (std::strcmp(argv[i], "--storage") == 0 && i + 1 < argc) {
+          opt.storage = argv[++i];
+        } else if (std::strcmp(argv[i], "--compression") == 0 && i + 1 < argc) {
+          opt.compression = argv[++i];
+        } else if (std::strcmp(argv[i], "--distro") == 0 && i + 1 < argc) {
+          opt.ros_distro = argv[++i];
         } else {
           return usage();
         }
