@@ -222,3 +222,53 @@ def test_reader_faults_name_file_offset_and_reason(tmp_path):
     (bag / path.name).write_bytes(data[:records + 10])
     info = run_tool('info', bag).stdout
     assert 'incomplete' in info and 'no mcap footer' in info and f'byte {pos}' in info
+
+
+ROSIDL_SCRIPT = r'''
+import glob, json, sys
+from pathlib import Path
+from rosidl_adapter.msg import convert_msg_to_idl
+from rosidl_generator_type_description import generate_type_hash
+msg_dir, share, work = Path(sys.argv[1]), sys.argv[2], Path(sys.argv[3])
+msgs = sorted(msg_dir.glob('*.msg'))
+for m in msgs:
+    convert_msg_to_idl(msg_dir.parent, 'tactile_msgs', Path('msg') / m.name, work / 'idl' / 'msg')
+args = {'package_name': 'tactile_msgs', 'output_dir': str(work / 'out'),
+        'idl_tuples': [f"{work / 'idl'}:msg/{m.stem}.idl" for m in msgs],
+        'include_paths': [f'{p}:{share}/{p}' for p in
+                          ['std_msgs', 'geometry_msgs', 'builtin_interfaces', 'sensor_msgs', 'nav_msgs']]}
+(work / 'args.json').write_text(json.dumps(args))
+for f in generate_type_hash(str(work / 'args.json')):
+    h = json.loads(Path(f).read_text())['type_hashes'][0]
+    print(h['type_name'], h['hash_string'])
+'''
+
+
+def test_hashes_equal_rosidl_where_the_toolchain_is_present(tmp_path):
+    """Our RIHS01 of every tactile_msgs and standard type against rosidl's own output.
+
+    rosidl runs in the Python of a ROS 2 Kilted install (its share/ and the interpreter next to
+    it); without one the rosidl comparison is skipped (rosbags' independent hash_rihs01 is
+    compared in every environment).
+    """
+    ours = dict(line.split() for line in run_tool('hashes').stdout.splitlines())
+    store = get_typestore(Stores.ROS2_KILTED)
+    for name, h in ours.items():
+        if name.startswith('tactile_msgs/'):
+            continue
+        assert h == store.hash_rihs01(name), name
+    share = ros2_share()
+    if share is None:
+        pytest.skip('no ROS 2 Kilted install found (TACTILE_ROS2_SHARE): rosidl comparison not run')
+    std = {n: h for n, h in ours.items() if not n.startswith('tactile_msgs/')}
+    for name, h in std.items():
+        pkg, _, typ = name.split('/')
+        want = json.loads((share / pkg / 'msg' / f'{typ}.json').read_text())['type_hashes'][0]
+        assert h == want['hash_string'], name
+    python = share.parent / 'bin' / 'python'
+    msg_dir = Path(__file__).resolve().parents[2] / 'tactile_msgs' / 'msg'
+    res = subprocess.run([str(python), '-c', ROSIDL_SCRIPT, str(msg_dir), str(share), str(tmp_path)],
+                         capture_output=True, text=True, check=True)
+    rosidl = dict(line.split() for line in res.stdout.splitlines() if line.startswith('tactile_msgs/'))
+    assert len(rosidl) == len(list(msg_dir.glob('*.msg')))
+    assert {n: ours[n] for n in rosidl} == rosidl

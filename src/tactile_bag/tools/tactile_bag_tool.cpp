@@ -13,6 +13,8 @@
 
 #include "sample.hpp"
 #include "tactile_bag/bag.hpp"
+#include "tactile_bag/distro.hpp"
+#include "tactile_msgs/cdr/registry.hpp"
 
 namespace {
 
@@ -37,9 +39,20 @@ std::string json_escape(const std::string& s) {
   return out;
 }
 
+// Every type of tactile_msgs' registry with the RIHS01 hash of its definition (what the writer
+// stores for jazzy/kilted bags): "type hash" per line.
+int hashes() {
+  for (const auto& t : tactile_msgs::cdr::all_types()) {
+    const std::string name(t.name);
+    std::cout << name << " " << tactile_bag::rihs01_hash(name, std::string(t.definition)) << "\n";
+  }
+  return 0;
+}
+
 int usage() {
   std::cerr << "usage: tactile_bag_tool info DIR\n"
                "       tactile_bag_tool dump DIR [TOPIC...]\n"
+               "       tactile_bag_tool hashes            # RIHS01 of every tactile_msgs type\n"
                "       tactile_bag_tool write-sample DIR [--version 5|8|9] [--storage sqlite3|mcap]\n"
                "                                    [--compression zstd|lz4] [--distro humble|iron|jazzy|kilted]\n";
   return 2;
@@ -93,6 +106,14 @@ int dump(const std::string& dir, const std::vector<std::string>& filter) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc == 2 && std::strcmp(argv[1], "hashes") == 0) {
+    try {
+      return hashes();
+    } catch (const std::exception& e) {
+      std::cerr << "tactile_bag_tool: " << e.what() << "\n";
+      return 1;
+    }
+  }
   if (argc < 3) return usage();
   const std::string cmd = argv[1];
   const std::string dir = argv[2];
