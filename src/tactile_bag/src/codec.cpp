@@ -5,6 +5,8 @@
 #include <zlib.h>
 #include <zstd.h>
 
+#include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <memory>
@@ -49,25 +51,28 @@ void compress(const std::string& format, const uint8_t* data, size_t size,
 void decompress(const std::string& format, const uint8_t* data, size_t size,
                 size_t expected_size, std::vector<uint8_t>& out, const std::string& where) {
   if (format == "zstd") {
-    size_t want = expected_size;
-    if (want == 0) {
-      const unsigned long long c = ZSTD_getFrameContentSize(data, size);
-      if (c == ZSTD_CONTENTSIZE_ERROR) throw BagError(where + ": not a zstd frame");
-      if (c != ZSTD_CONTENTSIZE_UNKNOWN) want = static_cast<size_t>(c);
-    }
-    if (want != 0 || expected_size != 0) {
-      out.resize(want);
+    // Allocate only what the frame itself declares (never trust a container's size alone:
+    // a corrupt chunk could declare gigabytes).
+    const unsigned long long c = ZSTD_getFrameContentSize(data, size);
+    if (c == ZSTD_CONTENTSIZE_ERROR) throw BagError(where + ": not a zstd frame");
+    if (c != ZSTD_CONTENTSIZE_UNKNOWN) {
+      if (expected_size != 0 && c != expected_size) {
+        throw BagError(where + ": zstd frame declares " + std::to_string(c) + " bytes, expected " +
+                       std::to_string(expected_size));
+      }
+      if (c > (1ULL << 34)) throw BagError(where + ": zstd frame declares an implausible " + std::to_string(c) + " bytes");
+      out.resize(static_cast<size_t>(c));
       const size_t n = ZSTD_decompress(out.data(), out.size(), data, size);
       if (ZSTD_isError(n)) {
         throw BagError(where + ": zstd decompression failed: " + ZSTD_getErrorName(n));
       }
-      if (n != want) {
+      if (n != c) {
         throw BagError(where + ": zstd data decompresses to " + std::to_string(n) +
-                       " bytes, expected " + std::to_string(want));
+                       " bytes, expected " + std::to_string(c));
       }
       return;
     }
-    // Size unknown (streamed frame): decompress in pieces.
+    // Size not in the frame (streamed): decompress in pieces, bounded by expected_size.
     std::unique_ptr<ZSTD_DCtx, size_t (*)(ZSTD_DCtx*)> ctx(ZSTD_createDCtx(), ZSTD_freeDCtx);
     out.clear();
     ZSTD_inBuffer in{data, size, 0};
@@ -78,24 +83,33 @@ void decompress(const std::string& format, const uint8_t* data, size_t size,
       rc = ZSTD_decompressStream(ctx.get(), &o, &in);
       if (ZSTD_isError(rc)) throw BagError(where + ": zstd decompression failed: " + ZSTD_getErrorName(rc));
       out.insert(out.end(), buf.data(), buf.data() + o.pos);
+      if (expected_size != 0 && out.size() > expected_size) {
+        throw BagError(where + ": zstd data decompresses to more than the declared " +
+                       std::to_string(expected_size) + " bytes");
+      }
       if (o.pos == 0 && rc != 0 && in.pos == in.size) break;
     }
     if (rc != 0) throw BagError(where + ": zstd data is truncated (frame not complete)");
+    if (expected_size != 0 && out.size() != expected_size) {
+      throw BagError(where + ": zstd data decompresses to " + std::to_string(out.size()) +
+                     " bytes, expected " + std::to_string(expected_size));
+    }
   } else if (format == "lz4") {
     LZ4F_dctx* raw = nullptr;
     if (LZ4F_isError(LZ4F_createDecompressionContext(&raw, LZ4F_VERSION))) {
       throw BagError(where + ": lz4: cannot create a decompression context");
     }
     std::unique_ptr<LZ4F_dctx, size_t (*)(LZ4F_dctx*)> ctx(raw, LZ4F_freeDecompressionContext);
-    out.resize(expected_size > 0 ? expected_size : size * 4 + 64);
+    // Grow from a size bounded by the input (doubling), never straight to a declared size.
+    out.resize(std::min<size_t>(expected_size > 0 ? expected_size : SIZE_MAX, size * 4 + 64));
     size_t in_pos = 0, out_pos = 0, rc = 1;
     while (in_pos < size && rc != 0) {
       if (out_pos == out.size()) {
-        if (expected_size > 0) {
+        if (expected_size > 0 && out.size() >= expected_size) {
           throw BagError(where + ": lz4 data decompresses to more than the declared " +
                          std::to_string(expected_size) + " bytes");
         }
-        out.resize(out.size() * 2);
+        out.resize(expected_size > 0 ? std::min(out.size() * 2, expected_size) : out.size() * 2);
       }
       size_t dst = out.size() - out_pos, src = size - in_pos;
       rc = LZ4F_decompress(ctx.get(), out.data() + out_pos, &dst, data + in_pos, &src, nullptr);
