@@ -54,9 +54,12 @@ def register(typestore, msgtype, msgdef):
 
 
 def ros2_share():
-    """share/ of a ROS 2 Kilted install with rosidl's type description JSON files, if any."""
-    for cand in [os.environ.get('TACTILE_ROS2_SHARE', ''),
-                 str(Path.home() / '.cache' / 'ros2-kilted' / 'venv' / 'share')]:
+    """share/ of a ROS 2 (Kilted) install with rosidl's type description JSON files, if any:
+    TACTILE_ROS2_SHARE, else the prefixes of a sourced ROS 2 environment."""
+    cands = [os.environ.get('TACTILE_ROS2_SHARE', '')]
+    for var in ('AMENT_PREFIX_PATH', 'CMAKE_PREFIX_PATH'):
+        cands += [str(Path(p) / 'share') for p in os.environ.get(var, '').split(os.pathsep) if p]
+    for cand in cands:
         if cand and (Path(cand) / 'std_msgs' / 'msg' / 'String.json').exists():
             return Path(cand)
     return None
@@ -248,7 +251,7 @@ def test_hashes_equal_rosidl_where_the_toolchain_is_present(tmp_path):
     """Our RIHS01 of every tactile_msgs and standard type against rosidl's own output.
 
     rosidl runs in the Python of a ROS 2 Kilted install (its share/ and the interpreter next to
-    it); without one the rosidl comparison is skipped (rosbags' independent hash_rihs01 is
+    it, or python3 of the sourced environment); without one the rosidl comparison is skipped (rosbags' independent hash_rihs01 is
     compared in every environment).
     """
     ours = dict(line.split() for line in run_tool('hashes').stdout.splitlines())
@@ -266,6 +269,8 @@ def test_hashes_equal_rosidl_where_the_toolchain_is_present(tmp_path):
         want = json.loads((share / pkg / 'msg' / f'{typ}.json').read_text())['type_hashes'][0]
         assert h == want['hash_string'], name
     python = share.parent / 'bin' / 'python'
+    if not python.exists():
+        python = Path(shutil.which('python3'))
     msg_dir = Path(__file__).resolve().parents[2] / 'tactile_msgs' / 'msg'
     res = subprocess.run([str(python), '-c', ROSIDL_SCRIPT, str(msg_dir), str(share), str(tmp_path)],
                          capture_output=True, text=True, check=True)
