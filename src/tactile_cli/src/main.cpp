@@ -9,6 +9,7 @@
 
 #include "tactile_cli/evaluate.hpp"
 #include "tactile_cli/hardware.hpp"
+#include "tactile_cli/host.hpp"
 #include "tactile_cli/sim_run.hpp"
 #include "tactile_cli/xplorer_export.hpp"
 #include "tactile_cli/whisker_demo.hpp"
@@ -30,6 +31,19 @@ void print_fpr(const nlohmann::json& m) {
               100.0 * m["fpr_tdorc"].get<double>(), m["contact_detected"].get<bool>() ? "yes" : "no");
 }
 
+// --storage, --bag-distro, --bag-compression of the commands that record bags.
+void add_bag_options(CLI::App* cmd, tactile_bag::WriterOptions& o) {
+  cmd->add_option("--storage", o.storage, "bag storage (mcap: what ros2 bag record writes since Iron)")
+      ->check(CLI::IsMember({"mcap", "sqlite3"}))
+      ->capture_default_str();
+  cmd->add_option("--bag-distro", o.ros_distro,
+                  "ROS 2 distro the bag is for: message layouts, metadata version, type hashes")
+      ->check(CLI::IsMember({"humble", "iron", "jazzy", "kilted"}))
+      ->capture_default_str();
+  cmd->add_option("--bag-compression", o.compression, "mcap chunk compression (default: none, as rosbag2)")
+      ->check(CLI::IsMember({"zstd", "lz4"}));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -48,6 +62,8 @@ int main(int argc, char** argv) {
   replay_cmd->add_option("--out", replay.out_dir, "output directory (bag/, metrics.json, signals.png)")
       ->required();
   replay_cmd->add_flag("!--no-png", replay.write_png, "do not draw signals.png");
+  auto& bag_options = tactile_cli::BagRecorder::default_options();
+  add_bag_options(replay_cmd, bag_options);
 
   tactile_cli::DemoOptions demo;
   auto* demo_cmd = app.add_subcommand(
@@ -57,6 +73,7 @@ int main(int argc, char** argv) {
   demo_cmd->add_option("--hover", demo.hover_s, "free-flight duration after take-off [s]")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  add_bag_options(demo_cmd, bag_options);
 
   tactile_cli::SimOptions sim;
   uint64_t sim_seed = 0;
@@ -69,6 +86,7 @@ int main(int argc, char** argv) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   sim_cmd->add_flag("!--no-bag", sim.write_bag, "do not record the bag");
+  add_bag_options(sim_cmd, bag_options);
   sim_cmd->add_flag("!--no-png", sim.write_png, "do not draw topview.png");
   sim_cmd->add_flag("!--quiet", sim.progress, "no progress line");
 
@@ -81,12 +99,14 @@ int main(int argc, char** argv) {
   fly_cmd->add_option("--sim", fly.sim_scenario, "fly the simulated Crazyflie of this scenario (in-process UDP server)");
   fly_cmd->add_option("--sim-loss", fly.sim_loss, "injected UDP packet loss of the simulated Crazyflie [0, 1)");
   fly_cmd->add_flag("!--no-bag", fly.write_bag, "do not record the bag");
+  add_bag_options(fly_cmd, bag_options);
   tactile_cli::BenchOptions bench;
   auto* bench_cmd = app.add_subcommand("bench", "whisker bench rig over serial: whisker_driver -> TDORC (records a bag)");
   bench_cmd->add_option("--port", bench.left_port, "serial device of whisker 1 (text protocol)")->capture_default_str();
   bench_cmd->add_option("--port2", bench.right_port, "serial device of whisker 2 (CSV protocol)");
   bench_cmd->add_option("--out", bench.out_dir, "output directory (bag/, metrics.json)")->required();
   bench_cmd->add_option("--duration", bench.duration_s, "[s]")->capture_default_str();
+  add_bag_options(bench_cmd, bag_options);
   std::string scan_host = "127.0.0.1";
   auto* scan_cmd = app.add_subcommand("scan", "list Crazyradios, Crazyflies on USB and simulated Crazyflies on UDP");
   scan_cmd->add_option("--udp-host", scan_host, "host of simulated Crazyflies (ports 19850-19859)")->capture_default_str();
@@ -114,6 +134,11 @@ int main(int argc, char** argv) {
   auto* evaluate_seed_opt = evaluate_cmd->add_option("--seed", evaluate_seed, "the flight's seed (default: the scenario's)");
 
   CLI11_PARSE(app, argc, argv);
+  if (!bag_options.compression.empty() && bag_options.storage != "mcap") {
+    std::fprintf(stderr, "tactile: error: --bag-compression %s needs --storage mcap (sqlite3 bags are written uncompressed)\n",
+                 bag_options.compression.c_str());
+    return 1;
+  }
 
   if (*stage_cmd) {  // needs no node parameter files
     try {

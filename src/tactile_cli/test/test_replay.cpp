@@ -127,15 +127,18 @@ TEST(WhiskerReplay, MissingBagCorruptBagAndBadInputNameTheFile) {
   std::string msg = error_of({(dir / "nope").string(), (dir / "out1").string(), kConfig, false});
   EXPECT_NE(msg.find((dir / "nope").string()), std::string::npos) << msg;
 
-  // Corrupt .db3 next to a valid metadata.yaml.
+  // Corrupt storage file (.mcap by default, .db3) next to a valid metadata.yaml.
   tactile_cli::record_sim_whisker_bag((dir / "raw").string(), kConfig, 1, 2.0, {}, {}, {});
+  std::string corrupted;
   for (const auto& e : fs::directory_iterator(dir / "raw")) {
-    if (e.path().extension() == ".db3") {
-      std::ofstream(e.path(), std::ios::binary | std::ios::trunc) << "this is not a database at all";
+    if (e.path().extension() == ".db3" || e.path().extension() == ".mcap") {
+      std::ofstream(e.path(), std::ios::binary | std::ios::trunc) << "this is not a bag file at all";
+      corrupted = e.path().filename().string();
     }
   }
+  ASSERT_FALSE(corrupted.empty());
   msg = error_of({(dir / "raw").string(), (dir / "out2").string(), kConfig, false});
-  EXPECT_NE(msg.find(".db3"), std::string::npos) << msg;
+  EXPECT_NE(msg.find(corrupted), std::string::npos) << msg;
 
   // A bag without whisker pressure topics.
   {
