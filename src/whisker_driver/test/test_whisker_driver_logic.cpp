@@ -264,7 +264,9 @@ void expect_clean_stamps(const std::vector<WhiskerPressure>& out) {
     // Every published sample carries its true sampling time t0 + seq T.
     EXPECT_EQ(from_stamp(out[i].header.stamp), 5000000000LL + out[i].sequence * 20000000LL) << i;
     EXPECT_DOUBLE_EQ(out[i].pressure[0], 100000.0 + out[i].sequence) << i;
-    if (i > 0) EXPECT_GT(out[i].sequence, out[i - 1].sequence) << i;
+    if (i > 0) {
+      EXPECT_GT(out[i].sequence, out[i - 1].sequence) << i;
+    }
   }
 }
 }  // namespace
