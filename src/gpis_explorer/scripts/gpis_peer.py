@@ -208,18 +208,21 @@ class NumpyGpis:
 
 
 def sklearn_update(X, y, cells, vcells, size=4.0):
-    """The same update with scikit-learn: fit (no incremental update in its API),
+    """The same update with scikit-learn (vcells: 0 every grid node, k a k x k
+    map, None no variance map): fit (no incremental update in its API),
     predict the mean on the grid, predict with return_std on the contour points
     and the variance map."""
     gpr = sklearn_gpr().fit(X, y)
     gx, gy, G = grid_nodes(cells, size)
     mean = gpr.predict(G)
-    Vn = coarse_nodes(cells, vcells, size)
-    _, std = gpr.predict(G if Vn is None else Vn, return_std=True)
+    std = None
+    if vcells is not None:  # None: no variance map
+        Vn = coarse_nodes(cells, vcells, size)
+        _, std = gpr.predict(G if Vn is None else Vn, return_std=True)
     lines = contour_lines(gx, gy, mean, cells)
     corners, variances = [], []
     for P, closed in lines:
         corners += corners_of(P, derivatives(P, X, gpr.alpha_), closed)
         variances.append(gpr.predict(P, return_std=True)[1] ** 2)
     h = size / 2
-    return select_target([P for P, _ in lines], variances, corners, -h, h), mean, std ** 2
+    return select_target([P for P, _ in lines], variances, corners, -h, h), mean, None if std is None else std ** 2
