@@ -22,6 +22,7 @@ bench_gpis) with both peers: grid mean, contour variance, target; and the
 error single precision would make (why the C++ stays in double).
 
 Usage: bench_numpy_compare.py [path/to/bench_gpis] [--quick] [--cpp-json FILE]
+       [--max-peer-points N] (peers only up to N points; the C++ rows all)
 (--quick: onboard budget only; --cpp-json: take the C++ figures from that
 bench_gpis JSON instead of running it; scripts/bench.sh does both in one run)
 """
@@ -156,33 +157,38 @@ def main():
              "(/50/|Incremental/50/)")], capture_output=True, text=True, check=True).stdout)
     cpp = {b["name"].split("/iterations")[0]: b["cpu_time"] * {"ms": 1e-3, "us": 1e-6, "ns": 1e-9}[b["time_unit"]]
            for b in report["benchmarks"]}
+    max_peer = int(sys.argv[sys.argv.index("--max-peer-points") + 1]) if "--max-peer-points" in sys.argv else 10 ** 9
+    print(f"{'update (CPU time, one core)':52s} {'C++ [ms]':>10s} {'numpy [ms]':>11s} {'sklearn [ms]':>13s}"
+          f" {'numpy/C++':>10s} {'sklearn/C++':>12s}", flush=True)
+
+    def show(name, c, p, s):
+        cs = f"{c * 1e3:10.2f}" if c else f"{'-':>10s}"
+        ps = f"{p * 1e3:11.2f}" if p else f"{'-':>11s}"
+        ss = f"{s * 1e3:13.2f}" if s else f"{'-':>13s}"
+        r1 = f"{p / c:10.1f}" if c and p else f"{'-':>10s}"
+        r2 = f"{s / c:12.1f}" if c and s else f"{'-':>12s}"
+        print(f"{name:52s} {cs} {ps} {ss} {r1} {r2}", flush=True)
+
     gp.sklearn_gpr().fit(*gp.room_points(20))  # import and first-call costs outside the timings
-    rows, sk_scratch = [], {}
+    sk_scratch = {}
     cases = [(50, 10, 0, True), (2000, 200, 40, True), (2000, 200, 0, True), (2000, 200, 0, False),
              (10000, 400, 40, True)]
     for n, cells, vc, gv in cases:
         if quick and n > 50:
             continue
-        t_np, t_sk = peer_scratch(n, cells, vc, gv)
+        t_np, t_sk = peer_scratch(n, cells, vc, gv) if n <= max_peer else (None, None)
         sk_scratch[(n, cells, vc, gv)] = t_sk
         what = "no variance map" if not gv else (f"{vc}x{vc} variance map" if vc else "variance on every node")
-        rows.append((f"update {n} pts, {cells}x{cells}, {what}", cpp.get(f"BM_Update/{n}/{cells}/{int(gv)}/{vc}"),
-                     t_np, t_sk))
+        show(f"update {n} pts, {cells}x{cells}, {what}", cpp.get(f"BM_Update/{n}/{cells}/{int(gv)}/{vc}"), t_np, t_sk)
     for n, cells, vc in [(50, 10, 0), (2000, 200, 40), (10000, 400, 40)]:
         if quick and n > 50:
             continue
-        t_np = peer_incremental(n, cells, vc)
-        t_sk = sk_scratch.get((n, cells, vc, True)) or peer_scratch(n, cells, vc)[1]
-        rows.append((f"+5 pts and update {n}, {cells}x{cells}" + (f", {vc}x{vc} map" if vc else ""),
-                     cpp.get(f"BM_UpdateIncremental/{n}/{cells}/{vc}"), t_np, t_sk))
-    print(f"{'update (CPU time, one core)':52s} {'C++ [ms]':>10s} {'numpy [ms]':>11s} {'sklearn [ms]':>13s}"
-          f" {'numpy/C++':>10s} {'sklearn/C++':>12s}")
-    for name, c, p, s in rows:
-        cs = f"{c * 1e3:10.2f}" if c else f"{'-':>10s}"
-        r1 = f"{p / c:10.1f}" if c else f"{'-':>10s}"
-        r2 = f"{s / c:12.1f}" if c else f"{'-':>12s}"
-        print(f"{name:52s} {cs} {p * 1e3:11.2f} {s * 1e3:13.2f} {r1} {r2}")
-    print("(sklearn has no incremental update: its '+5 pts' rows refit from scratch)")
+        t_np = peer_incremental(n, cells, vc) if n <= max_peer else None
+        t_sk = (sk_scratch.get((n, cells, vc, True)) or peer_scratch(n, cells, vc)[1]) if n <= max_peer else None
+        show(f"+5 pts and update {n}, {cells}x{cells}" + (f", {vc}x{vc} map" if vc else ""),
+             cpp.get(f"BM_UpdateIncremental/{n}/{cells}/{vc}"), t_np, t_sk)
+    print("(sklearn has no incremental update: its '+5 pts' rows refit from scratch; '-': peer not run,"
+          " --max-peer-points)")
     helper = os.path.join(os.path.dirname(bench), "gpis_update_json")
     if os.path.exists(helper):
         print(f"\nagreement of one update with the peers (C++ backend: ", end="")
