@@ -10,6 +10,7 @@
 #include "tactile_cli/evaluate.hpp"
 #include "tactile_cli/hardware.hpp"
 #include "tactile_cli/host.hpp"
+#include "tactile_cli/parallel.hpp"
 #include "tactile_cli/sim_run.hpp"
 #include "tactile_cli/xplorer_export.hpp"
 #include "tactile_cli/whisker_demo.hpp"
@@ -84,6 +85,9 @@ int main(int argc, char** argv) {
   auto* seed_opt = sim_cmd->add_option("--seed", sim_seed, "seed (default: the scenario's)");
   sim_cmd->add_option("--trials", sim.trials, "number of seeded trials (seed, seed+1, ...)")
       ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sim_cmd->add_option("--jobs,-j", sim.jobs, "trials run at once on worker threads (0: all cores); outputs as a serial run")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   sim_cmd->add_flag("!--no-bag", sim.write_bag, "do not record the bag");
   add_bag_options(sim_cmd, bag_options);
@@ -167,9 +171,12 @@ int main(int argc, char** argv) {
                     m["real_time_factor"].get<double>(), m["collisions"].get<size_t>(),
                     m["success"].get<bool>() ? "success" : "no success");
       } else {
-        std::printf("tactile sim: %s, %d trials: %d successes, %zu collisions, %.0fx real time\n",
+        std::printf("tactile sim: %s, %d trials: %d successes, %zu collisions, %.1f s in %.2f s on %d jobs "
+                    "(%.0fx real time)\n",
                     m["scenario"].get<std::string>().c_str(), sim.trials, m["success_count"].get<int>(),
-                    m["collisions"].get<size_t>(), m["real_time_factor"].get<double>());
+                    m["collisions"].get<size_t>(), m["sim_time_s"].get<double>(), m["wall_time_s"].get<double>(),
+                    tactile_cli::resolve_jobs(sim.jobs, static_cast<size_t>(sim.trials)),
+                    m["real_time_factor"].get<double>());
       }
       std::printf("outputs in %s\n", sim.out_dir.c_str());
     } else if (*fly_cmd || *bench_cmd || *scan_cmd) {
