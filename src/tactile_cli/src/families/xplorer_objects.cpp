@@ -144,7 +144,8 @@ std::vector<ScenarioFamily> xplorer_object_families() {
       "(jitter +-30 % of the spacing) / cylinder of 0.4-1.0 m diameter; rigid; near face 0.8 m ahead on +x; "
       "valid: polygon edges >= 0.25 m, start >= 0.5 m from the object";
   f.table_metrics = {"xplorer.final_state", "xplorer.loop_closed", "xplorer.loop_closure_time_s",
-                     "xplorer.traversed_path_m", "xplorer.turns", "xplorer.map_area_accuracy"};
+                     "xplorer.traversed_path_m", "xplorer.turns", "xplorer.map_area_accuracy",
+                     "xplorer.map_hull_area_accuracy"};
   f.draw = [](FamilyDraw& d) { return draw_object(d, "xplorer_objects"); };
   return {f};
 }
