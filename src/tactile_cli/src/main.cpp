@@ -11,7 +11,10 @@
 #include "tactile_cli/hardware.hpp"
 #include "tactile_cli/host.hpp"
 #include "tactile_cli/parallel.hpp"
+
+#include "tactile_cli/scenario_family.hpp"
 #include "tactile_cli/sim_run.hpp"
+#include "tactile_cli/sweep.hpp"
 #include "tactile_cli/xplorer_export.hpp"
 #include "tactile_cli/whisker_demo.hpp"
 #include "tactile_cli/whisker_replay.hpp"
@@ -137,11 +140,60 @@ int main(int argc, char** argv) {
   evaluate_cmd->add_option("--out", evaluate.out_dir, "output directory (metrics.json)")->required();
   auto* evaluate_seed_opt = evaluate_cmd->add_option("--seed", evaluate_seed, "the flight's seed (default: the scenario's)");
 
+  auto* scenarios_cmd = app.add_subcommand("scenarios", "procedural scenario families (issue 17): list, generate");
+  scenarios_cmd->require_subcommand(1);
+  auto* scenarios_list = scenarios_cmd->add_subcommand("list", "the families and their distributions");
+  std::string gen_family, gen_out;
+  int gen_count = 10;
+  uint64_t gen_seed = 1;
+  auto* scenarios_gen = scenarios_cmd->add_subcommand(
+      "generate", "draw N seeded, validated environments of a family as standalone scenario files");
+  scenarios_gen->add_option("family", gen_family, "family (tactile scenarios list)")->required();
+  scenarios_gen->add_option("--count", gen_count, "environments (seeds S .. S+N-1)")->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  scenarios_gen->add_option("--seed", gen_seed, "first generator seed")->capture_default_str();
+  scenarios_gen->add_option("--out", gen_out, "output directory (<family>_<seed>.yaml, index.json)")->required();
+
+  tactile_cli::SweepOptions sweep;
+  auto* sweep_cmd = app.add_subcommand(
+      "sweep", "fly a scenario family (or a directory of scenarios) and write a table and a summary");
+  sweep_cmd->add_option("what", sweep.what, "family name or directory of scenario files")->required();
+  sweep_cmd->add_option("--count", sweep.count, "environments (family; with a directory: at most N, 0 = all)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  sweep_cmd->add_option("--seed", sweep.seed, "first generator seed (family)")->capture_default_str();
+  sweep_cmd->add_option("--out", sweep.out_dir, "output directory (table.csv/md, summary.json/md, runs/, failures/)")
+      ->required();
+  sweep_cmd->add_option("--jobs", sweep.jobs, "environments flown at once")->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  sweep_cmd->add_flag("!--no-bag", sweep.write_bags, "do not record bags (failures keep theirs otherwise)");
+  sweep_cmd->add_flag("--keep-bags", sweep.keep_bags, "keep the bags of successes too");
+  sweep_cmd->add_flag("!--quiet", sweep.progress, "no line per environment");
+
   CLI11_PARSE(app, argc, argv);
   if (!bag_options.compression.empty() && bag_options.storage != "mcap") {
     std::fprintf(stderr, "tactile: error: --bag-compression %s needs --storage mcap (sqlite3 bags are written uncompressed)\n",
                  bag_options.compression.c_str());
     return 1;
+  }
+
+  if (*scenarios_cmd) {  // needs no node parameter files
+    try {
+      if (*scenarios_list) {
+        for (const auto& f : tactile_cli::scenario_families()) {
+          std::printf("%s: %s\n    %s\n", f.name.c_str(), f.description.c_str(), f.distribution.c_str());
+        }
+      } else {
+        const auto& family = tactile_cli::scenario_family(gen_family);
+        const auto paths = tactile_cli::generate_family(family, gen_count, gen_seed, gen_out);
+        std::printf("tactile scenarios: %zu %s environments (seeds %llu-%llu) -> %s (index.json)\n", paths.size(),
+                    family.name.c_str(), static_cast<unsigned long long>(gen_seed),
+                    static_cast<unsigned long long>(gen_seed + gen_count - 1), gen_out.c_str());
+      }
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "tactile: error: %s\n", e.what());
+      return 1;
+    }
+    return 0;
   }
 
   if (*stage_cmd) {  // needs no node parameter files
@@ -179,6 +231,12 @@ int main(int argc, char** argv) {
                     m["real_time_factor"].get<double>());
       }
       std::printf("outputs in %s\n", sim.out_dir.c_str());
+    } else if (*sweep_cmd) {
+      sweep.config_dir = config_dir;
+      const auto m = tactile_cli::run_sweep(sweep);
+      std::printf("tactile sweep: %s: %d / %d successes (%.1f %%), %zu collisions -> %s (summary.md, table.md)\n",
+                  sweep.what.c_str(), m["successes"].get<int>(), m["flown"].get<int>(),
+                  100.0 * m["success_rate"].get<double>(), m["collisions"].get<size_t>(), sweep.out_dir.c_str());
     } else if (*fly_cmd || *bench_cmd || *scan_cmd) {
       if (*scan_cmd) {
         for (const auto& line : tactile_cli::run_scan(scan_host)) std::printf("%s\n", line.c_str());
