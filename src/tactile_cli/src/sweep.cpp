@@ -232,7 +232,7 @@ void write_outputs(const fs::path& out, const std::string& what, const SweepOpti
       e.second += r.success;
     }
   }
-  const double n = std::max<size_t>(1, rows.size());
+  const double n = static_cast<double>(std::max<size_t>(1, rows.size()));
   summary["successes"] = successes;
   summary["success_rate"] = successes / n;
   summary["collision_free"] = collision_free;
