@@ -163,7 +163,8 @@ int main(int argc, char** argv) {
   sweep_cmd->add_option("--seed", sweep.seed, "first generator seed (family)")->capture_default_str();
   sweep_cmd->add_option("--out", sweep.out_dir, "output directory (table.csv/md, summary.json/md, runs/, failures/)")
       ->required();
-  sweep_cmd->add_option("--jobs", sweep.jobs, "environments flown at once")->check(CLI::PositiveNumber)
+  sweep_cmd->add_option("--jobs,-j", sweep.jobs, "environments flown at once on worker threads (0: all cores)")
+      ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   sweep_cmd->add_flag("!--no-bag", sweep.write_bags, "do not record bags (failures keep theirs otherwise)");
   sweep_cmd->add_flag("--keep-bags", sweep.keep_bags, "keep the bags of successes too");

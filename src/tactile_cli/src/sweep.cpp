@@ -1,5 +1,9 @@
 #include "tactile_cli/sweep.hpp"
 
+#include <mutex>
+
+#include "tactile_cli/parallel.hpp"
+
 #include <sys/utsname.h>
 #include <unistd.h>
 
@@ -304,7 +308,7 @@ void write_outputs(const fs::path& out, const std::string& what, const SweepOpti
 }  // namespace
 
 json run_sweep(const SweepOptions& options) {
-  if (options.jobs < 1) throw std::invalid_argument("--jobs must be >= 1");
+  if (options.jobs < 0) throw std::invalid_argument("--jobs must be >= 0 (0: all cores)");
   const fs::path out(options.out_dir);
   fs::create_directories(out);
   const std::string started = utc_now();
@@ -349,16 +353,37 @@ json run_sweep(const SweepOptions& options) {
   std::vector<Row> rows;
   json summary;
   const int total = static_cast<int>(files.size());
-  for (const auto& file : files) {
-    rows.push_back(fly_one(file, options, out / "runs", out / "failures", table_metrics));
-    const auto& r = rows.back();
+  const int workers = resolve_jobs(options.jobs, files.size());
+  if (workers == 1) {
+    // One at a time: the table and summary are rewritten after each environment, so an
+    // interrupted sweep keeps what it flew.
+    for (const auto& file : files) {
+      rows.push_back(fly_one(file, options, out / "runs", out / "failures", table_metrics));
+      const auto& r = rows.back();
+      if (options.progress) {
+        std::fprintf(stderr, "[sweep] %zu/%d %s: %s (%.0f s)\n", rows.size(), total, r.name.c_str(),
+                     r.outcome.c_str(), r.wall_time_s);
+      }
+      const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+      write_outputs(out, options.what, options, table_metrics, rows, total, started, load0, wall_s, summary);
+    }
+    return summary;
+  }
+  // Several at once on the parallel runner (each environment owns its host, simulator and
+  // output folder); rows come back in file order, so the table equals a serial sweep's.
+  std::mutex progress_mutex;
+  int finished = 0;
+  rows = parallel_map(files.size(), workers, [&](size_t i) {
+    Row r = fly_one(files[i], options, out / "runs", out / "failures", table_metrics);
     if (options.progress) {
-      std::fprintf(stderr, "[sweep] %zu/%d %s: %s (%.0f s)\n", rows.size(), total, r.name.c_str(), r.outcome.c_str(),
+      std::lock_guard<std::mutex> lock(progress_mutex);
+      std::fprintf(stderr, "[sweep] %d/%d %s: %s (%.0f s)\n", ++finished, total, r.name.c_str(), r.outcome.c_str(),
                    r.wall_time_s);
     }
-    const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-    write_outputs(out, options.what, options, table_metrics, rows, total, started, load0, wall_s, summary);
-  }
+    return r;
+  });
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  write_outputs(out, options.what, options, table_metrics, rows, total, started, load0, wall_s, summary);
   return summary;
 }
 
