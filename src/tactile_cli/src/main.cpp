@@ -130,6 +130,8 @@ int main(int argc, char** argv) {
   export_cmd->add_option("bag", exp.bag, "input rosbag2 directory")->required();
   export_cmd->add_option("--ply", exp.ply, "output PLY file (frame map, metres)")->required();
   export_cmd->add_flag("--binary", exp.binary, "binary little endian instead of ASCII");
+  export_cmd->add_option("--metrics", exp.metrics,
+                         "summary JSON with its warnings (default: the PLY's name with .metrics.json)");
 
   tactile_cli::EvaluateOptions evaluate;
   uint64_t evaluate_seed = 0;
@@ -267,9 +269,10 @@ int main(int argc, char** argv) {
     } else if (*export_cmd) {
       exp.config_dir = config_dir;
       const auto m = tactile_cli::run_export(exp);
-      std::printf("tactile export: %s -> %s (%llu points, %.3f x %.3f m)\n", exp.bag.c_str(), exp.ply.c_str(),
-                  static_cast<unsigned long long>(m["points"].get<uint64_t>()), m["map_length_m"].get<double>(),
-                  m["map_width_m"].get<double>());
+      std::printf("tactile export: %s -> %s (%llu points, %.3f x %.3f m; summary %s)\n", exp.bag.c_str(),
+                  exp.ply.c_str(), static_cast<unsigned long long>(m["points"].get<uint64_t>()),
+                  m["map_length_m"].get<double>(), m["map_width_m"].get<double>(),
+                  m["metrics_file"].get<std::string>().c_str());
     } else if (*replay_cmd) {
       replay.config_dir = config_dir;
       const auto m = tactile_cli::run_replay(replay);

@@ -1,5 +1,7 @@
 #include "tactile_cli/xplorer_export.hpp"
 
+#include <filesystem>
+#include <fstream>
 #include <stdexcept>
 
 #include "graphs/xplorer_nodes.hpp"
@@ -92,6 +94,14 @@ nlohmann::json run_export(const ExportOptions& o) {
   s["map_area_m2"] = r.obb_area;
   s["warnings"] = warnings.to_json();
   warnings.print("export");
+  // The summary beside the map, so repairs, skips and drops are on record (issue 16).
+  std::filesystem::path metrics = o.metrics;
+  if (metrics.empty()) metrics = std::filesystem::path(o.ply).replace_extension(".metrics.json");
+  {
+    std::ofstream out(metrics);
+    if (!out || !(out << s.dump(2) << '\n')) throw std::runtime_error(metrics.string() + ": cannot write");
+  }
+  s["metrics_file"] = metrics.string();
   return s;
 }
 
