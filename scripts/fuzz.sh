@@ -16,15 +16,23 @@ source .venv/bin/activate
 out="$here/build/fuzz"
 mkdir -p "$out"
 export CC=clang CXX=clang++
-colcon build --packages-up-to whisker_driver tactile_msgs crazyflie_bridge --build-base "$out/build" \
+colcon build --packages-up-to whisker_driver tactile_msgs crazyflie_bridge tactile_bag --build-base "$out/build" \
   --install-base "$out/install" --event-handlers console_cohesion- summary- \
   --cmake-args -DBUILD_TESTING=OFF -DTACTILE_BUILD_BENCHMARKS=OFF \
-  -DWHISKER_DRIVER_FUZZ=ON -DTACTILE_MSGS_FUZZ=ON -DCRAZYFLIE_BRIDGE_FUZZ=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
+  -DWHISKER_DRIVER_FUZZ=ON -DTACTILE_MSGS_FUZZ=ON -DCRAZYFLIE_BRIDGE_FUZZ=ON -DTACTILE_BAG_FUZZ=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
 for h in "$out/build/whisker_driver/fuzz_frame_parser:512" "$out/build/tactile_msgs/fuzz_cdr:4096" \
-         "$out/build/crazyflie_bridge/fuzz_crtp:64"; do
+         "$out/build/crazyflie_bridge/fuzz_crtp:64" "$out/build/tactile_bag/fuzz_mcap:65536"; do
   exe="${h%%:*}"; len="${h##*:}"
   corpus="$out/corpus/$(basename "$exe")"
   mkdir -p "$corpus"
+  if [[ "$(basename "$exe")" == fuzz_mcap && -z "$(ls -A "$corpus")" ]]; then
+    # seed: small mcap files of every chunk compression
+    for c in "" zstd lz4; do
+      d="$(mktemp -d)"; rmdir "$d"
+      "$out/install/tactile_bag/bin/tactile_bag_tool" write-sample "$d" --storage mcap ${c:+--compression $c} >/dev/null
+      cp "$d"/*.mcap "$corpus/seed_${c:-none}.mcap"; rm -rf "$d"
+    done
+  fi
   echo "== $(basename "$exe") for ${seconds}s"
   "$exe" "$corpus" -max_total_time="$seconds" -max_len="$len" -rss_limit_mb=2048 2>&1 | grep -E "^Done|ERROR|SUMMARY" || true
 done

@@ -48,7 +48,10 @@ else
   fi
 fi
 python -c 'import pytest' 2>/dev/null || python -m pip install -q pytest
+# The ROS tests' Python needs (the ROS 2 Python may be a system or toolchain one): pytest,
+# PyYAML and numpy, and rosbags (the end-to-end tests record the DDS flights into bags).
 python -c 'import yaml, numpy' 2>/dev/null || python -m pip install -q pyyaml numpy
+python -c 'import rosbags.rosbag2' 2>/dev/null || python -m pip install -q rosbags
 
 export ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST
 export RMW_IMPLEMENTATION="${RMW_IMPLEMENTATION:-rmw_fastrtps_cpp}"

@@ -1,6 +1,6 @@
 // Benchmarks of the GPIS explorer (000 eq. 31-46): one update (fit + grid
 // prediction + contour + curvature + corners + target) for the onboard budget
-// (50 points, 10 x 10 grid) and the ground budget (2000 points, 200 x 200),
+// (50 points, 10 x 10 grid), 2000 points / 200 x 200 and 10000 / 400 x 400,
 // and the incremental Cholesky update per added point. The numpy reference
 // of the same steps: scripts/bench_numpy_compare.py (runs both, prints ratios).
 #include <cmath>
@@ -45,22 +45,24 @@ void room_points(int n, Eigen::Matrix2Xd& X, Eigen::VectorXd& y) {
   }
 }
 
-ExplorerParams params_for(int points, int cells, bool grid_variance = true) {
+ExplorerParams params_for(int points, int cells, bool grid_variance = true, int variance_cells = 0) {
   ExplorerParams p = ExplorerParams::ground();
   p.grid_variance = grid_variance;
+  p.variance_cells = static_cast<uint32_t>(variance_cells);
   p.gpis.max_points = static_cast<std::size_t>(points);
   p.grid_cells = static_cast<uint32_t>(cells);
   return p;
 }
 
-// Args: points, grid nodes per side, grid variance (0/1).
+// One update from scratch. Args: points, grid nodes per side, grid variance
+// (0/1), variance-map nodes per side (0: every grid node).
 void BM_Update(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0));
   const int cells = static_cast<int>(state.range(1));
   Eigen::Matrix2Xd X;
   Eigen::VectorXd y;
   room_points(n, X, y);
-  GpisExplorer ex(params_for(n, cells, state.range(2) != 0));
+  GpisExplorer ex(params_for(n, cells, state.range(2) != 0, static_cast<int>(state.range(3))));
   std::size_t contour_points = 0;
   for (auto _ : state) {
     ex.fit(X, y);                      // K + sigma^2 I, Cholesky (000 eq. 34-35)
@@ -71,8 +73,42 @@ void BM_Update(benchmark::State& state) {
   }
   state.counters["contour_points"] = static_cast<double>(contour_points);
   state.counters["state_bytes"] = static_cast<double>(ex.state_bytes());
+  state.SetLabel(gpis_explorer::Gpis::backend());
 }
-BENCHMARK(BM_Update)->Args({50, 10, 1})->Args({2000, 200, 1})->Args({2000, 200, 0})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Update)
+    ->Args({50, 10, 1, 0})
+    ->Args({2000, 200, 1, 0})
+    ->Args({2000, 200, 1, 40})
+    ->Args({2000, 200, 0, 0})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Update)->Args({10000, 400, 1, 40})->Iterations(1)->Unit(benchmark::kMillisecond);
+
+// The update as the exploration runs it: the GPIS holds n - 5 points from the
+// previous updates; a retreat adds 5 (4 surface, 1 interior: incremental
+// Cholesky rows) and the update follows (grid mean, variance map extended by
+// the 5 new rows, contour, curvature, contour variance, target). Args: points,
+// grid nodes per side, variance-map nodes per side.
+void BM_UpdateIncremental(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const int cells = static_cast<int>(state.range(1));
+  Eigen::Matrix2Xd X;
+  Eigen::VectorXd y;
+  room_points(n, X, y);
+  GpisExplorer ex(params_for(n, cells, true, static_cast<int>(state.range(2))));
+  ex.fit(X.leftCols(n - 5), y.head(n - 5));
+  ex.update();  // the state of the previous update (variance map up to date)
+  for (auto _ : state) {
+    for (int i = n - 5; i < n; ++i) ex.add_point(X.col(i), y(i));
+    const auto& r = ex.update();
+    benchmark::DoNotOptimize(r.target);
+    state.PauseTiming();
+    for (int i = 0; i < 5; ++i) ex.pop_back();
+    state.ResumeTiming();
+  }
+  state.SetLabel(gpis_explorer::Gpis::backend());
+}
+BENCHMARK(BM_UpdateIncremental)->Args({50, 10, 0})->Args({2000, 200, 40})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_UpdateIncremental)->Args({10000, 400, 40})->Iterations(2)->Unit(benchmark::kMillisecond);
 
 // Adding one point to a GPIS of n - 1 points: new factor row + alpha (O(n^2)).
 void BM_IncrementalAdd(benchmark::State& state) {
@@ -90,7 +126,7 @@ void BM_IncrementalAdd(benchmark::State& state) {
     state.ResumeTiming();
   }
 }
-BENCHMARK(BM_IncrementalAdd)->Arg(50)->Arg(2000)->Unit(benchmark::kMicrosecond);
+BENCHMARK(BM_IncrementalAdd)->Arg(50)->Arg(2000)->Arg(10000)->Unit(benchmark::kMicrosecond);
 
 // Refactorizing from scratch for comparison (what the incremental update avoids).
 void BM_Refactorize(benchmark::State& state) {

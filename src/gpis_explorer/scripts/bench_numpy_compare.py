@@ -1,18 +1,30 @@
 #!/usr/bin/env python3
-"""Side-by-side timing of the C++ GPIS explorer and a numpy/scipy reference.
+"""Side-by-side timing and agreement of the C++ GPIS explorer update with
+numpy/scipy and scikit-learn's GaussianProcessRegressor (issue 18).
 
-Runs the Google Benchmark executable bench_gpis (path as the first argument,
-default: lib/gpis_explorer/bench_gpis under $AMENT_PREFIX_PATH / ./install) with
-JSON output, times the same steps in numpy/scipy on the same kind of data, and
-prints one table with the ratio numpy / C++ (CPU time of this process for
-numpy, CPU time reported by Google Benchmark for C++).
+Runs the Google Benchmark executable bench_gpis (JSON output), times the same
+steps on the same data (scripts/gpis_peer.py: the rotated-room points of
+bench/bench_gpis.cpp) in numpy/scipy and with scikit-learn, and prints one
+table: C++, numpy, sklearn [ms] and the ratios peer / C++. CPU time of each
+process (Google Benchmark's cpu_time for C++, time.process_time() here);
+OPENBLAS_NUM_THREADS=1 for all three unless set, so each uses one core.
 
-Steps per update (paper 000 eq. 33-46): kernel matrix + Cholesky + alpha,
-mean (and variance) on the grid, zero contour (contourpy, the marching-squares
-code matplotlib uses), gradient/Hessian/curvature at the contour points,
-variance at the contour points, corner clustering and target.
+Steps per update (paper 000 eq. 33-46): kernel matrix + Cholesky + alpha (from
+scratch) or 5 new factor rows + alpha (incremental), the mean on the grid, the
+variance map (every node, or variance_cells^2 nodes interpolated: kept between
+updates by the new rows in C++ and numpy; scikit-learn predicts it again),
+the zero contour (contourpy for the peers), curvature, corners, the variance at
+the contour points and the target. scikit-learn has no incremental update: its
+incremental rows refit.
 
-Usage: bench_numpy_compare.py [path/to/bench_gpis] [--quick]
+Then the agreement of one update (gpis_update_json, installed next to
+bench_gpis) with both peers: grid mean, contour variance, target; and the
+error single precision would make (why the C++ stays in double).
+
+Usage: bench_numpy_compare.py [path/to/bench_gpis] [--quick] [--cpp-json FILE]
+       [--max-peer-points N] (peers only up to N points; the C++ rows all)
+(--quick: onboard budget only; --cpp-json: take the C++ figures from that
+bench_gpis JSON instead of running it; scripts/bench.sh does both in one run)
 """
 import json
 import os
@@ -20,99 +32,27 @@ import subprocess
 import sys
 import time
 
-import contourpy
-import numpy as np
-from scipy.linalg import cho_factor, cho_solve, solve_triangular
-from scipy.spatial.distance import cdist
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-BETA, C, NOISE, Q, PEN = 0.5, 1.0, 1e-2, -1.0, 0.2
+import numpy as np  # noqa: E402
+from scipy.linalg import cho_factor, solve_triangular  # noqa: E402
 
-
-def room_points(n, seed=42):
-    rng = np.random.default_rng(seed)
-    X = np.zeros((n, 2))
-    y = np.zeros(n)
-    for i in range(n):
-        if i % 5 == 4:
-            X[i] = rng.uniform(-0.7, 0.7, 2)
-            y[i] = -1.0
-        else:
-            t = rng.uniform(-1, 1)
-            X[i] = [(t, -1.0), (t, 1.0), (-1.0, t), (1.0, t)][i % 4]
-            X[i] += rng.normal(0, 0.01, 2)
-    a = 0.3
-    R = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
-    return X @ R.T, y
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import gpis_peer as gp  # noqa: E402
 
 
-def kern(A, B):
-    return (C ** 2 + cdist(A, B, "sqeuclidean")) ** (-BETA)
-
-
-def update(X, y, cells, grid_variance=True, size=4.0):
-    cf = cho_factor(kern(X, X) + NOISE * np.eye(len(X)), lower=True)
-    alpha = cho_solve(cf, y)
-    g = np.linspace(-size / 2, size / 2, cells)
-    gx, gy = np.meshgrid(g, g)
-    G = np.stack([gx.ravel(), gy.ravel()], 1)
-    mean = np.empty(len(G))
-    var = np.full(len(G), np.nan)
-    for s in range(0, len(G), 512):
-        Ks = kern(G[s:s + 512], X)
-        mean[s:s + 512] = Ks @ alpha
-        if grid_variance:
-            V = solve_triangular(cf[0], Ks.T, lower=True)
-            var[s:s + 512] = C ** (-2 * BETA) - np.sum(V * V, 0)
-    lines = contourpy.contour_generator(gx, gy, mean.reshape(cells, cells)).lines(0.0)
-    corners, best, target = [], -np.inf, None
-    for P in lines:
-        D = P[:, None, :] - X[None, :, :]
-        s = C ** 2 + np.sum(D * D, 2)
-        s1 = s ** (-BETA - 1)
-        grad = np.einsum("ij,ijk->ik", -2 * BETA * s1 * alpha, D)
-        w = 4 * BETA * (BETA + 1) * s1 / s * alpha
-        H = np.einsum("ij,ijk,ijl->ikl", w, D, D) + np.einsum("ij->i", -2 * BETA * s1 * alpha)[:, None, None] * np.eye(2)
-        gn = np.linalg.norm(grad, axis=1)
-        kappa = (np.einsum("ni,nij,nj->n", grad, H, grad) - gn ** 2 * np.trace(H, axis1=1, axis2=2)) / gn ** 3
-        mask = kappa < Q
-        idx = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(int), [0]])))
-        for a, b in zip(idx[::2], idx[1::2]):
-            corners.append(P[a:b].mean(0))
-        Kp = kern(P, X)
-        V = solve_triangular(cf[0], Kp.T, lower=True)
-        pv = C ** (-2 * BETA) - np.sum(V * V, 0)
-        pen = np.zeros(len(P))
-        for ck in corners:
-            pen = np.minimum(pen, -np.exp(-np.sum((P - ck) ** 2, 1) / (2 * PEN ** 2)))
-        acq = pv + pen
-        k = int(np.argmax(acq))
-        if acq[k] > best:
-            best, target = acq[k], P[k]
-    return target, mean, var
-
-
-def incremental_add(L, X, y, x, label):
-    """New Cholesky row for x (O(n^2)), then alpha by two triangular solves."""
-    l = solve_triangular(L, kern(X, x[None, :])[:, 0], lower=True)
-    d = np.sqrt(C ** (-2 * BETA) + NOISE - l @ l)
-    n = len(L)
-    L2 = np.zeros((n + 1, n + 1))
-    L2[:n, :n] = L
-    L2[n, :n] = l
-    L2[n, n] = d
-    y2 = np.append(y, label)
-    alpha = solve_triangular(L2.T, solve_triangular(L2, y2, lower=True), lower=False)
-    return L2, alpha
-
-
-def cpu_time(fn, min_time=0.5, max_reps=1000):
-    reps, t0 = 0, time.process_time()
+def cpu_time(fn, min_time=0.5, max_reps=1000, setup=None):
+    """CPU seconds per call of fn (setup, untimed, before each call)."""
+    reps, total = 0, 0.0
     while True:
+        if setup:
+            setup()
+        t0 = time.process_time()
         fn()
+        total += time.process_time() - t0
         reps += 1
-        el = time.process_time() - t0
-        if el >= min_time or reps >= max_reps:
-            return el / reps
+        if total >= min_time or reps >= max_reps:
+            return total / reps
 
 
 def find_bench():
@@ -125,30 +65,142 @@ def find_bench():
     sys.exit("bench_gpis not found: pass its path as the first argument")
 
 
+def peer_scratch(n, cells, vcells, grid_variance=True):
+    X, y = gp.room_points(n)
+    big = n > 100
+
+    def numpy_run():
+        g = gp.NumpyGpis(cells, vcells if grid_variance else 0, capacity=n)
+        if not grid_variance:
+            g.variance_map = lambda: None
+        g.fit(X, y)
+        g.update()
+
+    def sk_run():
+        gp.sklearn_update(X, y, cells, vcells if grid_variance else None)
+
+    kw = dict(min_time=0.0, max_reps=1) if big else dict(min_time=0.5, max_reps=2000)
+    return cpu_time(numpy_run, **kw), cpu_time(sk_run, **kw)
+
+
+def peer_incremental(n, cells, vcells):
+    X, y = gp.room_points(n)
+    g = gp.NumpyGpis(cells, vcells, capacity=n)
+    g.fit(X[:-5], y[:-5])
+    g.update()
+
+    def run():
+        g.add(X[-5:], y[-5:])
+        g.update()
+
+    reps = 1 if n > 5000 else 3 if n > 100 else 1000
+    t = 0.0
+    for _ in range(reps):
+        t0 = time.process_time()
+        run()
+        t += time.process_time() - t0
+        g.pop(5)
+        if n <= 100 and t >= 0.5:
+            reps = _ + 1
+            break
+    return t / reps
+
+
+def agreement(n, cells, vcells, helper):
+    X, y = gp.room_points(n)
+    lines = [f"{cells},4.0,{vcells}"] + [f"{a!r},{b!r},{l!r}" for (a, b), l in zip(X.tolist(), y.tolist())]
+    got = json.loads(subprocess.run([helper], input="\n".join(lines) + "\n", capture_output=True, text=True,
+                                    check=True).stdout)
+    g = gp.NumpyGpis(cells, vcells, capacity=n)
+    g.fit(X, y)
+    _, mean, _ = g.update()
+    gpr = gp.sklearn_gpr().fit(X, y)
+    G = g.G
+    m = np.array(got["grid_mean"])
+    scale = np.max(np.abs(mean))
+    contours = [np.array(c["points"]) for c in got["contours"]]
+    cvar = np.concatenate([c["variance"] for c in got["contours"]])
+    P = np.vstack(contours)
+    v_np = g.variance_at(P)
+    v_sk = gpr.predict(P, return_std=True)[1] ** 2
+    corners = []
+    for c, Pc in zip(got["contours"], contours):
+        corners += gp.corners_of(Pc, gp.derivatives(Pc, X, g.alpha), c["closed"])
+    split = np.cumsum([len(c) for c in contours])[:-1]
+    t_np = gp.select_target(contours, np.split(v_np, split), corners, -2.0, 2.0)
+    t_sk = gp.select_target(contours, np.split(v_sk, split), corners, -2.0, 2.0)
+    tc = np.array(got["target"])
+    # single precision: Cholesky, mean and contour variance in float32
+    A = (gp.kern(X, X) + gp.NOISE * np.eye(n)).astype(np.float32)
+    L32 = np.linalg.cholesky(A)
+    a32 = solve_triangular(L32, solve_triangular(L32, y.astype(np.float32), lower=True), lower=True, trans="T")
+    m32 = gp.kern(G, X).astype(np.float32) @ a32
+    V32 = solve_triangular(L32, gp.kern(X, P).astype(np.float32), lower=True)
+    v32 = 1.0 - np.sum(V32.astype(np.float64) ** 2, 0)
+    return dict(
+        backend=got["backend"],
+        mean_np=np.max(np.abs(m - mean)) / scale, mean_sk=np.max(np.abs(m - gpr.predict(G))) / scale,
+        var_np=np.max(np.abs(cvar - v_np)), var_sk=np.max(np.abs(cvar - v_sk)),
+        target_np=np.linalg.norm(tc - t_np), target_sk=np.linalg.norm(tc - t_sk),
+        mean_f32=np.max(np.abs(m32 - mean)) / scale, var_f32=np.max(np.abs(v32 - v_np)))
+
+
 def main():
     quick = "--quick" in sys.argv
     bench = find_bench()
-    out = subprocess.run([bench, "--benchmark_format=json"], capture_output=True, text=True, check=True)
-    cpp = {b["name"]: b["cpu_time"] * {"ms": 1e-3, "us": 1e-6, "ns": 1e-9}[b["time_unit"]]
-           for b in json.loads(out.stdout)["benchmarks"]}
-    rows = []
-    for n, cells, gv in [(50, 10, 1), (2000, 200, 1), (2000, 200, 0)]:
+    if "--cpp-json" in sys.argv:  # the JSON of a bench_gpis run (scripts/bench.sh)
+        with open(sys.argv[sys.argv.index("--cpp-json") + 1]) as f:
+            report = json.load(f)
+    else:
+        report = json.loads(subprocess.run(
+            [bench, "--benchmark_format=json", "--benchmark_filter=BM_Update" + ("" if not quick else
+             "(/50/|Incremental/50/)")], capture_output=True, text=True, check=True).stdout)
+    cpp = {b["name"].split("/iterations")[0]: b["cpu_time"] * {"ms": 1e-3, "us": 1e-6, "ns": 1e-9}[b["time_unit"]]
+           for b in report["benchmarks"]}
+    max_peer = int(sys.argv[sys.argv.index("--max-peer-points") + 1]) if "--max-peer-points" in sys.argv else 10 ** 9
+    print(f"{'update (CPU time, one core)':52s} {'C++ [ms]':>10s} {'numpy [ms]':>11s} {'sklearn [ms]':>13s}"
+          f" {'numpy/C++':>10s} {'sklearn/C++':>12s}", flush=True)
+
+    def show(name, c, p, s):
+        cs = f"{c * 1e3:10.2f}" if c else f"{'-':>10s}"
+        ps = f"{p * 1e3:11.2f}" if p else f"{'-':>11s}"
+        ss = f"{s * 1e3:13.2f}" if s else f"{'-':>13s}"
+        r1 = f"{p / c:10.1f}" if c and p else f"{'-':>10s}"
+        r2 = f"{s / c:12.1f}" if c and s else f"{'-':>12s}"
+        print(f"{name:52s} {cs} {ps} {ss} {r1} {r2}", flush=True)
+
+    gp.sklearn_gpr().fit(*gp.room_points(20))  # import and first-call costs outside the timings
+    sk_scratch = {}
+    cases = [(50, 10, 0, True), (2000, 200, 40, True), (2000, 200, 0, True), (2000, 200, 0, False),
+             (10000, 400, 40, True)]
+    for n, cells, vc, gv in cases:
         if quick and n > 50:
             continue
-        X, y = room_points(n)
-        t = cpu_time(lambda: update(X, y, cells, bool(gv)), min_time=0.5 if n < 100 else 0.0, max_reps=2000 if n < 100 else 1)
-        rows.append((f"update {n} pts, {cells}x{cells} grid" + ("" if gv else ", mean only"),
-                     cpp.get(f"BM_Update/{n}/{cells}/{gv}"), t))
-    for n in (50, 2000):
-        X, y = room_points(n)
-        L = np.linalg.cholesky(kern(X[:-1], X[:-1]) + NOISE * np.eye(n - 1))
-        t = cpu_time(lambda: incremental_add(L, X[:-1], y[:-1], X[-1], y[-1]))
-        rows.append((f"incremental add, n = {n}", cpp.get(f"BM_IncrementalAdd/{n}"), t))
-    print(f"{'step':42s} {'C++ [ms]':>12s} {'numpy [ms]':>12s} {'numpy / C++':>12s}")
-    for name, c, p in rows:
-        cs = f"{c * 1e3:12.3f}" if c else f"{'-':>12s}"
-        ratio = f"{p / c:12.2f}" if c else f"{'-':>12s}"
-        print(f"{name:42s} {cs} {p * 1e3:12.3f} {ratio}")
+        t_np, t_sk = peer_scratch(n, cells, vc, gv) if n <= max_peer else (None, None)
+        sk_scratch[(n, cells, vc, gv)] = t_sk
+        what = "no variance map" if not gv else (f"{vc}x{vc} variance map" if vc else "variance on every node")
+        show(f"update {n} pts, {cells}x{cells}, {what}", cpp.get(f"BM_Update/{n}/{cells}/{int(gv)}/{vc}"), t_np, t_sk)
+    for n, cells, vc in [(50, 10, 0), (2000, 200, 40), (10000, 400, 40)]:
+        if quick and n > 50:
+            continue
+        t_np = peer_incremental(n, cells, vc) if n <= max_peer else None
+        t_sk = (sk_scratch.get((n, cells, vc, True)) or peer_scratch(n, cells, vc)[1]) if n <= max_peer else None
+        show(f"+5 pts and update {n}, {cells}x{cells}" + (f", {vc}x{vc} map" if vc else ""),
+             cpp.get(f"BM_UpdateIncremental/{n}/{cells}/{vc}"), t_np, t_sk)
+    print("(sklearn has no incremental update: its '+5 pts' rows refit from scratch; '-': peer not run,"
+          " --max-peer-points)")
+    helper = os.path.join(os.path.dirname(bench), "gpis_update_json")
+    if os.path.exists(helper):
+        print(f"\nagreement of one update with the peers (C++ backend: ", end="")
+        for n, cells, vc in [(50, 10, 0)] + ([] if quick else [(2000, 200, 40)]):
+            a = agreement(n, cells, vc, helper)
+            if n == 50:
+                print(a["backend"] + ")")
+            print(f"  {n} pts, {cells}x{cells}: grid mean {a['mean_np']:.1e} (numpy) {a['mean_sk']:.1e} (sklearn)"
+                  f" of max|mean|; contour variance {a['var_np']:.1e} / {a['var_sk']:.1e}; target distance"
+                  f" {a['target_np']:.1e} / {a['target_sk']:.1e} m")
+            print(f"  {'':{len(str(n)) + len(str(cells)) * 2 + 8}s}float32 instead: grid mean {a['mean_f32']:.1e},"
+                  f" contour variance {a['var_f32']:.1e}")
     print(f"onboard state (50 points, 10x10 grid, doubles): "
           f"{(50 * 5 + 50 * 50 + 2 * 100) * 8 / 1000:.1f} kB; paper 000 Fig. S6: 20.9 kB")
 

@@ -20,6 +20,7 @@ ExplorerParams ExplorerParams::ground() {
   ExplorerParams p;
   p.gpis.max_points = 5000;
   p.grid_cells = 100;
+  p.variance_cells = 40;
   return p;
 }
 
@@ -37,6 +38,9 @@ void ExplorerParams::validate() const {
   }
   if (!(std::isfinite(corner_exclusion) && corner_exclusion >= 0.0)) {
     fail("corner_exclusion", "must be >= 0, got " + std::to_string(corner_exclusion));
+  }
+  if (variance_cells == 1 || variance_cells > 5000) {
+    fail("variance_cells", "must be 0 (every grid node) or in [2, 5000], got " + std::to_string(variance_cells));
   }
   if (!(std::isfinite(border_margin) && border_margin >= 0.0 && 2.0 * border_margin < grid_size)) {
     fail("border_margin", "must be >= 0 and < grid_size / 2, got " + std::to_string(border_margin));
@@ -103,23 +107,98 @@ void GpisExplorer::set_grid(const GridSpec& grid) {
   nodes_ = grid_.nodes();
   mean_.assign(grid_.count(), 0.0);
   var_.assign(grid_.count(), gpis_.prior_variance());
+  vrows_ = 0;
+  vw_ = std::min(p_.variance_cells, grid_.width);
+  vh_ = std::min(p_.variance_cells, grid_.height);
+  vnodes_.resize(2, variance_cells_active() ? static_cast<Eigen::Index>(vw_) * vh_ : 0);
+  if (variance_cells_active()) {
+    // Node (a, b) at the fractional grid index (a (W-1)/(vw-1), b (H-1)/(vh-1)): same extent as the grid.
+    const double sx = (grid_.width - 1) * grid_.resolution / (vw_ - 1);
+    const double sy = (grid_.height - 1) * grid_.resolution / (vh_ - 1);
+    Eigen::Index k = 0;
+    for (uint32_t b = 0; b < vh_; ++b) {
+      for (uint32_t a = 0; a < vw_; ++a) vnodes_.col(k++) = Eigen::Vector2d(grid_.origin_x + a * sx, grid_.origin_y + b * sy);
+    }
+  }
+}
+
+void GpisExplorer::coarse_variance() {
+  const auto n = static_cast<Eigen::Index>(gpis_.size());
+  const Eigen::Index m = vnodes_.cols();
+  Eigen::VectorXd cvar(m);
+  if (n == 0) {
+    cvar.setConstant(gpis_.prior_variance());
+  } else {
+    if (V_.rows() < n || V_.cols() != m) {
+      // Room for the rows to come (doubling, at most the budget); valid rows kept.
+      const Eigen::Index rows = std::min<Eigen::Index>(static_cast<Eigen::Index>(gpis_.params().max_points),
+                                                       std::max<Eigen::Index>(n, 2 * V_.rows()));
+      if (V_.cols() != m) {
+        V_.resize(rows, m);
+        vrows_ = 0;
+      } else {
+        V_.conservativeResize(rows, m);
+      }
+    }
+    const auto r0 = static_cast<Eigen::Index>(std::min(vrows_, gpis_.size()));
+    if (r0 == 0) {
+      // From scratch: V = L^-1 k(X, Q) (000 eq. 35), one blocked solve.
+      auto Vn = V_.topRows(n);
+      gpis_.kernel_block(vnodes_, Vn);
+      gpis_.solve_lower(Vn);
+    } else if (r0 < n) {
+      // Rows of the points added since the last update, by the rows of the
+      // incremental factor: V_new = L_nn^-1 (k(X_new, Q) - L_no V_old).
+      const Eigen::Index b = n - r0;
+      const auto L = gpis_.cholesky();
+      Eigen::MatrixXd B(b, m);
+      for (Eigen::Index r = 0; r < b; ++r) {
+        const Eigen::Vector2d x = gpis_.point(static_cast<std::size_t>(r0 + r));
+        for (Eigen::Index q = 0; q < m; ++q) B(r, q) = gpis_.kernel(x, vnodes_.col(q));
+      }
+      B.noalias() -= L.block(r0, 0, b, r0) * V_.topRows(r0);
+      L.block(r0, r0, b, b).triangularView<Eigen::Lower>().solveInPlace(B);
+      V_.middleRows(r0, b) = B;
+    }
+    vrows_ = static_cast<std::size_t>(n);
+    cvar = (gpis_.prior_variance() - V_.topRows(n).colwise().squaredNorm().array()).max(0.0).matrix().transpose();
+  }
+  // Bilinear interpolation onto the grid nodes (the picture only).
+  const double fx = static_cast<double>(vw_ - 1) / (grid_.width - 1);
+  const double fy = static_cast<double>(vh_ - 1) / (grid_.height - 1);
+  for (uint32_t j = 0; j < grid_.height; ++j) {
+    const double v = j * fy;
+    const auto b = std::min<uint32_t>(static_cast<uint32_t>(v), vh_ - 2);
+    const double tv = v - b;
+    for (uint32_t i = 0; i < grid_.width; ++i) {
+      const double u = i * fx;
+      const auto a = std::min<uint32_t>(static_cast<uint32_t>(u), vw_ - 2);
+      const double tu = u - a;
+      const Eigen::Index k00 = static_cast<Eigen::Index>(b) * vw_ + a;
+      const Eigen::Index k01 = k00 + static_cast<Eigen::Index>(vw_);
+      var_[static_cast<std::size_t>(j) * grid_.width + i] =
+          (1 - tv) * ((1 - tu) * cvar(k00) + tu * cvar(k00 + 1)) + tv * ((1 - tu) * cvar(k01) + tu * cvar(k01 + 1));
+    }
+  }
 }
 
 const UpdateResult& GpisExplorer::update() {
   ++updates_;
   UpdateResult& r = result_;
   r = UpdateResult{};
-  if (p_.grid_variance) {
-    gpis_.predict_batch(nodes_, mean_buf_, var_buf_);  // 000 eq. 34-35 on the grid
+  if (p_.grid_variance && !variance_cells_active()) {
+    gpis_.predict_batch(nodes_, mean_buf_, var_buf_);  // 000 eq. 34-35 on every grid node
     for (std::size_t k = 0; k < mean_.size(); ++k) {
       mean_[k] = mean_buf_(static_cast<Eigen::Index>(k));
       var_[k] = var_buf_(static_cast<Eigen::Index>(k));
     }
   } else {
     gpis_.mean_batch(nodes_, mean_buf_);  // 000 eq. 34 on the grid
-    for (std::size_t k = 0; k < mean_.size(); ++k) {
-      mean_[k] = mean_buf_(static_cast<Eigen::Index>(k));
-      var_[k] = std::numeric_limits<double>::quiet_NaN();
+    for (std::size_t k = 0; k < mean_.size(); ++k) mean_[k] = mean_buf_(static_cast<Eigen::Index>(k));
+    if (p_.grid_variance) {
+      coarse_variance();  // 000 eq. 35 on the variance map, interpolated (picture)
+    } else {
+      std::fill(var_.begin(), var_.end(), std::numeric_limits<double>::quiet_NaN());
     }
   }
   const std::size_t n = gpis_.size();
@@ -143,8 +222,11 @@ const UpdateResult& GpisExplorer::update() {
     ContourInfo info;
     info.contour = std::move(c);
     const auto& P = info.contour.points;
-    info.curvature.resize(P.size());
-    for (std::size_t i = 0; i < P.size(); ++i) info.curvature[i] = gpis_.curvature(P[i]);  // 000 eq. 40
+    Eigen::Matrix2Xd Pm(2, static_cast<Eigen::Index>(P.size()));
+    for (std::size_t i = 0; i < P.size(); ++i) Pm.col(static_cast<Eigen::Index>(i)) = P[i];
+    Eigen::VectorXd kappa;
+    gpis_.curvature_batch(Pm, kappa);  // 000 eq. 40, one pass over the points
+    info.curvature.assign(kappa.data(), kappa.data() + kappa.size());
     auto corners = cluster_corners(P, info.curvature, info.contour.closed, p_.corner_curvature);
     r.corners.insert(r.corners.end(), corners.begin(), corners.end());
     (info.contour.closed ? r.closed_contours : r.open_contours)++;
@@ -190,7 +272,9 @@ const UpdateResult& GpisExplorer::update() {
 }
 
 std::size_t GpisExplorer::state_bytes() const {
-  return gpis_.state_bytes() + sizeof(double) * 2 * grid_.count();
+  const std::size_t vmap =
+      variance_cells_active() ? gpis_.params().max_points * static_cast<std::size_t>(vnodes_.cols()) : 0;
+  return gpis_.state_bytes() + sizeof(double) * (2 * grid_.count() + vmap);
 }
 
 }  // namespace gpis_explorer

@@ -10,8 +10,66 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
+#include "imq_kernels.hpp"
+
+#ifdef GPIS_EXPLORER_HAVE_OPENBLAS
+#include <cblas.h>
+extern "C" void dpotrf_(const char* uplo, const int* n, double* a, const int* lda, int* info);  // LAPACK in OpenBLAS
+#endif
+
 namespace gpis_explorer {
 namespace {
+
+// Triangular solves and the Cholesky factorization with the lower factor L
+// (column-major, leading dimension ld): OpenBLAS when built with it (runtime
+// dispatch to the CPU's kernels), else Eigen's blocked routines.
+using MapMat = Eigen::Map<Eigen::MatrixXd, 0, Eigen::OuterStride<>>;
+using CMapMat = Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>;
+
+/// v := L^-1 v (trans false) or L^-T v (trans true).
+void trsv_lower(const double* L, Eigen::Index ld, Eigen::Index n, double* v, bool trans) {
+  if (n == 0) return;
+#ifdef GPIS_EXPLORER_HAVE_OPENBLAS
+  cblas_dtrsv(CblasColMajor, CblasLower, trans ? CblasTrans : CblasNoTrans, CblasNonUnit, static_cast<blasint>(n), L,
+              static_cast<blasint>(ld), v, 1);
+#else
+  const CMapMat Lm(L, n, n, Eigen::OuterStride<>(ld));
+  Eigen::Map<Eigen::VectorXd> x(v, n);
+  if (trans) {
+    Lm.triangularView<Eigen::Lower>().transpose().solveInPlace(x);
+  } else {
+    Lm.triangularView<Eigen::Lower>().solveInPlace(x);
+  }
+#endif
+}
+
+/// B := L^-1 B, B n x m with leading dimension ldb.
+void trsm_lower(const double* L, Eigen::Index ld, Eigen::Index n, double* B, Eigen::Index ldb, Eigen::Index m) {
+  if (n == 0 || m == 0) return;
+#ifdef GPIS_EXPLORER_HAVE_OPENBLAS
+  cblas_dtrsm(CblasColMajor, CblasLeft, CblasLower, CblasNoTrans, CblasNonUnit, static_cast<blasint>(n),
+              static_cast<blasint>(m), 1.0, L, static_cast<blasint>(ld), B, static_cast<blasint>(ldb));
+#else
+  const CMapMat Lm(L, n, n, Eigen::OuterStride<>(ld));
+  MapMat Bm(B, n, m, Eigen::OuterStride<>(ldb));
+  Lm.triangularView<Eigen::Lower>().solveInPlace(Bm);
+#endif
+}
+
+/// In place: the lower triangle of A (n x n, leading dimension ld) becomes its
+/// Cholesky factor; the strict upper triangle is left alone. False if not PD.
+bool potrf_lower(double* A, Eigen::Index ld, Eigen::Index n) {
+#ifdef GPIS_EXPLORER_HAVE_OPENBLAS
+  const int nn = static_cast<int>(n), lda = static_cast<int>(ld);
+  int info = 0;
+  dpotrf_("L", &nn, A, &lda, &info);
+  return info == 0;
+#else
+  MapMat Am(A, n, n, Eigen::OuterStride<>(ld));
+  Eigen::LLT<Eigen::Ref<Eigen::MatrixXd>> llt(Am);  // in place, reads and writes the lower triangle
+  return llt.info() == Eigen::Success;
+#endif
+}
 
 [[noreturn]] void fail(const char* field, const std::string& reason) {
   throw std::invalid_argument(std::string("GpisParams.") + field + ": " + reason);
@@ -100,7 +158,7 @@ AddStatus Gpis::add_point(const Eigen::Vector2d& x, double label) {
   // New row of the factor: L_{n,0:n} = L^-1 k(X, x), L_nn = sqrt(k(x,x) + sigma^2 - |l|^2).
   Eigen::VectorXd::SegmentReturnType l = work_.head(n);
   for (Eigen::Index i = 0; i < n; ++i) l(i) = kernel(X_.col(i), x);
-  if (n > 0) L_.topLeftCorner(n, n).triangularView<Eigen::Lower>().solveInPlace(l);
+  trsv_lower(L_.data(), L_.outerStride(), n, l.data(), false);
   const double pivot = prior_var_ + p_.noise - l.squaredNorm();
   if (!(pivot > 0.0) || !std::isfinite(pivot)) return AddStatus::kNotPositive;
   L_.row(n).head(n) = l.transpose();
@@ -116,9 +174,17 @@ AddStatus Gpis::add_point(const Eigen::Vector2d& x, double label) {
 void Gpis::solve_alpha() {
   const auto n = static_cast<Eigen::Index>(n_);
   alpha_.head(n) = y_.head(n);
-  const auto L = L_.topLeftCorner(n, n);
-  L.triangularView<Eigen::Lower>().solveInPlace(alpha_.head(n));
-  L.triangularView<Eigen::Lower>().transpose().solveInPlace(alpha_.head(n));
+  trsv_lower(L_.data(), L_.outerStride(), n, alpha_.data(), false);
+  trsv_lower(L_.data(), L_.outerStride(), n, alpha_.data(), true);
+}
+
+void Gpis::split_points(std::vector<double>& xs, std::vector<double>& ys) const {
+  xs.resize(n_);
+  ys.resize(n_);
+  for (std::size_t i = 0; i < n_; ++i) {
+    xs[i] = X_(0, static_cast<Eigen::Index>(i));
+    ys[i] = X_(1, static_cast<Eigen::Index>(i));
+  }
 }
 
 std::size_t Gpis::fit(const Eigen::Ref<const Eigen::Matrix2Xd>& X, const Eigen::Ref<const Eigen::VectorXd>& y) {
@@ -156,14 +222,26 @@ void Gpis::pop_back() {
 void Gpis::refactorize() {
   const auto n = static_cast<Eigen::Index>(n_);
   if (n == 0) return;
-  Eigen::MatrixXd K(n, n);
+  // K + sigma^2 I into the factor's storage (lower triangle, column by column),
+  // zeros above the diagonal, then the Cholesky factorization in place.
+  const double c2 = p_.c * p_.c;
+  std::vector<double> xs, ys;
+  split_points(xs, ys);
   for (Eigen::Index j = 0; j < n; ++j) {
-    for (Eigen::Index i = j; i < n; ++i) K(i, j) = kernel(X_.col(i), X_.col(j));
-    K(j, j) += p_.noise;
+    double* col = &L_(0, j);
+    for (Eigen::Index i = 0; i < j; ++i) col[i] = 0.0;
+    if (half_beta_) {
+      detail::imq_block(xs.data() + j, ys.data() + j, n - j, &xs[static_cast<std::size_t>(j)],
+                        &ys[static_cast<std::size_t>(j)], 1, c2, col + j, n);
+    } else {
+      for (Eigen::Index i = j; i < n; ++i) col[i] = kernel(X_.col(i), X_.col(j));
+    }
+    col[j] += p_.noise;
   }
-  Eigen::LLT<Eigen::MatrixXd> llt(K);
-  if (llt.info() != Eigen::Success) throw std::runtime_error("Gpis::refactorize: K + sigma^2 I not positive definite");
-  L_.topLeftCorner(n, n) = llt.matrixL();
+  if (!potrf_lower(L_.data(), L_.outerStride(), n)) {
+    clear();
+    throw std::runtime_error("Gpis::refactorize: K + sigma^2 I not positive definite");
+  }
   solve_alpha();
 }
 
@@ -195,9 +273,40 @@ void Gpis::predict(const Eigen::Vector2d& x, double* mean, double* variance) con
   }
   if (mean) *mean = m;
   if (variance) {
-    if (n > 0) L_.topLeftCorner(n, n).triangularView<Eigen::Lower>().solveInPlace(v);
+    trsv_lower(L_.data(), L_.outerStride(), n, v.data(), false);
     *variance = std::max(0.0, prior_var_ - v.squaredNorm());  // 000 eq. 35
   }
+}
+
+void Gpis::kernel_block(const Eigen::Ref<const Eigen::Matrix2Xd>& Q, Eigen::Ref<Eigen::MatrixXd> K) const {
+  const auto n = static_cast<Eigen::Index>(n_);
+  if (K.rows() != n || K.cols() != Q.cols()) {
+    throw std::invalid_argument("Gpis::kernel_block: K is " + std::to_string(K.rows()) + " x " +
+                                std::to_string(K.cols()) + ", need " + std::to_string(n) + " x " +
+                                std::to_string(Q.cols()));
+  }
+  if (n == 0 || Q.cols() == 0) return;
+  const double c2 = p_.c * p_.c;
+  if (half_beta_) {
+    std::vector<double> xs, ys;
+    split_points(xs, ys);
+    const Eigen::VectorXd qx = Q.row(0).transpose(), qy = Q.row(1).transpose();
+    detail::imq_block(xs.data(), ys.data(), n, qx.data(), qy.data(), Q.cols(), c2, K.data(), K.outerStride());
+    return;
+  }
+  for (Eigen::Index j = 0; j < Q.cols(); ++j) {
+    const Eigen::Vector2d q = Q.col(j);
+    for (Eigen::Index i = 0; i < n; ++i) K(i, j) = imq(c2 + (X_.col(i) - q).squaredNorm());  // 000 eq. 33
+  }
+}
+
+void Gpis::solve_lower(Eigen::Ref<Eigen::MatrixXd> B) const {
+  const auto n = static_cast<Eigen::Index>(n_);
+  if (B.rows() != n) {
+    throw std::invalid_argument("Gpis::solve_lower: B has " + std::to_string(B.rows()) + " rows, need " +
+                                std::to_string(n));
+  }
+  trsm_lower(L_.data(), L_.outerStride(), n, B.data(), B.outerStride(), B.cols());
 }
 
 void Gpis::predict_batch(const Eigen::Ref<const Eigen::Matrix2Xd>& Q, Eigen::VectorXd& mean,
@@ -211,19 +320,14 @@ void Gpis::predict_batch(const Eigen::Ref<const Eigen::Matrix2Xd>& Q, Eigen::Vec
     variance.setConstant(prior_var_);
     return;
   }
-  const double c2 = p_.c * p_.c;
-  const auto L = L_.topLeftCorner(n, n);
   const auto alpha = alpha_.head(n);
   Eigen::MatrixXd Ks(n, std::min(m, kBatchColumns));
   for (Eigen::Index start = 0; start < m; start += kBatchColumns) {
     const Eigen::Index b = std::min(kBatchColumns, m - start);
-    for (Eigen::Index j = 0; j < b; ++j) {
-      const Eigen::Vector2d q = Q.col(start + j);
-      for (Eigen::Index i = 0; i < n; ++i) Ks(i, j) = imq(c2 + (X_.col(i) - q).squaredNorm());
-    }
     auto block = Ks.leftCols(b);
+    kernel_block(Q.middleCols(start, b), block);
     mean.segment(start, b).noalias() = block.transpose() * alpha;  // 000 eq. 34
-    L.triangularView<Eigen::Lower>().solveInPlace(block);
+    solve_lower(block);
     variance.segment(start, b) =
         (prior_var_ - block.colwise().squaredNorm().array()).max(0.0).matrix().transpose();  // 000 eq. 35
   }
@@ -233,6 +337,14 @@ void Gpis::mean_batch(const Eigen::Ref<const Eigen::Matrix2Xd>& Q, Eigen::Vector
   const auto n = static_cast<Eigen::Index>(n_);
   mean.setZero(Q.cols());
   const double c2 = p_.c * p_.c;
+  if (half_beta_) {
+    if (n == 0) return;
+    std::vector<double> xs, ys;
+    split_points(xs, ys);
+    const Eigen::VectorXd qx = Q.row(0).transpose(), qy = Q.row(1).transpose();
+    detail::imq_mean(xs.data(), ys.data(), alpha_.data(), n, qx.data(), qy.data(), Q.cols(), c2, mean.data());
+    return;
+  }
   for (Eigen::Index j = 0; j < Q.cols(); ++j) {
     const double qx = Q(0, j), qy = Q(1, j);
     double m = 0.0;
@@ -242,6 +354,40 @@ void Gpis::mean_batch(const Eigen::Ref<const Eigen::Matrix2Xd>& Q, Eigen::Vector
     }
     mean(j) = m;
   }
+}
+
+void Gpis::curvature_batch(const Eigen::Ref<const Eigen::Matrix2Xd>& Q, Eigen::VectorXd& kappa,
+                           double min_gradient) const {
+  const Eigen::Index m = Q.cols();
+  kappa.resize(m);
+  if (!half_beta_) {
+    for (Eigen::Index j = 0; j < m; ++j) kappa(j) = curvature(Q.col(j), min_gradient);
+    return;
+  }
+  std::vector<double> xs, ys;
+  split_points(xs, ys);
+  const Eigen::VectorXd qx = Q.row(0).transpose(), qy = Q.row(1).transpose();
+  Eigen::MatrixXd D(m, 5);
+  detail::imq_derivatives(xs.data(), ys.data(), alpha_.data(), static_cast<Eigen::Index>(n_), qx.data(), qy.data(), m,
+                          p_.c * p_.c, D.col(0).data(), D.col(1).data(), D.col(2).data(), D.col(3).data(),
+                          D.col(4).data());
+  for (Eigen::Index j = 0; j < m; ++j) {
+    const Eigen::Vector2d g(D(j, 0), D(j, 1));
+    Eigen::Matrix2d H;
+    H << D(j, 2), D(j, 3), D(j, 3), D(j, 4);
+    const double gn = g.norm();
+    kappa(j) = (!(gn >= min_gradient) || gn == 0.0) ? std::numeric_limits<double>::quiet_NaN()
+                                                      : (g.dot(H * g) - g.squaredNorm() * H.trace()) / (gn * gn * gn);  // 000 eq. 40
+  }
+}
+
+const char* Gpis::backend() {
+  const bool avx2 = std::string(detail::simd_dispatch()) == "avx2";
+#ifdef GPIS_EXPLORER_HAVE_OPENBLAS
+  return avx2 ? "openblas+avx2" : "openblas+baseline";
+#else
+  return avx2 ? "eigen+avx2" : "eigen+baseline";
+#endif
 }
 
 void Gpis::derivatives(const Eigen::Vector2d& x, Eigen::Vector2d* gradient, Eigen::Matrix2d* hessian) const {

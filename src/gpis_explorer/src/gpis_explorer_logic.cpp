@@ -32,6 +32,7 @@ ParamMap GpisExplorerLogic::default_parameters() {
   m.set("grid_size", s.explorer.grid_size);
   m.set("grid_cells", static_cast<int64_t>(s.explorer.grid_cells));  // 000: 10 x 10 onboard
   m.set("grid_variance", s.explorer.grid_variance);
+  m.set("variance_cells", static_cast<int64_t>(s.explorer.variance_cells));
   m.set("corner_curvature", s.explorer.corner_curvature);  // 000 eq. 41, q
   m.set("penalty_scale", s.explorer.penalty_scale);        // 000 eq. 45, c
   m.set("corner_exclusion", s.explorer.corner_exclusion);
@@ -98,6 +99,7 @@ GpisExplorerLogic::Params GpisExplorerLogic::params_from(const ParamMap& m) {
   s.explorer.grid_size = m.get_double("grid_size");
   s.explorer.grid_cells = static_cast<uint32_t>(std::min<int64_t>(nonneg_int("grid_cells"), 1000000));
   s.explorer.grid_variance = m.get_bool("grid_variance");
+  s.explorer.variance_cells = static_cast<uint32_t>(std::min<int64_t>(nonneg_int("variance_cells"), 1000000));
   s.explorer.corner_curvature = m.get_double("corner_curvature");
   s.explorer.penalty_scale = m.get_double("penalty_scale");
   s.explorer.corner_exclusion = m.get_double("corner_exclusion");

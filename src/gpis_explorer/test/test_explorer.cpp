@@ -3,6 +3,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 #include "gpis_explorer/explorer.hpp"
@@ -184,4 +185,59 @@ TEST(Explorer, GridVarianceOffGivesTheSameTarget) {
   EXPECT_EQ(ra.corners.size(), rb.corners.size());
   EXPECT_TRUE(std::isnan(b.grid_variance()[0]));
   for (std::size_t k = 0; k < a.grid_mean().size(); ++k) EXPECT_NEAR(a.grid_mean()[k], b.grid_mean()[k], 1e-12);
+}
+
+// The coarse variance map (variance_cells) is kept between updates: the rows of
+// points added since (incremental Cholesky rows) extend L^-1 k(X, q); after
+// pop_back and new points, and against a map computed from scratch and the
+// exact variance at its nodes (000 eq. 35).
+TEST(Explorer, VarianceMapKeptBetweenUpdatesEqualsFromScratch) {
+  ExplorerParams p = ExplorerParams::onboard();
+  p.gpis.max_points = 300;
+  p.grid_cells = 41;
+  p.variance_cells = 11;
+  GpisExplorer inc(p), scratch(p);
+  std::vector<std::pair<Vector2d, double>> pts;
+  for (int i = 0; i < 120; ++i) {
+    const double t = -1.0 + 2.0 * (i / 4 + 0.5) / 30.0;
+    const Vector2d q = i % 4 == 0 ? Vector2d(t, -1.0) : i % 4 == 1 ? Vector2d(t, 1.0) : i % 4 == 2 ? Vector2d(-1.0, t) : Vector2d(1.0, t);
+    pts.emplace_back(Eigen::Rotation2Dd(0.3) * q, 0.0);
+    if (i % 10 == 9) pts.emplace_back(Vector2d(0.05 * (i / 10) - 0.3, 0.03 * (i / 10) - 0.15), -1.0);
+  }
+  const std::size_t half = pts.size() / 2;
+  for (std::size_t i = 0; i < half; ++i) ASSERT_EQ(inc.add_point(pts[i].first, pts[i].second), AddStatus::kAdded);
+  inc.update();
+  for (int k = 0; k < 3; ++k) inc.pop_back();
+  for (std::size_t i = half - 3; i < pts.size(); ++i) ASSERT_EQ(inc.add_point(pts[i].first, pts[i].second), AddStatus::kAdded);
+  inc.update();
+  for (const auto& [q, l] : pts) ASSERT_EQ(scratch.add_point(q, l), AddStatus::kAdded);
+  scratch.update();
+  ASSERT_EQ(inc.grid_variance().size(), 41u * 41u);
+  for (std::size_t k = 0; k < inc.grid_variance().size(); ++k) {
+    EXPECT_NEAR(inc.grid_variance()[k], scratch.grid_variance()[k], 1e-10) << k;
+  }
+  // Grid nodes that are map nodes (every 4th: 40 / 10) carry the exact variance.
+  Eigen::VectorXd m, v;
+  inc.gpis().predict_batch(inc.variance_nodes(), m, v);
+  for (uint32_t b = 0; b < 11; ++b) {
+    for (uint32_t a = 0; a < 11; ++a) {
+      EXPECT_NEAR(inc.grid_variance()[(4 * b) * 41 + 4 * a], v(b * 11 + a), 1e-10);
+    }
+  }
+  // The target does not depend on the map (exact variance at the contour points).
+  p.variance_cells = 0;
+  GpisExplorer full(p);
+  for (const auto& [q, l] : pts) ASSERT_EQ(full.add_point(q, l), AddStatus::kAdded);
+  const auto& rf = full.update();
+  ASSERT_TRUE(rf.has_target && inc.last().has_target);
+  EXPECT_NEAR((rf.target - inc.last().target).norm(), 0.0, 1e-12);
+  EXPECT_NEAR(rf.target_variance, inc.last().target_variance, 1e-12);
+}
+
+TEST(Explorer, VarianceCellsValidated) {
+  ExplorerParams p = ExplorerParams::onboard();
+  p.variance_cells = 1;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p.variance_cells = 2;
+  EXPECT_NO_THROW(p.validate());
 }

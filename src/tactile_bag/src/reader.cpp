@@ -9,10 +9,15 @@
 #include <set>
 #include <string>
 
+#include <unistd.h>
+
 #include <yaml-cpp/yaml.h>
 
+#include "codec.hpp"
 #include "internal.hpp"
+#include "mcap.hpp"
 #include "tactile_bag/bag.hpp"
+#include "tactile_bag/distro.hpp"
 
 namespace fs = std::filesystem;
 
@@ -26,6 +31,7 @@ struct MetaTopic {
 
 struct Metadata {
   int version = 0;
+  std::string storage = "sqlite3", compression_format, compression_mode, ros_distro;
   std::vector<std::string> files;
   std::vector<MetaTopic> topics;
   uint64_t message_count = 0;
@@ -72,18 +78,32 @@ Metadata parse_metadata(const std::string& file, const std::string& dir) {
                    std::to_string(m.version) + " (this reader supports 1..9)");
   }
   const auto storage = need_as<std::string>(info, "storage_identifier", file, top, "a string");
-  if (storage != "sqlite3") {
+  if (storage != "sqlite3" && storage != "mcap") {
     throw BagError(file + ": key '" + top + ".storage_identifier': storage '" + storage +
-                   "' is not supported (only sqlite3; convert the bag with "
-                   "'ros2 bag convert' to sqlite3)");
+                   "' is not supported (sqlite3 and mcap are)");
   }
+  m.storage = storage;
   if (m.version >= 3 && info["compression_mode"]) {
-    const auto mode = need_as<std::string>(info, "compression_mode", file, top, "a string");
-    if (!mode.empty() && mode != "NONE" && mode != "none") {
-      throw BagError(file + ": key '" + top + ".compression_mode': compressed bags ('" + mode +
-                     "') are not supported");
+    std::string mode = need_as<std::string>(info, "compression_mode", file, top, "a string");
+    std::transform(mode.begin(), mode.end(), mode.begin(), ::toupper);
+    std::string format;
+    if (info["compression_format"]) {
+      format = need_as<std::string>(info, "compression_format", file, top, "a string");
+    }
+    if (!mode.empty() && mode != "NONE") {
+      if (mode != "FILE" && mode != "MESSAGE") {
+        throw BagError(file + ": key '" + top + ".compression_mode': unknown mode '" + mode +
+                       "' (FILE, MESSAGE or NONE)");
+      }
+      if (format != "zstd") {
+        throw BagError(file + ": key '" + top + ".compression_format': '" + format +
+                       "' is not supported (rosbag2 compresses with zstd)");
+      }
+      m.compression_mode = mode;
+      m.compression_format = format;
     }
   }
+  if (info["ros_distro"] && info["ros_distro"].IsScalar()) m.ros_distro = info["ros_distro"].Scalar();
   YAML::Node paths = need(info, "relative_file_paths", file, top);
   if (!paths.IsSequence()) {
     throw BagError(file + ": key '" + top + ".relative_file_paths': expected a sequence");
@@ -196,6 +216,8 @@ std::string col_text(sqlite3_stmt* s, int i) {
 
 }  // namespace
 
+Reader::Reader() = default;
+Reader::Reader(const std::string& dir) { open(dir); }
 Reader::~Reader() { close(); }
 
 void Reader::close() {
@@ -204,6 +226,17 @@ void Reader::close() {
     sqlite3_close(f.db);
   }
   files_.clear();
+  mcap_files_.clear();
+  for (const auto& t : temp_files_) {
+    std::error_code ec;
+    fs::remove(t, ec);
+  }
+  temp_files_.clear();
+  upgraded_.clear();
+  storage_ = "sqlite3";
+  compression_format_.clear();
+  compression_mode_.clear();
+  ros_distro_.clear();
   db_paths_.clear();
   topics_.clear();
   counts_.clear();
@@ -241,9 +274,14 @@ void Reader::open(const std::string& dir) {
     meta = parse_metadata(meta_path, dir);
     have_meta = true;
     metadata_version_ = meta.version;
+    storage_ = meta.storage;
+    compression_format_ = meta.compression_format;
+    compression_mode_ = meta.compression_mode;
+    ros_distro_ = meta.ros_distro;
     for (const auto& f : meta.files) {
       if (!fs::exists(f, ec)) {
-        throw BagError(f + ": database file named in " + meta_path + " does not exist");
+        throw BagError(f + ": " + (storage_ == "mcap" ? "mcap" : "database") + " file named in " +
+                       meta_path + " does not exist");
       }
     }
     db_paths_ = meta.files;
@@ -253,11 +291,12 @@ void Reader::open(const std::string& dir) {
       if (e.path().extension() == ".db3") found.push_back(e.path().string());
       if (e.path().extension() == ".mcap") mcap.push_back(e.path().string());
     }
+    if (found.empty() && !mcap.empty()) {
+      found = mcap;
+      storage_ = "mcap";
+    }
     if (found.empty()) {
-      if (!mcap.empty()) {
-        throw BagError(mcap.front() + ": mcap storage is not supported (only sqlite3)");
-      }
-      throw BagError(dir + ": no metadata.yaml and no .db3 file: not a rosbag2 bag");
+      throw BagError(dir + ": no metadata.yaml and no .db3 file (nor .mcap): not a rosbag2 bag");
     }
     // Order split files by their numeric suffix (<name>_<n>.db3).
     auto index_of = [](const std::string& p) {
@@ -280,10 +319,33 @@ void Reader::open(const std::string& dir) {
   int64_t tmin = 0, tmax = 0;
   bool any = false;
   try {
-    files_.resize(db_paths_.size());
-    for (size_t i = 0; i < db_paths_.size(); ++i) {
-      files_[i].path = db_paths_[i];
-      open_file(files_[i], db_topics, db_counts, tmin, tmax, any);
+    // File-mode compression: every file is one zstd stream; read a decompressed copy.
+    std::vector<std::string> paths = db_paths_;
+    if (compression_mode_ == "FILE") {
+      for (auto& p : paths) {
+        const fs::path tmp = fs::temp_directory_path() /
+                             ("tactile_bag_" + std::to_string(::getpid()) + "_" +
+                              std::to_string(reinterpret_cast<uintptr_t>(this)) + "_" +
+                              fs::path(p).stem().string());
+        temp_files_.push_back(tmp.string());
+        codec::decompress_zstd_file(p, tmp.string());
+        p = tmp.string();
+      }
+    }
+    if (storage_ == "mcap") {
+      for (const auto& p : paths) {
+        McapFile mf;
+        mf.reader = std::make_unique<mcap::FileReader>();
+        mf.reader->open(p);
+        mcap_files_.push_back(std::move(mf));
+      }
+      open_mcap(db_topics, db_counts, tmin, tmax, any);
+    } else {
+      files_.resize(paths.size());
+      for (size_t i = 0; i < paths.size(); ++i) {
+        files_[i].path = paths[i];
+        open_file(files_[i], db_topics, db_counts, tmin, tmax, any);
+      }
     }
   } catch (...) {
     close();
@@ -334,6 +396,71 @@ void Reader::open(const std::string& dir) {
     if (!note.empty()) {
       metadata_complete_ = false;
       recovery_note_ = note + " (recording not closed?); using the database";
+    }
+  }
+  for (const auto& mf : mcap_files_) {
+    if (!mf.reader->complete()) {
+      metadata_complete_ = false;
+      recovery_note_ += (recovery_note_.empty() ? "" : "; ") + mf.reader->path() + ": " +
+                        mf.reader->recovery_note();
+    }
+  }
+  // sensor_msgs/Range in Humble's layout (no variance): by its definition where the bag
+  // stores one, else by the bag's distro (Humble/Iron, or metadata older than Jazzy's).
+  for (const auto& t : topics_) {
+    if (t.type != "sensor_msgs/msg/Range") continue;
+    bool old_layout;
+    if (!t.type_definition.empty() && t.definition_encoding == "ros2msg") {
+      old_layout = !definition_has_field(t.type_definition, t.type, t.type, "variance");
+    } else if (!ros_distro_.empty()) {
+      old_layout = ros_distro_ == "humble" || ros_distro_ == "iron" || ros_distro_ == "foxy" ||
+                   ros_distro_ == "galactic";
+    } else {
+      old_layout = metadata_version_ > 0 && metadata_version_ < 9;
+    }
+    if (old_layout) upgraded_.push_back(t.name);
+  }
+}
+
+void Reader::open_mcap(std::map<std::string, TopicInfo>& found, std::map<std::string, uint64_t>& counts,
+                       int64_t& tmin, int64_t& tmax, bool& any) {
+  for (auto& mf : mcap_files_) {
+    const auto& r = *mf.reader;
+    mf.channel_topic.assign(65536, std::string());
+    for (const auto& [id, ch] : r.channels()) {
+      mf.channel_topic[id] = ch.topic;
+      if (found.count(ch.topic) != 0) continue;
+      TopicInfo t;
+      t.name = ch.topic;
+      t.serialization_format = ch.encoding;
+      auto sc = r.schemas().find(ch.schema_id);
+      if (sc != r.schemas().end()) {
+        t.type = sc->second.name;
+        t.type_definition = sc->second.data;
+        t.definition_encoding = sc->second.encoding;
+      }
+      auto q = ch.metadata.find("offered_qos_profiles");
+      if (q != ch.metadata.end() && !q->second.empty()) {
+        try {
+          t.offered_qos_profiles = dump_qos_profiles(parse_qos_profiles(q->second), 9);
+        } catch (const BagError&) {
+          t.offered_qos_profiles = q->second;
+        }
+      }
+      auto h = ch.metadata.find("topic_type_hash");
+      if (h != ch.metadata.end()) t.type_description_hash = h->second;
+      found[t.name] = t;
+    }
+    for (const auto& [id, n] : r.channel_counts()) counts[mf.channel_topic[id]] += n;
+    if (r.message_count() > 0) {
+      const auto lo = static_cast<int64_t>(r.start_time()), hi = static_cast<int64_t>(r.end_time());
+      if (!any || lo < tmin) tmin = lo;
+      if (!any || hi > tmax) tmax = hi;
+      any = true;
+    }
+    if (ros_distro_.empty()) {
+      auto m = r.metadata().find("rosbag2");
+      if (m != r.metadata().end() && m->second.count("ros_distro") != 0) ros_distro_ = m->second.at("ros_distro");
     }
   }
 }
@@ -459,6 +586,20 @@ void Reader::set_topic_filter(const std::vector<std::string>& topics) {
 void Reader::reset() { iter_ready_ = false; }
 
 void Reader::prepare_iteration() {
+  if (!mcap_files_.empty()) {
+    for (auto& mf : mcap_files_) {
+      std::vector<uint16_t> ids;
+      if (!filter_.empty()) {
+        for (const auto& [id, ch] : mf.reader->channels()) {
+          if (std::find(filter_.begin(), filter_.end(), ch.topic) != filter_.end()) ids.push_back(id);
+        }
+        if (ids.empty()) ids.push_back(65535);  // nothing wanted: a channel that cannot match
+      }
+      mf.reader->set_channel_filter(ids);
+    }
+    iter_ready_ = true;
+    return;
+  }
   if (files_.empty()) throw BagError("tactile_bag::Reader: read_next on a reader that is not open");
   for (auto& f : files_) {
     sqlite3_finalize(f.stmt);
@@ -496,8 +637,47 @@ void Reader::step(File& f) {
   }
 }
 
+bool Reader::read_next_mcap(SerializedMessage& out) {
+  McapFile* best = nullptr;
+  uint64_t best_t = 0;
+  for (auto& mf : mcap_files_) {
+    uint64_t t;
+    if (mf.reader->peek_time(t) && (best == nullptr || t < best_t)) {
+      best = &mf;
+      best_t = t;
+    }
+  }
+  if (best == nullptr) return false;
+  mcap::FileReader::Message m{};
+  best->reader->next(m);
+  out.topic = best->channel_topic[m.channel_id];
+  out.timestamp_ns = static_cast<int64_t>(m.log_time);
+  out.data.assign(m.data, m.data + m.size);
+  return true;
+}
+
+void Reader::finish_message(SerializedMessage& out) {
+  if (compression_mode_ == "MESSAGE") {
+    codec::decompress(compression_format_, out.data.data(), out.data.size(), 0, scratch_,
+                      dir_ + ": message on '" + out.topic + "' at " + std::to_string(out.timestamp_ns) + " ns");
+    out.data.swap(scratch_);
+  }
+  if (!upgraded_.empty() && std::find(upgraded_.begin(), upgraded_.end(), out.topic) != upgraded_.end()) {
+    const size_t n = range_payload_size_without_variance(out.data.data(), out.data.size());
+    if (n != 0) {
+      out.data.resize(n);
+      out.data.insert(out.data.end(), 4, 0);  // variance 0: unknown
+    }
+  }
+}
+
 bool Reader::read_next(SerializedMessage& out) {
   if (!iter_ready_) prepare_iteration();
+  if (!mcap_files_.empty()) {
+    if (!read_next_mcap(out)) return false;
+    finish_message(out);
+    return true;
+  }
   File* best = nullptr;
   for (auto& f : files_) {
     if (f.has_row && (best == nullptr || f.ts < best->ts)) best = &f;
@@ -514,6 +694,7 @@ bool Reader::read_next(SerializedMessage& out) {
   const int n = sqlite3_column_bytes(best->stmt, 2);
   out.data.assign(blob, blob + (blob != nullptr ? n : 0));
   step(*best);
+  finish_message(out);
   return true;
 }
 

@@ -19,7 +19,9 @@
 #include <yaml-cpp/yaml.h>
 
 #include "internal.hpp"
+#include "mcap.hpp"
 #include "tactile_bag/bag.hpp"
+#include "tactile_bag/distro.hpp"
 
 namespace fs = std::filesystem;
 
@@ -37,8 +39,12 @@ const char* kSchemaSql =
     " encoding TEXT NOT NULL, encoded_message_definition TEXT NOT NULL,"
     " type_description_hash TEXT NOT NULL);"
     "CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL,"
-    " timestamp INTEGER NOT NULL, data BLOB NOT NULL);"
-    "CREATE INDEX timestamp_idx ON messages (timestamp ASC);";
+    " timestamp INTEGER NOT NULL, data BLOB NOT NULL);";
+// rosbag2's index on the message timestamps, built by close() in one sorted
+// pass instead of updated on every insert: a recording spent about a third of
+// its sqlite time keeping it (issue 18). A killed recording has no index; its
+// messages are read in timestamp order all the same (ORDER BY), only slower.
+const char* kIndexSql = "CREATE INDEX IF NOT EXISTS timestamp_idx ON messages (timestamp ASC);";
 
 constexpr int kSchemaVersion = 4;
 
@@ -58,6 +64,18 @@ struct Stmt {
 Writer::Writer() : Writer(WriterOptions{}) {}
 
 Writer::Writer(WriterOptions options) : opt_(std::move(options)) {
+  if (!opt_.ros_distro.empty()) {
+    check_distro(opt_.ros_distro, "WriterOptions.ros_distro");
+    if (opt_.metadata_version == 0) opt_.metadata_version = metadata_version_for_distro(opt_.ros_distro);
+  }
+  if (opt_.metadata_version == 0) opt_.metadata_version = 9;
+  if (opt_.storage != "sqlite3" && opt_.storage != "mcap") {
+    throw BagError("WriterOptions.storage: must be sqlite3 or mcap, got '" + opt_.storage + "'");
+  }
+  if (!opt_.compression.empty() && (opt_.storage != "mcap" || (opt_.compression != "zstd" && opt_.compression != "lz4"))) {
+    throw BagError("WriterOptions.compression: '" + opt_.compression +
+                   "' is not supported (mcap chunk compression: zstd or lz4; sqlite3 bags are written uncompressed)");
+  }
   if (opt_.metadata_version != 5 && opt_.metadata_version != 8 && opt_.metadata_version != 9) {
     throw BagError("WriterOptions.metadata_version: must be 5, 8 or 9, got " +
                    std::to_string(opt_.metadata_version));
@@ -67,6 +85,7 @@ Writer::Writer(WriterOptions options) : opt_(std::move(options)) {
                    std::to_string(opt_.flush_interval.count()) + " ms");
   }
   if (opt_.ros_distro.empty()) opt_.ros_distro = distro_for(opt_.metadata_version);
+  hash_types_ = distro_has_type_hashes(opt_.ros_distro) && opt_.metadata_version >= 7;
 }
 
 Writer::~Writer() {
@@ -93,7 +112,7 @@ void Writer::exec(const char* sql) {
 }
 
 void Writer::open(const std::string& dir) {
-  if (db_ != nullptr) throw BagError(dir + ": writer is already open on " + dir_);
+  if (is_open()) throw BagError(dir + ": writer is already open on " + dir_);
   fs::path p = fs::path(dir).lexically_normal();
   if (p.filename().empty()) p = p.parent_path();
   std::error_code ec;
@@ -106,8 +125,26 @@ void Writer::open(const std::string& dir) {
     throw BagError(p.string() + ": cannot create bag directory: " + ec.message());
   }
   dir_ = p.string();
-  db_name_ = p.filename().string() + "_0.db3";
+  db_name_ = p.filename().string() + (opt_.storage == "mcap" ? "_0.mcap" : "_0.db3");
   db_path_ = (p / db_name_).string();
+  if (opt_.storage == "mcap") {
+    auto w = std::make_unique<mcap::FileWriter>();
+    mcap::WriterConfig cfg;
+    cfg.compression = opt_.compression;
+    cfg.chunk_size = opt_.chunk_size;
+    w->open(db_path_, cfg, "tactile_bag");
+    std::lock_guard<std::mutex> lk(mu_);
+    mcap_ = std::move(w);
+    topics_.clear();
+    topic_order_.clear();
+    count_ = 0;
+    min_ts_ = max_ts_ = 0;
+    last_commit_ = std::chrono::steady_clock::now();
+    write_metadata_locked();
+    stop_ = false;
+    flusher_ = std::thread([this] { flusher_main(); });
+    return;
+  }
 
   // Every call into the connection holds mu_, so sqlite's own per-call mutex is
   // redundant (NOMUTEX: sqlite's multi-thread mode).
@@ -174,7 +211,7 @@ uint64_t Writer::message_count() const {
 
 void Writer::create_topic(const TopicInfo& topic) {
   std::lock_guard<std::mutex> lk(mu_);
-  if (db_ == nullptr) throw BagError(topic.name + ": create_topic on a writer that is not open");
+  if (!is_open()) throw BagError(topic.name + ": create_topic on a writer that is not open");
   if (topic.name.empty() || topic.type.empty()) {
     throw BagError(db_path_ + ": create_topic: topic name and type must not be empty");
   }
@@ -195,6 +232,23 @@ void Writer::create_topic(const TopicInfo& topic) {
     profiles = parse_qos_profiles(topic.offered_qos_profiles, ctx);
   }
   st.info.offered_qos_profiles = dump_qos_profiles(profiles, opt_.metadata_version);
+  prepare_topic_locked(st);
+  if (mcap_ != nullptr) {
+    const uint16_t schema = st.info.type_definition.empty()
+                                ? 0
+                                : mcap_->add_schema(st.info.type, st.info.definition_encoding,
+                                                    st.info.type_definition);
+    mcap::StringMap meta;
+    meta["offered_qos_profiles"] = st.info.offered_qos_profiles;
+    if (opt_.metadata_version >= 7) meta["topic_type_hash"] = st.info.type_description_hash;
+    st.id = mcap_->add_channel(schema, st.info.name, st.info.serialization_format, meta);
+    topics_.emplace(topic.name, st);
+    topic_order_.push_back(topic.name);
+    write_metadata_locked();
+    return;
+  }
+  const TopicInfo& topic_in = topic;
+  (void)topic_in;
 
   begin_locked();
   {
@@ -213,7 +267,7 @@ void Writer::create_topic(const TopicInfo& topic) {
     if (sqlite3_step(s.s) != SQLITE_DONE) fail("insert topic '" + topic.name + "'");
     st.id = sqlite3_last_insert_rowid(db_);
   }
-  if (!topic.type_definition.empty() && defined_types_.count(topic.type) == 0) {
+  if (!st.info.type_definition.empty() && defined_types_.count(topic.type) == 0) {
     Stmt s;
     if (sqlite3_prepare_v2(db_,
                            "INSERT INTO message_definitions(topic_type, encoding,"
@@ -223,9 +277,9 @@ void Writer::create_topic(const TopicInfo& topic) {
       fail("prepare message definition insert");
     }
     sqlite3_bind_text(s.s, 1, topic.type.c_str(), -1, SQLITE_TRANSIENT);
-    sqlite3_bind_text(s.s, 2, topic.definition_encoding.c_str(), -1, SQLITE_TRANSIENT);
-    sqlite3_bind_text(s.s, 3, topic.type_definition.c_str(), -1, SQLITE_TRANSIENT);
-    sqlite3_bind_text(s.s, 4, topic.type_description_hash.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(s.s, 2, st.info.definition_encoding.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(s.s, 3, st.info.type_definition.c_str(), -1, SQLITE_TRANSIENT);
+    sqlite3_bind_text(s.s, 4, st.info.type_description_hash.c_str(), -1, SQLITE_TRANSIENT);
     if (sqlite3_step(s.s) != SQLITE_DONE) fail("insert definition of '" + topic.type + "'");
     defined_types_[topic.type] = true;
   }
@@ -242,6 +296,7 @@ void Writer::begin_locked() {
 }
 
 void Writer::commit_locked() {
+  if (mcap_ != nullptr) mcap_->flush();
   if (in_txn_) {
     exec("COMMIT;");
     in_txn_ = false;
@@ -252,12 +307,26 @@ void Writer::commit_locked() {
 void Writer::write(const std::string& topic, int64_t timestamp_ns, const uint8_t* data,
                    size_t size) {
   std::lock_guard<std::mutex> lk(mu_);
-  if (db_ == nullptr) throw BagError(topic + ": write on a writer that is not open");
+  if (!is_open()) throw BagError(topic + ": write on a writer that is not open");
   auto it = topics_.find(topic);
   if (it == topics_.end()) {
     throw BagError(db_path_ + ": write: topic '" + topic + "' has not been created");
   }
   if (size > 0 && data == nullptr) throw BagError(db_path_ + ": write: null data");
+  if (it->second.drop_range_variance) {
+    // Humble/Iron layout: the payload ends after `range` (tactile_bag/distro.hpp).
+    const size_t cut = range_payload_size_without_variance(data, size);
+    if (cut == 0 || cut + 4 != size) {
+      throw BagError(db_path_ + ": write: message on '" + topic + "' (" + std::to_string(size) +
+                     " bytes) is not a sensor_msgs/msg/Range in the Jazzy/Kilted layout, cannot "
+                     "convert it to " + opt_.ros_distro + "'s layout");
+    }
+    size = cut;
+  }
+  if (mcap_ != nullptr) {
+    write_mcap_locked(it->second, timestamp_ns, data, size);
+    return;
+  }
   if (size > static_cast<size_t>(sqlite3_limit(db_, SQLITE_LIMIT_LENGTH, -1))) {
     throw BagError(db_path_ + ": write: message of " + std::to_string(size) +
                    " bytes on '" + topic + "' exceeds the sqlite blob limit");
@@ -268,8 +337,7 @@ void Writer::write(const std::string& topic, int64_t timestamp_ns, const uint8_t
   static const uint8_t kEmpty = 0;
   sqlite3_bind_blob64(insert_, 3, size > 0 ? data : &kEmpty, size, SQLITE_STATIC);
   const int rc = sqlite3_step(insert_);
-  sqlite3_reset(insert_);
-  sqlite3_clear_bindings(insert_);
+  sqlite3_reset(insert_);  // every parameter is bound again by the next write
   if (rc != SQLITE_DONE) fail("insert message on '" + topic + "'");
   if (count_ == 0 || timestamp_ns < min_ts_) min_ts_ = timestamp_ns;
   if (count_ == 0 || timestamp_ns > max_ts_) max_ts_ = timestamp_ns;
@@ -278,9 +346,48 @@ void Writer::write(const std::string& topic, int64_t timestamp_ns, const uint8_t
   if (std::chrono::steady_clock::now() - last_commit_ >= opt_.flush_interval) commit_locked();
 }
 
+void Writer::write_mcap_locked(TopicState& st, int64_t timestamp_ns, const uint8_t* data, size_t size) {
+  if (timestamp_ns < 0) {
+    throw BagError(db_path_ + ": write: negative timestamp " + std::to_string(timestamp_ns) +
+                   " ns on '" + st.info.name + "' (mcap log times are unsigned)");
+  }
+  mcap_->write(static_cast<uint16_t>(st.id), static_cast<uint64_t>(timestamp_ns), data, size);
+  if (count_ == 0 || timestamp_ns < min_ts_) min_ts_ = timestamp_ns;
+  if (count_ == 0 || timestamp_ns > max_ts_) max_ts_ = timestamp_ns;
+  ++count_;
+  ++st.count;
+  if (std::chrono::steady_clock::now() - last_commit_ >= opt_.flush_interval) commit_locked();
+}
+
+void Writer::prepare_topic_locked(TopicState& st) const {
+  TopicInfo& t = st.info;
+  if (t.type == "sensor_msgs/msg/Range" && distro_range_without_variance(opt_.ros_distro)) {
+    bool has_section = false;
+    const bool has_variance = t.type_definition.empty() ||
+                              definition_has_field(t.type_definition, t.type, t.type, "variance", &has_section);
+    if (has_variance) {
+      st.drop_range_variance = true;
+      if (!t.type_definition.empty()) {
+        t.type_definition = remove_field_from_definition(t.type_definition, t.type, t.type, "variance");
+      }
+    }
+  } else if (distro_range_without_variance(opt_.ros_distro) && !t.type_definition.empty()) {
+    bool nests = false;
+    definition_has_field(t.type_definition, t.type, "sensor_msgs/msg/Range", "variance", &nests);
+    if (nests) {
+      throw BagError(db_path_ + ": topic '" + t.name + "' (" + t.type + ") nests sensor_msgs/msg/Range, "
+                     "which cannot be converted to " + opt_.ros_distro + "'s Range layout");
+    }
+  }
+  if (hash_types_ && t.type_description_hash.empty() && !t.type_definition.empty() &&
+      t.definition_encoding == "ros2msg") {
+    t.type_description_hash = rihs01_hash(t.type, t.type_definition);
+  }
+}
+
 void Writer::flush() {
   std::lock_guard<std::mutex> lk(mu_);
-  if (db_ != nullptr) commit_locked();
+  if (is_open()) commit_locked();
 }
 
 void Writer::flusher_main() {
@@ -290,8 +397,8 @@ void Writer::flusher_main() {
                           : std::chrono::milliseconds(1);
   while (!stop_) {
     cv_.wait_for(lk, period);
-    if (stop_ || db_ == nullptr) break;
-    if (in_txn_ && std::chrono::steady_clock::now() - last_commit_ >= opt_.flush_interval) {
+    if (stop_ || !is_open()) break;
+    if ((in_txn_ || mcap_ != nullptr) && std::chrono::steady_clock::now() - last_commit_ >= opt_.flush_interval) {
       try {
         commit_locked();
       } catch (const std::exception& e) {
@@ -307,7 +414,7 @@ std::string Writer::metadata_yaml_locked(bool with_root) const {
   const int64_t duration = count_ > 0 ? max_ts_ - min_ts_ : 0;
   YAML::Node info;
   info["version"] = v;
-  info["storage_identifier"] = "sqlite3";
+  info["storage_identifier"] = opt_.storage;
   info["duration"]["nanoseconds"] = duration;
   info["starting_time"]["nanoseconds_since_epoch"] = start;
   info["message_count"] = count_;
@@ -383,9 +490,26 @@ void Writer::close() {
     flusher_.join();
   }
   std::lock_guard<std::mutex> lk(mu_);
+  if (mcap_ != nullptr) {
+    std::string error;
+    try {
+      mcap_->flush();
+      // What rosbag2's mcap plugin stores: the final metadata and the distro.
+      mcap_->set_metadata("rosbag2", {{"serialized_metadata", metadata_yaml_locked(false)},
+                                      {"ros_distro", opt_.ros_distro}});
+      mcap_->close();
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    mcap_.reset();
+    write_metadata_locked();
+    if (!error.empty()) throw BagError(error);
+    return;
+  }
   if (db_ == nullptr) return;
   std::string error;
   try {
+    exec(kIndexSql);
     commit_locked();
     // The final metadata is also stored in the database, as rosbag2 does; its
     // version tells ROS 2 how to parse the QoS strings of the topics table.

@@ -279,7 +279,9 @@ TEST(Bag, HumbleVersion5UsesIntegerQosString) {
   ASSERT_EQ(p.size(), 1u);
   EXPECT_EQ(p[0].reliability, "reliable");
   EXPECT_EQ(p[0].durability, "volatile");
-  EXPECT_THROW(Writer(tactile_bag::WriterOptions{7, std::chrono::milliseconds(250), ""}), BagError);
+  tactile_bag::WriterOptions bad;
+  bad.metadata_version = 7;
+  EXPECT_THROW(Writer{bad}, BagError);
 }
 
 TEST(Bag, QosParsingBothSpellingsAndErrors) {
@@ -399,7 +401,7 @@ TEST(BagErrors, MissingDirectoryAndDatabase) {
   fs::remove(dir + "/sample_0.db3");
   expect_error([&] { Reader r(dir); }, {"sample_0.db3", "does not exist", "metadata.yaml"});
   write_file(tmp.sub("nodb") + "/x.mcap", "mcap");
-  expect_error([&] { Reader r(tmp.sub("nodb")); }, {"x.mcap", "mcap", "not supported"});
+  expect_error([&] { Reader r(tmp.sub("nodb")); }, {"x.mcap", "byte 0", "not an mcap file", "bad magic"});
 }
 
 TEST(BagErrors, CorruptAndTruncatedDatabase) {
@@ -468,8 +470,10 @@ TEST(BagErrors, BadMetadata) {
   expect_error([&] { Reader r(dir); }, {"metadata.yaml", "version", "unsupported version 10"});
   with("version: 9", "version: nine");
   expect_error([&] { Reader r(dir); }, {"metadata.yaml", "version", "expected an integer"});
-  with("storage_identifier: sqlite3", "storage_identifier: mcap");
-  expect_error([&] { Reader r(dir); }, {"metadata.yaml", "storage_identifier", "mcap", "not supported"});
+  with("storage_identifier: sqlite3", "storage_identifier: rosbag_v1");
+  expect_error([&] { Reader r(dir); }, {"metadata.yaml", "storage_identifier", "rosbag_v1", "not supported"});
+  with("storage_identifier: sqlite3", "storage_identifier: mcap");  // but names a .db3
+  expect_error([&] { Reader r(dir); }, {"sample_0.db3", "byte 0", "not an mcap file"});
   with("message_count: 15", "message_count: lots");
   expect_error([&] { Reader r(dir); }, {"metadata.yaml", "message_count", "unsigned integer"});
   with("reliability: reliable", "reliability: sometimes");
@@ -477,7 +481,7 @@ TEST(BagErrors, BadMetadata) {
                {"metadata.yaml", "topics_with_message_count[0].topic_metadata.offered_qos_profiles",
                 "reliability", "sometimes"});
   with("compression_mode: \"\"", "compression_mode: FILE");
-  expect_error([&] { Reader r(dir); }, {"metadata.yaml", "compression_mode", "not supported"});
+  expect_error([&] { Reader r(dir); }, {"metadata.yaml", "compression_format", "not supported"});
   // Oversized garbage: a large random file must be rejected, not crash.
   std::string junk(1 << 20, 'x');
   std::mt19937 gen(3);

@@ -196,19 +196,6 @@ def test_rosbags_bag_is_read_by_tactile_bag(tmp_path, version):
     assert '/whisker/right/pressure | tactile_msgs/msg/WhiskerPressure | cdr | 1 msgs' in info
 
 
-def test_rosbags_mcap_bag_is_rejected_with_reason(tmp_path):
-    ts = get_typestore(Stores.LATEST)
-    bag = tmp_path / 'mcap_bag'
-    with Writer(bag, version=9, storage_plugin=StoragePlugin.MCAP) as w:
-        c = w.add_connection('/chatter', 'std_msgs/msg/String', typestore=ts)
-        w.write(c, 1, ts.serialize_cdr(ts.types['std_msgs/msg/String'](data='x'),
-                                       'std_msgs/msg/String'))
-    res = run_tool('dump', bag, check=False)
-    assert res.returncode == 1
-    assert 'metadata.yaml' in res.stderr
-    assert "storage 'mcap' is not supported" in res.stderr
-
-
 def test_tool_errors_name_the_path(tmp_path):
     res = run_tool('info', tmp_path / 'missing', check=False)
     assert res.returncode == 1

@@ -1,4 +1,4 @@
-// tactile_bag_tool: inspect, dump and create rosbag2 (sqlite3) bags without ROS.
+// tactile_bag_tool: inspect, dump and create rosbag2 (sqlite3, mcap) bags without ROS.
 //
 //   tactile_bag_tool info DIR           topics, types, counts, duration
 //   tactile_bag_tool dump DIR [TOPIC..] one JSON object per message:
@@ -13,6 +13,8 @@
 
 #include "sample.hpp"
 #include "tactile_bag/bag.hpp"
+#include "tactile_bag/distro.hpp"
+#include "tactile_msgs/cdr/registry.hpp"
 
 namespace {
 
@@ -37,17 +39,32 @@ std::string json_escape(const std::string& s) {
   return out;
 }
 
+// Every type of tactile_msgs' registry with the RIHS01 hash of its definition (what the writer
+// stores for jazzy/kilted bags): "type hash" per line.
+int hashes() {
+  for (const auto& t : tactile_msgs::cdr::all_types()) {
+    const std::string name(t.name);
+    std::cout << name << " " << tactile_bag::rihs01_hash(name, std::string(t.definition)) << "\n";
+  }
+  return 0;
+}
+
 int usage() {
   std::cerr << "usage: tactile_bag_tool info DIR\n"
                "       tactile_bag_tool dump DIR [TOPIC...]\n"
-               "       tactile_bag_tool write-sample DIR [--version 5|8|9]\n";
+               "       tactile_bag_tool hashes            # RIHS01 of every tactile_msgs type\n"
+               "       tactile_bag_tool write-sample DIR [--version 5|8|9] [--storage sqlite3|mcap]\n"
+               "                                    [--compression zstd|lz4] [--distro humble|iron|jazzy|kilted]\n";
   return 2;
 }
 
 int info(const std::string& dir) {
   tactile_bag::Reader r(dir);
   std::cout << "bag:          " << dir << "\n"
-            << "storage:      sqlite3\n"
+            << "storage:      " << r.storage_identifier()
+            << (r.compression_mode().empty() ? "" : " (" + r.compression_format() + ", " + r.compression_mode() + " mode)")
+            << "\n"
+            << "ros_distro:   " << (r.ros_distro().empty() ? "(not stored)" : r.ros_distro()) << "\n"
             << "metadata:     "
             << (r.metadata_version() > 0 ? "version " + std::to_string(r.metadata_version())
                                          : std::string("missing"))
@@ -89,6 +106,14 @@ int dump(const std::string& dir, const std::vector<std::string>& filter) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc == 2 && std::strcmp(argv[1], "hashes") == 0) {
+    try {
+      return hashes();
+    } catch (const std::exception& e) {
+      std::cerr << "tactile_bag_tool: " << e.what() << "\n";
+      return 1;
+    }
+  }
   if (argc < 3) return usage();
   const std::string cmd = argv[1];
   const std::string dir = argv[2];
@@ -100,6 +125,12 @@ int main(int argc, char** argv) {
       for (int i = 3; i < argc; ++i) {
         if (std::strcmp(argv[i], "--version") == 0 && i + 1 < argc) {
           opt.metadata_version = std::stoi(argv[++i]);
+        } else if (std::strcmp(argv[i], "--storage") == 0 && i + 1 < argc) {
+          opt.storage = argv[++i];
+        } else if (std::strcmp(argv[i], "--compression") == 0 && i + 1 < argc) {
+          opt.compression = argv[++i];
+        } else if (std::strcmp(argv[i], "--distro") == 0 && i + 1 < argc) {
+          opt.ros_distro = argv[++i];
         } else {
           return usage();
         }

@@ -6,7 +6,17 @@
 
 namespace tactile_cli {
 
-BagRecorder::BagRecorder(const std::string& dir) { writer_.open(dir); }
+tactile_bag::WriterOptions& BagRecorder::default_options() {
+  static tactile_bag::WriterOptions options = [] {
+    tactile_bag::WriterOptions o;
+    o.storage = "mcap";
+    o.ros_distro = "kilted";
+    return o;
+  }();
+  return options;
+}
+
+BagRecorder::BagRecorder(const std::string& dir) : writer_(default_options()) { writer_.open(dir); }
 
 void BagRecorder::on_message(const std::string& topic, const std::string& type_name,
                              const std::string& definition, int64_t stamp_ns,

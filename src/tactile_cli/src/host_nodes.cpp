@@ -23,6 +23,14 @@ std::shared_ptr<whisker_driver::WhiskerDriverLogic> add_whisker_driver(
                       {{"published", s.published},
                        {"source_errors", s.source_errors},
                        {"sequence_gaps", s.sequence_gaps},
+                       {"stamps_repaired_ahead", s.stamps_repaired_ahead},
+                       {"stamps_repaired_behind", s.stamps_repaired_behind},
+                       {"clock_steps", s.clock_steps},
+                       {"dropped_duplicate", s.dropped_duplicate},
+                       {"dropped_late", s.dropped_late},
+                       {"sequence_restarts", s.sequence_restarts},
+                       {"gaps", s.gaps},
+                       {"samples_missing", s.samples_missing},
                        {"parse_lines", s.parse.lines},
                        {"parse_frames", s.parse.frames},
                        {"parse_dropped_lines", s.parse.dropped_lines()},
@@ -40,7 +48,9 @@ std::shared_ptr<tdorc_filter::TdorcFilterLogic> add_tdorc_filter(
   Logic* l = logic.get();
   host.bus().subscribe<tactile_msgs::msg::WhiskerPressure>(
       resolve_topic(ns, Logic::kInputTopic), [h, l, out](const tactile_msgs::msg::WhiskerPressure& msg) {
-        if (auto sig = l->on_pressure(msg)) h->bus().publish(out, *sig, h->executor().now_ns());
+        // Receive time: the host's clock when the message is delivered.
+        const int64_t now = h->executor().now_ns();
+        if (auto sig = l->on_pressure(msg, now)) h->bus().publish(out, *sig, now);
       });
   host.add_reporter([l, name = resolve_topic(ns, Logic::kNodeName)] {
     const auto& s = l->stats();
@@ -50,6 +60,14 @@ std::shared_ptr<tdorc_filter::TdorcFilterLogic> add_tdorc_filter(
                        {"dropped_nonfinite", s.dropped_nonfinite},
                        {"dropped_wrong_whisker", s.dropped_wrong_whisker},
                        {"dropped_out_of_order", s.dropped_out_of_order},
+                       {"dropped_duplicate", s.dropped_duplicate},
+                       {"dropped_late", s.dropped_late},
+                       {"stamps_repaired_ahead", s.stamps_repaired_ahead},
+                       {"stamps_repaired_behind", s.stamps_repaired_behind},
+                       {"clock_steps", s.clock_steps},
+                       {"sequence_restarts", s.sequence_restarts},
+                       {"gaps_bridged", s.gaps_bridged},
+                       {"samples_missing", s.samples_missing},
                        {"resets_on_gap", s.resets_on_gap},
                        {"sequence_gaps", s.sequence_gaps}}};
   });

@@ -9,7 +9,12 @@
 
 #include "tactile_cli/evaluate.hpp"
 #include "tactile_cli/hardware.hpp"
+#include "tactile_cli/host.hpp"
+#include "tactile_cli/parallel.hpp"
+
+#include "tactile_cli/scenario_family.hpp"
 #include "tactile_cli/sim_run.hpp"
+#include "tactile_cli/sweep.hpp"
 #include "tactile_cli/xplorer_export.hpp"
 #include "tactile_cli/whisker_demo.hpp"
 #include "tactile_cli/whisker_replay.hpp"
@@ -30,6 +35,19 @@ void print_fpr(const nlohmann::json& m) {
               100.0 * m["fpr_tdorc"].get<double>(), m["contact_detected"].get<bool>() ? "yes" : "no");
 }
 
+// --storage, --bag-distro, --bag-compression of the commands that record bags.
+void add_bag_options(CLI::App* cmd, tactile_bag::WriterOptions& o) {
+  cmd->add_option("--storage", o.storage, "bag storage (mcap: what ros2 bag record writes since Iron)")
+      ->check(CLI::IsMember({"mcap", "sqlite3"}))
+      ->capture_default_str();
+  cmd->add_option("--bag-distro", o.ros_distro,
+                  "ROS 2 distro the bag is for: message layouts, metadata version, type hashes")
+      ->check(CLI::IsMember({"humble", "iron", "jazzy", "kilted"}))
+      ->capture_default_str();
+  cmd->add_option("--bag-compression", o.compression, "mcap chunk compression (default: none, as rosbag2)")
+      ->check(CLI::IsMember({"zstd", "lz4"}));
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -48,6 +66,8 @@ int main(int argc, char** argv) {
   replay_cmd->add_option("--out", replay.out_dir, "output directory (bag/, metrics.json, signals.png)")
       ->required();
   replay_cmd->add_flag("!--no-png", replay.write_png, "do not draw signals.png");
+  auto& bag_options = tactile_cli::BagRecorder::default_options();
+  add_bag_options(replay_cmd, bag_options);
 
   tactile_cli::DemoOptions demo;
   auto* demo_cmd = app.add_subcommand(
@@ -57,6 +77,7 @@ int main(int argc, char** argv) {
   demo_cmd->add_option("--hover", demo.hover_s, "free-flight duration after take-off [s]")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  add_bag_options(demo_cmd, bag_options);
 
   tactile_cli::SimOptions sim;
   uint64_t sim_seed = 0;
@@ -68,7 +89,11 @@ int main(int argc, char** argv) {
   sim_cmd->add_option("--trials", sim.trials, "number of seeded trials (seed, seed+1, ...)")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
+  sim_cmd->add_option("--jobs,-j", sim.jobs, "trials run at once on worker threads (0: all cores); outputs as a serial run")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   sim_cmd->add_flag("!--no-bag", sim.write_bag, "do not record the bag");
+  add_bag_options(sim_cmd, bag_options);
   sim_cmd->add_flag("!--no-png", sim.write_png, "do not draw topview.png");
   sim_cmd->add_flag("!--quiet", sim.progress, "no progress line");
 
@@ -81,12 +106,14 @@ int main(int argc, char** argv) {
   fly_cmd->add_option("--sim", fly.sim_scenario, "fly the simulated Crazyflie of this scenario (in-process UDP server)");
   fly_cmd->add_option("--sim-loss", fly.sim_loss, "injected UDP packet loss of the simulated Crazyflie [0, 1)");
   fly_cmd->add_flag("!--no-bag", fly.write_bag, "do not record the bag");
+  add_bag_options(fly_cmd, bag_options);
   tactile_cli::BenchOptions bench;
   auto* bench_cmd = app.add_subcommand("bench", "whisker bench rig over serial: whisker_driver -> TDORC (records a bag)");
   bench_cmd->add_option("--port", bench.left_port, "serial device of whisker 1 (text protocol)")->capture_default_str();
   bench_cmd->add_option("--port2", bench.right_port, "serial device of whisker 2 (CSV protocol)");
   bench_cmd->add_option("--out", bench.out_dir, "output directory (bag/, metrics.json)")->required();
   bench_cmd->add_option("--duration", bench.duration_s, "[s]")->capture_default_str();
+  add_bag_options(bench_cmd, bag_options);
   std::string scan_host = "127.0.0.1";
   auto* scan_cmd = app.add_subcommand("scan", "list Crazyradios, Crazyflies on USB and simulated Crazyflies on UDP");
   scan_cmd->add_option("--udp-host", scan_host, "host of simulated Crazyflies (ports 19850-19859)")->capture_default_str();
@@ -103,6 +130,8 @@ int main(int argc, char** argv) {
   export_cmd->add_option("bag", exp.bag, "input rosbag2 directory")->required();
   export_cmd->add_option("--ply", exp.ply, "output PLY file (frame map, metres)")->required();
   export_cmd->add_flag("--binary", exp.binary, "binary little endian instead of ASCII");
+  export_cmd->add_option("--metrics", exp.metrics,
+                         "summary JSON with its warnings (default: the PLY's name with .metrics.json)");
 
   tactile_cli::EvaluateOptions evaluate;
   uint64_t evaluate_seed = 0;
@@ -113,7 +142,62 @@ int main(int argc, char** argv) {
   evaluate_cmd->add_option("--out", evaluate.out_dir, "output directory (metrics.json)")->required();
   auto* evaluate_seed_opt = evaluate_cmd->add_option("--seed", evaluate_seed, "the flight's seed (default: the scenario's)");
 
+  auto* scenarios_cmd = app.add_subcommand("scenarios", "procedural scenario families (issue 17): list, generate");
+  scenarios_cmd->require_subcommand(1);
+  auto* scenarios_list = scenarios_cmd->add_subcommand("list", "the families and their distributions");
+  std::string gen_family, gen_out;
+  int gen_count = 10;
+  uint64_t gen_seed = 1;
+  auto* scenarios_gen = scenarios_cmd->add_subcommand(
+      "generate", "draw N seeded, validated environments of a family as standalone scenario files");
+  scenarios_gen->add_option("family", gen_family, "family (tactile scenarios list)")->required();
+  scenarios_gen->add_option("--count", gen_count, "environments (seeds S .. S+N-1)")->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  scenarios_gen->add_option("--seed", gen_seed, "first generator seed")->capture_default_str();
+  scenarios_gen->add_option("--out", gen_out, "output directory (<family>_<seed>.yaml, index.json)")->required();
+
+  tactile_cli::SweepOptions sweep;
+  auto* sweep_cmd = app.add_subcommand(
+      "sweep", "fly a scenario family (or a directory of scenarios) and write a table and a summary");
+  sweep_cmd->add_option("what", sweep.what, "family name or directory of scenario files")->required();
+  sweep_cmd->add_option("--count", sweep.count, "environments (family; with a directory: at most N, 0 = all)")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
+  sweep_cmd->add_option("--seed", sweep.seed, "first generator seed (family)")->capture_default_str();
+  sweep_cmd->add_option("--out", sweep.out_dir, "output directory (table.csv/md, summary.json/md, runs/, failures/)")
+      ->required();
+  sweep_cmd->add_option("--jobs,-j", sweep.jobs, "environments flown at once on worker threads (0: all cores)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  sweep_cmd->add_flag("!--no-bag", sweep.write_bags, "do not record bags (failures keep theirs otherwise)");
+  sweep_cmd->add_flag("--keep-bags", sweep.keep_bags, "keep the bags of successes too");
+  sweep_cmd->add_flag("!--quiet", sweep.progress, "no line per environment");
+
   CLI11_PARSE(app, argc, argv);
+  if (!bag_options.compression.empty() && bag_options.storage != "mcap") {
+    std::fprintf(stderr, "tactile: error: --bag-compression %s needs --storage mcap (sqlite3 bags are written uncompressed)\n",
+                 bag_options.compression.c_str());
+    return 1;
+  }
+
+  if (*scenarios_cmd) {  // needs no node parameter files
+    try {
+      if (*scenarios_list) {
+        for (const auto& f : tactile_cli::scenario_families()) {
+          std::printf("%s: %s\n    %s\n", f.name.c_str(), f.description.c_str(), f.distribution.c_str());
+        }
+      } else {
+        const auto& family = tactile_cli::scenario_family(gen_family);
+        const auto paths = tactile_cli::generate_family(family, gen_count, gen_seed, gen_out);
+        std::printf("tactile scenarios: %zu %s environments (seeds %llu-%llu) -> %s (index.json)\n", paths.size(),
+                    family.name.c_str(), static_cast<unsigned long long>(gen_seed),
+                    static_cast<unsigned long long>(gen_seed + gen_count - 1), gen_out.c_str());
+      }
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "tactile: error: %s\n", e.what());
+      return 1;
+    }
+    return 0;
+  }
 
   if (*stage_cmd) {  // needs no node parameter files
     try {
@@ -142,11 +226,20 @@ int main(int argc, char** argv) {
                     m["real_time_factor"].get<double>(), m["collisions"].get<size_t>(),
                     m["success"].get<bool>() ? "success" : "no success");
       } else {
-        std::printf("tactile sim: %s, %d trials: %d successes, %zu collisions, %.0fx real time\n",
+        std::printf("tactile sim: %s, %d trials: %d successes, %zu collisions, %.1f s in %.2f s on %d jobs "
+                    "(%.0fx real time)\n",
                     m["scenario"].get<std::string>().c_str(), sim.trials, m["success_count"].get<int>(),
-                    m["collisions"].get<size_t>(), m["real_time_factor"].get<double>());
+                    m["collisions"].get<size_t>(), m["sim_time_s"].get<double>(), m["wall_time_s"].get<double>(),
+                    tactile_cli::resolve_jobs(sim.jobs, static_cast<size_t>(sim.trials)),
+                    m["real_time_factor"].get<double>());
       }
       std::printf("outputs in %s\n", sim.out_dir.c_str());
+    } else if (*sweep_cmd) {
+      sweep.config_dir = config_dir;
+      const auto m = tactile_cli::run_sweep(sweep);
+      std::printf("tactile sweep: %s: %d / %d successes (%.1f %%), %zu collisions -> %s (summary.md, table.md)\n",
+                  sweep.what.c_str(), m["successes"].get<int>(), m["flown"].get<int>(),
+                  100.0 * m["success_rate"].get<double>(), m["collisions"].get<size_t>(), sweep.out_dir.c_str());
     } else if (*fly_cmd || *bench_cmd || *scan_cmd) {
       if (*scan_cmd) {
         for (const auto& line : tactile_cli::run_scan(scan_host)) std::printf("%s\n", line.c_str());
@@ -176,9 +269,10 @@ int main(int argc, char** argv) {
     } else if (*export_cmd) {
       exp.config_dir = config_dir;
       const auto m = tactile_cli::run_export(exp);
-      std::printf("tactile export: %s -> %s (%llu points, %.3f x %.3f m)\n", exp.bag.c_str(), exp.ply.c_str(),
-                  static_cast<unsigned long long>(m["points"].get<uint64_t>()), m["map_length_m"].get<double>(),
-                  m["map_width_m"].get<double>());
+      std::printf("tactile export: %s -> %s (%llu points, %.3f x %.3f m; summary %s)\n", exp.bag.c_str(),
+                  exp.ply.c_str(), static_cast<unsigned long long>(m["points"].get<uint64_t>()),
+                  m["map_length_m"].get<double>(), m["map_width_m"].get<double>(),
+                  m["metrics_file"].get<std::string>().c_str());
     } else if (*replay_cmd) {
       replay.config_dir = config_dir;
       const auto m = tactile_cli::run_replay(replay);

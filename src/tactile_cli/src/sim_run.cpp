@@ -6,12 +6,14 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <mutex>
 #include <random>
 #include <sstream>
 #include <algorithm>
 
 #include "tactile_cli/host.hpp"
 #include "tactile_cli/host_nodes.hpp"
+#include "tactile_cli/parallel.hpp"
 #include "tactile_cli/sim_graph.hpp"
 #include "tactile_cli/topview.hpp"
 #include "tactile_cli/whisker_eval.hpp"
@@ -230,13 +232,30 @@ nlohmann::json run_sim(const SimOptions& options) {
   if (options.trials == 1) {
     return run_once(scenario, options, seed0, options.out_dir, scenario.name);
   }
-  std::vector<nlohmann::json> runs;
+  // Trials are independent (each its own host, simulator, seed streams and
+  // directory): run them on the parallel runner, collected in seed order, so
+  // every per-trial file and the aggregate equal those of a serial run.
   const auto wall_start = std::chrono::steady_clock::now();
-  for (int k = 0; k < options.trials; ++k) {
+  const size_t n = static_cast<size_t>(options.trials);
+  const int workers = resolve_jobs(options.jobs, n);
+  std::mutex progress_mu;
+  size_t finished = 0;
+  const std::vector<nlohmann::json> runs = parallel_map(n, workers, [&](size_t k) {
     const uint64_t seed = seed0 + static_cast<uint64_t>(k);
     const std::string label = scenario.name + " trial " + std::to_string(k + 1) + "/" + std::to_string(options.trials);
-    runs.push_back(run_once(scenario, options, seed, fs::path(options.out_dir) / ("trial_" + std::to_string(k)), label));
-  }
+    SimOptions trial = options;
+    trial.progress = options.progress && workers == 1;  // one live progress line at a time
+    nlohmann::json m = run_once(scenario, trial, seed, fs::path(options.out_dir) / ("trial_" + std::to_string(k)), label);
+    if (options.progress && workers > 1) {
+      std::lock_guard<std::mutex> lk(progress_mu);
+      ++finished;
+      std::fprintf(stderr, "[sim] %s (seed %llu): %s, %.1f s simulated in %.2f s; %zu/%zu trials done (%d jobs)\n",
+                   label.c_str(), static_cast<unsigned long long>(seed),
+                   m["success"].get<bool>() ? "success" : "no success", m["sim_time_s"].get<double>(),
+                   m["wall_time_s"].get<double>(), finished, n, workers);
+    }
+    return m;
+  });
   nlohmann::json agg;
   agg["scenario"] = scenario.name;
   agg["trials"] = options.trials;

@@ -12,6 +12,7 @@
 #include "tactile_cli/host.hpp"
 #include "tactile_cli/host_nodes.hpp"
 #include "tactile_cli/plot.hpp"
+#include "tactile_cli/warnings.hpp"
 #include "tactile_common/time.hpp"
 #include "tactile_msgs/msg/whisker_ground_truth.hpp"
 
@@ -93,8 +94,20 @@ nlohmann::json run_replay(const ReplayOptions& options) {
   // Raw pressure topics (one namespace per whisker) and optional ground truth.
   std::vector<std::pair<std::string, std::string>> whiskers;  // (topic, namespace)
   std::map<std::string, std::string> truth_topics;            // namespace -> topic
+  Warnings warnings;
+  warnings.add_bag_metadata(options.bag, in);
+  const std::string pressure_type = tactile_msgs::cdr::MessageTraits<WhiskerPressure>::type_name;
+  const std::string truth_type = tactile_msgs::cdr::MessageTraits<WhiskerGroundTruth>::type_name;
+  std::vector<std::string> skipped;  // "topic (type)"
   for (const auto& t : in.topics()) {
-    if (t.type == tactile_msgs::cdr::MessageTraits<WhiskerPressure>::type_name) {
+    // A whisker's pressure topic (<namespace>/pressure) or a ground-truth
+    // contact topic of another type is skipped, and said so.
+    if (t.type != pressure_type && !namespace_of(t.name, "pressure").empty()) {
+      skipped.push_back(t.name + " (type " + t.type + ", expected " + pressure_type + ")");
+    } else if (t.type != truth_type && t.name.rfind("/ground_truth/", 0) == 0 && !namespace_of(t.name, "contact").empty()) {
+      skipped.push_back(t.name + " (type " + t.type + ", expected " + truth_type + ")");
+    }
+    if (t.type == pressure_type) {
       std::string ns = namespace_of(t.name, "pressure");
       if (ns.empty()) {
         throw std::runtime_error(options.bag + ": topic " + t.name +
@@ -105,11 +118,24 @@ nlohmann::json run_replay(const ReplayOptions& options) {
       // /ground_truth/whisker/left/contact -> /whisker/left
       std::string ns = namespace_of(t.name, "contact");
       const std::string prefix = "/ground_truth";
-      if (ns.rfind(prefix, 0) == 0) truth_topics[ns.substr(prefix.size())] = t.name;
+      if (ns.rfind(prefix, 0) == 0) {
+        truth_topics[ns.substr(prefix.size())] = t.name;
+      } else {
+        skipped.push_back(t.name + " (" + truth_type + " not named /ground_truth/<namespace>/contact)");
+      }
     }
   }
   if (whiskers.empty()) {
-    throw std::runtime_error(options.bag + ": no topic of type tactile_msgs/msg/WhiskerPressure");
+    std::string what = options.bag + ": no topic of type tactile_msgs/msg/WhiskerPressure";
+    for (const auto& s : skipped) what += "; skipped " + s;
+    throw std::runtime_error(what);
+  }
+  if (!skipped.empty()) {
+    std::string what = "skipped " + std::to_string(skipped.size()) + " topic(s): ";
+    for (size_t i = 0; i < skipped.size(); ++i) what += (i ? "; " : "") + skipped[i];
+    what += "; replaying only";
+    for (const auto& w : whiskers) what += " " + w.first;
+    warnings.add("skipped_topic", skipped.size(), what);
   }
 
   std::map<std::string, Truth> truths;
@@ -156,11 +182,13 @@ nlohmann::json run_replay(const ReplayOptions& options) {
       eval->filters[m] = std::make_shared<Logic>(p);
     }
     WhiskerEval* e = eval.get();
-    host.bus().subscribe<WhiskerPressure>(topic, [e, &in](const WhiskerPressure& msg) {
+    Host* h = &host;
+    host.bus().subscribe<WhiskerPressure>(topic, [e, h, &in](const WhiskerPressure& msg) {
       std::array<std::optional<WhiskerSignal>, 3> out;
-      for (size_t m = 0; m < 3; ++m) out[m] = e->filters[m]->on_pressure(msg);
+      const int64_t now = h->executor().now_ns();  // receive time, as tdorc_filter gets it
+      for (size_t m = 0; m < 3; ++m) out[m] = e->filters[m]->on_pressure(msg, now);
       if (!out[0] || !out[1] || !out[2]) return;  // dropped (counted by the filters)
-      const int64_t stamp = tactile_common::from_stamp(msg.header.stamp);
+      const int64_t stamp = tactile_common::from_stamp(out[2]->header.stamp);
       const bool truth_contact = e->truth ? e->truth->at(stamp) : false;
       const bool all_ready = out[0]->calibrated_ready && out[1]->calibrated_ready && out[2]->calibrated_ready;
       for (size_t m = 0; m < 3; ++m) {
@@ -247,6 +275,9 @@ nlohmann::json run_replay(const ReplayOptions& options) {
     for (const auto& [k, v] : r.counters) metrics["nodes"][r.name][k] = v;
   }
   for (const auto& [topic, n] : host.bus().published_counts()) metrics["output_topics"][topic] = n;
+  warnings.add_node_counters(host.reports());
+  metrics["warnings"] = warnings.to_json();
+  warnings.print("replay");
   write_json(fs::path(options.out_dir) / "metrics.json", metrics);
 
   if (options.write_png) {

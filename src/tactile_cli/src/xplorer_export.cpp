@@ -1,11 +1,14 @@
 #include "tactile_cli/xplorer_export.hpp"
 
+#include <filesystem>
+#include <fstream>
 #include <stdexcept>
 
 #include "graphs/xplorer_nodes.hpp"
 #include "tactile_bag/bag.hpp"
 #include "tactile_bag/typed.hpp"
 #include "tactile_cli/host.hpp"
+#include "tactile_cli/warnings.hpp"
 #include "tactile_common/time.hpp"
 
 namespace tactile_cli {
@@ -14,6 +17,8 @@ nlohmann::json run_export(const ExportOptions& o) {
   using xplorer_force_est::XplorerForceEstLogic;
   using MapLogic = mapping_pcl::XplorerMapLogic;
   tactile_bag::Reader reader(o.bag);
+  Warnings warnings;
+  warnings.add_bag_metadata(o.bag, reader);
   const bool have_odom = reader.find_topic(MapLogic::kOdometryTopic) != nullptr;
   if (!have_odom) throw std::runtime_error(o.bag + ": no " + std::string(MapLogic::kOdometryTopic) + " topic (the map needs the pose)");
   const bool have_wrench = reader.find_topic(MapLogic::kWrenchBodyTopic) != nullptr;
@@ -41,24 +46,35 @@ nlohmann::json run_export(const ExportOptions& o) {
   reader.set_topic_filter(topics);
   tactile_bag::SerializedMessage m;
   uint64_t used = 0;
+  uint64_t undecodable = 0;
+  std::string first_error;
   while (reader.read_next(m)) {
     host.executor().run_until(m.timestamp_ns);  // mapping timer ticks up to this message
     const int64_t now = m.timestamp_ns;
-    if (m.topic == MapLogic::kOdometryTopic) {
-      host.bus().publish(m.topic, tactile_bag::decode<nav_msgs::msg::Odometry>(m), now);
-    } else if (m.topic == MapLogic::kFsmStateTopic) {
-      host.bus().publish(m.topic, tactile_bag::decode<tactile_msgs::msg::FsmState>(m), now);
-    } else if (m.topic == MapLogic::kWrenchBodyTopic) {
-      host.bus().publish(m.topic, tactile_bag::decode<geometry_msgs::msg::WrenchStamped>(m), now);
-    } else if (m.topic == XplorerForceEstLogic::kArmImuTopic) {
-      host.bus().publish(m.topic, tactile_bag::decode<tactile_msgs::msg::ArmImuArray>(m), now);
-    } else if (m.topic == XplorerForceEstLogic::kImuTopic) {
-      host.bus().publish(m.topic, tactile_bag::decode<sensor_msgs::msg::Imu>(m), now);
-    } else if (m.topic == XplorerForceEstLogic::kThrustTopic) {
-      host.bus().publish(m.topic, tactile_bag::decode<tactile_msgs::msg::ThrustCommand>(m), now);
+    try {
+      if (m.topic == MapLogic::kOdometryTopic) {
+        host.bus().publish(m.topic, tactile_bag::decode<nav_msgs::msg::Odometry>(m), now);
+      } else if (m.topic == MapLogic::kFsmStateTopic) {
+        host.bus().publish(m.topic, tactile_bag::decode<tactile_msgs::msg::FsmState>(m), now);
+      } else if (m.topic == MapLogic::kWrenchBodyTopic) {
+        host.bus().publish(m.topic, tactile_bag::decode<geometry_msgs::msg::WrenchStamped>(m), now);
+      } else if (m.topic == XplorerForceEstLogic::kArmImuTopic) {
+        host.bus().publish(m.topic, tactile_bag::decode<tactile_msgs::msg::ArmImuArray>(m), now);
+      } else if (m.topic == XplorerForceEstLogic::kImuTopic) {
+        host.bus().publish(m.topic, tactile_bag::decode<sensor_msgs::msg::Imu>(m), now);
+      } else if (m.topic == XplorerForceEstLogic::kThrustTopic) {
+        host.bus().publish(m.topic, tactile_bag::decode<tactile_msgs::msg::ThrustCommand>(m), now);
+      }
+    } catch (const tactile_bag::BagError& e) {
+      // A corrupt message is dropped, counted and said (the map keeps the rest).
+      if (undecodable++ == 0) first_error = e.what();
+      continue;
     }
     ++used;
   }
+  warnings.add("corrupt_messages_dropped", undecodable,
+               std::to_string(undecodable) + " message(s) that did not decode dropped (first: " + first_error + ")");
+  warnings.add_node_counters(host.reports());
   const auto r = map->finalize();
   mapping_pcl::PlyInfo info;
   info.frame = map->params().frame_id;
@@ -76,6 +92,16 @@ nlohmann::json run_export(const ExportOptions& o) {
   s["map_length_m"] = r.length;
   s["map_width_m"] = r.width;
   s["map_area_m2"] = r.obb_area;
+  s["warnings"] = warnings.to_json();
+  warnings.print("export");
+  // The summary beside the map, so repairs, skips and drops are on record (issue 16).
+  std::filesystem::path metrics = o.metrics;
+  if (metrics.empty()) metrics = std::filesystem::path(o.ply).replace_extension(".metrics.json");
+  {
+    std::ofstream out(metrics);
+    if (!out || !(out << s.dump(2) << '\n')) throw std::runtime_error(metrics.string() + ": cannot write");
+  }
+  s["metrics_file"] = metrics.string();
   return s;
 }
 

@@ -10,6 +10,7 @@
 
 #include "tactile_bag/bag.hpp"
 #include "tactile_bag/typed.hpp"
+#include "tactile_cli/parallel.hpp"
 #include "tactile_cli/whisker_demo.hpp"
 #include "tactile_cli/whisker_replay.hpp"
 #include "tactile_common/parameters.hpp"
@@ -43,11 +44,16 @@ TEST(WhiskerReplay, FreeFlightFalsePositiveRatesReproduceThePaper) {
   const fs::path dir = fresh_dir("free");
   double bp_sum = 0, tdoc_sum = 0;
   const int seeds = 4;
-  for (int seed = 1; seed <= seeds; ++seed) {
+  // The seeds' flights are independent: recorded and replayed on the parallel runner.
+  const auto runs = tactile_cli::parallel_map(seeds, 0, [&](size_t i) {
+    const int seed = static_cast<int>(i) + 1;
     const fs::path run = dir / std::to_string(seed);
     tactile_cli::record_sim_whisker_bag((run / "raw").string(), kConfig, static_cast<uint64_t>(seed), 90.0, {}, {}, {});
     tactile_cli::ReplayOptions o{(run / "raw").string(), (run / "out").string(), kConfig, seed == 1};
-    const auto m = tactile_cli::run_replay(o);
+    return tactile_cli::run_replay(o);
+  });
+  for (int seed = 1; seed <= seeds; ++seed) {
+    const auto& m = runs[static_cast<size_t>(seed - 1)];
     const double bp = m["fpr_bandpass"], tdoc = m["fpr_tdoc"], tdorc = m["fpr_tdorc"];
     EXPECT_GT(bp, tdoc) << "seed " << seed;
     EXPECT_GT(tdoc, tdorc) << "seed " << seed;
@@ -127,15 +133,18 @@ TEST(WhiskerReplay, MissingBagCorruptBagAndBadInputNameTheFile) {
   std::string msg = error_of({(dir / "nope").string(), (dir / "out1").string(), kConfig, false});
   EXPECT_NE(msg.find((dir / "nope").string()), std::string::npos) << msg;
 
-  // Corrupt .db3 next to a valid metadata.yaml.
+  // Corrupt storage file (.mcap by default, .db3) next to a valid metadata.yaml.
   tactile_cli::record_sim_whisker_bag((dir / "raw").string(), kConfig, 1, 2.0, {}, {}, {});
+  std::string corrupted;
   for (const auto& e : fs::directory_iterator(dir / "raw")) {
-    if (e.path().extension() == ".db3") {
-      std::ofstream(e.path(), std::ios::binary | std::ios::trunc) << "this is not a database at all";
+    if (e.path().extension() == ".db3" || e.path().extension() == ".mcap") {
+      std::ofstream(e.path(), std::ios::binary | std::ios::trunc) << "this is not a bag file at all";
+      corrupted = e.path().filename().string();
     }
   }
+  ASSERT_FALSE(corrupted.empty());
   msg = error_of({(dir / "raw").string(), (dir / "out2").string(), kConfig, false});
-  EXPECT_NE(msg.find(".db3"), std::string::npos) << msg;
+  EXPECT_NE(msg.find(corrupted), std::string::npos) << msg;
 
   // A bag without whisker pressure topics.
   {

@@ -4,11 +4,14 @@
 // scenario files stop with file, key and reason.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 #include "tactile_bag/bag.hpp"
+#include "tactile_cli/parallel.hpp"
 #include "tactile_cli/sim_run.hpp"
 
 namespace fs = std::filesystem;
@@ -72,17 +75,27 @@ TEST(Sim, WhiskerSweepFollowsTheDataCollectionProtocol) {
 }
 
 TEST(Sim, EveryLibraryScenarioFlies) {
+  // The scenarios are independent: flown on the parallel runner (all cores),
+  // checked here in file-name order.
   const fs::path dir = fresh_dir("library");
+  std::vector<fs::path> files;
   for (const auto& e : fs::directory_iterator(kConfig / "scenarios")) {
-    if (e.path().extension() != ".yaml") continue;
-    SCOPED_TRACE(e.path().filename().string());
-    auto o = options(e.path().filename().string(), dir / e.path().stem());
+    if (e.path().extension() == ".yaml") files.push_back(e.path());
+  }
+  std::sort(files.begin(), files.end());
+  const auto runs = tactile_cli::parallel_map(files.size(), 0, [&](size_t i) {
+    auto o = options(files[i].filename().string(), dir / files[i].stem());
     o.write_bag = false;
     o.write_png = false;
-    const auto m = tactile_cli::run_sim(o);
+    o.jobs = 1;
+    return tactile_cli::run_sim(o);
+  });
+  for (size_t i = 0; i < files.size(); ++i) {
+    SCOPED_TRACE(files[i].filename().string());
+    const auto& m = runs[i];
     EXPECT_GT(m["sim_time_s"].get<double>(), 1.0);
     EXPECT_TRUE(m["ground_truth"].contains("path_length_m"));
-    EXPECT_TRUE(fs::exists(dir / e.path().stem() / "trajectory.csv"));
+    EXPECT_TRUE(fs::exists(dir / files[i].stem() / "trajectory.csv"));
   }
   fs::remove_all(dir);
 }

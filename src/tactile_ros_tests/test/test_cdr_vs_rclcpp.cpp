@@ -4,8 +4,10 @@
 // rosidl type support of the installed distro over its rmw), and each side reads the
 // other's bytes back to an equal message. Values: the deterministic filler and
 // pseudo-random ones with empty and long (100-300 element) sequences and strings.
+// Padding: see rclcpp_bytes().
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <sstream>
@@ -32,11 +34,18 @@ struct ToTestTypes<std::tuple<Ts...>>
 };
 using AllTypes = ToTestTypes<tactile_msgs::cdr::testing::AllTypes>::type;
 
+// Fast CDR writes alignment padding by skipping bytes, so they keep whatever the buffer
+// held (CDR leaves the padding's value open; ours is zero). The buffer is therefore
+// allocated large enough for the message up front and zeroed, which makes the padding
+// comparable; rmw grows a buffer only when it is too small for the message.
 template<class T>
 std::vector<uint8_t> rclcpp_bytes(const T & msg)
 {
   rclcpp::Serialization<T> serialization;
-  rclcpp::SerializedMessage serialized;
+  const std::size_t capacity = 2 * tactile_msgs::cdr::serialize(msg).size() + 4096;
+  rclcpp::SerializedMessage serialized(capacity);
+  auto & buffer = serialized.get_rcl_serialized_message();
+  std::memset(buffer.buffer, 0, buffer.buffer_capacity);
   serialization.serialize_message(&msg, &serialized);
   const auto & raw = serialized.get_rcl_serialized_message();
   return std::vector<uint8_t>(raw.buffer, raw.buffer + raw.buffer_length);
@@ -72,7 +81,15 @@ void expect_same_both_ways(const T & msg, const std::string & what)
 {
   const std::vector<uint8_t> ours = tactile_msgs::cdr::serialize(msg);
   const std::vector<uint8_t> theirs = rclcpp_bytes(msg);
-  EXPECT_EQ(ours, theirs) << what << ": " << first_difference(ours, theirs);
+  // rmw_fastrtps rounds some messages (e.g. std_msgs/Bool: 5 -> 8 bytes) up to a multiple
+  // of 4 with zero bytes after the last field; readers ignore bytes after the message.
+  const bool end_padded = theirs.size() > ours.size() && theirs.size() % 4 == 0 &&
+                          theirs.size() - ours.size() < 4 &&
+                          std::all_of(theirs.begin() + static_cast<std::ptrdiff_t>(ours.size()), theirs.end(),
+                                      [](uint8_t b) {return b == 0;});
+  const std::vector<uint8_t> compared =
+    end_padded ? std::vector<uint8_t>(theirs.begin(), theirs.begin() + static_cast<std::ptrdiff_t>(ours.size())) : theirs;
+  EXPECT_EQ(ours, compared) << what << ": " << first_difference(ours, theirs);
   // rclcpp reads our bytes ...
   EXPECT_TRUE(rclcpp_read<T>(ours) == msg) << what << ": rclcpp read our bytes to another message";
   // ... and we read rclcpp's.

@@ -17,6 +17,12 @@ void TdorcFilterLogic::Params::validate() const {
     throw std::invalid_argument("TdorcFilterLogic.max_sample_gap_s: must be finite and > 0, got " +
                                 std::to_string(max_sample_gap_s));
   }
+  try {
+    clock.validate();
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();  // "SampleClockParams.<field>: <reason>"
+    throw std::invalid_argument("TdorcFilterLogic.clock." + what.substr(what.find('.') + 1));
+  }
 }
 
 ParamMap TdorcFilterLogic::default_parameters() {
@@ -36,7 +42,12 @@ ParamMap TdorcFilterLogic::default_parameters() {
   m.set("max_drift_slope", d.max_drift_slope);                     // workspace extension (README)
   m.set("bandpass_b", std::vector<double>(d.bandpass_b.begin(), d.bandpass_b.end()));  // 000 eq. 9-11
   m.set("bandpass_a", std::vector<double>(d.bandpass_a.begin(), d.bandpass_a.end()));  // 000 eq. 9-11
-  m.set("max_sample_gap_s", Params{}.max_sample_gap_s);
+  const Params n;
+  m.set("max_sample_gap_s", n.max_sample_gap_s);                  // workspace choice (README "Time")
+  m.set("sample_period_s", n.clock.nominal_period_s);              // 000: whisker deck at 50 Hz
+  m.set("stamp_tolerance_s", n.clock.tolerance_s);                 // workspace choice (README "Time")
+  m.set("max_late_samples", n.clock.max_late_samples);             // workspace choice (README "Time")
+  m.set("clock_step_samples", n.clock.step_samples);               // workspace choice (README "Time")
   return m;
 }
 
@@ -88,6 +99,22 @@ TdorcFilterLogic::Params TdorcFilterLogic::params_from(const ParamMap& m) {
   p.tdorc.bandpass_b = three(m, "bandpass_b");
   p.tdorc.bandpass_a = three(m, "bandpass_a");
   p.max_sample_gap_s = m.get_double("max_sample_gap_s");
+  p.clock.nominal_period_s = m.get_double("sample_period_s");
+  if (!std::isfinite(p.clock.nominal_period_s) || p.clock.nominal_period_s <= 0.0 || p.clock.nominal_period_s > 10.0) {
+    throw m.error("sample_period_s", "must be in (0, 10], got " + std::to_string(p.clock.nominal_period_s));
+  }
+  p.clock.tolerance_s = m.get_double("stamp_tolerance_s");
+  if (!std::isfinite(p.clock.tolerance_s) || p.clock.tolerance_s <= 0.0 || p.clock.tolerance_s > 60.0) {
+    throw m.error("stamp_tolerance_s", "must be in (0, 60], got " + std::to_string(p.clock.tolerance_s));
+  }
+  p.clock.max_late_samples = m.get_int("max_late_samples");
+  if (p.clock.max_late_samples < 1 || p.clock.max_late_samples > 1000000) {
+    throw m.error("max_late_samples", "must be in [1, 1e6], got " + std::to_string(p.clock.max_late_samples));
+  }
+  p.clock.step_samples = m.get_int("clock_step_samples");
+  if (p.clock.step_samples < 2 || p.clock.step_samples > 1000000) {
+    throw m.error("clock_step_samples", "must be in [2, 1e6], got " + std::to_string(p.clock.step_samples));
+  }
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {
@@ -96,12 +123,14 @@ TdorcFilterLogic::Params TdorcFilterLogic::params_from(const ParamMap& m) {
   return p;
 }
 
-TdorcFilterLogic::TdorcFilterLogic(const Params& params) : params_(params), whisker_(params.tdorc) {
+TdorcFilterLogic::TdorcFilterLogic(const Params& params)
+    : params_(params), whisker_(params.tdorc), clock_(params.clock) {
   params_.validate();
 }
 
 std::optional<tactile_msgs::msg::WhiskerSignal> TdorcFilterLogic::on_pressure(
-    const tactile_msgs::msg::WhiskerPressure& msg) {
+    const tactile_msgs::msg::WhiskerPressure& msg, std::optional<int64_t> receive_ns) {
+  using tactile_common::SampleKind;
   using tactile_msgs::msg::WhiskerPressure;
   using tactile_msgs::msg::WhiskerSignal;
   ++stats_.received;
@@ -119,26 +148,45 @@ std::optional<tactile_msgs::msg::WhiskerSignal> TdorcFilterLogic::on_pressure(
       return std::nullopt;
     }
   }
-  const int64_t stamp = tactile_common::from_stamp(msg.header.stamp);
-  if (have_last_ && stamp <= last_stamp_ns_) {
+  // Which clock to trust (README "Time"): duplicates and late samples are
+  // dropped, a stamp that disagrees with both the sequence and the receive
+  // time is replaced, and the sample still enters the filter.
+  const auto d = clock_.classify(msg.sequence, tactile_common::from_stamp(msg.header.stamp), receive_ns);
+  switch (d.kind) {
+    case SampleKind::kDuplicate: ++stats_.dropped_duplicate; break;
+    case SampleKind::kLate: ++stats_.dropped_late; break;
+    case SampleKind::kRepairedAhead: ++stats_.stamps_repaired_ahead; break;
+    case SampleKind::kRepairedBehind: ++stats_.stamps_repaired_behind; break;
+    case SampleKind::kClockStep: ++stats_.clock_steps; break;
+    case SampleKind::kFirst:
+    case SampleKind::kInOrder: break;
+  }
+  if (!d.accept) {
     ++stats_.dropped_out_of_order;
     return std::nullopt;
   }
+  if (d.restart) ++stats_.sequence_restarts;
   if (have_last_) {
-    if (tactile_common::to_seconds(stamp - last_stamp_ns_) > params_.max_sample_gap_s) {
+    if (tactile_common::to_seconds(d.elapsed_ns) > params_.max_sample_gap_s) {
       whisker_.reset();  // the window and the extrapolated drift are stale
       ++stats_.resets_on_gap;
+    } else if (d.missing > 0) {
+      // The window is in samples: the missing ones keep their index, so the
+      // drift line (000 eq. 4) is extrapolated over them as across a contact.
+      whisker_.skip(d.missing);
+      ++stats_.gaps_bridged;
+      stats_.samples_missing += static_cast<uint64_t>(d.missing);
     }
     if (msg.sequence != static_cast<uint32_t>(last_sequence_ + 1u)) ++stats_.sequence_gaps;
   }
   whisker_id_ = msg.whisker_id;
   have_last_ = true;
-  last_stamp_ns_ = stamp;
   last_sequence_ = msg.sequence;
 
   const WhiskerOutput o = whisker_.update(msg.pressure);
   WhiskerSignal s;
   s.header = msg.header;
+  tactile_common::to_stamp(d.stamp_ns, s.header.stamp);
   s.whisker_id = msg.whisker_id;
   switch (params_.tdorc.mode) {
     case Mode::kTdorc: s.mode = WhiskerSignal::MODE_TDORC; break;

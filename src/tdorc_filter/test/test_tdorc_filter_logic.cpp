@@ -52,7 +52,11 @@ TEST(TdorcFilterLogic, DefaultsArePaperValues) {
   EXPECT_FALSE(p.tdorc.contact_hold);
   EXPECT_EQ(p.tdorc.bandpass_b, (std::array<double, 3>{{0.0564, 0.0, -0.0564}}));
   EXPECT_EQ(p.tdorc.bandpass_a, (std::array<double, 3>{{1.0, -1.8865, 0.8872}}));
-  EXPECT_EQ(p.max_sample_gap_s, 0.5);
+  EXPECT_EQ(p.max_sample_gap_s, 5.0);
+  EXPECT_EQ(p.clock.nominal_period_s, 0.02);  // 000: 50 Hz
+  EXPECT_EQ(p.clock.tolerance_s, 0.1);
+  EXPECT_EQ(p.clock.max_late_samples, 50);
+  EXPECT_EQ(p.clock.step_samples, 25);
   EXPECT_STREQ(TdorcFilterLogic::kInputTopic, "pressure");
   EXPECT_STREQ(TdorcFilterLogic::kOutputTopic, "signal");
 }
@@ -69,6 +73,8 @@ TEST(TdorcFilterLogic, RepositoryConfigIsPaperValuesPlusSustainedContact) {
   EXPECT_EQ(p.tdorc.bandpass_b, d.tdorc.bandpass_b);
   EXPECT_EQ(p.tdorc.bandpass_a, d.tdorc.bandpass_a);
   EXPECT_EQ(p.max_sample_gap_s, d.max_sample_gap_s);
+  EXPECT_EQ(p.clock.nominal_period_s, d.clock.nominal_period_s);
+  EXPECT_EQ(p.clock.tolerance_s, d.clock.tolerance_s);
   // The workspace extensions the repository runs with (README "Sustained contact").
   EXPECT_EQ(p.tdorc.learn_delay, 10);
   EXPECT_TRUE(p.tdorc.contact_hold);
@@ -121,6 +127,14 @@ TEST(TdorcFilterLogic, ParameterErrorsNameTheKey) {
   m = TdorcFilterLogic::default_parameters();
   m.set("max_sample_gap_s", 0.0);
   EXPECT_NE(param_error(m).find("max_sample_gap_s"), std::string::npos);
+
+  m = TdorcFilterLogic::default_parameters();
+  m.set("stamp_tolerance_s", -1.0);
+  EXPECT_NE(param_error(m).find("stamp_tolerance_s: must be in (0, 60], got -1"), std::string::npos);
+
+  m = TdorcFilterLogic::default_parameters();
+  m.set("clock_step_samples", int64_t{1});
+  EXPECT_NE(param_error(m).find("clock_step_samples: must be in [2, 1e6], got 1"), std::string::npos);
 
   m = TdorcFilterLogic::default_parameters();
   m.set("window", std::string("100"));  // wrong type
@@ -210,34 +224,198 @@ TEST(TdorcFilterLogic, DropsNonFiniteSamplesWithoutTouchingState) {
   EXPECT_EQ(clean.stats().published, 300u);
 }
 
-TEST(TdorcFilterLogic, DropsWrongWhiskerAndOutOfOrder) {
+TEST(TdorcFilterLogic, DropsWrongWhiskerDuplicateAndLate) {
   TdorcFilterLogic logic(TdorcFilterLogic::params_from(TdorcFilterLogic::default_parameters()));
   ASSERT_TRUE(logic.on_pressure(pressure(0, WhiskerPressure::WHISKER_RIGHT)));
   EXPECT_FALSE(logic.on_pressure(pressure(1, WhiskerPressure::WHISKER_LEFT)));  // latched right
   EXPECT_FALSE(logic.on_pressure(pressure(2, 7)));                             // unknown id
   EXPECT_EQ(logic.stats().dropped_wrong_whisker, 2u);
   ASSERT_TRUE(logic.on_pressure(pressure(3, WhiskerPressure::WHISKER_RIGHT)));
-  EXPECT_FALSE(logic.on_pressure(pressure(3, WhiskerPressure::WHISKER_RIGHT)));  // same stamp
-  EXPECT_FALSE(logic.on_pressure(pressure(1, WhiskerPressure::WHISKER_RIGHT)));  // older
+  EXPECT_FALSE(logic.on_pressure(pressure(3, WhiskerPressure::WHISKER_RIGHT)));  // same sequence and stamp
+  EXPECT_FALSE(logic.on_pressure(pressure(1, WhiskerPressure::WHISKER_RIGHT)));  // sequence behind: late
+  EXPECT_EQ(logic.stats().dropped_duplicate, 1u);
+  EXPECT_EQ(logic.stats().dropped_late, 1u);
   EXPECT_EQ(logic.stats().dropped_out_of_order, 2u);
-  EXPECT_EQ(logic.whisker().samples(), 2);
-  // Sequence 0 -> 3 skipped two numbers: counted once, sample kept.
+  // Sequence 0 -> 3 skipped two numbers: counted once, sample kept, and the
+  // sample index advanced over the two missing periods (0, then 3).
   EXPECT_EQ(logic.stats().sequence_gaps, 1u);
+  EXPECT_EQ(logic.stats().samples_missing, 2u);
+  EXPECT_EQ(logic.whisker().samples(), 4);
 }
 
-TEST(TdorcFilterLogic, GapResetsFilter) {
+TEST(TdorcFilterLogic, GapUpToMaxSampleGapIsBridgedLongerResets) {
   TdorcFilterLogic logic(TdorcFilterLogic::params_from(TdorcFilterLogic::default_parameters()));
   for (int k = 0; k < 150; ++k) ASSERT_TRUE(logic.on_pressure(pressure(k)));
   ASSERT_TRUE(logic.whisker().channel(0).ready());
-  // 24 missing samples (0.5 s gap exactly): no reset.
-  auto s = logic.on_pressure(pressure(150 + 24));
+  // 248 missing samples (4.98 s gap): bridged, the filter stays ready.
+  auto s = logic.on_pressure(pressure(150 + 248));
   ASSERT_TRUE(s);
   EXPECT_TRUE(s->calibrated_ready);
   EXPECT_EQ(logic.stats().resets_on_gap, 0u);
-  // 26 missing samples (0.54 s): reset, the window refills.
-  s = logic.on_pressure(pressure(174 + 27));
+  EXPECT_EQ(logic.stats().gaps_bridged, 1u);
+  EXPECT_EQ(logic.whisker().samples(), 399);
+  // 251 missing samples (5.04 s): reset, the window refills.
+  s = logic.on_pressure(pressure(398 + 252));
   ASSERT_TRUE(s);
   EXPECT_FALSE(s->calibrated_ready);
   EXPECT_EQ(s->window_fill, 1u);
   EXPECT_EQ(logic.stats().resets_on_gap, 1u);
+}
+
+// ---------------------------------------------------------------- time faults
+// Each bad-stamp case against the clean stream (README "Time"). The input is a
+// noise-free drift ramp (pressure(k): +0.02 Pa and -0.01 Pa per sample), on
+// which TDORC's outputs are S_c = S_p = 0 once ready; a sample index that
+// lost track of time by one sample would give S_c = 0.02 Pa on channel 0.
+
+namespace {
+
+struct Arrival {
+  WhiskerPressure msg;
+  int64_t receive_ns;
+};
+
+std::vector<Arrival> clean_stream(int n) {
+  std::vector<Arrival> s;
+  for (int k = 0; k < n; ++k) s.push_back({pressure(k), 1000000000LL + k * kStepNs});
+  return s;
+}
+
+std::vector<std::optional<WhiskerSignal>> feed(TdorcFilterLogic& l, const std::vector<Arrival>& s, bool receive = true) {
+  std::vector<std::optional<WhiskerSignal>> out;
+  for (const auto& a : s) out.push_back(l.on_pressure(a.msg, receive ? std::optional<int64_t>(a.receive_ns) : std::nullopt));
+  return out;
+}
+
+TdorcFilterLogic::Params paper_params() {
+  return TdorcFilterLogic::params_from(TdorcFilterLogic::default_parameters());
+}
+
+/// Output of sample `seq` in `out` (nullptr if none).
+const WhiskerSignal* find_seq(const std::vector<std::optional<WhiskerSignal>>& out,
+                              const std::vector<Arrival>& in, uint32_t seq) {
+  for (size_t i = 0; i < out.size(); ++i) {
+    if (out[i] && in[i].msg.sequence == seq) return &*out[i];
+  }
+  return nullptr;
+}
+
+/// Every output of the faulty run equals the clean run's output of the same
+/// sample (stamp, S_c, S_p, contact), within 1e-9 Pa.
+void expect_same_as_clean(const std::vector<std::optional<WhiskerSignal>>& clean, const std::vector<Arrival>& clean_in,
+                          const std::vector<std::optional<WhiskerSignal>>& faulty, const std::vector<Arrival>& faulty_in) {
+  for (size_t i = 0; i < faulty.size(); ++i) {
+    if (!faulty[i]) continue;
+    const WhiskerSignal* c = find_seq(clean, clean_in, faulty_in[i].msg.sequence);
+    ASSERT_NE(c, nullptr) << i;
+    EXPECT_EQ(tactile_common::from_stamp(faulty[i]->header.stamp), tactile_common::from_stamp(c->header.stamp)) << i;
+    EXPECT_EQ(faulty[i]->calibrated_ready, c->calibrated_ready) << i;
+    EXPECT_EQ(faulty[i]->contact, c->contact) << i;
+    for (size_t ch = 0; ch < 3; ++ch) {
+      EXPECT_NEAR(faulty[i]->calibrated[ch], c->calibrated[ch], 1e-9) << i << " ch " << ch;
+      EXPECT_NEAR(faulty[i]->compensated[ch], c->compensated[ch], 1e-9) << i << " ch " << ch;
+    }
+  }
+}
+
+}  // namespace
+
+TEST(TdorcFilterLogicTime, StampTwentySecondsAheadOrBehindCostsNoSample) {
+  for (const int64_t jump : {20000000000LL, -20000000000LL}) {
+    for (const bool receive : {true, false}) {  // without receive time the sequence decides
+      TdorcFilterLogic clean(paper_params()), faulty(paper_params());
+      const auto in = clean_stream(400);
+      auto bad = in;
+      tactile_common::to_stamp(tactile_common::from_stamp(bad[200].msg.header.stamp) + jump, bad[200].msg.header.stamp);
+      const auto a = feed(clean, in, receive);
+      const auto b = feed(faulty, bad, receive);
+      for (size_t i = 0; i < b.size(); ++i) ASSERT_TRUE(b[i]) << i;  // nothing dropped
+      expect_same_as_clean(a, in, b, bad);
+      // The repaired stamp is the clean one: t0 + 200 T.
+      EXPECT_EQ(tactile_common::from_stamp(b[200]->header.stamp), 1000000000LL + 200 * kStepNs);
+      const auto& s = faulty.stats();
+      EXPECT_EQ(jump > 0 ? s.stamps_repaired_ahead : s.stamps_repaired_behind, 1u);
+      EXPECT_EQ(s.stamps_repaired_ahead + s.stamps_repaired_behind, 1u);
+      EXPECT_EQ(s.published, 400u);
+      EXPECT_EQ(s.dropped_out_of_order + s.resets_on_gap + s.gaps_bridged + s.clock_steps, 0u);
+    }
+  }
+}
+
+TEST(TdorcFilterLogicTime, TwoSwappedSamplesCostTheLateOneAndKeepTheTimeIndex) {
+  TdorcFilterLogic clean(paper_params()), faulty(paper_params());
+  const auto in = clean_stream(400);
+  auto bad = in;
+  std::swap(bad[200].msg, bad[201].msg);  // receive times stay in order
+  const auto a = feed(clean, in);
+  const auto b = feed(faulty, bad);
+  ASSERT_TRUE(b[200]);   // sample 201 first: used, one sample period missing
+  EXPECT_FALSE(b[201]);  // sample 200 after it: late, dropped
+  expect_same_as_clean(a, in, b, bad);
+  const auto& s = faulty.stats();
+  EXPECT_EQ(s.dropped_late, 1u);
+  EXPECT_EQ(s.dropped_out_of_order, 1u);
+  EXPECT_EQ(s.gaps_bridged, 1u);
+  EXPECT_EQ(s.samples_missing, 1u);
+  EXPECT_EQ(s.published, 399u);
+  EXPECT_EQ(faulty.whisker().samples(), clean.whisker().samples());  // 400: the index kept the time
+}
+
+TEST(TdorcFilterLogicTime, DuplicateIsDropped) {
+  TdorcFilterLogic clean(paper_params()), faulty(paper_params());
+  const auto in = clean_stream(400);
+  auto bad = in;
+  bad.insert(bad.begin() + 201, {in[200].msg, in[200].receive_ns + 1000000});
+  const auto a = feed(clean, in);
+  const auto b = feed(faulty, bad);
+  EXPECT_FALSE(b[201]);
+  expect_same_as_clean(a, in, b, bad);
+  EXPECT_EQ(faulty.stats().dropped_duplicate, 1u);
+  EXPECT_EQ(faulty.stats().published, 400u);
+}
+
+TEST(TdorcFilterLogicTime, TwoSecondGapIsBridgedByTheSampleIndex) {
+  TdorcFilterLogic clean(paper_params()), faulty(paper_params());
+  const auto in = clean_stream(400);
+  auto bad = in;
+  bad.erase(bad.begin() + 200, bad.begin() + 300);  // 2 s: 100 samples never arrive
+  const auto a = feed(clean, in);
+  const auto b = feed(faulty, bad);
+  for (size_t i = 0; i < b.size(); ++i) ASSERT_TRUE(b[i]) << i;
+  // After the gap the drift line, extrapolated over the 100 missing indices,
+  // is exact: S_c = S_p = 0 as in the clean run (without the index advance
+  // S_c of channel 0 would be 100 * 0.02 = 2 Pa).
+  expect_same_as_clean(a, in, b, bad);
+  EXPECT_TRUE(b[200]->calibrated_ready);
+  const auto& s = faulty.stats();
+  EXPECT_EQ(s.gaps_bridged, 1u);
+  EXPECT_EQ(s.samples_missing, 100u);
+  EXPECT_EQ(s.resets_on_gap, 0u);
+  EXPECT_EQ(s.sequence_gaps, 1u);
+  EXPECT_EQ(faulty.whisker().samples(), 400);
+}
+
+TEST(TdorcFilterLogicTime, StreamDeliveredLateInABurstIsInOrder) {
+  TdorcFilterLogic clean(paper_params()), faulty(paper_params());
+  const auto in = clean_stream(400);
+  auto bad = in;
+  for (int k = 200; k < 300; ++k) bad[static_cast<size_t>(k)].receive_ns = in[300].receive_ns;  // stalled, then a burst
+  const auto a = feed(clean, in);
+  const auto b = feed(faulty, bad);
+  expect_same_as_clean(a, in, b, bad);
+  const auto& s = faulty.stats();
+  EXPECT_EQ(s.published, 400u);
+  EXPECT_EQ(s.stamps_repaired_ahead + s.stamps_repaired_behind + s.gaps_bridged + s.dropped_out_of_order, 0u);
+}
+
+TEST(TdorcFilterLogicTime, GapLongerThanMaxSampleGapResets) {
+  TdorcFilterLogic faulty(paper_params());  // max_sample_gap_s = 5 s
+  auto bad = clean_stream(700);
+  bad.erase(bad.begin() + 200, bad.begin() + 500);  // 6 s
+  const auto b = feed(faulty, bad);
+  ASSERT_TRUE(b[200]);
+  EXPECT_FALSE(b[200]->calibrated_ready);
+  EXPECT_EQ(b[200]->window_fill, 1u);
+  EXPECT_EQ(faulty.stats().resets_on_gap, 1u);
+  EXPECT_EQ(faulty.stats().gaps_bridged, 0u);
 }

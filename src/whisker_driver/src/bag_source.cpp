@@ -26,6 +26,11 @@ BagSource::BagSource(const std::string& path, const std::string& topic)
 bool BagSource::fetch() { return reader_.read_next(next_); }
 
 void BagSource::poll(int64_t now_ns, std::vector<WhiskerPressure>& out) {
+  std::vector<int64_t> receive_ns;
+  poll_received(now_ns, out, receive_ns);
+}
+
+void BagSource::poll_received(int64_t now_ns, std::vector<WhiskerPressure>& out, std::vector<int64_t>& receive_ns) {
   if (!have_next_) {
     done_ = true;
     return;
@@ -52,6 +57,7 @@ void BagSource::poll(int64_t now_ns, std::vector<WhiskerPressure>& out) {
     }
     if (ok) {
       out.push_back(std::move(msg));
+      receive_ns.push_back(next_.timestamp_ns);
     } else {
       ++errors_;
     }

@@ -4,6 +4,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "tactile_common/time.hpp"
 #include "whisker_driver/serial_port.hpp"
 #ifdef WHISKER_DRIVER_WITH_BAG
 #include "whisker_driver/bag_source.hpp"
@@ -135,8 +136,17 @@ std::unique_ptr<WhiskerSource> make_source(const WhiskerDriverParams& p) {
 WhiskerDriverLogic::WhiskerDriverLogic(const Params& params)
     : WhiskerDriverLogic(params, make_source(params)) {}
 
+namespace {
+tactile_common::SampleClockParams clock_params(const WhiskerDriverParams& p) {
+  p.validate();
+  tactile_common::SampleClockParams c;
+  c.nominal_period_s = 1.0 / p.rate_hz;
+  return c;
+}
+}  // namespace
+
 WhiskerDriverLogic::WhiskerDriverLogic(const Params& params, std::unique_ptr<WhiskerSource> source)
-    : params_(params), source_(std::move(source)) {
+    : params_(params), source_(std::move(source)), clock_(clock_params(params)) {
   params_.validate();
   if (!source_) throw std::invalid_argument("WhiskerDriverLogic: source must not be null");
 }
@@ -146,16 +156,41 @@ int64_t WhiskerDriverLogic::period_ns() const {
 }
 
 WhiskerDriverLogic::Outputs WhiskerDriverLogic::on_timer(int64_t now_ns) {
+  using tactile_common::SampleKind;
   Outputs out;
-  source_->poll(now_ns, out.pressure);
-  for (const auto& m : out.pressure) {
-    if (have_last_seq_) {
-      const uint32_t expected = last_seq_ + 1u;
-      const uint32_t gap = m.sequence - expected;  // modulo 2^32
-      if (gap != 0 && gap < 0x80000000u) stats_.sequence_gaps += gap;  // ignore restarts
+  std::vector<WhiskerPressure> polled;
+  std::vector<int64_t> received;
+  source_->poll_received(now_ns, polled, received);
+  out.pressure.reserve(polled.size());
+  for (size_t i = 0; i < polled.size(); ++i) {
+    WhiskerPressure& m = polled[i];
+    // Which clock to trust (README "Time"): duplicates and late samples are
+    // not published, a stamp that disagrees with both the sequence and the
+    // receive time is replaced and the sample published.
+    const auto d = clock_.classify(m.sequence, tactile_common::from_stamp(m.header.stamp),
+                                   i < received.size() ? std::optional<int64_t>(received[i]) : std::nullopt);
+    switch (d.kind) {
+      case SampleKind::kDuplicate: ++stats_.dropped_duplicate; continue;
+      case SampleKind::kLate: ++stats_.dropped_late; continue;
+      case SampleKind::kRepairedAhead: ++stats_.stamps_repaired_ahead; break;
+      case SampleKind::kRepairedBehind: ++stats_.stamps_repaired_behind; break;
+      case SampleKind::kClockStep: ++stats_.clock_steps; break;
+      case SampleKind::kFirst:
+      case SampleKind::kInOrder: break;
+    }
+    if (d.restart) ++stats_.sequence_restarts;
+    if (d.missing > 0) {
+      ++stats_.gaps;
+      stats_.samples_missing += static_cast<uint64_t>(d.missing);
+    }
+    tactile_common::to_stamp(d.stamp_ns, m.header.stamp);
+    if (have_last_seq_ && !d.restart) {
+      const uint32_t gap = m.sequence - (last_seq_ + 1u);  // modulo 2^32
+      if (gap != 0 && gap < 0x80000000u) stats_.sequence_gaps += gap;
     }
     have_last_seq_ = true;
     last_seq_ = m.sequence;
+    out.pressure.push_back(std::move(m));
   }
   stats_.published += out.pressure.size();
   return out;

@@ -207,3 +207,128 @@ TEST(BagSource, ReplaysWhiskerPressurePacedByRecordedTime) {
   std::filesystem::remove_all(dir);
 }
 #endif
+
+#ifdef WHISKER_DRIVER_WITH_BAG
+namespace {
+/// A bag of n left-whisker samples at 50 Hz (stamp = receive time = t0 + k T,
+/// sequence k, pressure 100000 + k on channel 0) with `fault` applied, then
+/// replayed through the driver by a 50 Hz timer. Returns what it published.
+enum class Fault { kNone, kAhead, kBehind, kSwap, kGap, kDuplicate };
+std::vector<WhiskerPressure> replay_with(Fault fault, WhiskerDriverLogic::Stats& stats, int n = 250, int at = 120) {
+  constexpr int64_t kT0 = 5000000000LL, kT = 20000000LL;
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("whisker_driver_fault_" + std::to_string(static_cast<int>(fault)) + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  {
+    tactile_bag::Writer w;
+    w.open(dir.string());
+    std::vector<std::pair<int64_t, WhiskerPressure>> rows;  // (receive, message)
+    for (int k = 0; k < n; ++k) {
+      WhiskerPressure m;
+      tactile_common::to_stamp(kT0 + k * kT, m.header.stamp);
+      m.header.frame_id = "whisker_left";
+      m.pressure = {100000.0 + k, 100001.0, 100002.0};
+      m.temperature = {25.0, 25.0, 25.0};
+      m.sequence = static_cast<uint32_t>(k);
+      rows.emplace_back(kT0 + k * kT, m);
+    }
+    auto& m = rows[static_cast<size_t>(at)].second;
+    switch (fault) {
+      case Fault::kNone: break;
+      case Fault::kAhead: tactile_common::to_stamp(kT0 + at * kT + 20000000000LL, m.header.stamp); break;
+      case Fault::kBehind: tactile_common::to_stamp(kT0 + at * kT - 20000000000LL, m.header.stamp); break;
+      case Fault::kSwap: std::swap(rows[static_cast<size_t>(at)].second, rows[static_cast<size_t>(at) + 1].second); break;
+      case Fault::kGap: rows.erase(rows.begin() + at, rows.begin() + at + 100); break;  // 2 s stall, 100 lost
+      case Fault::kDuplicate: rows.insert(rows.begin() + at + 1, {kT0 + at * kT + 1000000, m}); break;
+    }
+    for (const auto& [t, msg] : rows) w.write("/whisker/left/pressure", t, msg);
+    w.close();
+  }
+  WhiskerDriverParams p;
+  p.source = "bag";
+  p.bag_path = dir.string();
+  p.bag_topic = "/whisker/left/pressure";
+  WhiskerDriverLogic logic(p);
+  std::vector<WhiskerPressure> out;
+  for (int64_t now = 0; !logic.finished(); now += kT) {
+    for (auto& m : logic.on_timer(now).pressure) out.push_back(m);
+  }
+  stats = logic.stats();
+  std::filesystem::remove_all(dir);
+  return out;
+}
+
+/// Published samples as (sequence, stamp) and the stamps' strict order.
+void expect_clean_stamps(const std::vector<WhiskerPressure>& out) {
+  for (size_t i = 0; i < out.size(); ++i) {
+    // Every published sample carries its true sampling time t0 + seq T.
+    EXPECT_EQ(from_stamp(out[i].header.stamp), 5000000000LL + out[i].sequence * 20000000LL) << i;
+    EXPECT_DOUBLE_EQ(out[i].pressure[0], 100000.0 + out[i].sequence) << i;
+    if (i > 0) {
+      EXPECT_GT(out[i].sequence, out[i - 1].sequence) << i;
+    }
+  }
+}
+}  // namespace
+
+TEST(BagSource, StampTwentySecondsAheadIsRepairedNotDropped) {
+  WhiskerDriverLogic::Stats s;
+  const auto out = replay_with(Fault::kAhead, s);
+  ASSERT_EQ(out.size(), 250u);  // one bad stamp costs no sample
+  expect_clean_stamps(out);
+  EXPECT_EQ(s.stamps_repaired_ahead, 1u);
+  EXPECT_EQ(s.stamps_repaired_behind + s.dropped_late + s.dropped_duplicate + s.gaps + s.clock_steps, 0u);
+}
+
+TEST(BagSource, StampTwentySecondsBehindIsRepairedNotDropped) {
+  WhiskerDriverLogic::Stats s;
+  const auto out = replay_with(Fault::kBehind, s);
+  ASSERT_EQ(out.size(), 250u);
+  expect_clean_stamps(out);
+  EXPECT_EQ(s.stamps_repaired_behind, 1u);
+  EXPECT_EQ(s.stamps_repaired_ahead + s.dropped_late + s.dropped_duplicate + s.gaps, 0u);
+}
+
+TEST(BagSource, TwoSwappedSamplesCostTheLateOne) {
+  WhiskerDriverLogic::Stats s;
+  const auto out = replay_with(Fault::kSwap, s);
+  ASSERT_EQ(out.size(), 249u);  // sample 121 first, then 120 is late: dropped
+  expect_clean_stamps(out);
+  EXPECT_EQ(out[120].sequence, 121u);
+  EXPECT_EQ(s.dropped_late, 1u);
+  EXPECT_EQ(s.gaps, 1u);
+  EXPECT_EQ(s.samples_missing, 1u);
+  EXPECT_EQ(s.sequence_gaps, 1u);
+  EXPECT_EQ(s.stamps_repaired_ahead + s.stamps_repaired_behind + s.dropped_duplicate, 0u);
+}
+
+TEST(BagSource, StallIsAGapOfTheMissingSamples) {
+  WhiskerDriverLogic::Stats s;
+  const auto out = replay_with(Fault::kGap, s);
+  ASSERT_EQ(out.size(), 150u);
+  expect_clean_stamps(out);
+  EXPECT_EQ(s.gaps, 1u);
+  EXPECT_EQ(s.samples_missing, 100u);
+  EXPECT_EQ(s.sequence_gaps, 100u);
+  EXPECT_EQ(s.stamps_repaired_ahead + s.stamps_repaired_behind + s.dropped_late + s.dropped_duplicate, 0u);
+}
+
+TEST(BagSource, DuplicateIsDropped) {
+  WhiskerDriverLogic::Stats s;
+  const auto out = replay_with(Fault::kDuplicate, s);
+  ASSERT_EQ(out.size(), 250u);
+  expect_clean_stamps(out);
+  EXPECT_EQ(s.dropped_duplicate, 1u);
+  EXPECT_EQ(s.stamps_repaired_ahead + s.stamps_repaired_behind + s.dropped_late + s.gaps, 0u);
+}
+
+TEST(BagSource, CleanBagNeedsNoDecision) {
+  WhiskerDriverLogic::Stats s;
+  const auto out = replay_with(Fault::kNone, s);
+  ASSERT_EQ(out.size(), 250u);
+  expect_clean_stamps(out);
+  EXPECT_EQ(s.stamps_repaired_ahead + s.stamps_repaired_behind + s.dropped_late + s.dropped_duplicate + s.gaps +
+                s.clock_steps + s.sequence_restarts,
+            0u);
+}
+#endif

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstddef>
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -42,10 +43,20 @@ struct ExplorerParams {
   /// the grid variance is left at NaN and an update costs O(n m) instead of
   /// O(n^2 m) for n points and m grid nodes.
   bool grid_variance = true;
+  /// Nodes per side of the variance map (the picture's uncertainty layer).
+  /// 0: the variance on every grid node, one triangular solve per update
+  /// (O(n^2 m)). k > 0 (and below grid_cells): the variance on k x k nodes
+  /// spanning the grid, bilinearly interpolated to the grid nodes; its
+  /// L^-1 k(X, q) is kept between updates and extended by the rows of the
+  /// points added since (the incremental Cholesky rows, O(n k^2) per point;
+  /// memory max_points x k^2 doubles). The target uses the exact variance at
+  /// the contour points either way (000 eq. 44-46). Workspace choice.
+  uint32_t variance_cells = 0;
 
   /// The onboard budget of 000: 50 points, 10 x 10 grid over 4 m.
   static ExplorerParams onboard();
-  /// The ground-station budget: 5000 points, 100 x 100 grid over 4 m.
+  /// The ground-station budget: 5000 points, 100 x 100 grid over 4 m,
+  /// a 40 x 40 variance map.
   static ExplorerParams ground();
   /// Throws std::invalid_argument "ExplorerParams.<field>: <reason>".
   void validate() const;
@@ -104,11 +115,21 @@ class GpisExplorer {
   AddStatus add_point(const Eigen::Vector2d& x, double label) { return gpis_.add_point(x, label); }
   /// Replaces the training set and factorizes once (Gpis::fit).
   std::size_t fit(const Eigen::Ref<const Eigen::Matrix2Xd>& X, const Eigen::Ref<const Eigen::VectorXd>& y) {
+    vrows_ = 0;
     return gpis_.fit(X, y);
   }
-  void pop_back() { gpis_.pop_back(); }
-  void refactorize() { gpis_.refactorize(); }
-  void clear() { gpis_.clear(); }
+  void pop_back() {
+    gpis_.pop_back();
+    vrows_ = std::min(vrows_, gpis_.size());
+  }
+  void refactorize() {
+    vrows_ = 0;
+    gpis_.refactorize();
+  }
+  void clear() {
+    vrows_ = 0;
+    gpis_.clear();
+  }
   /// Centres the prediction grid on (x, y) (grid_size, grid_cells unchanged).
   void centre_grid(double x, double y);
   void set_grid(const GridSpec& grid);
@@ -123,13 +144,26 @@ class GpisExplorer {
   const UpdateResult& last() const { return result_; }
   std::size_t updates() const { return updates_; }
   const ExplorerParams& params() const { return p_; }
+  /// Nodes of the variance map (all grid nodes when variance_cells is 0).
+  const Eigen::Matrix2Xd& variance_nodes() const { return variance_cells_active() ? vnodes_ : nodes_; }
   /// State of the onboard-budget representation: GPIS (points, labels,
   /// factor, alpha, work) + grid mean and variance [bytes], for max_points.
   std::size_t state_bytes() const;
 
  private:
+  bool variance_cells_active() const {
+    return p_.variance_cells > 0 && (p_.variance_cells < grid_.width || p_.variance_cells < grid_.height);
+  }
+  /// Extends (or recomputes) V = L^-1 k(X, vnodes_) to the current points and
+  /// interpolates the coarse variance map onto var_.
+  void coarse_variance();
+
   ExplorerParams p_;
   Gpis gpis_;
+  Eigen::Matrix2Xd vnodes_;   ///< variance-map nodes (variance_cells^2), row-major
+  uint32_t vw_ = 0, vh_ = 0;  ///< variance-map nodes per row / column
+  Eigen::MatrixXd V_;         ///< rows: points (first vrows_ valid), cols: vnodes_
+  std::size_t vrows_ = 0;
   GridSpec grid_;
   Eigen::Matrix2Xd nodes_;
   std::vector<double> mean_, var_;

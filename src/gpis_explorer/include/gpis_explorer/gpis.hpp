@@ -104,6 +104,19 @@ class Gpis {
                      Eigen::VectorXd& variance) const;
   /// Mean only at the columns of Q (O(n m), no triangular solve).
   void mean_batch(const Eigen::Ref<const Eigen::Matrix2Xd>& Q, Eigen::VectorXd& mean) const;
+  /// K(i, j) = k(x_i, q_j) for the n training points and the columns of Q;
+  /// K must be n x Q.cols() (000 eq. 33).
+  void kernel_block(const Eigen::Ref<const Eigen::Matrix2Xd>& Q, Eigen::Ref<Eigen::MatrixXd> K) const;
+  /// B := L^-1 B for B with n rows (blocked triangular solve; BLAS where built
+  /// with OpenBLAS). |column of L^-1 K(X, q)|^2 is the variance reduction of eq. 35.
+  void solve_lower(Eigen::Ref<Eigen::MatrixXd> B) const;
+  /// Curvature (eq. 40) at the columns of Q in one pass over the points
+  /// (same values as curvature() per point). kappa is resized to Q.cols().
+  void curvature_batch(const Eigen::Ref<const Eigen::Matrix2Xd>& Q, Eigen::VectorXd& kappa,
+                       double min_gradient = 1e-9) const;
+  /// Which linear algebra and kernel loops this build runs: "openblas" or
+  /// "eigen", "+avx2" or "+baseline" (the kernel clone this CPU runs).
+  static const char* backend();
   /// Gradient of the posterior mean (000 eq. 36-37, for general beta).
   Eigen::Vector2d gradient(const Eigen::Vector2d& x) const;
   /// Hessian of the posterior mean (000 eq. 38-39, for general beta).
@@ -126,6 +139,8 @@ class Gpis {
   double imq(double s) const { return half_beta_ ? 1.0 / std::sqrt(s) : std::pow(s, -p_.beta); }
   void ensure_capacity(std::size_t n);
   void solve_alpha();
+  /// Training coordinates as two contiguous arrays (kernel loops).
+  void split_points(std::vector<double>& xs, std::vector<double>& ys) const;
 
   GpisParams p_;
   double prior_var_ = 1.0;

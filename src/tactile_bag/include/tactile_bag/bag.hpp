@@ -27,6 +27,10 @@ struct sqlite3;
 struct sqlite3_stmt;
 
 namespace tactile_bag {
+namespace mcap {
+class FileWriter;
+class FileReader;
+}  // namespace mcap
 
 /// Every error of this library. The message names the file and the reason.
 class BagError : public std::runtime_error {
@@ -81,15 +85,27 @@ std::string dump_qos_profiles(const std::vector<QosProfile>& profiles, int metad
 std::string default_qos_profiles(int metadata_version = 9);
 
 struct WriterOptions {
-  /// rosbag2 metadata version: 9 (Jazzy, default; read by Jazzy and rosbags),
-  /// 8 (Iron) or 5 (Humble: QoS as a string with integer enums).
-  int metadata_version = 9;
+  /// rosbag2 metadata version: 9 (Jazzy/Kilted; read by Jazzy and rosbags),
+  /// 8 (Iron) or 5 (Humble: QoS as a string with integer enums). 0: the version of
+  /// ros_distro (9 when that is empty too).
+  int metadata_version = 0;
   /// Open transactions are committed at least this often (wall time), by write()
   /// and by a background thread while idle. A SIGKILL loses at most this window.
   std::chrono::milliseconds flush_interval{250};
-  /// ros_distro stored in metadata (v >= 8) and in the schema table. Empty: the
-  /// distro whose format the version follows (jazzy, iron, humble).
+  /// Distro the bag is for (humble, iron, jazzy, kilted; tactile_bag/distro.hpp): stored in
+  /// metadata (v >= 8) and the schema table, and selecting the standard types' layouts
+  /// (Humble/Iron: sensor_msgs/Range without `variance`: definition and payload are
+  /// converted on write) and the RIHS01 type_description_hash written for every topic
+  /// (iron and later; a hash given in TopicInfo is kept). Empty: the distro whose format
+  /// the metadata version follows (jazzy, iron, humble), and no hashes are computed.
   std::string ros_distro;
+  /// Storage: "sqlite3" (the library's default, unchanged for existing callers) or "mcap"
+  /// (what `ros2 bag record` writes since Iron; the default of the `tactile` writers).
+  std::string storage = "sqlite3";
+  /// mcap chunk compression: "" (none: rosbag2's default), "zstd" or "lz4".
+  std::string compression;
+  /// mcap: uncompressed bytes per chunk (a chunk is also written every flush_interval).
+  uint64_t chunk_size = 768 * 1024;
 };
 
 class Writer {
@@ -103,7 +119,7 @@ class Writer {
   /// Create the bag directory (it must not exist or be empty), the database
   /// <dir>/<basename>_0.db3 and a first metadata.yaml.
   void open(const std::string& dir);
-  bool is_open() const { return db_ != nullptr; }
+  bool is_open() const { return db_ != nullptr || mcap_ != nullptr; }
 
   /// Register a topic; a second call with the same name and type is a no-op, with
   /// another type an error.
@@ -126,15 +142,20 @@ class Writer {
   /// Commit, rewrite metadata.yaml with the final counts, close the database.
   void close();
 
+  /// Path of the storage file (.db3 or .mcap).
   const std::string& db_path() const { return db_path_; }
   uint64_t message_count() const;
+  const WriterOptions& options() const { return opt_; }
 
  private:
   struct TopicState {
     TopicInfo info;
     int64_t id = 0;
     uint64_t count = 0;
+    bool drop_range_variance = false;  ///< Humble/Iron bag: cut Range's trailing variance
   };
+  void prepare_topic_locked(TopicState& st) const;
+  void write_mcap_locked(TopicState& st, int64_t timestamp_ns, const uint8_t* data, size_t size);
   void exec(const char* sql);
   void begin_locked();
   void commit_locked();
@@ -147,6 +168,8 @@ class Writer {
   std::string dir_, db_path_, db_name_;
   sqlite3* db_ = nullptr;
   sqlite3_stmt* insert_ = nullptr;
+  std::unique_ptr<mcap::FileWriter> mcap_;
+  bool hash_types_ = false;
   std::map<std::string, TopicState> topics_;
   std::vector<std::string> topic_order_;
   std::map<std::string, bool> defined_types_;
@@ -162,8 +185,8 @@ class Writer {
 
 class Reader {
  public:
-  Reader() = default;
-  explicit Reader(const std::string& dir) { open(dir); }
+  Reader();
+  explicit Reader(const std::string& dir);
   ~Reader();
   Reader(const Reader&) = delete;
   Reader& operator=(const Reader&) = delete;
@@ -182,7 +205,17 @@ class Reader {
   int64_t end_time_ns() const { return end_ns_; }       ///< last timestamp
   int64_t duration_ns() const { return end_ns_ - start_ns_; }
   int metadata_version() const { return metadata_version_; }  ///< 0 without metadata.yaml
-  std::string storage_identifier() const { return "sqlite3"; }
+  /// "sqlite3" or "mcap".
+  const std::string& storage_identifier() const { return storage_; }
+  /// compression_format / compression_mode of metadata.yaml ("" when not compressed).
+  const std::string& compression_format() const { return compression_format_; }
+  const std::string& compression_mode() const { return compression_mode_; }
+  /// ros_distro of the bag (metadata.yaml v >= 8, the sqlite schema table or the mcap
+  /// "rosbag2" metadata record); empty if the bag does not say.
+  const std::string& ros_distro() const { return ros_distro_; }
+  /// Topics of type sensor_msgs/msg/Range recorded in Humble's layout (no variance): read
+  /// with a variance of 0 ("unknown") appended, so they decode as the current type.
+  const std::vector<std::string>& upgraded_range_topics() const { return upgraded_; }
   bool metadata_complete() const { return metadata_complete_; }
   const std::string& recovery_note() const { return recovery_note_; }
   const std::vector<std::string>& files() const { return db_paths_; }
@@ -209,9 +242,22 @@ class Reader {
                  bool& any);
   void step(File& f);
   void prepare_iteration();
+  void open_mcap(std::map<std::string, TopicInfo>& found, std::map<std::string, uint64_t>& counts,
+                 int64_t& tmin, int64_t& tmax, bool& any);
+  bool read_next_mcap(SerializedMessage& out);
+  void finish_message(SerializedMessage& out);
 
   std::string dir_;
+  std::string storage_ = "sqlite3", compression_format_, compression_mode_, ros_distro_;
   std::vector<File> files_;
+  struct McapFile {
+    std::unique_ptr<mcap::FileReader> reader;
+    std::vector<std::string> channel_topic;  // channel id -> topic
+  };
+  std::vector<McapFile> mcap_files_;
+  std::vector<std::string> temp_files_;  // decompressed copies of file-compressed bags
+  std::vector<std::string> upgraded_;
+  std::vector<uint8_t> scratch_;
   std::vector<std::string> db_paths_;
   std::vector<TopicInfo> topics_;
   std::map<std::string, uint64_t> counts_;

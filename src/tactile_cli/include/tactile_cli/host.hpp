@@ -19,6 +19,10 @@ namespace tactile_cli {
 /// each topic (type + definition) on its first message.
 class BagRecorder : public BusTap {
  public:
+  /// Storage, distro and compression of every bag the `tactile` commands record (set once
+  /// from --storage, --bag-distro, --bag-compression). Default: what `ros2 bag record` of
+  /// Kilted writes: mcap, uncompressed chunks, Kilted layouts and RIHS01 hashes.
+  static tactile_bag::WriterOptions& default_options();
   explicit BagRecorder(const std::string& dir);
   void on_message(const std::string& topic, const std::string& type_name,
                   const std::string& definition, int64_t stamp_ns,

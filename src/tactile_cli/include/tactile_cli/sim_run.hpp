@@ -1,7 +1,8 @@
 // `tactile sim SCENARIO.yaml --out DIR [--seed N] [--trials K]`: flies a
 // scenario of the SITL with the node graph it names and writes the bag,
 // trajectory.csv, metrics.json and a top-view PNG; K seeded trials are
-// aggregated (mean, std, success count).
+// aggregated (mean, std, success count); they run on `jobs` worker threads
+// (parallel.hpp) with the outputs of a serial run.
 #pragma once
 
 #include <cstdint>
@@ -18,6 +19,7 @@ struct SimOptions {
   std::string config_dir;               ///< node parameter files (config/)
   std::optional<uint64_t> seed;         ///< default: the scenario's seed
   int trials = 1;                       ///< > 1: out_dir/trial_<k>/ per trial + aggregate
+  int jobs = 0;                         ///< trials run at once (parallel.hpp); 0: all cores
   bool progress = true;                 ///< progress line on stderr
   bool write_bag = true;
   bool write_png = true;

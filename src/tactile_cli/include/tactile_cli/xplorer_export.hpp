@@ -16,6 +16,9 @@ struct ExportOptions {
   std::string ply;              ///< output PLY file
   bool binary = false;          ///< binary little endian instead of ASCII
   std::string config_dir = "config";
+  /// Where the summary goes as JSON (with its `warnings`): --metrics, default
+  /// <ply without .ply>.metrics.json beside the map.
+  std::string metrics;
 };
 
 /// Returns a summary (messages used, source of the wrench, points, map

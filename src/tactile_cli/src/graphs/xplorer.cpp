@@ -241,12 +241,39 @@ class XplorerGraph : public SimGraph {
     m["map_height_m"] = r.height;
     m["map_area_m2"] = r.obb_area;
     m["map_hull_area_m2"] = r.hull_area;
+    // Footprint of the object: the convex hull of the arena's walls and
+    // cylinders (a box, a convex polygon or a cylinder, the objects of 001 and
+    // of the xplorer_objects family) against the hull of the map, for the
+    // shapes whose map has no meaningful bounding rectangle (issue 17).
+    const double a_obj = object_area();
+    if (a_obj > 0.0) {
+      m["true_area_m2"] = a_obj;
+      m["map_hull_area_accuracy"] = r.points > 0 ? 1.0 - std::abs(r.hull_area - a_obj) / a_obj : 0.0;
+    }
     if (box_size_) {
       const double a_true = (*box_size_)[0] * (*box_size_)[1];
       m["true_length_m"] = (*box_size_)[0];
       m["true_width_m"] = (*box_size_)[1];
       m["map_area_accuracy"] = r.points > 0 ? 1.0 - std::abs(r.obb_area - a_true) / a_true : 0.0;
     }
+  }
+
+  /// Area of the convex hull of every wall end point and cylinder (sampled at
+  /// 0.5 deg) of the arena [m^2]; 0 for an arena without obstacles.
+  double object_area() const {
+    std::vector<Eigen::Vector2d> pts;
+    for (const auto& w : sim_->arena().walls()) {
+      pts.push_back(w.a);
+      pts.push_back(w.b);
+    }
+    for (const auto& c : sim_->arena().cylinders()) {
+      for (int k = 0; k < 720; ++k) {
+        const double a = 2.0 * M_PI * k / 720.0;
+        pts.emplace_back(c.center.x() + c.radius * std::cos(a), c.center.y() + c.radius * std::sin(a));
+      }
+    }
+    if (pts.size() < 3) return 0.0;
+    return mapping_pcl::min_area_rectangle(pts).hull_area;
   }
 
   /// 001 Sec. V-E: rise time (90 % of the start -> goal distance) and settling

@@ -54,6 +54,9 @@ def test_export_rebuilds_the_map_from_a_bag(tmp_path):
         assert len(p) == m["map_points"] > 0
         # The wall of xplorer_wall.yaml is at x = 1 m: slabs lie in [1.0, 1.08].
         assert p[:, 0].min() > 1.0 - 0.02 and p[:, 0].max() < 1.08 + 0.03
+        # The summary with its (here empty) warnings beside the map.
+        summary = json.loads(out.with_suffix(".metrics.json").read_text())
+        assert summary["points"] == len(p) and summary["warnings"] == []
 
 
 def test_export_names_the_missing_topic(tmp_path):

@@ -284,6 +284,13 @@ class TdorcWhisker {
   explicit TdorcWhisker(const Params& params);
   /// One sample of all three channels; values must be finite.
   WhiskerOutput update(const std::array<double, 3>& raw);
+  /// `n` sample periods passed without a sample (a gap in the stream): the
+  /// next sample's index is n larger, so the drift line N_td(t) (000 eq. 4,
+  /// t in sample periods) is extrapolated over the gap, as it is across a
+  /// contact; windows, fits, band-pass and contact state stay as they are.
+  void skip(int64_t n) {
+    if (n > 0) next_index_ += n;
+  }
   void reset();
   const Params& params() const { return params_; }
   const TdorcChannel& channel(int i) const { return channels_[static_cast<std::size_t>(i)]; }

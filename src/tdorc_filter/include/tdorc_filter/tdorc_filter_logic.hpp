@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "tactile_common/parameters.hpp"
+#include "tactile_common/sample_clock.hpp"
 #include "tactile_msgs/msg/whisker_pressure.hpp"
 #include "tactile_msgs/msg/whisker_signal.hpp"
 #include "tdorc_filter/tdorc.hpp"
@@ -22,10 +23,16 @@ class TdorcFilterLogic {
 
   struct Params {
     tdorc_filter::Params tdorc;
-    /// A stamp gap larger than this resets the filter (window refills, the
-    /// extrapolated drift would be stale). Our choice, not from the paper:
-    /// 0.5 s = 25 samples at the deck's 50 Hz.
-    double max_sample_gap_s = 0.5;
+    /// A gap (trusted time between two accepted samples, see SampleClock) up
+    /// to this is bridged: the sample index advances by the missing sample
+    /// periods, so the drift line is extrapolated across the gap as it is
+    /// across a contact (000 eq. 8), and the band-pass continues. A longer gap
+    /// resets the filter (window refills). Our choice, not from the paper:
+    /// 5 s = 250 samples at the deck's 50 Hz (a held contact may extrapolate 20 s).
+    double max_sample_gap_s = 5.0;
+    /// Which clock to trust per sample (stamp, sequence, receive time):
+    /// tactile_common::SampleClock. nominal_period_s is the deck's 50 Hz.
+    tactile_common::SampleClockParams clock;
     void validate() const;
   };
 
@@ -35,9 +42,17 @@ class TdorcFilterLogic {
     uint64_t published = 0;
     uint64_t dropped_nonfinite = 0;      ///< NaN/inf in any pressure channel
     uint64_t dropped_wrong_whisker = 0;  ///< whisker_id unknown or not the one this instance latched
-    uint64_t dropped_out_of_order = 0;   ///< stamp not after the previous accepted stamp
-    uint64_t resets_on_gap = 0;          ///< filter resets after a stamp gap > max_sample_gap_s
-    uint64_t sequence_gaps = 0;          ///< source sequence numbers skipped (counted only)
+    uint64_t dropped_out_of_order = 0;   ///< dropped_duplicate + dropped_late
+    uint64_t dropped_duplicate = 0;      ///< same sequence again, stamp not advancing
+    uint64_t dropped_late = 0;           ///< sequence behind the last accepted one (e.g. two swapped)
+    uint64_t stamps_repaired_ahead = 0;  ///< stamp far ahead of sequence and receive time: replaced, sample kept
+    uint64_t stamps_repaired_behind = 0; ///< stamp behind (or not advancing): replaced, sample kept
+    uint64_t clock_steps = 0;            ///< a persistent stamp offset taken as the new time base
+    uint64_t sequence_restarts = 0;      ///< sequence went back by more than max_late_samples (kept)
+    uint64_t gaps_bridged = 0;           ///< gaps <= max_sample_gap_s: index advanced, drift extrapolated
+    uint64_t samples_missing = 0;        ///< sample periods without a sample (sum over the gaps)
+    uint64_t resets_on_gap = 0;          ///< filter resets after a gap > max_sample_gap_s
+    uint64_t sequence_gaps = 0;          ///< accepted samples whose sequence is not previous + 1 (counted only)
   };
 
   /// Every parameter the node reads, with the paper's defaults.
@@ -48,10 +63,16 @@ class TdorcFilterLogic {
 
   explicit TdorcFilterLogic(const Params& params);
 
-  /// One raw sample. Returns the signal, or nothing if the sample was dropped
+  /// One raw sample received at receive_ns (the node's clock; nullopt: not
+  /// known, the sequence alone checks the stamp). Returns the signal (with
+  /// the stamp SampleClock trusts), or nothing if the sample was dropped
   /// (counted in stats()). The first message fixes the whisker id of this
   /// instance.
-  std::optional<tactile_msgs::msg::WhiskerSignal> on_pressure(const tactile_msgs::msg::WhiskerPressure& msg);
+  std::optional<tactile_msgs::msg::WhiskerSignal> on_pressure(const tactile_msgs::msg::WhiskerPressure& msg,
+                                                              std::optional<int64_t> receive_ns);
+  std::optional<tactile_msgs::msg::WhiskerSignal> on_pressure(const tactile_msgs::msg::WhiskerPressure& msg) {
+    return on_pressure(msg, std::nullopt);
+  }
 
   const Stats& stats() const { return stats_; }
   const Params& params() const { return params_; }
@@ -61,9 +82,9 @@ class TdorcFilterLogic {
   Params params_;
   TdorcWhisker whisker_;
   Stats stats_;
+  tactile_common::SampleClock clock_;
   int whisker_id_ = -1;
   bool have_last_ = false;
-  int64_t last_stamp_ns_ = 0;
   uint32_t last_sequence_ = 0;
 };
 

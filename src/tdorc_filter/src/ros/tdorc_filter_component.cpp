@@ -24,7 +24,8 @@ class TdorcFilterComponent : public rclcpp::Node {
     subscription_ = create_subscription<tactile_msgs::msg::WhiskerPressure>(
       TdorcFilterLogic::kInputTopic, rclcpp::SensorDataQoS(),
       [this](const tactile_msgs::msg::WhiskerPressure & msg) {
-        if (auto out = logic_.on_pressure(msg)) {
+        // Receive time: this node's clock (sim time under ros2 bag play --clock).
+        if (auto out = logic_.on_pressure(msg, now().nanoseconds())) {
           publisher_->publish(
             std::make_unique<tactile_msgs::msg::WhiskerSignal>(std::move(*out)));
         }

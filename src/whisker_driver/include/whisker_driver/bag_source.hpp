@@ -22,6 +22,8 @@ class BagSource : public WhiskerSource {
   /// the path and topic (topic missing, wrong type).
   BagSource(const std::string& path, const std::string& topic);
   void poll(int64_t now_ns, std::vector<WhiskerPressure>& out) override;
+  /// Receive time of each message: its bag timestamp (when the recorder got it).
+  void poll_received(int64_t now_ns, std::vector<WhiskerPressure>& out, std::vector<int64_t>& receive_ns) override;
   bool finished() const override { return done_; }
   uint64_t errors() const override { return errors_; }
 

@@ -26,6 +26,14 @@ class WhiskerSource {
   virtual ~WhiskerSource() = default;
   /// Appends the samples available at `now_ns` (clock of the caller) to out.
   virtual void poll(int64_t now_ns, std::vector<WhiskerPressure>& out) = 0;
+  /// Like poll, and appends to receive_ns when each sample was received
+  /// (same length as out). Default: now_ns for every sample; the bag source
+  /// gives the bag's receive time of each message.
+  virtual void poll_received(int64_t now_ns, std::vector<WhiskerPressure>& out, std::vector<int64_t>& receive_ns) {
+    const size_t before = out.size();
+    poll(now_ns, out);
+    receive_ns.resize(receive_ns.size() + (out.size() - before), now_ns);
+  }
   /// Parser counters (serial source); zeros for the others.
   virtual ParseStats parse_stats() const { return {}; }
   /// True when the source has nothing more to give (end of a bag).

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "tactile_common/parameters.hpp"
+#include "tactile_common/sample_clock.hpp"
 #include "tactile_msgs/msg/whisker_pressure.hpp"
 #include "whisker_driver/frame_parser.hpp"
 #include "whisker_driver/sources.hpp"
@@ -57,6 +58,17 @@ class WhiskerDriverLogic {
     uint64_t published = 0;       ///< messages returned by on_timer
     uint64_t source_errors = 0;   ///< serial disconnects / failed reopens, bag decode errors
     uint64_t sequence_gaps = 0;   ///< samples missing according to the sequence counter
+    /// Time handling (tactile_common::SampleClock, README "Time"): which
+    /// clock to trust per sample, from the sequence and the receive time
+    /// (the bag's receive time for the bag source, the timer's clock else).
+    uint64_t stamps_repaired_ahead = 0;   ///< stamp far ahead: replaced, sample published
+    uint64_t stamps_repaired_behind = 0;  ///< stamp behind / not advancing: replaced, sample published
+    uint64_t clock_steps = 0;             ///< persistent stamp offset taken as the new time base
+    uint64_t dropped_duplicate = 0;       ///< same sequence and stamp again: not published
+    uint64_t dropped_late = 0;            ///< sequence behind the last published one: not published
+    uint64_t sequence_restarts = 0;       ///< sequence went back by more than a late sample would
+    uint64_t gaps = 0;                    ///< published samples after a gap (missing sample periods)
+    uint64_t samples_missing = 0;         ///< sample periods without a sample (sum over the gaps)
   };
 
   static tactile_common::ParamMap default_parameters();
@@ -81,6 +93,7 @@ class WhiskerDriverLogic {
   Params params_;
   std::unique_ptr<WhiskerSource> source_;
   Stats stats_;
+  tactile_common::SampleClock clock_;
   bool have_last_seq_ = false;
   uint32_t last_seq_ = 0;
 };

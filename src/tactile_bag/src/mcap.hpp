@@ -1,0 +1,171 @@
+// MCAP storage (https://mcap.dev/spec, format version 0) as rosbag2's mcap plugin uses it:
+// profile "ros2", schemas with encoding "ros2msg", channels with message encoding "cdr" and
+// metadata {offered_qos_profiles, topic_type_hash}, chunked data with message indexes, a
+// summary section (schemas, channels, statistics, chunk and metadata indexes, summary
+// offsets) and a footer. Written and read without the mcap library (none is packaged in
+// Debian): little-endian records <opcode u8><length u64><content>.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace tactile_bag::mcap {
+
+inline constexpr uint8_t kMagic[8] = {0x89, 'M', 'C', 'A', 'P', '0', '\r', '\n'};
+
+enum Op : uint8_t {
+  kHeader = 0x01, kFooter = 0x02, kSchema = 0x03, kChannel = 0x04, kMessage = 0x05,
+  kChunk = 0x06, kMessageIndex = 0x07, kChunkIndex = 0x08, kAttachment = 0x09,
+  kAttachmentIndex = 0x0A, kStatistics = 0x0B, kMetadata = 0x0C, kMetadataIndex = 0x0D,
+  kSummaryOffset = 0x0E, kDataEnd = 0x0F,
+};
+
+using StringMap = std::map<std::string, std::string>;
+
+struct WriterConfig {
+  std::string compression;            ///< "" (none, rosbag2's default), "zstd" or "lz4"
+  uint64_t chunk_size = 768 * 1024;   ///< uncompressed bytes per chunk (mcap's default)
+  int compression_level = 1;
+  bool chunk_crc = true;              ///< CRC-32 of every chunk's uncompressed records
+};
+
+/// Buffered writer: records go to an in-memory chunk; a full chunk (or flush()) is
+/// compressed and written with its message indexes in one write() call.
+class FileWriter {
+ public:
+  FileWriter() = default;
+  ~FileWriter();
+  FileWriter(const FileWriter&) = delete;
+  FileWriter& operator=(const FileWriter&) = delete;
+
+  void open(const std::string& path, const WriterConfig& config, const std::string& library);
+  bool is_open() const { return fd_ >= 0; }
+  uint16_t add_schema(const std::string& name, const std::string& encoding, const std::string& data);
+  uint16_t add_channel(uint16_t schema_id, const std::string& topic, const std::string& encoding,
+                       const StringMap& metadata);
+  void write(uint16_t channel_id, uint64_t log_time, const uint8_t* data, size_t size);
+  /// Write the open chunk (if any) to the file.
+  void flush();
+  /// Metadata record written (in the data section) at close.
+  void set_metadata(const std::string& name, const StringMap& metadata);
+  /// Flush, write the data end, summary, footer and closing magic; close the file.
+  void close();
+  const std::string& path() const { return path_; }
+
+ private:
+  struct Schema { uint16_t id; std::string name, encoding, data; };
+  struct Channel { uint16_t id, schema_id; std::string topic, encoding; StringMap metadata; };
+  struct ChunkIndex {
+    uint64_t start, end, offset, length, index_length, compressed, uncompressed;
+    std::map<uint16_t, uint64_t> index_offsets;
+  };
+  void emit(const std::vector<uint8_t>& bytes);
+  void in_chunk_channel(uint16_t channel_id);
+  [[noreturn]] void fail(const std::string& what) const;
+
+  std::string path_;
+  int fd_ = -1;
+  WriterConfig cfg_;
+  uint64_t offset_ = 0;
+  uint32_t data_crc_ = 0;
+  std::vector<Schema> schemas_;
+  std::vector<Channel> channels_;
+  std::vector<uint8_t> chunk_, compressed_, out_;
+  uint64_t chunk_start_ = 0, chunk_end_ = 0;
+  bool chunk_empty_ = true;
+  std::vector<std::vector<uint64_t>> chunk_index_;   // per channel: (time, offset) pairs
+  std::vector<bool> schema_in_chunk_, channel_in_chunk_;
+  std::vector<ChunkIndex> chunk_indexes_;
+  std::vector<uint64_t> channel_counts_;
+  uint64_t message_count_ = 0, start_ = 0, end_ = 0;
+  std::vector<uint32_t> sequence_;
+  std::string metadata_name_;
+  StringMap metadata_;
+};
+
+/// One MCAP file opened for reading (memory-mapped). Every fault is a BagError naming the
+/// file, the byte offset and the reason. A file without footer (a recording that was killed)
+/// is read up to its last complete record, and recovery_note() says what was lost.
+class FileReader {
+ public:
+  struct Schema { uint16_t id = 0; std::string name, encoding, data; };
+  struct Channel { uint16_t id = 0, schema_id = 0; std::string topic, encoding; StringMap metadata; };
+  struct Message { uint16_t channel_id; uint64_t log_time; const uint8_t* data; size_t size; };
+
+  FileReader();
+  ~FileReader();
+  FileReader(const FileReader&) = delete;
+  FileReader& operator=(const FileReader&) = delete;
+
+  void open(const std::string& path);
+  /// Parse an in-memory file (the fuzz harness, tests); `name` names it in errors. The
+  /// buffer must outlive the reader.
+  void open_buffer(const uint8_t* data, size_t size, const std::string& name);
+
+  const std::string& path() const { return path_; }
+  const std::string& profile() const { return profile_; }
+  const std::map<uint16_t, Schema>& schemas() const { return schemas_; }
+  const std::map<uint16_t, Channel>& channels() const { return channels_; }
+  const std::map<uint16_t, uint64_t>& channel_counts() const { return counts_; }
+  uint64_t message_count() const { return total_; }
+  uint64_t start_time() const { return start_; }
+  uint64_t end_time() const { return end_; }
+  bool complete() const { return recovery_note_.empty(); }
+  const std::string& recovery_note() const { return recovery_note_; }
+  /// Metadata records by name (rosbag2 writes "rosbag2": serialized_metadata, ros_distro).
+  const std::map<std::string, StringMap>& metadata() const { return metadata_; }
+
+  /// Restrict iteration to these channel ids (empty: all) and restart.
+  void set_channel_filter(const std::vector<uint16_t>& ids);
+  void reset();
+  /// Next message in log-time order (ties: file order). The data pointer is valid until
+  /// the next call.
+  bool next(Message& out);
+  /// Log time of the next message without consuming it (false at the end).
+  bool peek_time(uint64_t& t);
+
+ private:
+  struct Block {       // a chunk, or the messages outside chunks
+    uint64_t offset = 0;          // byte offset of the chunk record in the file
+    uint64_t start = 0, end = 0;
+    std::string compression;
+    const uint8_t* records = nullptr;
+    uint64_t records_size = 0, uncompressed_size = 0;
+    uint32_t crc = 0;
+    bool top_level = false;
+    std::vector<Message> loose;   // top-level messages (top_level == true)
+  };
+  struct Cursor {
+    size_t block = 0;
+    std::vector<uint8_t> buffer;   // decompressed records (empty if pointing into the map)
+    std::vector<Message> messages;  // sorted by time
+    size_t pos = 0;
+  };
+  void scan();
+  void parse_records(const uint8_t* p, uint64_t size, uint64_t base, bool in_chunk,
+                     const std::string& where, std::vector<Message>* out);
+  void load(size_t block, Cursor& c);
+  void fill();
+  [[noreturn]] void fail(uint64_t offset, const std::string& what) const;
+
+  std::string path_, profile_, recovery_note_;
+  const uint8_t* data_ = nullptr;
+  size_t size_ = 0;
+  void* map_ = nullptr;
+  std::map<uint16_t, Schema> schemas_;
+  std::map<uint16_t, Channel> channels_;
+  std::map<uint16_t, uint64_t> counts_;
+  std::map<std::string, StringMap> metadata_;
+  uint64_t total_ = 0, start_ = 0, end_ = 0;
+  std::vector<Block> blocks_;       // sorted by start time
+  std::vector<bool> wanted_;        // by channel id (empty: all)
+  std::vector<std::unique_ptr<Cursor>> active_;
+  size_t next_block_ = 0;
+  bool ready_ = false;
+};
+
+}  // namespace tactile_bag::mcap

@@ -1,0 +1,41 @@
+// `tactile sweep FAMILY|DIR --count N --seed S --out DIR [--jobs N]` (issue
+// 17): flies a scenario family over N generated environments (or every
+// scenario file of a directory, e.g. one written by `tactile scenarios
+// generate`) and writes a table and a summary:
+//   OUT/scenarios/<name>.yaml   the generated environments (FAMILY only) + index.json
+//   OUT/runs/<name>/            each run (metrics.json, trajectory.csv, topview.png;
+//                               bag/ kept for failures only unless --keep-bags)
+//   OUT/failures/<name>.png     the top view of every failure
+//   OUT/table.csv, table.md     per environment: outcome, collisions (guard, body),
+//                               the behaviour's metrics
+//   OUT/summary.json, summary.md success rate overall and per state estimate,
+//                               metric means, failures, date, machine
+// Table and summary are rewritten after every environment, so an interrupted
+// sweep keeps what it had.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+namespace tactile_cli {
+
+struct SweepOptions {
+  std::string what;        ///< a family name (scenario_family.hpp) or a directory of scenario files
+  int count = 10;          ///< environments (family); with a directory: at most this many (0: all)
+  uint64_t seed = 1;       ///< first generator seed (family)
+  std::string out_dir;
+  std::string config_dir;  ///< node parameter files (config/)
+  int jobs = 0;            ///< environments flown at once (0: all cores)
+  bool write_bags = true;  ///< record bags (kept for failures)
+  bool keep_bags = false;  ///< keep the bags of successes too
+  bool progress = true;    ///< one line per environment on stderr
+};
+
+/// Runs the sweep; returns the summary (also OUT/summary.json). A scenario
+/// that cannot be flown (bad file) is a row with outcome "error: ..." and
+/// counts as a failure. Throws on a bad family/directory or unwritable output.
+nlohmann::json run_sweep(const SweepOptions& options);
+
+}  // namespace tactile_cli

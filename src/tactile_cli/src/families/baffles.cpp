@@ -1,0 +1,161 @@
+// Family `baffles` (issue 17): staggered baffle courses for the whisker
+// wall-following FSM, 000 Fig. 4 style (graph whisker_fsm).
+//
+// Distribution (every quantity uniform and independent):
+//   n baffles            2 .. 6
+//   spacing              0.8 .. 1.4 m along the course (start -> first centre too)
+//   orientation          -90 +- 25 deg (direction points[0] -> points[1]; -90 is
+//                        square to the course, as 000 Fig. 4's -90.76 deg)
+//   stagger              0.2 .. 0.5 m off the course line, alternating sides,
+//                        first side drawn
+//   length               0.8 .. 1.6 m
+//   material             rigid / glass / textile per baffle
+//   state estimate       mocap / flow_deck / imu_tof (family `baffles`), or fixed
+//                        (`baffles_mocap`, `baffles_flow_deck`, `baffles_imu_tof`;
+//                        the geometry of a seed is the same in all four)
+// Course: start at the origin heading +x (the course direction), target on the
+// course line 0.6 m past the farthest baffle end (000 Fig. 4: 3.6 m, 0.6 m past
+// the last baffle), band 60-100 mm (000 Fig. 4c).
+// Validity: the start is >= 0.5 m from every baffle (hover and approach), and a
+// disc of radius 0.25 m (a 0.5 m corridor: guard 0.08 m + whiskers 0.2 m
+// folded) has a free path from the start to the target inside the course's
+// bounding box grown by 0.6 m.
+#include <cmath>
+#include <sstream>
+
+#include "families.hpp"
+
+namespace tactile_cli::families {
+
+namespace {
+
+using tactile_sim::Vec2;
+
+constexpr double kDeg = M_PI / 180.0;
+constexpr double kStartClearance = 0.5;
+constexpr double kCorridorRadius = 0.25;
+constexpr double kTargetPast = 0.6;
+
+struct Baffle {
+  Vec2 center, p0, p1;
+  double angle_deg, length;
+  std::string material;
+};
+
+FamilyEnvironment draw_course(FamilyDraw& d, const std::string& family, const std::string& fixed_estimate) {
+  const int n = d.uniform_int(2, 6);
+  const int first_side = d.uniform_int(0, 1) ? 1 : -1;
+  std::vector<Baffle> baffles;
+  double x = 0.0;
+  nlohmann::json drawn;
+  drawn["baffles"] = n;
+  for (int i = 0; i < n; ++i) {
+    Baffle b;
+    const double spacing = d.uniform(0.8, 1.4);
+    x += spacing;
+    b.angle_deg = d.uniform(-115.0, -65.0);
+    const double stagger = d.uniform(0.2, 0.5);
+    b.length = d.uniform(0.8, 1.6);
+    b.material = d.pick<std::string>({"rigid", "glass", "textile"});
+    const double side = (i % 2 == 0) ? first_side : -first_side;
+    b.center = Vec2(x, side * stagger);
+    const Vec2 u(std::cos(b.angle_deg * kDeg), std::sin(b.angle_deg * kDeg));
+    b.p0 = b.center - 0.5 * b.length * u;
+    b.p1 = b.center + 0.5 * b.length * u;
+    baffles.push_back(b);
+    drawn["layout"].push_back({{"spacing_m", spacing},
+                               {"angle_deg", b.angle_deg},
+                               {"stagger_m", side * stagger},
+                               {"length_m", b.length},
+                               {"material", b.material}});
+  }
+  std::string estimate = d.pick<std::string>({"mocap", "flow_deck", "imu_tof"});
+  if (!fixed_estimate.empty()) estimate = fixed_estimate;
+  drawn["state_estimate"] = estimate;
+
+  double x_far = 0.0, y_lo = 0.0, y_hi = 0.0;
+  for (const auto& b : baffles) {
+    x_far = std::max({x_far, b.p0.x(), b.p1.x()});
+    y_lo = std::min({y_lo, b.p0.y(), b.p1.y()});
+    y_hi = std::max({y_hi, b.p0.y(), b.p1.y()});
+  }
+  const Vec2 target(x_far + kTargetPast, 0.0);
+  drawn["target"] = {target.x(), target.y()};
+
+  const std::string name = family + "_" + std::to_string(d.seed);
+  std::ostringstream arena;
+  arena << "  name: " << name << "\n  walls:\n";
+  for (size_t i = 0; i < baffles.size(); ++i) {
+    const auto& b = baffles[i];
+    arena << "    - name: baffle_" << i + 1 << "   # " << yaml_num(b.angle_deg, 2) << " deg, " << yaml_num(b.length, 2)
+          << " m, centre (" << yaml_num(b.center.x(), 3) << ", " << yaml_num(b.center.y(), 3) << ")\n"
+          << "      points: [[" << yaml_num(b.p0.x()) << ", " << yaml_num(b.p0.y()) << "], [" << yaml_num(b.p1.x())
+          << ", " << yaml_num(b.p1.y()) << "]]\n"
+          << "      material: " << b.material << "\n";
+  }
+  // Validity on the arena as written (rounded coordinates; an indented block
+  // map is still the document's root map).
+  const auto parsed = tactile_sim::Arena::from_yaml_text(arena.str(), name, "arena.");
+  const double c0 = clearance_at(parsed, Vec2::Zero());
+  if (c0 < kStartClearance) {
+    throw InvalidDraw("start " + yaml_num(c0, 2) + " m from a baffle (< " + yaml_num(kStartClearance, 1) + " m)");
+  }
+  const Vec2 lo(-0.6, y_lo - 0.6), hi(target.x() + 0.6, y_hi + 0.6);
+  if (!disc_path_exists(parsed, Vec2::Zero(), target, kCorridorRadius, lo, hi)) {
+    throw InvalidDraw("no " + yaml_num(2 * kCorridorRadius, 1) + " m corridor from the start to the target");
+  }
+
+  const double duration = std::ceil(30.0 + 10.0 * n + 5.0 * target.x());
+  std::ostringstream y;
+  y << "# Generated by `tactile scenarios generate " << family << " --seed " << d.seed
+    << "` (issue 17 scenario family; distribution in src/tactile_cli/src/families/baffles.cpp and\n"
+    << "# config/scenarios/README.md). " << n << " staggered baffles, state estimate " << estimate
+    << ", draw attempt " << d.attempt + 1 << ".\n"
+    << "# Flown alone with: tactile sim " << name << ".yaml --out DIR\n"
+    << "name: " << name << "\n"
+    << "description: \"" << family << " family, seed " << d.seed << ": " << n << " baffles, " << estimate << "\"\n"
+    << "duration_s: " << yaml_num(duration, 1) << "\n"
+    << "physics_rate_hz: 1000\n"
+    << "seed: " << d.seed << "\n"
+    << "arena:\n"
+    << arena.str() << "vehicle:\n"
+    << "  type: whisker_crazyflie\n"
+    << "  initial: {x: 0.0, y: 0.0, z: 0.0, yaw_deg: 0.0}\n"
+    << "  state_estimate: " << estimate << "\n"
+    << "graph: whisker_fsm\n"
+    << "node_parameters:\n"
+    << "  whisker_fsm: {t_min: 0.060, t_max: 0.100}    # 000 Fig. 4c band 60-100 mm\n"
+    << "metrics:\n"
+    << "  target: [" << yaml_num(target.x()) << ", 0.0]\n";
+  FamilyEnvironment env;
+  env.name = name;
+  env.yaml = y.str();
+  env.drawn = drawn;
+  return env;
+}
+
+ScenarioFamily make(const std::string& name, const std::string& estimate) {
+  ScenarioFamily f;
+  f.name = name;
+  f.description = "whisker wall-following FSM (000 Fig. 4 style): 2-6 staggered baffles, state estimate " +
+                  (estimate.empty() ? std::string("mocap/flow_deck/imu_tof") : estimate);
+  f.distribution =
+      "baffles 2-6; spacing 0.8-1.4 m; orientation -90 +- 25 deg; stagger 0.2-0.5 m, alternating; length "
+      "0.8-1.6 m; material rigid/glass/textile; state estimate " +
+      (estimate.empty() ? std::string("mocap/flow_deck/imu_tof") : estimate) +
+      "; target 0.6 m past the farthest baffle end; valid: start >= 0.5 m from every baffle, 0.5 m corridor "
+      "from start to target";
+  f.table_metrics = {"fsm.reached_target", "fsm.final_state", "fsm.wall_following_episodes",
+                     "fsm.depth_in_band_fraction", "fsm.mean_abs_heading_error_deg"};
+  f.draw = [name, estimate](FamilyDraw& d) { return draw_course(d, name, estimate); };
+  return f;
+}
+
+}  // namespace
+
+std::vector<ScenarioFamily> baffle_families() {
+  return {make("baffles", ""), make("baffles_mocap", "mocap"), make("baffles_flow_deck", "flow_deck"),
+          make("baffles_imu_tof", "imu_tof")};
+}
+
+}  // namespace tactile_cli::families

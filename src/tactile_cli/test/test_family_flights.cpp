@@ -1,0 +1,72 @@
+// Scenario tests of the issue-17 families (short, seeded): a few environments
+// drawn by the `rooms` and `xplorer_objects` generators are flown in the full
+// graphs and must meet the behaviour's criteria. The seeds are from the tuning
+// block (1000-1009) of the sweeps in the gpis_explorer and tactile_fsm READMEs;
+// the held-out measurement is the sweep, not this test.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "tactile_cli/scenario_family.hpp"
+#include "tactile_cli/sim_run.hpp"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+nlohmann::json fly_family(const std::string& family, uint64_t seed) {
+  const auto env = tactile_cli::generate_environment(tactile_cli::scenario_family(family), seed);
+  const fs::path dir = fs::temp_directory_path() / ("tactile_family_" + env.name + "_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const fs::path file = dir / (env.name + ".yaml");
+  std::ofstream(file) << env.yaml;
+  tactile_cli::SimOptions o;
+  o.scenario = file.string();
+  o.out_dir = (dir / "out").string();
+  o.config_dir = TACTILE_CONFIG_DIR;
+  o.trials = 1;
+  o.progress = false;
+  o.write_bag = false;
+  o.write_png = false;
+  nlohmann::json m = tactile_cli::run_sim(o);
+  fs::remove_all(dir);
+  return m;
+}
+
+}  // namespace
+
+// Rooms (000 Fig. 5 style): exit reported, the true final position outside the
+// room, no guard collision (`success`), mapped contacts within 0.08 m.
+TEST(FamilyFlights, GeneratedRoomsAreLeftThroughAnExit) {
+  for (uint64_t seed : {1003u, 1007u, 1008u}) {
+    SCOPED_TRACE("rooms seed " + std::to_string(seed));
+    const auto m = fly_family("rooms", seed);
+    const auto& g = m["gpis"];
+    EXPECT_TRUE(g["exit_found"].get<bool>()) << g["outcome"];
+    EXPECT_TRUE(g["outside_room"].get<bool>());
+    EXPECT_TRUE(g["collision_phases"].empty()) << g["collision_phases"].dump();
+    ASSERT_TRUE(g["reconstruction_error_m"].is_number());
+    EXPECT_LE(g["reconstruction_error_m"].get<double>(), 0.08);
+  }
+}
+
+// XPLORER objects (001 Sec. V-C): a cylinder, a polygon and a box are
+// traversed round and the loop is closed; the box's map (bounding rectangle,
+// 001 Sec. V-D) is within 3 % of its area on this seed.
+TEST(FamilyFlights, GeneratedObjectsAreTraversedRound) {
+  for (uint64_t seed : {1000u, 1001u, 1008u}) {
+    SCOPED_TRACE("xplorer_objects seed " + std::to_string(seed));
+    const auto m = fly_family("xplorer_objects", seed);
+    const auto& x = m["xplorer"];
+    EXPECT_TRUE(x["loop_closed"].get<bool>()) << x["final_state"];
+    EXPECT_GT(x["true_area_m2"].get<double>(), 0.0);
+    if (seed == 1008u) {
+      EXPECT_GE(x["map_area_accuracy"].get<double>(), 0.97);
+    }
+  }
+}
