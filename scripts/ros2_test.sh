@@ -4,7 +4,8 @@
 # build in build/ and install/ stays as it is -- and runs the ROS tests of the package
 # tactile_ros_tests (CDR bytes against rclcpp, launch files, flights over DDS).
 #
-# Usage: scripts/ros2_test.sh [pytest -k EXPR]
+# Usage: scripts/ros2_test.sh [--e2e] [pytest -k EXPR]
+#   --e2e   also fly the SITL end to end over DDS (test_e2e_*.py; several minutes)
 #
 # The ROS 2 environment, in this order:
 #   1. the one already sourced (ROS_DISTRO set and `ros2` on PATH), e.g. /opt/ros/jazzy;
@@ -101,6 +102,7 @@ source install_ros/setup.bash
 set -u
 status=0
 ctest_args=()
+if [[ "${1:-}" == "--e2e" ]]; then export TACTILE_ROS_E2E=1; shift; fi
 if (($# > 0)); then export PYTEST_ADDOPTS="-k $1"; fi
 colcon --log-base log_ros test "${common[@]}" --packages-select tactile_ros_tests \
   --event-handlers console_cohesion+ summary+ --return-code-on-test-failure "${ctest_args[@]}" || status=$?

@@ -20,3 +20,22 @@ os.environ.setdefault('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
 @pytest.fixture(scope='session')
 def workspace() -> Path:
     return WORKSPACE
+
+
+def pytest_configure(config):
+    config.addinivalue_line(
+        'markers', 'e2e: SITL flights over DDS compared with tactile sim (opt-in: '
+        'scripts/ros2_test.sh --e2e, or TACTILE_ROS_E2E=1)')
+
+
+def pytest_collection_modifyitems(config, items):
+    """The end-to-end flights run only when asked for: they were written against the
+    toolchain but have not yet passed a full run (src/tactile_ros_tests/README.md), so CI
+    deselects them rather than counting an unproven result either way."""
+    if os.environ.get('TACTILE_ROS_E2E') == '1':
+        return
+    selected = [i for i in items if 'e2e' not in i.keywords]
+    deselected = [i for i in items if 'e2e' in i.keywords]
+    if deselected:
+        config.hook.pytest_deselected(items=deselected)
+        items[:] = selected

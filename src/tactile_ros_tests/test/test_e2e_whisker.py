@@ -25,6 +25,8 @@ import os
 
 import pytest
 
+pytestmark = pytest.mark.e2e
+
 from e2e import WORKSPACE, fly_over_dds, sim_in_process, spread
 
 SCENARIO = WORKSPACE / 'config' / 'scenarios' / 'whisker_three_baffles_fsm.yaml'

@@ -21,6 +21,8 @@ import os
 
 import pytest
 
+pytestmark = pytest.mark.e2e
+
 from e2e import WORKSPACE, fly_over_dds, sim_in_process, spread
 
 SCENARIO = WORKSPACE / 'config' / 'scenarios' / 'xplorer_box_traversal.yaml'
