@@ -148,7 +148,7 @@ TEST(Parallel, AFailingJobStopsTheHandOutAndItsErrorReachesTheCaller) {
 
 TEST(Parallel, SimTrialsOnTwoJobsWriteTheBytesOfASerialRun) {
   // Three seeded trials of the glass-wall protocol (flow-deck estimate, noisy
-  // barometers): bag (metadata.yaml and the sqlite file), trajectory.csv,
+  // barometers): bag (metadata.yaml and the mcap file, the default storage), trajectory.csv,
   // topview.png and metrics.json of every trial and the aggregate.
   const fs::path dir = fresh_dir("sim");
   auto run = [&](int jobs) {
@@ -181,7 +181,7 @@ TEST(Parallel, SimTrialsOnTwoJobsWriteTheBytesOfASerialRun) {
   EXPECT_EQ(compared, 1u + 3u * 5u);
   for (int k = 0; k < 3; ++k) {
     const std::string t = "trial_" + std::to_string(k) + "/";
-    for (const char* f : {"metrics.json", "trajectory.csv", "topview.png", "bag/metadata.yaml", "bag/bag_0.db3"}) {
+    for (const char* f : {"metrics.json", "trajectory.csv", "topview.png", "bag/metadata.yaml", "bag/bag_0.mcap"}) {
       EXPECT_EQ(serial.count(t + f), 1u) << t + f;
     }
   }

@@ -55,10 +55,11 @@ def test_evaluate_of_the_sim_bag_equals_the_sim_metrics(flown, tmp_path):
 
 
 def copy_bag(src: Path, dst: Path, keep):
-    """Copies the bag, keeping the messages for which keep(topic, index) is true."""
+    """Copies the bag, keeping the messages for which keep(topic, index) is true; a topic
+    for which keep(topic, -1) is false is left out altogether (no connection)."""
     with Reader(src) as reader, Writer(dst, version=8) as writer:
         conns = {c.id: writer.add_connection(c.topic, c.msgtype, msgdef=c.msgdef.data, rihs01=c.digest)
-                 for c in reader.connections}
+                 for c in reader.connections if keep(c.topic, -1)}
         seen = {}
         for c, stamp, raw in reader.messages():
             i = seen[c.topic] = seen.get(c.topic, -1) + 1
