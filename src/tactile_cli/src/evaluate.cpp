@@ -3,6 +3,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <array>
 #include <map>
 #include <optional>
@@ -16,6 +17,7 @@
 #include "tactile_bag/typed.hpp"
 #include "tactile_cli/host.hpp"
 #include "tactile_cli/sim_graph.hpp"
+#include "tactile_cli/wall_effect_eval.hpp"
 #include "tactile_cli/whisker_eval.hpp"
 #include "tactile_common/geometry.hpp"
 #include "tactile_common/time.hpp"
@@ -88,6 +90,51 @@ void add_collisions(nlohmann::json& m, const std::vector<CollisionEvent>& collis
   }
 }
 
+/// Replays a bag's messages onto the host's bus in timestamp order: each topic
+/// registered with topic<T>() is decoded as T and published at its bag
+/// timestamp; with run_executor, the host's timers due before each message run
+/// first (as in flight). Counts the messages per topic.
+class BagReplay {
+ public:
+  BagReplay(tactile_bag::Reader& in, Host& host, bool run_executor = false)
+      : in_(in), host_(host), run_executor_(run_executor) {}
+
+  template <class T>
+  BagReplay& topic(const std::string& name) {
+    decoders_[name] = [this](const tactile_bag::SerializedMessage& msg) {
+      host_.bus().publish(msg.topic, tactile_bag::decode<T>(msg), msg.timestamp_ns);
+    };
+    return *this;
+  }
+
+  void run() {
+    std::vector<std::string> topics;
+    for (const auto& [name, decode] : decoders_) topics.push_back(name);
+    in_.set_topic_filter(topics);
+    tactile_bag::SerializedMessage msg;
+    while (in_.read_next(msg)) {
+      if (run_executor_) host_.executor().run_until(msg.timestamp_ns);
+      last_ns_ = std::max(last_ns_, msg.timestamp_ns);
+      ++counts_[msg.topic];
+      decoders_.at(msg.topic)(msg);
+    }
+  }
+
+  /// sim_time_s (the last message's time) and the "topics" counts of metrics.json.
+  void write(nlohmann::json& m) const {
+    m["sim_time_s"] = tactile_common::to_seconds(last_ns_);
+    for (const auto& [topic, n] : counts_) m["topics"][topic] = n;
+  }
+
+ private:
+  tactile_bag::Reader& in_;
+  Host& host_;
+  bool run_executor_;
+  std::map<std::string, std::function<void(const tactile_bag::SerializedMessage&)>> decoders_;
+  int64_t last_ns_ = 0;
+  std::map<std::string, uint64_t> counts_;
+};
+
 /// Graph whisker_fsm (src/graphs/whisker_fsm.cpp): WallFollowingEvaluation
 /// over the recorded truth and FSM states, the FSM's parameters as the graph
 /// sets them (config/tactile_fsm.yaml <- scenario node_parameters <- target).
@@ -122,26 +169,14 @@ nlohmann::json evaluate_whisker_fsm(const tactile_sim::Scenario& s, const Evalua
   std::vector<CollisionEvent> collisions;
   host.bus().subscribe<CollisionEvent>(kCollisionsTopic, [&collisions](const CollisionEvent& c) { collisions.push_back(c); });
 
-  std::vector<std::string> topics = {kTruthTopics[0], kTruthTopics[1], Logic::kStateTopic};
-  if (have_collisions) topics.push_back(kCollisionsTopic);
-  in.set_topic_filter(topics);
-  tactile_bag::SerializedMessage msg;
-  int64_t last_ns = 0;
-  std::map<std::string, uint64_t> counts;
-  while (in.read_next(msg)) {
-    last_ns = std::max(last_ns, msg.timestamp_ns);
-    ++counts[msg.topic];
-    if (msg.topic == Logic::kStateTopic) {
-      host.bus().publish(msg.topic, tactile_bag::decode<FsmState>(msg), msg.timestamp_ns);
-    } else if (msg.topic == kCollisionsTopic) {
-      host.bus().publish(msg.topic, tactile_bag::decode<CollisionEvent>(msg), msg.timestamp_ns);
-    } else {
-      host.bus().publish(msg.topic, tactile_bag::decode<WhiskerGroundTruth>(msg), msg.timestamp_ns);
-    }
-  }
+  BagReplay replay(in, host);
+  replay.topic<WhiskerGroundTruth>(kTruthTopics[0]).topic<WhiskerGroundTruth>(kTruthTopics[1]);
+  replay.topic<FsmState>(Logic::kStateTopic);
+  if (have_collisions) replay.topic<CollisionEvent>(kCollisionsTopic);
+  replay.run();
 
   nlohmann::json m = header(s, o, seed, arena_yaw, in);
-  m["sim_time_s"] = tactile_common::to_seconds(last_ns);
+  replay.write(m);
   add_collisions(m, collisions);
   nlohmann::json f = eval.metrics();
   f["target"] = {params.target_x, params.target_y};
@@ -151,7 +186,6 @@ nlohmann::json evaluate_whisker_fsm(const tactile_sim::Scenario& s, const Evalua
   f["reached_target"] = reached;
   m["fsm"] = f;
   m["success"] = reached && (ctx.flag("allow_collisions") || collisions.empty());
-  for (const auto& [topic, n] : counts) m["topics"][topic] = n;
   return m;
 }
 
@@ -203,30 +237,13 @@ nlohmann::json evaluate_xplorer(const tactile_sim::Scenario& s, const EvaluateOp
   std::vector<CollisionEvent> collisions;
   host.bus().subscribe<CollisionEvent>(kCollisionsTopic, [&collisions](const CollisionEvent& c) { collisions.push_back(c); });
 
-  std::vector<std::string> topics = {MapLogic::kWrenchBodyTopic, MapLogic::kOdometryTopic, FsmLogic::kStateTopic};
-  if (have_arms) topics.push_back(MapLogic::kArmImuTopic);
-  if (have_collisions) topics.push_back(kCollisionsTopic);
-  in.set_topic_filter(topics);
-  tactile_bag::SerializedMessage msg;
-  int64_t last_ns = 0;
-  std::map<std::string, uint64_t> counts;
-  while (in.read_next(msg)) {
-    host.executor().run_until(msg.timestamp_ns);
-    last_ns = std::max(last_ns, msg.timestamp_ns);
-    ++counts[msg.topic];
-    const int64_t now = msg.timestamp_ns;
-    if (msg.topic == MapLogic::kWrenchBodyTopic) {
-      host.bus().publish(msg.topic, tactile_bag::decode<geometry_msgs::msg::WrenchStamped>(msg), now);
-    } else if (msg.topic == MapLogic::kOdometryTopic) {
-      host.bus().publish(msg.topic, tactile_bag::decode<nav_msgs::msg::Odometry>(msg), now);
-    } else if (msg.topic == FsmLogic::kStateTopic) {
-      host.bus().publish(msg.topic, tactile_bag::decode<FsmState>(msg), now);
-    } else if (msg.topic == MapLogic::kArmImuTopic) {
-      host.bus().publish(msg.topic, tactile_bag::decode<tactile_msgs::msg::ArmImuArray>(msg), now);
-    } else {
-      host.bus().publish(msg.topic, tactile_bag::decode<CollisionEvent>(msg), now);
-    }
-  }
+  BagReplay replay(in, host, /*run_executor=*/true);
+  replay.topic<geometry_msgs::msg::WrenchStamped>(MapLogic::kWrenchBodyTopic);
+  replay.topic<nav_msgs::msg::Odometry>(MapLogic::kOdometryTopic);
+  replay.topic<FsmState>(FsmLogic::kStateTopic);
+  if (have_arms) replay.topic<tactile_msgs::msg::ArmImuArray>(MapLogic::kArmImuTopic);
+  if (have_collisions) replay.topic<CollisionEvent>(kCollisionsTopic);
+  replay.run();
 
   nlohmann::json x;
   x["mission"] = "explore";
@@ -278,7 +295,7 @@ nlohmann::json evaluate_xplorer(const tactile_sim::Scenario& s, const EvaluateOp
   }
 
   nlohmann::json m = header(s, o, seed, arena_yaw, in);
-  m["sim_time_s"] = tactile_common::to_seconds(last_ns);
+  replay.write(m);
   add_collisions(m, collisions);
   m["xplorer"] = x;
   // As XplorerGraph::reached_goal for explore without metrics.min_traversed_m.
@@ -287,7 +304,6 @@ nlohmann::json evaluate_xplorer(const tactile_sim::Scenario& s, const EvaluateOp
                                         "tactile evaluate judges explore flights by loop closure only");
   }
   m["success"] = closure >= 0 && (ctx.flag("allow_collisions") || collisions.empty());
-  for (const auto& [topic, n] : counts) m["topics"][topic] = n;
   return m;
 }
 
@@ -303,8 +319,8 @@ nlohmann::json evaluate_wall_effect(const tactile_sim::Scenario& s, const Evalua
   using tactile_msgs::msg::WallEstimate;
   using Ekf = wall_effect_ekf::WallEffectEkfLogic;
   using Traj = wall_effect_ekf::WallTrajectoryLogic;
-  constexpr const char* kTruthWall = "/ground_truth/wall";
-  constexpr const char* kTruthOdom = "/ground_truth/odom";
+  constexpr const char* kTruthWall = WallEffectEvaluation::kTruthWallTopic;
+  constexpr const char* kTruthOdom = WallEffectEvaluation::kTruthOdomTopic;
   tactile_bag::Reader in(o.bag);
   const auto wall_type = tactile_msgs::cdr::MessageTraits<WallEstimate>::type_name;
   const auto odom_type = tactile_msgs::cdr::MessageTraits<nav_msgs::msg::Odometry>::type_name;
@@ -323,99 +339,24 @@ nlohmann::json evaluate_wall_effect(const tactile_sim::Scenario& s, const Evalua
     throw std::runtime_error(s.source + ": wall_trajectory mode 'sweep': tactile evaluate knows the modes "
                                         "estimation_flight and hold");
   }
-  double t0 = tp.t_start + 5.0, t1 = INFINITY;
-  if (tp.mode == "estimation_flight") {
-    t0 = 10.0;  // 004: RMSE over t = 10 s to 70 s
-    t1 = 70.0;
-  }
-  struct Acc {
-    double sum = 0.0, sum2 = 0.0;
-    size_t n = 0;
-    void add(double x) {
-      sum += x;
-      sum2 += x * x;
-      ++n;
-    }
-    double mean() const { return n ? sum / static_cast<double>(n) : NAN; }
-    double rms() const { return n ? std::sqrt(sum2 / static_cast<double>(n)) : NAN; }
-  } dist, dir, all_dist, nees, track_y, track_yaw;
-  const auto wrap = [](double a) { return std::atan2(std::sin(a), std::cos(a)); };
-  WallEstimate truth;
-  nav_msgs::msg::Odometry odom, sp;
-  bool have_truth = false, have_odom = false, have_sp = false;
-  auto& bus = host.bus();
-  bus.subscribe<WallEstimate>(kTruthWall, [&](const WallEstimate& m) {
-    truth = m;
-    have_truth = true;
-  });
-  bus.subscribe<nav_msgs::msg::Odometry>(kTruthOdom, [&](const nav_msgs::msg::Odometry& m) {
-    odom = m;
-    have_odom = true;
-  });
-  bus.subscribe<nav_msgs::msg::Odometry>(Traj::kOutputTopic, [&](const nav_msgs::msg::Odometry& m) {
-    sp = m;
-    have_sp = true;
-  });
-  bus.subscribe<WallEstimate>(Ekf::kOutputTopic, [&](const WallEstimate& est) {
-    if (!have_truth || !truth.wall_detected) return;
-    const double t = tactile_common::to_seconds(tactile_common::from_stamp(est.header.stamp));
-    if (t < t0 || t > t1) return;
-    const double e_d = est.distance - truth.distance;
-    const double e_a = wrap(est.direction - truth.direction);
-    all_dist.add(e_d);
-    if (truth.distance < 0.20) {  // 004: "within 20 cm from the wall"
-      dist.add(e_d);
-      dir.add(e_a * 180.0 / M_PI);
-      const double a = est.covariance[0], b = est.covariance[1], d = est.covariance[4];
-      const double det = a * d - b * b;
-      if (det > 0.0) nees.add((d * e_d * e_d - 2.0 * b * e_d * e_a + a * e_a * e_a) / det);
-    }
-    if (have_odom && have_sp) {
-      track_y.add(odom.pose.pose.position.y - sp.pose.pose.position.y);
-      const auto& q = odom.pose.pose.orientation;
-      const auto& qs = sp.pose.pose.orientation;
-      track_yaw.add(wrap(tactile_common::yaw_of(q) - 2.0 * std::atan2(qs.z, qs.w)) * 180.0 / M_PI);
-    }
-  });
+  WallEffectEvaluation eval(tp);
+  eval.subscribe(host.bus());
   std::vector<CollisionEvent> collisions;
-  bus.subscribe<CollisionEvent>(kCollisionsTopic, [&collisions](const CollisionEvent& c) { collisions.push_back(c); });
+  host.bus().subscribe<CollisionEvent>(kCollisionsTopic, [&collisions](const CollisionEvent& c) { collisions.push_back(c); });
 
-  std::vector<std::string> topics = {kTruthWall, kTruthOdom, Traj::kOutputTopic, Ekf::kOutputTopic};
-  if (have_collisions) topics.push_back(kCollisionsTopic);
-  in.set_topic_filter(topics);
-  tactile_bag::SerializedMessage msg;
-  int64_t last_ns = 0;
-  std::map<std::string, uint64_t> counts;
-  while (in.read_next(msg)) {
-    last_ns = std::max(last_ns, msg.timestamp_ns);
-    ++counts[msg.topic];
-    if (msg.topic == kTruthWall || msg.topic == Ekf::kOutputTopic) {
-      bus.publish(msg.topic, tactile_bag::decode<WallEstimate>(msg), msg.timestamp_ns);
-    } else if (msg.topic == kCollisionsTopic) {
-      bus.publish(msg.topic, tactile_bag::decode<CollisionEvent>(msg), msg.timestamp_ns);
-    } else {
-      bus.publish(msg.topic, tactile_bag::decode<nav_msgs::msg::Odometry>(msg), msg.timestamp_ns);
-    }
-  }
-  const auto num = [](double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); };
+  BagReplay replay(in, host);
+  replay.topic<WallEstimate>(kTruthWall).topic<nav_msgs::msg::Odometry>(kTruthOdom);
+  replay.topic<nav_msgs::msg::Odometry>(Traj::kOutputTopic).topic<WallEstimate>(Ekf::kOutputTopic);
+  if (have_collisions) replay.topic<CollisionEvent>(kCollisionsTopic);
+  replay.run();
   nlohmann::json w;
-  w["mode"] = tp.mode;
-  w["window_s"] = {t0, std::isfinite(t1) ? nlohmann::json(t1) : nlohmann::json(nullptr)};
-  w["samples_within_20cm"] = dist.n;
-  w["rmse_distance_cm"] = num(100.0 * dist.rms());
-  w["rmse_direction_deg"] = num(dir.rms());
-  w["mean_distance_error_cm"] = num(100.0 * dist.mean());
-  w["rmse_distance_all_cm"] = num(100.0 * all_dist.rms());
-  w["nees_distance_direction"] = num(nees.mean());
-  w["tracking_rms_y_cm"] = num(100.0 * track_y.rms());
-  w["tracking_rms_yaw_deg"] = num(track_yaw.rms());
+  eval.write(w);
 
   nlohmann::json m = header(s, o, seed, arena_yaw, in);
-  m["sim_time_s"] = tactile_common::to_seconds(last_ns);
+  replay.write(m);
   add_collisions(m, collisions);
   m["wall_effect"] = w;
   m["success"] = ctx.flag("allow_collisions") || collisions.empty();  // the graph has no goal
-  for (const auto& [topic, n] : counts) m["topics"][topic] = n;
   return m;
 }
 

@@ -16,6 +16,7 @@
 
 #include "graphs.hpp"
 #include "tactile_cli/host_nodes.hpp"
+#include "tactile_cli/wall_effect_eval.hpp"
 #include "tactile_common/time.hpp"
 #include "tactile_common/geometry.hpp"
 
@@ -23,85 +24,36 @@ namespace tactile_cli::graphs {
 
 namespace {
 
-double wrap(double a) { return std::atan2(std::sin(a), std::cos(a)); }
-
-struct Accumulator {
-  double sum = 0.0, sum2 = 0.0;
-  size_t n = 0;
-  void add(double x) {
-    sum += x;
-    sum2 += x * x;
-    ++n;
-  }
-  double mean() const { return n ? sum / static_cast<double>(n) : NAN; }
-  double rms() const { return n ? std::sqrt(sum2 / static_cast<double>(n)) : NAN; }
-  double std() const {
-    if (n < 2) return NAN;
-    const double m = mean();
-    return std::sqrt(std::max(0.0, sum2 / static_cast<double>(n) - m * m));
-  }
-};
-
-nlohmann::json num(double x) { return std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr); }
-
 class WallEffectGraph : public SimGraph {
  public:
   explicit WallEffectGraph(GraphContext& ctx) : sim_(ctx.sim) {
     ekf_ = add_wall_effect_ekf(ctx.host, ctx.overrides("wall_effect_ekf"));
     indi_ = add_indi_controller(ctx.host, ctx.overrides("indi_controller"));
     traj_ = add_wall_trajectory(ctx.host, ctx.overrides("wall_trajectory"));
-    const auto& tp = traj_->params();
-    if (tp.mode == "estimation_flight") {
-      t0_ = 10.0;  // 004: RMSE over t = 10 s to 70 s
-      t1_ = 70.0;
-    } else {
-      t0_ = tp.t_start + 5.0;
-      t1_ = INFINITY;
+    eval_ = std::make_unique<WallEffectEvaluation>(traj_->params());
+    eval_->subscribe(ctx.host.bus(), [this](const tactile_msgs::msg::WallEstimate&) {
+      if (eval_->have_odometry()) add_state_nees();
+    });
+    if (traj_->params().mode == "sweep") {
+      ctx.host.bus().subscribe<tactile_msgs::msg::WallEstimate>(
+          wall_effect_ekf::WallEffectEkfLogic::kOutputTopic,
+          [this](const tactile_msgs::msg::WallEstimate& m) { on_sweep_estimate(m); });
     }
-    auto& bus = ctx.host.bus();
-    bus.subscribe<tactile_msgs::msg::WallEstimate>("/ground_truth/wall",
-                                                   [this](const tactile_msgs::msg::WallEstimate& m) { truth_ = m; have_truth_ = true; });
-    bus.subscribe<nav_msgs::msg::Odometry>("/ground_truth/odom", [this](const nav_msgs::msg::Odometry& m) { odom_ = m; have_odom_ = true; });
-    bus.subscribe<nav_msgs::msg::Odometry>(wall_effect_ekf::WallTrajectoryLogic::kOutputTopic,
-                                           [this](const nav_msgs::msg::Odometry& m) { sp_ = m; have_sp_ = true; });
-    bus.subscribe<tactile_msgs::msg::WallEstimate>(wall_effect_ekf::WallEffectEkfLogic::kOutputTopic,
-                                                   [this](const tactile_msgs::msg::WallEstimate& m) { on_estimate(m); });
   }
 
-  void on_estimate(const tactile_msgs::msg::WallEstimate& est) {
-    if (!have_truth_ || !truth_.wall_detected) return;
+  /// 004 Fig. 5: per-setpoint errors of the distance sweep.
+  void on_sweep_estimate(const tactile_msgs::msg::WallEstimate& est) {
+    const auto& truth = eval_->truth();
+    if (!eval_->have_truth() || !truth.wall_detected) return;
     const double t = tactile_common::to_seconds(tactile_common::from_stamp(est.header.stamp));
     const auto& tp = traj_->params();
-    if (tp.mode == "sweep") {
-      const int k = wall_effect_ekf::sweep_segment(tp, t);
-      // Skip the first 10 s of each hover (transition to the new setpoint).
-      if (k >= 0 && t - tp.t_start - k * tp.sweep_hold_s > 10.0) {
-        auto& s = sweep_[k];
-        s.truth.add(truth_.distance);
-        s.dist.add(est.distance - truth_.distance);
-        s.angle.add(std::abs(wrap(est.direction - truth_.direction)) * 180.0 / M_PI);
-      }
-    }
-    if (t < t0_ || t > t1_) return;
-    const double e_d = est.distance - truth_.distance;
-    const double e_a = wrap(est.direction - truth_.direction);
-    all_dist_.add(e_d);
-    if (truth_.distance < 0.20) {  // 004: "within 20 cm from the wall"
-      dist_.add(e_d);
-      dir_.add(e_a * 180.0 / M_PI);
-      // NEES of (distance, direction) with the published covariance.
-      const double a = est.covariance[0], b = est.covariance[1], d = est.covariance[4];
-      const double det = a * d - b * b;
-      if (det > 0.0) nees_.add((d * e_d * e_d - 2.0 * b * e_d * e_a + a * e_a * e_a) / det);
-      if (have_odom_) add_state_nees();
-    }
-    if (have_odom_ && have_sp_) {
-      track_y_.add(odom_.pose.pose.position.y - sp_.pose.pose.position.y);
-      const auto& q = odom_.pose.pose.orientation;
-      const auto& qs = sp_.pose.pose.orientation;
-      const double yaw = tactile_common::yaw_of(q);
-      const double yaw_sp = 2.0 * std::atan2(qs.z, qs.w);
-      track_yaw_.add(wrap(yaw - yaw_sp) * 180.0 / M_PI);
+    const int k = wall_effect_ekf::sweep_segment(tp, t);
+    // Skip the first 10 s of each hover (transition to the new setpoint).
+    if (k >= 0 && t - tp.t_start - k * tp.sweep_hold_s > 10.0) {
+      auto& s = sweep_[k];
+      s.truth.add(truth.distance);
+      s.dist.add(est.distance - truth.distance);
+      s.angle.add(std::abs(wrap_angle(est.direction - truth.direction)) * 180.0 / M_PI);
     }
   }
 
@@ -110,7 +62,8 @@ class WallEffectGraph : public SimGraph {
   /// x_W = y_W x z_W): y, z, p_dot (W), R (body -> W), omega.
   void add_state_nees() {
     namespace we = wall_effect_ekf;
-    const auto& pp = odom_.pose.pose;
+    const auto& odom = eval_->odometry();
+    const auto& pp = odom.pose.pose;
     const tactile_sim::Vec3 p(pp.position.x, pp.position.y, pp.position.z);
     const tactile_sim::Quat q(pp.orientation.w, pp.orientation.x, pp.orientation.y, pp.orientation.z);
     const tactile_sim::Hit h = sim_->arena().closest(p.head<2>(), 1.0);
@@ -124,7 +77,7 @@ class WallEffectGraph : public SimGraph {
     truth.y = h.distance;
     truth.z = p.z() - sim_->arena().floor_z();
     truth.R = W * q.toRotationMatrix();
-    const auto& tw = odom_.twist.twist;
+    const auto& tw = odom.twist.twist;
     truth.v = truth.R * we::Vec3(tw.linear.x, tw.linear.y, tw.linear.z);
     truth.omega = we::Vec3(tw.angular.x, tw.angular.y, tw.angular.z);
     const auto& ekf = ekf_->ekf();
@@ -143,38 +96,29 @@ class WallEffectGraph : public SimGraph {
 
   nlohmann::json metrics() const override {
     nlohmann::json m;
-    m["mode"] = traj_->params().mode;
-    m["window_s"] = {t0_, std::isfinite(t1_) ? nlohmann::json(t1_) : nlohmann::json(nullptr)};
-    m["samples_within_20cm"] = dist_.n;
-    m["rmse_distance_cm"] = num(100.0 * dist_.rms());
-    m["rmse_direction_deg"] = num(dir_.rms());
-    m["mean_distance_error_cm"] = num(100.0 * dist_.mean());
-    m["rmse_distance_all_cm"] = num(100.0 * all_dist_.rms());
-    m["nees_distance_direction"] = num(nees_.mean());  // 2 for a consistent filter
+    eval_->write(m);
     // Full error state (11 dof): mean NEES (11 for a consistent filter), the
     // fraction of samples inside the 95 % chi-square interval of one sample
     // [3.82, 21.92], and the normalised squared error of each component
     // (y, z, v_W x3, dtheta x3, omega x3), 1 each when consistent.
-    m["nees_state"] = num(state_nees_.mean());
+    m["nees_state"] = json_number(state_nees_.mean());
     m["nees_state_dim"] = wall_effect_ekf::kErrorDim;
     m["nees_state_samples"] = state_nees_.n;
-    m["nees_state_in_chi2_95"] = num(state_nees_.n ? static_cast<double>(state_nees_in95_) / static_cast<double>(state_nees_.n) : NAN);
+    m["nees_state_in_chi2_95"] = json_number(state_nees_.n ? static_cast<double>(state_nees_in95_) / static_cast<double>(state_nees_.n) : NAN);
     nlohmann::json comp = nlohmann::json::array();
-    for (const auto& c : component_nees_) comp.push_back(num(c.mean()));
+    for (const auto& c : component_nees_) comp.push_back(json_number(c.mean()));
     m["nees_components"] = comp;
-    m["tracking_rms_y_cm"] = num(100.0 * track_y_.rms());
-    m["tracking_rms_yaw_deg"] = num(track_yaw_.rms());
     const auto& es = ekf_->ekf().stats();
     m["ekf_reacquisitions"] = es.reacquisitions;
     if (!sweep_.empty()) {
       nlohmann::json rows = nlohmann::json::array();
       for (const auto& [k, s] : sweep_) {
         rows.push_back({{"setpoint_m", traj_->params().sweep_distances[static_cast<size_t>(k)]},
-                        {"mean_distance_m", num(s.truth.mean())},
-                        {"mean_distance_error_cm", num(100.0 * s.dist.mean())},
-                        {"std_distance_error_cm", num(100.0 * s.dist.std())},
-                        {"mean_abs_angle_error_deg", num(s.angle.mean())},
-                        {"std_abs_angle_error_deg", num(s.angle.std())}});
+                        {"mean_distance_m", json_number(s.truth.mean())},
+                        {"mean_distance_error_cm", json_number(100.0 * s.dist.mean())},
+                        {"std_distance_error_cm", json_number(100.0 * s.dist.std())},
+                        {"mean_abs_angle_error_deg", json_number(s.angle.mean())},
+                        {"std_abs_angle_error_deg", json_number(s.angle.std())}});
       }
       m["sweep"] = rows;
     }
@@ -190,11 +134,8 @@ class WallEffectGraph : public SimGraph {
   std::shared_ptr<wall_effect_ekf::WallEffectEkfLogic> ekf_;
   std::shared_ptr<wall_effect_ekf::IndiControlLogic> indi_;
   std::shared_ptr<wall_effect_ekf::WallTrajectoryLogic> traj_;
-  double t0_ = 0.0, t1_ = INFINITY;
-  tactile_msgs::msg::WallEstimate truth_;
-  nav_msgs::msg::Odometry odom_, sp_;
-  bool have_truth_ = false, have_odom_ = false, have_sp_ = false;
-  Accumulator dist_, dir_, all_dist_, nees_, track_y_, track_yaw_, state_nees_;
+  std::unique_ptr<WallEffectEvaluation> eval_;
+  Accumulator state_nees_;
   size_t state_nees_in95_ = 0;
   std::array<Accumulator, wall_effect_ekf::kErrorDim> component_nees_{};
   std::map<int, Segment> sweep_;
