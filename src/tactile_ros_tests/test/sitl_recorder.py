@@ -53,6 +53,15 @@ GRAPH_TOPICS = {
     },
 }
 
+# The simulator's topics among GRAPH_TOPICS that it publishes from t = 0: the simulator
+# holds its first step until these have a subscriber in another process
+# (launch argument wait_for_subscribers), so the recording starts at t = 0.
+SIM_TOPICS = {
+    'whisker_fsm': ['/ground_truth/whisker/left/contact', '/ground_truth/whisker/right/contact'],
+    'xplorer': ['/odom', '/arm_imu'],
+    'wall_effect': ['/ground_truth/wall', '/ground_truth/odom'],
+}
+
 DONE_TOPIC = '/sim/done'
 
 
@@ -95,14 +104,19 @@ class Recorder:
         from std_msgs.msg import Bool
 
         self.out = Path(out)
+        self.topics = dict(topics)
         self.counts = {t: 0 for t in topics}
         self.done = threading.Event()
-        self._store = typestore()
-        self._writer = Writer(self.out, version=8)
-        self._writer.open()
-        self._connections = {
-            t: self._writer.add_connection(t, typ, typestore=self._store)
-            for t, (typ, _) in topics.items()}
+        # The messages as received (topic, stamp, CDR bytes), written to the bag in stop().
+        # The bag is not written from the callbacks: the sqlite3 connection the rosbags
+        # writer opens may only be used by the thread that opened it (sqlite3's
+        # check_same_thread), and the callbacks run in the spin thread; a write there
+        # raised ProgrammingError, which ended the spin thread silently, so /sim/done was
+        # never seen. Keeping the callbacks to an append also keeps the best-effort
+        # queues drained while the flight runs.
+        self._messages: list[tuple[str, int, bytes]] = []
+        self._error: BaseException | None = None
+        self._Writer = Writer
         self._context = rclpy.Context()
         rclpy.init(context=self._context)
         self._node = rclpy.create_node('sitl_recorder', context=self._context)
@@ -125,11 +139,15 @@ class Recorder:
         self._thread.start()
 
     def _spin(self):
-        while not self._stop.is_set() and self._context.ok():
-            self._executor.spin_once(timeout_sec=0.1)
+        try:
+            while not self._stop.is_set() and self._context.ok():
+                self._executor.spin_once(timeout_sec=0.1)
+        except BaseException as e:  # re-raised by wait_done() / stop(), never lost
+            self._error = e
+            self.done.set()
 
     def _on_message(self, topic: str, data: bytes):
-        self._writer.write(self._connections[topic], header_stamp_ns(data), data)
+        self._messages.append((topic, header_stamp_ns(data), bytes(data)))
         self.counts[topic] += 1
 
     def _on_done(self, msg):
@@ -137,17 +155,31 @@ class Recorder:
             self.done.set()
 
     def wait_done(self, timeout: float) -> bool:
-        return self.done.wait(timeout)
+        done = self.done.wait(timeout)
+        if self._error is not None:
+            raise RuntimeError(f'sitl_recorder: the spin thread failed: {self._error!r}') from self._error
+        return done
 
     def stop(self):
-        """Stops spinning (the queues drained for 0.5 s first) and closes the bag."""
+        """Stops spinning (the queues drained for 0.5 s first) and writes the bag."""
         time.sleep(0.5)
         self._stop.set()
         self._thread.join()
         self._executor.shutdown()
         self._node.destroy_node()
         self._context.try_shutdown()
-        self._writer.close()
+        store = typestore()
+        writer = self._Writer(self.out, version=8)
+        writer.open()
+        try:
+            connections = {t: writer.add_connection(t, typ, typestore=store)
+                           for t, (typ, _) in self.topics.items()}
+            for topic, stamp, data in self._messages:
+                writer.write(connections[topic], stamp, data)
+        finally:
+            writer.close()
+        if self._error is not None:
+            raise RuntimeError(f'sitl_recorder: the spin thread failed: {self._error!r}') from self._error
 
 
 def main(argv=None) -> int:
