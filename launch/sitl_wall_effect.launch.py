@@ -50,7 +50,11 @@ def nodes(context):
                          'real_time_factor': ParameterValue(
                              LaunchConfiguration('real_time_factor'), value_type=float),
                          # start the world when the controller (loaded last) is up
-                         'wait_for_publisher': '/wall_effect/setpoint'}],
+                         'wait_for_publisher': '/wall_effect/setpoint',
+                         # hold t = 0 until these topics have a subscriber in another
+                         # process (e.g. a recorder), comma-separated; '' starts at once
+                         'wait_for_subscribers': ParameterValue(
+                             LaunchConfiguration('wait_for_subscribers'), value_type=str)}],
             extra_arguments=intra),
         ComposableNode(
             package='wall_effect_ekf', plugin='wall_effect_ekf::WallEffectEkfComponent',
@@ -86,6 +90,10 @@ def generate_launch_description():
         DeclareLaunchArgument('real_time_factor', default_value='1.0',
                               description='simulated seconds per wall-clock second (1.0: real '
                                           'time; the simulator publishes /sim/done at the end)'),
+        DeclareLaunchArgument('wait_for_subscribers', default_value='',
+                              description="the simulator's topics (comma-separated) that must "
+                                          'have a subscriber in another process before the '
+                                          'world starts, e.g. a recorder'),
         DeclareLaunchArgument('behaviour', default_value='navigation',
                               description="'navigation' (wall_effect_nav) or 'trajectory' "
                                           "(004 estimation-flight script)"),

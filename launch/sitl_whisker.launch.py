@@ -45,7 +45,11 @@ def generate_launch_description():
                          'real_time_factor': ParameterValue(
                              LaunchConfiguration('real_time_factor'), value_type=float),
                          # start the world when the controller (loaded last) is up
-                         'wait_for_publisher': '/cmd_hover'}],
+                         'wait_for_publisher': '/cmd_hover',
+                         # hold t = 0 until these topics have a subscriber in another
+                         # process (e.g. a recorder), comma-separated; '' starts at once
+                         'wait_for_subscribers': ParameterValue(
+                             LaunchConfiguration('wait_for_subscribers'), value_type=str)}],
             extra_arguments=intra),
     ]
     for side in ('left', 'right'):
@@ -68,6 +72,10 @@ def generate_launch_description():
         DeclareLaunchArgument('real_time_factor', default_value='1.0',
                               description='simulated seconds per wall-clock second (1.0: real '
                                           'time; the simulator publishes /sim/done at the end)'),
+        DeclareLaunchArgument('wait_for_subscribers', default_value='',
+                              description="the simulator's topics (comma-separated) that must "
+                                          'have a subscriber in another process before the '
+                                          'world starts, e.g. a recorder'),
         ComposableNodeContainer(
             name='sitl_whisker_container', namespace='', package='rclcpp_components',
             executable='component_container', composable_node_descriptions=nodes,

@@ -47,7 +47,11 @@ def generate_launch_description():
                          'real_time_factor': ParameterValue(
                              LaunchConfiguration('real_time_factor'), value_type=float),
                          # start the world when the controller (loaded last) is up
-                         'wait_for_publisher': '/cmd_position'}],
+                         'wait_for_publisher': '/cmd_position',
+                         # hold t = 0 until these topics have a subscriber in another
+                         # process (e.g. a recorder), comma-separated; '' starts at once
+                         'wait_for_subscribers': ParameterValue(
+                             LaunchConfiguration('wait_for_subscribers'), value_type=str)}],
             extra_arguments=intra),
         ComposableNode(
             package='xplorer_force_est', plugin='xplorer_force_est::XplorerForceEstComponent',
@@ -73,6 +77,10 @@ def generate_launch_description():
         DeclareLaunchArgument('real_time_factor', default_value='1.0',
                               description='simulated seconds per wall-clock second (1.0: real '
                                           'time; the simulator publishes /sim/done at the end)'),
+        DeclareLaunchArgument('wait_for_subscribers', default_value='',
+                              description="the simulator's topics (comma-separated) that must "
+                                          'have a subscriber in another process before the '
+                                          'world starts, e.g. a recorder'),
         DeclareLaunchArgument('mission', default_value='explore',
                               description='explore | static_wrench | ricochet | waypoint'),
         DeclareLaunchArgument('ply_file', default_value='xplorer_map.ply',

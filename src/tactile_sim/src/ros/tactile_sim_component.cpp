@@ -13,12 +13,32 @@
 //     t = 0 (nothing published) until some node publishes on this topic, e.g.
 //     the graph's setpoint topic: a launch file loads the simulator first and
 //     the controller last, and the standalone host starts them together.
+//   wait_for_subscribers (string, default ""): comma-separated topics of the
+//     simulator's; when set, the world takes its first step (t = 0, which
+//     creates the publishers) and holds its messages until each of these
+//     topics has a subscription outside this process matched by the
+//     simulator's publisher, e.g. a recorder's. Publishers are created on their
+//     first message, and a DDS subscriber only receives from a writer once
+//     discovery has matched them: without the wait, a recorder in another
+//     process missed the first seconds of a flight on a loaded machine.
 //
 // At the scenario's end (duration_s) the simulator stops stepping and
 // publishing, logs one line "tactile_sim: scenario ... ended" with the
 // achieved real-time factor and the setpoint latency, and publishes
 // std_msgs/Bool true on /sim/done (reliable, transient local: a subscriber
 // that joins later still gets it).
+//
+// /clock of a step's time t is published one timer period after the step's
+// messages, at the start of the next step, so a node timer due at t (the
+// controllers' 50/100 Hz ticks) runs after the messages of t have gone through
+// the pipeline, as in process, where the world steps first and then node timers
+// due at the same instant run (ties go to the timer created first, the
+// simulator's). Publishing /clock(t) before the messages of t let, e.g., the
+// whisker FSM's tick at t act on the depth of t - 20 ms: the component
+// container's executor runs ready timers before ready subscriptions, and the
+// FSM's clock (its own /clock subscription) reached t while the pressure of t
+// was still queued for TDORC. The price: a setpoint stamped t reaches the world
+// at t + 2 steps instead of t + 1 (the "late" count below: 2-3 ms ages).
 //
 // Setpoint latency: the age of each setpoint (/cmd_hover, /cmd_position,
 // /cmd_rotor_thrust) when it reaches the simulator, in simulated time (the
@@ -32,6 +52,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
@@ -59,6 +80,16 @@ class TactileSimComponent : public rclcpp::Node {
         std::to_string(real_time_factor_));
     }
     wait_for_publisher_ = declare_parameter<std::string>("wait_for_publisher", "");
+    const auto subscribers = declare_parameter<std::string>("wait_for_subscribers", "");
+    for (size_t begin = 0; begin < subscribers.size(); ) {
+      size_t end = subscribers.find(',', begin);
+      if (end == std::string::npos) {end = subscribers.size();}
+      std::string topic = subscribers.substr(begin, end - begin);
+      topic.erase(0, topic.find_first_not_of(' '));
+      topic.erase(topic.find_last_not_of(' ') + 1);
+      if (!topic.empty()) {wait_for_subscribers_.push_back(topic);}
+      begin = end + 1;
+    }
     clock_publisher_ = create_publisher<rosgraph_msgs::msg::Clock>("/clock", rclcpp::ClockQoS());
     done_publisher_ = create_publisher<std_msgs::msg::Bool>(
       kDoneTopic, rclcpp::QoS(1).reliable().transient_local());
@@ -107,6 +138,62 @@ class TactileSimComponent : public rclcpp::Node {
     }
   }
 
+  template<class T>
+  void create_publishers(const std::vector<Published<T>> & messages)
+  {
+    auto & publishers = std::get<Publishers<T>>(publishers_);
+    for (const auto & m : messages) {
+      if (publishers.find(m.topic) == publishers.end()) {
+        publishers.emplace(m.topic, create_publisher<T>(m.topic, rclcpp::SensorDataQoS()));
+      }
+      publisher_bases_[m.topic] = publishers.at(m.topic);
+    }
+  }
+
+  void create_publishers()
+  {
+    create_publishers(outputs_.pressure);
+    create_publishers(outputs_.whisker_truth);
+    create_publishers(outputs_.odometry);
+    create_publishers(outputs_.imu);
+    create_publishers(outputs_.range);
+    create_publishers(outputs_.flow);
+    create_publishers(outputs_.arm_imu);
+    create_publishers(outputs_.thrust);
+    create_publishers(outputs_.wrench);
+    create_publishers(outputs_.wall);
+    create_publishers(outputs_.collisions);
+  }
+
+  /// Every wait_for_subscribers topic has a subscription in another process
+  /// matched by our publisher (rclcpp's own test for an inter-process publish).
+  bool subscribers_matched()
+  {
+    while (!wait_for_subscribers_.empty()) {
+      const std::string & topic = wait_for_subscribers_.front();
+      auto it = publisher_bases_.find(topic);
+      if (it == publisher_bases_.end()) {
+        std::string published;
+        for (const auto & [t, p] : publisher_bases_) {published += (published.empty() ? "" : ", ") + t;}
+        throw std::invalid_argument(
+          tactile_common::parameter_source(*this) + ": wait_for_subscribers: the simulator publishes no " +
+          topic + " at t = 0 in scenario " + logic_->scenario().name + " (it publishes " + published + ")");
+      }
+      if (it->second->get_subscription_count() <= it->second->get_intra_process_subscription_count()) {
+        if (!waiting_subscribers_logged_) {
+          RCLCPP_INFO(get_logger(), "tactile_sim: waiting for a subscriber of %s in another process",
+            topic.c_str());
+          waiting_subscribers_logged_ = true;
+        }
+        return false;
+      }
+      RCLCPP_INFO(get_logger(), "tactile_sim: %s has a subscriber in another process", topic.c_str());
+      waiting_subscribers_logged_ = false;
+      wait_for_subscribers_.erase(wait_for_subscribers_.begin());
+    }
+    return true;
+  }
+
   void count_setpoint(const builtin_interfaces::msg::Time & stamp)
   {
     // now_ns_ is the time of the next step: the setpoint is applied there.
@@ -140,13 +227,22 @@ class TactileSimComponent : public rclcpp::Node {
           wait_for_publisher_.c_str());
         wait_for_publisher_.clear();
       }
+      if (!held_) {
+        outputs_.clear();
+        logic_->step(now_ns_, outputs_);
+        held_ = true;
+        create_publishers();
+      }
+      if (!subscribers_matched()) {
+        return;
+      }
       wall_start_ = std::chrono::steady_clock::now();
+    } else {
+      // /clock of the previous step, whose messages went out one timer period ago.
+      publish_clock(now_ns_ - logic_->period_ns());
+      outputs_.clear();
+      logic_->step(now_ns_, outputs_);
     }
-    outputs_.clear();
-    logic_->step(now_ns_, outputs_);
-    rosgraph_msgs::msg::Clock clock;
-    tactile_common::to_stamp(now_ns_, clock.clock);
-    clock_publisher_->publish(clock);
     publish(outputs_.pressure);
     publish(outputs_.whisker_truth);
     publish(outputs_.odometry);
@@ -161,8 +257,16 @@ class TactileSimComponent : public rclcpp::Node {
     now_ns_ += logic_->period_ns();
   }
 
+  void publish_clock(int64_t t_ns)
+  {
+    rosgraph_msgs::msg::Clock clock;
+    tactile_common::to_stamp(t_ns, clock.clock);
+    clock_publisher_->publish(clock);
+  }
+
   void finish()
   {
+    if (now_ns_ > 0) {publish_clock(now_ns_ - logic_->period_ns());}
     done_ = true;
     timer_->cancel();
     const double wall_s =
@@ -193,6 +297,10 @@ class TactileSimComponent : public rclcpp::Node {
   bool done_ = false;
   std::string wait_for_publisher_;
   bool waiting_logged_ = false;
+  std::vector<std::string> wait_for_subscribers_;
+  bool waiting_subscribers_logged_ = false;
+  bool held_ = false;  // the t = 0 step was taken, its messages not yet published
+  std::map<std::string, rclcpp::PublisherBase::SharedPtr> publisher_bases_;
   std::chrono::steady_clock::time_point wall_start_ = std::chrono::steady_clock::now();
   uint64_t setpoints_ = 0;
   uint64_t late_setpoints_ = 0;
