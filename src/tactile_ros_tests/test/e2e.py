@@ -15,7 +15,7 @@ import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from sitl_recorder import GRAPH_TOPICS, Recorder
+from sitl_recorder import GRAPH_TOPICS, SIM_TOPICS, Recorder
 
 try:
     import rosbags  # noqa: F401  (the recorder writes its bags with it)
@@ -85,7 +85,8 @@ def fly_over_dds(launch_file: str, scenario: Path, graph: str, seed: int, factor
     with open(log_path, 'w') as log:
         launch = subprocess.Popen(
             ['ros2', 'launch', str(WORKSPACE / 'launch' / launch_file), f'scenario:={scenario}',
-             f'seed:={seed}', f'real_time_factor:={factor}', *extra_args],
+             f'seed:={seed}', f'real_time_factor:={factor}',
+             f'wait_for_subscribers:={",".join(SIM_TOPICS[graph])}', *extra_args],
             stdout=log, stderr=subprocess.STDOUT, start_new_session=True, env=os.environ.copy())
         try:
             done = False

@@ -25,7 +25,7 @@ pytestmark = pytest.mark.e2e
 from e2e import WORKSPACE, fly_over_dds, sim_in_process, spread
 
 SCENARIO = WORKSPACE / 'config' / 'scenarios' / 'ducted_estimation.yaml'
-IN_PROCESS_SEEDS = [1, 2, 3]
+IN_PROCESS_SEEDS = [1, 2, 3, 4, 5]  # with the DDS seeds (2 s each)
 DDS_SEEDS = [int(s) for s in os.environ.get('TACTILE_E2E_WALL_SEEDS', '1').split(',')]
 FACTOR = float(os.environ.get('TACTILE_E2E_FACTOR', '2.0'))
 RMSE_MARGIN_CM = 0.3
@@ -36,7 +36,8 @@ ESTIMATE_TOPIC = '/wall_effect/estimate'
 @pytest.fixture(scope='module')
 def in_process(tmp_path_factory):
     out = tmp_path_factory.mktemp('in_process_wall_effect')
-    return {s: sim_in_process(SCENARIO, s, out / f'seed_{s}') for s in IN_PROCESS_SEEDS}
+    seeds = sorted(set(IN_PROCESS_SEEDS) | set(DDS_SEEDS))
+    return {s: sim_in_process(SCENARIO, s, out / f'seed_{s}') for s in seeds}
 
 
 @pytest.fixture(scope='module')

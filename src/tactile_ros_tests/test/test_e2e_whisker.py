@@ -6,11 +6,16 @@ and compared with `tactile sim` of the same scenario in process.
 
 A DDS flight is not bit-identical to the in-process flight of its seed (README: "End to
 end over DDS"): the same seed gives the same world and noise, but the nodes see their
-inputs at other instants. So the comparison is of outcomes against the in-process spread:
+inputs at other instants, and after the first wall contact the flight is another draw
+from the distribution the in-process seeds sample. So the comparison is of outcomes
+against the in-process spread (IN_PROCESS_SEEDS, 0.5 s each):
 
 - success (target reached, no collision) per seed equals the in-process success;
-- depth-in-band fraction and mean heading error of each DDS flight lie within
-  [min, max] of the in-process seeds widened by IN_BAND_MARGIN / HEADING_MARGIN_DEG;
+- the depth-in-band fraction of each DDS flight is at least the in-process minimum less
+  IN_BAND_MARGIN, and its mean heading error at most the in-process maximum plus
+  HEADING_MARGIN_DEG: the side of the spread that a worse pipeline falls out of. A DDS
+  flight better than every in-process seed is not a defect (measured: seed 2 held the
+  depth in band 0.97 of the time over DDS, the best of 30 in-process seeds 0.85);
 - the recorder lost at most 2 % of the ground-truth samples.
 
 How well the DDS pipeline kept up (achieved real-time factor, setpoint ages, late
@@ -30,8 +35,9 @@ pytestmark = pytest.mark.e2e
 from e2e import WORKSPACE, fly_over_dds, sim_in_process, spread
 
 SCENARIO = WORKSPACE / 'config' / 'scenarios' / 'whisker_three_baffles_fsm.yaml'
-# In-process seeds give the spread; the first DDS_SEEDS of them are flown over DDS too.
-IN_PROCESS_SEEDS = [1, 2, 3, 4, 5]
+# In-process seeds give the spread (README "Measured": 30 seeds, depth in band 0.46-0.85,
+# heading error 2.3-4.6 deg); the DDS seeds are among them.
+IN_PROCESS_SEEDS = list(range(1, 21))
 DDS_SEEDS = [int(s) for s in os.environ.get('TACTILE_E2E_SEEDS', '1,2').split(',')]
 FACTOR = float(os.environ.get('TACTILE_E2E_FACTOR', '2.0'))
 # Margins around the in-process spread (README "End to end over DDS" for the reasoning).
@@ -43,7 +49,8 @@ TRUTH_TOPIC = '/ground_truth/whisker/left/contact'
 @pytest.fixture(scope='module')
 def in_process(tmp_path_factory):
     out = tmp_path_factory.mktemp('in_process')
-    return {s: sim_in_process(SCENARIO, s, out / f'seed_{s}') for s in IN_PROCESS_SEEDS}
+    seeds = sorted(set(IN_PROCESS_SEEDS) | set(DDS_SEEDS))
+    return {s: sim_in_process(SCENARIO, s, out / f'seed_{s}') for s in seeds}
 
 
 @pytest.fixture(scope='module')
@@ -88,7 +95,7 @@ def test_whisker_fsm_over_dds_matches_in_process(seed, in_process, report, tmp_p
     assert dds['topics'].get(TRUTH_TOPIC, 0) >= 0.98 * ref['topics'][TRUTH_TOPIC]
     assert dds['success'] == ref['success'], (dds['fsm'], dds['collision_events'])
     assert dds['fsm']['reached_target'] == ref['fsm']['reached_target']
-    lo, hi = spread(band, IN_BAND_MARGIN)
-    assert lo <= dds['fsm']['depth_in_band_fraction'] <= hi
-    lo, hi = spread(heading, HEADING_MARGIN_DEG)
-    assert lo <= dds['fsm']['mean_abs_heading_error_deg'] <= hi
+    lo, _ = spread(band, IN_BAND_MARGIN)
+    assert dds['fsm']['depth_in_band_fraction'] >= lo
+    _, hi = spread(heading, HEADING_MARGIN_DEG)
+    assert dds['fsm']['mean_abs_heading_error_deg'] <= hi

@@ -26,7 +26,7 @@ pytestmark = pytest.mark.e2e
 from e2e import WORKSPACE, fly_over_dds, sim_in_process, spread
 
 SCENARIO = WORKSPACE / 'config' / 'scenarios' / 'xplorer_box_traversal.yaml'
-IN_PROCESS_SEEDS = [1, 2, 3]
+IN_PROCESS_SEEDS = [1, 2, 3, 4, 5]  # with the DDS seeds (2 s each)
 DDS_SEEDS = [int(s) for s in os.environ.get('TACTILE_E2E_XPLORER_SEEDS', '1').split(',')]
 FACTOR = float(os.environ.get('TACTILE_E2E_FACTOR', '2.0'))
 AREA_MARGIN = 0.01
@@ -36,7 +36,8 @@ WRENCH_TOPIC = '/xplorer/wrench_body'
 @pytest.fixture(scope='module')
 def in_process(tmp_path_factory):
     out = tmp_path_factory.mktemp('in_process_xplorer')
-    return {s: sim_in_process(SCENARIO, s, out / f'seed_{s}') for s in IN_PROCESS_SEEDS}
+    seeds = sorted(set(IN_PROCESS_SEEDS) | set(DDS_SEEDS))
+    return {s: sim_in_process(SCENARIO, s, out / f'seed_{s}') for s in seeds}
 
 
 @pytest.fixture(scope='module')
