@@ -4,6 +4,8 @@ A few simulated seconds of the default scenario (the take-off), then stopped."""
 
 from __future__ import annotations
 
+import time
+
 import yaml
 
 from launch_check import CONFIG_DIR, Graph, Launch, check_graph
@@ -38,3 +40,19 @@ def test_sitl_whisker_graph_topics_and_arguments(tmp_path):
     assert sim == {'scenario': str(scenario), 'seed': 7, 'wait_for_publisher': '/cmd_hover'}
     cfg = yaml.safe_load((CONFIG_DIR / 'tdorc_filter.yaml').read_text())['/**/tdorc_filter']['ros__parameters']
     assert tdorc == {'window': cfg['window'], 'use_sim_time': True}
+
+
+def test_sitl_whisker_wait_for_subscribers_of_a_topic_the_simulator_lacks_stops_it(tmp_path):
+    """wait_for_subscribers names topics of the simulator's (the end-to-end tests pass the
+    recorder's); a topic it does not publish stops the simulator at t = 0 with the
+    parameter, the topic, the scenario and the topics it does publish."""
+    with Launch('sitl_whisker.launch.py', ['wait_for_subscribers:=/no_such_topic'],
+                tmp_path / 'launch.log') as launch:
+        deadline = time.monotonic() + 60.0
+        while time.monotonic() < deadline and 'process has died' not in launch.output():
+            time.sleep(0.5)
+        out = launch.output()
+    assert 'process has died' in out, out[-3000:]
+    assert ('wait_for_subscribers: the simulator publishes no /no_such_topic at t = 0 in '
+            'scenario whisker_three_baffles_fsm') in out, out[-3000:]
+    assert '/ground_truth/whisker/left/contact' in out
