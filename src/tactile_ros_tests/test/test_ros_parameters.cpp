@@ -1,0 +1,148 @@
+// tactile_common/ros_parameters.hpp on a real rclcpp::Node: a bad parameter's error names
+// the node, the file (or launch override) its value came from, the key and the reason,
+// whether the file came as a --params-file argument (ros2 run) or through the
+// tactile.parameter_sources list the launch files pass (ros2 launch reads the files itself).
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+#include "rclcpp/rclcpp.hpp"
+#include "tactile_common/ros_parameters.hpp"
+
+namespace {
+
+using tactile_common::ParamError;
+using tactile_common::ParamMap;
+
+ParamMap defaults() {
+  ParamMap d("probe", "defaults");
+  d.set("gain", 1.0);
+  d.set("window", int64_t{5});
+  d.set("frame_id", std::string("base"));
+  return d;
+}
+
+/// A parameter file in a fresh temporary directory.
+std::string write_file(const std::string& name, const std::string& text) {
+  static std::atomic<int> counter{0};
+  const auto dir = std::filesystem::temp_directory_path() /
+                   ("tactile_ros_parameters_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
+  std::filesystem::create_directories(dir);
+  const auto path = dir / name;
+  std::ofstream(path) << text;
+  return path.string();
+}
+
+/// A context of its own, initialised with `args` as a process's command line (ros2 run).
+std::shared_ptr<rclcpp::Context> context_with(std::vector<std::string> args) {
+  args.insert(args.begin(), "probe_node");
+  std::vector<const char*> argv;
+  for (const auto& a : args) argv.push_back(a.c_str());
+  auto context = std::make_shared<rclcpp::Context>();
+  context->init(static_cast<int>(argv.size()), argv.data());
+  return context;
+}
+
+std::string error_of(rclcpp::Node& node) {
+  try {
+    tactile_common::declare_parameters(node, defaults());
+  } catch (const ParamError& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+class RosParameters : public ::testing::Test {
+ protected:
+  void TearDown() override {
+    for (auto& c : contexts_) c->shutdown("test done");
+  }
+  rclcpp::NodeOptions options(std::vector<std::string> process_args) {
+    contexts_.push_back(context_with(std::move(process_args)));
+    return rclcpp::NodeOptions().context(contexts_.back());
+  }
+  std::vector<std::shared_ptr<rclcpp::Context>> contexts_;
+};
+
+TEST_F(RosParameters, RosRunParamsFileWithWrongTypeNamesTheFileKeyAndReason) {
+  const std::string file = write_file("probe.yaml", "/**:\n  ros__parameters:\n    window: wide\n");
+  rclcpp::Node node("probe", "/bench", options({"--ros-args", "--params-file", file}));
+  EXPECT_EQ(error_of(node),
+            "ros parameters of /bench/probe from " + file +
+                ": probe.ros__parameters.window: is a string (wide), expected a integer");
+}
+
+TEST_F(RosParameters, EveryKeyRemembersTheLastFileThatSetItOrThatItIsADefaultOrAnOverride) {
+  const std::string a = write_file("a.yaml", "/**:\n  ros__parameters:\n    gain: 2.0\n    window: 7\n");
+  const std::string b = write_file("b.yaml", "/bench/probe:\n  ros__parameters:\n    window: 9\n");
+  // The process's arguments (ros2 run) and the node's own: rclcpp applies the node's last.
+  auto opts = options({"--ros-args", "--params-file", a});
+  opts.arguments({"--ros-args", "--params-file", b, "-p", "frame_id:=tool"});
+  rclcpp::Node node("probe", "/bench", opts);
+  const ParamMap params = tactile_common::declare_parameters(node, defaults());
+  EXPECT_EQ(params.get_int("window"), 9);
+  EXPECT_EQ(params.origin("window"), "ros parameters of /bench/probe from " + b);
+  EXPECT_EQ(params.origin("gain"), "ros parameters of /bench/probe from " + a);
+  EXPECT_EQ(params.origin("frame_id"),
+            "ros parameters of /bench/probe (a launch or -p override; not from " + a + ", " + b + ")");
+  // An invalid value found by the node logic names the file too.
+  EXPECT_EQ(std::string(params.error("gain", "must be < 1, got 2").what()),
+            "ros parameters of /bench/probe from " + a + ": probe.ros__parameters.gain: must be < 1, got 2");
+}
+
+TEST_F(RosParameters, AFileThatSetsAnotherValueIsNotBlamedForAnOverride) {
+  const std::string a = write_file("a.yaml", "/**:\n  ros__parameters:\n    window: 7\n");
+  auto opts = options({});
+  opts.arguments({"--ros-args", "--params-file", a, "-p", "window:=1"});
+  rclcpp::Node node("probe", opts);
+  const ParamMap params = tactile_common::declare_parameters(node, defaults());
+  EXPECT_EQ(params.get_int("window"), 1);
+  EXPECT_EQ(params.origin("window"), "ros parameters of /probe (a launch or -p override; not from " + a + ")");
+  EXPECT_EQ(params.origin("gain"), "ros parameters of /probe (default; not set in " + a + ")");
+}
+
+// ros2 launch: the container hands the component plain values (NodeOptions parameter
+// overrides) and, from launch/launch_common.py, the list of where they came from.
+TEST_F(RosParameters, LaunchValueFromAParameterFileNamesTheFile) {
+  const std::string a = write_file("tdorc.yaml", "/**/probe:\n  ros__parameters:\n    window: 52.0e9\n");
+  auto opts = options({});
+  opts.use_global_arguments(false);  // as the component container loads a component
+  opts.parameter_overrides({{"window", "52.0e9"},  // what launch's YAML 1.1 reader makes of it
+                            {"gain", 3.0},
+                            {"tactile.parameter_sources",
+                             std::vector<std::string>{a, "launch:gain:gain_arg", "launch:use_sim_time"}}});
+  rclcpp::Node node("probe", "/whisker/left", opts);
+  EXPECT_EQ(error_of(node), "ros parameters of /whisker/left/probe from " + a +
+                                ": probe.ros__parameters.window: is a string (52.0e9), expected a integer");
+}
+
+TEST_F(RosParameters, LaunchValueFromALaunchArgumentNamesTheArgument) {
+  const std::string a = write_file("probe.yaml", "/**:\n  ros__parameters:\n    gain: 2.0\n");
+  auto opts = options({});
+  opts.use_global_arguments(false);
+  opts.parameter_overrides({{"gain", "high"},
+                            {"tactile.parameter_sources", std::vector<std::string>{a, "launch:gain:gain_arg"}}});
+  rclcpp::Node node("probe", opts);
+  EXPECT_EQ(error_of(node),
+            "ros parameters of /probe from the launch file (launch argument gain_arg): "
+            "probe.ros__parameters.gain: is a string (high), expected a double (YAML 1.1, which the launch "
+            "system reads, takes 52.0e9 as a string: write 52.0e+9)");
+}
+
+TEST_F(RosParameters, LaunchValueWithoutSourcesIsAnOverride) {
+  auto opts = options({});
+  opts.use_global_arguments(false);
+  opts.parameter_overrides({{"frame_id", int64_t{3}}});
+  rclcpp::Node node("probe", opts);
+  EXPECT_EQ(error_of(node), "ros parameters of /probe (a launch or -p override): "
+                            "probe.ros__parameters.frame_id: is a integer (3), expected a string");
+}
+
+}  // namespace
