@@ -40,12 +40,12 @@ def whisker_nodes(side, device, tdorc_params):
             plugin='whisker_driver::WhiskerDriverComponent',
             name='whisker_driver',
             namespace=namespace,
-            parameters=[
+            parameters=launch_common.parameters(
                 os.path.join(CONFIG_DIR, 'whisker_driver.yaml'),
                 # Protocol, whisker_id and frame_id come from the file's
                 # /whisker/<side>/whisker_driver section.
                 {'source': 'serial', 'device': device},
-            ],
+            ),
             extra_arguments=[{'use_intra_process_comms': True}],
         ),
         ComposableNode(
@@ -53,7 +53,7 @@ def whisker_nodes(side, device, tdorc_params):
             plugin='tdorc_filter::TdorcFilterComponent',
             name='tdorc_filter',
             namespace=namespace,
-            parameters=[tdorc_params],
+            parameters=launch_common.parameters(tdorc_params),
             extra_arguments=[{'use_intra_process_comms': True}],
         ),
     ]

@@ -1,5 +1,6 @@
 """Shared by the launch files of this directory (loaded by path, as they are):
-a composable node that cannot start stops the whole launch.
+a composable node that cannot start stops the whole launch, and its parameter error
+names the file (or the launch argument) the bad value came from.
 
 The component container only logs a failed load (a bad parameter, a missing Crazyradio,
 a serial device that is not there) and keeps running the rest of the graph, which then
@@ -7,8 +8,13 @@ waits for that node's topics for ever. Here the launch ends instead, with exit c
 the component's own message (it names the node, the parameter or device and the reason).
 """
 
+import os
+
 from launch.actions import RegisterEventHandler
 from launch.event_handlers import OnProcessIO
+from launch.substitution import Substitution
+from launch.substitutions import LaunchConfiguration, PythonExpression, TextSubstitution
+from launch_ros.parameter_descriptions import ParameterValue
 
 LOAD_FAILURE = 'Component constructor threw an exception'
 
@@ -34,3 +40,57 @@ def stop_on_load_failure(container=None):
     return RegisterEventHandler(OnProcessIO(
         target_action=container, on_stdout=_check_output, on_stderr=_check_output))
 
+
+
+PARAMETER_SOURCES = 'tactile.parameter_sources'
+
+
+def _text(substitutions):
+    return ''.join(s.text for s in substitutions if isinstance(s, TextSubstitution))
+
+
+def _launch_arguments(value):
+    """The launch arguments a parameter value of a launch-file dict is taken from."""
+    if isinstance(value, LaunchConfiguration):
+        return [_text(value.variable_name)]
+    if isinstance(value, ParameterValue):
+        return _launch_arguments(value.value)
+    if isinstance(value, PythonExpression):
+        return _launch_arguments(value.expression)
+    if isinstance(value, (list, tuple)):
+        return [name for v in value for name in _launch_arguments(v)]
+    return []
+
+
+def _dict_keys(values, prefix=''):
+    """(key, value) of a launch-file parameter dict, nested dicts flattened with '.'."""
+    for key, value in values.items():
+        if not isinstance(key, str):
+            continue
+        if isinstance(value, dict):
+            yield from _dict_keys(value, prefix + key + '.')
+        else:
+            yield prefix + key, value
+
+
+def parameters(*entries):
+    """The `parameters` of a ComposableNode: `entries` (parameter files as paths or launch
+    arguments, and dicts) followed by the string array tactile.parameter_sources, which
+    tells the component where each value came from. `ros2 launch` reads the parameter
+    files itself and hands the component plain values, so without it a bad value could
+    only be blamed on the node, not on its file (tactile_common/ros_parameters.hpp reads
+    it). Its entries, in launch's order: each file's path, and "launch:<key>" or
+    "launch:<key>:<launch argument>" for every key a dict sets."""
+    sources = []
+    for entry in entries:
+        if isinstance(entry, dict):
+            for key, value in _dict_keys(entry):
+                names = _launch_arguments(value)
+                sources.append(['launch:' + key + (':' + names[0] if len(names) == 1 else '')])
+        elif isinstance(entry, (str, os.PathLike)):
+            sources.append([os.path.normpath(os.fspath(entry))])
+        elif isinstance(entry, Substitution):
+            sources.append([entry])  # a parameter file named by a launch argument
+        else:
+            raise TypeError(f'parameters(): a file or a dict, got {entry!r}')
+    return list(entries) + ([{PARAMETER_SOURCES: sources}] if sources else [])

@@ -46,18 +46,20 @@ def pipeline_nodes(bridge_overrides):
     intra = [{'use_intra_process_comms': True}]
     nodes = [ComposableNode(
         package='crazyflie_bridge', plugin='crazyflie_bridge::CrazyflieBridgeComponent',
-        name='crazyflie_bridge', parameters=[config('crazyflie_bridge'), bridge_overrides],
+        name='crazyflie_bridge', parameters=launch_common.parameters(
+            config('crazyflie_bridge'), bridge_overrides),
         extra_arguments=intra)]
     for side in ('left', 'right'):
         nodes.append(ComposableNode(
             package='tdorc_filter', plugin='tdorc_filter::TdorcFilterComponent', name='tdorc_filter',
-            namespace='whisker/' + side, parameters=[config('tdorc_filter')], extra_arguments=intra))
+            namespace='whisker/' + side, parameters=launch_common.parameters(
+                config('tdorc_filter')), extra_arguments=intra))
     nodes.append(ComposableNode(
         package='tactile_depth', plugin='tactile_depth::TactileDepthComponent', name='tactile_depth',
-        parameters=[config('tactile_depth')], extra_arguments=intra))
+        parameters=launch_common.parameters(config('tactile_depth')), extra_arguments=intra))
     nodes.append(ComposableNode(
         package='tactile_fsm', plugin='tactile_fsm::WhiskerFsmComponent', name='whisker_fsm',
-        parameters=[config('tactile_fsm')], extra_arguments=intra))
+        parameters=launch_common.parameters(config('tactile_fsm')), extra_arguments=intra))
     return nodes
 
 

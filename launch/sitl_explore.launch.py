@@ -41,8 +41,9 @@ def generate_launch_description():
     nodes = [
         ComposableNode(
             package='tactile_sim', plugin='tactile_sim::TactileSimComponent', name='tactile_sim',
-            parameters=[{'scenario': LaunchConfiguration('scenario'),
-                         'seed': LaunchConfiguration('seed')}],
+            parameters=launch_common.parameters(
+                {'scenario': LaunchConfiguration('scenario'),
+                 'seed': LaunchConfiguration('seed')}),
             extra_arguments=intra),
     ]
     for side in ('left', 'right'):
@@ -50,14 +51,17 @@ def generate_launch_description():
             package='tdorc_filter', plugin='tdorc_filter::TdorcFilterComponent', name='tdorc_filter',
             namespace='whisker/' + side,
             # Probing: a held contact also ends at 1/4 of its peak S_c (tdorc_filter README).
-            parameters=[config('tdorc_filter'), {'hold_release_fraction': 0.25}, sim_time],
+            parameters=launch_common.parameters(
+                config('tdorc_filter'), {'hold_release_fraction': 0.25}, sim_time),
             extra_arguments=intra))
     nodes.append(ComposableNode(
         package='tactile_depth', plugin='tactile_depth::TactileDepthComponent', name='tactile_depth',
-        parameters=[config('tactile_depth'), sim_time], extra_arguments=intra))
+        parameters=launch_common.parameters(
+            config('tactile_depth'), sim_time), extra_arguments=intra))
     nodes.append(ComposableNode(
         package='gpis_explorer', plugin='gpis_explorer::GpisExplorerComponent', name='gpis_explorer',
-        parameters=[config('gpis_explorer'), sim_time], extra_arguments=intra))
+        parameters=launch_common.parameters(
+            config('gpis_explorer'), sim_time), extra_arguments=intra))
     return LaunchDescription([
         DeclareLaunchArgument('scenario', default_value=os.path.join(
             CONFIG_DIR, 'scenarios', 'whisker_room_exit_gpis.yaml'),

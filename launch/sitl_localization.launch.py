@@ -46,7 +46,8 @@ def generate_launch_description():
                     package="whisker_localization",
                     plugin="whisker_localization::WhiskerLocalizationComponent",
                     name="whisker_localization",
-                    parameters=[params, {"possibilistic": ParameterValue(possibilistic, value_type=bool)}],
+                    parameters=launch_common.parameters(
+                        params, {"possibilistic": ParameterValue(possibilistic, value_type=bool)}),
                 ),
             ],
             output="screen",

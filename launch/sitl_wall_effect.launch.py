@@ -45,35 +45,40 @@ def nodes(context):
     out = [
         ComposableNode(
             package='tactile_sim', plugin='tactile_sim::TactileSimComponent', name='tactile_sim',
-            parameters=[{'scenario': LaunchConfiguration('scenario'),
-                         'seed': LaunchConfiguration('seed'),
-                         'real_time_factor': ParameterValue(
-                             LaunchConfiguration('real_time_factor'), value_type=float),
-                         # start the world when the controller (loaded last) is up
-                         'wait_for_publisher': '/wall_effect/setpoint',
-                         # hold t = 0 until these topics have a subscriber in another
-                         # process (e.g. a recorder), comma-separated; '' starts at once
-                         'wait_for_subscribers': ParameterValue(
-                             LaunchConfiguration('wait_for_subscribers'), value_type=str)}],
+            parameters=launch_common.parameters(
+                {'scenario': LaunchConfiguration('scenario'),
+                 'seed': LaunchConfiguration('seed'),
+                 'real_time_factor': ParameterValue(
+                     LaunchConfiguration('real_time_factor'), value_type=float),
+                 # start the world when the controller (loaded last) is up
+                 'wait_for_publisher': '/wall_effect/setpoint',
+                 # hold t = 0 until these topics have a subscriber in another
+                 # process (e.g. a recorder), comma-separated; '' starts at once
+                 'wait_for_subscribers': ParameterValue(
+                     LaunchConfiguration('wait_for_subscribers'), value_type=str)}),
             extra_arguments=intra),
         ComposableNode(
             package='wall_effect_ekf', plugin='wall_effect_ekf::WallEffectEkfComponent',
-            name='wall_effect_ekf', parameters=[config('wall_effect_ekf'), sim_time],
+            name='wall_effect_ekf', parameters=launch_common.parameters(
+                config('wall_effect_ekf'), sim_time),
             extra_arguments=intra),
         ComposableNode(
             package='wall_effect_ekf', plugin='wall_effect_ekf::IndiControlComponent',
-            name='indi_controller', parameters=[config('indi_controller'), sim_time],
+            name='indi_controller', parameters=launch_common.parameters(
+                config('indi_controller'), sim_time),
             extra_arguments=intra),
     ]
     if behaviour == 'trajectory':
         out.append(ComposableNode(
             package='wall_effect_ekf', plugin='wall_effect_ekf::WallTrajectoryComponent',
-            name='wall_trajectory', parameters=[config('wall_trajectory'), sim_time],
+            name='wall_trajectory', parameters=launch_common.parameters(
+                config('wall_trajectory'), sim_time),
             extra_arguments=intra))
     else:
         out.append(ComposableNode(
             package='tactile_fsm', plugin='tactile_fsm::WallEffectNavComponent',
-            name='wall_effect_nav', parameters=[config('wall_effect_nav'), sim_time],
+            name='wall_effect_nav', parameters=launch_common.parameters(
+                config('wall_effect_nav'), sim_time),
             extra_arguments=intra))
     return [ComposableNodeContainer(
         name='sitl_wall_effect_container', namespace='', package='rclcpp_components',

@@ -40,29 +40,33 @@ def generate_launch_description():
     nodes = [
         ComposableNode(
             package='tactile_sim', plugin='tactile_sim::TactileSimComponent', name='tactile_sim',
-            parameters=[{'scenario': LaunchConfiguration('scenario'),
-                         'seed': LaunchConfiguration('seed'),
-                         'real_time_factor': ParameterValue(
-                             LaunchConfiguration('real_time_factor'), value_type=float),
-                         # start the world when the controller (loaded last) is up
-                         'wait_for_publisher': '/cmd_hover',
-                         # hold t = 0 until these topics have a subscriber in another
-                         # process (e.g. a recorder), comma-separated; '' starts at once
-                         'wait_for_subscribers': ParameterValue(
-                             LaunchConfiguration('wait_for_subscribers'), value_type=str)}],
+            parameters=launch_common.parameters(
+                {'scenario': LaunchConfiguration('scenario'),
+                 'seed': LaunchConfiguration('seed'),
+                 'real_time_factor': ParameterValue(
+                     LaunchConfiguration('real_time_factor'), value_type=float),
+                 # start the world when the controller (loaded last) is up
+                 'wait_for_publisher': '/cmd_hover',
+                 # hold t = 0 until these topics have a subscriber in another
+                 # process (e.g. a recorder), comma-separated; '' starts at once
+                 'wait_for_subscribers': ParameterValue(
+                     LaunchConfiguration('wait_for_subscribers'), value_type=str)}),
             extra_arguments=intra),
     ]
     for side in ('left', 'right'):
         nodes.append(ComposableNode(
             package='tdorc_filter', plugin='tdorc_filter::TdorcFilterComponent', name='tdorc_filter',
-            namespace='whisker/' + side, parameters=[config('tdorc_filter'), sim_time],
+            namespace='whisker/' + side, parameters=launch_common.parameters(
+                config('tdorc_filter'), sim_time),
             extra_arguments=intra))
     nodes.append(ComposableNode(
         package='tactile_depth', plugin='tactile_depth::TactileDepthComponent', name='tactile_depth',
-        parameters=[config('tactile_depth'), sim_time], extra_arguments=intra))
+        parameters=launch_common.parameters(
+            config('tactile_depth'), sim_time), extra_arguments=intra))
     nodes.append(ComposableNode(
         package='tactile_fsm', plugin='tactile_fsm::WhiskerFsmComponent', name='whisker_fsm',
-        parameters=[config('tactile_fsm'), sim_time], extra_arguments=intra))
+        parameters=launch_common.parameters(
+            config('tactile_fsm'), sim_time), extra_arguments=intra))
     return LaunchDescription([
         DeclareLaunchArgument('scenario', default_value=os.path.join(
             CONFIG_DIR, 'scenarios', 'whisker_three_baffles_fsm.yaml'),

@@ -42,30 +42,34 @@ def generate_launch_description():
     nodes = [
         ComposableNode(
             package='tactile_sim', plugin='tactile_sim::TactileSimComponent', name='tactile_sim',
-            parameters=[{'scenario': LaunchConfiguration('scenario'),
-                         'seed': LaunchConfiguration('seed'),
-                         'real_time_factor': ParameterValue(
-                             LaunchConfiguration('real_time_factor'), value_type=float),
-                         # start the world when the controller (loaded last) is up
-                         'wait_for_publisher': '/cmd_position',
-                         # hold t = 0 until these topics have a subscriber in another
-                         # process (e.g. a recorder), comma-separated; '' starts at once
-                         'wait_for_subscribers': ParameterValue(
-                             LaunchConfiguration('wait_for_subscribers'), value_type=str)}],
+            parameters=launch_common.parameters(
+                {'scenario': LaunchConfiguration('scenario'),
+                 'seed': LaunchConfiguration('seed'),
+                 'real_time_factor': ParameterValue(
+                     LaunchConfiguration('real_time_factor'), value_type=float),
+                 # start the world when the controller (loaded last) is up
+                 'wait_for_publisher': '/cmd_position',
+                 # hold t = 0 until these topics have a subscriber in another
+                 # process (e.g. a recorder), comma-separated; '' starts at once
+                 'wait_for_subscribers': ParameterValue(
+                     LaunchConfiguration('wait_for_subscribers'), value_type=str)}),
             extra_arguments=intra),
         ComposableNode(
             package='xplorer_force_est', plugin='xplorer_force_est::XplorerForceEstComponent',
-            name='xplorer_force_est', parameters=[config('xplorer_force_est'), sim_time],
+            name='xplorer_force_est', parameters=launch_common.parameters(
+                config('xplorer_force_est'), sim_time),
             extra_arguments=intra),
         ComposableNode(
             package='tactile_fsm', plugin='tactile_fsm::XplorerFsmComponent', name='xplorer_fsm',
-            parameters=[config('xplorer_fsm'), sim_time,
-                        {'mission': LaunchConfiguration('mission')}],
+            parameters=launch_common.parameters(
+                config('xplorer_fsm'), sim_time,
+                {'mission': LaunchConfiguration('mission')}),
             extra_arguments=intra),
         ComposableNode(
             package='mapping_pcl', plugin='mapping_pcl::XplorerMapComponent', name='xplorer_mapping',
-            parameters=[config('xplorer_mapping'), sim_time,
-                        {'ply_file': LaunchConfiguration('ply_file')}],
+            parameters=launch_common.parameters(
+                config('xplorer_mapping'), sim_time,
+                {'ply_file': LaunchConfiguration('ply_file')}),
             extra_arguments=intra),
     ]
     return LaunchDescription([

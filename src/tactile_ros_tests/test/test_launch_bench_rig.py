@@ -173,7 +173,7 @@ def test_bench_rig_tdorc_params_override_changes_the_signal(deck, tmp_path):
     assert window == 20
 
 
-def test_bench_rig_bad_parameter_stops_the_launch_naming_key_and_reason(deck, tmp_path):
+def test_bench_rig_bad_parameter_stops_the_launch_naming_file_key_and_reason(deck, tmp_path):
     params = tdorc_file(tmp_path, window=1)
     with Launch('bench_rig.launch.py', [f'left_device:={deck.left_device}',
                                         f'right_device:={deck.right_device}',
@@ -185,6 +185,24 @@ def test_bench_rig_bad_parameter_stops_the_launch_naming_key_and_reason(deck, tm
     assert code != 0
     assert 'a node failed to start' in out
     assert 'tdorc_filter' in out and 'window' in out and 'got 1' in out, out[-3000:]
+    # The file the value came from (ros2 launch reads it and hands the node plain values;
+    # the launch file tells the node which file that was).
+    assert f'/whisker/left/tdorc_filter from {params}: tdorc_filter.ros__parameters.window: ' \
+        in out, out[-3000:]
+
+
+def test_bench_rig_bad_launch_argument_stops_the_launch_naming_the_argument(deck, tmp_path):
+    # config/whisker_driver.yaml sets device too: the launch argument overrides it, and the
+    # error says so instead of blaming the file.
+    with Launch('bench_rig.launch.py', ['left_device:=123', f'right_device:={deck.right_device}'],
+                tmp_path / 'launch.log') as launch:
+        code = launch.wait_exit(60)
+        out = launch.output()
+    assert code not in (None, 0), f'launch exit {code}:\n{out[-3000:]}'
+    assert 'a node failed to start' in out
+    assert ('/whisker/left/whisker_driver from the launch file (launch argument left_device): '
+            'whisker_driver.ros__parameters.device: is a integer (123), expected a string') in out, \
+        out[-3000:]
 
 
 def test_bench_rig_missing_device_stops_the_launch_naming_it(tmp_path):

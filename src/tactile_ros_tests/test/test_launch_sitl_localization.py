@@ -67,7 +67,7 @@ def test_sitl_localization_results_per_moment_sample(tmp_path):
     assert params == {'possibilistic': True, 'beam.youngs_modulus': 52.0e9}
 
 
-def test_sitl_localization_bad_parameter_type_stops_the_launch(tmp_path):
+def test_sitl_localization_bad_parameter_type_stops_the_launch_naming_the_file(tmp_path):
     bad = tmp_path / 'bad.yaml'
     text = (CONFIG_DIR / 'whisker_localization.yaml').read_text()
     assert 'beam.youngs_modulus: 52.0e+9' in text
@@ -79,3 +79,5 @@ def test_sitl_localization_bad_parameter_type_stops_the_launch(tmp_path):
     assert code not in (None, 0), f'launch exit {code}:\n{out[-3000:]}'
     assert 'a node failed to start' in out
     assert 'beam.youngs_modulus' in out and 'expected a double' in out and 'YAML 1.1' in out, out[-3000:]
+    assert f'/whisker_localization from {bad}: whisker_localization.ros__parameters.beam.youngs_modulus: ' \
+        'is a string (52.0e9), expected a double' in out, out[-3000:]
