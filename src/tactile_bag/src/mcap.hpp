@@ -31,6 +31,12 @@ struct WriterConfig {
   uint64_t chunk_size = 768 * 1024;   ///< uncompressed bytes per chunk (mcap's default)
   int compression_level = 1;
   bool chunk_crc = true;              ///< CRC-32 of every chunk's uncompressed records
+  /// CRC-32 of the whole data section in the Data End record. Off by default, as in the
+  /// mcap C++ library rosbag2's mcap plugin uses (McapWriterOptions::enableDataCRC = false):
+  /// every message is already covered by its chunk's CRC, and a second pass over the
+  /// whole recording costs as much as the chunk CRCs themselves. 0 in the file means
+  /// "not computed" (mcap specification, Data End).
+  bool data_crc = false;
 };
 
 /// Buffered writer: records go to an in-memory chunk; a full chunk (or flush()) is

@@ -55,7 +55,7 @@ FileWriter::~FileWriter() {
 void FileWriter::fail(const std::string& what) const { throw BagError(path_ + ": " + what); }
 
 void FileWriter::emit(const std::vector<uint8_t>& bytes) {
-  data_crc_ = codec::crc32(data_crc_, bytes.data(), bytes.size());
+  if (cfg_.data_crc) data_crc_ = codec::crc32(data_crc_, bytes.data(), bytes.size());
   size_t done = 0;
   while (done < bytes.size()) {
     const ssize_t n = ::write(fd_, bytes.data() + done, bytes.size() - done);
@@ -234,8 +234,8 @@ void FileWriter::close() {
     const size_t at = begin_record(out_, kDataEnd);
     put<uint32_t>(out_, 0);
     end_record(out_, at);
-    // The data section CRC covers everything before the Data End record.
-    std::memcpy(out_.data() + 9, &data_crc_, 4);
+    // The data section CRC covers everything before the Data End record (0: not computed).
+    if (cfg_.data_crc) std::memcpy(out_.data() + 9, &data_crc_, 4);
   }
   emit(out_);
   // Summary section.
