@@ -11,6 +11,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace tactile_bag::mcap {
@@ -70,6 +71,8 @@ class FileWriter {
     std::map<uint16_t, uint64_t> index_offsets;
   };
   void emit(const std::vector<uint8_t>& bytes);
+  /// Writes the pieces in order with writev (a chunk is not copied behind its header).
+  void emit_pieces(const std::vector<std::pair<const uint8_t*, size_t>>& pieces);
   void in_chunk_channel(uint16_t channel_id);
   [[noreturn]] void fail(const std::string& what) const;
 
@@ -80,7 +83,7 @@ class FileWriter {
   uint32_t data_crc_ = 0;
   std::vector<Schema> schemas_;
   std::vector<Channel> channels_;
-  std::vector<uint8_t> chunk_, compressed_, out_;
+  std::vector<uint8_t> chunk_, compressed_, out_, tail_;
   uint64_t chunk_start_ = 0, chunk_end_ = 0;
   bool chunk_empty_ = true;
   std::vector<std::vector<uint64_t>> chunk_index_;   // per channel: (time, offset) pairs
