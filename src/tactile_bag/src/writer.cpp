@@ -504,9 +504,26 @@ std::string Writer::metadata_yaml_locked(bool with_root) const {
   return std::string(e.c_str()) + "\n";
 }
 
-void Writer::write_metadata_locked() {
+void Writer::write_metadata_locked(const std::string* inner) {
   metadata_dirty_ = false;
-  const std::string text = metadata_yaml_locked(true);
+  // With the storage's copy (`inner`, emitted without the root key) at hand, the file's
+  // text is that block under the root key: block-style YAML nests by indentation alone,
+  // so the bytes equal an emit with the root (the emitter is the slowest step of close()).
+  std::string text;
+  if (inner != nullptr) {
+    text = "rosbag2_bagfile_information:\n";
+    text.reserve(inner->size() + inner->size() / 8 + 40);
+    size_t pos = 0;
+    while (pos < inner->size()) {
+      const size_t eol = inner->find('\n', pos);
+      const size_t end = eol == std::string::npos ? inner->size() : eol + 1;
+      if (end - pos > 1) text += "  ";  // empty lines stay empty
+      text.append(*inner, pos, end - pos);
+      pos = end;
+    }
+  } else {
+    text = metadata_yaml_locked(true);
+  }
   const fs::path final_path = fs::path(dir_) / "metadata.yaml";
   const fs::path tmp = fs::path(dir_) / ".metadata.yaml.tmp";
   {
@@ -531,23 +548,23 @@ void Writer::close() {
   }
   std::lock_guard<std::mutex> lk(mu_);
   if (mcap_ != nullptr) {
-    std::string error;
+    std::string error, inner;
     try {
       mcap_->flush();
       // What rosbag2's mcap plugin stores: the final metadata and the distro.
-      mcap_->set_metadata("rosbag2", {{"serialized_metadata", metadata_yaml_locked(false)},
-                                      {"ros_distro", opt_.ros_distro}});
+      inner = metadata_yaml_locked(false);
+      mcap_->set_metadata("rosbag2", {{"serialized_metadata", inner}, {"ros_distro", opt_.ros_distro}});
       mcap_->close();
     } catch (const std::exception& e) {
       error = e.what();
     }
     mcap_.reset();
-    write_metadata_locked();
+    write_metadata_locked(inner.empty() ? nullptr : &inner);
     if (!error.empty()) throw BagError(error);
     return;
   }
   if (db_ == nullptr) return;
-  std::string error;
+  std::string error, meta;
   try {
     exec(kIndexSql);
     commit_locked();
@@ -558,7 +575,7 @@ void Writer::close() {
                            -1, &s.s, nullptr) != SQLITE_OK) {
       fail("prepare metadata insert");
     }
-    const std::string meta = metadata_yaml_locked(false);
+    meta = metadata_yaml_locked(false);
     sqlite3_bind_int(s.s, 1, opt_.metadata_version);
     sqlite3_bind_text(s.s, 2, meta.c_str(), -1, SQLITE_TRANSIENT);
     if (sqlite3_step(s.s) != SQLITE_DONE) fail("insert metadata");
@@ -575,7 +592,7 @@ void Writer::close() {
   }
   db_ = nullptr;
   in_txn_ = false;
-  write_metadata_locked();
+  write_metadata_locked(meta.empty() ? nullptr : &meta);
   if (!error.empty()) throw BagError(error);
 }
 

@@ -169,7 +169,7 @@ class Writer {
   void exec(const char* sql);
   void begin_locked();
   void commit_locked();
-  void write_metadata_locked();
+  void write_metadata_locked(const std::string* inner = nullptr);
   std::string metadata_yaml_locked(bool with_root) const;
   void flusher_main();
   [[noreturn]] void fail(const std::string& what) const;
