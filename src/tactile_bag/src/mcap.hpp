@@ -11,6 +11,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace tactile_bag::mcap {
@@ -31,6 +32,12 @@ struct WriterConfig {
   uint64_t chunk_size = 768 * 1024;   ///< uncompressed bytes per chunk (mcap's default)
   int compression_level = 1;
   bool chunk_crc = true;              ///< CRC-32 of every chunk's uncompressed records
+  /// CRC-32 of the whole data section in the Data End record. Off by default, as in the
+  /// mcap C++ library rosbag2's mcap plugin uses (McapWriterOptions::enableDataCRC = false):
+  /// every message is already covered by its chunk's CRC, and a second pass over the
+  /// whole recording costs as much as the chunk CRCs themselves. 0 in the file means
+  /// "not computed" (mcap specification, Data End).
+  bool data_crc = false;
 };
 
 /// Buffered writer: records go to an in-memory chunk; a full chunk (or flush()) is
@@ -64,6 +71,8 @@ class FileWriter {
     std::map<uint16_t, uint64_t> index_offsets;
   };
   void emit(const std::vector<uint8_t>& bytes);
+  /// Writes the pieces in order with writev (a chunk is not copied behind its header).
+  void emit_pieces(const std::vector<std::pair<const uint8_t*, size_t>>& pieces);
   void in_chunk_channel(uint16_t channel_id);
   [[noreturn]] void fail(const std::string& what) const;
 
@@ -74,7 +83,7 @@ class FileWriter {
   uint32_t data_crc_ = 0;
   std::vector<Schema> schemas_;
   std::vector<Channel> channels_;
-  std::vector<uint8_t> chunk_, compressed_, out_;
+  std::vector<uint8_t> chunk_, compressed_, out_, tail_;
   uint64_t chunk_start_ = 0, chunk_end_ = 0;
   bool chunk_empty_ = true;
   std::vector<std::vector<uint64_t>> chunk_index_;   // per channel: (time, offset) pairs

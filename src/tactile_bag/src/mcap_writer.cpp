@@ -1,9 +1,12 @@
-// MCAP writer (see mcap.hpp). One write() syscall per chunk; nothing per message but a
-// memcpy into the chunk buffer and an index entry.
+// MCAP writer (see mcap.hpp). One writev() syscall per chunk (header, records, message
+// indexes); nothing per message but a memcpy into the chunk buffer and an index entry.
 #include <fcntl.h>
+#include <sys/uio.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <climits>
 #include <cstring>
 
 #include "codec.hpp"
@@ -54,8 +57,39 @@ FileWriter::~FileWriter() {
 
 void FileWriter::fail(const std::string& what) const { throw BagError(path_ + ": " + what); }
 
+void FileWriter::emit_pieces(const std::vector<std::pair<const uint8_t*, size_t>>& pieces) {
+  std::vector<iovec> iov;
+  size_t total = 0;
+  for (const auto& [p, n] : pieces) {
+    if (n == 0) continue;
+    if (cfg_.data_crc) data_crc_ = codec::crc32(data_crc_, p, n);
+    iov.push_back({const_cast<uint8_t*>(p), n});
+    total += n;
+  }
+  size_t done = 0, first = 0;
+  while (first < iov.size()) {
+    const ssize_t n = ::writev(fd_, iov.data() + first, static_cast<int>(std::min<size_t>(iov.size() - first, IOV_MAX)));
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      fail("write at byte " + std::to_string(offset_ + done) + ": " + std::strerror(errno));
+    }
+    done += static_cast<size_t>(n);
+    // Drop the pieces written in full, advance into a partly written one.
+    size_t left = static_cast<size_t>(n);
+    while (first < iov.size() && left >= iov[first].iov_len) {
+      left -= iov[first].iov_len;
+      ++first;
+    }
+    if (first < iov.size() && left > 0) {
+      iov[first].iov_base = static_cast<uint8_t*>(iov[first].iov_base) + left;
+      iov[first].iov_len -= left;
+    }
+  }
+  offset_ += total;
+}
+
 void FileWriter::emit(const std::vector<uint8_t>& bytes) {
-  data_crc_ = codec::crc32(data_crc_, bytes.data(), bytes.size());
+  if (cfg_.data_crc) data_crc_ = codec::crc32(data_crc_, bytes.data(), bytes.size());
   size_t done = 0;
   while (done < bytes.size()) {
     const ssize_t n = ::write(fd_, bytes.data() + done, bytes.size() - done);
@@ -176,8 +210,8 @@ void FileWriter::flush() {
   ci.offset = offset_;
   ci.compressed = records->size();
   ci.uncompressed = chunk_.size();
+  // Chunk record header; the records follow it in the file without being copied.
   out_.clear();
-  out_.reserve(records->size() + 128);
   const size_t at = begin_record(out_, kChunk);
   put<uint64_t>(out_, chunk_start_);
   put<uint64_t>(out_, chunk_end_);
@@ -185,24 +219,26 @@ void FileWriter::flush() {
   put<uint32_t>(out_, crc);
   put_str(out_, cfg_.compression);
   put<uint64_t>(out_, records->size());
-  out_.insert(out_.end(), records->begin(), records->end());
-  end_record(out_, at);
-  ci.length = out_.size();
+  const uint64_t chunk_len = out_.size() - at - 8 + records->size();
+  std::memcpy(out_.data() + at, &chunk_len, 8);
+  ci.length = out_.size() + records->size();
+  // Message indexes, after the chunk.
+  tail_.clear();
   for (uint16_t ch = 0; ch < chunk_index_.size(); ++ch) {
     auto& idx = chunk_index_[ch];
     if (idx.empty()) continue;
-    ci.index_offsets[ch] = offset_ + out_.size();
-    const size_t mi = begin_record(out_, kMessageIndex);
-    put<uint16_t>(out_, ch);
-    put<uint32_t>(out_, static_cast<uint32_t>(idx.size() * 8));
-    const size_t n = out_.size();
-    out_.resize(n + idx.size() * 8);
-    std::memcpy(out_.data() + n, idx.data(), idx.size() * 8);
-    end_record(out_, mi);
+    ci.index_offsets[ch] = offset_ + ci.length + tail_.size();
+    const size_t mi = begin_record(tail_, kMessageIndex);
+    put<uint16_t>(tail_, ch);
+    put<uint32_t>(tail_, static_cast<uint32_t>(idx.size() * 8));
+    const size_t n = tail_.size();
+    tail_.resize(n + idx.size() * 8);
+    std::memcpy(tail_.data() + n, idx.data(), idx.size() * 8);
+    end_record(tail_, mi);
     idx.clear();
   }
-  ci.index_length = out_.size() - ci.length;
-  emit(out_);
+  ci.index_length = tail_.size();
+  emit_pieces({{out_.data(), out_.size()}, {records->data(), records->size()}, {tail_.data(), tail_.size()}});
   chunk_indexes_.push_back(std::move(ci));
   chunk_.clear();
   chunk_empty_ = true;
@@ -234,8 +270,8 @@ void FileWriter::close() {
     const size_t at = begin_record(out_, kDataEnd);
     put<uint32_t>(out_, 0);
     end_record(out_, at);
-    // The data section CRC covers everything before the Data End record.
-    std::memcpy(out_.data() + 9, &data_crc_, 4);
+    // The data section CRC covers everything before the Data End record (0: not computed).
+    if (cfg_.data_crc) std::memcpy(out_.data() + 9, &data_crc_, 4);
   }
   emit(out_);
   // Summary section.

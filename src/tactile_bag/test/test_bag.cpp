@@ -150,6 +150,39 @@ TEST(Bag, RoundTripInterleavedTopicsSortedByTimestamp) {
   EXPECT_THROW(r.set_topic_filter({"/nope"}), BagError);
 }
 
+// Writes by topic number (the recorder's path) equal writes by name, in both storages;
+// numbers follow creation order and a second create_topic returns the same number.
+TEST(Bag, WriteByTopicNumberEqualsWriteByName) {
+  for (const std::string storage : {"sqlite3", "mcap"}) {
+    TempDir tmp;
+    tactile_bag::WriterOptions o;
+    o.storage = storage;
+    const std::string dir = tmp.sub("ids_" + storage);
+    {
+      Writer w(o);
+      w.open(dir);
+      EXPECT_EQ(w.create_topic(topic("/a")), 0u);
+      EXPECT_EQ(w.create_topic(topic("/b", "geometry_msgs/msg/Vector3")), 1u);
+      EXPECT_EQ(w.create_topic(topic("/a")), 0u);
+      EXPECT_EQ(w.topic_id("/b"), 1u);
+      expect_error([&] { w.topic_id("/zz"); }, {"/zz", "has not been created"});
+      expect_error([&] { w.write(Writer::TopicId{2}, 1, nullptr, 0); }, {"topic number 2", "2 topics"});
+      w.write(Writer::TopicId{1}, 10, bytes({1, 2}).data(), 2);
+      w.write("/a", 20, bytes({3}));
+      w.write(w.topic_id("/a"), 30, bytes({4, 5, 6}).data(), 3);
+      w.close();
+    }
+    Reader r(dir);
+    const auto all = read_all(r);
+    ASSERT_EQ(all.size(), 3u) << storage;
+    EXPECT_EQ(all[0].topic, "/b");
+    EXPECT_EQ(all[0].data, bytes({1, 2}));
+    EXPECT_EQ(all[1].topic, "/a");
+    EXPECT_EQ(all[2].timestamp_ns, 30);
+    EXPECT_EQ(all[2].data, bytes({4, 5, 6}));
+  }
+}
+
 TEST(Bag, EmptyBagAndTopicWithoutMessages) {
   TempDir tmp;
   {

@@ -18,17 +18,19 @@ tactile_bag::WriterOptions& BagRecorder::default_options() {
 
 BagRecorder::BagRecorder(const std::string& dir) : writer_(default_options()) { writer_.open(dir); }
 
-void BagRecorder::on_message(const std::string& topic, const std::string& type_name,
-                             const std::string& definition, int64_t stamp_ns,
-                             const std::function<std::vector<uint8_t>()>& serialize) {
-  if (!writer_.has_topic(topic)) {
+void BagRecorder::on_message(const TapTopic& topic, int64_t stamp_ns,
+                             const std::function<void(std::vector<uint8_t>&)>& serialize_into) {
+  auto it = topics_.find(&topic.name);
+  if (it == topics_.end()) {
     tactile_bag::TopicInfo info;
-    info.name = topic;
-    info.type = type_name;
-    info.type_definition = definition;
-    writer_.create_topic(info);
+    info.name = topic.name;
+    info.type = topic.type_name;
+    info.type_definition = topic.definition;
+    it = topics_.emplace(&topic.name, Topic{writer_.create_topic(info), {}}).first;
   }
-  writer_.write(topic, stamp_ns, serialize());
+  Topic& t = it->second;
+  serialize_into(t.buffer);
+  writer_.write(t.id, stamp_ns, t.buffer.data(), t.buffer.size());
 }
 
 Host::Host(std::string config_dir) : config_dir_(std::move(config_dir)) {}

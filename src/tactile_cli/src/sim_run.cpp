@@ -1,5 +1,6 @@
 #include "tactile_cli/sim_run.hpp"
 
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -37,17 +38,33 @@ void write_text(const fs::path& path, const std::string& text) {
 }
 
 void write_trajectory_csv(const fs::path& path, const tactile_sim::SimLogic& sim) {
-  std::ostringstream os;
-  os << "t,x,y,z,yaw,vx,vy,vz,est_x,est_y,est_z,est_yaw\n";
-  os << std::setprecision(9);
+  // std::to_chars with a precision formats as printf's %.9g, which is what an ostream with
+  // setprecision(9) writes, at a fraction of the cost (7,500 rows per 75 s run).
+  std::string text = "t,x,y,z,yaw,vx,vy,vz,est_x,est_y,est_z,est_yaw\n";
+  text.reserve(sim.trajectory().size() * 160 + text.size());
+  char buf[32];
+  auto field = [&](double v, char sep) {
+    const auto r = std::to_chars(buf, buf + sizeof buf, v, std::chars_format::general, 9);
+    text.append(buf, r.ptr);
+    text.push_back(sep);
+  };
   for (const auto& p : sim.trajectory()) {
     const auto& x = p.truth;
     const auto& e = p.estimate;
-    os << p.t << ',' << x.position.x() << ',' << x.position.y() << ',' << x.position.z() << ',' << x.yaw()
-       << ',' << x.velocity.x() << ',' << x.velocity.y() << ',' << x.velocity.z() << ',' << e.position.x()
-       << ',' << e.position.y() << ',' << e.position.z() << ',' << e.yaw() << '\n';
+    field(p.t, ',');
+    field(x.position.x(), ',');
+    field(x.position.y(), ',');
+    field(x.position.z(), ',');
+    field(x.yaw(), ',');
+    field(x.velocity.x(), ',');
+    field(x.velocity.y(), ',');
+    field(x.velocity.z(), ',');
+    field(e.position.x(), ',');
+    field(e.position.y(), ',');
+    field(e.position.z(), ',');
+    field(e.yaw(), '\n');
   }
-  write_text(path, os.str());
+  write_text(path, text);
 }
 
 struct Progress {

@@ -54,10 +54,13 @@ TEST(Executor, StartsAtSetTime) {
 namespace {
 struct CountingTap : tactile_cli::BusTap {
   std::vector<std::string> seen;
-  void on_message(const std::string& topic, const std::string& type, const std::string& def, int64_t t,
-                  const std::function<std::vector<uint8_t>()>& ser) override {
-    seen.push_back(topic + " " + type + " " + std::to_string(t) + " " + std::to_string(ser().size()));
-    EXPECT_FALSE(def.empty());
+  std::vector<uint8_t> buffer{9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9, 9};
+  void on_message(const tactile_cli::TapTopic& topic, int64_t t,
+                  const std::function<void(std::vector<uint8_t>&)>& ser) override {
+    ser(buffer);  // replaces the old contents
+    seen.push_back(topic.name + " " + topic.type_name + " " + std::to_string(t) + " " +
+                   std::to_string(buffer.size()));
+    EXPECT_FALSE(topic.definition.empty());
   }
 };
 }  // namespace
@@ -80,6 +83,8 @@ TEST(Bus, DeliversInSubscriptionOrderAndTapsSerialize) {
   // 4-byte encapsulation header + 8-byte double.
   ASSERT_EQ(tap.seen.size(), 1u);
   EXPECT_EQ(tap.seen[0], "/x std_msgs/msg/Float64 7 12");
+  // The tap's buffer held 20 stale bytes: serialize_into replaces them, bytes as serialize().
+  EXPECT_EQ(tap.buffer, tactile_msgs::cdr::serialize(m));
   EXPECT_EQ(bus.published_counts().at("/x"), 1u);
 }
 

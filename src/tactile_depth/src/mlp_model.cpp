@@ -64,19 +64,35 @@ MlpModel::MlpModel(const std::array<double, 3>& input_mean, const std::array<dou
   if (!std::isfinite(offset_)) invalid("output_offset", "must be finite, got " + num(offset_));
   buf_a_.assign(widest, 0.0);
   buf_b_.assign(widest, 0.0);
+  for (const DenseLayer& l : layers_) {
+    std::vector<double> t(l.weights.size());
+    for (int o = 0; o < l.out; ++o) {
+      for (int i = 0; i < l.in; ++i) {
+        t[static_cast<std::size_t>(i) * l.out + o] = l.weights[static_cast<std::size_t>(o) * l.in + i];
+      }
+    }
+    weights_t_.push_back(std::move(t));
+  }
 }
 
 double MlpModel::predict(const std::array<double, 3>& sp) const {
   double* x = buf_a_.data();
   double* y = buf_b_.data();
   for (int i = 0; i < kInputs; ++i) x[i] = (sp[i] - mean_[i]) / std_[i];  // 000 eq. 12
-  for (const DenseLayer& l : layers_) {
-    const double* w = l.weights.data();
-    for (int o = 0; o < l.out; ++o) {  // W^k h^(k-1) + b^k (000 eq. 13, 14)
-      const double* row = w + static_cast<std::size_t>(o) * static_cast<std::size_t>(l.in);
-      double acc = l.bias[static_cast<std::size_t>(o)];
-      for (int i = 0; i < l.in; ++i) acc += row[i] * x[i];
-      y[o] = (l.activation == Activation::kRelu && acc < 0.0) ? 0.0 : acc;  // ReLU (eq. 13) / linear (eq. 14)
+  for (std::size_t k = 0; k < layers_.size(); ++k) {
+    const DenseLayer& l = layers_[k];
+    const double* wt = weights_t_[k].data();
+    // W^k h^(k-1) + b^k (000 eq. 13, 14). Every output sums bias + w_0 x_0 + w_1 x_1 + ...
+    // in this order, as a dot product per output row would: the loops are interchanged
+    // so the compiler vectorises over outputs, and the results are bit-identical.
+    for (int o = 0; o < l.out; ++o) y[o] = l.bias[static_cast<std::size_t>(o)];
+    for (int i = 0; i < l.in; ++i) {
+      const double xi = x[i];
+      const double* col = wt + static_cast<std::size_t>(i) * static_cast<std::size_t>(l.out);
+      for (int o = 0; o < l.out; ++o) y[o] += col[o] * xi;
+    }
+    if (l.activation == Activation::kRelu) {
+      for (int o = 0; o < l.out; ++o) y[o] = y[o] < 0.0 ? 0.0 : y[o];  // ReLU (eq. 13); linear (eq. 14) otherwise
     }
     std::swap(x, y);
   }
@@ -92,6 +108,7 @@ std::size_t MlpModel::parameter_count() const {
 std::size_t MlpModel::memory_bytes() const {
   std::size_t n = sizeof(*this);
   for (const DenseLayer& l : layers_) n += sizeof(DenseLayer) + (l.weights.capacity() + l.bias.capacity()) * sizeof(double);
+  for (const auto& t : weights_t_) n += sizeof(t) + t.capacity() * sizeof(double);
   n += (buf_a_.capacity() + buf_b_.capacity()) * sizeof(double);
   return n;
 }

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <random>
 #include <string>
+#include <vector>
 #include <unistd.h>
 
 #include "tactile_depth/mlp_model.hpp"
@@ -125,6 +126,46 @@ TEST(MlpModel, OnboardShapeParses) {
   // 3*32+32 + 2*(32*32+32) + 32+1 + 3 + 3 + 2
   EXPECT_EQ(f.left.parameter_count(), 2281u);
   EXPECT_EQ(f.left.parameter_bytes_float32(), 9124u);
+}
+
+// predict() runs its loops over outputs (vectorised); each output must still sum
+// bias + w_0 x_0 + w_1 x_1 + ... in input order, so the result equals, bit for bit, the
+// dot product per output row written out here (000 eq. 12-14) on random networks of
+// the onboard shape (3-32-32-32-1) and odd widths, with negative pre-activations.
+TEST(MlpModel, BitIdenticalToRowMajorDotProducts) {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (const std::vector<int>& widths : {std::vector<int>{3, 32, 32, 32, 1}, std::vector<int>{3, 7, 5, 1},
+                                         std::vector<int>{3, 1}}) {
+    std::vector<DenseLayer> layers;
+    for (size_t k = 0; k + 1 < widths.size(); ++k) {
+      DenseLayer l;
+      l.in = widths[k];
+      l.out = widths[k + 1];
+      for (int j = 0; j < l.in * l.out; ++j) l.weights.push_back(n(rng));
+      for (int j = 0; j < l.out; ++j) l.bias.push_back(0.3 * n(rng));
+      l.activation = k + 2 < widths.size() ? Activation::kRelu : Activation::kIdentity;
+      layers.push_back(l);
+    }
+    const std::array<double, 3> mean{{1.0, -2.0, 0.5}}, sd{{3.0, 0.7, 2.0}};
+    const MlpModel m(mean, sd, layers, 0.01, 0.02);
+    for (int t = 0; t < 200; ++t) {
+      const std::array<double, 3> sp{{20 * n(rng), 20 * n(rng), 20 * n(rng)}};
+      std::vector<double> x(3);
+      for (int i = 0; i < 3; ++i) x[i] = (sp[i] - mean[i]) / sd[i];
+      for (const DenseLayer& l : layers) {
+        std::vector<double> y(l.out);
+        for (int o = 0; o < l.out; ++o) {
+          double acc = l.bias[o];
+          for (int i = 0; i < l.in; ++i) acc += l.weights[o * l.in + i] * x[i];
+          y[o] = (l.activation == Activation::kRelu && acc < 0.0) ? 0.0 : acc;
+        }
+        x = y;
+      }
+      const double expected = 0.01 * x[0] + 0.02;
+      EXPECT_EQ(m.predict(sp), expected) << "widths " << widths.size() << " trial " << t;
+    }
+  }
 }
 
 TEST(MlpModel, ConstructorValidates) {

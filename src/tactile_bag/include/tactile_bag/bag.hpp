@@ -121,9 +121,13 @@ class Writer {
   void open(const std::string& dir);
   bool is_open() const { return db_ != nullptr || mcap_ != nullptr; }
 
+  /// A created topic by number, for writes without a name lookup (a recorder's hot path).
+  /// Numbers are given in creation order from 0 and stay valid until the next open().
+  using TopicId = std::size_t;
+
   /// Register a topic; a second call with the same name and type is a no-op, with
-  /// another type an error.
-  void create_topic(const TopicInfo& topic);
+  /// another type an error. Returns the topic's number.
+  TopicId create_topic(const TopicInfo& topic);
   bool has_topic(const std::string& name) const;
   /// Type of a created topic; empty if the topic does not exist.
   std::string topic_type(const std::string& name) const;
@@ -132,6 +136,9 @@ class Writer {
   void write(const std::string& topic, int64_t timestamp_ns, const std::vector<uint8_t>& data) {
     write(topic, timestamp_ns, data.data(), data.size());
   }
+  /// Number of a created topic; throws BagError if it has not been created.
+  TopicId topic_id(const std::string& name) const;
+  void write(TopicId topic, int64_t timestamp_ns, const uint8_t* data, size_t size);
   /// Typed write (defined in tactile_bag/typed.hpp): serialises with tactile_msgs CDR
   /// and creates the topic from MessageTraits<T> on first use.
   template <class T>
@@ -153,13 +160,16 @@ class Writer {
     int64_t id = 0;
     uint64_t count = 0;
     bool drop_range_variance = false;  ///< Humble/Iron bag: cut Range's trailing variance
+    std::vector<QosProfile> qos;       ///< offered_qos_profiles, parsed once
   };
   void prepare_topic_locked(TopicState& st) const;
+  void write_locked(TopicState& st, int64_t timestamp_ns, const uint8_t* data, size_t size);
   void write_mcap_locked(TopicState& st, int64_t timestamp_ns, const uint8_t* data, size_t size);
+  bool flush_due_locked();
   void exec(const char* sql);
   void begin_locked();
   void commit_locked();
-  void write_metadata_locked();
+  void write_metadata_locked(const std::string* inner = nullptr);
   std::string metadata_yaml_locked(bool with_root) const;
   void flusher_main();
   [[noreturn]] void fail(const std::string& what) const;
@@ -172,8 +182,11 @@ class Writer {
   bool hash_types_ = false;
   std::map<std::string, TopicState> topics_;
   std::vector<std::string> topic_order_;
+  std::vector<TopicState*> by_id_;  // TopicId -> state (std::map nodes do not move)
+  uint32_t writes_since_clock_ = 0;
   std::map<std::string, bool> defined_types_;
   bool in_txn_ = false;
+  bool metadata_dirty_ = false;  ///< a topic was created since metadata.yaml was written
   uint64_t count_ = 0;
   int64_t min_ts_ = 0, max_ts_ = 0;
   std::chrono::steady_clock::time_point last_commit_;

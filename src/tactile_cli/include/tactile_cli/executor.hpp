@@ -10,6 +10,7 @@
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <typeindex>
 #include <utility>
 #include <vector>
@@ -22,61 +23,89 @@ namespace tactile_cli {
 /// "pressure") -> "/whisker/left/pressure"; absolute topics are kept.
 std::string resolve_topic(const std::string& ns, const std::string& topic);
 
+/// A topic as a tap sees it: name, type and definition, stable for the bus's lifetime.
+struct TapTopic {
+  const std::string& name;
+  const char* type_name;        ///< "pkg/msg/Type"
+  const std::string& definition;  ///< ros2msg definition text
+};
+
 /// Receives every message published on the bus (e.g. the bag recorder).
 class BusTap {
  public:
   virtual ~BusTap() = default;
-  /// `serialize` produces the CDR bytes of the message on demand.
-  virtual void on_message(const std::string& topic, const std::string& type_name,
-                          const std::string& definition, int64_t stamp_ns,
-                          const std::function<std::vector<uint8_t>()>& serialize) = 0;
+  /// `serialize_into` writes the CDR bytes of the message into the buffer it is given
+  /// (replacing its contents, reusing its capacity), on demand.
+  virtual void on_message(const TapTopic& topic, int64_t stamp_ns,
+                          const std::function<void(std::vector<uint8_t>&)>& serialize_into) = 0;
 };
 
 /// Typed publish/subscribe by topic name. Delivery is synchronous and in
 /// subscription order, so a run is deterministic.
+///
+/// Per message a publish costs one topic lookup (no allocation: topic names are
+/// looked up as string_views) and, with a tap, one serialization into a buffer the
+/// tap reuses; a simulated run publishes ~800 messages per simulated second.
 class Bus {
  public:
   template <class T>
   using Callback = std::function<void(const T&)>;
 
   template <class T>
-  void subscribe(const std::string& topic, Callback<T> cb) {
-    check_type<T>(topic);
-    subscribers_[topic].push_back([cb = std::move(cb)](const void* msg) {
+  void subscribe(std::string_view topic, Callback<T> cb) {
+    slot<T>(topic).subscribers.push_back([cb = std::move(cb)](const void* msg) {
       cb(*static_cast<const T*>(msg));
     });
   }
 
   /// Publishes `msg` at simulated time `now_ns` (the bag timestamp).
   template <class T>
-  void publish(const std::string& topic, const T& msg, int64_t now_ns) {
+  void publish(std::string_view topic, const T& msg, int64_t now_ns) {
     using Traits = tactile_msgs::cdr::MessageTraits<T>;
-    check_type<T>(topic);
-    ++published_[topic];
-    for (auto* tap : taps_) {
-      tap->on_message(topic, Traits::type_name, Traits::definition(), now_ns,
-                      [&msg] { return tactile_msgs::cdr::serialize(msg); });
+    Slot& s = slot<T>(topic);
+    ++s.published;
+    if (!taps_.empty()) {
+      const TapTopic t{s.name, Traits::type_name, Traits::definition()};
+      const std::function<void(std::vector<uint8_t>&)> ser = [&msg](std::vector<uint8_t>& out) {
+        tactile_msgs::cdr::serialize_into(msg, out);
+      };
+      for (auto* tap : taps_) tap->on_message(t, now_ns, ser);
     }
-    auto it = subscribers_.find(topic);
-    if (it == subscribers_.end()) return;
-    for (auto& cb : it->second) cb(&msg);
+    for (auto& cb : s.subscribers) cb(&msg);
   }
 
   void add_tap(BusTap* tap) { taps_.push_back(tap); }
-  const std::map<std::string, uint64_t>& published_counts() const { return published_; }
-
- private:
-  template <class T>
-  void check_type(const std::string& topic) {
-    auto [it, inserted] = types_.emplace(topic, std::type_index(typeid(T)));
-    if (!inserted && it->second != std::type_index(typeid(T))) {
-      throw std::logic_error("topic " + topic + " is used with two different message types");
+  /// Messages published per topic (topics that were only subscribed are not listed).
+  std::map<std::string, uint64_t> published_counts() const {
+    std::map<std::string, uint64_t> out;
+    for (const auto& [name, s] : slots_) {
+      if (s.published > 0) out.emplace(name, s.published);
     }
+    return out;
   }
 
-  std::map<std::string, std::type_index> types_;
-  std::map<std::string, std::vector<std::function<void(const void*)>>> subscribers_;
-  std::map<std::string, uint64_t> published_;
+ private:
+  struct Slot {
+    std::string name;
+    std::type_index type;
+    uint64_t published = 0;
+    std::vector<std::function<void(const void*)>> subscribers;
+  };
+
+  /// The topic's slot, created on first use; one topic carries one message type.
+  template <class T>
+  Slot& slot(std::string_view topic) {
+    auto it = slots_.find(topic);
+    if (it == slots_.end()) {
+      std::string name(topic);
+      it = slots_.emplace(name, Slot{name, std::type_index(typeid(T)), 0, {}}).first;
+    } else if (it->second.type != std::type_index(typeid(T))) {
+      throw std::logic_error("topic " + std::string(topic) + " is used with two different message types");
+    }
+    return it->second;
+  }
+
+  std::map<std::string, Slot, std::less<>> slots_;  // std::map: slot references stay valid
   std::vector<BusTap*> taps_;
 };
 

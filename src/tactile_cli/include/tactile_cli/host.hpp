@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -24,14 +25,19 @@ class BagRecorder : public BusTap {
   /// Kilted writes: mcap, uncompressed chunks, Kilted layouts and RIHS01 hashes.
   static tactile_bag::WriterOptions& default_options();
   explicit BagRecorder(const std::string& dir);
-  void on_message(const std::string& topic, const std::string& type_name,
-                  const std::string& definition, int64_t stamp_ns,
-                  const std::function<std::vector<uint8_t>()>& serialize) override;
+  void on_message(const TapTopic& topic, int64_t stamp_ns,
+                  const std::function<void(std::vector<uint8_t>&)>& serialize_into) override;
   void close() { writer_.close(); }
   uint64_t message_count() const { return writer_.message_count(); }
 
  private:
   tactile_bag::Writer writer_;
+  /// Bus topic name -> bag topic (created) and its serialization buffer, reused.
+  struct Topic {
+    tactile_bag::Writer::TopicId id = 0;
+    std::vector<uint8_t> buffer;
+  };
+  std::map<const std::string*, Topic> topics_;  // keyed by the bus slot's stable name
 };
 
 /// A summary line of one node instance's counters, for metrics and logs.

@@ -83,6 +83,9 @@ class MlpModel {
   std::array<double, 3> mean_{};
   std::array<double, 3> std_{{1.0, 1.0, 1.0}};
   std::vector<DenseLayer> layers_;
+  /// Each layer's weights transposed (in * out: the weights of input i to every output are
+  /// contiguous), so predict() runs its inner loop over outputs, which vectorises.
+  std::vector<std::vector<double>> weights_t_;
   double scale_ = 1.0;
   double offset_ = 0.0;
   // Activation buffers (ping-pong), sized to the widest layer at construction.

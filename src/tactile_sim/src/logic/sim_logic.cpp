@@ -846,7 +846,8 @@ void SimLogic::step(int64_t now_ns, Outputs& out) {
   started_ = true;
   const double hz = scenario_.physics_rate_hz;
 
-  Outputs raw;
+  Outputs& raw = scratch_;
+  raw.clear();
   vehicle_->sense(k_, hz, now_ns, *arena_, raw, whisker_contacts_);
   const RigidBodyState& truth = vehicle_->truth();
   if (every(k_, hz, 100.0)) {

@@ -130,6 +130,7 @@ class SimLogic {
   int64_t k_ = 0;
   bool started_ = false;
   std::vector<TrajectoryPoint> trajectory_;
+  Outputs scratch_;  ///< step()'s sensor outputs before fault injection, reused (no allocation per step)
   std::vector<CollisionEvent> collisions_;
   std::vector<Vec2> whisker_contacts_;
   FaultCounts fault_counts_;
