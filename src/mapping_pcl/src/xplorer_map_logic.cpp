@@ -31,10 +31,12 @@ ParamMap XplorerMapLogic::default_parameters() {
   const Params d;
   ParamMap m(kNodeName, "defaults");
   m.set("delta_map", d.stamping.delta_map);
+  m.set("delta_map_hold", d.stamping.delta_map_hold);
   m.set("slab_size", std::vector<double>{d.stamping.slab_size.x(), d.stamping.slab_size.y(), d.stamping.slab_size.z()});
   m.set("slab_offset", d.stamping.slab_offset);
   m.set("corner_offset", d.stamping.corner_offset);
   m.set("rate_hz", d.stamping.rate_hz);
+  m.set("corner_release_s", d.stamping.corner_release_s);
   m.set("slab_spacing", d.stamping.slab_spacing);
   m.set("min_flight_height", d.stamping.min_flight_height);
   m.set("normal_from_force", d.stamping.normal_from_force);
@@ -51,6 +53,7 @@ ParamMap XplorerMapLogic::default_parameters() {
   m.set("stamp_states", d.stamp_states);
   m.set("min_state_time_s", d.min_state_time_s);
   m.set("edge_from_arms", d.stamping.edge_from_arms);
+  m.set("min_arm_deflection", d.stamping.min_arm_deflection);
   m.set("arm_hinge_offset", d.stamping.arm_hinge_offset);
   m.set("arm_length", d.stamping.arm_length);
   m.set("guard_radius", d.stamping.guard_radius);
@@ -61,12 +64,14 @@ ParamMap XplorerMapLogic::default_parameters() {
 XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
   Params p;
   p.stamping.delta_map = m.get_double("delta_map");
+  p.stamping.delta_map_hold = m.get_double("delta_map_hold");
   const std::vector<double> s = m.get_double_array("slab_size");
   if (s.size() != 3) throw m.error("slab_size", "must have 3 elements (along the face, along C_n, height), got " + std::to_string(s.size()));
   p.stamping.slab_size = Vec3(s[0], s[1], s[2]);
   p.stamping.slab_offset = m.get_double("slab_offset");
   p.stamping.corner_offset = m.get_double("corner_offset");
   p.stamping.rate_hz = m.get_double("rate_hz");
+  p.stamping.corner_release_s = m.get_double("corner_release_s");
   p.stamping.slab_spacing = m.get_double("slab_spacing");
   p.stamping.min_flight_height = m.get_double("min_flight_height");
   p.stamping.normal_from_force = m.get_bool("normal_from_force");
@@ -83,6 +88,7 @@ XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
   p.stamp_states = m.get_string_array("stamp_states");
   p.min_state_time_s = m.get_double("min_state_time_s");
   p.stamping.edge_from_arms = m.get_bool("edge_from_arms");
+  p.stamping.min_arm_deflection = m.get_double("min_arm_deflection");
   p.stamping.arm_hinge_offset = m.get_double("arm_hinge_offset");
   p.stamping.arm_length = m.get_double("arm_length");
   p.stamping.guard_radius = m.get_double("guard_radius");
@@ -132,8 +138,12 @@ void XplorerMapLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
 }
 
 void XplorerMapLogic::on_fsm_state(const tactile_msgs::msg::FsmState& msg) {
+  const bool changed = !fsm_state_ || *fsm_state_ != msg.state;
   fsm_state_ = msg.state;
   fsm_state_since_s_ = tactile_common::to_seconds(tactile_common::from_stamp(msg.header.stamp)) - msg.time_in_state;
+  // A corner release (001 Sec. IV-A: the yaw-rate peak that starts Tactile-turning):
+  // the slabs stamped just before it overhang the face's end (corner_release_s).
+  if (changed && msg.state == "tactile_turning") mapper_.release_corner(fsm_state_since_s_);
 }
 
 void XplorerMapLogic::on_arm_imu(const tactile_msgs::msg::ArmImuArray& msg) {
@@ -151,12 +161,16 @@ void XplorerMapLogic::on_arm_imu(const tactile_msgs::msg::ArmImuArray& msg) {
 }
 
 std::optional<sensor_msgs::msg::PointCloud2> XplorerMapLogic::on_timer(int64_t now_ns) {
+  mapper_.commit(tactile_common::to_seconds(now_ns));
   const bool gated =
       fsm_state_ && !params_.stamp_states.empty() &&
       (std::find(params_.stamp_states.begin(), params_.stamp_states.end(), *fsm_state_) == params_.stamp_states.end() ||
        tactile_common::to_seconds(now_ns) - fsm_state_since_s_ < params_.min_state_time_s);
   if (gated) {
     ++stats_.ticks_gated;
+    // The initiation latch sees the force in every state: the firm contact
+    // that initiates mapping (001 Sec. IV-B) is the one that started the traversal.
+    if (!forces_.empty()) mapper_.observe_force(force_sum_ / static_cast<double>(forces_.size()));
   } else if (!odom_ || forces_.empty() ||
       tactile_common::to_seconds(now_ns - tactile_common::from_stamp(odom_->header.stamp)) > params_.max_odometry_age_s) {
     ++stats_.ticks_without_input;
@@ -185,6 +199,7 @@ std::optional<sensor_msgs::msg::PointCloud2> XplorerMapLogic::on_timer(int64_t n
 }
 
 MapMeasurement XplorerMapLogic::finalize() {
+  mapper_.flush();
   map_.voxel_filter();
   map_.remove_outliers();
   return map_.measure();

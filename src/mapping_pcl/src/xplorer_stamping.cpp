@@ -53,17 +53,32 @@ void XplorerMapParams::validate() const {
     throw std::invalid_argument("XplorerMapParams." + f + ": " + why + ", got " + std::to_string(v));
   };
   if (!(delta_map > 0.0) || !std::isfinite(delta_map)) bad("delta_map", "must be finite and > 0", delta_map);
+  if (!(delta_map_hold > 0.0) || !(delta_map_hold <= delta_map)) bad("delta_map_hold", "must be > 0 and <= delta_map", delta_map_hold);
   for (int i = 0; i < 3; ++i) {
     if (!(slab_size[i] > 0.0) || !std::isfinite(slab_size[i])) bad("slab_size[" + std::to_string(i) + "]", "must be finite and > 0", slab_size[i]);
   }
   if (!(slab_offset >= 0.0) || !std::isfinite(slab_offset)) bad("slab_offset", "must be finite and >= 0", slab_offset);
   if (!(corner_offset >= 0.0) || !std::isfinite(corner_offset)) bad("corner_offset", "must be finite and >= 0", corner_offset);
   if (!(rate_hz > 0.0) || !std::isfinite(rate_hz)) bad("rate_hz", "must be finite and > 0", rate_hz);
+  if (!(corner_release_s >= 0.0) || !std::isfinite(corner_release_s)) bad("corner_release_s", "must be finite and >= 0", corner_release_s);
   if (!(slab_spacing > 0.0) || !std::isfinite(slab_spacing)) bad("slab_spacing", "must be finite and > 0", slab_spacing);
   if (!std::isfinite(min_flight_height)) bad("min_flight_height", "must be finite", min_flight_height);
   if (!(arm_hinge_offset >= 0.0) || !std::isfinite(arm_hinge_offset)) bad("arm_hinge_offset", "must be finite and >= 0", arm_hinge_offset);
   if (!(arm_length > 0.0) || !std::isfinite(arm_length)) bad("arm_length", "must be finite and > 0", arm_length);
+  if (!(min_arm_deflection >= 0.0) || !std::isfinite(min_arm_deflection)) bad("min_arm_deflection", "must be finite and >= 0", min_arm_deflection);
   if (!(guard_radius >= 0.0) || !std::isfinite(guard_radius)) bad("guard_radius", "must be finite and >= 0", guard_radius);
+}
+
+namespace {
+constexpr double kArmDir[4] = {-M_PI / 4, M_PI / 4, 3 * M_PI / 4, -3 * M_PI / 4};  // tactile_msgs/ArmImu.arm_id
+}  // namespace
+
+bool both_arms_touch(const Eigen::Vector2d& d, const std::array<double, 4>& theta, double min_deflection) {
+  for (int i = 0; i < 4; ++i) {
+    if (Eigen::Vector2d(std::cos(kArmDir[i]), std::sin(kArmDir[i])).dot(d) > 1e-9 && !(std::abs(theta[i]) >= min_deflection))
+      return false;
+  }
+  return true;
 }
 
 double outline_reach(const XplorerMapParams& p, const Eigen::Vector2d& d, const std::array<double, 4>& theta) {
@@ -108,6 +123,48 @@ Box XplorerContactMapper::corner_slab(const ContactSample& s, const Eigen::Vecto
   return b;
 }
 
+void XplorerContactMapper::stamp(double t, const Box& b) {
+  if (p_.corner_release_s <= 0.0) {
+    map_->insert_box(b, p_.slab_spacing);
+  } else {
+    pending_.emplace_back(t, b);
+  }
+}
+
+void XplorerContactMapper::commit(double t) {
+  while (!pending_.empty() && pending_.front().first <= t - p_.corner_release_s) {
+    map_->insert_box(pending_.front().second, p_.slab_spacing);
+    pending_.pop_front();
+  }
+}
+
+std::size_t XplorerContactMapper::release_corner(double t) {
+  std::size_t n = 0;
+  while (!pending_.empty() && pending_.back().first > t - p_.corner_release_s) {
+    pending_.pop_back();
+    ++n;
+  }
+  stats_.dropped_at_corner += n;
+  return n;
+}
+
+void XplorerContactMapper::flush() {
+  for (const auto& [t, b] : pending_) map_->insert_box(b, p_.slab_spacing);
+  pending_.clear();
+}
+
+void XplorerContactMapper::observe_force(const Eigen::Vector2d& f) {
+  if (!f.allFinite()) return;
+  const double n = f.norm();
+  if (!initiated_ && n >= p_.delta_map) {  // 001 Sec. IV-B: "initializes when |b_delta_f| >= delta_map"
+    initiated_ = true;
+    ++stats_.initiations;
+  } else if (initiated_ && n < p_.delta_map_hold) {
+    initiated_ = false;
+    ++stats_.releases;
+  }
+}
+
 int XplorerContactMapper::update(const ContactSample& s) {
   ++stats_.samples;
   if (!s.position.allFinite() || !std::isfinite(s.yaw) || !std::isfinite(s.height) || !s.force_body.allFinite() ||
@@ -115,6 +172,8 @@ int XplorerContactMapper::update(const ContactSample& s) {
     ++stats_.rejected_nonfinite;
     return 0;
   }
+  observe_force(s.force_body);
+  commit(s.t);
   if (s.t - last_stamp_t_ < 1.0 / p_.rate_hz - 1e-9) {  // 001 Sec. IV-B: 30 Hz
     ++stats_.skipped_rate;
     return 0;
@@ -123,7 +182,7 @@ int XplorerContactMapper::update(const ContactSample& s) {
     ++stats_.skipped_not_flying;
     return 0;
   }
-  if (s.force_body.norm() < p_.delta_map) {  // 001 Sec. V-D: |b_delta_f| >= delta_map
+  if (!initiated_) {  // 001 Sec. V-D: |b_delta_f| >= delta_map (then >= delta_map_hold)
     ++stats_.skipped_low_force;
     return 0;
   }
@@ -132,25 +191,30 @@ int XplorerContactMapper::update(const ContactSample& s) {
     ++stats_.skipped_low_force;
     return 0;
   }
-  last_stamp_t_ = s.t;
-  int stamped = 0;
   const Eigen::Rotation2Dd R(s.yaw);
   const Eigen::Vector2d c_w = p_.normal_from_force ? Eigen::Vector2d(-(R * s.force_body).normalized()) : Eigen::Vector2d(R * unit(*c));
+  const bool arms_known = s.arm_angles && std::all_of(s.arm_angles->begin(), s.arm_angles->end(), [](double a) {
+                            return std::isfinite(a);
+                          });
+  if (p_.min_arm_deflection > 0.0 && arms_known && !both_arms_touch(R.inverse() * c_w, *s.arm_angles, p_.min_arm_deflection)) {
+    ++stats_.skipped_one_arm;  // 001 Sec. V-C1: two arms in contact with the obstacle
+    return 0;
+  }
+  last_stamp_t_ = s.t;
+  int stamped = 0;
   double offset = p_.slab_offset;  // 001 Sec. IV-B: 0.21 m
-  if (p_.edge_from_arms && s.arm_angles && std::all_of(s.arm_angles->begin(), s.arm_angles->end(), [](double a) {
-        return std::isfinite(a);
-      })) {
+  if (p_.edge_from_arms && arms_known) {
     offset = outline_reach(p_, R.inverse() * c_w, *s.arm_angles);  // the CAD outline with the arms as they are
     ++stats_.offset_from_arms;
   }
-  map_->insert_box(face_slab_world(s, c_w, offset), p_.slab_spacing);
+  stamp(s.t, face_slab_world(s, c_w, offset));
   ++stats_.slabs;
   ++stamped;
   const Eigen::Vector2d m_w = Eigen::Rotation2Dd(-M_PI / 2) * c_w;  // lambda in the world (right-hand)
   const double ang = std::atan2(m_w.y(), m_w.x());
   const int move_world = static_cast<int>(std::lround(ang / (M_PI / 2))) & 3;  // nearest world axis
   if (last_move_world_ && *last_move_world_ != move_world) {  // 001 Sec. IV-B: corner
-    map_->insert_box(corner_slab(s, last_contact_world_, c_w), p_.slab_spacing);
+    stamp(s.t, corner_slab(s, last_contact_world_, c_w));
     ++stats_.corner_slabs;
     ++stamped;
   }

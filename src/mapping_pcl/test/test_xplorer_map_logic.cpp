@@ -164,7 +164,9 @@ TEST(XplorerMapLogic, ArmAnglesSetTheSlabOffset) {
     }
     return a;
   };
-  XplorerMapLogic logic(XplorerMapLogic::params_from(XplorerMapLogic::default_parameters()));
+  auto at_once = XplorerMapLogic::default_parameters();
+  at_once.set("corner_release_s", 0.0);  // slabs straight into the map
+  XplorerMapLogic logic(XplorerMapLogic::params_from(at_once));
   logic.on_odometry(odom(0, 0.0, 0.0, 0.7, 0.0));
   logic.on_wrench_body(wrench(-2.0, 0.0));
   auto bad = arms(0, {-0.05, 0.05, 0.0, 0.0});
@@ -177,7 +179,7 @@ TEST(XplorerMapLogic, ArmAnglesSetTheSlabOffset) {
   EXPECT_EQ(logic.mapper().stats().offset_from_arms, 0u);
   EXPECT_NEAR(logic.map().measure().min.x(), 0.21, 1e-6);
 
-  XplorerMapLogic fresh(XplorerMapLogic::params_from(XplorerMapLogic::default_parameters()));
+  XplorerMapLogic fresh(XplorerMapLogic::params_from(at_once));
   fresh.on_odometry(odom(0, 0.0, 0.0, 0.7, 0.0));
   fresh.on_wrench_body(wrench(-2.0, 0.0));
   fresh.on_arm_imu(arms(0, {-0.05, 0.05, 0.0, 0.0}));

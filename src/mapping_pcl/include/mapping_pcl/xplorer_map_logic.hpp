@@ -45,7 +45,7 @@ class XplorerMapLogic {
     /// FsmState has arrived; empty = always). Keeps slabs out of turns, where
     /// the body force points across the corner (choice; 001 gates on force only).
     std::vector<std::string> stamp_states = {"tactile_traversal"};
-    double min_state_time_s = 2.0;   ///< ... and has been in it this long (choice: skips post-turn transients)
+    double min_state_time_s = 1.0;   ///< ... and has been in it this long (choice: the 50-sample, 1 s force average still holds the turn)
     double max_arm_age_s = 0.1;      ///< older arm angles: the fixed slab_offset is used (choice; arm IMUs at 50 Hz)
     void validate() const;
   };

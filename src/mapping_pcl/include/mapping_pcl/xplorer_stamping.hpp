@@ -8,7 +8,9 @@
 
 #include <array>
 #include <cstdint>
+#include <deque>
 #include <optional>
+#include <utility>
 
 #include "mapping_pcl/point_map.hpp"
 
@@ -29,10 +31,22 @@ std::optional<BodyDirection> contact_direction(const Eigen::Vector2d& force_body
 
 struct XplorerMapParams {
   double delta_map = 1.51;                     ///< [N] (001 Sec. V-D)
+  /// Once mapping has been initiated (|b_delta_f| >= delta_map: "obstacle map
+  /// generation initializes when", 001 Sec. IV-B), it goes on while the force
+  /// stays >= delta_map_hold; below it the contact is released and the next
+  /// stamp needs delta_map again. delta_map_hold = delta_map: the force gates
+  /// every stamp (the reading before issue 17) (choice; README "Mapping is initiated").
+  double delta_map_hold = 0.5;                 ///< [N]
   Vec3 slab_size = Vec3(0.25, 0.08, 0.5);      ///< along the face, along C_n, height [m] (001 Sec. IV-B)
   double slab_offset = 0.21;                   ///< vehicle centre -> slab's near face along C_n [m] (001 Sec. IV-B)
   double corner_offset = 0.417;                ///< vehicle centre -> corner slab centre, diagonal [m] (001 Sec. IV-B)
   double rate_hz = 30.0;                       ///< stamping rate (001 Sec. IV-B)
+  /// Slabs are held back this long before they enter the map; a corner
+  /// release (Tactile-turning, 001 Sec. IV-A) drops those stamped within this
+  /// time before it: there the leading guard has passed the corner and the
+  /// 0.25 m slab overhangs the face's end. 0: every slab enters at once
+  /// (choice; README "Corner release"; the FSM's corner_lookback).
+  double corner_release_s = 0.6;               ///< [s]
   double slab_spacing = 0.02;                  ///< point spacing inside a slab [m] (choice; the map is voxel-filtered at 1 cm)
   double min_flight_height = 0.2;              ///< "mapping only when flying": height above the floor [m] (choice)
   /// Direction of the slab: false = the contact axis C_n (a body axis, 001);
@@ -47,6 +61,13 @@ struct XplorerMapParams {
   /// a few mm closer than 0.21 m, which the fixed offset maps into the
   /// obstacle (choice).
   bool edge_from_arms = true;
+  /// Square contact: with arm angles known, a slab is stamped only if both
+  /// arms on the C_n side are deflected by at least this much, i.e. both
+  /// guards touch a face ("the yaw is in admittance ensuring two arms of the
+  /// UAV are in contact with the obstacle", 001 Sec. V-C1). One guard on a
+  /// corner (an oblique first contact, the end of a face) does not say where
+  /// the face is. 0: no check (choice; README "Two arms in contact").
+  double min_arm_deflection = 0.002;  ///< [rad]
   double arm_hinge_offset = 0.05;  ///< centre -> arm hinge along the diagonal [m] (vehicle CAD; the SITL's value)
   double arm_length = 0.15;        ///< hinge -> motor [m] (vehicle CAD)
   double guard_radius = 0.07;      ///< propeller guard radius round the motor [m] (vehicle CAD)
@@ -69,6 +90,10 @@ struct ContactSample {
 /// guard radius [m]. Undeflected, along a body axis: (0.05 + 0.15) cos 45 deg
 /// + 0.07 = 0.2114 m (001: 0.21 m).
 double outline_reach(const XplorerMapParams& p, const Eigen::Vector2d& d, const std::array<double, 4>& theta);
+/// True if every arm pointing towards the body direction `d` (unit, x-y: the
+/// two arms either side of a body axis) is deflected by at least
+/// `min_deflection` [rad] in magnitude (both guards touch the face).
+bool both_arms_touch(const Eigen::Vector2d& d, const std::array<double, 4>& theta, double min_deflection);
 
 class XplorerContactMapper {
  public:
@@ -79,14 +104,34 @@ class XplorerContactMapper {
     uint64_t skipped_rate = 0;        ///< sample within 1/rate_hz of the last stamp
     uint64_t skipped_not_flying = 0;
     uint64_t skipped_low_force = 0;
+    uint64_t initiations = 0;         ///< the force reached delta_map with mapping not initiated
+    uint64_t releases = 0;            ///< the force fell below delta_map_hold with mapping initiated
     uint64_t rejected_nonfinite = 0;
     uint64_t offset_from_arms = 0;    ///< slabs placed with the deflected-arm outline
+    uint64_t skipped_one_arm = 0;     ///< an arm on the C_n side deflected less than min_arm_deflection
+    uint64_t dropped_at_corner = 0;   ///< slabs dropped by a corner release (corner_release_s)
   };
 
   XplorerContactMapper(const XplorerMapParams& params, PointMap& map);
 
   /// Returns the number of slabs stamped (0, 1 or 2 with a corner).
   int update(const ContactSample& s);
+
+  /// Feeds the initiation/hold latch with the filtered body force without
+  /// stamping (samples the node logic does not stamp, e.g. gated by the FSM
+  /// state). `update` does the same for every sample it gets.
+  void observe_force(const Eigen::Vector2d& force_body);
+  /// Mapping initiated (force reached delta_map and has not fallen below delta_map_hold since).
+  bool initiated() const { return initiated_; }
+
+  /// Moves the slabs stamped at least corner_release_s before `t` into the map.
+  void commit(double t);
+  /// A corner release (the FSM entered Tactile-turning) at time `t`: drops the
+  /// held-back slabs stamped after t - corner_release_s. Returns how many.
+  std::size_t release_corner(double t);
+  /// Moves every held-back slab into the map (end of the mapping).
+  void flush();
+  std::size_t pending() const { return pending_.size(); }
 
   /// The slab that `update` would stamp for a contact direction (tests, pictures).
   Box face_slab(const ContactSample& s, BodyDirection contact) const;
@@ -104,7 +149,10 @@ class XplorerContactMapper {
   XplorerMapParams p_;
   PointMap* map_;
   Stats stats_;
+  void stamp(double t, const Box& b);
   double last_stamp_t_ = -1e300;
+  std::deque<std::pair<double, Box>> pending_;  ///< held-back slabs (corner_release_s) with their stamp time
+  bool initiated_ = false;
   std::optional<BodyDirection> last_contact_;
   std::optional<int> last_move_world_;       ///< lambda quantised to a world axis (0:+X 1:+Y 2:-X 3:-Y)
   Eigen::Vector2d last_contact_world_ = Eigen::Vector2d::Zero();
