@@ -94,6 +94,15 @@ WallSubState wall_sub_state(double d_l, bool l_valid, double d_r, bool r_valid, 
       const double remaining = l_valid ? d_l : d_r;
       return remaining < p.t_min ? WallSubState::kFlyBackward : WallSubState::kFlySideways;
     }
+    if (both_touched && p.hold_heading_trailing_lost) {
+      // The trailing whisker lost the wall the leading one is still on: at a
+      // straight baffle it cannot have run off an end, so hold the heading and
+      // keep the remaining depth in the band (issue 17, README).
+      const double remaining = l_valid ? d_l : d_r;
+      if (remaining < p.t_min) return WallSubState::kFlyBackward;
+      if (remaining > p.t_max) return WallSubState::kFlyForward;
+      return WallSubState::kFlySideways;
+    }
     // Approach (or trailing whisker lost): the missing depth is beyond the
     // whisker's reach, hence beyond T_max.
     const double far = p.t_max + p.whisker_spacing;

@@ -78,6 +78,13 @@ struct WallFollowerParams {
   /// tilted baffle the drone turns back to the course, so the next baffle is
   /// met head-on (000 Fig. 4h: -1 / 24.3 / -1 deg). 0 = off. [1/s]
   double realign_gain = 1.5;
+  /// Trailing whisker lost after both touched (issue 17, README "Random baffle
+  /// courses"): hold the heading and translate on the remaining depth instead of
+  /// turning toward the lost whisker. On rigid baffles TDORC can drop a pressed
+  /// whisker (stick-slip) and not see it again; turning toward it then yawed the
+  /// drone 40-50 deg into the wall (seeds 1001, 1043 of the tuning block). false =
+  /// the previous rule (missing depth counts as beyond T_max, turn).
+  bool hold_heading_trailing_lost = true;
   double target_radius = 0.15;                 ///< land within this distance of the target [m]
   bool land_past_target = true;                ///< also land once past the target along the course direction
   double landing_duration_s = 2.0;             ///< LANDING -> LANDED after this [s]
