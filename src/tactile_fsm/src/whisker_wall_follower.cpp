@@ -75,6 +75,8 @@ void WallFollowerParams::validate() const {
   require(finite_nonneg(clear_confirm_s), "clear_confirm_s", "must be finite and >= 0", clear_confirm_s);
   require(finite_nonneg(clear_margin), "clear_margin", "must be finite and >= 0", clear_margin);
   require(finite_nonneg(realign_gain), "realign_gain", "must be finite and >= 0", realign_gain);
+  require(finite_nonneg(same_obstacle_distance), "same_obstacle_distance", "must be finite and >= 0",
+          same_obstacle_distance);
   require(finite_positive(target_radius), "target_radius", "must be finite and > 0", target_radius);
   require(finite_nonneg(landing_duration_s), "landing_duration_s", "must be finite and >= 0", landing_duration_s);
   require(finite_positive(max_input_age_s), "max_input_age_s", "must be finite and > 0", max_input_age_s);
@@ -166,6 +168,8 @@ void WhiskerWallFollower::reset() {
   wall_heading_ = theta_ = NAN;
   origin_set_ = false;
   origin_x_ = origin_y_ = clear_x_ = clear_y_ = 0.0;
+  after_clear_ = false;
+  resume_x_ = resume_y_ = 0.0;
   course_yaw_ = 0.0;
 }
 
@@ -269,6 +273,15 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
           both_touched_ = true;
           last_contact_t_ = t;
           enter(FsmState::kWallFollowing, "whisker contact while clearing", t);
+        } else if (contact && after_clear_ &&
+                   std::cos(course_yaw_) * (in.x - resume_x_) + std::sin(course_yaw_) * (in.y - resume_y_) <
+                       p_.same_obstacle_distance) {
+          // Contact right after a clearing: the same obstacle (its contact
+          // flags dropped mid-wall). Keep the side instead of re-choosing it,
+          // which went back along the baffle (issue 17, README).
+          both_touched_ = false;
+          last_contact_t_ = t;
+          enter(FsmState::kWallFollowing, "whisker contact, same obstacle (just cleared)", t);
         } else if (contact) {
           // Side: toward the target's lateral offset in the body frame when it
           // is clear, else the configured side.
@@ -283,6 +296,9 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
           enter(FsmState::kWallFollowing, "whisker contact", t);
         } else if (state_ == FsmState::kResumeForward &&
                    std::hypot(in.x - clear_x_, in.y - clear_y_) >= p_.clear_margin) {
+          after_clear_ = true;
+          resume_x_ = in.x;
+          resume_y_ = in.y;
           enter(FsmState::kFlyForward, "cleared the obstacle by the margin", t);
         }
         break;

@@ -85,6 +85,13 @@ struct WallFollowerParams {
   /// drone 40-50 deg into the wall (seeds 1001, 1043 of the tuning block). false =
   /// the previous rule (missing depth counts as beyond T_max, turn).
   bool hold_heading_trailing_lost = true;
+  /// A contact in FLY_FORWARD less than this far ahead (along the course
+  /// heading) of where the side-step after a clearing ended is the same
+  /// obstacle: keep the side (issue 17, README "Random baffle courses": on rigid
+  /// baffles both contact flags dropped together mid-wall, the drone "cleared",
+  /// re-touched 8 cm further on and re-chose the side toward the target, going
+  /// back along the baffle; flow-deck seed 1001 did so three times). 0 = off. [m]
+  double same_obstacle_distance = 0.25;
   double target_radius = 0.15;                 ///< land within this distance of the target [m]
   bool land_past_target = true;                ///< also land once past the target along the course direction
   double landing_duration_s = 2.0;             ///< LANDING -> LANDED after this [s]
@@ -209,6 +216,8 @@ class WhiskerWallFollower {
   double origin_x_ = 0.0, origin_y_ = 0.0;  ///< course start (end of hover)
   double course_yaw_ = 0.0;                   ///< heading at the course start [rad]
   double clear_x_ = 0.0, clear_y_ = 0.0;    ///< where the obstacle was cleared
+  bool after_clear_ = false;                 ///< FLY_FORWARD entered from RESUME_FORWARD
+  double resume_x_ = 0.0, resume_y_ = 0.0;  ///< where that FLY_FORWARD began
 };
 
 }  // namespace tactile_fsm
