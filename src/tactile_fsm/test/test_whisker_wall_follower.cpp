@@ -145,12 +145,80 @@ TEST(WallSubStateRule, MissingDepth) {
             WallSubState::kFlyBackward);
   EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kLeft, true, WallSubState::kFlySideways, p),
             WallSubState::kFlySideways);
-  // Following right, the trailing (left) whisker lost: as approach -> turn right.
+  // Following right, the trailing (left) whisker lost after both touched: hold
+  // the heading, translate on the remaining depth (hold_heading_trailing_lost).
   EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kRight, true, WallSubState::kFlySideways, p),
+            WallSubState::kFlySideways);
+  // With the previous rule (off): as approach -> turn right.
+  WallFollowerParams prev = p;
+  prev.hold_heading_trailing_lost = false;
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kRight, true, WallSubState::kFlySideways, prev),
             WallSubState::kTurnRight);
   // Invalid flag wins over a finite value; NaN with a valid flag is invalid.
   EXPECT_EQ(wall_sub_state(0.08, true, NAN, true, Side::kRight, false, WallSubState::kNone, p),
             WallSubState::kTurnLeft);
+}
+
+// Issue 17 (README "Random baffle courses"): the trailing whisker lost after
+// both touched, hand cases. Following right the trailing whisker is the left
+// one; following left, the right one. The remaining depth decides the
+// translation (band 60-100 mm); the drone never turns toward the lost whisker.
+TEST(WallSubStateRule, TrailingWhiskerLostHoldsHeading) {
+  const WallFollowerParams p;
+  const auto ws = WallSubState::kFlySideways;
+  // Right side, left lost: remaining right depth in band / too close / too far.
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kRight, true, ws, p), WallSubState::kFlySideways);
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.045, true, Side::kRight, true, ws, p), WallSubState::kFlyBackward);
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.12, true, Side::kRight, true, ws, p), WallSubState::kFlyForward);
+  // Left side, right lost.
+  EXPECT_EQ(wall_sub_state(0.07, true, NAN, false, Side::kLeft, true, ws, p), WallSubState::kFlySideways);
+  EXPECT_EQ(wall_sub_state(0.05, true, NAN, false, Side::kLeft, true, ws, p), WallSubState::kFlyBackward);
+  EXPECT_EQ(wall_sub_state(0.11, true, NAN, false, Side::kLeft, true, WallSubState::kTurnLeft, p),
+            WallSubState::kFlyForward);
+  // Before both touched (approach) the missing depth still counts as beyond
+  // T_max: turn toward the touching whisker to align.
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kRight, false, ws, p), WallSubState::kTurnRight);
+  EXPECT_EQ(wall_sub_state(0.08, true, NAN, false, Side::kLeft, false, ws, p), WallSubState::kTurnLeft);
+}
+
+// Issue 17: a contact right after a clearing (less than same_obstacle_distance
+// along the course from where the side-step ended) keeps the side although the
+// target is now clearly on the other side; further on, the side is re-chosen.
+TEST(WhiskerWallFollower, ContactJustAfterClearingKeepsTheSide) {
+  auto run = [](double forward_after_resume) {
+    WhiskerWallFollower fsm{WallFollowerParams{}};
+    double t = 0.0;
+    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t));
+    // Contact at x = 1, target (2, 0) straight ahead -> default side right.
+    WallFollowerInput in = input(t, 1.0, 0.0);
+    set_depths(in, 0.08, 0.08);
+    fsm.step(in);
+    EXPECT_EQ(fsm.active_side(), Side::kRight);
+    // Sideways to y = -0.6, then both whiskers off for clear_confirm_s.
+    double y = 0.0;
+    for (int k = 0; k < 150; ++k) {
+      t += kDt;
+      y -= 0.004;
+      in = input(t, 1.0, y);
+      set_depths(in, 0.08, 0.08);
+      fsm.step(in);
+    }
+    for (int k = 0; k < 15; ++k) fsm.step(input(t += kDt, 1.0, y));
+    EXPECT_EQ(fsm.state(), FsmState::kResumeForward);
+    // Side-step the clear margin (0.30 m): now y = -0.9, target 0.9 m to the left.
+    for (int k = 0; k < 80 && fsm.state() == FsmState::kResumeForward; ++k) {
+      y -= 0.004;
+      fsm.step(input(t += kDt, 1.0, y));
+    }
+    EXPECT_EQ(fsm.state(), FsmState::kFlyForward);
+    in = input(t += kDt, 1.0 + forward_after_resume, y);
+    set_depths(in, 0.08, 0.08);
+    fsm.step(in);
+    EXPECT_EQ(fsm.state(), FsmState::kWallFollowing);
+    return fsm.active_side();
+  };
+  EXPECT_EQ(run(0.08), Side::kRight);  // same obstacle (0.08 m < 0.25 m): kept
+  EXPECT_EQ(run(0.50), Side::kLeft);   // a new obstacle: toward the target
 }
 
 TEST(Saturation, ScalesSpeedAndClampsYawRate) {
