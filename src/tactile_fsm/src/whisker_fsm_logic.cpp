@@ -40,6 +40,7 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   m.set("realign_gain", d.realign_gain);
   m.set("hold_heading_trailing_lost", d.hold_heading_trailing_lost);
   m.set("same_obstacle_distance", d.same_obstacle_distance);
+  m.set("max_heading_offset", d.max_heading_offset);
   m.set("target_radius", d.target_radius);
   m.set("land_past_target", d.land_past_target);
   m.set("landing_duration_s", d.landing_duration_s);
@@ -76,6 +77,7 @@ WhiskerFsmLogic::Params WhiskerFsmLogic::params_from(const ParamMap& m) {
   f.realign_gain = m.get_double("realign_gain");
   f.hold_heading_trailing_lost = m.get_bool("hold_heading_trailing_lost");
   f.same_obstacle_distance = m.get_double("same_obstacle_distance");
+  f.max_heading_offset = m.get_double("max_heading_offset");
   f.target_radius = m.get_double("target_radius");
   f.land_past_target = m.get_bool("land_past_target");
   f.landing_duration_s = m.get_double("landing_duration_s");

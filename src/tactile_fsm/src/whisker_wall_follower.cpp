@@ -75,6 +75,8 @@ void WallFollowerParams::validate() const {
   require(finite_nonneg(clear_confirm_s), "clear_confirm_s", "must be finite and >= 0", clear_confirm_s);
   require(finite_nonneg(clear_margin), "clear_margin", "must be finite and >= 0", clear_margin);
   require(finite_nonneg(realign_gain), "realign_gain", "must be finite and >= 0", realign_gain);
+  require(std::isfinite(max_heading_offset) && max_heading_offset >= 0.0 && max_heading_offset <= M_PI,
+          "max_heading_offset", "must be in [0, pi]", max_heading_offset);
   require(finite_nonneg(same_obstacle_distance), "same_obstacle_distance", "must be finite and >= 0",
           same_obstacle_distance);
   require(finite_positive(target_radius), "target_radius", "must be finite and > 0", target_radius);
@@ -329,7 +331,21 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
   }
 
   if (state_ == FsmState::kWallFollowing) {
-    const WallSubState next = wall_sub_state(f_left_, l_valid, f_right_, r_valid, side_, both_touched_, sub_, p_, theta_);
+    WallSubState next = wall_sub_state(f_left_, l_valid, f_right_, r_valid, side_, both_touched_, sub_, p_, theta_);
+    // Heading limit about the course heading (issue 17, README): no turn beyond
+    // max_heading_offset; translate on the depths instead.
+    if (p_.max_heading_offset > 0.0 && origin_set_ && std::isfinite(in.yaw) &&
+        (next == WallSubState::kTurnLeft || next == WallSubState::kTurnRight)) {
+      const double off = std::remainder(in.yaw - course_yaw_, 2.0 * M_PI);
+      if ((next == WallSubState::kTurnLeft && off >= p_.max_heading_offset) ||
+          (next == WallSubState::kTurnRight && off <= -p_.max_heading_offset)) {
+        const double lo = std::fmin(l_valid ? f_left_ : INFINITY, r_valid ? f_right_ : INFINITY);
+        const double hi = std::fmax(l_valid ? f_left_ : -INFINITY, r_valid ? f_right_ : -INFINITY);
+        next = (l_valid || r_valid) && lo < p_.t_min   ? WallSubState::kFlyBackward
+               : (l_valid || r_valid) && hi > p_.t_max ? WallSubState::kFlyForward
+                                                       : WallSubState::kFlySideways;
+      }
+    }
     if (next != sub_ && state_ == state_before) reason_ = "sub-state rule (000 Fig. S4e)";
     sub_ = next;
   } else {

@@ -221,6 +221,40 @@ TEST(WhiskerWallFollower, ContactJustAfterClearingKeepsTheSide) {
   EXPECT_EQ(run(0.50), Side::kLeft);   // a new obstacle: toward the target
 }
 
+// Issue 17: wall following does not turn beyond max_heading_offset (45 deg)
+// from the course heading (0 here, heading at the end of the hover). Depths
+// d_l = 100 mm, d_r = 70 mm (theta = atan(0.03/0.05) = 31 deg, wall nearer on
+// the right) ask for TURN_RIGHT; at yaw -30 deg it turns, at -46 deg (past the
+// limit) it flies sideways instead (both in band), at +46 deg a turn right
+// (back toward the course) is still allowed. Below T_min it backs off.
+TEST(WhiskerWallFollower, HeadingLimitAboutTheCourse) {
+  auto sub_at = [](double yaw_deg, double dl, double dr) {
+    WhiskerWallFollower fsm{WallFollowerParams{}};
+    double t = 0.0;
+    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t));
+    WallFollowerInput in = input(t, 1.0, 0.0, yaw_deg * kDeg);
+    set_depths(in, dl, dr);
+    return fsm.step(in).sub_state;
+  };
+  EXPECT_EQ(sub_at(-30.0, 0.10, 0.07), WallSubState::kTurnRight);
+  EXPECT_EQ(sub_at(-46.0, 0.10, 0.07), WallSubState::kFlySideways);
+  EXPECT_EQ(sub_at(46.0, 0.10, 0.07), WallSubState::kTurnRight);
+  EXPECT_EQ(sub_at(-46.0, 0.10, 0.05), WallSubState::kFlyBackward);
+  EXPECT_EQ(sub_at(-46.0, 0.13, 0.09), WallSubState::kFlyForward);
+  // Mirror: a turn left is blocked past +45 deg.
+  EXPECT_EQ(sub_at(46.0, 0.07, 0.10), WallSubState::kFlySideways);
+  EXPECT_EQ(sub_at(30.0, 0.07, 0.10), WallSubState::kTurnLeft);
+  // Off (0): the turn is kept.
+  WallFollowerParams p;
+  p.max_heading_offset = 0.0;
+  WhiskerWallFollower fsm(p);
+  double t = 0.0;
+  for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t));
+  WallFollowerInput in = input(t, 1.0, 0.0, -46.0 * kDeg);
+  set_depths(in, 0.10, 0.07);
+  EXPECT_EQ(fsm.step(in).sub_state, WallSubState::kTurnRight);
+}
+
 TEST(Saturation, ScalesSpeedAndClampsYawRate) {
   const WallFollowerParams p;
   Setpoint s;

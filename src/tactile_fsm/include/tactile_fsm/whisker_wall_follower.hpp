@@ -92,6 +92,16 @@ struct WallFollowerParams {
   /// re-touched 8 cm further on and re-chose the side toward the target, going
   /// back along the baffle; flow-deck seed 1001 did so three times). 0 = off. [m]
   double same_obstacle_distance = 0.25;
+  /// Wall following never turns the heading further than this from the course
+  /// heading (heading at the end of HOVER_INIT); a turn that would is replaced
+  /// by the translation the depths ask for (issue 17, README "Random baffle
+  /// courses": with contact flags held after a whisker left a baffle, the drone
+  /// followed a phantom wall, turning 95-120 deg off the course, and wrapped round
+  /// the baffle's tip into the guard, 8 of 24 failures of tuning block 2000-2049).
+  /// A baffle square to the course +- 25 deg (000 Fig. 4: up to 24.3 deg) needs at
+  /// most 25 deg plus the alignment overshoot (45 deg: 35/50 on block 2000,
+  /// 60 deg: 33/50). 0 = off. [rad]
+  double max_heading_offset = 45.0 * M_PI / 180.0;
   double target_radius = 0.15;                 ///< land within this distance of the target [m]
   bool land_past_target = true;                ///< also land once past the target along the course direction
   double landing_duration_s = 2.0;             ///< LANDING -> LANDED after this [s]
