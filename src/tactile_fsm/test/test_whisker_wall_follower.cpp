@@ -217,7 +217,7 @@ TEST(WhiskerWallFollower, ContactJustAfterClearingKeepsTheSide) {
     EXPECT_EQ(fsm.state(), FsmState::kWallFollowing);
     return fsm.active_side();
   };
-  EXPECT_EQ(run(0.08), Side::kRight);  // same obstacle (0.08 m < 0.25 m): kept
+  EXPECT_EQ(run(0.08), Side::kRight);  // same obstacle (0.08 m < 0.15 m): kept
   EXPECT_EQ(run(0.50), Side::kLeft);   // a new obstacle: toward the target
 }
 

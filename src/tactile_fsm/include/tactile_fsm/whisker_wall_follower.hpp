@@ -90,8 +90,10 @@ struct WallFollowerParams {
   /// obstacle: keep the side (issue 17, README "Random baffle courses": on rigid
   /// baffles both contact flags dropped together mid-wall, the drone "cleared",
   /// re-touched 8 cm further on and re-chose the side toward the target, going
-  /// back along the baffle; flow-deck seed 1001 did so three times). 0 = off. [m]
-  double same_obstacle_distance = 0.25;
+  /// back along the baffle; flow-deck seed 1001 did so three times). 0.15 m:
+  /// with 0.25 m the next baffle of the shipped tilted-30 course, 0.25-0.3 m
+  /// ahead, counted as the same one (seed 2: heading error 12 deg). 0 = off. [m]
+  double same_obstacle_distance = 0.15;
   /// Wall following never turns the heading further than this from the course
   /// heading (heading at the end of HOVER_INIT); a turn that would is replaced
   /// by the translation the depths ask for (issue 17, README "Random baffle
