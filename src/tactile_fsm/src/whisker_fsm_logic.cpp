@@ -38,7 +38,9 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   m.set("clear_confirm_s", d.clear_confirm_s);
   m.set("clear_margin", d.clear_margin);
   m.set("realign_gain", d.realign_gain);
-  m.set("hold_heading_trailing_lost", d.hold_heading_trailing_lost);
+  // On in the whisker FSM node (issue 17); the core default stays off so the other
+  // users of wall_sub_state() (gpis_explorer's wall follows) keep their rule.
+  m.set("hold_heading_trailing_lost", true);
   m.set("same_obstacle_distance", d.same_obstacle_distance);
   m.set("max_heading_offset", d.max_heading_offset);
   m.set("target_radius", d.target_radius);

@@ -145,15 +145,15 @@ TEST(WallSubStateRule, MissingDepth) {
             WallSubState::kFlyBackward);
   EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kLeft, true, WallSubState::kFlySideways, p),
             WallSubState::kFlySideways);
-  // Following right, the trailing (left) whisker lost after both touched: hold
-  // the heading, translate on the remaining depth (hold_heading_trailing_lost).
+  // Following right, the trailing (left) whisker lost: with the core default
+  // (hold_heading_trailing_lost off) as approach -> turn right; with it on (the
+  // whisker FSM node's default) hold the heading and translate.
   EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kRight, true, WallSubState::kFlySideways, p),
-            WallSubState::kFlySideways);
-  // With the previous rule (off): as approach -> turn right.
-  WallFollowerParams prev = p;
-  prev.hold_heading_trailing_lost = false;
-  EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kRight, true, WallSubState::kFlySideways, prev),
             WallSubState::kTurnRight);
+  WallFollowerParams hold = p;
+  hold.hold_heading_trailing_lost = true;
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kRight, true, WallSubState::kFlySideways, hold),
+            WallSubState::kFlySideways);
   // Invalid flag wins over a finite value; NaN with a valid flag is invalid.
   EXPECT_EQ(wall_sub_state(0.08, true, NAN, true, Side::kRight, false, WallSubState::kNone, p),
             WallSubState::kTurnLeft);
@@ -164,7 +164,8 @@ TEST(WallSubStateRule, MissingDepth) {
 // one; following left, the right one. The remaining depth decides the
 // translation (band 60-100 mm); the drone never turns toward the lost whisker.
 TEST(WallSubStateRule, TrailingWhiskerLostHoldsHeading) {
-  const WallFollowerParams p;
+  WallFollowerParams p;
+  p.hold_heading_trailing_lost = true;  // the whisker FSM node's default
   const auto ws = WallSubState::kFlySideways;
   // Right side, left lost: remaining right depth in band / too close / too far.
   EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kRight, true, ws, p), WallSubState::kFlySideways);

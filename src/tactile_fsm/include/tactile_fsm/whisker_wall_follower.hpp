@@ -83,8 +83,11 @@ struct WallFollowerParams {
   /// turning toward the lost whisker. On rigid baffles TDORC can drop a pressed
   /// whisker (stick-slip) and not see it again; turning toward it then yawed the
   /// drone 40-50 deg into the wall (seeds 1001, 1043 of the tuning block). false =
-  /// the previous rule (missing depth counts as beyond T_max, turn).
-  bool hold_heading_trailing_lost = true;
+  /// the previous rule (missing depth counts as beyond T_max, turn). Core
+  /// default false (gpis_explorer's wall follows call wall_sub_state() with
+  /// these params and were not re-measured); the whisker FSM node's default
+  /// and config/tactile_fsm.yaml turn it on.
+  bool hold_heading_trailing_lost = false;
   /// A contact in FLY_FORWARD less than this far ahead (along the course
   /// heading) of where the side-step after a clearing ended is the same
   /// obstacle: keep the side (issue 17, README "Random baffle courses": on rigid
