@@ -38,6 +38,11 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   m.set("clear_confirm_s", d.clear_confirm_s);
   m.set("clear_margin", d.clear_margin);
   m.set("realign_gain", d.realign_gain);
+  // On in the whisker FSM node (issue 17); the core default stays off so the other
+  // users of wall_sub_state() (gpis_explorer's wall follows) keep their rule.
+  m.set("hold_heading_trailing_lost", true);
+  m.set("same_obstacle_distance", d.same_obstacle_distance);
+  m.set("max_heading_offset", d.max_heading_offset);
   m.set("target_radius", d.target_radius);
   m.set("land_past_target", d.land_past_target);
   m.set("landing_duration_s", d.landing_duration_s);
@@ -72,6 +77,9 @@ WhiskerFsmLogic::Params WhiskerFsmLogic::params_from(const ParamMap& m) {
   f.clear_confirm_s = m.get_double("clear_confirm_s");
   f.clear_margin = m.get_double("clear_margin");
   f.realign_gain = m.get_double("realign_gain");
+  f.hold_heading_trailing_lost = m.get_bool("hold_heading_trailing_lost");
+  f.same_obstacle_distance = m.get_double("same_obstacle_distance");
+  f.max_heading_offset = m.get_double("max_heading_offset");
   f.target_radius = m.get_double("target_radius");
   f.land_past_target = m.get_bool("land_past_target");
   f.landing_duration_s = m.get_double("landing_duration_s");

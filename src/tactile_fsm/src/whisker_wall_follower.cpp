@@ -75,6 +75,10 @@ void WallFollowerParams::validate() const {
   require(finite_nonneg(clear_confirm_s), "clear_confirm_s", "must be finite and >= 0", clear_confirm_s);
   require(finite_nonneg(clear_margin), "clear_margin", "must be finite and >= 0", clear_margin);
   require(finite_nonneg(realign_gain), "realign_gain", "must be finite and >= 0", realign_gain);
+  require(std::isfinite(max_heading_offset) && max_heading_offset >= 0.0 && max_heading_offset <= M_PI,
+          "max_heading_offset", "must be in [0, pi]", max_heading_offset);
+  require(finite_nonneg(same_obstacle_distance), "same_obstacle_distance", "must be finite and >= 0",
+          same_obstacle_distance);
   require(finite_positive(target_radius), "target_radius", "must be finite and > 0", target_radius);
   require(finite_nonneg(landing_duration_s), "landing_duration_s", "must be finite and >= 0", landing_duration_s);
   require(finite_positive(max_input_age_s), "max_input_age_s", "must be finite and > 0", max_input_age_s);
@@ -93,6 +97,15 @@ WallSubState wall_sub_state(double d_l, bool l_valid, double d_r, bool r_valid, 
       // The leading whisker ran off the wall's end: keep passing the edge.
       const double remaining = l_valid ? d_l : d_r;
       return remaining < p.t_min ? WallSubState::kFlyBackward : WallSubState::kFlySideways;
+    }
+    if (both_touched && p.hold_heading_trailing_lost) {
+      // The trailing whisker lost the wall the leading one is still on: at a
+      // straight baffle it cannot have run off an end, so hold the heading and
+      // keep the remaining depth in the band (issue 17, README).
+      const double remaining = l_valid ? d_l : d_r;
+      if (remaining < p.t_min) return WallSubState::kFlyBackward;
+      if (remaining > p.t_max) return WallSubState::kFlyForward;
+      return WallSubState::kFlySideways;
     }
     // Approach (or trailing whisker lost): the missing depth is beyond the
     // whisker's reach, hence beyond T_max.
@@ -157,6 +170,8 @@ void WhiskerWallFollower::reset() {
   wall_heading_ = theta_ = NAN;
   origin_set_ = false;
   origin_x_ = origin_y_ = clear_x_ = clear_y_ = 0.0;
+  after_clear_ = false;
+  resume_x_ = resume_y_ = 0.0;
   course_yaw_ = 0.0;
 }
 
@@ -260,6 +275,15 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
           both_touched_ = true;
           last_contact_t_ = t;
           enter(FsmState::kWallFollowing, "whisker contact while clearing", t);
+        } else if (contact && after_clear_ &&
+                   std::cos(course_yaw_) * (in.x - resume_x_) + std::sin(course_yaw_) * (in.y - resume_y_) <
+                       p_.same_obstacle_distance) {
+          // Contact right after a clearing: the same obstacle (its contact
+          // flags dropped mid-wall). Keep the side instead of re-choosing it,
+          // which went back along the baffle (issue 17, README).
+          both_touched_ = false;
+          last_contact_t_ = t;
+          enter(FsmState::kWallFollowing, "whisker contact, same obstacle (just cleared)", t);
         } else if (contact) {
           // Side: toward the target's lateral offset in the body frame when it
           // is clear, else the configured side.
@@ -274,6 +298,9 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
           enter(FsmState::kWallFollowing, "whisker contact", t);
         } else if (state_ == FsmState::kResumeForward &&
                    std::hypot(in.x - clear_x_, in.y - clear_y_) >= p_.clear_margin) {
+          after_clear_ = true;
+          resume_x_ = in.x;
+          resume_y_ = in.y;
           enter(FsmState::kFlyForward, "cleared the obstacle by the margin", t);
         }
         break;
@@ -304,7 +331,21 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
   }
 
   if (state_ == FsmState::kWallFollowing) {
-    const WallSubState next = wall_sub_state(f_left_, l_valid, f_right_, r_valid, side_, both_touched_, sub_, p_, theta_);
+    WallSubState next = wall_sub_state(f_left_, l_valid, f_right_, r_valid, side_, both_touched_, sub_, p_, theta_);
+    // Heading limit about the course heading (issue 17, README): no turn beyond
+    // max_heading_offset; translate on the depths instead.
+    if (p_.max_heading_offset > 0.0 && origin_set_ && std::isfinite(in.yaw) &&
+        (next == WallSubState::kTurnLeft || next == WallSubState::kTurnRight)) {
+      const double off = std::remainder(in.yaw - course_yaw_, 2.0 * M_PI);
+      if ((next == WallSubState::kTurnLeft && off >= p_.max_heading_offset) ||
+          (next == WallSubState::kTurnRight && off <= -p_.max_heading_offset)) {
+        const double lo = std::fmin(l_valid ? f_left_ : INFINITY, r_valid ? f_right_ : INFINITY);
+        const double hi = std::fmax(l_valid ? f_left_ : -INFINITY, r_valid ? f_right_ : -INFINITY);
+        next = (l_valid || r_valid) && lo < p_.t_min   ? WallSubState::kFlyBackward
+               : (l_valid || r_valid) && hi > p_.t_max ? WallSubState::kFlyForward
+                                                       : WallSubState::kFlySideways;
+      }
+    }
     if (next != sub_ && state_ == state_before) reason_ = "sub-state rule (000 Fig. S4e)";
     sub_ = next;
   } else {

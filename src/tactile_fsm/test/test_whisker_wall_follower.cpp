@@ -145,12 +145,115 @@ TEST(WallSubStateRule, MissingDepth) {
             WallSubState::kFlyBackward);
   EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kLeft, true, WallSubState::kFlySideways, p),
             WallSubState::kFlySideways);
-  // Following right, the trailing (left) whisker lost: as approach -> turn right.
+  // Following right, the trailing (left) whisker lost: with the core default
+  // (hold_heading_trailing_lost off) as approach -> turn right; with it on (the
+  // whisker FSM node's default) hold the heading and translate.
   EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kRight, true, WallSubState::kFlySideways, p),
             WallSubState::kTurnRight);
+  WallFollowerParams hold = p;
+  hold.hold_heading_trailing_lost = true;
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kRight, true, WallSubState::kFlySideways, hold),
+            WallSubState::kFlySideways);
   // Invalid flag wins over a finite value; NaN with a valid flag is invalid.
   EXPECT_EQ(wall_sub_state(0.08, true, NAN, true, Side::kRight, false, WallSubState::kNone, p),
             WallSubState::kTurnLeft);
+}
+
+// Issue 17 (README "Random baffle courses"): the trailing whisker lost after
+// both touched, hand cases. Following right the trailing whisker is the left
+// one; following left, the right one. The remaining depth decides the
+// translation (band 60-100 mm); the drone never turns toward the lost whisker.
+TEST(WallSubStateRule, TrailingWhiskerLostHoldsHeading) {
+  WallFollowerParams p;
+  p.hold_heading_trailing_lost = true;  // the whisker FSM node's default
+  const auto ws = WallSubState::kFlySideways;
+  // Right side, left lost: remaining right depth in band / too close / too far.
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kRight, true, ws, p), WallSubState::kFlySideways);
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.045, true, Side::kRight, true, ws, p), WallSubState::kFlyBackward);
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.12, true, Side::kRight, true, ws, p), WallSubState::kFlyForward);
+  // Left side, right lost.
+  EXPECT_EQ(wall_sub_state(0.07, true, NAN, false, Side::kLeft, true, ws, p), WallSubState::kFlySideways);
+  EXPECT_EQ(wall_sub_state(0.05, true, NAN, false, Side::kLeft, true, ws, p), WallSubState::kFlyBackward);
+  EXPECT_EQ(wall_sub_state(0.11, true, NAN, false, Side::kLeft, true, WallSubState::kTurnLeft, p),
+            WallSubState::kFlyForward);
+  // Before both touched (approach) the missing depth still counts as beyond
+  // T_max: turn toward the touching whisker to align.
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kRight, false, ws, p), WallSubState::kTurnRight);
+  EXPECT_EQ(wall_sub_state(0.08, true, NAN, false, Side::kLeft, false, ws, p), WallSubState::kTurnLeft);
+}
+
+// Issue 17: a contact right after a clearing (less than same_obstacle_distance
+// along the course from where the side-step ended) keeps the side although the
+// target is now clearly on the other side; further on, the side is re-chosen.
+TEST(WhiskerWallFollower, ContactJustAfterClearingKeepsTheSide) {
+  auto run = [](double forward_after_resume) {
+    WhiskerWallFollower fsm{WallFollowerParams{}};
+    double t = 0.0;
+    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t));
+    // Contact at x = 1, target (2, 0) straight ahead -> default side right.
+    WallFollowerInput in = input(t, 1.0, 0.0);
+    set_depths(in, 0.08, 0.08);
+    fsm.step(in);
+    EXPECT_EQ(fsm.active_side(), Side::kRight);
+    // Sideways to y = -0.6, then both whiskers off for clear_confirm_s.
+    double y = 0.0;
+    for (int k = 0; k < 150; ++k) {
+      t += kDt;
+      y -= 0.004;
+      in = input(t, 1.0, y);
+      set_depths(in, 0.08, 0.08);
+      fsm.step(in);
+    }
+    for (int k = 0; k < 15; ++k) fsm.step(input(t += kDt, 1.0, y));
+    EXPECT_EQ(fsm.state(), FsmState::kResumeForward);
+    // Side-step the clear margin (0.30 m): now y = -0.9, target 0.9 m to the left.
+    for (int k = 0; k < 80 && fsm.state() == FsmState::kResumeForward; ++k) {
+      y -= 0.004;
+      fsm.step(input(t += kDt, 1.0, y));
+    }
+    EXPECT_EQ(fsm.state(), FsmState::kFlyForward);
+    in = input(t += kDt, 1.0 + forward_after_resume, y);
+    set_depths(in, 0.08, 0.08);
+    fsm.step(in);
+    EXPECT_EQ(fsm.state(), FsmState::kWallFollowing);
+    return fsm.active_side();
+  };
+  EXPECT_EQ(run(0.08), Side::kRight);  // same obstacle (0.08 m < 0.15 m): kept
+  EXPECT_EQ(run(0.50), Side::kLeft);   // a new obstacle: toward the target
+}
+
+// Issue 17: wall following does not turn beyond max_heading_offset (45 deg)
+// from the course heading (0 here, heading at the end of the hover). Depths
+// d_l = 100 mm, d_r = 70 mm (theta = atan(0.03/0.05) = 31 deg, wall nearer on
+// the right) ask for TURN_RIGHT; at yaw -30 deg it turns, at -46 deg (past the
+// limit) it flies sideways instead (both in band), at +46 deg a turn right
+// (back toward the course) is still allowed. Below T_min it backs off.
+TEST(WhiskerWallFollower, HeadingLimitAboutTheCourse) {
+  auto sub_at = [](double yaw_deg, double dl, double dr) {
+    WhiskerWallFollower fsm{WallFollowerParams{}};
+    double t = 0.0;
+    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t));
+    WallFollowerInput in = input(t, 1.0, 0.0, yaw_deg * kDeg);
+    set_depths(in, dl, dr);
+    return fsm.step(in).sub_state;
+  };
+  EXPECT_EQ(sub_at(-30.0, 0.10, 0.07), WallSubState::kTurnRight);
+  EXPECT_EQ(sub_at(-46.0, 0.10, 0.07), WallSubState::kFlySideways);
+  EXPECT_EQ(sub_at(46.0, 0.10, 0.07), WallSubState::kTurnRight);
+  EXPECT_EQ(sub_at(-46.0, 0.10, 0.05), WallSubState::kFlyBackward);
+  EXPECT_EQ(sub_at(-46.0, 0.13, 0.09), WallSubState::kFlyForward);
+  // Mirror: a turn left is blocked past +45 deg.
+  EXPECT_EQ(sub_at(46.0, 0.07, 0.10), WallSubState::kFlySideways);
+  EXPECT_EQ(sub_at(30.0, 0.07, 0.10), WallSubState::kTurnLeft);
+  // Off (0): the turn is kept.
+  WallFollowerParams p;
+  p.max_heading_offset = 0.0;
+  WhiskerWallFollower fsm(p);
+  double t = 0.0;
+  for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t));
+  WallFollowerInput in = input(t, 1.0, 0.0, -46.0 * kDeg);
+  set_depths(in, 0.10, 0.07);
+  EXPECT_EQ(fsm.step(in).sub_state, WallSubState::kTurnRight);
 }
 
 TEST(Saturation, ScalesSpeedAndClampsYawRate) {

@@ -78,6 +78,35 @@ struct WallFollowerParams {
   /// tilted baffle the drone turns back to the course, so the next baffle is
   /// met head-on (000 Fig. 4h: -1 / 24.3 / -1 deg). 0 = off. [1/s]
   double realign_gain = 1.5;
+  /// Trailing whisker lost after both touched (issue 17, README "Random baffle
+  /// courses"): hold the heading and translate on the remaining depth instead of
+  /// turning toward the lost whisker. On rigid baffles TDORC can drop a pressed
+  /// whisker (stick-slip) and not see it again; turning toward it then yawed the
+  /// drone 40-50 deg into the wall (seeds 1001, 1043 of the tuning block). false =
+  /// the previous rule (missing depth counts as beyond T_max, turn). Core
+  /// default false (gpis_explorer's wall follows call wall_sub_state() with
+  /// these params and were not re-measured); the whisker FSM node's default
+  /// and config/tactile_fsm.yaml turn it on.
+  bool hold_heading_trailing_lost = false;
+  /// A contact in FLY_FORWARD less than this far ahead (along the course
+  /// heading) of where the side-step after a clearing ended is the same
+  /// obstacle: keep the side (issue 17, README "Random baffle courses": on rigid
+  /// baffles both contact flags dropped together mid-wall, the drone "cleared",
+  /// re-touched 8 cm further on and re-chose the side toward the target, going
+  /// back along the baffle; flow-deck seed 1001 did so three times). 0.15 m:
+  /// with 0.25 m the next baffle of the shipped tilted-30 course, 0.25-0.3 m
+  /// ahead, counted as the same one (seed 2: heading error 12 deg). 0 = off. [m]
+  double same_obstacle_distance = 0.15;
+  /// Wall following never turns the heading further than this from the course
+  /// heading (heading at the end of HOVER_INIT); a turn that would is replaced
+  /// by the translation the depths ask for (issue 17, README "Random baffle
+  /// courses": with contact flags held after a whisker left a baffle, the drone
+  /// followed a phantom wall, turning 95-120 deg off the course, and wrapped round
+  /// the baffle's tip into the guard, 8 of 24 failures of tuning block 2000-2049).
+  /// A baffle square to the course +- 25 deg (000 Fig. 4: up to 24.3 deg) needs at
+  /// most 25 deg plus the alignment overshoot (45 deg: 35/50 on block 2000,
+  /// 60 deg: 33/50). 0 = off. [rad]
+  double max_heading_offset = 45.0 * M_PI / 180.0;
   double target_radius = 0.15;                 ///< land within this distance of the target [m]
   bool land_past_target = true;                ///< also land once past the target along the course direction
   double landing_duration_s = 2.0;             ///< LANDING -> LANDED after this [s]
@@ -202,6 +231,8 @@ class WhiskerWallFollower {
   double origin_x_ = 0.0, origin_y_ = 0.0;  ///< course start (end of hover)
   double course_yaw_ = 0.0;                   ///< heading at the course start [rad]
   double clear_x_ = 0.0, clear_y_ = 0.0;    ///< where the obstacle was cleared
+  bool after_clear_ = false;                 ///< FLY_FORWARD entered from RESUME_FORWARD
+  double resume_x_ = 0.0, resume_y_ = 0.0;  ///< where that FLY_FORWARD began
 };
 
 }  // namespace tactile_fsm
