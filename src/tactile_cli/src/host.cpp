@@ -35,10 +35,18 @@ void BagRecorder::on_message(const TapTopic& topic, int64_t stamp_ns,
 
 Host::Host(std::string config_dir) : config_dir_(std::move(config_dir)) {}
 
+std::string parameter_file_name(const std::string& node_name) {
+  // As the launch files pass them: every node's file is <node>.yaml except the whisker
+  // FSM's, which is named after its package (launch/sitl_whisker.launch.py and the others
+  // give config/tactile_fsm.yaml to the node whisker_fsm).
+  if (node_name == "whisker_fsm") return "tactile_fsm.yaml";
+  return node_name + ".yaml";
+}
+
 tactile_common::ParamMap Host::load_parameters(const std::string& ns, const std::string& node_name,
                                                const tactile_common::ParamMap& defaults,
                                                const tactile_common::ParamMap& over) const {
-  const std::string path = (std::filesystem::path(config_dir_) / (node_name + ".yaml")).string();
+  const std::string path = (std::filesystem::path(config_dir_) / parameter_file_name(node_name)).string();
   tactile_common::ParamMap params = std::filesystem::exists(path)
                                         ? tactile_common::load_node_parameters(path, resolve_topic(ns, node_name), defaults)
                                         : defaults;

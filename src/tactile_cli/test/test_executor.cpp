@@ -1,11 +1,17 @@
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <regex>
 #include <string>
+#include <unistd.h>
 #include <vector>
 
 #include "std_msgs/msg/header.hpp"
 #include "std_msgs/msg/float64.hpp"
 #include "tactile_cli/executor.hpp"
+#include "tactile_cli/host.hpp"
 
 using tactile_cli::Bus;
 using tactile_cli::Executor;
@@ -92,4 +98,41 @@ TEST(Bus, OneTopicOneType) {
   Bus bus;
   bus.subscribe<std_msgs::msg::Float64>("/x", [](const std_msgs::msg::Float64&) {});
   EXPECT_THROW(bus.publish("/x", std_msgs::msg::Header{}, 0), std::logic_error);
+}
+
+// The standalone host reads each node's parameters from the file the launch files give
+// that node: a launch file's ComposableNode(name='N', parameters=...config('F')...) must
+// have parameter_file_name(N) == F.yaml for every node of every launch file. (The whisker
+// FSM's file is named after its package; the host looked for whisker_fsm.yaml and ran the
+// FSM on its code defaults whatever config/tactile_fsm.yaml said.)
+TEST(Host, ParameterFilesAreTheLaunchFilesOnes) {
+  namespace fs = std::filesystem;
+  const fs::path launch_dir = fs::path(TACTILE_CONFIG_DIR) / ".." / "launch";
+  const std::regex node(R"(name='([a-z_]+)',\s*\n?[^)]*?config\('([a-z_]+)'\))");
+  int pairs = 0;
+  for (const auto& entry : fs::directory_iterator(launch_dir)) {
+    if (entry.path().extension() != ".py") continue;
+    std::ifstream in(entry.path());
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    for (std::sregex_iterator it(text.begin(), text.end(), node), end; it != end; ++it) {
+      EXPECT_EQ(tactile_cli::parameter_file_name((*it)[1]), std::string((*it)[2]) + ".yaml")
+          << entry.path().filename() << ": node " << (*it)[1];
+      ++pairs;
+    }
+  }
+  EXPECT_GE(pairs, 10);  // the regex still finds the launch files' nodes
+  EXPECT_EQ(tactile_cli::parameter_file_name("whisker_fsm"), "tactile_fsm.yaml");
+}
+
+TEST(Host, LoadsTheWhiskerFsmFromTactileFsmYaml) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("tactile_host_cfg_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ofstream(dir / "tactile_fsm.yaml") << "/**/whisker_fsm:\n  ros__parameters:\n    v_max: 0.123\n";
+  tactile_cli::Host host(dir.string());
+  tactile_common::ParamMap defaults("whisker_fsm", "defaults");
+  defaults.set("v_max", 0.2);
+  const auto p = host.load_parameters("", "whisker_fsm", defaults, tactile_common::ParamMap("", "none"));
+  EXPECT_DOUBLE_EQ(p.get_double("v_max"), 0.123);
+  fs::remove_all(dir);
 }

@@ -57,7 +57,7 @@ class Host {
   const std::string& config_dir() const { return config_dir_; }
 
   /// Parameters of node `node_name` in namespace `ns`: defaults <-
-  /// config/<node_name>.yaml (sections matched against the fully qualified
+  /// config/<parameter_file_name(node_name)> (sections matched against the fully qualified
   /// name, as ROS 2 does) <- overrides (like a launch file's per-node
   /// parameter dict). Errors name the file, key and reason.
   tactile_common::ParamMap load_parameters(const std::string& ns, const std::string& node_name,
@@ -83,6 +83,10 @@ class Host {
   std::vector<std::shared_ptr<void>> objects_;
   std::vector<std::function<NodeReport()>> reporters_;
 };
+
+/// Name of the parameter file of node `node_name` in the config directory, the one the
+/// launch files give that node: `<node_name>.yaml`, but `tactile_fsm.yaml` for `whisker_fsm`.
+std::string parameter_file_name(const std::string& node_name);
 
 /// The logic object of node `Logic` in namespace `ns`, built from its
 /// parameters (defaults <- config/<node>.yaml <- `over`, Host::load_parameters)
