@@ -94,3 +94,23 @@ def parameters(*entries):
         else:
             raise TypeError(f'parameters(): a file or a dict, got {entry!r}')
     return list(entries) + ([{PARAMETER_SOURCES: sources}] if sources else [])
+
+
+def simulator_node(wait_for_publisher, extra_arguments):
+    """The SITL's simulator component of the sitl_* launch files (arguments scenario, seed,
+    real_time_factor, wait_for_subscribers). It starts the world once `wait_for_publisher`
+    (the graph's controller output, loaded last) has a publisher, and holds t = 0 until the
+    topics of wait_for_subscribers have a subscriber in another process (a recorder;
+    comma-separated, '' starts at once)."""
+    from launch_ros.descriptions import ComposableNode
+    return ComposableNode(
+        package='tactile_sim', plugin='tactile_sim::TactileSimComponent', name='tactile_sim',
+        parameters=parameters(
+            {'scenario': LaunchConfiguration('scenario'),
+             'seed': LaunchConfiguration('seed'),
+             'real_time_factor': ParameterValue(
+                 LaunchConfiguration('real_time_factor'), value_type=float),
+             'wait_for_publisher': wait_for_publisher,
+             'wait_for_subscribers': ParameterValue(
+                 LaunchConfiguration('wait_for_subscribers'), value_type=str)}),
+        extra_arguments=extra_arguments)

@@ -24,7 +24,6 @@ from launch.actions import DeclareLaunchArgument, OpaqueFunction
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import ComposableNodeContainer
 from launch_ros.descriptions import ComposableNode
-from launch_ros.parameter_descriptions import ParameterValue
 
 CONFIG_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config')
 
@@ -43,20 +42,7 @@ def nodes(context):
     intra = [{'use_intra_process_comms': True}]
     behaviour = LaunchConfiguration('behaviour').perform(context)
     out = [
-        ComposableNode(
-            package='tactile_sim', plugin='tactile_sim::TactileSimComponent', name='tactile_sim',
-            parameters=launch_common.parameters(
-                {'scenario': LaunchConfiguration('scenario'),
-                 'seed': LaunchConfiguration('seed'),
-                 'real_time_factor': ParameterValue(
-                     LaunchConfiguration('real_time_factor'), value_type=float),
-                 # start the world when the controller (loaded last) is up
-                 'wait_for_publisher': '/wall_effect/setpoint',
-                 # hold t = 0 until these topics have a subscriber in another
-                 # process (e.g. a recorder), comma-separated; '' starts at once
-                 'wait_for_subscribers': ParameterValue(
-                     LaunchConfiguration('wait_for_subscribers'), value_type=str)}),
-            extra_arguments=intra),
+        launch_common.simulator_node('/wall_effect/setpoint', intra),
         ComposableNode(
             package='wall_effect_ekf', plugin='wall_effect_ekf::WallEffectEkfComponent',
             name='wall_effect_ekf', parameters=launch_common.parameters(

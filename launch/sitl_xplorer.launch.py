@@ -22,7 +22,6 @@ from launch.actions import DeclareLaunchArgument
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import ComposableNodeContainer
 from launch_ros.descriptions import ComposableNode
-from launch_ros.parameter_descriptions import ParameterValue
 
 CONFIG_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config')
 
@@ -40,20 +39,7 @@ def generate_launch_description():
     sim_time = {'use_sim_time': True}
     intra = [{'use_intra_process_comms': True}]
     nodes = [
-        ComposableNode(
-            package='tactile_sim', plugin='tactile_sim::TactileSimComponent', name='tactile_sim',
-            parameters=launch_common.parameters(
-                {'scenario': LaunchConfiguration('scenario'),
-                 'seed': LaunchConfiguration('seed'),
-                 'real_time_factor': ParameterValue(
-                     LaunchConfiguration('real_time_factor'), value_type=float),
-                 # start the world when the controller (loaded last) is up
-                 'wait_for_publisher': '/cmd_position',
-                 # hold t = 0 until these topics have a subscriber in another
-                 # process (e.g. a recorder), comma-separated; '' starts at once
-                 'wait_for_subscribers': ParameterValue(
-                     LaunchConfiguration('wait_for_subscribers'), value_type=str)}),
-            extra_arguments=intra),
+        launch_common.simulator_node('/cmd_position', intra),
         ComposableNode(
             package='xplorer_force_est', plugin='xplorer_force_est::XplorerForceEstComponent',
             name='xplorer_force_est', parameters=launch_common.parameters(
