@@ -274,6 +274,17 @@ TEST(ModelFile, LoadFromDisk) {
   } catch (const ModelError& e) {
     EXPECT_NE(std::string(e.what()).find("too large"), std::string::npos) << e.what();
   }
+  // Loaded again after an edit: the new text is parsed (the kept models are keyed by the text),
+  // and an edit that breaks the file throws although the good version was loaded before.
+  {
+    std::ofstream(good) << replace(hand_file(), "\"output_offset\": 0.02", "\"output_offset\": 0.52");
+    const SensorModelFile edited = SensorModelFile::load(good.string());
+    EXPECT_NEAR(edited.left.predict({{3, 2, 4}}), 0.571, 1e-12);
+    std::ofstream(good) << hand_file();
+    EXPECT_EQ(SensorModelFile::load(good.string()).left.predict({{3, 2, 4}}), f.left.predict({{3, 2, 4}}));
+    std::ofstream(good) << replace(hand_file(), "\"relu\"", "\"sigmoid\"");
+    EXPECT_THROW(SensorModelFile::load(good.string()), ModelError);
+  }
   // Errors from a file name the file.
   const fs::path bad = dir / "bad.json";
   std::ofstream(bad) << replace(hand_file(), "\"relu\"", "\"sigmoid\"");
