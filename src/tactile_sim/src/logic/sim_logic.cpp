@@ -346,7 +346,8 @@ class CrazyflieVehicle : public SimLogic::Vehicle {
           p.temperature[c] = sample.temperature[c];
         }
         p.sequence = sequence_[static_cast<size_t>(i)]++;
-        out.pressure.push_back({std::string("/whisker/") + kSides[i] + "/pressure", p});
+        static constexpr std::string_view kPressureTopics[2] = {"/whisker/left/pressure", "/whisker/right/pressure"};
+        out.pressure.push_back({kPressureTopics[i], p});
 
         tactile_msgs::msg::WhiskerGroundTruth gt;
         gt.header = p.header;
@@ -355,7 +356,9 @@ class CrazyflieVehicle : public SimLogic::Vehicle {
         gt.load = w.base_moment;
         gt.depth = w.depth;
         gt.motors_on = cf_.motors_on();
-        out.whisker_truth.push_back({std::string("/ground_truth/whisker/") + kSides[i] + "/contact", gt});
+        static constexpr std::string_view kTruthTopics[2] = {"/ground_truth/whisker/left/contact",
+                                                             "/ground_truth/whisker/right/contact"};
+        out.whisker_truth.push_back({kTruthTopics[i], gt});
 
         if (w.contact) {
           contacts.push_back(w.contact_point);
@@ -652,7 +655,7 @@ class WhiskerStageVehicle : public SimLogic::Vehicle {
 
 struct SimLogic::FaultSet {
   template <class T>
-  using Map = std::map<std::string, TopicFaults<T>>;
+  using Map = std::map<std::string, TopicFaults<T>, std::less<>>;  // found by string_view
   std::tuple<Map<tactile_msgs::msg::WhiskerPressure>, Map<sensor_msgs::msg::Imu>, Map<sensor_msgs::msg::Range>,
              Map<nav_msgs::msg::Odometry>, Map<tactile_msgs::msg::OpticalFlow>, Map<tactile_msgs::msg::ArmImuArray>>
       maps;
@@ -666,7 +669,7 @@ struct SimLogic::FaultSet {
                          std::is_same<T, tactile_msgs::msg::ArmImuArray>>;
 
   template <class T>
-  TopicFaults<T>* find(const std::string& topic) {
+  TopicFaults<T>* find(std::string_view topic) {
     auto& m = std::get<Map<T>>(maps);
     auto it = m.find(topic);
     return it == m.end() ? nullptr : &it->second;
@@ -826,7 +829,7 @@ void flush_delayed(Map& faults, std::vector<Published<T>>& out, int64_t now_ns) 
 }  // namespace
 
 template <class T>
-void SimLogic::emit(std::vector<Published<T>>& out, const std::string& topic, T msg, int64_t now_ns) {
+void SimLogic::emit(std::vector<Published<T>>& out, std::string_view topic, T msg, int64_t now_ns) {
   if constexpr (FaultSet::supports<T>) {
     if (auto* f = faults_->find<T>(topic)) {
       std::vector<T> delivered;

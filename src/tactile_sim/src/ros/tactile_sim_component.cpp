@@ -132,7 +132,8 @@ class TactileSimComponent : public rclcpp::Node {
     for (const auto & m : messages) {
       auto it = publishers.find(m.topic);
       if (it == publishers.end()) {
-        it = publishers.emplace(m.topic, create_publisher<T>(m.topic, rclcpp::SensorDataQoS())).first;
+        const std::string topic(m.topic);
+        it = publishers.emplace(topic, create_publisher<T>(topic, rclcpp::SensorDataQoS())).first;
       }
       it->second->publish(m.msg);
     }
@@ -143,10 +144,11 @@ class TactileSimComponent : public rclcpp::Node {
   {
     auto & publishers = std::get<Publishers<T>>(publishers_);
     for (const auto & m : messages) {
-      if (publishers.find(m.topic) == publishers.end()) {
-        publishers.emplace(m.topic, create_publisher<T>(m.topic, rclcpp::SensorDataQoS()));
+      const std::string topic(m.topic);
+      if (publishers.find(topic) == publishers.end()) {
+        publishers.emplace(topic, create_publisher<T>(topic, rclcpp::SensorDataQoS()));
       }
-      publisher_bases_[m.topic] = publishers.at(m.topic);
+      publisher_bases_[topic] = publishers.at(topic);
     }
   }
 
@@ -288,7 +290,7 @@ class TactileSimComponent : public rclcpp::Node {
   }
 
   template<class T>
-  using Publishers = std::map<std::string, typename rclcpp::Publisher<T>::SharedPtr>;
+  using Publishers = std::map<std::string, typename rclcpp::Publisher<T>::SharedPtr, std::less<>>;
 
   std::unique_ptr<SimLogic> logic_;
   SimLogic::Outputs outputs_;

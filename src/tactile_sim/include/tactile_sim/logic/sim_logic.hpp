@@ -9,6 +9,7 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "geometry_msgs/msg/pose_stamped.hpp"
@@ -30,10 +31,12 @@
 
 namespace tactile_sim {
 
-/// A message and the topic it goes to.
+/// A message and the topic it goes to. `topic` views a name that lives as long as the
+/// SimLogic (a string literal or a name the simulator keeps), so emitting a message does
+/// not copy its topic name (issue 18: a heap string per message before).
 template <class T>
 struct Published {
-  std::string topic;
+  std::string_view topic;
   T msg;
 };
 
@@ -119,7 +122,7 @@ class SimLogic {
 
  private:
   template <class T>
-  void emit(std::vector<Published<T>>& out, const std::string& topic, T msg, int64_t now_ns);
+  void emit(std::vector<Published<T>>& out, std::string_view topic, T msg, int64_t now_ns);
 
   Scenario scenario_;
   uint64_t seed_;
