@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <random>
 #include <string>
 #include <vector>
@@ -280,6 +281,70 @@ TEST(Bag, MetadataYamlVersion9Content) {
   sqlite3_close(db);
   // After close the WAL is checkpointed: no side files remain.
   EXPECT_FALSE(fs::exists(dir + "/sample_0.db3-wal"));
+}
+
+// metadata.yaml is composed from parts the writer emits at different times (each topic's
+// block when the topic is created): the text must be exactly what yaml-cpp emits for the whole
+// node tree it reads as, for every metadata version, storage, with no topic, with topics whose
+// QoS strings are multi-line (v5, v8) or lists (v9), while open and after close.
+TEST(Bag, MetadataYamlIsTheEmittersTextOfItsTree) {
+  // The tree read back, with every collection in the default (block) style a tree built in
+  // code has ("[]" reads as a flow sequence), emitted whole.
+  std::function<void(YAML::Node)> default_style = [&](YAML::Node n) {
+    if (!n.IsMap() && !n.IsSequence()) return;
+    n.SetStyle(YAML::EmitterStyle::Default);
+    for (auto it = n.begin(); it != n.end(); ++it) default_style(n.IsMap() ? it->second : *it);
+  };
+  auto canonical = [&](const std::string& text) {
+    YAML::Node tree = YAML::Load(text);
+    default_style(tree);
+    YAML::Emitter e;
+    e << tree;
+    return std::string(e.c_str()) + "\n";
+  };
+  auto file = [](const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  TempDir tmp;
+  for (const std::string storage : {"sqlite3", "mcap"}) {
+    for (const int version : {5, 8, 9}) {
+      for (int topics = 0; topics <= 3; topics += 3) {
+        SCOPED_TRACE(storage + " v" + std::to_string(version) + " topics " + std::to_string(topics));
+        tactile_bag::WriterOptions opt;
+        opt.storage = storage;
+        opt.metadata_version = version;
+        const std::string dir = tmp.sub(storage + std::to_string(version) + "_" + std::to_string(topics));
+        {
+          Writer w(opt);
+          w.open(dir);
+          const std::string at_open = file(dir + "/metadata.yaml");
+          EXPECT_EQ(at_open, canonical(at_open));
+          for (int t = 0; t < topics; ++t) {
+            tactile_bag::TopicInfo info = topic("/t" + std::to_string(t));
+            if (t == 1) {
+              info.offered_qos_profiles =
+                  "- history: keep_last\n  depth: 10\n  reliability: best_effort\n  durability: volatile\n"
+                  "  deadline:\n    sec: 1\n    nsec: 500\n  lifespan:\n    sec: 0\n    nsec: 0\n"
+                  "  liveliness: automatic\n  liveliness_lease_duration:\n    sec: 2\n    nsec: 0\n"
+                  "  avoid_ros_namespace_conventions: false\n";
+            }
+            w.create_topic(info);
+            for (int k = 0; k <= t; ++k) w.write(info.name, 100 * (k + 1) + t, bytes({1, 2}));
+          }
+        }
+        const std::string text = file(dir + "/metadata.yaml");
+        EXPECT_EQ(text, canonical(text));
+        const YAML::Node m = YAML::Load(text)["rosbag2_bagfile_information"];
+        EXPECT_EQ(m["version"].as<int>(), version);
+        EXPECT_EQ(m["topics_with_message_count"].size(), static_cast<size_t>(topics));
+        EXPECT_EQ(m["message_count"].as<int>(), topics == 3 ? 6 : 0);
+        if (topics == 3) {
+          EXPECT_EQ(m["topics_with_message_count"][2]["message_count"].as<int>(), 3);
+        }
+      }
+    }
+  }
 }
 
 TEST(Bag, HumbleVersion5UsesIntegerQosString) {

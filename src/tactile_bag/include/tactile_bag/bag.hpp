@@ -161,6 +161,7 @@ class Writer {
     uint64_t count = 0;
     bool drop_range_variance = false;  ///< Humble/Iron bag: cut Range's trailing variance
     std::vector<QosProfile> qos;       ///< offered_qos_profiles, parsed once
+    std::string metadata_yaml;         ///< its metadata.yaml `topic_metadata` block, emitted once
   };
   void prepare_topic_locked(TopicState& st) const;
   void write_locked(TopicState& st, int64_t timestamp_ns, const uint8_t* data, size_t size);
