@@ -1,5 +1,6 @@
 #include "tdorc_filter/tdorc.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <sstream>
@@ -64,6 +65,12 @@ void Params::validate() const {
   }
   if (!(max_drift_slope >= 0.0) || !std::isfinite(max_drift_slope)) {
     bad("max_drift_slope", "must be finite and >= 0, got " + num(max_drift_slope));
+  }
+  if (!(hold_quiet_rms >= 0.0) || !std::isfinite(hold_quiet_rms)) {
+    bad("hold_quiet_rms", "must be finite and >= 0, got " + num(hold_quiet_rms));
+  }
+  if (hold_quiet_samples < 2 || hold_quiet_samples > 10000) {
+    bad("hold_quiet_samples", "must be in [2, 10000], got " + std::to_string(hold_quiet_samples));
   }
   if (hold_level_samples < 1 || hold_level_samples > 100000) {
     bad("hold_level_samples", "must be in [1, 100000], got " + std::to_string(hold_level_samples));
@@ -313,7 +320,9 @@ std::size_t TdorcChannel::state_size_bytes() const {
 // ---------------------------------------------------------------- TdorcWhisker
 
 TdorcWhisker::TdorcWhisker(const Params& params)
-    : params_(validated(params)), channels_{{TdorcChannel(params), TdorcChannel(params), TdorcChannel(params)}} {}
+    : params_(validated(params)),
+      channels_{{TdorcChannel(params), TdorcChannel(params), TdorcChannel(params)}},
+      quiet_sq_(params.hold_quiet_rms > 0.0 ? static_cast<std::size_t>(params.hold_quiet_samples) : 1, 0.0) {}
 
 void TdorcWhisker::reset() {
   for (auto& c : channels_) c.reset();
@@ -323,6 +332,43 @@ void TdorcWhisker::reset() {
   contact_peak_ = {};
   contact_level_ = 0.0;
   below_samples_ = 0;
+  std::fill(quiet_sq_.begin(), quiet_sq_.end(), 0.0);
+  quiet_head_ = quiet_count_ = quiet_pushes_ = 0;
+  quiet_sum_ = last_sum_ = 0.0;
+  have_last_sum_ = false;
+}
+
+void TdorcWhisker::push_quiet(double sum) {
+  if (!have_last_sum_) {
+    last_sum_ = sum;
+    have_last_sum_ = true;
+    return;
+  }
+  const double d = sum - last_sum_;
+  last_sum_ = sum;
+  const int n = static_cast<int>(quiet_sq_.size());
+  const int slot = (quiet_head_ + quiet_count_) % n;
+  if (quiet_count_ == n) {
+    quiet_sum_ -= quiet_sq_[static_cast<std::size_t>(quiet_head_)];
+    quiet_head_ = (quiet_head_ + 1) % n;
+  } else {
+    ++quiet_count_;
+  }
+  quiet_sq_[static_cast<std::size_t>(slot)] = d * d;
+  quiet_sum_ += d * d;
+  // Rebuild the running sum every n pushes so rounding does not accumulate.
+  if (++quiet_pushes_ >= n) {
+    quiet_pushes_ = 0;
+    quiet_sum_ = 0.0;
+    for (double v : quiet_sq_) quiet_sum_ += v;
+  }
+}
+
+bool TdorcWhisker::quiet() const {
+  const int n = static_cast<int>(quiet_sq_.size());
+  if (params_.hold_quiet_rms <= 0.0 || quiet_count_ < n) return false;
+  // RMS of the changes < hold_quiet_rms  <=>  sum of squares < n * rms^2.
+  return quiet_sum_ < static_cast<double>(n) * params_.hold_quiet_rms * params_.hold_quiet_rms;
 }
 
 WhiskerOutput TdorcWhisker::update(const std::array<double, 3>& raw) {
@@ -334,6 +380,9 @@ WhiskerOutput TdorcWhisker::update(const std::array<double, 3>& raw) {
     out.channel[i] = channels_[i].compensate(k, raw[i]);
     any = any || out.channel[i].contact;
     all_ready = all_ready && out.channel[i].ready;
+  }
+  if (params_.hold_quiet_rms > 0.0 && all_ready) {
+    push_quiet(out.channel[0].calibrated + out.channel[1].calibrated + out.channel[2].calibrated);
   }
   // Whisker-level contact freezes every channel's fit (000 eq. 8).
   // Sustained contact (Params::contact_hold): after an S_p onset the whisker
@@ -351,6 +400,9 @@ WhiskerOutput TdorcWhisker::update(const std::array<double, 3>& raw) {
     // A release drops the whisker's S_c (sum of the channels) to a small part
     // of its recent level, whatever offset the gel hysteresis leaves.
     if (params_.hold_release_drop > 0.0) over = over && sum > params_.hold_release_drop * contact_level_;
+    // A whisker whose S_c went quiet (barometer noise only) is no longer
+    // moved by a wall, whatever offset the hysteresis and the line leave.
+    if (quiet()) over = false;
     below_samples_ = over ? 0 : below_samples_ + 1;
     held = below_samples_ < params_.hold_release_samples;
   }

@@ -40,6 +40,8 @@ ParamMap TdorcFilterLogic::default_parameters() {
   m.set("hold_release_drop", d.hold_release_drop);                 // workspace extension (README)
   m.set("hold_level_samples", static_cast<int64_t>(d.hold_level_samples));  // workspace extension (README)
   m.set("max_drift_slope", d.max_drift_slope);                     // workspace extension (README)
+  m.set("hold_quiet_rms", d.hold_quiet_rms);                       // workspace extension (README, issue 17)
+  m.set("hold_quiet_samples", static_cast<int64_t>(d.hold_quiet_samples));  // workspace extension (README, issue 17)
   m.set("bandpass_b", std::vector<double>(d.bandpass_b.begin(), d.bandpass_b.end()));  // 000 eq. 9-11
   m.set("bandpass_a", std::vector<double>(d.bandpass_a.begin(), d.bandpass_a.end()));  // 000 eq. 9-11
   const Params n;
@@ -96,6 +98,12 @@ TdorcFilterLogic::Params TdorcFilterLogic::params_from(const ParamMap& m) {
   }
   p.tdorc.hold_level_samples = static_cast<int>(level);
   p.tdorc.max_drift_slope = m.get_double("max_drift_slope");
+  p.tdorc.hold_quiet_rms = m.get_double("hold_quiet_rms");
+  const int64_t quiet = m.get_int("hold_quiet_samples");
+  if (quiet < 2 || quiet > 10000) {
+    throw m.error("hold_quiet_samples", "must be in [2, 10000], got " + std::to_string(quiet));
+  }
+  p.tdorc.hold_quiet_samples = static_cast<int>(quiet);
   p.tdorc.bandpass_b = three(m, "bandpass_b");
   p.tdorc.bandpass_a = three(m, "bandpass_a");
   p.max_sample_gap_s = m.get_double("max_sample_gap_s");

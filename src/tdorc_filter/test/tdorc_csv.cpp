@@ -1,7 +1,7 @@
 // Test helper (not installed): runs TdorcWhisker over CSV samples so an
 // independent Python implementation can be compared sample by sample.
 //
-//   tdorc_csv <mode> <window> <contact_threshold> <absolute 0|1> [learn_delay contact_hold 0|1 max_contact_hold [hold_release_fraction [hold_release_samples [hold_release_drop [hold_level_samples [max_drift_slope]]]]]]
+//   tdorc_csv <mode> <window> <contact_threshold> <absolute 0|1> [learn_delay contact_hold 0|1 max_contact_hold [hold_release_fraction [hold_release_samples [hold_release_drop [hold_level_samples [max_drift_slope [hold_quiet_rms hold_quiet_samples]]]]]]]
 //   stdin:  one sample per line: S_r0,S_r1,S_r2
 //   stdout: ready,contact,drift_frozen,S_c0,S_c1,S_c2,S_p0,S_p1,S_p2,contact0,contact1,contact2
 #include <cstdio>
@@ -14,9 +14,9 @@
 #include "tdorc_filter/tdorc.hpp"
 
 int main(int argc, char** argv) {
-  if (argc != 5 && (argc < 8 || argc > 13)) {
+  if (argc != 5 && (argc < 8 || argc > 15 || argc == 14)) {
     std::cerr << "usage: tdorc_csv <tdorc|tdoc|bandpass> <window> <threshold> <absolute 0|1>"
-                 " [<learn_delay> <contact_hold 0|1> <max_contact_hold> [<hold_release_fraction> [<hold_release_samples> [<hold_release_drop> [<hold_level_samples> [<max_drift_slope>]]]]]]\n";
+                 " [<learn_delay> <contact_hold 0|1> <max_contact_hold> [<hold_release_fraction> [<hold_release_samples> [<hold_release_drop> [<hold_level_samples> [<max_drift_slope> [<hold_quiet_rms> <hold_quiet_samples>]]]]]]]\n";
     return 2;
   }
   try {
@@ -35,6 +35,10 @@ int main(int argc, char** argv) {
     if (argc >= 11) p.hold_release_drop = std::strtod(argv[10], nullptr);
     if (argc >= 12) p.hold_level_samples = std::atoi(argv[11]);
     if (argc >= 13) p.max_drift_slope = std::strtod(argv[12], nullptr);
+    if (argc >= 15) {
+      p.hold_quiet_rms = std::strtod(argv[13], nullptr);
+      p.hold_quiet_samples = std::atoi(argv[14]);
+    }
     tdorc_filter::TdorcWhisker w(p);
     std::string line;
     while (std::getline(std::cin, line)) {

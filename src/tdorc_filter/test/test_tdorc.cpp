@@ -505,6 +505,70 @@ TEST(TdorcWhisker, HoldReleaseDropFollowsAGradualEaseOff) {
   EXPECT_THROW(TdorcWhisker{bad}, std::invalid_argument);
 }
 
+TEST(TdorcWhisker, HoldQuietRmsEndsAHoldOverAQuietOffset) {
+  // Issue 17: a whisker pressed by a moving drone (+200 Pa with +-30 Pa
+  // alternating: changes of 60 Pa per sample) from sample 300 to 1099; after
+  // the release the gel keeps an offset of +150 Pa decaying by 0.1 Pa per
+  // sample (000 eq. 1, N_h). 150 is over T_c, over 0.1 of the peak and over
+  // 0.25 of the level, so the previous rules hold the whisker to the limit
+  // (onset 301 + 999 = 1300). The band-pass has zero gain at the alternation
+  // (Nyquist), so S_p, the onset and the hold's start are those of a plain
+  // push. By hand, with hold_quiet_rms 8 over 25 samples: the last change of
+  // the pressed phase (60 Pa, sample 1099) leaves the window of 25 changes
+  // after sample 1123; at 1124 the window holds the fall 170 -> 150 (20 Pa)
+  // and 24 changes of 0.1 Pa, RMS sqrt((400 + 0.24) / 25) = 4.0 < 8: 1124 and
+  // 1125 are held (hold_release_samples 3), 1126 is free.
+  auto last_with = [](double rms) {
+    Params p = holding();
+    p.hold_release_fraction = 0.1;
+    p.hold_release_samples = 3;
+    p.hold_release_drop = 0.25;
+    p.hold_level_samples = 50;
+    p.hold_quiet_rms = rms;
+    p.hold_quiet_samples = 25;
+    return last_contact(run_pushed(p, 1600, [](int k) {
+      if (k < 300) return 0.0;
+      if (k < 1100) return 200.0 + (k % 2 == 0 ? 30.0 : -30.0);
+      return 150.0 - 0.1 * (k - 1100);
+    }));
+  };
+  EXPECT_EQ(last_with(0.0), 1300);
+  EXPECT_EQ(last_with(8.0), 1125);
+  // With 0.2 Pa the fall (RMS 4.0) is not quiet; from 1125 the window holds
+  // only the 0.1 Pa changes: 1125, 1126 held, 1127 free. Below 0.1, never.
+  EXPECT_EQ(last_with(0.2), 1126);
+  EXPECT_EQ(last_with(0.09), 1300);
+}
+
+TEST(TdorcWhisker, HoldQuietRmsKeepsAMovingPressedWhisker) {
+  // Pressed from sample 300 to the end with +-a Pa alternating on +200 Pa:
+  // the changes are 2a per sample, their RMS 2a. With hold_quiet_rms 8 a
+  // whisker moved by 10 Pa per sample (a = 5) stays in contact to the hold
+  // limit (1300), one moved by 6 Pa (a = 3) is released as soon as the hold
+  // begins: held at its first two samples, free at the third.
+  auto outs_with = [](double a) {
+    Params p = holding();
+    p.hold_release_samples = 3;
+    p.hold_quiet_rms = 8.0;
+    p.hold_quiet_samples = 25;
+    return run_pushed(p, 1600, [a](int k) { return k < 300 ? 0.0 : 200.0 + (k % 2 == 0 ? a : -a); });
+  };
+  EXPECT_EQ(last_contact(outs_with(5.0)), 1300);
+  const auto quiet = outs_with(3.0);
+  int first_held = -1;
+  for (int k = 0; k < 1600 && first_held < 0; ++k) {
+    if (quiet[static_cast<size_t>(k)].contact_held) first_held = k;
+  }
+  ASSERT_GT(first_held, 600);  // after S_p of the push decayed under T_c (~668)
+  EXPECT_EQ(last_contact(quiet), first_held + 1);
+  Params bad;
+  bad.hold_quiet_rms = -1.0;
+  EXPECT_THROW(TdorcWhisker{bad}, std::invalid_argument);
+  bad.hold_quiet_rms = 8.0;
+  bad.hold_quiet_samples = 1;
+  EXPECT_THROW(TdorcWhisker{bad}, std::invalid_argument);
+}
+
 TEST(TdorcWhisker, MaxDriftSlopeKeepsAStepFromLockingTheWhisker) {
   // eq. 8 as written on a 10 s push (+200 Pa, samples 300-799): the band-pass
   // loses the contact after ~7 s, the window learns pressed samples, and after
@@ -668,6 +732,12 @@ TEST(Params, ValidateSustainedContactFields) {
   p = Params{};
   p.max_drift_slope = -1.0;
   EXPECT_EQ(error_of(p), "TdorcParams.max_drift_slope: must be finite and >= 0, got -1");
+  p = Params{};
+  p.hold_quiet_rms = -1.0;
+  EXPECT_EQ(error_of(p), "TdorcParams.hold_quiet_rms: must be finite and >= 0, got -1");
+  p = Params{};
+  p.hold_quiet_samples = 1;
+  EXPECT_EQ(error_of(p), "TdorcParams.hold_quiet_samples: must be in [2, 10000], got 1");
 }
 
 TEST(Params, ValidateNamesTheField) {

@@ -84,6 +84,8 @@ TEST(TdorcFilterLogic, RepositoryConfigIsPaperValuesPlusSustainedContact) {
   EXPECT_EQ(p.tdorc.hold_release_drop, 0.25);
   EXPECT_EQ(p.tdorc.hold_level_samples, 50);
   EXPECT_EQ(p.tdorc.max_drift_slope, 0.5);
+  EXPECT_EQ(p.tdorc.hold_quiet_rms, 0.0);  // issue 17: measured, not switched on (README)
+  EXPECT_EQ(p.tdorc.hold_quiet_samples, 25);
 }
 
 TEST(TdorcFilterLogic, ParameterErrorsNameTheKey) {
@@ -115,6 +117,14 @@ TEST(TdorcFilterLogic, ParameterErrorsNameTheKey) {
   m = TdorcFilterLogic::default_parameters();
   m.set("hold_level_samples", int64_t{0});
   EXPECT_NE(param_error(m).find("hold_level_samples: must be in [1, 100000], got 0"), std::string::npos);
+
+  m = TdorcFilterLogic::default_parameters();
+  m.set("hold_quiet_samples", int64_t{1});
+  EXPECT_NE(param_error(m).find("hold_quiet_samples: must be in [2, 10000], got 1"), std::string::npos);
+
+  m = TdorcFilterLogic::default_parameters();
+  m.set("hold_quiet_rms", -1.0);
+  EXPECT_NE(param_error(m).find("hold_quiet_rms: must be finite and >= 0"), std::string::npos);
 
   m = TdorcFilterLogic::default_parameters();
   m.set("max_drift_slope", -0.5);

@@ -45,11 +45,12 @@ def synthetic_trace(seed=1, n=3000, rate=50.0, contact_amp=600.0, contact_end=16
 
 
 def reference(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=False, max_hold=1000, release=0.0,
-              release_samples=1, drop=0.0, level_samples=25, max_slope=0.0):
-    """delay, hold, max_hold, release, release_samples, drop, level_samples, max_slope: the
-    README's sustained-contact extension (learn_delay, contact_hold, max_contact_hold,
-    hold_release_fraction, hold_release_samples, hold_release_drop, hold_level_samples,
-    max_drift_slope); defaults = eq. 8 as written."""
+              release_samples=1, drop=0.0, level_samples=25, max_slope=0.0, quiet_rms=0.0, quiet_samples=25):
+    """delay, hold, max_hold, release, release_samples, drop, level_samples, max_slope,
+    quiet_rms, quiet_samples: the README's sustained-contact extension (learn_delay,
+    contact_hold, max_contact_hold, hold_release_fraction, hold_release_samples,
+    hold_release_drop, hold_level_samples, max_drift_slope, hold_quiet_rms,
+    hold_quiet_samples); defaults = eq. 8 as written."""
     N = S.shape[0]
     rows = np.zeros((N, 12))
     window = []          # sample indices in the least-squares window
@@ -60,6 +61,7 @@ def reference(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=Fals
     peak = np.zeros(3)             # largest S_c per channel during the current contact
     below = 0                      # consecutive held samples with no channel over the hold condition
     level = 0.0                    # recent level of sum(S_c) during the current contact
+    sums = []                      # sum(S_c) of the ready samples (hold_quiet_rms)
     for k in range(N):
         # 1. compensate with the fit of the previous samples
         if mode == "bandpass":
@@ -80,10 +82,16 @@ def reference(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=Fals
             ch_contact = np.abs(sp) > threshold if absolute else sp > threshold
             contact = bool(ch_contact.any())
             any_sp = contact
+            sums.append(sc.sum())
+            changes = np.diff(sums[-(quiet_samples + 1):])
+            quiet = quiet_rms > 0.0 and len(changes) == quiet_samples and \
+                float(np.sum(changes ** 2)) < quiet_samples * quiet_rms ** 2  # RMS of the changes < quiet_rms
             if hold and mode != "bandpass" and not contact and prev_contact and run < max_hold:
                 over = bool(((sc > threshold) & (sc > release * peak)).any())  # held while S_c is over T_c
                 if drop > 0.0:
                     over = over and sc.sum() > drop * level  # ... and the whisker's S_c has not fallen
+                if quiet:
+                    over = False  # ... and has not gone quiet
                 below = 0 if over else below + 1
                 contact = below < release_samples  # ... and until release_samples samples were not
             frozen = mode == "tdorc" and contact
@@ -125,14 +133,15 @@ def reference(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=Fals
 
 
 def run_cpp(S, mode, n=100, threshold=20.0, absolute=False, delay=0, hold=False, max_hold=1000, release=0.0,
-            release_samples=1, drop=0.0, level_samples=25, max_slope=0.0):
+            release_samples=1, drop=0.0, level_samples=25, max_slope=0.0, quiet_rms=0.0, quiet_samples=25):
     exe = os.environ.get("TDORC_CSV")
     if not exe:
         pytest.skip("TDORC_CSV not set (run through ctest)")
     text = "\n".join(",".join(repr(float(v)) for v in row) for row in S) + "\n"
     res = subprocess.run([exe, mode, str(n), repr(threshold), "1" if absolute else "0",
                           str(delay), "1" if hold else "0", str(max_hold), repr(float(release)), str(release_samples),
-                          repr(float(drop)), str(level_samples), repr(float(max_slope))],
+                          repr(float(drop)), str(level_samples), repr(float(max_slope)),
+                          repr(float(quiet_rms)), str(quiet_samples)],
                          input=text, capture_output=True, text=True, check=True)
     return np.array([[float(v) for v in line.split(",")] for line in res.stdout.strip().splitlines()])
 
@@ -254,6 +263,30 @@ def test_hold_release_drop_ends_a_hold_over_hysteresis():
     assert without[1404:, 1].all(), "the offset holds the contact with the fraction rule alone"
     assert with_drop[1404:2000, 1].all(), "the drop rule keeps the 12 s push in contact"
     assert not with_drop[2010:, 1].any(), "and releases it within a few samples of the push's end"
+
+
+@pytest.mark.parametrize("quiet_rms,quiet_samples", [(0.0, 25), (8.0, 25), (3.0, 25), (8.0, 50)])
+def test_hold_quiet_rms_matches_reference(quiet_rms, quiet_samples):
+    """hold_quiet_rms (issue 17) on the hysteresis trace, C++ against the
+    reference sample by sample. The trace's push is a constant +200 Pa (no
+    motion): its S_c changes by the noise and the 7 Hz ringing only (RMS of
+    the sum's changes ~4-5 Pa), so with 8 Pa it is released as soon as the
+    band-pass lets the hold decide, as is the hysteresis offset after it: the
+    rule relies on a pressed whisker moving with the drone."""
+    S = hysteresis_trace()
+    kw = dict(delay=10, hold=True, max_hold=2000, release=0.1, release_samples=3, drop=0.25, level_samples=50,
+              quiet_rms=quiet_rms, quiet_samples=quiet_samples)
+    ref = reference(S, "tdorc", **kw)
+    cpp = run_cpp(S, "tdorc", **kw)
+    np.testing.assert_array_equal(cpp[:, [0, 1, 2, 9, 10, 11]], ref[:, [0, 1, 2, 9, 10, 11]])
+    scale = np.abs(S).max()
+    for col in range(3, 9):
+        np.testing.assert_allclose(cpp[:, col], ref[:, col], rtol=1e-9, atol=1e-9 * scale if col < 6 else 1e-9 * 100)
+    held = ref[1404:2000, 1]
+    if quiet_rms == 8.0:
+        assert not held.all(), "a motionless push is quiet: released before its end"
+    if quiet_rms == 0.0:
+        assert held.all(), "without the rule the 12 s push stays in contact"
 
 
 @pytest.mark.parametrize("hold", [False, True])

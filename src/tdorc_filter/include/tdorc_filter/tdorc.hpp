@@ -100,6 +100,19 @@ struct Params {
   /// ramp holds S_p over T_c for good (S_p of a ramp of c Pa/sample settles
   /// at ~161 c). 0: off (eq. 8 as written: every fit is used).
   double max_drift_slope = 0.0;
+  /// A held contact also ends when the whisker's S_c (sum of its three
+  /// channels) has gone quiet: the RMS of its sample-to-sample changes over
+  /// the last hold_quiet_samples samples is below this [Pa]; 0: off.
+  /// A whisker pressed by a flying drone follows every millimetre of the
+  /// drone's motion and every stick-slip (in the SITL's held contacts the RMS
+  /// is 10 Pa at the 1st percentile, 180 Pa median); a free whisker's S_c is
+  /// the barometer noise (RMS of the changes of the sum ~6 Pa in flight) on
+  /// top of a slow decay of the gel hysteresis (000 eq. 1, N_h) and the drift
+  /// line's error, which is what a held contact of a whisker that left the
+  /// wall reads, whatever its size.
+  double hold_quiet_rms = 0.0;
+  /// Samples over which that RMS is taken (25 = 0.5 s at 50 Hz).
+  int hold_quiet_samples = 25;
   /// Band-pass numerator b0, b1, b2 (000 eq. 9-11, first-order Butterworth 0.05-1 Hz at 50 Hz).
   std::array<double, 3> bandpass_b{{0.0564, 0.0, -0.0564}};
   /// Band-pass denominator a0, a1, a2; a0 must be 1 (000 eq. 9-11).
@@ -310,6 +323,17 @@ class TdorcWhisker {
   std::array<double, 3> contact_peak_{};  // largest S_c per channel during the current contact
   int below_samples_ = 0;  // consecutive held samples with no channel over the hold condition
   double contact_level_ = 0.0;  // recent level of the sum of the channels' S_c in the current contact (hold_release_drop)
+  // hold_quiet_rms: squared sample-to-sample changes of the sum of the
+  // channels' S_c over the last hold_quiet_samples ready samples (ring).
+  std::vector<double> quiet_sq_;
+  int quiet_head_ = 0;
+  int quiet_count_ = 0;
+  int quiet_pushes_ = 0;
+  double quiet_sum_ = 0.0;
+  double last_sum_ = 0.0;
+  bool have_last_sum_ = false;
+  void push_quiet(double sum);
+  bool quiet() const;
 };
 
 }  // namespace tdorc_filter
