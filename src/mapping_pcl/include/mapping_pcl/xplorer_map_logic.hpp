@@ -47,6 +47,9 @@ class XplorerMapLogic {
     std::vector<std::string> stamp_states = {"tactile_traversal"};
     double min_state_time_s = 1.0;   ///< ... and has been in it this long (choice: the 50-sample, 1 s force average still holds the turn)
     double max_arm_age_s = 0.1;      ///< older arm angles: the fixed slab_offset is used (choice; arm IMUs at 50 Hz)
+    /// The "contact now" force (stamping.min_force_now) is the mean of this
+    /// many latest wrench samples (choice: 10 = 0.2 s at 50 Hz); 0: not used.
+    int force_now_samples = 10;
     void validate() const;
   };
 
