@@ -279,3 +279,74 @@ TEST(XplorerMappingRules, CornerSlabOnlyAtRightAngleCorners) {
   bad.corner_angle_tolerance = 2.0;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
 }
+
+// README "Release on every end of a traversal": the loop closing ("done",
+// SITL seed 1041: the first contact point next to a corner, the last slabs
+// 3 cm past it) and the contact lost ("exploration") drop the held-back slabs
+// as Tactile-turning does; a state not in release_states does not.
+TEST(XplorerMappingRules, LogicReleasesOnEveryEndOfATraversal) {
+  for (const std::string state : {"done", "exploration", "static_wrench"}) {
+    auto d = XplorerMapLogic::default_parameters();
+    d.set("corner_release_s", 0.5);
+    d.set("min_state_time_s", 0.0);
+    d.set("publish_rate_hz", 0.0);
+    d.set("min_force_now", 0.0);
+    XplorerMapLogic logic(XplorerMapLogic::params_from(d));
+    tactile_msgs::msg::FsmState st;
+    st.state = "tactile_traversal";
+    logic.on_fsm_state(st);
+    geometry_msgs::msg::WrenchStamped w;
+    w.header.frame_id = "base_link";
+    w.wrench.force.x = -1.6;
+    logic.on_wrench_body(w);
+    for (int k = 0; k <= 20; ++k) {  // a slab every 0.125 s, 0.5 s held back
+      const int64_t ns = tactile_common::from_seconds(0.125 * k);
+      nav_msgs::msg::Odometry o;
+      tactile_common::to_stamp(ns, o.header.stamp);
+      o.child_frame_id = "base_link";
+      o.pose.pose.position.y = -0.02 * k;
+      o.pose.pose.position.z = 0.7;
+      o.pose.pose.orientation.w = 1.0;
+      logic.on_odometry(o);
+      logic.on_timer(ns);
+    }
+    ASSERT_EQ(logic.mapper().pending(), 4u) << state;
+    st.state = state;  // entered at 2.5 s
+    tactile_common::to_stamp(tactile_common::from_seconds(2.5), st.header.stamp);
+    st.time_in_state = 0.0;
+    logic.on_fsm_state(st);
+    EXPECT_EQ(logic.mapper().stats().dropped_at_corner, state == "static_wrench" ? 0u : 4u) << state;
+  }
+}
+
+// contact_now_after: the contact-now check applies in a traversal entered from
+// Exploration (the impact at 0.3 m/s), not in one entered from Tactile-turning.
+TEST(XplorerMappingRules, LogicChecksTheContactNowAfterExplorationOnly) {
+  for (const std::string previous : {"exploration", "tactile_turning"}) {
+    auto d = XplorerMapLogic::default_parameters();
+    d.set("min_state_time_s", 0.0);
+    d.set("corner_release_s", 0.0);
+    d.set("publish_rate_hz", 0.0);
+    d.set("min_force_now", 0.5);
+    d.set("force_now_samples", static_cast<int64_t>(5));
+    XplorerMapLogic logic(XplorerMapLogic::params_from(d));
+    tactile_msgs::msg::FsmState st;
+    st.state = "tactile_traversal";
+    st.previous_state = previous;
+    logic.on_fsm_state(st);
+    geometry_msgs::msg::WrenchStamped w;
+    w.header.frame_id = "base_link";
+    for (int i = 0; i < 50; ++i) {
+      w.wrench.force.x = i < 45 ? -2.0 : -0.1;  // average 1.81 N, latest 5: 0.1 N
+      logic.on_wrench_body(w);
+    }
+    nav_msgs::msg::Odometry o;
+    o.child_frame_id = "base_link";
+    o.pose.pose.position.z = 0.7;
+    o.pose.pose.orientation.w = 1.0;
+    tactile_common::to_stamp(0, o.header.stamp);
+    logic.on_odometry(o);
+    logic.on_timer(0);
+    EXPECT_EQ(logic.mapper().stats().slabs, previous == "exploration" ? 0u : 1u) << previous;
+  }
+}
