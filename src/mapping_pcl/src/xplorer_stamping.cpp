@@ -67,8 +67,8 @@ void XplorerMapParams::validate() const {
   if (!(arm_length > 0.0) || !std::isfinite(arm_length)) bad("arm_length", "must be finite and > 0", arm_length);
   if (!(min_arm_deflection >= 0.0) || !std::isfinite(min_arm_deflection)) bad("min_arm_deflection", "must be finite and >= 0", min_arm_deflection);
   if (!(min_force_now >= 0.0) || !std::isfinite(min_force_now)) bad("min_force_now", "must be finite and >= 0", min_force_now);
-  if (!(corner_angle_tolerance >= 0.0) || !(corner_angle_tolerance <= M_PI / 2))
-    bad("corner_angle_tolerance", "must be in [0, pi/2]", corner_angle_tolerance);
+  if (!(corner_angle_tolerance >= 0.0) || !(corner_angle_tolerance <= M_PI))
+    bad("corner_angle_tolerance", "must be in [0, pi] (>= pi/2: every change of lambda)", corner_angle_tolerance);
   if (!(guard_radius >= 0.0) || !std::isfinite(guard_radius)) bad("guard_radius", "must be finite and >= 0", guard_radius);
 }
 

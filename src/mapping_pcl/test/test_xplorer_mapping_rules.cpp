@@ -276,8 +276,12 @@ TEST(XplorerMappingRules, CornerSlabOnlyAtRightAngleCorners) {
   EXPECT_EQ(at(0.2, 136.0), 2);  // turned 90 deg: face slab + corner slab
   EXPECT_EQ(m.stats().corner_slabs, 1u);
   XplorerMapParams bad;
-  bad.corner_angle_tolerance = 2.0;
+  bad.corner_angle_tolerance = 4.0;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
+  XplorerMapParams every;  // 1.5708 > pi/2 in a config file: every lambda change, as 001
+  every.corner_angle_tolerance = 1.5708;
+  EXPECT_NO_THROW(every.validate());
+  EXPECT_TRUE(is_right_angle_corner(X, dir(44.5), X, dir(45.5), every.corner_angle_tolerance));
 }
 
 // README "Release on every end of a traversal": the loop closing ("done",

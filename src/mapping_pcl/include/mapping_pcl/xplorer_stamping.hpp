@@ -85,7 +85,7 @@ struct XplorerMapParams {
   /// out of the face), where the contact flips to another body axis
   /// mid-face, and at the 44-78 deg turns of 5-6 sided polygons, where the
   /// slab lands 0.1-0.23 m outside the object (choice; README "Right-angle
-  /// corners"). pi/2: every lambda change (001).
+  /// corners"). >= pi/2 (e.g. 1.5708): every lambda change (001).
   double corner_angle_tolerance = 0.175;  ///< [rad] (10 deg)
   double arm_hinge_offset = 0.05;  ///< centre -> arm hinge along the diagonal [m] (vehicle CAD; the SITL's value)
   double arm_length = 0.15;        ///< hinge -> motor [m] (vehicle CAD)
@@ -118,7 +118,7 @@ bool both_arms_touch(const Eigen::Vector2d& d, const std::array<double, 4>& thet
 
 /// True if a change of lambda is a right-angle corner (corner_angle_tolerance):
 /// the contact stayed on the same body axis and C_n turned in the world by
-/// 90 deg +- `tolerance` [rad]; always true for tolerance >= pi/2 (001).
+/// 90 deg +- `tolerance` [rad]; always true for tolerance >= pi/2 (001; validate() allows up to pi).
 bool is_right_angle_corner(std::optional<BodyDirection> previous_body, const Eigen::Vector2d& previous_world,
                            BodyDirection body, const Eigen::Vector2d& world, double tolerance);
 
