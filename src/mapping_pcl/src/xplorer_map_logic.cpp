@@ -25,6 +25,8 @@ void XplorerMapLogic::Params::validate() const {
   if (!(min_state_time_s >= 0.0) || !std::isfinite(min_state_time_s)) bad("min_state_time_s", "must be finite and >= 0");
   if (frame_id.empty()) bad("frame_id", "must not be empty");
   if (!(max_arm_age_s > 0.0)) bad("max_arm_age_s", "must be > 0");
+  if (force_now_samples < 0 || force_now_samples > force_average_samples)
+    bad("force_now_samples", "must be in [0, force_average_samples], got " + std::to_string(force_now_samples));
 }
 
 ParamMap XplorerMapLogic::default_parameters() {
@@ -58,6 +60,11 @@ ParamMap XplorerMapLogic::default_parameters() {
   m.set("arm_length", d.stamping.arm_length);
   m.set("guard_radius", d.stamping.guard_radius);
   m.set("max_arm_age_s", d.max_arm_age_s);
+  m.set("min_force_now", d.stamping.min_force_now);
+  m.set("force_now_samples", static_cast<int64_t>(d.force_now_samples));
+  m.set("corner_angle_tolerance", d.stamping.corner_angle_tolerance);
+  m.set("release_states", d.release_states);
+  m.set("contact_now_after", d.contact_now_after);
   return m;
 }
 
@@ -93,6 +100,11 @@ XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
   p.stamping.arm_length = m.get_double("arm_length");
   p.stamping.guard_radius = m.get_double("guard_radius");
   p.max_arm_age_s = m.get_double("max_arm_age_s");
+  p.stamping.min_force_now = m.get_double("min_force_now");
+  p.force_now_samples = static_cast<int>(m.get_int("force_now_samples"));
+  p.stamping.corner_angle_tolerance = m.get_double("corner_angle_tolerance");
+  p.release_states = m.get_string_array("release_states");
+  p.contact_now_after = m.get_string_array("contact_now_after");
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {
@@ -141,9 +153,12 @@ void XplorerMapLogic::on_fsm_state(const tactile_msgs::msg::FsmState& msg) {
   const bool changed = !fsm_state_ || *fsm_state_ != msg.state;
   fsm_state_ = msg.state;
   fsm_state_since_s_ = tactile_common::to_seconds(tactile_common::from_stamp(msg.header.stamp)) - msg.time_in_state;
+  fsm_previous_state_ = msg.previous_state;
   // A corner release (001 Sec. IV-A: the yaw-rate peak that starts Tactile-turning):
   // the slabs stamped just before it overhang the face's end (corner_release_s).
-  if (changed && msg.state == "tactile_turning") mapper_.release_corner(fsm_state_since_s_);
+  // Likewise at every other end of a traversal in release_states (README "Release on every end of a traversal").
+  if (changed && std::find(params_.release_states.begin(), params_.release_states.end(), msg.state) != params_.release_states.end())
+    mapper_.release_corner(fsm_state_since_s_);
 }
 
 void XplorerMapLogic::on_arm_imu(const tactile_msgs::msg::ArmImuArray& msg) {
@@ -183,6 +198,15 @@ std::optional<sensor_msgs::msg::PointCloud2> XplorerMapLogic::on_timer(int64_t n
     s.yaw = tactile_common::yaw_of(q);
     s.height = p.z - params_.floor_z;
     s.force_body = force_sum_ / static_cast<double>(forces_.size());
+    const bool check_now = !fsm_state_ || params_.contact_now_after.empty() ||
+                           std::find(params_.contact_now_after.begin(), params_.contact_now_after.end(),
+                                     fsm_previous_state_) != params_.contact_now_after.end();
+    if (params_.force_now_samples > 0 && check_now) {  // README "Contact now": the latest samples, not the 1 s average
+      const std::size_t k = std::min<std::size_t>(forces_.size(), static_cast<std::size_t>(params_.force_now_samples));
+      Eigen::Vector2d now = Eigen::Vector2d::Zero();
+      for (std::size_t i = forces_.size() - k; i < forces_.size(); ++i) now += forces_[i];
+      s.force_body_now = now / static_cast<double>(k);
+    }
     const int64_t max_age = tactile_common::from_seconds(params_.max_arm_age_s);
     if (std::all_of(arm_stamp_ns_.begin(), arm_stamp_ns_.end(),
                     [&](int64_t t) { return t >= 0 && now_ns - t <= max_age; })) {

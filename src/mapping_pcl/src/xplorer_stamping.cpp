@@ -66,12 +66,23 @@ void XplorerMapParams::validate() const {
   if (!(arm_hinge_offset >= 0.0) || !std::isfinite(arm_hinge_offset)) bad("arm_hinge_offset", "must be finite and >= 0", arm_hinge_offset);
   if (!(arm_length > 0.0) || !std::isfinite(arm_length)) bad("arm_length", "must be finite and > 0", arm_length);
   if (!(min_arm_deflection >= 0.0) || !std::isfinite(min_arm_deflection)) bad("min_arm_deflection", "must be finite and >= 0", min_arm_deflection);
+  if (!(min_force_now >= 0.0) || !std::isfinite(min_force_now)) bad("min_force_now", "must be finite and >= 0", min_force_now);
+  if (!(corner_angle_tolerance >= 0.0) || !(corner_angle_tolerance <= M_PI))
+    bad("corner_angle_tolerance", "must be in [0, pi] (>= pi/2: every change of lambda)", corner_angle_tolerance);
   if (!(guard_radius >= 0.0) || !std::isfinite(guard_radius)) bad("guard_radius", "must be finite and >= 0", guard_radius);
 }
 
 namespace {
 constexpr double kArmDir[4] = {-M_PI / 4, M_PI / 4, 3 * M_PI / 4, -3 * M_PI / 4};  // tactile_msgs/ArmImu.arm_id
 }  // namespace
+
+bool is_right_angle_corner(std::optional<BodyDirection> previous_body, const Eigen::Vector2d& previous_world,
+                           BodyDirection body, const Eigen::Vector2d& world, double tolerance) {
+  if (tolerance >= M_PI / 2) return true;  // 001: every change of lambda
+  if (!previous_body || *previous_body != body) return false;
+  const double turned = std::acos(std::clamp(previous_world.normalized().dot(world.normalized()), -1.0, 1.0));
+  return std::abs(turned - M_PI / 2) <= tolerance;
+}
 
 bool both_arms_touch(const Eigen::Vector2d& d, const std::array<double, 4>& theta, double min_deflection) {
   for (int i = 0; i < 4; ++i) {
@@ -191,6 +202,11 @@ int XplorerContactMapper::update(const ContactSample& s) {
     ++stats_.skipped_low_force;
     return 0;
   }
+  if (p_.min_force_now > 0.0 && s.force_body_now &&
+      !(s.force_body_now->allFinite() && s.force_body_now->norm() >= p_.min_force_now)) {
+    ++stats_.skipped_no_contact_now;  // the averaged force still holds a contact that has ended (README "Contact now")
+    return 0;
+  }
   const Eigen::Rotation2Dd R(s.yaw);
   const Eigen::Vector2d c_w = p_.normal_from_force ? Eigen::Vector2d(-(R * s.force_body).normalized()) : Eigen::Vector2d(R * unit(*c));
   const bool arms_known = s.arm_angles && std::all_of(s.arm_angles->begin(), s.arm_angles->end(), [](double a) {
@@ -214,9 +230,13 @@ int XplorerContactMapper::update(const ContactSample& s) {
   const double ang = std::atan2(m_w.y(), m_w.x());
   const int move_world = static_cast<int>(std::lround(ang / (M_PI / 2))) & 3;  // nearest world axis
   if (last_move_world_ && *last_move_world_ != move_world) {  // 001 Sec. IV-B: corner
-    stamp(s.t, corner_slab(s, last_contact_world_, c_w));
-    ++stats_.corner_slabs;
-    ++stamped;
+    if (is_right_angle_corner(last_contact_, last_contact_world_, *c, c_w, p_.corner_angle_tolerance)) {
+      stamp(s.t, corner_slab(s, last_contact_world_, c_w));
+      ++stats_.corner_slabs;
+      ++stamped;
+    } else {
+      ++stats_.skipped_corner_angle;  // README "Right-angle corners"
+    }
   }
   last_move_world_ = move_world;
   last_contact_world_ = c_w;

@@ -159,3 +159,198 @@ TEST(XplorerMappingRules, LogicReleasesTheCornerOnTactileTurning) {
   const MapMeasurement r = logic.finalize();
   EXPECT_NEAR(r.min.y(), -0.32 - 0.125, 0.011);
 }
+
+// README "Contact now": the 50-sample (1 s) average still reads the impact of
+// the first contact after the vehicle has rebounded off the face (SITL seed
+// 1040: the average 1.8-2.3 N at 5.0-5.2 s, the latest samples < 0.1 N, the
+// vehicle centre 0.25 m from the face, slabs 4.5-5 cm outside it). A slab is
+// stamped only with the mean of the latest samples >= min_force_now.
+TEST(XplorerMappingRules, SlabsOnlyWhileTheLatestSamplesStillPress) {
+  XplorerMapParams p;
+  p.min_force_now = 0.5;
+  PointMap map;
+  XplorerContactMapper m(p, map);
+  ContactSample s = sample(0.0, 0.0, -2.0);
+  s.force_body_now = Eigen::Vector2d(-0.05, 0.02);  // contact ended, average still 2 N
+  EXPECT_EQ(m.update(s), 0);
+  EXPECT_EQ(m.stats().skipped_no_contact_now, 1u);
+  EXPECT_TRUE(m.initiated());  // the latch keeps the averaged force's state
+  s = sample(0.1, 0.0, -2.0);
+  s.force_body_now = Eigen::Vector2d(-0.3, 0.45);  // |(-0.3, 0.45)| = 0.54 N >= 0.5 N
+  EXPECT_EQ(m.update(s), 1);
+  s = sample(0.2, 0.0, -2.0);  // not known: no check
+  EXPECT_EQ(m.update(s), 1);
+  XplorerMapParams off;
+  off.min_force_now = 0.0;
+  PointMap map2;
+  XplorerContactMapper m2(off, map2);
+  s = sample(0.0, 0.0, -2.0);
+  s.force_body_now = Eigen::Vector2d::Zero();
+  EXPECT_EQ(m2.update(s), 1);
+  XplorerMapParams bad;
+  bad.min_force_now = -0.1;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
+// The node logic's "now" force is the mean of the latest force_now_samples
+// wrench messages: 45 at 2 N then 5 at 0.1 N average 1.81 N over 50 (mapping
+// initiated and held) but 0.1 N over the latest 5: no slab; one more 2 N
+// sample makes the latest 5 (4 x 0.1 + 2) / 5 = 0.48 N (still none), two more
+// 0.86 N: a slab.
+TEST(XplorerMappingRules, LogicTakesTheContactNowFromTheLatestSamples) {
+  auto d = XplorerMapLogic::default_parameters();
+  d.set("min_state_time_s", 0.0);
+  d.set("corner_release_s", 0.0);
+  d.set("publish_rate_hz", 0.0);
+  d.set("min_force_now", 0.5);
+  d.set("force_now_samples", static_cast<int64_t>(5));
+  XplorerMapLogic logic(XplorerMapLogic::params_from(d));
+  geometry_msgs::msg::WrenchStamped w;
+  w.header.frame_id = "base_link";
+  auto push = [&](double fx, int n) {
+    for (int i = 0; i < n; ++i) {
+      w.wrench.force.x = fx;
+      logic.on_wrench_body(w);
+    }
+  };
+  nav_msgs::msg::Odometry o;
+  o.child_frame_id = "base_link";
+  o.pose.pose.position.z = 0.7;
+  o.pose.pose.orientation.w = 1.0;
+  auto tick = [&](double t) {
+    const int64_t ns = tactile_common::from_seconds(t);
+    tactile_common::to_stamp(ns, o.header.stamp);
+    logic.on_odometry(o);
+    logic.on_timer(ns);
+  };
+  push(-2.0, 45);
+  push(-0.1, 5);
+  tick(0.0);
+  EXPECT_TRUE(logic.mapper().initiated());
+  EXPECT_EQ(logic.mapper().stats().slabs, 0u);
+  EXPECT_EQ(logic.mapper().stats().skipped_no_contact_now, 1u);
+  push(-2.0, 1);
+  tick(0.1);
+  EXPECT_EQ(logic.mapper().stats().slabs, 0u);
+  push(-2.0, 1);
+  tick(0.2);
+  EXPECT_EQ(logic.mapper().stats().slabs, 1u);
+  d.set("force_now_samples", static_cast<int64_t>(51));  // more than the 50-sample average
+  EXPECT_THROW(XplorerMapLogic::params_from(d), tactile_common::ParamError);
+}
+
+// README "Right-angle corners". The corner slab of 001 (0.417 m along the
+// bisector of the previous and the new C_n) fits a 90 deg corner. Cases by
+// hand: a box corner (same body axis +b1, C_n turned 84 deg in the world, as
+// measured at the SITL box corners): kept; a 5-6 sided polygon's corner (C_n
+// turned 62 deg): none; a face at 45 deg to the world axes (C_n turned 1 deg
+// across the 45 deg line, lambda's world axis changes): none; the contact
+// jumping from +b1 to -b2 mid-face: none.
+TEST(XplorerMappingRules, CornerSlabOnlyAtRightAngleCorners) {
+  const double tol = 10.0 * M_PI / 180.0;
+  auto dir = [](double deg) { return Eigen::Vector2d(std::cos(deg * M_PI / 180.0), std::sin(deg * M_PI / 180.0)); };
+  const auto X = BodyDirection::kPlusX;
+  EXPECT_TRUE(is_right_angle_corner(X, dir(0), X, dir(84), tol));
+  EXPECT_TRUE(is_right_angle_corner(X, dir(10), X, dir(-88), tol));
+  EXPECT_FALSE(is_right_angle_corner(X, dir(0), X, dir(62), tol));
+  EXPECT_FALSE(is_right_angle_corner(X, dir(44.5), X, dir(45.5), tol));
+  EXPECT_FALSE(is_right_angle_corner(X, dir(0), BodyDirection::kMinusY, dir(-90), tol));
+  EXPECT_FALSE(is_right_angle_corner(std::nullopt, dir(0), X, dir(90), tol));
+  EXPECT_TRUE(is_right_angle_corner(X, dir(44.5), X, dir(45.5), M_PI / 2));  // 001: every lambda change
+  // The mapper: vehicle yawed so that C_n (+b1) points along 44 deg, then 46 deg
+  // (lambda's world axis changes from -X... to the next): no corner slab; then
+  // yawed by a further 90 deg: a corner slab.
+  XplorerMapParams p;
+  p.corner_angle_tolerance = tol;
+  p.corner_release_s = 0.0;
+  PointMap map;
+  XplorerContactMapper m(p, map);
+  auto at = [&](double t, double yaw_deg) {
+    ContactSample s = sample(t, 0.0, -2.0);
+    s.yaw = yaw_deg * M_PI / 180.0;
+    return m.update(s);
+  };
+  EXPECT_EQ(at(0.0, 44.0), 1);
+  EXPECT_EQ(at(0.1, 46.0), 1);  // lambda: world axis changed, C_n turned 2 deg
+  EXPECT_EQ(m.stats().skipped_corner_angle, 1u);
+  EXPECT_EQ(at(0.2, 136.0), 2);  // turned 90 deg: face slab + corner slab
+  EXPECT_EQ(m.stats().corner_slabs, 1u);
+  XplorerMapParams bad;
+  bad.corner_angle_tolerance = 4.0;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+  XplorerMapParams every;  // 1.5708 > pi/2 in a config file: every lambda change, as 001
+  every.corner_angle_tolerance = 1.5708;
+  EXPECT_NO_THROW(every.validate());
+  EXPECT_TRUE(is_right_angle_corner(X, dir(44.5), X, dir(45.5), every.corner_angle_tolerance));
+}
+
+// README "Release on every end of a traversal": the loop closing ("done",
+// SITL seed 1041: the first contact point next to a corner, the last slabs
+// 3 cm past it) and the contact lost ("exploration") drop the held-back slabs
+// as Tactile-turning does; a state not in release_states does not.
+TEST(XplorerMappingRules, LogicReleasesOnEveryEndOfATraversal) {
+  for (const std::string state : {"done", "exploration", "static_wrench"}) {
+    auto d = XplorerMapLogic::default_parameters();
+    d.set("corner_release_s", 0.5);
+    d.set("min_state_time_s", 0.0);
+    d.set("publish_rate_hz", 0.0);
+    d.set("min_force_now", 0.0);
+    XplorerMapLogic logic(XplorerMapLogic::params_from(d));
+    tactile_msgs::msg::FsmState st;
+    st.state = "tactile_traversal";
+    logic.on_fsm_state(st);
+    geometry_msgs::msg::WrenchStamped w;
+    w.header.frame_id = "base_link";
+    w.wrench.force.x = -1.6;
+    logic.on_wrench_body(w);
+    for (int k = 0; k <= 20; ++k) {  // a slab every 0.125 s, 0.5 s held back
+      const int64_t ns = tactile_common::from_seconds(0.125 * k);
+      nav_msgs::msg::Odometry o;
+      tactile_common::to_stamp(ns, o.header.stamp);
+      o.child_frame_id = "base_link";
+      o.pose.pose.position.y = -0.02 * k;
+      o.pose.pose.position.z = 0.7;
+      o.pose.pose.orientation.w = 1.0;
+      logic.on_odometry(o);
+      logic.on_timer(ns);
+    }
+    ASSERT_EQ(logic.mapper().pending(), 4u) << state;
+    st.state = state;  // entered at 2.5 s
+    tactile_common::to_stamp(tactile_common::from_seconds(2.5), st.header.stamp);
+    st.time_in_state = 0.0;
+    logic.on_fsm_state(st);
+    EXPECT_EQ(logic.mapper().stats().dropped_at_corner, state == "static_wrench" ? 0u : 4u) << state;
+  }
+}
+
+// contact_now_after: the contact-now check applies in a traversal entered from
+// Exploration (the impact at 0.3 m/s), not in one entered from Tactile-turning.
+TEST(XplorerMappingRules, LogicChecksTheContactNowAfterExplorationOnly) {
+  for (const std::string previous : {"exploration", "tactile_turning"}) {
+    auto d = XplorerMapLogic::default_parameters();
+    d.set("min_state_time_s", 0.0);
+    d.set("corner_release_s", 0.0);
+    d.set("publish_rate_hz", 0.0);
+    d.set("min_force_now", 0.5);
+    d.set("force_now_samples", static_cast<int64_t>(5));
+    XplorerMapLogic logic(XplorerMapLogic::params_from(d));
+    tactile_msgs::msg::FsmState st;
+    st.state = "tactile_traversal";
+    st.previous_state = previous;
+    logic.on_fsm_state(st);
+    geometry_msgs::msg::WrenchStamped w;
+    w.header.frame_id = "base_link";
+    for (int i = 0; i < 50; ++i) {
+      w.wrench.force.x = i < 45 ? -2.0 : -0.1;  // average 1.81 N, latest 5: 0.1 N
+      logic.on_wrench_body(w);
+    }
+    nav_msgs::msg::Odometry o;
+    o.child_frame_id = "base_link";
+    o.pose.pose.position.z = 0.7;
+    o.pose.pose.orientation.w = 1.0;
+    tactile_common::to_stamp(0, o.header.stamp);
+    logic.on_odometry(o);
+    logic.on_timer(0);
+    EXPECT_EQ(logic.mapper().stats().slabs, previous == "exploration" ? 0u : 1u) << previous;
+  }
+}

@@ -47,6 +47,24 @@ class XplorerMapLogic {
     std::vector<std::string> stamp_states = {"tactile_traversal"};
     double min_state_time_s = 1.0;   ///< ... and has been in it this long (choice: the 50-sample, 1 s force average still holds the turn)
     double max_arm_age_s = 0.1;      ///< older arm angles: the fixed slab_offset is used (choice; arm IMUs at 50 Hz)
+    /// The "contact now" force (stamping.min_force_now) is the mean of this
+    /// many latest wrench samples (choice: 10 = 0.2 s at 50 Hz); 0: not used.
+    int force_now_samples = 10;
+    /// The contact-now check applies only in a state entered from one of
+    /// these FSM states (FsmState.previous_state; always before an FsmState is
+    /// heard; empty = always): the rebound that the 1 s average hides follows
+    /// a contact at the Exploration speed (0.3 m/s); on the 0.3-0.6 m faces of
+    /// polygons, re-contacted after a turn at 0.15 m/s, the contact is
+    /// intermittent but the vehicle stays at the face, and the check cut
+    /// their coverage (choice; README "Contact now").
+    std::vector<std::string> contact_now_after = {"exploration"};
+    /// Entering one of these FSM states releases the held-back slabs of the
+    /// last corner_release_s (dated by the state's entry): Tactile-turning (a
+    /// corner, 001 Sec. IV-A), the loop closed ("done": the vehicle stops at
+    /// the first contact point, which may be next to a corner) and Exploration
+    /// (the contact lost) (choice; README "Corner release" and "Release on
+    /// every end of a traversal").
+    std::vector<std::string> release_states = {"tactile_turning", "done", "exploration"};
     void validate() const;
   };
 
@@ -97,6 +115,7 @@ class XplorerMapLogic {
   std::optional<nav_msgs::msg::Odometry> odom_;
   std::optional<std::string> fsm_state_;
   double fsm_state_since_s_ = 0.0;  ///< stamp time of entering the current state
+  std::string fsm_previous_state_;  ///< FsmState.previous_state of the current state
   int64_t last_publish_ns_ = -1;
   std::array<double, 4> arm_angles_{};
   std::array<int64_t, 4> arm_stamp_ns_{-1, -1, -1, -1};

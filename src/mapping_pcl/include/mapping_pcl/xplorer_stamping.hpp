@@ -68,6 +68,25 @@ struct XplorerMapParams {
   /// corner (an oblique first contact, the end of a face) does not say where
   /// the face is. 0: no check (choice; README "Two arms in contact").
   double min_arm_deflection = 0.002;  ///< [rad]
+  /// Contact now: a slab is stamped only if the force of the last few wrench
+  /// samples (ContactSample::force_body_now, the node logic's
+  /// force_now_samples) is at least this large. The 50-sample average of 001
+  /// Sec. V-C lags the contact by up to 1 s: after the first contact at the
+  /// exploration speed the vehicle rebounds off the face while the average
+  /// still holds the impact, and slabs land 4-5 cm outside the face (choice;
+  /// README "Contact now"). 0: no check.
+  double min_force_now = 0.2;  ///< [N]
+  /// Right-angle corners: the corner slab (001 Sec. IV-B: at corner_offset
+  /// along the bisector of the previous and the new C_n, a construction for
+  /// the 90 deg corners of 001's box) is added only when the contact stayed on
+  /// the same body axis and C_n turned in the world by 90 deg within this
+  /// tolerance. lambda quantised to a world axis also changes where a face
+  /// lies near 45 deg to the world axes (a 1 deg change, the corner slab 2 cm
+  /// out of the face), where the contact flips to another body axis
+  /// mid-face, and at the 44-78 deg turns of 5-6 sided polygons, where the
+  /// slab lands 0.1-0.23 m outside the object (choice; README "Right-angle
+  /// corners"). >= pi/2 (e.g. 1.5708): every lambda change (001).
+  double corner_angle_tolerance = 0.175;  ///< [rad] (10 deg)
   double arm_hinge_offset = 0.05;  ///< centre -> arm hinge along the diagonal [m] (vehicle CAD; the SITL's value)
   double arm_length = 0.15;        ///< hinge -> motor [m] (vehicle CAD)
   double guard_radius = 0.07;      ///< propeller guard radius round the motor [m] (vehicle CAD)
@@ -83,6 +102,8 @@ struct ContactSample {
   Eigen::Vector2d force_body = Eigen::Vector2d::Zero();  ///< filtered external force, body x-y [N]
   /// Arm deflections theta_i (arm_id 0..3 at -45, 45, 135, -135 deg) [rad], if known.
   std::optional<std::array<double, 4>> arm_angles;
+  /// Mean body force of the last few wrench samples [N], if known (min_force_now).
+  std::optional<Eigen::Vector2d> force_body_now;
 };
 
 /// Reach of the vehicle's outline along the body direction `d` (unit, x-y):
@@ -94,6 +115,12 @@ double outline_reach(const XplorerMapParams& p, const Eigen::Vector2d& d, const 
 /// two arms either side of a body axis) is deflected by at least
 /// `min_deflection` [rad] in magnitude (both guards touch the face).
 bool both_arms_touch(const Eigen::Vector2d& d, const std::array<double, 4>& theta, double min_deflection);
+
+/// True if a change of lambda is a right-angle corner (corner_angle_tolerance):
+/// the contact stayed on the same body axis and C_n turned in the world by
+/// 90 deg +- `tolerance` [rad]; always true for tolerance >= pi/2 (001; validate() allows up to pi).
+bool is_right_angle_corner(std::optional<BodyDirection> previous_body, const Eigen::Vector2d& previous_world,
+                           BodyDirection body, const Eigen::Vector2d& world, double tolerance);
 
 class XplorerContactMapper {
  public:
@@ -110,6 +137,8 @@ class XplorerContactMapper {
     uint64_t offset_from_arms = 0;    ///< slabs placed with the deflected-arm outline
     uint64_t skipped_one_arm = 0;     ///< an arm on the C_n side deflected less than min_arm_deflection
     uint64_t dropped_at_corner = 0;   ///< slabs dropped by a corner release (corner_release_s)
+    uint64_t skipped_no_contact_now = 0;  ///< the last samples' force below min_force_now
+    uint64_t skipped_corner_angle = 0;    ///< lambda changed but not at a right-angle corner (corner_angle_tolerance)
   };
 
   XplorerContactMapper(const XplorerMapParams& params, PointMap& map);
