@@ -53,8 +53,9 @@ void Params::validate() const {
   if (!std::isfinite(slip_fraction) || slip_fraction < 0.0 || slip_fraction >= 1.0) {
     throw std::invalid_argument("TactileDepthParams.slip_fraction: must be in [0, 1) (0 = off), got " + num(slip_fraction));
   }
-  if (slip_window_samples < 1 || slip_window_samples > 500) {
-    throw std::invalid_argument("TactileDepthParams.slip_window_samples: must be in [1, 500], got " + std::to_string(slip_window_samples));
+  if (slip_window_samples < 1 || slip_window_samples > TactileDepthEstimator::kMaxSlipWindow) {
+    throw std::invalid_argument("TactileDepthParams.slip_window_samples: must be in [1, " +
+                                std::to_string(TactileDepthEstimator::kMaxSlipWindow) + "], got " + std::to_string(slip_window_samples));
   }
   positive("slip_r_mm2", slip_r_mm2);
   positive("whisker_spacing", whisker_spacing);

@@ -60,7 +60,7 @@ ParamMap TactileDepthLogic::default_parameters() {
   m.set("kf.q_mm2", d.q_mm2);                        // 000 eq. 27, onboard Q = 0.01 mm^2
   m.set("kf.r_mm2", d.r_mm2);                        // 000 eq. 28, onboard R = 1 mm^2
   m.set("kf.p0_mm2", d.p0_mm2);                      // onboard P0 = 50 mm^2
-  m.set("kf.slip_fraction", d.slip_fraction);        // issue 17 slip gate; 0 = off
+  m.set("kf.slip_fraction", 0.7);  // issue 17 slip gate (README "Slip gate"); core default 0 = off (the paper)
   m.set("kf.slip_window_samples", static_cast<int64_t>(d.slip_window_samples));
   m.set("kf.slip_r_mm2", d.slip_r_mm2);
   m.set("whisker_spacing", d.whisker_spacing);       // 000 eq. 22, s = 0.05 m
@@ -97,7 +97,9 @@ TactileDepthLogic::Params TactileDepthLogic::params_from(const ParamMap& m) {
   p.estimator.slip_fraction = m.get_double("kf.slip_fraction");
   p.estimator.slip_r_mm2 = m.get_double("kf.slip_r_mm2");
   const int64_t window = m.get_int("kf.slip_window_samples");
-  if (window < 1 || window > 500) throw m.error("kf.slip_window_samples", "must be in [1, 500], got " + std::to_string(window));
+  if (window < 1 || window > TactileDepthEstimator::kMaxSlipWindow) {
+    throw m.error("kf.slip_window_samples", "must be in [1, " + std::to_string(TactileDepthEstimator::kMaxSlipWindow) + "], got " + std::to_string(window));
+  }
   p.estimator.slip_window_samples = static_cast<int>(window);
   p.estimator.p0_mm2 = m.get_double("kf.p0_mm2");
   p.estimator.whisker_spacing = m.get_double("whisker_spacing");

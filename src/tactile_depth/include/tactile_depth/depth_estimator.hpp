@@ -67,10 +67,11 @@ struct Params {
   /// baffle sticks and slips; on a slip its load, hence its input (sum of the
   /// three S_c), drops while it stays pressed, and the MLP reads a far wall.
   /// A whisker whose input sum is below slip_fraction x its maximum over the
-  /// last slip_window_samples ticks (this one included) is updated with
+  /// last slip_window_samples ticks (this one included, at most
+  /// TactileDepthEstimator::kMaxSlipWindow) is updated with
   /// R = slip_r_mm2 instead of r_mm2. slip_fraction 0 = off (the paper).
   double slip_fraction = 0.0;
-  int slip_window_samples = 15;
+  int slip_window_samples = 25;
   double slip_r_mm2 = 1.0e4;
   /// s, lateral distance between the two whisker bases [m] (000 eq. 22: 0.05 m).
   double whisker_spacing = 0.05;
@@ -200,6 +201,9 @@ class TactileDepthEstimator {
   /// Total bytes held (object + models).
   std::size_t state_size_bytes() const;
 
+  /// Longest slip gate window (2 s at 50 Hz).
+  static constexpr int kMaxSlipWindow = 100;
+
   /// Paper 000 Fig. S6: "the Tactile Depth Estimator occupies around 9.6 kB".
   static constexpr std::size_t kPaperBudgetBytes = 9600;
 
@@ -214,7 +218,6 @@ class TactileDepthEstimator {
   double r_m2_ = 0.0;
   double slip_r_m2_ = 0.0;
   /// Input sums of the last slip_window_samples ticks per whisker (ring).
-  static constexpr int kMaxSlipWindow = 500;
   std::array<std::array<double, kMaxSlipWindow>, 2> input_sum_{};
   int slip_head_ = 0;    ///< next slot of the ring
   int slip_count_ = 0;   ///< filled slots
