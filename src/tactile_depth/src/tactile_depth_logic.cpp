@@ -60,7 +60,7 @@ ParamMap TactileDepthLogic::default_parameters() {
   m.set("kf.q_mm2", d.q_mm2);                        // 000 eq. 27, onboard Q = 0.01 mm^2
   m.set("kf.r_mm2", d.r_mm2);                        // 000 eq. 28, onboard R = 1 mm^2
   m.set("kf.p0_mm2", d.p0_mm2);                      // onboard P0 = 50 mm^2
-  m.set("kf.slip_fraction", 0.7);  // issue 17 slip gate (README "Slip gate"); core default 0 = off (the paper)
+  m.set("kf.slip_fraction", d.slip_fraction);        // issue 17 slip gate (README "Slip gate"); 0 = off
   m.set("kf.slip_window_samples", static_cast<int64_t>(d.slip_window_samples));
   m.set("kf.slip_r_mm2", d.slip_r_mm2);
   m.set("whisker_spacing", d.whisker_spacing);       // 000 eq. 22, s = 0.05 m
