@@ -1,5 +1,6 @@
 #include "tactile_depth/depth_estimator.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <sstream>
@@ -49,6 +50,14 @@ void Params::validate() const {
   positive("q_mm2", q_mm2);
   positive("r_mm2", r_mm2);
   positive("p0_mm2", p0_mm2);
+  if (!std::isfinite(slip_fraction) || slip_fraction < 0.0 || slip_fraction >= 1.0) {
+    throw std::invalid_argument("TactileDepthParams.slip_fraction: must be in [0, 1) (0 = off), got " + num(slip_fraction));
+  }
+  if (slip_window_samples < 1 || slip_window_samples > TactileDepthEstimator::kMaxSlipWindow) {
+    throw std::invalid_argument("TactileDepthParams.slip_window_samples: must be in [1, " +
+                                std::to_string(TactileDepthEstimator::kMaxSlipWindow) + "], got " + std::to_string(slip_window_samples));
+  }
+  positive("slip_r_mm2", slip_r_mm2);
   positive("whisker_spacing", whisker_spacing);
   if (!std::isfinite(whisker_base_x)) {
     throw std::invalid_argument("TactileDepthParams.whisker_base_x: must be finite, got " + num(whisker_base_x));
@@ -118,8 +127,10 @@ void DepthKalmanFilter::predict(double d_pred) {
   p_ = p_ + q_;  // P^-_k+1 = P_k + Q (000 eq. 27)
 }
 
-void DepthKalmanFilter::update(double m) {
-  k_ = p_ / (p_ + r_);    // K = P^- (P^- + R)^-1 (000 eq. 28)
+void DepthKalmanFilter::update(double m) { update(m, r_); }
+
+void DepthKalmanFilter::update(double m, double r_m2) {
+  k_ = p_ / (p_ + r_m2);    // K = P^- (P^- + R)^-1 (000 eq. 28)
   d_ = d_ + k_ * (m - d_);  // d = d^- + K (m - d^-) (000 eq. 29)
   p_ = (1.0 - k_) * p_;   // P = (I - K) P^- (000 eq. 30)
 }
@@ -141,6 +152,7 @@ TactileDepthEstimator::TactileDepthEstimator(const Params& params, const MlpMode
   const double q = params_.q_mm2 * kMm2ToM2;
   r_m2_ = params_.r_mm2 * kMm2ToM2;
   const double p0 = params_.p0_mm2 * kMm2ToM2;
+  slip_r_m2_ = params_.slip_r_mm2 * kMm2ToM2;
   kf_[0] = DepthKalmanFilter(q, r_m2_, p0);
   kf_[1] = DepthKalmanFilter(q, r_m2_, p0);
 }
@@ -154,6 +166,9 @@ void TactileDepthEstimator::reset() {
   kf_[0].reset();
   kf_[1].reset();
   have_prev_pose_ = false;
+  slip_head_ = 0;
+  slip_count_ = 0;
+  slipping_ = {false, false};
 }
 
 TickOutput TactileDepthEstimator::update(const TickInput& in) {
@@ -164,6 +179,22 @@ TickOutput TactileDepthEstimator::update(const TickInput& in) {
   out.contact[1] = in.contact_right;
   const bool both = in.contact_left && in.contact_right;
   const double s = params_.whisker_spacing;
+
+  // Slip gate (issue 17): input sum against its maximum over the last
+  // slip_window_samples ticks, this one included.
+  const int window = params_.slip_window_samples;
+  input_sum_[0][static_cast<std::size_t>(slip_head_)] = in.sp_left[0] + in.sp_left[1] + in.sp_left[2];
+  input_sum_[1][static_cast<std::size_t>(slip_head_)] = in.sp_right[0] + in.sp_right[1] + in.sp_right[2];
+  if (slip_count_ < window) ++slip_count_;
+  for (std::size_t i = 0; i < 2; ++i) {
+    double peak = input_sum_[i][static_cast<std::size_t>(slip_head_)];
+    for (int j = 1; j < slip_count_; ++j) {
+      const int idx = (slip_head_ - j + window) % window;
+      peak = std::max(peak, input_sum_[i][static_cast<std::size_t>(idx)]);
+    }
+    slipping_[i] = params_.slip_fraction > 0.0 && input_sum_[i][static_cast<std::size_t>(slip_head_)] < params_.slip_fraction * peak;
+  }
+  slip_head_ = (slip_head_ + 1) % window;
 
   bool fused = false;
   if (params_.model != EstimatorModel::kMlp && both && in.pose_valid) {
@@ -187,7 +218,11 @@ TickOutput TactileDepthEstimator::update(const TickInput& in) {
       }
       for (std::size_t i = 0; i < 2; ++i) {
         kf_[i].predict(pred[i]);          // 000 eq. 27
-        kf_[i].update(out.measurement[i]);  // 000 eq. 28-30
+        if (slipping_[i]) {
+          kf_[i].update(out.measurement[i], slip_r_m2_);  // 000 eq. 28-30 with the slip gate's R
+        } else {
+          kf_[i].update(out.measurement[i]);  // 000 eq. 28-30
+        }
       }
     }
     fused = true;

@@ -60,6 +60,9 @@ ParamMap TactileDepthLogic::default_parameters() {
   m.set("kf.q_mm2", d.q_mm2);                        // 000 eq. 27, onboard Q = 0.01 mm^2
   m.set("kf.r_mm2", d.r_mm2);                        // 000 eq. 28, onboard R = 1 mm^2
   m.set("kf.p0_mm2", d.p0_mm2);                      // onboard P0 = 50 mm^2
+  m.set("kf.slip_fraction", d.slip_fraction);        // issue 17 slip gate (README "Slip gate"); 0 = off
+  m.set("kf.slip_window_samples", static_cast<int64_t>(d.slip_window_samples));
+  m.set("kf.slip_r_mm2", d.slip_r_mm2);
   m.set("whisker_spacing", d.whisker_spacing);       // 000 eq. 22, s = 0.05 m
   m.set("whisker_base_x", d.whisker_base_x);
   m.set("max_input_age_s", Params{}.max_input_age_s);
@@ -91,6 +94,13 @@ TactileDepthLogic::Params TactileDepthLogic::params_from(const ParamMap& m) {
   }
   p.estimator.q_mm2 = m.get_double("kf.q_mm2");
   p.estimator.r_mm2 = m.get_double("kf.r_mm2");
+  p.estimator.slip_fraction = m.get_double("kf.slip_fraction");
+  p.estimator.slip_r_mm2 = m.get_double("kf.slip_r_mm2");
+  const int64_t window = m.get_int("kf.slip_window_samples");
+  if (window < 1 || window > TactileDepthEstimator::kMaxSlipWindow) {
+    throw m.error("kf.slip_window_samples", "must be in [1, " + std::to_string(TactileDepthEstimator::kMaxSlipWindow) + "], got " + std::to_string(window));
+  }
+  p.estimator.slip_window_samples = static_cast<int>(window);
   p.estimator.p0_mm2 = m.get_double("kf.p0_mm2");
   p.estimator.whisker_spacing = m.get_double("whisker_spacing");
   p.estimator.whisker_base_x = m.get_double("whisker_base_x");
@@ -103,7 +113,7 @@ TactileDepthLogic::Params TactileDepthLogic::params_from(const ParamMap& m) {
     const auto dot = what.find('.');
     const auto colon = what.find(": ");
     std::string field = what.substr(dot + 1, colon - dot - 1);
-    if (field == "q_mm2" || field == "r_mm2" || field == "p0_mm2") field = "kf." + field;
+    if (field == "q_mm2" || field == "r_mm2" || field == "p0_mm2" || field.rfind("slip_", 0) == 0) field = "kf." + field;
     throw m.error(field, colon == std::string::npos ? what : what.substr(colon + 2));
   }
   const std::string name = m.get_string("model_file");

@@ -192,6 +192,30 @@ TEST(Params, DefaultsAndValidation) {
   p = Params{};
   p.whisker_base_x = NAN;
   EXPECT_THROW(p.validate(), std::invalid_argument);
+  // Slip gate (issue 17): off by default; fraction in [0, 1), window 1-500, R > 0.
+  EXPECT_EQ(Params{}.slip_fraction, 0.0);
+  EXPECT_EQ(Params{}.slip_window_samples, 25);
+  EXPECT_EQ(Params{}.slip_r_mm2, 1.0e4);
+  p = Params{};
+  p.slip_fraction = 1.0;
+  try {
+    p.validate();
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "TactileDepthParams.slip_fraction: must be in [0, 1) (0 = off), got 1");
+  }
+  p.slip_fraction = -0.1;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p.slip_fraction = NAN;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = Params{};
+  p.slip_window_samples = 0;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p.slip_window_samples = 101;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = Params{};
+  p.slip_r_mm2 = 0.0;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
   EXPECT_EQ(estimator_model_from_string("kf_simplified"), EstimatorModel::kKfSimplified);
   EXPECT_THROW(estimator_model_from_string("kf"), std::invalid_argument);
 }
@@ -249,6 +273,69 @@ TEST(Estimator, InitialisationAndReset) {
   o = est.update(tick(70, 75, true, true, {0.004, 0, 0}));
   EXPECT_TRUE(o.filter_initialized);
   EXPECT_DOUBLE_EQ(o.variance[1], 50e-6);
+}
+
+// Slip gate by hand: drone still (d^- = d), linear models (m = 1e-3 S[0]); the
+// input sum S[0] + S[1] + S[2] is set through S[2] independently of m.
+TEST(Estimator, SlipGateUsesLargeRBelowFractionOfRecentPeak) {
+  auto in = [](double m_left_mm, double sum_left, double m_right_mm, double sum_right) {
+    TickInput t;
+    t.sp_left = {{m_left_mm, 0, sum_left - m_left_mm}};
+    t.sp_right = {{m_right_mm, 0, sum_right - m_right_mm}};
+    t.contact_left = t.contact_right = true;
+    return t;
+  };
+  Params p;
+  p.slip_fraction = 0.5;
+  p.slip_window_samples = 3;
+  p.slip_r_mm2 = 1e4;
+  TactileDepthEstimator est(p, test_models::linear_mlp(), test_models::linear_mlp());
+  TactileDepthEstimator off(Params{}, test_models::linear_mlp(), test_models::linear_mlp());
+  const double q = 0.01e-6, r = 1e-6, r_slip = 1e4 * 1e-6;
+  // Tick 1: initialised at m (80 mm), P0; input sums 1000 / 600.
+  TickOutput o = est.update(in(80, 1000, 90, 600));
+  off.update(in(80, 1000, 90, 600));
+  EXPECT_DOUBLE_EQ(o.depth[0], 0.080);
+  EXPECT_FALSE(est.slipping(0));
+  // Tick 2: sum 1100 (peak of the window), normal update toward 100 mm.
+  o = est.update(in(100, 1100, 90, 600));
+  off.update(in(100, 1100, 90, 600));
+  double pm = 50e-6 + q;
+  double k = pm / (pm + r);
+  double d = 0.080 + k * (0.100 - 0.080);
+  double pv = (1 - k) * pm;
+  EXPECT_FALSE(est.slipping(0));
+  EXPECT_NEAR(o.depth[0], d, 1e-15);
+  // Tick 3: the left sum drops to 500 < 0.5 x 1100 (a slip); the MLP reads
+  // 120 mm. Left: R = 1e4 mm^2, the depth hardly moves. Right (600 of 600):
+  // normal update.
+  o = est.update(in(120, 500, 90, 600));
+  const TickOutput o_off = off.update(in(120, 500, 90, 600));
+  EXPECT_TRUE(est.slipping(0));
+  EXPECT_FALSE(est.slipping(1));
+  pm = pv + q;
+  k = pm / (pm + r_slip);
+  const double d_slip = d + k * (0.120 - d);
+  EXPECT_NEAR(o.depth[0], d_slip, 1e-15);
+  EXPECT_NEAR(o.variance[0], (1 - k) * pm, 1e-18);
+  EXPECT_NEAR(est.filter(0).gain(), pm / (pm + r_slip), 1e-15);
+  EXPECT_LT(o.depth[0] - d, 0.0002);           // < 0.2 mm toward the slip's 120 mm
+  EXPECT_GT(o_off.depth[0] - d, 0.005);         // off: follows it (K ~ 0.5, ~10 mm)
+  EXPECT_DOUBLE_EQ(o.depth[1], o_off.depth[1]);
+  // Tick 4: 540 is still below 550 (the 1100 of tick 2 is in the 3-tick window).
+  est.update(in(120, 540, 90, 600));
+  EXPECT_TRUE(est.slipping(0));
+  // Tick 5: window = ticks 3-5 (500, 540, 560): 560 >= 0.5 x 560, normal update.
+  const double v4 = est.filter(0).variance();
+  est.update(in(120, 560, 90, 600));
+  EXPECT_FALSE(est.slipping(0));
+  EXPECT_NEAR(est.filter(0).gain(), (v4 + q) / (v4 + q + r), 1e-12);  // R = 1 mm^2 again
+  // Off (slip_fraction 0): never slipping.
+  EXPECT_FALSE(off.slipping(0));
+  // reset() empties the window: a low sum right after is not a slip.
+  est.reset();
+  est.update(in(120, 100, 90, 600));
+  EXPECT_FALSE(est.slipping(0));
 }
 
 TEST(Estimator, MlpModelNeverFilters) {
@@ -324,7 +411,9 @@ TEST(Estimator, FullKfReducesNoiseAndBeatsSimplifiedOnTiltedWall) {
 
 TEST(Estimator, StateSizeVsPaperBudget) {
   TactileDepthEstimator est(Params{}, test_models::onboard_shape_mlp(1), test_models::onboard_shape_mlp(2));
-  EXPECT_LT(est.filter_state_bytes(), 512u);
+  // KF, poses and flags < 512 B, plus the slip gate's window of input sums
+  // (2 whiskers x kMaxSlipWindow doubles).
+  EXPECT_LT(est.filter_state_bytes(), 512u + 2 * TactileDepthEstimator::kMaxSlipWindow * sizeof(double));
   // One 3-32-32-32-1 network in float32 fits the paper's 9.6 kB (Fig. S6).
   EXPECT_EQ(est.model(0).parameter_bytes_float32(), 9124u);
   EXPECT_LT(est.model(0).parameter_bytes_float32(), TactileDepthEstimator::kPaperBudgetBytes);

@@ -63,6 +63,16 @@ struct Params {
   double r_mm2 = 1.0;
   /// P0, variance at initialisation [mm^2] (onboard default 50).
   double p0_mm2 = 50.0;
+  /// Slip gate (issue 17, README "Slip gate"): a pressed whisker sliding on a
+  /// baffle sticks and slips; on a slip its load, hence its input (sum of the
+  /// three S_c), drops while it stays pressed, and the MLP reads a far wall.
+  /// A whisker whose input sum is below slip_fraction x its maximum over the
+  /// last slip_window_samples ticks (this one included, at most
+  /// TactileDepthEstimator::kMaxSlipWindow) is updated with
+  /// R = slip_r_mm2 instead of r_mm2. slip_fraction 0 = off (the paper).
+  double slip_fraction = 0.0;
+  int slip_window_samples = 25;
+  double slip_r_mm2 = 1.0e4;
   /// s, lateral distance between the two whisker bases [m] (000 eq. 22: 0.05 m).
   double whisker_spacing = 0.05;
   /// x of the whisker bases in the body frame [m] (ahead of the odometry
@@ -114,6 +124,8 @@ class DepthKalmanFilter {
   /// Update step with the MLP depth m (000 eq. 28-30):
   ///   K = P^- (P^- + R)^-1, d = d^- + K (m - d^-), P = (1 - K) P^-.
   void update(double m);
+  /// Same with the measurement variance r_m2 [m^2] of this update only.
+  void update(double m, double r_m2);
   void reset();
   bool initialized() const { return initialized_; }
   double depth() const { return d_; }
@@ -178,12 +190,19 @@ class TactileDepthEstimator {
   const MlpModel& model(int side) const { return side == 0 ? left_ : right_; }
   Point2 whisker_base(int side) const;  ///< body frame; 0 = left, 1 = right
 
+  /// True if the input sum of `side` at the last tick was below slip_fraction
+  /// x its window maximum (the update used slip_r_mm2).
+  bool slipping(int side) const { return slipping_[static_cast<std::size_t>(side)]; }
+
   /// Bytes of the filter state (this object without the models' parameters).
   std::size_t filter_state_bytes() const;
   /// Bytes of both models as held here (double parameters + buffers).
   std::size_t model_bytes() const;
   /// Total bytes held (object + models).
   std::size_t state_size_bytes() const;
+
+  /// Longest slip gate window (2 s at 50 Hz).
+  static constexpr int kMaxSlipWindow = 100;
 
   /// Paper 000 Fig. S6: "the Tactile Depth Estimator occupies around 9.6 kB".
   static constexpr std::size_t kPaperBudgetBytes = 9600;
@@ -195,7 +214,13 @@ class TactileDepthEstimator {
   std::array<DepthKalmanFilter, 2> kf_;
   Pose2 prev_pose_;
   bool have_prev_pose_ = false;
+  std::array<bool, 2> slipping_{};
   double r_m2_ = 0.0;
+  double slip_r_m2_ = 0.0;
+  /// Input sums of the last slip_window_samples ticks per whisker (ring).
+  std::array<std::array<double, kMaxSlipWindow>, 2> input_sum_{};
+  int slip_head_ = 0;    ///< next slot of the ring
+  int slip_count_ = 0;   ///< filled slots
 };
 
 }  // namespace tactile_depth
