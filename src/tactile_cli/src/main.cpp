@@ -51,6 +51,8 @@ void add_bag_options(CLI::App* cmd, tactile_bag::WriterOptions& o) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  // OpenBLAS's pool would spin ~0.1 s of CPU beside the trials (parallel.hpp).
+  tactile_cli::release_blas_threads();
   CLI::App app{"tactile: standalone host of the tactile flight workspace (no ROS needed)"};
   app.require_subcommand(1);
   app.fallthrough();  // --config may follow the subcommand

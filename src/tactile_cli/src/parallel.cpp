@@ -10,7 +10,17 @@
 #include <system_error>
 #include <thread>
 
+// OpenBLAS's own shutdown of its thread pool (blas_server.c; exported, what its fork handler
+// calls). Weak: absent when no OpenBLAS is loaded.
+extern "C" int blas_thread_shutdown_(void) __attribute__((weak));
+
 namespace tactile_cli {
+
+bool release_blas_threads() {
+  if (blas_thread_shutdown_ == nullptr) return false;
+  blas_thread_shutdown_();
+  return true;
+}
 
 int available_cores() {
   cpu_set_t set;

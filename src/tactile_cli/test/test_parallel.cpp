@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <cstdlib>
 #include <chrono>
 #include <condition_variable>
 #include <filesystem>
@@ -19,6 +20,7 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -70,6 +72,40 @@ std::string without_wall_clock(const std::string& text) {
 }
 
 }  // namespace
+
+// OpenBLAS's thread pool (loaded through OpenCV's core and the GPIS solves) is stopped, and a
+// threaded BLAS call afterwards starts it again and computes the right product.
+extern "C" void dgemm_(const char*, const char*, const int*, const int*, const int*, const double*,
+                       const double*, const int*, const double*, const int*, const double*, double*,
+                       const int*) __attribute__((weak));
+
+TEST(ReleaseBlasThreads, StopsOpenBlasPoolWhichComesBackOnUse) {
+  auto threads = [] {
+    return std::distance(fs::directory_iterator("/proc/self/task"), fs::directory_iterator{});
+  };
+  const auto before = threads();
+  if (!tactile_cli::release_blas_threads() || dgemm_ == nullptr) GTEST_SKIP() << "OpenBLAS is not loaded";
+  const auto after = threads();
+  if (tactile_cli::available_cores() > 1 && std::getenv("OPENBLAS_NUM_THREADS") == nullptr) {
+    EXPECT_LT(after, before) << "the pool's threads are still there";
+  }
+  const int n = 300;
+  std::vector<double> a(n * n), b(n * n), c(n * n, -1.0);
+  for (int i = 0; i < n * n; ++i) {
+    a[i] = (i % 7) - 3.0;
+    b[i] = (i % 5) * 0.5;
+  }
+  const double one = 1.0, zero = 0.0;
+  dgemm_("N", "N", &n, &n, &n, &one, a.data(), &n, b.data(), &n, &zero, c.data(), &n);
+  for (const auto& [r, k] : {std::pair{0, 0}, std::pair{17, 123}, std::pair{299, 299}}) {
+    double expect = 0.0;  // column-major: C(r, k) = sum_j A(r, j) B(j, k)
+    for (int j = 0; j < n; ++j) expect += a[r + j * n] * b[j + k * n];
+    EXPECT_DOUBLE_EQ(c[r + k * n], expect) << r << "," << k;
+  }
+  if (tactile_cli::available_cores() > 1 && std::getenv("OPENBLAS_NUM_THREADS") == nullptr) {
+    EXPECT_GT(threads(), after) << "a threaded call did not start the pool again";
+  }
+}
 
 TEST(Parallel, ResultsComeBackInIndexOrderForAnyNumberOfWorkers) {
   for (int jobs : {1, 2, 3, 0, 64}) {

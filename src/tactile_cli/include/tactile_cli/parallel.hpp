@@ -41,6 +41,17 @@ int resolve_jobs(int jobs, size_t n);
 /// rethrown (the outputs of finished jobs stay where the jobs put them).
 void parallel_for(size_t n, int jobs, const std::function<void(size_t)>& job);
 
+/// Stops OpenBLAS's idle thread pool, if OpenBLAS is loaded (through OpenCV's core and the
+/// GPIS solves); returns whether it did. OpenBLAS starts its pool when the library loads, and
+/// each pool thread spins (sched_yield) for its thread timeout before it sleeps: ~0.11 s of
+/// CPU in every process (measured 2026-11-24 on this workspace's 2-core VM: 0.114 s of CPU
+/// in a process that only sleeps, 0.004 s after this call), which is 7 % of a 10-trial
+/// `tactile sim` and is taken from the trials' workers under `--jobs 2` or on one core.
+/// The pool is started again by OpenBLAS itself on the first threaded BLAS call (a GPIS
+/// update at the ground-station budget), so nothing is lost. Without OpenBLAS (another
+/// BLAS, or none) it does nothing and returns false.
+bool release_blas_threads();
+
 /// parallel_for that collects job(i)'s return value at index i.
 template <class F>
 auto parallel_map(size_t n, int jobs, F&& job) -> std::vector<std::invoke_result_t<F&, size_t>> {
