@@ -23,6 +23,42 @@ ContactSample sample(double t, double x, double fx, std::array<double, 4> arms =
   s.arm_angles = arms;
   return s;
 }
+
+// The node logic in Tactile-traversal pressed with 1.6 N, flying along -y at 0.16 m/s
+// with a timer tick every 0.125 s for 2.5 s (21 slabs; the last corner_release_s of them
+// held back).
+void traverse_one_face(XplorerMapLogic& logic) {
+  tactile_msgs::msg::FsmState st;
+  st.state = "tactile_traversal";
+  logic.on_fsm_state(st);
+  geometry_msgs::msg::WrenchStamped w;
+  w.header.frame_id = "base_link";
+  w.wrench.force.x = -1.6;
+  logic.on_wrench_body(w);
+  for (int k = 0; k <= 20; ++k) {
+    const int64_t ns = tactile_common::from_seconds(0.125 * k);
+    nav_msgs::msg::Odometry o;
+    tactile_common::to_stamp(ns, o.header.stamp);
+    o.child_frame_id = "base_link";
+    o.pose.pose.position.y = -0.02 * k;
+    o.pose.pose.position.z = 0.7;
+    o.pose.pose.orientation.w = 1.0;
+    logic.on_odometry(o);
+    logic.on_timer(ns);
+  }
+}
+
+// Node parameters of the contact-now tests: the check over the latest 5 wrench samples at
+// 0.5 N, nothing held back, no minimum state time.
+auto contact_now_params() {
+  auto d = XplorerMapLogic::default_parameters();
+  d.set("min_state_time_s", 0.0);
+  d.set("corner_release_s", 0.0);
+  d.set("publish_rate_hz", 0.0);
+  d.set("min_force_now", 0.5);
+  d.set("force_now_samples", static_cast<int64_t>(5));
+  return XplorerMapLogic::params_from(d);
+}
 }  // namespace
 
 // 001 Sec. IV-B: "obstacle map generation initializes when |b_delta_f| >=
@@ -131,25 +167,9 @@ TEST(XplorerMappingRules, LogicReleasesTheCornerOnTactileTurning) {
   d.set("delta_map_hold", 0.5);
   d.set("publish_rate_hz", 0.0);
   XplorerMapLogic logic(XplorerMapLogic::params_from(d));
-  tactile_msgs::msg::FsmState st;
-  st.state = "tactile_traversal";
-  logic.on_fsm_state(st);
-  geometry_msgs::msg::WrenchStamped w;
-  w.header.frame_id = "base_link";
-  w.wrench.force.x = -1.6;
-  logic.on_wrench_body(w);
-  for (int k = 0; k <= 20; ++k) {
-    const int64_t ns = tactile_common::from_seconds(0.125 * k);
-    nav_msgs::msg::Odometry o;
-    tactile_common::to_stamp(ns, o.header.stamp);
-    o.child_frame_id = "base_link";
-    o.pose.pose.position.y = -0.02 * k;
-    o.pose.pose.position.z = 0.7;
-    o.pose.pose.orientation.w = 1.0;
-    logic.on_odometry(o);
-    logic.on_timer(ns);
-  }
+  traverse_one_face(logic);
   EXPECT_EQ(logic.mapper().stats().slabs, 21u);
+  tactile_msgs::msg::FsmState st;
   EXPECT_EQ(logic.mapper().pending(), 4u);  // t = 2.125 .. 2.5 s
   st.state = "tactile_turning";             // entered at 2.25 s, heard at 2.5 s
   tactile_common::to_stamp(tactile_common::from_seconds(2.5), st.header.stamp);
@@ -198,13 +218,7 @@ TEST(XplorerMappingRules, SlabsOnlyWhileTheLatestSamplesStillPress) {
 // sample makes the latest 5 (4 x 0.1 + 2) / 5 = 0.48 N (still none), two more
 // 0.86 N: a slab.
 TEST(XplorerMappingRules, LogicTakesTheContactNowFromTheLatestSamples) {
-  auto d = XplorerMapLogic::default_parameters();
-  d.set("min_state_time_s", 0.0);
-  d.set("corner_release_s", 0.0);
-  d.set("publish_rate_hz", 0.0);
-  d.set("min_force_now", 0.5);
-  d.set("force_now_samples", static_cast<int64_t>(5));
-  XplorerMapLogic logic(XplorerMapLogic::params_from(d));
+  XplorerMapLogic logic(contact_now_params());
   geometry_msgs::msg::WrenchStamped w;
   w.header.frame_id = "base_link";
   auto push = [&](double fx, int n) {
@@ -235,6 +249,7 @@ TEST(XplorerMappingRules, LogicTakesTheContactNowFromTheLatestSamples) {
   push(-2.0, 1);
   tick(0.2);
   EXPECT_EQ(logic.mapper().stats().slabs, 1u);
+  auto d = XplorerMapLogic::default_parameters();
   d.set("force_now_samples", static_cast<int64_t>(51));  // more than the 50-sample average
   EXPECT_THROW(XplorerMapLogic::params_from(d), tactile_common::ParamError);
 }
@@ -296,25 +311,9 @@ TEST(XplorerMappingRules, LogicReleasesOnEveryEndOfATraversal) {
     d.set("publish_rate_hz", 0.0);
     d.set("min_force_now", 0.0);
     XplorerMapLogic logic(XplorerMapLogic::params_from(d));
-    tactile_msgs::msg::FsmState st;
-    st.state = "tactile_traversal";
-    logic.on_fsm_state(st);
-    geometry_msgs::msg::WrenchStamped w;
-    w.header.frame_id = "base_link";
-    w.wrench.force.x = -1.6;
-    logic.on_wrench_body(w);
-    for (int k = 0; k <= 20; ++k) {  // a slab every 0.125 s, 0.5 s held back
-      const int64_t ns = tactile_common::from_seconds(0.125 * k);
-      nav_msgs::msg::Odometry o;
-      tactile_common::to_stamp(ns, o.header.stamp);
-      o.child_frame_id = "base_link";
-      o.pose.pose.position.y = -0.02 * k;
-      o.pose.pose.position.z = 0.7;
-      o.pose.pose.orientation.w = 1.0;
-      logic.on_odometry(o);
-      logic.on_timer(ns);
-    }
+    traverse_one_face(logic);  // a slab every 0.125 s, 0.5 s held back
     ASSERT_EQ(logic.mapper().pending(), 4u) << state;
+    tactile_msgs::msg::FsmState st;
     st.state = state;  // entered at 2.5 s
     tactile_common::to_stamp(tactile_common::from_seconds(2.5), st.header.stamp);
     st.time_in_state = 0.0;
@@ -327,13 +326,7 @@ TEST(XplorerMappingRules, LogicReleasesOnEveryEndOfATraversal) {
 // Exploration (the impact at 0.3 m/s), not in one entered from Tactile-turning.
 TEST(XplorerMappingRules, LogicChecksTheContactNowAfterExplorationOnly) {
   for (const std::string previous : {"exploration", "tactile_turning"}) {
-    auto d = XplorerMapLogic::default_parameters();
-    d.set("min_state_time_s", 0.0);
-    d.set("corner_release_s", 0.0);
-    d.set("publish_rate_hz", 0.0);
-    d.set("min_force_now", 0.5);
-    d.set("force_now_samples", static_cast<int64_t>(5));
-    XplorerMapLogic logic(XplorerMapLogic::params_from(d));
+    XplorerMapLogic logic(contact_now_params());
     tactile_msgs::msg::FsmState st;
     st.state = "tactile_traversal";
     st.previous_state = previous;
