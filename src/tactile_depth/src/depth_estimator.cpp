@@ -181,20 +181,23 @@ TickOutput TactileDepthEstimator::update(const TickInput& in) {
   const double s = params_.whisker_spacing;
 
   // Slip gate (issue 17): input sum against its maximum over the last
-  // slip_window_samples ticks, this one included.
-  const int window = params_.slip_window_samples;
-  input_sum_[0][static_cast<std::size_t>(slip_head_)] = in.sp_left[0] + in.sp_left[1] + in.sp_left[2];
-  input_sum_[1][static_cast<std::size_t>(slip_head_)] = in.sp_right[0] + in.sp_right[1] + in.sp_right[2];
-  if (slip_count_ < window) ++slip_count_;
-  for (std::size_t i = 0; i < 2; ++i) {
-    double peak = input_sum_[i][static_cast<std::size_t>(slip_head_)];
-    for (int j = 1; j < slip_count_; ++j) {
-      const int idx = (slip_head_ - j + window) % window;
-      peak = std::max(peak, input_sum_[i][static_cast<std::size_t>(idx)]);
+  // slip_window_samples ticks, this one included. Off (slip_fraction 0, the
+  // paper): no window is kept and slipping_ stays false.
+  if (params_.slip_fraction > 0.0) {
+    const int window = params_.slip_window_samples;
+    input_sum_[0][static_cast<std::size_t>(slip_head_)] = in.sp_left[0] + in.sp_left[1] + in.sp_left[2];
+    input_sum_[1][static_cast<std::size_t>(slip_head_)] = in.sp_right[0] + in.sp_right[1] + in.sp_right[2];
+    if (slip_count_ < window) ++slip_count_;
+    for (std::size_t i = 0; i < 2; ++i) {
+      double peak = input_sum_[i][static_cast<std::size_t>(slip_head_)];
+      for (int j = 1; j < slip_count_; ++j) {
+        const int idx = (slip_head_ - j + window) % window;
+        peak = std::max(peak, input_sum_[i][static_cast<std::size_t>(idx)]);
+      }
+      slipping_[i] = input_sum_[i][static_cast<std::size_t>(slip_head_)] < params_.slip_fraction * peak;
     }
-    slipping_[i] = params_.slip_fraction > 0.0 && input_sum_[i][static_cast<std::size_t>(slip_head_)] < params_.slip_fraction * peak;
+    slip_head_ = (slip_head_ + 1) % window;
   }
-  slip_head_ = (slip_head_ + 1) % window;
 
   bool fused = false;
   if (params_.model != EstimatorModel::kMlp && both && in.pose_valid) {

@@ -192,7 +192,7 @@ TEST(Params, DefaultsAndValidation) {
   p = Params{};
   p.whisker_base_x = NAN;
   EXPECT_THROW(p.validate(), std::invalid_argument);
-  // Slip gate (issue 17): off by default; fraction in [0, 1), window 1-500, R > 0.
+  // Slip gate (issue 17): off by default; fraction in [0, 1), window 1-100 (kMaxSlipWindow), R > 0.
   EXPECT_EQ(Params{}.slip_fraction, 0.0);
   EXPECT_EQ(Params{}.slip_window_samples, 25);
   EXPECT_EQ(Params{}.slip_r_mm2, 1.0e4);
