@@ -101,7 +101,13 @@ XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
   p.stamping.guard_radius = m.get_double("guard_radius");
   p.max_arm_age_s = m.get_double("max_arm_age_s");
   p.stamping.min_force_now = m.get_double("min_force_now");
-  p.force_now_samples = static_cast<int>(m.get_int("force_now_samples"));
+  // Checked before it is narrowed to int (4294967306 would otherwise pass as 10).
+  const int64_t now_samples = m.get_int("force_now_samples");
+  if (now_samples < 0 || now_samples > p.force_average_samples) {
+    throw m.error("force_now_samples",
+                  "must be in [0, force_average_samples], got " + std::to_string(now_samples));
+  }
+  p.force_now_samples = static_cast<int>(now_samples);
   p.stamping.corner_angle_tolerance = m.get_double("corner_angle_tolerance");
   p.release_states = m.get_string_array("release_states");
   p.contact_now_after = m.get_string_array("contact_now_after");

@@ -252,6 +252,14 @@ TEST(XplorerMappingRules, LogicTakesTheContactNowFromTheLatestSamples) {
   auto d = XplorerMapLogic::default_parameters();
   d.set("force_now_samples", static_cast<int64_t>(51));  // more than the 50-sample average
   EXPECT_THROW(XplorerMapLogic::params_from(d), tactile_common::ParamError);
+  d.set("force_now_samples", static_cast<int64_t>(4294967306));  // 2^32 + 10: not taken as 10
+  try {
+    XplorerMapLogic::params_from(d);
+    FAIL() << "no error";
+  } catch (const tactile_common::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("force_now_samples: must be in [0, force_average_samples], got 4294967306"),
+              std::string::npos) << e.what();
+  }
 }
 
 // README "Right-angle corners". The corner slab of 001 (0.417 m along the
