@@ -2,6 +2,7 @@
 
 #include <limits>
 
+#include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/parameters.hpp"
 #include "tactile_common/time.hpp"
 
@@ -293,4 +294,25 @@ TEST(IntegerParameters, FromAFileTheErrorNamesTheFileThatSetTheValue) {
   // A double for an integer: rejected at load as well, not truncated.
   const auto msg2 = error_of("tdorc_filter:\n  ros__parameters:\n    window: 10.5\n");
   EXPECT_NE(msg2.find("window: expected integer, got double"), std::string::npos) << msg2;
+}
+
+// The helper the node packages' tests use: it tells a read that narrows before
+// it checks (the defect) from one that checks first.
+TEST(IntegerParameters, WrappedIntegersTellAnUncheckedNarrowingFromACheckedRead) {
+  ParamMap d("n", "defaults");
+  d.set("window", int64_t{10});
+  d.set("gain", 1.5);
+  auto unchecked = [](const ParamMap& m) {
+    const int window = static_cast<int>(std::get<int64_t>(m.values().at("window")));  // the old pattern
+    if (window < 1 || window > 100) throw m.error("window", "must be in [1, 100], got " + std::to_string(window));
+  };
+  auto checked = [](const ParamMap& m) { (void)m.get_int("window", 1, 100); };
+  const auto before = tactile_common::wrapped_integers(d, unchecked);
+  ASSERT_EQ(before.size(), 1u);  // only the integer
+  EXPECT_EQ(before.at("window").value, 4294967306);
+  EXPECT_EQ(before.at("window").error, "");
+  EXPECT_FALSE(before.at("window").rejected_as_given());
+  const auto after = tactile_common::wrapped_integers(d, checked);
+  EXPECT_EQ(after.at("window").error, "defaults: n.ros__parameters.window: must be in [1, 100], got 4294967306");
+  EXPECT_TRUE(after.at("window").rejected_as_given());
 }
