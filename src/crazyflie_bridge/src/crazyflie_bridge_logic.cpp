@@ -95,8 +95,8 @@ CrazyflieBridgeLogic::Params CrazyflieBridgeLogic::params_from(const ParamMap& m
   p.right_pressure_vars = m.get_string_array("right_pressure_vars");
   p.pressure_scale = m.get_double("pressure_scale");
   p.state_vars = m.get_string_array("state_vars");
-  p.whisker_period_ms = m.get_int("whisker_period_ms");
-  p.state_period_ms = m.get_int("state_period_ms");
+  p.whisker_period_ms = m.get_int64("whisker_period_ms", 1, 65535);  // u16 log period
+  p.state_period_ms = m.get_int64("state_period_ms", 1, 65535);
   p.setpoint_rate_hz = m.get_double("setpoint_rate_hz");
   p.max_velocity = m.get_double("max_velocity");
   p.max_yaw_rate = m.get_double("max_yaw_rate");

@@ -6,6 +6,7 @@
 
 #include "crazyflie_bridge/crazyflie_bridge_logic.hpp"
 #include "crazyflie_bridge/protocol.hpp"
+#include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/time.hpp"
 
 using namespace crazyflie_bridge;
@@ -199,6 +200,25 @@ TEST(BridgeLogic, ParametersDefaultsAndValidation) {
   bad = m;
   bad.set("state_vars", std::vector<std::string>{"stateEstimate.x"});
   EXPECT_THROW(CrazyflieBridgeLogic::params_from(bad), tactile_common::ParamError);
+}
+
+// The log periods are u16 on the link (start_block_v2): every integer
+// parameter set to its default + 2^32 (65536 + 20 would be 20 as a u16 too) is
+// rejected with its key and the value as given, not a message for both keys.
+TEST(BridgeLogic, IntegerParametersAreCheckedBeforeTheyAreNarrowed) {
+  const auto wrapped = tactile_common::wrapped_integers(CrazyflieBridgeLogic::default_parameters(),
+                                                        [](const tactile_common::ParamMap& m) { CrazyflieBridgeLogic::params_from(m); });
+  EXPECT_EQ(wrapped.size(), 2u);  // whisker_period_ms, state_period_ms
+  for (const auto& [key, w] : wrapped) EXPECT_TRUE(w.rejected_as_given()) << key << ": " << w.error;
+  auto m = CrazyflieBridgeLogic::default_parameters();
+  m.set("state_period_ms", int64_t{65536 + 10});
+  try {
+    CrazyflieBridgeLogic::params_from(m);
+    FAIL();
+  } catch (const tactile_common::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("crazyflie_bridge.ros__parameters.state_period_ms: must be in [1, 65535], got 65546"),
+              std::string::npos) << e.what();
+  }
 }
 
 TEST(BridgeLogic, RepositoryConfigEqualsDefaults) {

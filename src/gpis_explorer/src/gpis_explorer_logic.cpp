@@ -87,19 +87,14 @@ ParamMap GpisExplorerLogic::default_parameters() {
 GpisExplorerLogic::Params GpisExplorerLogic::params_from(const ParamMap& m) {
   Params p;
   SequencerParams& s = p.sequencer;
-  auto nonneg_int = [&](const char* key) {
-    const int64_t v = m.get_int(key);
-    if (v < 0) throw m.error(key, "must be >= 0, got " + std::to_string(v));
-    return v;
-  };
   s.explorer.gpis.beta = m.get_double("gpis.beta");
   s.explorer.gpis.c = m.get_double("gpis.c");
   s.explorer.gpis.noise = m.get_double("gpis.noise");
-  s.explorer.gpis.max_points = static_cast<std::size_t>(nonneg_int("gpis.max_points"));
+  s.explorer.gpis.max_points = m.get_size("gpis.max_points", 1, 100000);
   s.explorer.grid_size = m.get_double("grid_size");
-  s.explorer.grid_cells = static_cast<uint32_t>(std::min<int64_t>(nonneg_int("grid_cells"), 1000000));
+  s.explorer.grid_cells = m.get_integer<uint32_t>("grid_cells", 2, 5000);
   s.explorer.grid_variance = m.get_bool("grid_variance");
-  s.explorer.variance_cells = static_cast<uint32_t>(std::min<int64_t>(nonneg_int("variance_cells"), 1000000));
+  s.explorer.variance_cells = m.get_integer<uint32_t>("variance_cells", 0, 5000);  // not 1: validate()
   s.explorer.corner_curvature = m.get_double("corner_curvature");
   s.explorer.penalty_scale = m.get_double("penalty_scale");
   s.explorer.corner_exclusion = m.get_double("corner_exclusion");
@@ -115,11 +110,11 @@ GpisExplorerLogic::Params GpisExplorerLogic::params_from(const ParamMap& m) {
   } catch (const std::invalid_argument& e) {
     throw m.error("follow_side", e.what());
   }
-  s.probe_directions = static_cast<int>(std::min<int64_t>(nonneg_int("probe_directions"), 1000));
+  s.probe_directions = m.get_int("probe_directions", 1, 16);
   s.follow_time_s = m.get_double("follow_time_s");
   s.retreat_time_s = m.get_double("retreat_time_s");
-  s.surface_points_per_follow = static_cast<int>(std::min<int64_t>(nonneg_int("surface_points_per_follow"), 1000));
-  s.interior_points_per_retreat = static_cast<int>(std::min<int64_t>(nonneg_int("interior_points_per_retreat"), 1000));
+  s.surface_points_per_follow = m.get_int("surface_points_per_follow", 1, 1000);
+  s.interior_points_per_retreat = m.get_int("interior_points_per_retreat", 0, 1);
   s.retreat_speed = m.get_double("retreat_speed");
   s.probe_max_distance = m.get_double("probe_max_distance");
   s.yaw_gain = m.get_double("yaw_gain");
@@ -146,7 +141,7 @@ GpisExplorerLogic::Params GpisExplorerLogic::params_from(const ParamMap& m) {
   s.check_sample_s = m.get_double("check_sample_s");
   s.follow_min_forward = m.get_double("follow_min_forward");
 
-  s.max_updates = static_cast<int>(std::min<int64_t>(nonneg_int("max_updates"), 1000000));
+  s.max_updates = m.get_int("max_updates", 1, 1000000);
   s.max_time_s = m.get_double("max_time_s");
   s.landing_duration_s = m.get_double("landing_duration_s");
   p.max_input_age_s = m.get_double("max_input_age_s");

@@ -9,6 +9,7 @@
 
 #include "gpis_explorer/gpis_explorer_logic.hpp"
 #include "gpis_explorer/gpis_plot.hpp"
+#include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/time.hpp"
 
 using gpis_explorer::GpisExplorerLogic;
@@ -50,6 +51,27 @@ TEST(GpisExplorerLogic, BadParameterNamesKey) {
   m = GpisExplorerLogic::default_parameters();
   m.set("gpis.max_points", int64_t{-3});
   EXPECT_THROW(GpisExplorerLogic::params_from(m), tactile_common::ParamError);
+}
+
+// The integer parameters were clamped before they were checked (grid_cells,
+// probe_directions, max_updates, ...: min(value, cap)), so 2^32 + 4
+// surface points per follow ran as 1000 and grid_cells 2^32 + 10 was reported
+// as 1000000. Now every integer parameter set to its default + 2^32 is
+// rejected with its key and the value as given.
+TEST(GpisExplorerLogic, IntegerParametersAreCheckedBeforeTheyAreNarrowed) {
+  const auto wrapped = tactile_common::wrapped_integers(GpisExplorerLogic::default_parameters(),
+                                                        [](const tactile_common::ParamMap& m) { GpisExplorerLogic::params_from(m); });
+  EXPECT_EQ(wrapped.size(), 7u);  // gpis.max_points ... max_updates
+  for (const auto& [key, w] : wrapped) EXPECT_TRUE(w.rejected_as_given()) << key << ": " << w.error;
+  auto m = GpisExplorerLogic::default_parameters();
+  m.set("variance_cells", int64_t{1});  // in [0, 5000], but not 0 or 2..5000: validate()'s message
+  try {
+    GpisExplorerLogic::params_from(m);
+    FAIL();
+  } catch (const tactile_common::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("variance_cells: must be 0 (every grid node) or in [2, 5000], got 1"),
+              std::string::npos) << e.what();
+  }
 }
 
 TEST(GpisExplorerLogic, DropsBadInputAndHoversWithoutOdometry) {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <vector>
 
@@ -83,9 +84,9 @@ XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
   p.stamping.min_flight_height = m.get_double("min_flight_height");
   p.stamping.normal_from_force = m.get_bool("normal_from_force");
   p.map.voxel_leaf = m.get_double("voxel_leaf");
-  p.map.outlier_mean_k = static_cast<int>(m.get_int("outlier_mean_k"));
+  p.map.outlier_mean_k = m.get_int("outlier_mean_k", 1, std::numeric_limits<int>::max());
   p.map.outlier_stddev = m.get_double("outlier_stddev");
-  p.force_average_samples = static_cast<int>(m.get_int("force_average_samples"));
+  p.force_average_samples = m.get_int("force_average_samples", 1, std::numeric_limits<int>::max());
   p.floor_z = m.get_double("floor_z");
   p.publish_rate_hz = m.get_double("publish_rate_hz");
   p.max_odometry_age_s = m.get_double("max_odometry_age_s");
@@ -101,13 +102,8 @@ XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
   p.stamping.guard_radius = m.get_double("guard_radius");
   p.max_arm_age_s = m.get_double("max_arm_age_s");
   p.stamping.min_force_now = m.get_double("min_force_now");
-  // Checked before it is narrowed to int (4294967306 would otherwise pass as 10).
-  const int64_t now_samples = m.get_int("force_now_samples");
-  if (now_samples < 0 || now_samples > p.force_average_samples) {
-    throw m.error("force_now_samples",
-                  "must be in [0, force_average_samples], got " + std::to_string(now_samples));
-  }
-  p.force_now_samples = static_cast<int>(now_samples);
+  // <= force_average_samples: validate() (its message names that parameter).
+  p.force_now_samples = m.get_int("force_now_samples", 0, std::numeric_limits<int>::max());
   p.stamping.corner_angle_tolerance = m.get_double("corner_angle_tolerance");
   p.release_states = m.get_string_array("release_states");
   p.contact_now_after = m.get_string_array("contact_now_after");

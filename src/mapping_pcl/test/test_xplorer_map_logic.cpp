@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "mapping_pcl/xplorer_map_logic.hpp"
+#include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/time.hpp"
 
 using namespace mapping_pcl;
@@ -55,6 +56,16 @@ TEST(XplorerMapLogic, DefaultsAndRepoConfig) {
   } catch (const tactile_common::ParamError& e) {
     EXPECT_NE(std::string(e.what()).find("delta_map"), std::string::npos) << e.what();
   }
+}
+
+// outlier_mean_k and force_average_samples were narrowed to int unchecked:
+// 2^32 + 20 became 20 and passed validate(). Now every integer parameter set
+// to its default + 2^32 is rejected with its key and the value as given.
+TEST(XplorerMapLogic, IntegerParametersAreCheckedBeforeTheyAreNarrowed) {
+  const auto wrapped = tactile_common::wrapped_integers(XplorerMapLogic::default_parameters(),
+                                                        [](const ParamMap& m) { XplorerMapLogic::params_from(m); });
+  EXPECT_EQ(wrapped.size(), 3u);  // outlier_mean_k, force_average_samples, force_now_samples
+  for (const auto& [key, w] : wrapped) EXPECT_TRUE(w.rejected_as_given()) << key << ": " << w.error;
 }
 
 TEST(XplorerMapLogic, StampsWhilePressingAndPublishesPointCloud2) {

@@ -214,6 +214,12 @@ TEST(Sim, MalformedScenarioStopsWithFileKeyAndReason) {
   EXPECT_NE(msg.find("'whisker_fsm' cannot fly the xplorer"), std::string::npos) << msg;
   msg = error_of(head + walls + "node_parameters:\n  whisker_fsm: {t_max: 0.1}\n");
   EXPECT_NE(msg.find("node_parameters.whisker_fsm: no such node in graph 'none'"), std::string::npos) << msg;
+  // An integer an int would wrap (2^32 + 20 trials ran as 20) names the key and the value as given.
+  msg = error_of("name: b\nduration_s: 2\nvehicle: {type: whisker_stage}\ngraph: whisker_stage\n" + walls +
+                 "node_parameters:\n  whisker_stage_protocol: {protocol: table1, trials: 4294967316}\n");
+  EXPECT_NE(msg.find("bad.yaml (node_parameters.whisker_stage_protocol): whisker_stage_protocol.ros__parameters.trials: "
+                     "must be in [-2147483648, 2147483647], got 4294967316"),
+            std::string::npos) << msg;
   msg = error_of("name: b\nduration_s: 2\n  bad indent: [\n");
   EXPECT_NE(msg.find("YAML syntax error"), std::string::npos) << msg;
   fs::remove_all(dir);

@@ -229,10 +229,17 @@ bool ParamMap::get_bool(const std::string& key) const {
   wrong_type(key, "bool");
 }
 
-int64_t ParamMap::get_int(const std::string& key) const {
+int64_t ParamMap::raw_int(const std::string& key) const {
   const auto& v = at(key);
   if (auto p = std::get_if<int64_t>(&v)) return *p;
   wrong_type(key, "integer");
+}
+
+int64_t ParamMap::get_int(const std::string& key) const { return raw_int(key); }
+
+void ParamMap::out_of_range(const std::string& key, const std::string& lo, const std::string& hi,
+                            int64_t value) const {
+  throw error(key, "must be in [" + lo + ", " + hi + "], got " + std::to_string(value));
 }
 
 double ParamMap::get_double(const std::string& key) const {

@@ -1,5 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <limits>
+
+#include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/parameters.hpp"
 #include "tactile_common/time.hpp"
 
@@ -39,7 +42,7 @@ struct Stamp {
 TEST(Parameters, DefaultsWhenFileHasNoSection) {
   auto p = load_node_parameters_from_string("other:\n  ros__parameters: {a: 1}\n", "x.yaml",
                                             "tdorc_filter", defaults());
-  EXPECT_EQ(p.get_int("window"), 100);
+  EXPECT_EQ(p.get_int("window", 0, 1000), 100);
   EXPECT_DOUBLE_EQ(p.get_double("contact_threshold"), 20.0);
   EXPECT_EQ(p.get_string("mode"), "tdorc");
 }
@@ -50,7 +53,7 @@ TEST(Parameters, NodeSectionOverridesWildcardWhichOverridesDefaults) {
       "/whisker/left/tdorc_filter:\n  ros__parameters:\n    window: 80\n    mode: tdoc\n"
       "    kf:\n      q: 0.5\n    bandpass_b: [1, 0, -1]\n";
   auto p = load_node_parameters_from_string(yaml, "x.yaml", "/whisker/left/tdorc_filter", defaults());
-  EXPECT_EQ(p.get_int("window"), 80);
+  EXPECT_EQ(p.get_int("window", 0, 1000), 80);
   EXPECT_DOUBLE_EQ(p.get_double("contact_threshold"), 30.0);
   EXPECT_EQ(p.get_string("mode"), "tdoc");
   EXPECT_DOUBLE_EQ(p.get_double("kf.q"), 0.5);
@@ -68,12 +71,12 @@ TEST(Parameters, SectionsMatchFullyQualifiedNamesLikeRos2) {
   auto right = load_node_parameters_from_string(yaml, "x.yaml", "/whisker/right/tdorc_filter", defaults());
   auto root = load_node_parameters_from_string(yaml, "x.yaml", "tdorc_filter", defaults());
   auto deep = load_node_parameters_from_string(yaml, "x.yaml", "/a/b/c/tdorc_filter", defaults());
-  EXPECT_EQ(left.get_int("window"), 60);   // only the '**' section applies
+  EXPECT_EQ(left.get_int("window", 0, 1000), 60);   // only the '**' section applies
   EXPECT_EQ(left.get_string("mode"), "tdoc");
-  EXPECT_EQ(right.get_int("window"), 70);  // exact name beats the wildcard
-  EXPECT_EQ(root.get_int("window"), 90);   // a bare name is the root namespace
+  EXPECT_EQ(right.get_int("window", 0, 1000), 70);  // exact name beats the wildcard
+  EXPECT_EQ(root.get_int("window", 0, 1000), 90);   // a bare name is the root namespace
   EXPECT_EQ(root.get_string("mode"), "tdorc");
-  EXPECT_EQ(deep.get_int("window"), 60);
+  EXPECT_EQ(deep.get_int("window", 0, 1000), 60);
   EXPECT_EQ(deep.get_string("mode"), "tdorc");  // '*' is exactly one token
   EXPECT_EQ(left.node(), "tdorc_filter");
 }
@@ -162,4 +165,154 @@ TEST(Parameters, ErrorFromValidateMessageNamesTheField) {
   // An indexed field "<field>[i]" names the array parameter.
   EXPECT_EQ(std::string(m.error_from(std::invalid_argument("TdorcParams.bandpass_a[0]: must be 1")).what()),
             "defaults: tdorc_filter.ros__parameters.bandpass_a: must be 1");
+}
+
+// Range-checked integer getters: the value is checked as the 64-bit integer it
+// was given as, before it is narrowed, and every failure names the file, the
+// key, the range and the value as given.
+namespace {
+
+ParamMap ints() {
+  ParamMap m("tdorc_filter", "cfg.yaml");
+  m.set("k", int64_t{0});
+  return m;
+}
+
+std::string int_error(int64_t value, int lo, int hi) {
+  ParamMap m = ints();
+  m.set("k", value);
+  try {
+    m.get_int("k", lo, hi);
+  } catch (const ParamError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(IntegerParameters, InRangeAndAtTheBoundsIsTheValue) {
+  ParamMap m = ints();
+  for (const int64_t v : {int64_t{2}, int64_t{50}, int64_t{100}}) {
+    m.set("k", v);
+    EXPECT_EQ(m.get_int("k", 2, 100), v);
+  }
+  m.set("k", int64_t{-7});
+  EXPECT_EQ(m.get_int("k", -7, -7), -7);  // a one-value range
+}
+
+TEST(IntegerParameters, OneOutsideEitherBoundIsRejectedWithKeyRangeAndValue) {
+  EXPECT_EQ(int_error(1, 2, 100), "cfg.yaml: tdorc_filter.ros__parameters.k: must be in [2, 100], got 1");
+  EXPECT_EQ(int_error(101, 2, 100), "cfg.yaml: tdorc_filter.ros__parameters.k: must be in [2, 100], got 101");
+  EXPECT_EQ(int_error(-1, 0, 10), "cfg.yaml: tdorc_filter.ros__parameters.k: must be in [0, 10], got -1");
+}
+
+TEST(IntegerParameters, ValuesThatWrapWhenNarrowedToIntAreRejected) {
+  // static_cast<int>(2^32 + 10) == 10, which [2, 100] would have accepted.
+  const int64_t wraps_to_10 = (int64_t{1} << 32) + 10;
+  EXPECT_EQ(int_error(wraps_to_10, 2, 100),
+            "cfg.yaml: tdorc_filter.ros__parameters.k: must be in [2, 100], got 4294967306");
+  // Even with the int's whole range allowed, 2^32 + 10 is not an int.
+  const int lo = std::numeric_limits<int>::min(), hi = std::numeric_limits<int>::max();
+  EXPECT_EQ(int_error(wraps_to_10, lo, hi),
+            "cfg.yaml: tdorc_filter.ros__parameters.k: must be in [-2147483648, 2147483647], got 4294967306");
+  EXPECT_NE(int_error(int64_t{hi} + 1, lo, hi), "");
+  EXPECT_NE(int_error(int64_t{lo} - 1, lo, hi), "");
+  EXPECT_EQ(int_error(hi, lo, hi), "");
+  EXPECT_EQ(int_error(lo, lo, hi), "");
+}
+
+TEST(IntegerParameters, NegativeIsOutOfRangeForUnsignedTypes) {
+  ParamMap m = ints();
+  m.set("k", int64_t{-1});  // static_cast<std::size_t>(-1) == SIZE_MAX
+  try {
+    m.get_size("k", 0, std::numeric_limits<std::size_t>::max());
+    FAIL() << "-1 accepted as a size";
+  } catch (const ParamError& e) {
+    EXPECT_STREQ(e.what(), "cfg.yaml: tdorc_filter.ros__parameters.k: must be in [0, 18446744073709551615], got -1");
+  }
+  EXPECT_THROW(m.get_integer<uint32_t>("k", 0u, 5000u), ParamError);
+  EXPECT_THROW(m.get_integer<uint64_t>("k", 0u, std::numeric_limits<uint64_t>::max()), ParamError);
+  m.set("k", int64_t{5000});
+  EXPECT_EQ(m.get_integer<uint32_t>("k", 0u, 5000u), 5000u);
+  m.set("k", (int64_t{1} << 32) + 10);  // would wrap to 10 as a uint32_t
+  EXPECT_THROW(m.get_integer<uint32_t>("k", 0u, std::numeric_limits<uint32_t>::max()), ParamError);
+  EXPECT_EQ(m.get_size("k", 0, std::numeric_limits<std::size_t>::max()), (std::size_t{1} << 32) + 10);
+  m.set("k", std::numeric_limits<int64_t>::max());
+  EXPECT_EQ(m.get_integer<uint64_t>("k", 0u, std::numeric_limits<uint64_t>::max()),
+            uint64_t{std::numeric_limits<int64_t>::max()});
+}
+
+TEST(IntegerParameters, Int64BoundsAreExact) {
+  ParamMap m = ints();
+  const int64_t max = std::numeric_limits<int64_t>::max(), min = std::numeric_limits<int64_t>::min();
+  m.set("k", max);
+  EXPECT_EQ(m.get_int64("k", min, max), max);
+  EXPECT_THROW(m.get_int64("k", min, max - 1), ParamError);
+  m.set("k", min);
+  EXPECT_EQ(m.get_int64("k", min, max), min);
+  EXPECT_THROW(m.get_int64("k", min + 1, max), ParamError);
+}
+
+TEST(IntegerParameters, ADoubleOrAStringIsNotAnInteger) {
+  ParamMap m = ints();
+  m.set("k", 10.0);  // a map built in code (tests, command-line overrides) can hold one
+  try {
+    m.get_int("k", 0, 100);
+    FAIL() << "10.0 accepted as an integer";
+  } catch (const ParamError& e) {
+    EXPECT_STREQ(e.what(), "cfg.yaml: tdorc_filter.ros__parameters.k: expected integer, got double");
+  }
+  m.set("k", std::string("10"));
+  try {
+    m.get_size("k", 0, 100);
+    FAIL() << "\"10\" accepted as an integer";
+  } catch (const ParamError& e) {
+    EXPECT_STREQ(e.what(), "cfg.yaml: tdorc_filter.ros__parameters.k: expected integer, got string");
+  }
+  EXPECT_THROW(m.get_int("missing", 0, 1), ParamError);
+}
+
+TEST(IntegerParameters, AnEmptyRangeIsTheCallersBug) {
+  ParamMap m = ints();
+  EXPECT_THROW(m.get_int("k", 5, 2), std::logic_error);
+}
+
+TEST(IntegerParameters, FromAFileTheErrorNamesTheFileThatSetTheValue) {
+  // 2^32 + 10 in the file: loaded as the integer it is, rejected by the read.
+  auto p = load_node_parameters_from_string("tdorc_filter:\n  ros__parameters:\n    window: 4294967306\n",
+                                            "config/x.yaml", "tdorc_filter", defaults());
+  try {
+    p.get_int("window", 2, 100000);
+    FAIL();
+  } catch (const ParamError& e) {
+    EXPECT_STREQ(e.what(), "config/x.yaml: tdorc_filter.ros__parameters.window: must be in [2, 100000], got 4294967306");
+  }
+  // Past int64 YAML's integer is read as a double: rejected when the file is loaded.
+  const auto msg = error_of("tdorc_filter:\n  ros__parameters:\n    window: 99999999999999999999\n");
+  EXPECT_NE(msg.find("window: expected integer, got double"), std::string::npos) << msg;
+  // A double for an integer: rejected at load as well, not truncated.
+  const auto msg2 = error_of("tdorc_filter:\n  ros__parameters:\n    window: 10.5\n");
+  EXPECT_NE(msg2.find("window: expected integer, got double"), std::string::npos) << msg2;
+}
+
+// The helper the node packages' tests use: it tells a read that narrows before
+// it checks (the defect) from one that checks first.
+TEST(IntegerParameters, WrappedIntegersTellAnUncheckedNarrowingFromACheckedRead) {
+  ParamMap d("n", "defaults");
+  d.set("window", int64_t{10});
+  d.set("gain", 1.5);
+  auto unchecked = [](const ParamMap& m) {
+    const int window = static_cast<int>(std::get<int64_t>(m.values().at("window")));  // the old pattern
+    if (window < 1 || window > 100) throw m.error("window", "must be in [1, 100], got " + std::to_string(window));
+  };
+  auto checked = [](const ParamMap& m) { (void)m.get_int("window", 1, 100); };
+  const auto before = tactile_common::wrapped_integers(d, unchecked);
+  ASSERT_EQ(before.size(), 1u);  // only the integer
+  EXPECT_EQ(before.at("window").value, 4294967306);
+  EXPECT_EQ(before.at("window").error, "");
+  EXPECT_FALSE(before.at("window").rejected_as_given());
+  const auto after = tactile_common::wrapped_integers(d, checked);
+  EXPECT_EQ(after.at("window").error, "defaults: n.ros__parameters.window: must be in [1, 100], got 4294967306");
+  EXPECT_TRUE(after.at("window").rejected_as_given());
 }

@@ -96,11 +96,7 @@ TactileDepthLogic::Params TactileDepthLogic::params_from(const ParamMap& m) {
   p.estimator.r_mm2 = m.get_double("kf.r_mm2");
   p.estimator.slip_fraction = m.get_double("kf.slip_fraction");
   p.estimator.slip_r_mm2 = m.get_double("kf.slip_r_mm2");
-  const int64_t window = m.get_int("kf.slip_window_samples");
-  if (window < 1 || window > TactileDepthEstimator::kMaxSlipWindow) {
-    throw m.error("kf.slip_window_samples", "must be in [1, " + std::to_string(TactileDepthEstimator::kMaxSlipWindow) + "], got " + std::to_string(window));
-  }
-  p.estimator.slip_window_samples = static_cast<int>(window);
+  p.estimator.slip_window_samples = m.get_int("kf.slip_window_samples", 1, TactileDepthEstimator::kMaxSlipWindow);
   p.estimator.p0_mm2 = m.get_double("kf.p0_mm2");
   p.estimator.whisker_spacing = m.get_double("whisker_spacing");
   p.estimator.whisker_base_x = m.get_double("whisker_base_x");

@@ -68,7 +68,7 @@ TEST(TactileDepthLogic, DefaultParameters) {
   EXPECT_EQ(m.get_double("whisker_base_x"), 0.05);
   EXPECT_EQ(m.get_double("max_input_age_s"), 0.1);
   EXPECT_EQ(m.get_double("kf.slip_fraction"), 0.0);  // off: the shipped courses lose with it (README "Slip gate")
-  EXPECT_EQ(m.get_int("kf.slip_window_samples"), 25);
+  EXPECT_EQ(m.get_int("kf.slip_window_samples", 1, 100), 25);
   EXPECT_EQ(m.get_double("kf.slip_r_mm2"), 1.0e4);
   EXPECT_EQ(m.values().size(), 11u);
 }
@@ -116,6 +116,8 @@ TEST(TactileDepthLogic, ParamsFromAndModelFileResolution) {
   expect_param_error("kf.slip_fraction", 1.5, "tactile_depth.ros__parameters.kf.slip_fraction: must be in [0, 1)");
   expect_param_error("kf.slip_window_samples", int64_t{0}, "tactile_depth.ros__parameters.kf.slip_window_samples: must be in [1, 100], got 0");
   expect_param_error("kf.slip_window_samples", int64_t{1} << 40, "kf.slip_window_samples: must be in [1, 100]");
+  // 2^32 + 25 is 25 as an int: rejected as given, before it is narrowed.
+  expect_param_error("kf.slip_window_samples", (int64_t{1} << 32) + 25, "kf.slip_window_samples: must be in [1, 100], got 4294967321");
   expect_param_error("kf.slip_r_mm2", -1.0, "kf.slip_r_mm2: must be finite and > 0");
   expect_param_error("whisker_spacing", 0.0, "whisker_spacing: must be finite and > 0");
   expect_param_error("max_input_age_s", -0.1, "max_input_age_s: must be finite and > 0");

@@ -1,6 +1,7 @@
 #include "tactile_fsm/xplorer_fsm_logic.hpp"
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <vector>
 
@@ -81,7 +82,7 @@ XplorerFsmLogic::Params XplorerFsmLogic::params_from(const ParamMap& m) {
   f.explore_speed = m.get_double("explore_speed");
   f.traverse_speed = m.get_double("traverse_speed");
   f.position_gain = m.get_double("position_gain");
-  f.force_average_samples = static_cast<int>(m.get_int("force_average_samples"));
+  f.force_average_samples = m.get_int("force_average_samples", 1, std::numeric_limits<int>::max());
   f.delta_0 = m.get_double("delta_0");
   f.delta_psi0 = m.get_double("delta_psi0");
   f.yaw_rate_trigger = m.get_double("yaw_rate_trigger");

@@ -3,6 +3,7 @@
 
 #include <cmath>
 
+#include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/time.hpp"
 #include "tactile_fsm/xplorer_fsm_logic.hpp"
 
@@ -52,6 +53,15 @@ TEST(XplorerFsmLogic, DefaultsAndRepoConfig) {
   } catch (const tactile_common::ParamError& e) {
     EXPECT_NE(std::string(e.what()).find("delta_psi0"), std::string::npos) << e.what();
   }
+}
+
+// force_average_samples was narrowed to int unchecked: 2^32 + 50 became 50 and
+// passed validate(). Now it is rejected with its key and the value as given.
+TEST(XplorerFsmLogic, IntegerParametersAreCheckedBeforeTheyAreNarrowed) {
+  const auto wrapped = tactile_common::wrapped_integers(XplorerFsmLogic::default_parameters(),
+                                                        [](const ParamMap& m) { XplorerFsmLogic::params_from(m); });
+  EXPECT_EQ(wrapped.size(), 1u);  // force_average_samples
+  for (const auto& [key, w] : wrapped) EXPECT_TRUE(w.rejected_as_given()) << key << ": " << w.error;
 }
 
 TEST(XplorerFsmLogic, SetpointsStateMessagesAndBadInput) {

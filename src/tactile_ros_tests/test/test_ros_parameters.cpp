@@ -79,6 +79,22 @@ TEST_F(RosParameters, RosRunParamsFileWithWrongTypeNamesTheFileKeyAndReason) {
                 ": probe.ros__parameters.window: is a string (wide), expected a integer");
 }
 
+// The node logic reads integers with ParamMap's range-checked getters on the map
+// declare_parameters returns, so an integer an int would wrap (2^32 + 10 is 10 as an
+// int) gets the standalone host's message, naming the file it came from.
+TEST_F(RosParameters, IntegerOutOfRangeNamesTheFileLikeTheStandaloneHost) {
+  const std::string file = write_file("probe.yaml", "/**:\n  ros__parameters:\n    window: 4294967306\n");
+  rclcpp::Node node("probe", "/bench", options({"--ros-args", "--params-file", file}));
+  const ParamMap params = tactile_common::declare_parameters(node, defaults());
+  try {
+    params.get_int("window", 1, 100);
+    FAIL() << "4294967306 accepted";
+  } catch (const ParamError& e) {
+    EXPECT_EQ(std::string(e.what()), "ros parameters of /bench/probe from " + file +
+                                         ": probe.ros__parameters.window: must be in [1, 100], got 4294967306");
+  }
+}
+
 TEST_F(RosParameters, EveryKeyRemembersTheLastFileThatSetItOrThatItIsADefaultOrAnOverride) {
   const std::string a = write_file("a.yaml", "/**:\n  ros__parameters:\n    gain: 2.0\n    window: 7\n");
   const std::string b = write_file("b.yaml", "/bench/probe:\n  ros__parameters:\n    window: 9\n");
@@ -87,7 +103,7 @@ TEST_F(RosParameters, EveryKeyRemembersTheLastFileThatSetItOrThatItIsADefaultOrA
   opts.arguments({"--ros-args", "--params-file", b, "-p", "frame_id:=tool"});
   rclcpp::Node node("probe", "/bench", opts);
   const ParamMap params = tactile_common::declare_parameters(node, defaults());
-  EXPECT_EQ(params.get_int("window"), 9);
+  EXPECT_EQ(params.get_int("window", 0, 100), 9);
   EXPECT_EQ(params.origin("window"), "ros parameters of /bench/probe from " + b);
   EXPECT_EQ(params.origin("gain"), "ros parameters of /bench/probe from " + a);
   EXPECT_EQ(params.origin("frame_id"),
@@ -103,7 +119,7 @@ TEST_F(RosParameters, AFileThatSetsAnotherValueIsNotBlamedForAnOverride) {
   opts.arguments({"--ros-args", "--params-file", a, "-p", "window:=1"});
   rclcpp::Node node("probe", opts);
   const ParamMap params = tactile_common::declare_parameters(node, defaults());
-  EXPECT_EQ(params.get_int("window"), 1);
+  EXPECT_EQ(params.get_int("window", 0, 100), 1);
   EXPECT_EQ(params.origin("window"), "ros parameters of /probe (a launch or -p override; not from " + a + ")");
   EXPECT_EQ(params.origin("gain"), "ros parameters of /probe (default; not set in " + a + ")");
 }

@@ -31,6 +31,17 @@ TEST(SimLogic, FromParametersNamesTheBadParameter) {
   EXPECT_EQ(SimLogic::from_parameters(p)->seed(), 1u);  // the scenario's seed
   p.set("seed", int64_t{9});
   EXPECT_EQ(SimLogic::from_parameters(p)->seed(), 9u);
+  p.set("seed", (int64_t{1} << 32) + 10);  // a 64-bit seed: kept whole, not wrapped to 10
+  EXPECT_EQ(SimLogic::from_parameters(p)->seed(), 4294967306u);
+  p.set("seed", int64_t{-2});
+  try {
+    SimLogic::from_parameters(p);
+    FAIL();
+  } catch (const tactile_common::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("tactile_sim.ros__parameters.seed: must be in [-1, 9223372036854775807], got -2"),
+              std::string::npos) << e.what();
+  }
+  p.set("seed", int64_t{9});
   p.set("scenario", std::string("no/such/scenario.yaml"));
   EXPECT_THROW(SimLogic::from_parameters(p), tactile_sim::ScenarioError);
 }

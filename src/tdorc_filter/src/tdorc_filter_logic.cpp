@@ -71,39 +71,19 @@ TdorcFilterLogic::Params TdorcFilterLogic::params_from(const ParamMap& m) {
   } catch (const std::invalid_argument&) {
     throw m.error("mode", "must be \"tdorc\", \"tdoc\" or \"bandpass\", got \"" + mode + "\"");
   }
-  const int64_t window = m.get_int("window");
-  if (window < 2 || window > 100000) {
-    throw m.error("window", "must be in [2, 100000], got " + std::to_string(window));
-  }
-  p.tdorc.window = static_cast<int>(window);
+  p.tdorc.window = m.get_int("window", 2, 100000);
   p.tdorc.contact_threshold = m.get_double("contact_threshold");
   p.tdorc.absolute_threshold = m.get_bool("absolute_threshold");
-  const int64_t delay = m.get_int("learn_delay");
-  if (delay < 0 || delay > 10000) throw m.error("learn_delay", "must be in [0, 10000], got " + std::to_string(delay));
-  p.tdorc.learn_delay = static_cast<int>(delay);
+  p.tdorc.learn_delay = m.get_int("learn_delay", 0, 10000);
   p.tdorc.contact_hold = m.get_bool("contact_hold");
-  const int64_t hold = m.get_int("max_contact_hold");
-  if (hold < 1 || hold > 100000000) throw m.error("max_contact_hold", "must be in [1, 1e8], got " + std::to_string(hold));
-  p.tdorc.max_contact_hold = static_cast<int>(hold);
+  p.tdorc.max_contact_hold = m.get_int("max_contact_hold", 1, 100000000);
   p.tdorc.hold_release_fraction = m.get_double("hold_release_fraction");
-  const int64_t release = m.get_int("hold_release_samples");
-  if (release < 1 || release > 10000) {
-    throw m.error("hold_release_samples", "must be in [1, 10000], got " + std::to_string(release));
-  }
-  p.tdorc.hold_release_samples = static_cast<int>(release);
+  p.tdorc.hold_release_samples = m.get_int("hold_release_samples", 1, 10000);
   p.tdorc.hold_release_drop = m.get_double("hold_release_drop");
-  const int64_t level = m.get_int("hold_level_samples");
-  if (level < 1 || level > 100000) {
-    throw m.error("hold_level_samples", "must be in [1, 100000], got " + std::to_string(level));
-  }
-  p.tdorc.hold_level_samples = static_cast<int>(level);
+  p.tdorc.hold_level_samples = m.get_int("hold_level_samples", 1, 100000);
   p.tdorc.max_drift_slope = m.get_double("max_drift_slope");
   p.tdorc.hold_quiet_rms = m.get_double("hold_quiet_rms");
-  const int64_t quiet = m.get_int("hold_quiet_samples");
-  if (quiet < 2 || quiet > 10000) {
-    throw m.error("hold_quiet_samples", "must be in [2, 10000], got " + std::to_string(quiet));
-  }
-  p.tdorc.hold_quiet_samples = static_cast<int>(quiet);
+  p.tdorc.hold_quiet_samples = m.get_int("hold_quiet_samples", 2, 10000);
   p.tdorc.bandpass_b = three(m, "bandpass_b");
   p.tdorc.bandpass_a = three(m, "bandpass_a");
   p.max_sample_gap_s = m.get_double("max_sample_gap_s");
@@ -115,14 +95,8 @@ TdorcFilterLogic::Params TdorcFilterLogic::params_from(const ParamMap& m) {
   if (!std::isfinite(p.clock.tolerance_s) || p.clock.tolerance_s <= 0.0 || p.clock.tolerance_s > 60.0) {
     throw m.error("stamp_tolerance_s", "must be in (0, 60], got " + std::to_string(p.clock.tolerance_s));
   }
-  p.clock.max_late_samples = m.get_int("max_late_samples");
-  if (p.clock.max_late_samples < 1 || p.clock.max_late_samples > 1000000) {
-    throw m.error("max_late_samples", "must be in [1, 1e6], got " + std::to_string(p.clock.max_late_samples));
-  }
-  p.clock.step_samples = m.get_int("clock_step_samples");
-  if (p.clock.step_samples < 2 || p.clock.step_samples > 1000000) {
-    throw m.error("clock_step_samples", "must be in [2, 1e6], got " + std::to_string(p.clock.step_samples));
-  }
+  p.clock.max_late_samples = m.get_int64("max_late_samples", 1, 1000000);
+  p.clock.step_samples = m.get_int64("clock_step_samples", 2, 1000000);
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {

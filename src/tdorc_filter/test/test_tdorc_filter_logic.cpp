@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/parameters.hpp"
 #include "tactile_common/time.hpp"
 #include "tdorc_filter/tdorc_filter_logic.hpp"
@@ -144,11 +145,20 @@ TEST(TdorcFilterLogic, ParameterErrorsNameTheKey) {
 
   m = TdorcFilterLogic::default_parameters();
   m.set("clock_step_samples", int64_t{1});
-  EXPECT_NE(param_error(m).find("clock_step_samples: must be in [2, 1e6], got 1"), std::string::npos);
+  EXPECT_NE(param_error(m).find("clock_step_samples: must be in [2, 1000000], got 1"), std::string::npos);
 
   m = TdorcFilterLogic::default_parameters();
   m.set("window", std::string("100"));  // wrong type
   EXPECT_NE(param_error(m).find("window"), std::string::npos);
+}
+
+// Every integer parameter set to its default + 2^32, which static_cast<int>
+// turns back into the default, is rejected with its key and the value as given.
+TEST(TdorcFilterLogic, IntegerParametersAreCheckedBeforeTheyAreNarrowed) {
+  const auto wrapped = tactile_common::wrapped_integers(TdorcFilterLogic::default_parameters(),
+                                                        [](const ParamMap& m) { TdorcFilterLogic::params_from(m); });
+  EXPECT_EQ(wrapped.size(), 8u);  // window ... clock_step_samples
+  for (const auto& [key, w] : wrapped) EXPECT_TRUE(w.rejected_as_given()) << key << ": " << w.error;
 }
 
 TEST(TdorcFilterLogic, FillsEverySignalField) {

@@ -92,9 +92,7 @@ WallEffectEkfLogic::Params WallEffectEkfLogic::params_from(const ParamMap& map) 
   const std::vector<double> J = map.get_double_array("vehicle.inertia_diag");
   if (J.size() != 3) throw map.error("vehicle.inertia_diag", "must have 3 entries, got " + std::to_string(J.size()));
   p.ekf.vehicle.inertia_diag = Vec3(J[0], J[1], J[2]);
-  const int64_t q = map.get_int("min_flow_quality");
-  if (q < 0 || q > 255) throw map.error("min_flow_quality", "must be in [0, 255], got " + std::to_string(q));
-  p.min_flow_quality = static_cast<uint64_t>(q);
+  p.min_flow_quality = map.get_integer<uint64_t>("min_flow_quality", 0, 255);
   p.ekf.dt = 1.0 / p.rate_hz;
   try {
     p.validate();

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <random>
 
+#include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/time.hpp"
 #include "wall_effect_ekf/wall_effect_ekf_logic.hpp"
 
@@ -66,6 +67,15 @@ TEST(WallEffectEkfLogic, BadParametersNameTheKey) {
   m = WallEffectEkfLogic::default_parameters();
   m.set("vehicle.inertia_diag", std::vector<double>{1e-3, 1e-3});
   EXPECT_THROW(WallEffectEkfLogic::params_from(m), tactile_common::ParamError);
+}
+
+// Every integer parameter set to its default + 2^32 is rejected with its key
+// and the value as given (min_flow_quality: [0, 255], the OpticalFlow quality byte).
+TEST(WallEffectEkfLogic, IntegerParametersAreCheckedBeforeTheyAreNarrowed) {
+  const auto wrapped = tactile_common::wrapped_integers(WallEffectEkfLogic::default_parameters(),
+                                                        [](const ParamMap& m) { WallEffectEkfLogic::params_from(m); });
+  EXPECT_EQ(wrapped.size(), 1u);  // min_flow_quality
+  for (const auto& [key, w] : wrapped) EXPECT_TRUE(w.rejected_as_given()) << key << ": " << w.error;
 }
 
 TEST(WallEffectEkfLogic, BadInputIsCountedAndDropped) {

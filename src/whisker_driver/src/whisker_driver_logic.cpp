@@ -1,6 +1,7 @@
 #include "whisker_driver/whisker_driver_logic.hpp"
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -27,7 +28,8 @@ void WhiskerDriverParams::validate() const {
   if (!(rate_hz > 0.0 && rate_hz <= 1000.0))
     bad("rate_hz", "must be in (0, 1000], got " + std::to_string(rate_hz));
   if (source == "serial" && device.empty()) bad("device", "must not be empty for source \"serial\"");
-  if (baud <= 0) bad("baud", "must be > 0, got " + std::to_string(baud));
+  if (baud <= 0 || baud > std::numeric_limits<int>::max())
+    bad("baud", "must be in [1, " + std::to_string(std::numeric_limits<int>::max()) + "], got " + std::to_string(baud));
   if (!(sim_takeoff_s >= 0.0) || !std::isfinite(sim_takeoff_s))
     bad("sim_takeoff_s", "must be >= 0, got " + std::to_string(sim_takeoff_s));
   if (!(sim_hover_s >= 0.0) || !std::isfinite(sim_hover_s))
@@ -73,12 +75,13 @@ WhiskerDriverParams WhiskerDriverLogic::params_from(const tactile_common::ParamM
   Params p;
   p.source = m.get_string("source");
   p.device = m.get_string("device");
-  p.baud = m.get_int("baud");
+  p.baud = m.get_int64("baud", 1, std::numeric_limits<int>::max());  // the serial port takes an int
   p.protocol = m.get_string("protocol");
-  p.whisker_id = m.get_int("whisker_id");
+  p.whisker_id = m.get_int64("whisker_id", 0, 1);
   p.frame_id = m.get_string("frame_id");
   p.rate_hz = m.get_double("rate_hz");
-  p.sim_seed = m.get_int("sim_seed");
+  // Any 64-bit value: used as its uint64 bit pattern (one stream per value).
+  p.sim_seed = m.get_int64("sim_seed", std::numeric_limits<int64_t>::min(), std::numeric_limits<int64_t>::max());
   p.sim_takeoff_s = m.get_double("sim_takeoff_s");
   p.sim_hover_s = m.get_double("sim_hover_s");
   p.sim_contact_start_s = m.get_double_array("sim_contact_start_s");

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "tactile_common/parameters.hpp"
+#include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/time.hpp"
 #include "whisker_driver/sources.hpp"
 #include "whisker_driver/whisker_driver_logic.hpp"
@@ -76,6 +77,26 @@ TEST(WhiskerDriverLogic, BadParametersNameTheKey) {
   m = WhiskerDriverLogic::default_parameters();
   m.set("rate_hz", 0.0);
   EXPECT_THROW(WhiskerDriverLogic::params_from(m), tactile_common::ParamError);
+}
+
+// baud was read as int64 and checked only > 0, then narrowed to int for the
+// serial port: 2^32 + 115200 opened the port at 115200. Now every integer
+// parameter set to its default + 2^32 is rejected with its key and the value
+// as given, except sim_seed: a seed is any 64-bit value (its uint64 bit pattern).
+TEST(WhiskerDriverLogic, IntegerParametersAreCheckedBeforeTheyAreNarrowed) {
+  const auto wrapped = tactile_common::wrapped_integers(WhiskerDriverLogic::default_parameters(),
+                                                        [](const tactile_common::ParamMap& m) { WhiskerDriverLogic::params_from(m); });
+  EXPECT_EQ(wrapped.size(), 3u);  // baud, whisker_id, sim_seed
+  for (const auto& [key, w] : wrapped) {
+    if (key == "sim_seed") {
+      EXPECT_EQ(w.error, "");
+    } else {
+      EXPECT_TRUE(w.rejected_as_given()) << key << ": " << w.error;
+    }
+  }
+  WhiskerDriverParams p;  // built in code: validate() has the same bound
+  p.baud = (int64_t{1} << 32) + 115200;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
 }
 
 TEST(WhiskerDriverLogic, ConfigFileLoads) {

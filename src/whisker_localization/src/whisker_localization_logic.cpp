@@ -90,28 +90,23 @@ ParamMap WhiskerLocalizationLogic::default_parameters() {
 
 WhiskerLocalizationLogic::Params WhiskerLocalizationLogic::params_from(const ParamMap& m) {
   Params p;
-  auto to_int = [&](const char* key, int64_t lo, int64_t hi) {
-    const int64_t v = m.get_int(key);
-    if (v < lo || v > hi) throw m.error(key, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " + std::to_string(v));
-    return static_cast<int>(v);
-  };
   p.beam.length = m.get_double("beam.length");
   p.beam.youngs_modulus = m.get_double("beam.youngs_modulus");
   p.beam.moment_of_inertia = m.get_double("beam.moment_of_inertia");
   p.beam.taper_ratio = m.get_double("beam.taper_ratio");
-  p.beam.n_segments = to_int("beam.n_segments", 4, 100000);
+  p.beam.n_segments = m.get_int("beam.n_segments", 4, 100000);
   p.localizer.contact_tolerance = m.get_double("contact_tolerance");
   p.localizer.match_angle = m.get_double("match_angle");
   p.localizer.epsilon = m.get_double("epsilon");
-  p.localizer.epsilon_samples = to_int("epsilon_samples", 1, 1000);
+  p.localizer.epsilon_samples = m.get_int("epsilon_samples", 1, 1000);
   p.localizer.possibilistic = m.get_bool("possibilistic");
-  p.localizer.slope_samples = to_int("slope_samples", 2, 50);
+  p.localizer.slope_samples = m.get_int("slope_samples", 2, 50);
   p.localizer.min_clearance = m.get_double("min_clearance");
-  p.localizer.heading_samples = to_int("heading_samples", 1, 101);
+  p.localizer.heading_samples = m.get_int("heading_samples", 1, 101);
   p.localizer.heading_spread = m.get_double("heading_spread");
   p.localizer.prior_radius = m.get_double("prior_radius");
   p.localizer.mode_radius = m.get_double("mode_radius");
-  p.localizer.refine_passes = to_int("refine_passes", 0, 10);
+  p.localizer.refine_passes = m.get_int("refine_passes", 0, 10);
   p.map_file = m.get_string("map_file");
   p.map_spacing = m.get_double("map_spacing");
   p.fillet_radius = m.get_double("fillet_radius");

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <string>
 
+#include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/time.hpp"
 #include "whisker_localization/stage_sim.hpp"
 #include "whisker_localization/whisker_localization_logic.hpp"
@@ -76,6 +77,15 @@ TEST(WhiskerLocalizationLogic, BadParametersNameTheKey) {
   m = WhiskerLocalizationLogic::default_parameters();
   m.set("slope_samples", int64_t{1});
   EXPECT_THROW(WhiskerLocalizationLogic::params_from(m), tactile_common::ParamError);
+}
+
+// Every integer parameter set to its default + 2^32 (an int would wrap it back
+// to the default) is rejected with its key and the value as given.
+TEST(WhiskerLocalizationLogic, IntegerParametersAreCheckedBeforeTheyAreNarrowed) {
+  const auto wrapped = tactile_common::wrapped_integers(WhiskerLocalizationLogic::default_parameters(),
+                                                        [](const ParamMap& m) { WhiskerLocalizationLogic::params_from(m); });
+  EXPECT_EQ(wrapped.size(), 5u);  // beam.n_segments ... refine_passes
+  for (const auto& [key, w] : wrapped) EXPECT_TRUE(w.rejected_as_given()) << key << ": " << w.error;
 }
 
 TEST(WhiskerLocalizationLogic, MapFileErrorsNameFileAndKey) {

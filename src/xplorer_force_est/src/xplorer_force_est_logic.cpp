@@ -89,12 +89,12 @@ XplorerForceEstLogic::Params XplorerForceEstLogic::params_from(const ParamMap& m
   auto& e = p.estimator;
   e.arm_rate_hz = m.get_double("arm_rate_hz");
   e.imu_rate_hz = m.get_double("imu_rate_hz");
-  e.arm_median_window = static_cast<int>(m.get_int("arm_median_window"));
+  e.arm_median_window = m.get_int("arm_median_window", 1, MedianFilter::kMaxWindow);  // odd: validate()
   e.arm_lowpass_hz = m.get_double("arm_lowpass_hz");
   e.arm_bandstop = m.get_bool("arm_bandstop");
   e.arm_bandstop_hz = m.get_double("arm_bandstop_hz");
   e.arm_bandstop_q = m.get_double("arm_bandstop_q");
-  e.arm_hold_samples = static_cast<int>(m.get_int("arm_hold_samples"));
+  e.arm_hold_samples = m.get_int("arm_hold_samples", 0, std::numeric_limits<int>::max());
   e.arm_inertia = m.get_double("arm_inertia");
   e.arm_damping = m.get_double("arm_damping");
   e.arm_stiffness = m.get_double("arm_stiffness");
@@ -104,7 +104,7 @@ XplorerForceEstLogic::Params XplorerForceEstLogic::params_from(const ParamMap& m
   e.mass = m.get_double("mass");
   e.thrust_scale = m.get_double("thrust_scale");
   e.gravity = m.get_double("gravity");
-  e.com_median_window = static_cast<int>(m.get_int("com_median_window"));
+  e.com_median_window = m.get_int("com_median_window", 1, MedianFilter::kMaxWindow);  // odd: validate()
   e.com_lowpass_hz = m.get_double("com_lowpass_hz");
   e.contact_threshold = m.get_double("contact_threshold");
   e.xi_f = m.get_double("xi_f");

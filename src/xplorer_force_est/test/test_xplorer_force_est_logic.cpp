@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/time.hpp"
 #include "xplorer_force_est/xplorer_force_est_logic.hpp"
 
@@ -71,6 +72,26 @@ TEST(XplorerForceEstLogic, BadParametersNameTheKey) {
   m = XplorerForceEstLogic::default_parameters();
   m.set("arm_directions", std::vector<double>{0.0, 1.0});
   EXPECT_THROW(XplorerForceEstLogic::params_from(m), tactile_common::ParamError);
+}
+
+// The windows and arm_hold_samples were narrowed to int unchecked: 2^32 + 5
+// became 5 and passed validate(). Now every integer parameter set to its
+// default + 2^32 is rejected with its key and the value as given; an even
+// window inside the range gets validate()'s own message, once.
+TEST(XplorerForceEstLogic, IntegerParametersAreCheckedBeforeTheyAreNarrowed) {
+  const auto wrapped = tactile_common::wrapped_integers(XplorerForceEstLogic::default_parameters(),
+                                                        [](const ParamMap& m) { XplorerForceEstLogic::params_from(m); });
+  EXPECT_EQ(wrapped.size(), 3u);  // arm_median_window, arm_hold_samples, com_median_window
+  for (const auto& [key, w] : wrapped) EXPECT_TRUE(w.rejected_as_given()) << key << ": " << w.error;
+  ParamMap m = XplorerForceEstLogic::default_parameters();
+  m.set("com_median_window", int64_t{4});
+  try {
+    XplorerForceEstLogic::params_from(m);
+    FAIL();
+  } catch (const tactile_common::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("com_median_window: must be odd and in [1, 15], got 4"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(XplorerForceEstLogic, StaticPushPublishesWorldAndBodyWrench) {

@@ -16,6 +16,8 @@
 // link_packets_lost and the bridge's counters.
 #include "graphs.hpp"
 
+#include <limits>
+
 #include "crazyflie_bridge/bridge_runner.hpp"
 #include "crazyflie_bridge/loopback_link.hpp"
 #include "crazyflie_bridge/sim_firmware.hpp"
@@ -44,7 +46,8 @@ class WhiskerFsmCrtpGraph : public SimGraph {
     if (!(loss >= 0.0 && loss < 1.0)) {
       throw std::runtime_error(ctx.scenario.source + ": node_parameters.crtp_link.loss: must be in [0, 1)");
     }
-    const uint64_t seed = link_over.has("seed") ? static_cast<uint64_t>(link_over.get_int("seed")) : ctx.seed;
+    // A seed is any 64-bit value, used as its uint64 bit pattern.
+    const uint64_t seed = link_over.has("seed") ? static_cast<uint64_t>(link_over.get_int64("seed", std::numeric_limits<int64_t>::min(), std::numeric_limits<int64_t>::max())) : ctx.seed;
 
     // Firmware side, fed by the simulator's topics on the outer bus.
     Host& outer = ctx.host;

@@ -4,10 +4,12 @@
 // values under both hosts.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <map>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <variant>
 #include <vector>
 
@@ -46,7 +48,31 @@ class ParamMap {
   /// Typed getters. Throw ParamError if the key is missing or holds another
   /// type. An integer is accepted where a double is asked for.
   bool get_bool(const std::string& key) const;
+  /// The raw 64-bit integer, unchecked. Node logic reads integers with the
+  /// range-checked getters below instead: a value narrowed after this call
+  /// wraps silently (2^32 + 10 read into an int is 10).
+  [[deprecated("read integer parameters with get_int(key, lo, hi), get_int64, get_size or get_integer<T>")]]
   int64_t get_int(const std::string& key) const;
+
+  /// Range-checked integers: the integer `key`, checked to lie in [lo, hi]
+  /// BEFORE it is narrowed to T, so no value wraps into range. Throws
+  /// ParamError if the key is missing, is not an integer ("expected integer,
+  /// got double") or lies outside [lo, hi]:
+  ///   "<source>: <node>.ros__parameters.<key>: must be in [lo, hi], got <value as given>"
+  /// lo/hi are the parameter's documented range (the README's "Integer
+  /// parameters" says which bounds each node passes and how they relate to
+  /// its Params::validate()). std::logic_error if lo > hi (a bug of the caller).
+  template <typename T>
+  T get_integer(const std::string& key, T lo, T hi) const;
+  /// get_integer<int>: counts and windows held in an int.
+  int get_int(const std::string& key, int lo, int hi) const { return get_integer<int>(key, lo, hi); }
+  int64_t get_int64(const std::string& key, int64_t lo, int64_t hi) const {
+    return get_integer<int64_t>(key, lo, hi);
+  }
+  /// Sizes; a negative value is out of range (never wrapped to a huge size).
+  std::size_t get_size(const std::string& key, std::size_t lo, std::size_t hi) const {
+    return get_integer<std::size_t>(key, lo, hi);
+  }
   double get_double(const std::string& key) const;
   std::string get_string(const std::string& key) const;
   std::vector<bool> get_bool_array(const std::string& key) const;
@@ -76,12 +102,38 @@ class ParamMap {
  private:
   const ParamValue& at(const std::string& key) const;
   [[noreturn]] void wrong_type(const std::string& key, const char* wanted) const;
+  /// The stored integer of `key` (ParamError if missing or not an integer).
+  int64_t raw_int(const std::string& key) const;
+  /// The error of a value outside [lo, hi] (bounds and value already as text).
+  [[noreturn]] void out_of_range(const std::string& key, const std::string& lo, const std::string& hi,
+                                 int64_t value) const;
 
   std::string node_;
   std::string source_ = "defaults";
   std::map<std::string, ParamValue> values_;
   std::map<std::string, std::string> origin_;  ///< keys set by merge_from
 };
+
+template <typename T>
+T ParamMap::get_integer(const std::string& key, T lo, T hi) const {
+  static_assert(std::is_integral_v<T> && !std::is_same_v<T, bool>, "get_integer<T>: T must be an integer type");
+  if (lo > hi) {
+    throw std::logic_error("ParamMap::get_integer(\"" + key + "\"): empty range [" + std::to_string(lo) + ", " +
+                           std::to_string(hi) + "]");
+  }
+  const int64_t v = raw_int(key);
+  // Compared as 64-bit values before any narrowing. Every T's bounds fit in
+  // int64_t except unsigned ones above INT64_MAX, which no stored value reaches.
+  bool in_range;
+  if constexpr (std::is_signed_v<T>) {
+    in_range = v >= static_cast<int64_t>(lo) && v <= static_cast<int64_t>(hi);
+  } else {
+    in_range = v >= 0 && static_cast<uint64_t>(v) >= static_cast<uint64_t>(lo) &&
+               static_cast<uint64_t>(v) <= static_cast<uint64_t>(hi);
+  }
+  if (!in_range) out_of_range(key, std::to_string(lo), std::to_string(hi), v);
+  return static_cast<T>(v);
+}
 
 /// Reads the parameters of a node from a ROS 2 parameter file. `node_name` is
 /// the node's fully qualified name ("/whisker/left/tdorc_filter"; a name

@@ -772,8 +772,7 @@ tactile_common::ParamMap SimLogic::default_parameters() {
 std::unique_ptr<SimLogic> SimLogic::from_parameters(const tactile_common::ParamMap& params) {
   const std::string path = params.get_string("scenario");
   if (path.empty()) throw params.error("scenario", "must name a scenario file (config/scenarios/*.yaml)");
-  const int64_t seed = params.get_int("seed");
-  if (seed < -1) throw params.error("seed", "must be >= 0, or -1 for the scenario's seed");
+  const int64_t seed = params.get_int64("seed", -1, std::numeric_limits<int64_t>::max());  // -1: the scenario's seed
   const Scenario scenario = load_scenario(path);
   return std::make_unique<SimLogic>(scenario, seed < 0 ? scenario.seed : static_cast<uint64_t>(seed));
 }
