@@ -62,6 +62,8 @@ class FileWriter {
   /// Flush, write the data end, summary, footer and closing magic; close the file.
   void close();
   const std::string& path() const { return path_; }
+  /// Chunks written to the file so far.
+  size_t chunk_count() const { return chunk_indexes_.size(); }
 
  private:
   struct Schema { uint16_t id; std::string name, encoding, data; };

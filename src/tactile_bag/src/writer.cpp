@@ -14,8 +14,10 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <mutex>
 #include <string>
 #include <string_view>
+#include <unordered_map>
 #include <utility>
 
 #include <yaml-cpp/yaml.h>
@@ -105,8 +107,8 @@ Writer::Writer(WriterOptions options) : opt_(std::move(options)) {
     throw BagError("WriterOptions.metadata_version: must be 5, 8 or 9, got " +
                    std::to_string(opt_.metadata_version));
   }
-  if (opt_.flush_interval.count() <= 0 || opt_.flush_interval > std::chrono::seconds(1)) {
-    throw BagError("WriterOptions.flush_interval: must be in (0, 1000] ms, got " +
+  if (opt_.flush_interval.count() < 0 || opt_.flush_interval > std::chrono::seconds(1)) {
+    throw BagError("WriterOptions.flush_interval: must be in [0, 1000] ms (0: by size only), got " +
                    std::to_string(opt_.flush_interval.count()) + " ms");
   }
   if (opt_.ros_distro.empty()) opt_.ros_distro = distro_for(opt_.metadata_version);
@@ -168,7 +170,7 @@ void Writer::open(const std::string& dir) {
     last_commit_ = std::chrono::steady_clock::now();
     write_metadata_locked();
     stop_ = false;
-    flusher_ = std::thread([this] { flusher_main(); });
+    if (opt_.flush_interval.count() > 0) flusher_ = std::thread([this] { flusher_main(); });
     return;
   }
 
@@ -217,7 +219,7 @@ void Writer::open(const std::string& dir) {
   last_commit_ = std::chrono::steady_clock::now();
   write_metadata_locked();
   stop_ = false;
-  flusher_ = std::thread([this] { flusher_main(); });
+  if (opt_.flush_interval.count() > 0) flusher_ = std::thread([this] { flusher_main(); });
 }
 
 bool Writer::has_topic(const std::string& name) const {
@@ -236,22 +238,32 @@ uint64_t Writer::message_count() const {
   return count_;
 }
 
-Writer::TopicId Writer::create_topic(const TopicInfo& topic) {
-  std::lock_guard<std::mutex> lk(mu_);
-  if (!is_open()) throw BagError(topic.name + ": create_topic on a writer that is not open");
-  if (topic.name.empty() || topic.type.empty()) {
-    throw BagError(db_path_ + ": create_topic: topic name and type must not be empty");
+// Everything a topic's entry derives from its TopicInfo and this writer's options: the QoS
+// text normalised to the metadata version, the Range layout of the distro, the RIHS01 hash,
+// the metadata.yaml block. A process that records many bags of one graph (`tactile sim
+// --trials`, the sweeps) used to derive it per topic per bag with yaml-cpp's parser and
+// emitter and a SHA-256 (3.3 % of a recorded whisker flight's CPU, issue 18): it is now
+// derived once per distinct input and kept in a process-wide table (bounded; a fault is
+// never kept, so a bad topic fails every time with its own message).
+Writer::TopicState Writer::derived_topic_state(const TopicInfo& topic) const {
+  std::string key;
+  key.reserve(topic.name.size() + topic.type.size() + topic.offered_qos_profiles.size() +
+              topic.type_definition.size() + topic.type_description_hash.size() + 64);
+  for (const std::string* f : {&opt_.ros_distro, &topic.name, &topic.type, &topic.serialization_format,
+                               &topic.offered_qos_profiles, &topic.type_definition,
+                               &topic.definition_encoding, &topic.type_description_hash}) {
+    key += std::to_string(f->size());
+    key += ':';
+    key += *f;
   }
-  auto it = topics_.find(topic.name);
-  if (it != topics_.end()) {
-    if (it->second.info.type != topic.type) {
-      throw BagError(db_path_ + ": topic '" + topic.name + "' already exists with type '" +
-                     it->second.info.type + "', not '" + topic.type + "'");
-    }
-    for (TopicId i = 0; i < by_id_.size(); ++i) {
-      if (by_id_[i] == &it->second) return i;
-    }
-    throw BagError(db_path_ + ": topic '" + topic.name + "' has no number (internal error)");
+  key += std::to_string(opt_.metadata_version);
+  key += hash_types_ ? 'h' : '-';
+  static std::mutex cache_mu;
+  static std::unordered_map<std::string, TopicState> cache;
+  {
+    std::lock_guard<std::mutex> lk(cache_mu);
+    const auto it = cache.find(key);
+    if (it != cache.end()) return it->second;
   }
   TopicState st;
   st.info = topic;
@@ -280,6 +292,30 @@ Writer::TopicId Writer::create_topic(const TopicInfo& topic) {
     if (v >= 7) tm["type_description_hash"] = st.info.type_description_hash;
     st.metadata_yaml = emit_yaml(tm);
   }
+  std::lock_guard<std::mutex> lk(cache_mu);
+  if (cache.size() >= 4096) cache.clear();  // a long-lived process recording ever new topics
+  cache.emplace(std::move(key), st);
+  return st;
+}
+
+Writer::TopicId Writer::create_topic(const TopicInfo& topic) {
+  std::lock_guard<std::mutex> lk(mu_);
+  if (!is_open()) throw BagError(topic.name + ": create_topic on a writer that is not open");
+  if (topic.name.empty() || topic.type.empty()) {
+    throw BagError(db_path_ + ": create_topic: topic name and type must not be empty");
+  }
+  auto it = topics_.find(topic.name);
+  if (it != topics_.end()) {
+    if (it->second.info.type != topic.type) {
+      throw BagError(db_path_ + ": topic '" + topic.name + "' already exists with type '" +
+                     it->second.info.type + "', not '" + topic.type + "'");
+    }
+    for (TopicId i = 0; i < by_id_.size(); ++i) {
+      if (by_id_[i] == &it->second) return i;
+    }
+    throw BagError(db_path_ + ": topic '" + topic.name + "' has no number (internal error)");
+  }
+  TopicState st = derived_topic_state(topic);
   if (mcap_ != nullptr) {
     const uint16_t schema = st.info.type_definition.empty()
                                 ? 0
@@ -292,6 +328,7 @@ Writer::TopicId Writer::create_topic(const TopicInfo& topic) {
     by_id_.push_back(&topics_.emplace(topic.name, st).first->second);
     topic_order_.push_back(topic.name);
     metadata_dirty_ = true;  // written by the next commit
+    chunks_at_dirty_ = mcap_->chunk_count();
     return by_id_.size() - 1;
   }
   const TopicInfo& topic_in = topic;
@@ -345,6 +382,7 @@ void Writer::begin_locked() {
 
 void Writer::commit_locked() {
   if (mcap_ != nullptr) mcap_->flush();
+  bytes_since_commit_ = 0;
   if (in_txn_) {
     exec("COMMIT;");
     in_txn_ = false;
@@ -383,6 +421,16 @@ void Writer::write(TopicId topic, int64_t timestamp_ns, const uint8_t* data, siz
 }
 
 bool Writer::flush_due_locked() {
+  if (opt_.flush_interval.count() == 0) {
+    // By size only (a reproducible file). mcap: the FileWriter writes chunks by chunk_size;
+    // a topic created since metadata.yaml was written is added to it once a chunk has
+    // gone to the file after its creation.
+    if (mcap_ != nullptr) {
+      if (metadata_dirty_ && mcap_->chunk_count() > chunks_at_dirty_) write_metadata_locked();
+      return false;
+    }
+    return bytes_since_commit_ >= opt_.chunk_size;
+  }
   // The clock is read every 16th write (a vdso call per message was ~1 % of a recorded
   // run); the background flusher commits an idle writer on time regardless.
   if ((++writes_since_clock_ & 15U) != 0) return false;
@@ -422,6 +470,7 @@ void Writer::write_locked(TopicState& st, int64_t timestamp_ns, const uint8_t* d
   if (count_ == 0 || timestamp_ns > max_ts_) max_ts_ = timestamp_ns;
   ++count_;
   ++st.count;
+  bytes_since_commit_ += size;
   if (flush_due_locked()) commit_locked();
 }
 
@@ -435,6 +484,7 @@ void Writer::write_mcap_locked(TopicState& st, int64_t timestamp_ns, const uint8
   if (count_ == 0 || timestamp_ns > max_ts_) max_ts_ = timestamp_ns;
   ++count_;
   ++st.count;
+  bytes_since_commit_ += size;
   if (flush_due_locked()) commit_locked();
 }
 

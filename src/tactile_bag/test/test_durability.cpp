@@ -39,9 +39,9 @@ std::string temp_bag(const char* name) {
 
 // Child: write message i with payload = i (8 bytes) and timestamp = mono time after the
 // write; `burst` messages then idle forever, or (burst == 0) write every ms forever.
-[[noreturn]] void child_main(const std::string& dir, int burst) {
+[[noreturn]] void child_main(const std::string& dir, int burst, const tactile_bag::WriterOptions& options) {
   try {
-    tactile_bag::Writer w;
+    tactile_bag::Writer w(options);
     w.open(dir);
     tactile_bag::TopicInfo t;
     t.name = "/counter";
@@ -66,10 +66,11 @@ struct KillResult {
   std::string dir;
 };
 
-KillResult run_and_kill(const char* name, int burst, std::chrono::milliseconds run_for) {
+KillResult run_and_kill(const char* name, int burst, std::chrono::milliseconds run_for,
+                        const tactile_bag::WriterOptions& options = {}) {
   const std::string dir = temp_bag(name);
   const pid_t pid = ::fork();
-  if (pid == 0) child_main(dir, burst);
+  if (pid == 0) child_main(dir, burst, options);
   EXPECT_GT(pid, 0);
   std::this_thread::sleep_for(run_for);
   const int64_t kill_ns = mono_ns();
@@ -116,4 +117,30 @@ TEST(Durability, KilledWhileIdleKeepsEverything) {
   ASSERT_EQ(r.topics().size(), 1u);
   EXPECT_EQ(r.topics()[0].type, "std_msgs/msg/UInt64");
   fs::remove_all(res.dir);
+}
+
+TEST(Durability, SizeOnlyCommitsKeepEveryFullChunkOfAKilledRecording) {
+  // flush_interval 0 (reproducible recordings): nothing is committed by wall time, so the
+  // idle writer keeps its last partial chunk in memory, and a kill loses it, but no more.
+  // sqlite3: 250 messages of 8 bytes, a transaction per 800 bytes -> exactly 200 survive.
+  tactile_bag::WriterOptions o;
+  o.flush_interval = std::chrono::milliseconds(0);
+  o.chunk_size = 800;
+  {
+    const auto res = run_and_kill("size_sqlite", 250, std::chrono::milliseconds(900), o);
+    tactile_bag::Reader r(res.dir);
+    EXPECT_EQ(r.message_count(), 200u);
+    fs::remove_all(res.dir);
+  }
+  // mcap: a chunk goes to the file once its records reach 800 bytes: 21 messages of 39
+  // bytes (the first chunk also holds the channel record, so fewer): the messages of the
+  // last partial chunk (at most 21) are lost, and some are (242 of 250 here).
+  o.storage = "mcap";
+  {
+    const auto res = run_and_kill("size_mcap", 250, std::chrono::milliseconds(900), o);
+    tactile_bag::Reader r(res.dir);
+    EXPECT_LT(r.message_count(), 250u);
+    EXPECT_GE(r.message_count(), 250u - 21u);
+    fs::remove_all(res.dir);
+  }
 }

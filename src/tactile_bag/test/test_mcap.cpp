@@ -3,10 +3,15 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <chrono>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <map>
 #include <random>
 #include <string>
+#include <thread>
 #include <tuple>
 #include <vector>
 
@@ -208,6 +213,77 @@ TEST(McapErrors, WriterOptionsAreChecked) {
   o.compression = "";
   o.ros_distro = "rolling";
   EXPECT_THROW(Writer{o}, BagError);
+}
+
+// flush_interval 0 (what `tactile sim` records with): the file depends on the messages
+// alone. A writer that pauses longer than the flush interval in the middle of a recording
+// writes the same bytes as one that does not; with the default interval (250 ms, live
+// recordings) the pause commits a chunk early and the files differ, which is what made a
+// simulated trial's bag depend on the machine's speed and on --jobs.
+TEST(Reproducible, ZeroFlushIntervalFileDependsOnTheMessagesNotTheTiming) {
+  // One directory name for every recording: the storage file and the metadata inside it are
+  // named after it.
+  const std::string dir = temp_bag("repro");
+  auto record = [&dir](const std::string& storage, std::chrono::milliseconds interval, bool pause) {
+    WriterOptions o;
+    o.storage = storage;
+    o.ros_distro = "kilted";
+    o.flush_interval = interval;
+    o.chunk_size = 4096;
+    {
+      Writer w(o);
+      w.open(dir);
+      tactile_bag::TopicInfo t;
+      t.name = "/counter";
+      t.type = "std_msgs/msg/UInt64";
+      w.create_topic(t);
+      for (uint64_t i = 0; i < 400; ++i) {
+        if (pause && i == 100) std::this_thread::sleep_for(std::chrono::milliseconds(400));
+        uint8_t payload[8];
+        std::memcpy(payload, &i, 8);
+        w.write("/counter", static_cast<int64_t>(1000 + i), payload, 8);
+      }
+      w.close();
+    }
+    std::map<std::string, std::string> files;  // by extension
+    for (const auto& e : fs::directory_iterator(dir)) {
+      std::ifstream in(e.path(), std::ios::binary);
+      files[e.path().extension().string()] = std::string(std::istreambuf_iterator<char>(in), {});
+    }
+    Reader r(dir);
+    EXPECT_EQ(r.message_count(), 400u);
+    fs::remove_all(dir);
+    return files;
+  };
+  auto expect_same = [](const std::map<std::string, std::string>& a, const std::map<std::string, std::string>& b) {
+    ASSERT_EQ(a.size(), b.size());
+    for (const auto& [ext, bytes] : a) {
+      SCOPED_TRACE(ext);
+      ASSERT_EQ(b.count(ext), 1u);
+      if (ext == ".yaml") {
+        EXPECT_EQ(bytes, b.at(ext));
+      } else {
+        EXPECT_TRUE(bytes == b.at(ext)) << bytes.size() << " vs " << b.at(ext).size() << " bytes";
+      }
+    }
+  };
+  const auto zero = std::chrono::milliseconds(0);
+  const auto steady = record("mcap", zero, false);
+  ASSERT_EQ(steady.count(".mcap"), 1u);
+  expect_same(steady, record("mcap", zero, true));
+  const auto live = std::chrono::milliseconds(250);
+  EXPECT_NE(record("mcap", live, false).at(".mcap"), record("mcap", live, true).at(".mcap"))
+      << "a 400 ms pause no longer commits a chunk with the 250 ms interval: this test cannot fail";
+  // sqlite3: transactions by size, so the same commits and the same database file.
+  const auto db = record("sqlite3", zero, false);
+  ASSERT_EQ(db.count(".db3"), 1u);
+  expect_same(db, record("sqlite3", zero, true));
+  // Out of range.
+  WriterOptions bad;
+  bad.flush_interval = std::chrono::milliseconds(-1);
+  EXPECT_THROW(Writer{bad}, BagError);
+  bad.flush_interval = std::chrono::milliseconds(1001);
+  EXPECT_THROW(Writer{bad}, BagError);
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "tactile_cli/host.hpp"
 
+#include <chrono>
 #include <filesystem>
 
 #include "tactile_bag/typed.hpp"
@@ -16,7 +17,17 @@ tactile_bag::WriterOptions& BagRecorder::default_options() {
   return options;
 }
 
-BagRecorder::BagRecorder(const std::string& dir) : writer_(default_options()) { writer_.open(dir); }
+namespace {
+tactile_bag::WriterOptions options_for(BagRecorder::Commit commit) {
+  tactile_bag::WriterOptions o = BagRecorder::default_options();
+  if (commit == BagRecorder::Commit::kReproducible) o.flush_interval = std::chrono::milliseconds(0);
+  return o;
+}
+}  // namespace
+
+BagRecorder::BagRecorder(const std::string& dir, Commit commit) : writer_(options_for(commit)) {
+  writer_.open(dir);
+}
 
 void BagRecorder::on_message(const TapTopic& topic, int64_t stamp_ns,
                              const std::function<void(std::vector<uint8_t>&)>& serialize_into) {

@@ -119,7 +119,7 @@ nlohmann::json run_once(const Scenario& scenario, const SimOptions& options, uin
   Host host(options.config_dir);
   std::unique_ptr<BagRecorder> recorder;
   if (options.write_bag) {
-    recorder = std::make_unique<BagRecorder>((dir / "bag").string());
+    recorder = std::make_unique<BagRecorder>((dir / "bag").string(), BagRecorder::Commit::kReproducible);
     host.bus().add_tap(recorder.get());
   }
   add_tactile_sim(host, sim);

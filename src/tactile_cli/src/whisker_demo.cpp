@@ -19,7 +19,7 @@ void record_sim_whisker_bag(const std::string& bag_dir, const std::string& confi
                             const std::vector<double>& contact_duration_s,
                             const std::vector<double>& contact_peak_nm) {
   Host host(config_dir);
-  BagRecorder recorder(bag_dir);
+  BagRecorder recorder(bag_dir, BagRecorder::Commit::kReproducible);
   host.bus().add_tap(&recorder);
   double end_s = 0.0;
   int64_t side_index = 0;

@@ -154,7 +154,7 @@ nlohmann::json run_replay(const ReplayOptions& options) {
   fs::create_directories(options.out_dir);
   Host host(options.config_dir);
   host.executor().set_time(in.start_time_ns());
-  BagRecorder recorder((fs::path(options.out_dir) / "bag").string());
+  BagRecorder recorder((fs::path(options.out_dir) / "bag").string(), BagRecorder::Commit::kReproducible);
   host.bus().add_tap(&recorder);
 
   std::vector<std::shared_ptr<whisker_driver::WhiskerDriverLogic>> drivers;

@@ -91,6 +91,10 @@ struct WriterOptions {
   int metadata_version = 0;
   /// Open transactions are committed at least this often (wall time), by write()
   /// and by a background thread while idle. A SIGKILL loses at most this window.
+  /// 0: nothing is committed by wall time, so the file's bytes depend on the messages
+  /// alone (a reproducible recording: a simulation flown twice, or on more workers, writes
+  /// the same file): mcap chunks are written by chunk_size, a sqlite3 transaction is
+  /// committed every chunk_size bytes of messages, and a SIGKILL loses at most that much.
   std::chrono::milliseconds flush_interval{250};
   /// Distro the bag is for (humble, iron, jazzy, kilted; tactile_bag/distro.hpp): stored in
   /// metadata (v >= 8) and the schema table, and selecting the standard types' layouts
@@ -105,6 +109,7 @@ struct WriterOptions {
   /// mcap chunk compression: "" (none: rosbag2's default), "zstd" or "lz4".
   std::string compression;
   /// mcap: uncompressed bytes per chunk (a chunk is also written every flush_interval).
+  /// sqlite3 with flush_interval 0: message bytes per transaction.
   uint64_t chunk_size = 768 * 1024;
 };
 
@@ -163,6 +168,7 @@ class Writer {
     std::vector<QosProfile> qos;       ///< offered_qos_profiles, parsed once
     std::string metadata_yaml;         ///< its metadata.yaml `topic_metadata` block, emitted once
   };
+  TopicState derived_topic_state(const TopicInfo& topic) const;
   void prepare_topic_locked(TopicState& st) const;
   void write_locked(TopicState& st, int64_t timestamp_ns, const uint8_t* data, size_t size);
   void write_mcap_locked(TopicState& st, int64_t timestamp_ns, const uint8_t* data, size_t size);
@@ -185,6 +191,8 @@ class Writer {
   std::vector<std::string> topic_order_;
   std::vector<TopicState*> by_id_;  // TopicId -> state (std::map nodes do not move)
   uint32_t writes_since_clock_ = 0;
+  uint64_t bytes_since_commit_ = 0;   ///< message bytes since the last commit (flush_interval 0)
+  size_t chunks_at_dirty_ = 0;        ///< mcap chunks in the file when metadata became dirty
   std::map<std::string, bool> defined_types_;
   bool in_txn_ = false;
   bool metadata_dirty_ = false;  ///< a topic was created since metadata.yaml was written

@@ -24,7 +24,13 @@ class BagRecorder : public BusTap {
   /// from --storage, --bag-distro, --bag-compression). Default: what `ros2 bag record` of
   /// Kilted writes: mcap, uncompressed chunks, Kilted layouts and RIHS01 hashes.
   static tactile_bag::WriterOptions& default_options();
-  explicit BagRecorder(const std::string& dir);
+  /// When the bag reaches the disk. kLive (hardware, bench rigs): committed every 250 ms of
+  /// wall time, so a killed recording loses at most that. kReproducible (simulation, replay,
+  /// demo: their messages do not depend on the wall clock, so neither should the file):
+  /// chunks by size only (WriterOptions::flush_interval 0), the same bytes however fast the
+  /// machine and on however many workers the trials run.
+  enum class Commit { kLive, kReproducible };
+  explicit BagRecorder(const std::string& dir, Commit commit = Commit::kLive);
   void on_message(const TapTopic& topic, int64_t stamp_ns,
                   const std::function<void(std::vector<uint8_t>&)>& serialize_into) override;
   void close() { writer_.close(); }
