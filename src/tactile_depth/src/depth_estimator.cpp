@@ -58,6 +58,15 @@ void Params::validate() const {
                                 std::to_string(TactileDepthEstimator::kMaxSlipWindow) + "], got " + std::to_string(slip_window_samples));
   }
   positive("slip_r_mm2", slip_r_mm2);
+  if (slip_max_samples < 0 || slip_max_samples > TactileDepthEstimator::kMaxSlipWindow) {
+    throw std::invalid_argument("TactileDepthParams.slip_max_samples: must be in [0, " +
+                                std::to_string(TactileDepthEstimator::kMaxSlipWindow) + "] (0 = no limit), got " +
+                                std::to_string(slip_max_samples));
+  }
+  positive("saturation_r_mm2", saturation_r_mm2);
+  if (!std::isfinite(saturation_sum_pa) || saturation_sum_pa < 0.0) {
+    throw std::invalid_argument("TactileDepthParams.saturation_sum_pa: must be finite and >= 0 (0 = off), got " + num(saturation_sum_pa));
+  }
   positive("whisker_spacing", whisker_spacing);
   if (!std::isfinite(whisker_base_x)) {
     throw std::invalid_argument("TactileDepthParams.whisker_base_x: must be finite, got " + num(whisker_base_x));
@@ -153,6 +162,7 @@ TactileDepthEstimator::TactileDepthEstimator(const Params& params, const MlpMode
   r_m2_ = params_.r_mm2 * kMm2ToM2;
   const double p0 = params_.p0_mm2 * kMm2ToM2;
   slip_r_m2_ = params_.slip_r_mm2 * kMm2ToM2;
+  sat_r_m2_ = params_.saturation_r_mm2 * kMm2ToM2;
   kf_[0] = DepthKalmanFilter(q, r_m2_, p0);
   kf_[1] = DepthKalmanFilter(q, r_m2_, p0);
 }
@@ -169,6 +179,9 @@ void TactileDepthEstimator::reset() {
   slip_head_ = 0;
   slip_count_ = 0;
   slipping_ = {false, false};
+  slip_run_ = {0, 0};
+  saturated_ = false;
+  have_wall_world_ = false;
 }
 
 TickOutput TactileDepthEstimator::update(const TickInput& in) {
@@ -194,10 +207,20 @@ TickOutput TactileDepthEstimator::update(const TickInput& in) {
         const int idx = (slip_head_ - j + window) % window;
         peak = std::max(peak, input_sum_[i][static_cast<std::size_t>(idx)]);
       }
-      slipping_[i] = input_sum_[i][static_cast<std::size_t>(slip_head_)] < params_.slip_fraction * peak;
+      const bool below = input_sum_[i][static_cast<std::size_t>(slip_head_)] < params_.slip_fraction * peak;
+      slip_run_[i] = below ? slip_run_[i] + 1 : 0;
+      slipping_[i] = below && (params_.slip_max_samples == 0 || slip_run_[i] <= params_.slip_max_samples);
     }
     slip_head_ = (slip_head_ + 1) % window;
   }
+
+  // Saturated contact (issue 17): both input sums at or above saturation_sum_pa
+  // and a wall angle of an unsaturated tick to hold.
+  const double sum_l = in.sp_left[0] + in.sp_left[1] + in.sp_left[2];
+  const double sum_r = in.sp_right[0] + in.sp_right[1] + in.sp_right[2];
+  const bool saturated_now = params_.saturation_sum_pa > 0.0 && sum_l >= params_.saturation_sum_pa &&
+                             sum_r >= params_.saturation_sum_pa;
+  saturated_ = false;
 
   bool fused = false;
   if (params_.model != EstimatorModel::kMlp && both && in.pose_valid) {
@@ -209,7 +232,11 @@ TickOutput TactileDepthEstimator::update(const TickInput& in) {
       // previous tick (Fig. S3), shared by both whiskers (one planar wall).
       std::array<double, 2> pred{};
       if (params_.model == EstimatorModel::kKfFull) {
-        const double theta_k = ProcessModel::wall_angle(kf_[0].depth(), kf_[1].depth(), s);
+        saturated_ = saturated_now && have_wall_world_;
+        // Saturated: theta^D_k from the held world angle (eq. 24, theta^D = psi - theta^W)
+        // instead of eq. 22 on the saturated depths.
+        const double theta_k = saturated_ ? prev_pose_.yaw - wall_world_
+                                          : ProcessModel::wall_angle(kf_[0].depth(), kf_[1].depth(), s);
         for (int i = 0; i < 2; ++i) {
           if (!ProcessModel::predict_full(kf_[static_cast<std::size_t>(i)].depth(), theta_k, prev_pose_, in.pose,
                                           whisker_base(i), pred[static_cast<std::size_t>(i)])) {
@@ -221,19 +248,27 @@ TickOutput TactileDepthEstimator::update(const TickInput& in) {
       }
       for (std::size_t i = 0; i < 2; ++i) {
         kf_[i].predict(pred[i]);          // 000 eq. 27
-        if (slipping_[i]) {
-          kf_[i].update(out.measurement[i], slip_r_m2_);  // 000 eq. 28-30 with the slip gate's R
+        if (slipping_[i] || saturated_) {
+          // 000 eq. 28-30 with the slip gate's / the saturated contact's R (the larger if both)
+          kf_[i].update(out.measurement[i], std::max(slipping_[i] ? slip_r_m2_ : 0.0, saturated_ ? sat_r_m2_ : 0.0));
         } else {
           kf_[i].update(out.measurement[i]);  // 000 eq. 28-30
         }
       }
     }
     fused = true;
+    // World angle of the wall normal (000 eq. 21/24) of this unsaturated tick,
+    // held over the next saturated ones.
+    if (params_.model == EstimatorModel::kKfFull && !saturated_now) {
+      wall_world_ = in.pose.yaw - ProcessModel::wall_angle(kf_[0].depth(), kf_[1].depth(), s);
+      have_wall_world_ = true;
+    }
   } else {
     // Either whisker off the wall (or no odometry): the KF restarts at the next
     // double contact.
     kf_[0].reset();
     kf_[1].reset();
+    have_wall_world_ = false;
   }
   if (in.pose_valid) {
     prev_pose_ = in.pose;

@@ -63,6 +63,9 @@ ParamMap TactileDepthLogic::default_parameters() {
   m.set("kf.slip_fraction", d.slip_fraction);        // issue 17 slip gate (README "Slip gate"); 0 = off
   m.set("kf.slip_window_samples", static_cast<int64_t>(d.slip_window_samples));
   m.set("kf.slip_r_mm2", d.slip_r_mm2);
+  m.set("kf.slip_max_samples", static_cast<int64_t>(d.slip_max_samples));
+  m.set("kf.saturation_sum_pa", d.saturation_sum_pa);  // issue 17 (README "Saturated contact"); 0 = off
+  m.set("kf.saturation_r_mm2", d.saturation_r_mm2);
   m.set("whisker_spacing", d.whisker_spacing);       // 000 eq. 22, s = 0.05 m
   m.set("whisker_base_x", d.whisker_base_x);
   m.set("max_input_age_s", Params{}.max_input_age_s);
@@ -96,7 +99,10 @@ TactileDepthLogic::Params TactileDepthLogic::params_from(const ParamMap& m) {
   p.estimator.r_mm2 = m.get_double("kf.r_mm2");
   p.estimator.slip_fraction = m.get_double("kf.slip_fraction");
   p.estimator.slip_r_mm2 = m.get_double("kf.slip_r_mm2");
+  p.estimator.saturation_sum_pa = m.get_double("kf.saturation_sum_pa");
+  p.estimator.saturation_r_mm2 = m.get_double("kf.saturation_r_mm2");
   p.estimator.slip_window_samples = m.get_int("kf.slip_window_samples", 1, TactileDepthEstimator::kMaxSlipWindow);
+  p.estimator.slip_max_samples = m.get_int("kf.slip_max_samples", 0, TactileDepthEstimator::kMaxSlipWindow);  // 0 = no limit
   p.estimator.p0_mm2 = m.get_double("kf.p0_mm2");
   p.estimator.whisker_spacing = m.get_double("whisker_spacing");
   p.estimator.whisker_base_x = m.get_double("whisker_base_x");
@@ -109,7 +115,10 @@ TactileDepthLogic::Params TactileDepthLogic::params_from(const ParamMap& m) {
     const auto dot = what.find('.');
     const auto colon = what.find(": ");
     std::string field = what.substr(dot + 1, colon - dot - 1);
-    if (field == "q_mm2" || field == "r_mm2" || field == "p0_mm2" || field.rfind("slip_", 0) == 0) field = "kf." + field;
+    if (field == "q_mm2" || field == "r_mm2" || field == "p0_mm2" || field.rfind("slip_", 0) == 0 ||
+        field.rfind("saturation_", 0) == 0) {
+      field = "kf." + field;
+    }
     throw m.error(field, colon == std::string::npos ? what : what.substr(colon + 2));
   }
   const std::string name = m.get_string("model_file");

@@ -1,6 +1,7 @@
 // Process model (000 eq. 21-25), Kalman filter (eq. 27-30) and the estimator.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -216,6 +217,30 @@ TEST(Params, DefaultsAndValidation) {
   p = Params{};
   p.slip_r_mm2 = 0.0;
   EXPECT_THROW(p.validate(), std::invalid_argument);
+  // Slip run limit (0 = none, up to kMaxSlipWindow) and saturated contact (off by default).
+  EXPECT_EQ(Params{}.slip_max_samples, 0);
+  EXPECT_EQ(Params{}.saturation_sum_pa, 0.0);
+  EXPECT_EQ(Params{}.saturation_r_mm2, 1.0e4);
+  p = Params{};
+  p.slip_max_samples = -1;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p.slip_max_samples = 101;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p.slip_max_samples = 100;
+  EXPECT_NO_THROW(p.validate());
+  p = Params{};
+  p.saturation_sum_pa = -1.0;
+  try {
+    p.validate();
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_STREQ(e.what(), "TactileDepthParams.saturation_sum_pa: must be finite and >= 0 (0 = off), got -1");
+  }
+  p.saturation_sum_pa = NAN;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = Params{};
+  p.saturation_r_mm2 = 0.0;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
   EXPECT_EQ(estimator_model_from_string("kf_simplified"), EstimatorModel::kKfSimplified);
   EXPECT_THROW(estimator_model_from_string("kf"), std::invalid_argument);
 }
@@ -336,6 +361,117 @@ TEST(Estimator, SlipGateUsesLargeRBelowFractionOfRecentPeak) {
   est.reset();
   est.update(in(120, 100, 90, 600));
   EXPECT_FALSE(est.slipping(0));
+}
+
+// Slip run limit by hand: the gate of the test above with slip_max_samples = 1.
+// A sum that stays below the fraction is no longer a slip after one tick (the
+// whisker leaving the wall, which the MLP reads right): normal R again.
+TEST(Estimator, SlipGateEndsAfterSlipMaxSamples) {
+  auto in = [](double m_mm, double sum) {
+    TickInput t;
+    t.sp_left = {{m_mm, 0, sum - m_mm}};
+    t.sp_right = {{90, 0, 600 - 90}};
+    t.contact_left = t.contact_right = true;
+    return t;
+  };
+  Params p;
+  p.slip_fraction = 0.5;
+  p.slip_window_samples = 3;
+  p.slip_max_samples = 1;
+  TactileDepthEstimator est(p, test_models::linear_mlp(), test_models::linear_mlp());
+  p.slip_max_samples = 0;  // the gate without the limit
+  TactileDepthEstimator unlimited(p, test_models::linear_mlp(), test_models::linear_mlp());
+  const double q = 0.01e-6, r = 1e-6;
+  for (TactileDepthEstimator* e : {&est, &unlimited}) {
+    e->update(in(80, 1000));
+    e->update(in(100, 1100));
+    e->update(in(120, 500));  // 500 < 0.5 x 1100: a slip, first tick of the run
+    EXPECT_TRUE(e->slipping(0));
+  }
+  // Second tick below 550: the limit (1 tick) is over, normal update (R = 1 mm^2).
+  const double v = est.filter(0).variance();
+  est.update(in(120, 540));
+  unlimited.update(in(120, 540));
+  EXPECT_FALSE(est.slipping(0));
+  EXPECT_NEAR(est.filter(0).gain(), (v + q) / (v + q + r), 1e-12);
+  EXPECT_TRUE(unlimited.slipping(0));  // without the limit still gated
+  // A tick over the fraction ends the run; a new drop is a slip again.
+  est.update(in(100, 1200));
+  est.update(in(120, 100));
+  EXPECT_TRUE(est.slipping(0));
+}
+
+// Saturated contact by hand (issue 17): linear models (m = 1e-3 S[0]), input
+// sums set through S[2]. Ticks 1-2 unsaturated at 80 / 70 mm (wall angle
+// atan(10 mm / 50 mm)); then 10 ticks with both sums >= 500 Pa in which the
+// MLP reads 75 / 75 mm (a saturated whisker: angle 0) while the drone moves and
+// yaws. Each prediction takes theta^D_k = psi_k - theta^W with theta^W held
+// from tick 2 (eq. 24), not eq. 22 on the fused depths, and both updates use
+// R = saturation_r_mm2; computed here with ProcessModel / DepthKalmanFilter
+// step by step.
+TEST(Estimator, SaturatedContactHoldsTheWallAngleAndUsesLargeR) {
+  auto in = [](double ml, double sl, double mr, double sr, Pose2 pose) {
+    TickInput t;
+    t.sp_left = {{ml, 0, sl - ml}};
+    t.sp_right = {{mr, 0, sr - mr}};
+    t.contact_left = t.contact_right = true;
+    t.pose = pose;
+    return t;
+  };
+  Params p;
+  p.saturation_sum_pa = 500.0;
+  p.saturation_r_mm2 = 100.0;
+  TactileDepthEstimator est(p, test_models::linear_mlp(), test_models::linear_mlp());
+  TactileDepthEstimator off(Params{}, test_models::linear_mlp(), test_models::linear_mlp());
+  const int n_sat = 10;
+  auto pose = [](int k) { return k < 2 ? Pose2{0, 0, 0} : Pose2{0.001 * (k - 1), 0.0005 * (k - 1), 0.01 * (k - 1)}; };
+  // Reference: the two KFs by hand.
+  const double q = 0.01e-6, r = 1e-6, p0 = 50e-6, r_sat = 100e-6, s = 0.05;
+  std::array<DepthKalmanFilter, 2> kf = {DepthKalmanFilter(q, r, p0), DepthKalmanFilter(q, r, p0)};
+  kf[0].initialize(0.080);
+  kf[1].initialize(0.070);
+  double pred[2];
+  const double theta1 = std::atan((kf[0].depth() - kf[1].depth()) / s);  // eq. 22, unsaturated
+  for (int i = 0; i < 2; ++i) ProcessModel::predict_full(kf[i].depth(), theta1, pose(0), pose(1), est.whisker_base(i), pred[i]);
+  for (int i = 0; i < 2; ++i) {
+    kf[i].predict(pred[i]);
+    kf[i].update(i == 0 ? 0.080 : 0.070);
+  }
+  const double theta_w = pose(1).yaw - std::atan((kf[0].depth() - kf[1].depth()) / s);  // held from tick 2
+  double max_eq22_diff = 0.0;
+  for (int k = 2; k < 2 + n_sat; ++k) {
+    const double theta_held = pose(k - 1).yaw - theta_w;
+    max_eq22_diff = std::max(max_eq22_diff, std::fabs(theta_held - std::atan((kf[0].depth() - kf[1].depth()) / s)));
+    for (int i = 0; i < 2; ++i) ProcessModel::predict_full(kf[i].depth(), theta_held, pose(k - 1), pose(k), est.whisker_base(i), pred[i]);
+    for (int i = 0; i < 2; ++i) {
+      kf[i].predict(pred[i]);
+      kf[i].update(0.075, r_sat);
+    }
+  }
+  EXPECT_GT(max_eq22_diff, 1e-3);  // eq. 22 on the fused depths would predict differently
+  TickOutput o, o_off;
+  for (int k = 0; k < 2 + n_sat; ++k) {
+    const TickInput t = k < 2 ? in(80, 300, 70, 300, pose(k)) : in(75, 1000, 75, 900, pose(k));
+    o = est.update(t);
+    o_off = off.update(t);
+    EXPECT_EQ(est.saturated(), k >= 2) << k;
+  }
+  EXPECT_NEAR(o.depth[0], kf[0].depth(), 1e-15);
+  EXPECT_NEAR(o.depth[1], kf[1].depth(), 1e-15);
+  EXPECT_NEAR(o.variance[0], kf[0].variance(), 1e-18);
+  // Off (the paper's KF): follows the saturated 75 / 75 mm; on: the yaw of
+  // 0.1 rad toward the wall's angle shows in the depths' difference.
+  EXPECT_FALSE(off.saturated());
+  EXPECT_LT(std::fabs(o_off.depth[0] - o_off.depth[1]), 0.005);  // 3.0 mm
+  EXPECT_GT(std::fabs(o.depth[0] - o.depth[1]), 0.010);          // 14.1 mm
+  // One sum below 500 Pa: not saturated, normal update.
+  est.update(in(75, 1000, 75, 400, pose(n_sat + 1)));
+  EXPECT_FALSE(est.saturated());
+  // A contact that starts saturated has no angle to hold: normal updates.
+  est.reset();
+  est.update(in(75, 1000, 75, 900, pose(0)));
+  est.update(in(75, 1000, 75, 900, pose(1)));
+  EXPECT_FALSE(est.saturated());
 }
 
 TEST(Estimator, MlpModelNeverFilters) {

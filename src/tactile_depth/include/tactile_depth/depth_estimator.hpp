@@ -73,6 +73,22 @@ struct Params {
   double slip_fraction = 0.0;
   int slip_window_samples = 25;
   double slip_r_mm2 = 1.0e4;
+  /// A slip is short (the whisker sticks again within a few ticks); a sum that
+  /// stays below the fraction is the whisker leaving the wall (the drone backs
+  /// off or turns), which the MLP reads right. A whisker is gated for at most
+  /// slip_max_samples consecutive ticks (0 = no limit, the first gate of
+  /// issue 17), then not again until its sum is back over the fraction.
+  int slip_max_samples = 0;
+  /// Saturated contact (issue 17, README "Saturated contact"): a whisker
+  /// pressed and sliding along a baffle is friction-limited; its input sum
+  /// stops growing below ~70 mm and the MLP reads ~70 mm at any depth below.
+  /// While both input sums are >= saturation_sum_pa, the process model keeps
+  /// the wall's world angle of the last tick that was not saturated (a planar
+  /// wall does not turn; eq. 22 on two saturated depths reads ~0) and both
+  /// updates use R = saturation_r_mm2, so the odometry carries the approach.
+  /// 0 = off (the paper).
+  double saturation_sum_pa = 0.0;
+  double saturation_r_mm2 = 1.0e4;
   /// s, lateral distance between the two whisker bases [m] (000 eq. 22: 0.05 m).
   double whisker_spacing = 0.05;
   /// x of the whisker bases in the body frame [m] (ahead of the odometry
@@ -193,6 +209,9 @@ class TactileDepthEstimator {
   /// True if the input sum of `side` at the last tick was below slip_fraction
   /// x its window maximum (the update used slip_r_mm2).
   bool slipping(int side) const { return slipping_[static_cast<std::size_t>(side)]; }
+  /// True if both input sums at the last tick were >= saturation_sum_pa and a
+  /// wall angle of an unsaturated tick was held (the update used slip_r_mm2).
+  bool saturated() const { return saturated_; }
 
   /// Bytes of the filter state (this object without the models' parameters).
   std::size_t filter_state_bytes() const;
@@ -215,8 +234,13 @@ class TactileDepthEstimator {
   Pose2 prev_pose_;
   bool have_prev_pose_ = false;
   std::array<bool, 2> slipping_{};
+  std::array<int, 2> slip_run_{};  ///< consecutive ticks below the slip fraction
+  bool saturated_ = false;
+  double wall_world_ = 0.0;     ///< theta^W of the last unsaturated fused tick [rad]
+  bool have_wall_world_ = false;
   double r_m2_ = 0.0;
   double slip_r_m2_ = 0.0;
+  double sat_r_m2_ = 0.0;
   /// Input sums of the last slip_window_samples ticks per whisker (ring).
   std::array<std::array<double, kMaxSlipWindow>, 2> input_sum_{};
   int slip_head_ = 0;    ///< next slot of the ring
