@@ -65,6 +65,9 @@ ParamMap XplorerMapLogic::default_parameters() {
   m.set("corner_angle_tolerance", d.stamping.corner_angle_tolerance);
   m.set("release_states", d.release_states);
   m.set("contact_now_after", d.contact_now_after);
+  m.set("corner_fill_max_gap", d.stamping.corner_fill_max_gap);
+  m.set("corner_fill_min_turn", d.stamping.corner_fill_min_turn);
+  m.set("corner_fill_fit_length", d.stamping.corner_fill_fit_length);
   return m;
 }
 
@@ -111,6 +114,9 @@ XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
   p.stamping.corner_angle_tolerance = m.get_double("corner_angle_tolerance");
   p.release_states = m.get_string_array("release_states");
   p.contact_now_after = m.get_string_array("contact_now_after");
+  p.stamping.corner_fill_max_gap = m.get_double("corner_fill_max_gap");
+  p.stamping.corner_fill_min_turn = m.get_double("corner_fill_min_turn");
+  p.stamping.corner_fill_fit_length = m.get_double("corner_fill_fit_length");
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {
@@ -157,6 +163,9 @@ void XplorerMapLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
 
 void XplorerMapLogic::on_fsm_state(const tactile_msgs::msg::FsmState& msg) {
   const bool changed = !fsm_state_ || *fsm_state_ != msg.state;
+  const bool left_stamp_state =
+      changed && fsm_state_ &&
+      std::find(params_.stamp_states.begin(), params_.stamp_states.end(), *fsm_state_) != params_.stamp_states.end();
   fsm_state_ = msg.state;
   fsm_state_since_s_ = tactile_common::to_seconds(tactile_common::from_stamp(msg.header.stamp)) - msg.time_in_state;
   fsm_previous_state_ = msg.previous_state;
@@ -165,6 +174,9 @@ void XplorerMapLogic::on_fsm_state(const tactile_msgs::msg::FsmState& msg) {
   // Likewise at every other end of a traversal in release_states (README "Release on every end of a traversal").
   if (changed && std::find(params_.release_states.begin(), params_.release_states.end(), msg.state) != params_.release_states.end())
     mapper_.release_corner(fsm_state_since_s_);
+  // The end of a face traversal (README "Corner fill"): the corner between it
+  // and the face before is filled if that one ended in a Tactile-turning.
+  if (left_stamp_state) mapper_.end_face(msg.state == kTurningState);
 }
 
 void XplorerMapLogic::on_arm_imu(const tactile_msgs::msg::ArmImuArray& msg) {

@@ -28,6 +28,7 @@ class XplorerMapLogic {
   static constexpr const char* kWrenchBodyTopic = "/xplorer/wrench_body";  // geometry_msgs/msg/WrenchStamped
   static constexpr const char* kOdometryTopic = "/odom";                   // nav_msgs/msg/Odometry
   static constexpr const char* kCloudTopic = "/xplorer/map";               // sensor_msgs/msg/PointCloud2
+  static constexpr const char* kTurningState = "tactile_turning";  // tactile_fsm's Tactile-turning (001 Gamma 2): ends a face at a convex corner
   static constexpr const char* kFsmStateTopic = "/xplorer/fsm_state";      // tactile_msgs/msg/FsmState (optional)
   static constexpr const char* kArmImuTopic = "/arm_imu";                  // tactile_msgs/msg/ArmImuArray (optional: edge_from_arms)
 
