@@ -301,6 +301,11 @@ int XplorerContactMapper::update(const ContactSample& s) {
     ++stats_.skipped_no_contact_now;  // the averaged force still holds a contact that has ended (README "Contact now")
     return 0;
   }
+  if (p_.recent_axis && s.force_body_recent && s.force_body_recent->allFinite() &&
+      contact_direction(*s.force_body_recent, 0.0) != c) {
+    ++stats_.skipped_recent_axis;  // the average still holds the face before the turn (README "Recent axis")
+    return 0;
+  }
   const Eigen::Rotation2Dd R(s.yaw);
   const Eigen::Vector2d c_w = p_.normal_from_force ? Eigen::Vector2d(-(R * s.force_body).normalized()) : Eigen::Vector2d(R * unit(*c));
   const bool arms_known = s.arm_angles && std::all_of(s.arm_angles->begin(), s.arm_angles->end(), [](double a) {
@@ -317,8 +322,9 @@ int XplorerContactMapper::update(const ContactSample& s) {
     offset = outline_reach(p_, R.inverse() * c_w, *s.arm_angles);  // the CAD outline with the arms as they are
     ++stats_.offset_from_arms;
   }
+  const Eigen::Vector2d xy(s.position.x(), s.position.y());
   stamp(s.t, face_slab_world(s, c_w, offset));
-  face_.push_back({s.t, Eigen::Vector2d(s.position.x(), s.position.y()) + offset * c_w, c_w, s.position.z()});
+  face_.push_back({s.t, xy + offset * c_w, c_w, s.position.z()});
   ++stats_.slabs;
   ++stamped;
   const Eigen::Vector2d m_w = Eigen::Rotation2Dd(-M_PI / 2) * c_w;  // lambda in the world (right-hand)

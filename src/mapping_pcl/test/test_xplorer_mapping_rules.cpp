@@ -51,10 +51,11 @@ void traverse_one_face(XplorerMapLogic& logic) {
 }
 
 // Node parameters of the contact-now tests: the check over the latest 5 wrench samples at
-// 0.5 N, nothing held back, no minimum state time.
+// 0.5 N, nothing held back, no minimum state time (after Exploration or a turn).
 auto contact_now_params() {
   auto d = XplorerMapLogic::default_parameters();
   d.set("min_state_time_s", 0.0);
+  d.set("min_state_time_after_turn_s", 0.0);
   d.set("corner_release_s", 0.0);
   d.set("publish_rate_hz", 0.0);
   d.set("min_force_now", 0.5);
@@ -455,5 +456,53 @@ TEST(XplorerMappingRules, LogicFillsTheCornerAcrossATurnOnly) {
     logic.on_fsm_state(st);
     EXPECT_EQ(logic.mapper().stats().corner_fills, between == "tactile_turning" ? 1u : 0u)
         << between << " slabs " << logic.mapper().stats().slabs << " skipped " << logic.mapper().stats().skipped_corner_fill;
+  }
+}
+
+// README "Recent axis": 0.3 s after a 72 deg turn the 50-sample average still
+// reads the face just left (-2.0 N along b1: C_n = +b1) while the latest
+// samples press along b2 (the new face, C_n = +b2): no slab; once the latest
+// samples agree with the average's axis, a slab.
+TEST(XplorerMappingRules, SlabsOnlyWhileTheLatestSamplesPressAlongTheAveragesAxis) {
+  for (const bool on : {true, false}) {
+    XplorerMapParams p;
+    p.corner_release_s = 0.0;
+    p.recent_axis = on;
+    PointMap map;
+    XplorerContactMapper m(p, map);
+    ContactSample s = sample(0.0, 0.0, -2.0);
+    s.force_body_recent = Eigen::Vector2d(-0.3, -1.4);
+    EXPECT_EQ(m.update(s), on ? 0 : 1);
+    EXPECT_EQ(m.stats().skipped_recent_axis, on ? 1u : 0u);
+    s = sample(0.1, 0.0, -2.0);
+    s.force_body_recent = Eigen::Vector2d(-1.3, 0.2);
+    EXPECT_EQ(m.update(s), 1);
+  }
+}
+
+// README "Recent axis": a traversal entered from Tactile-turning stamps after
+// min_state_time_after_turn_s (0.3 s), one entered from Exploration after
+// min_state_time_s (1 s): 0.4 s after the entry, a slab only after the turn.
+TEST(XplorerMappingRules, LogicGatesATraversalAfterATurnForTheShorterTime) {
+  for (const std::string previous : {"tactile_turning", "exploration"}) {
+    auto d = XplorerMapLogic::default_parameters();
+    d.set("publish_rate_hz", 0.0);
+    XplorerMapLogic logic(XplorerMapLogic::params_from(d));
+    tactile_msgs::msg::FsmState st;
+    st.state = "tactile_traversal";
+    st.previous_state = previous;
+    logic.on_fsm_state(st);  // entered at 0 s
+    geometry_msgs::msg::WrenchStamped w;
+    w.header.frame_id = "base_link";
+    w.wrench.force.x = -1.6;
+    logic.on_wrench_body(w);
+    nav_msgs::msg::Odometry o;
+    o.child_frame_id = "base_link";
+    o.pose.pose.position.z = 0.7;
+    o.pose.pose.orientation.w = 1.0;
+    tactile_common::to_stamp(tactile_common::from_seconds(0.4), o.header.stamp);
+    logic.on_odometry(o);
+    logic.on_timer(tactile_common::from_seconds(0.4));
+    EXPECT_EQ(logic.mapper().stats().slabs, previous == "tactile_turning" ? 1u : 0u) << previous;
   }
 }

@@ -88,6 +88,14 @@ struct XplorerMapParams {
   /// slab lands 0.1-0.23 m outside the object (choice; README "Right-angle
   /// corners"). >= pi/2 (e.g. 1.5708): every lambda change (001).
   double corner_angle_tolerance = 0.175;  ///< [rad] (10 deg)
+  /// Recent axis: a slab is stamped only if the contact axis of the 50-sample
+  /// average (001 Sec. V-C) is also the axis of the latest samples
+  /// (ContactSample::force_body_recent). After a Tactile-turning the average
+  /// still holds the face just left for up to 1 s, on another body axis once
+  /// the vehicle has yawed round the corner; this replaces most of the 1 s
+  /// state gate after a turn (the node logic's min_state_time_after_turn_s
+  /// 0.3 s), which left no slab on the 0.4-0.5 m faces of the polygons (choice; README "Recent axis").
+  bool recent_axis = true;
   /// Corner fill: when a face traversal ends in a turn (end_face(true)) and
   /// the next face has been traversed, the two faces' lines (the slabs' near
   /// faces over the last / first corner_fill_fit_length of each, along their
@@ -118,6 +126,8 @@ struct ContactSample {
   std::optional<std::array<double, 4>> arm_angles;
   /// Mean body force of the last few wrench samples [N], if known (min_force_now).
   std::optional<Eigen::Vector2d> force_body_now;
+  /// Mean body force of the last few wrench samples [N], if known, in every state (recent_axis).
+  std::optional<Eigen::Vector2d> force_body_recent;
 };
 
 /// Reach of the vehicle's outline along the body direction `d` (unit, x-y):
@@ -153,6 +163,7 @@ class XplorerContactMapper {
     uint64_t dropped_at_corner = 0;   ///< slabs dropped by a corner release (corner_release_s)
     uint64_t skipped_no_contact_now = 0;  ///< the last samples' force below min_force_now
     uint64_t skipped_corner_angle = 0;    ///< lambda changed but not at a right-angle corner (corner_angle_tolerance)
+    uint64_t skipped_recent_axis = 0;     ///< the latest samples press along another body axis than the average (recent_axis)
     uint64_t corner_fills = 0;            ///< corners filled between two faces (corner_fill_max_gap)
     uint64_t skipped_corner_fill = 0;     ///< two faces joined by a turn whose corner was not filled (angle or gap)
   };
