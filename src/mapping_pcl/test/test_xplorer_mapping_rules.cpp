@@ -424,6 +424,7 @@ TEST(XplorerMappingRules, LogicFillsTheCornerAcrossATurnOnly) {
     d.set("publish_rate_hz", 0.0);
     d.set("min_force_now", 0.0);
     d.set("edge_from_arms", false);
+    d.set("corner_fill_max_gap", 0.4);  // off by default (README "Corner fill")
     XplorerMapLogic logic(XplorerMapLogic::params_from(d));
     traverse_one_face(logic);  // along -y, C_n = +x: the surface x = 0.21
     tactile_msgs::msg::FsmState st;  // entered at 2.6 s (the release drops nothing: corner_release_s 0)

@@ -105,8 +105,10 @@ struct XplorerMapParams {
   /// the corner release drops the face's last slabs, so nothing else maps
   /// the corner (choice; README "Corner fill"). Filled only if C_n turned by
   /// at least corner_fill_min_turn (and at most 135 deg) and the corner lies
-  /// beyond both mapped ends by at most corner_fill_max_gap. 0: off.
-  double corner_fill_max_gap = 0.4;       ///< [m]
+  /// beyond both mapped ends by at most corner_fill_max_gap. 0: off, the
+  /// default: with the 0.3 s state gate after a turn (recent_axis) the fill
+  /// did not help on the tuning blocks (README "Corner fill", not kept).
+  double corner_fill_max_gap = 0.0;       ///< [m] (0.4 as tried)
   double corner_fill_min_turn = 0.35;     ///< [rad] (20 deg)
   double corner_fill_fit_length = 0.3;    ///< [m] face length used for each line
   double arm_hinge_offset = 0.05;  ///< centre -> arm hinge along the diagonal [m] (vehicle CAD; the SITL's value)
