@@ -24,6 +24,8 @@ void XplorerMapLogic::Params::validate() const {
   if (!(publish_rate_hz >= 0.0) || !std::isfinite(publish_rate_hz)) bad("publish_rate_hz", "must be finite and >= 0 (0: never)");
   if (!(max_odometry_age_s > 0.0)) bad("max_odometry_age_s", "must be > 0");
   if (!(min_state_time_s >= 0.0) || !std::isfinite(min_state_time_s)) bad("min_state_time_s", "must be finite and >= 0");
+  if (!(min_state_time_after_turn_s >= 0.0) || !std::isfinite(min_state_time_after_turn_s))
+    bad("min_state_time_after_turn_s", "must be finite and >= 0");
   if (frame_id.empty()) bad("frame_id", "must not be empty");
   if (!(max_arm_age_s > 0.0)) bad("max_arm_age_s", "must be > 0");
   if (force_now_samples < 0 || force_now_samples > force_average_samples)
@@ -55,6 +57,7 @@ ParamMap XplorerMapLogic::default_parameters() {
   m.set("ply_binary", d.ply_binary);
   m.set("stamp_states", d.stamp_states);
   m.set("min_state_time_s", d.min_state_time_s);
+  m.set("min_state_time_after_turn_s", d.min_state_time_after_turn_s);
   m.set("edge_from_arms", d.stamping.edge_from_arms);
   m.set("min_arm_deflection", d.stamping.min_arm_deflection);
   m.set("arm_hinge_offset", d.stamping.arm_hinge_offset);
@@ -66,6 +69,10 @@ ParamMap XplorerMapLogic::default_parameters() {
   m.set("corner_angle_tolerance", d.stamping.corner_angle_tolerance);
   m.set("release_states", d.release_states);
   m.set("contact_now_after", d.contact_now_after);
+  m.set("recent_axis", d.stamping.recent_axis);
+  m.set("corner_fill_max_gap", d.stamping.corner_fill_max_gap);
+  m.set("corner_fill_min_turn", d.stamping.corner_fill_min_turn);
+  m.set("corner_fill_fit_length", d.stamping.corner_fill_fit_length);
   return m;
 }
 
@@ -95,6 +102,7 @@ XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
   p.ply_binary = m.get_bool("ply_binary");
   p.stamp_states = m.get_string_array("stamp_states");
   p.min_state_time_s = m.get_double("min_state_time_s");
+  p.min_state_time_after_turn_s = m.get_double("min_state_time_after_turn_s");
   p.stamping.edge_from_arms = m.get_bool("edge_from_arms");
   p.stamping.min_arm_deflection = m.get_double("min_arm_deflection");
   p.stamping.arm_hinge_offset = m.get_double("arm_hinge_offset");
@@ -107,6 +115,10 @@ XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
   p.stamping.corner_angle_tolerance = m.get_double("corner_angle_tolerance");
   p.release_states = m.get_string_array("release_states");
   p.contact_now_after = m.get_string_array("contact_now_after");
+  p.stamping.recent_axis = m.get_bool("recent_axis");
+  p.stamping.corner_fill_max_gap = m.get_double("corner_fill_max_gap");
+  p.stamping.corner_fill_min_turn = m.get_double("corner_fill_min_turn");
+  p.stamping.corner_fill_fit_length = m.get_double("corner_fill_fit_length");
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {
@@ -153,6 +165,9 @@ void XplorerMapLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
 
 void XplorerMapLogic::on_fsm_state(const tactile_msgs::msg::FsmState& msg) {
   const bool changed = !fsm_state_ || *fsm_state_ != msg.state;
+  const bool left_stamp_state =
+      changed && fsm_state_ &&
+      std::find(params_.stamp_states.begin(), params_.stamp_states.end(), *fsm_state_) != params_.stamp_states.end();
   fsm_state_ = msg.state;
   fsm_state_since_s_ = tactile_common::to_seconds(tactile_common::from_stamp(msg.header.stamp)) - msg.time_in_state;
   fsm_previous_state_ = msg.previous_state;
@@ -161,6 +176,9 @@ void XplorerMapLogic::on_fsm_state(const tactile_msgs::msg::FsmState& msg) {
   // Likewise at every other end of a traversal in release_states (README "Release on every end of a traversal").
   if (changed && std::find(params_.release_states.begin(), params_.release_states.end(), msg.state) != params_.release_states.end())
     mapper_.release_corner(fsm_state_since_s_);
+  // The end of a face traversal (README "Corner fill"): the corner between it
+  // and the face before is filled if that one ended in a Tactile-turning.
+  if (left_stamp_state) mapper_.end_face(msg.state == kTurningState);
 }
 
 void XplorerMapLogic::on_arm_imu(const tactile_msgs::msg::ArmImuArray& msg) {
@@ -182,7 +200,8 @@ std::optional<sensor_msgs::msg::PointCloud2> XplorerMapLogic::on_timer(int64_t n
   const bool gated =
       fsm_state_ && !params_.stamp_states.empty() &&
       (std::find(params_.stamp_states.begin(), params_.stamp_states.end(), *fsm_state_) == params_.stamp_states.end() ||
-       tactile_common::to_seconds(now_ns) - fsm_state_since_s_ < params_.min_state_time_s);
+       tactile_common::to_seconds(now_ns) - fsm_state_since_s_ <
+           (fsm_previous_state_ == kTurningState ? params_.min_state_time_after_turn_s : params_.min_state_time_s));
   if (gated) {
     ++stats_.ticks_gated;
     // The initiation latch sees the force in every state: the firm contact
@@ -203,11 +222,12 @@ std::optional<sensor_msgs::msg::PointCloud2> XplorerMapLogic::on_timer(int64_t n
     const bool check_now = !fsm_state_ || params_.contact_now_after.empty() ||
                            std::find(params_.contact_now_after.begin(), params_.contact_now_after.end(),
                                      fsm_previous_state_) != params_.contact_now_after.end();
-    if (params_.force_now_samples > 0 && check_now) {  // README "Contact now": the latest samples, not the 1 s average
+    if (params_.force_now_samples > 0) {  // README "Contact now": the latest samples, not the 1 s average
       const std::size_t k = std::min<std::size_t>(forces_.size(), static_cast<std::size_t>(params_.force_now_samples));
       Eigen::Vector2d now = Eigen::Vector2d::Zero();
       for (std::size_t i = forces_.size() - k; i < forces_.size(); ++i) now += forces_[i];
-      s.force_body_now = now / static_cast<double>(k);
+      s.force_body_recent = now / static_cast<double>(k);  // README "Recent axis": in every state
+      if (check_now) s.force_body_now = s.force_body_recent;
     }
     const int64_t max_age = tactile_common::from_seconds(params_.max_arm_age_s);
     if (std::all_of(arm_stamp_ns_.begin(), arm_stamp_ns_.end(),

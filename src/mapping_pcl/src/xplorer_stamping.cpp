@@ -70,6 +70,12 @@ void XplorerMapParams::validate() const {
   if (!(corner_angle_tolerance >= 0.0) || !(corner_angle_tolerance <= M_PI))
     bad("corner_angle_tolerance", "must be in [0, pi] (>= pi/2: every change of lambda)", corner_angle_tolerance);
   if (!(guard_radius >= 0.0) || !std::isfinite(guard_radius)) bad("guard_radius", "must be finite and >= 0", guard_radius);
+  if (!(corner_fill_max_gap >= 0.0) || !std::isfinite(corner_fill_max_gap))
+    bad("corner_fill_max_gap", "must be finite and >= 0 (0: no corner fill)", corner_fill_max_gap);
+  if (!(corner_fill_min_turn >= 0.0) || !(corner_fill_min_turn <= 0.75 * M_PI))
+    bad("corner_fill_min_turn", "must be in [0, 3 pi / 4]", corner_fill_min_turn);
+  if (!(corner_fill_fit_length > 0.0) || !std::isfinite(corner_fill_fit_length))
+    bad("corner_fill_fit_length", "must be finite and > 0", corner_fill_fit_length);
 }
 
 namespace {
@@ -150,6 +156,7 @@ void XplorerContactMapper::commit(double t) {
 }
 
 std::size_t XplorerContactMapper::release_corner(double t) {
+  while (!face_.empty() && face_.back().t > t - p_.corner_release_s) face_.pop_back();  // not part of the face
   std::size_t n = 0;
   while (!pending_.empty() && pending_.back().first > t - p_.corner_release_s) {
     pending_.pop_back();
@@ -159,7 +166,94 @@ std::size_t XplorerContactMapper::release_corner(double t) {
   return n;
 }
 
+void XplorerContactMapper::end_face(bool turned) {
+  if (face_.empty()) {
+    turned_face_.reset();  // a face without slabs between two turns: the faces either side are not adjacent
+    return;
+  }
+  if (turned_face_ && p_.corner_fill_max_gap > 0.0) {
+    if (const auto f = corner_between(*turned_face_, face_)) {
+      fill_corner(*f);
+      ++stats_.corner_fills;
+    } else {
+      ++stats_.skipped_corner_fill;
+    }
+  }
+  if (turned) {
+    turned_face_ = std::move(face_);
+  } else {
+    turned_face_.reset();
+  }
+  face_.clear();
+}
+
+std::optional<XplorerContactMapper::CornerFill> XplorerContactMapper::corner_between(
+    const std::vector<FaceSample>& a, const std::vector<FaceSample>& b) const {
+  if (a.empty() || b.empty()) return std::nullopt;
+  const Eigen::Rotation2Dd to_move(-M_PI / 2);  // lambda = C_n turned by -90 deg (right-hand)
+  // A line through the mean near-face point along the mean C_n's lambda, over
+  // the samples within fit_length (along lambda) of the face's corner end.
+  auto line = [&](const std::vector<FaceSample>& f, bool from_end, Eigen::Vector2d& point, Eigen::Vector2d& move,
+                  Eigen::Vector2d& contact) {
+    const FaceSample& ref = from_end ? f.back() : f.front();
+    const Eigen::Vector2d t0 = to_move * ref.contact;
+    Eigen::Vector2d sp = Eigen::Vector2d::Zero(), sc = Eigen::Vector2d::Zero();
+    int n = 0;
+    for (const auto& s : f) {
+      if (std::abs((s.point - ref.point).dot(t0)) > p_.corner_fill_fit_length) continue;
+      sp += s.point;
+      sc += s.contact;
+      ++n;
+    }
+    point = sp / n;
+    contact = sc.normalized();
+    move = to_move * contact;
+  };
+  Eigen::Vector2d pa, ta, ca, pb, tb, cb;
+  line(a, true, pa, ta, ca);
+  line(b, false, pb, tb, cb);
+  if (!ca.allFinite() || !cb.allFinite()) return std::nullopt;
+  const double turn = std::acos(std::clamp(ca.dot(cb), -1.0, 1.0));
+  if (turn < p_.corner_fill_min_turn || turn > 0.75 * M_PI) return std::nullopt;
+  // pa + s ta = pb + u tb
+  Eigen::Matrix2d m;
+  m << ta, -tb;
+  if (std::abs(m.determinant()) < 1e-6) return std::nullopt;
+  const Eigen::Vector2d su = m.inverse() * (pb - pa);
+  CornerFill f;
+  f.corner = pa + su.x() * ta;
+  f.end_a = pa + (a.back().point - pa).dot(ta) * ta;     // a's last point on a's line
+  f.start_b = pb + (b.front().point - pb).dot(tb) * tb;  // b's first point on b's line
+  const double gap_a = (f.corner - f.end_a).dot(ta), gap_b = (f.start_b - f.corner).dot(tb);
+  constexpr double kSlack = 0.02;  // [m] the corner may lie that far inside a mapped end (noise of the lines)
+  if (gap_a < -kSlack || gap_b < -kSlack || gap_a > p_.corner_fill_max_gap || gap_b > p_.corner_fill_max_gap)
+    return std::nullopt;
+  double z = 0.0;
+  for (const auto& s : a) z += s.z;
+  for (const auto& s : b) z += s.z;
+  f.z = z / static_cast<double>(a.size() + b.size());
+  return f;
+}
+
+std::size_t XplorerContactMapper::fill_corner(const CornerFill& f) {
+  const double h = p_.slab_spacing;
+  const Eigen::Vector2d e1 = f.end_a - f.corner, e2 = f.start_b - f.corner;
+  const int n = std::max(2, static_cast<int>(std::ceil(std::max(e1.norm(), e2.norm()) / h)) + 1);
+  const int nz = std::max(2, static_cast<int>(std::ceil(p_.slab_size.z() / h - 1e-9)) + 1);
+  std::vector<Vec3> pts;
+  for (int i = 0; i < n; ++i) {
+    for (int j = 0; i + j < n; ++j) {  // barycentric grid of the triangle (corner, end_a, start_b)
+      const Eigen::Vector2d q = f.corner + e1 * (static_cast<double>(i) / (n - 1)) + e2 * (static_cast<double>(j) / (n - 1));
+      for (int k = 0; k < nz; ++k)
+        pts.emplace_back(q.x(), q.y(), f.z - 0.5 * p_.slab_size.z() + p_.slab_size.z() * k / (nz - 1));
+    }
+  }
+  map_->insert(pts);
+  return pts.size();
+}
+
 void XplorerContactMapper::flush() {
+  end_face(false);
   for (const auto& [t, b] : pending_) map_->insert_box(b, p_.slab_spacing);
   pending_.clear();
 }
@@ -207,6 +301,11 @@ int XplorerContactMapper::update(const ContactSample& s) {
     ++stats_.skipped_no_contact_now;  // the averaged force still holds a contact that has ended (README "Contact now")
     return 0;
   }
+  if (p_.recent_axis && s.force_body_recent && s.force_body_recent->allFinite() &&
+      contact_direction(*s.force_body_recent, 0.0) != c) {
+    ++stats_.skipped_recent_axis;  // the average still holds the face before the turn (README "Recent axis")
+    return 0;
+  }
   const Eigen::Rotation2Dd R(s.yaw);
   const Eigen::Vector2d c_w = p_.normal_from_force ? Eigen::Vector2d(-(R * s.force_body).normalized()) : Eigen::Vector2d(R * unit(*c));
   const bool arms_known = s.arm_angles && std::all_of(s.arm_angles->begin(), s.arm_angles->end(), [](double a) {
@@ -223,7 +322,9 @@ int XplorerContactMapper::update(const ContactSample& s) {
     offset = outline_reach(p_, R.inverse() * c_w, *s.arm_angles);  // the CAD outline with the arms as they are
     ++stats_.offset_from_arms;
   }
+  const Eigen::Vector2d xy(s.position.x(), s.position.y());
   stamp(s.t, face_slab_world(s, c_w, offset));
+  face_.push_back({s.t, xy + offset * c_w, c_w, s.position.z()});
   ++stats_.slabs;
   ++stamped;
   const Eigen::Vector2d m_w = Eigen::Rotation2Dd(-M_PI / 2) * c_w;  // lambda in the world (right-hand)

@@ -6,6 +6,8 @@
 
 #include <array>
 #include <cmath>
+#include <memory>
+#include <tuple>
 
 #include "mapping_pcl/xplorer_map_logic.hpp"
 #include "mapping_pcl/xplorer_stamping.hpp"
@@ -49,10 +51,11 @@ void traverse_one_face(XplorerMapLogic& logic) {
 }
 
 // Node parameters of the contact-now tests: the check over the latest 5 wrench samples at
-// 0.5 N, nothing held back, no minimum state time.
+// 0.5 N, nothing held back, no minimum state time (after Exploration or a turn).
 auto contact_now_params() {
   auto d = XplorerMapLogic::default_parameters();
   d.set("min_state_time_s", 0.0);
+  d.set("min_state_time_after_turn_s", 0.0);
   d.set("corner_release_s", 0.0);
   d.set("publish_rate_hz", 0.0);
   d.set("min_force_now", 0.5);
@@ -359,5 +362,154 @@ TEST(XplorerMappingRules, LogicChecksTheContactNowAfterExplorationOnly) {
     logic.on_odometry(o);
     logic.on_timer(0);
     EXPECT_EQ(logic.mapper().stats().slabs, previous == "exploration" ? 0u : 1u) << previous;
+  }
+}
+
+// README "Corner fill": a corner of a pentagon (C_n turned by 72 deg) at (1, 0).
+// Face a: the surface y = 0 (object at +y, C_n = +y, lambda = +x), slabs' near
+// faces at x = 0 ... 0.7 (0.3 m short of the corner: the release and the pivot
+// orbit); face b: from the corner along (cos 72, sin 72) deg, slabs from 0.3 to
+// 0.8 m. The lines meet at the corner (1, 0); the triangle (1, 0), (0.7, 0),
+// 0.3 (cos 72, sin 72) from the corner is filled. Without the fill the nearest
+// map point is the end of face a's last slab, 0.175 m from the corner.
+TEST(XplorerMappingRules, CornerFillBetweenTwoFacesJoinedByATurn) {
+  auto run = [](double fill_gap, double turn_deg, double start_b) {
+    XplorerMapParams p;
+    p.corner_release_s = 0.0;
+    p.edge_from_arms = false;  // near face at slab_offset = 0.21 m
+    p.corner_fill_max_gap = fill_gap;
+    auto map = std::make_shared<PointMap>();
+    auto m = std::make_shared<XplorerContactMapper>(p, *map);
+    double t = 0.0;
+    auto at = [&](const Eigen::Vector2d& surface, const Eigen::Vector2d& c) {
+      ContactSample s = sample(t, 0.0, -2.0);
+      s.arm_angles.reset();
+      s.position = Vec3(surface.x() - 0.21 * c.x(), surface.y() - 0.21 * c.y(), 0.7);
+      s.yaw = std::atan2(c.y(), c.x());  // C_n = +b1
+      m->update(s);
+      t += 0.1;
+    };
+    for (int k = 0; k <= 14; ++k) at(Eigen::Vector2d(0.05 * k, 0.0), Eigen::Vector2d(0.0, 1.0));
+    m->end_face(true);  // Tactile-turning
+    const double a = turn_deg * M_PI / 180.0;
+    const Eigen::Vector2d cb(-std::sin(a), std::cos(a)), tb(std::cos(a), std::sin(a));
+    for (int k = 0; k <= 10; ++k) at(Eigen::Vector2d(1.0, 0.0) + (start_b + 0.05 * k) * tb, cb);
+    m->end_face(false);  // the loop closed
+    double nearest = 1e9;
+    for (const auto& q : map->cloud()) nearest = std::min(nearest, std::hypot(q.x - 1.0, q.y - 0.0));
+    return std::make_tuple(nearest, m->stats().corner_fills, m->stats().skipped_corner_fill);
+  };
+  const auto [with, fills, skipped] = run(0.4, 72.0, 0.3);
+  EXPECT_LT(with, 1e-4);
+  EXPECT_EQ(fills, 1u);
+  EXPECT_EQ(skipped, 0u);
+  const auto [without, fills0, skipped0] = run(0.0, 72.0, 0.3);
+  EXPECT_NEAR(without, 0.175, 1e-3);
+  EXPECT_EQ(fills0, 0u);
+  EXPECT_GT(std::get<0>(run(0.4, 72.0, 0.5)), 0.17);  // face b starts 0.5 m past the corner: gap > 0.4 m
+  EXPECT_EQ(std::get<2>(run(0.4, 72.0, 0.5)), 1u);
+  EXPECT_EQ(std::get<2>(run(0.4, 10.0, 0.3)), 1u);   // turned by 10 deg < corner_fill_min_turn
+  XplorerMapParams bad;
+  bad.corner_fill_max_gap = -0.1;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+  bad = XplorerMapParams{};
+  bad.corner_fill_min_turn = 3.0;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+  bad = XplorerMapParams{};
+  bad.corner_fill_fit_length = 0.0;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
+// The node logic ends a face when the FSM leaves Tactile-traversal: the corner
+// is filled across a Tactile-turning, not across a contact lost (Exploration).
+TEST(XplorerMappingRules, LogicFillsTheCornerAcrossATurnOnly) {
+  for (const std::string between : {"tactile_turning", "exploration"}) {
+    auto d = XplorerMapLogic::default_parameters();
+    d.set("corner_release_s", 0.0);
+    d.set("min_state_time_s", 0.0);
+    d.set("publish_rate_hz", 0.0);
+    d.set("min_force_now", 0.0);
+    d.set("edge_from_arms", false);
+    d.set("corner_fill_max_gap", 0.4);  // off by default (README "Corner fill")
+    XplorerMapLogic logic(XplorerMapLogic::params_from(d));
+    traverse_one_face(logic);  // along -y, C_n = +x: the surface x = 0.21
+    tactile_msgs::msg::FsmState st;  // entered at 2.6 s (the release drops nothing: corner_release_s 0)
+    st.state = between;
+    tactile_common::to_stamp(tactile_common::from_seconds(2.6), st.header.stamp);
+    logic.on_fsm_state(st);
+    st.state = "tactile_traversal";
+    tactile_common::to_stamp(tactile_common::from_seconds(2.9), st.header.stamp);
+    logic.on_fsm_state(st);
+    // Round the corner (0.21, -0.6): C_n = +y (yaw 90 deg), the surface y = -0.6, moving along +x.
+    geometry_msgs::msg::WrenchStamped w;
+    w.header.frame_id = "base_link";
+    w.wrench.force.x = -1.6;
+    logic.on_wrench_body(w);
+    for (int k = 0; k <= 10; ++k) {
+      const int64_t ns = tactile_common::from_seconds(3.0 + 0.125 * k);
+      nav_msgs::msg::Odometry o;
+      tactile_common::to_stamp(ns, o.header.stamp);
+      o.child_frame_id = "base_link";
+      o.pose.pose.position.x = 0.3 + 0.02 * k;
+      o.pose.pose.position.y = -0.81;
+      o.pose.pose.position.z = 0.7;
+      o.pose.pose.orientation.z = std::sqrt(0.5);
+      o.pose.pose.orientation.w = std::sqrt(0.5);
+      logic.on_odometry(o);
+      logic.on_timer(ns);
+    }
+    st.state = "done";
+    tactile_common::to_stamp(tactile_common::from_seconds(4.5), st.header.stamp);
+    logic.on_fsm_state(st);
+    EXPECT_EQ(logic.mapper().stats().corner_fills, between == "tactile_turning" ? 1u : 0u)
+        << between << " slabs " << logic.mapper().stats().slabs << " skipped " << logic.mapper().stats().skipped_corner_fill;
+  }
+}
+
+// README "Recent axis": 0.3 s after a 72 deg turn the 50-sample average still
+// reads the face just left (-2.0 N along b1: C_n = +b1) while the latest
+// samples press along b2 (the new face, C_n = +b2): no slab; once the latest
+// samples agree with the average's axis, a slab.
+TEST(XplorerMappingRules, SlabsOnlyWhileTheLatestSamplesPressAlongTheAveragesAxis) {
+  for (const bool on : {true, false}) {
+    XplorerMapParams p;
+    p.corner_release_s = 0.0;
+    p.recent_axis = on;
+    PointMap map;
+    XplorerContactMapper m(p, map);
+    ContactSample s = sample(0.0, 0.0, -2.0);
+    s.force_body_recent = Eigen::Vector2d(-0.3, -1.4);
+    EXPECT_EQ(m.update(s), on ? 0 : 1);
+    EXPECT_EQ(m.stats().skipped_recent_axis, on ? 1u : 0u);
+    s = sample(0.1, 0.0, -2.0);
+    s.force_body_recent = Eigen::Vector2d(-1.3, 0.2);
+    EXPECT_EQ(m.update(s), 1);
+  }
+}
+
+// README "Recent axis": a traversal entered from Tactile-turning stamps after
+// min_state_time_after_turn_s (0.3 s), one entered from Exploration after
+// min_state_time_s (1 s): 0.4 s after the entry, a slab only after the turn.
+TEST(XplorerMappingRules, LogicGatesATraversalAfterATurnForTheShorterTime) {
+  for (const std::string previous : {"tactile_turning", "exploration"}) {
+    auto d = XplorerMapLogic::default_parameters();
+    d.set("publish_rate_hz", 0.0);
+    XplorerMapLogic logic(XplorerMapLogic::params_from(d));
+    tactile_msgs::msg::FsmState st;
+    st.state = "tactile_traversal";
+    st.previous_state = previous;
+    logic.on_fsm_state(st);  // entered at 0 s
+    geometry_msgs::msg::WrenchStamped w;
+    w.header.frame_id = "base_link";
+    w.wrench.force.x = -1.6;
+    logic.on_wrench_body(w);
+    nav_msgs::msg::Odometry o;
+    o.child_frame_id = "base_link";
+    o.pose.pose.position.z = 0.7;
+    o.pose.pose.orientation.w = 1.0;
+    tactile_common::to_stamp(tactile_common::from_seconds(0.4), o.header.stamp);
+    logic.on_odometry(o);
+    logic.on_timer(tactile_common::from_seconds(0.4));
+    EXPECT_EQ(logic.mapper().stats().slabs, previous == "tactile_turning" ? 1u : 0u) << previous;
   }
 }

@@ -28,6 +28,7 @@ class XplorerMapLogic {
   static constexpr const char* kWrenchBodyTopic = "/xplorer/wrench_body";  // geometry_msgs/msg/WrenchStamped
   static constexpr const char* kOdometryTopic = "/odom";                   // nav_msgs/msg/Odometry
   static constexpr const char* kCloudTopic = "/xplorer/map";               // sensor_msgs/msg/PointCloud2
+  static constexpr const char* kTurningState = "tactile_turning";  // tactile_fsm's Tactile-turning (001 Gamma 2): ends a face at a convex corner
   static constexpr const char* kFsmStateTopic = "/xplorer/fsm_state";      // tactile_msgs/msg/FsmState (optional)
   static constexpr const char* kArmImuTopic = "/arm_imu";                  // tactile_msgs/msg/ArmImuArray (optional: edge_from_arms)
 
@@ -46,6 +47,12 @@ class XplorerMapLogic {
     /// the body force points across the corner (choice; 001 gates on force only).
     std::vector<std::string> stamp_states = {"tactile_traversal"};
     double min_state_time_s = 1.0;   ///< ... and has been in it this long (choice: the 50-sample, 1 s force average still holds the turn)
+    /// ... or this long in a traversal entered from Tactile-turning: the
+    /// stamping's recent_axis check holds back the slabs while the average
+    /// still reads the face just left; the 1 s gate left no slab on the
+    /// 0.4-0.5 m faces of the polygons. After Exploration the 1 s stays (the
+    /// first contact's rebound; contact now) (choice; README "Recent axis").
+    double min_state_time_after_turn_s = 0.3;
     double max_arm_age_s = 0.1;      ///< older arm angles: the fixed slab_offset is used (choice; arm IMUs at 50 Hz)
     /// The "contact now" force (stamping.min_force_now) is the mean of this
     /// many latest wrench samples (choice: 10 = 0.2 s at 50 Hz); 0: not used.

@@ -11,6 +11,7 @@
 #include <deque>
 #include <optional>
 #include <utility>
+#include <vector>
 
 #include "mapping_pcl/point_map.hpp"
 
@@ -87,6 +88,29 @@ struct XplorerMapParams {
   /// slab lands 0.1-0.23 m outside the object (choice; README "Right-angle
   /// corners"). >= pi/2 (e.g. 1.5708): every lambda change (001).
   double corner_angle_tolerance = 0.175;  ///< [rad] (10 deg)
+  /// Recent axis: a slab is stamped only if the contact axis of the 50-sample
+  /// average (001 Sec. V-C) is also the axis of the latest samples
+  /// (ContactSample::force_body_recent). After a Tactile-turning the average
+  /// still holds the face just left for up to 1 s, on another body axis once
+  /// the vehicle has yawed round the corner; this replaces most of the 1 s
+  /// state gate after a turn (the node logic's min_state_time_after_turn_s
+  /// 0.3 s), which left no slab on the 0.4-0.5 m faces of the polygons (choice; README "Recent axis").
+  bool recent_axis = true;
+  /// Corner fill: when a face traversal ends in a turn (end_face(true)) and
+  /// the next face has been traversed, the two faces' lines (the slabs' near
+  /// faces over the last / first corner_fill_fit_length of each, along their
+  /// mean C_n) are intersected and the triangle between the corner and the
+  /// two faces' mapped ends is filled with points. The pivot orbit of
+  /// Tactile-turning passes 0.1-0.25 m off the faces at a polygon corner and
+  /// the corner release drops the face's last slabs, so nothing else maps
+  /// the corner (choice; README "Corner fill"). Filled only if C_n turned by
+  /// at least corner_fill_min_turn (and at most 135 deg) and the corner lies
+  /// beyond both mapped ends by at most corner_fill_max_gap. 0: off, the
+  /// default: with the 0.3 s state gate after a turn (recent_axis) the fill
+  /// did not help on the tuning blocks (README "Corner fill", not kept).
+  double corner_fill_max_gap = 0.0;       ///< [m] (0.4 as tried)
+  double corner_fill_min_turn = 0.35;     ///< [rad] (20 deg)
+  double corner_fill_fit_length = 0.3;    ///< [m] face length used for each line
   double arm_hinge_offset = 0.05;  ///< centre -> arm hinge along the diagonal [m] (vehicle CAD; the SITL's value)
   double arm_length = 0.15;        ///< hinge -> motor [m] (vehicle CAD)
   double guard_radius = 0.07;      ///< propeller guard radius round the motor [m] (vehicle CAD)
@@ -104,6 +128,8 @@ struct ContactSample {
   std::optional<std::array<double, 4>> arm_angles;
   /// Mean body force of the last few wrench samples [N], if known (min_force_now).
   std::optional<Eigen::Vector2d> force_body_now;
+  /// Mean body force of the last few wrench samples [N], if known, in every state (recent_axis).
+  std::optional<Eigen::Vector2d> force_body_recent;
 };
 
 /// Reach of the vehicle's outline along the body direction `d` (unit, x-y):
@@ -139,6 +165,9 @@ class XplorerContactMapper {
     uint64_t dropped_at_corner = 0;   ///< slabs dropped by a corner release (corner_release_s)
     uint64_t skipped_no_contact_now = 0;  ///< the last samples' force below min_force_now
     uint64_t skipped_corner_angle = 0;    ///< lambda changed but not at a right-angle corner (corner_angle_tolerance)
+    uint64_t skipped_recent_axis = 0;     ///< the latest samples press along another body axis than the average (recent_axis)
+    uint64_t corner_fills = 0;            ///< corners filled between two faces (corner_fill_max_gap)
+    uint64_t skipped_corner_fill = 0;     ///< two faces joined by a turn whose corner was not filled (angle or gap)
   };
 
   XplorerContactMapper(const XplorerMapParams& params, PointMap& map);
@@ -158,8 +187,31 @@ class XplorerContactMapper {
   /// A corner release (the FSM entered Tactile-turning) at time `t`: drops the
   /// held-back slabs stamped after t - corner_release_s. Returns how many.
   std::size_t release_corner(double t);
-  /// Moves every held-back slab into the map (end of the mapping).
+  /// Moves every held-back slab into the map (end of the mapping); ends the current face (end_face(false)).
   void flush();
+  /// The current face traversal ended (the FSM left Tactile-traversal);
+  /// `turned`: it ended in a Tactile-turning, so the next face starts at a
+  /// convex corner of this one. Fills the corner between the previous face
+  /// and this one if the previous face ended in a turn (corner_fill_max_gap).
+  void end_face(bool turned);
+  /// Corner of two faces for the corner fill, from their slabs' near-face
+  /// points `a` (the face that ended in a turn) and `b` (the next face), each
+  /// with its world C_n, in traversal order. Empty if the turn angle or the
+  /// gap is out of range. The fill triangle is (corner, end of a's points on
+  /// a's line, start of b's points on b's line).
+  struct FaceSample {
+    double t = 0.0;
+    Eigen::Vector2d point = Eigen::Vector2d::Zero();    ///< near face of the slab (the surface), world x-y [m]
+    Eigen::Vector2d contact = Eigen::Vector2d::Zero();  ///< C_n in the world (unit)
+    double z = 0.0;
+  };
+  struct CornerFill {
+    Eigen::Vector2d corner, end_a, start_b;
+    double z = 0.0;
+  };
+  std::optional<CornerFill> corner_between(const std::vector<FaceSample>& a, const std::vector<FaceSample>& b) const;
+  /// Inserts the fill triangle's points (slab_spacing, slab height); returns how many.
+  std::size_t fill_corner(const CornerFill& f);
   std::size_t pending() const { return pending_.size(); }
 
   /// The slab that `update` would stamp for a contact direction (tests, pictures).
@@ -185,6 +237,8 @@ class XplorerContactMapper {
   std::optional<BodyDirection> last_contact_;
   std::optional<int> last_move_world_;       ///< lambda quantised to a world axis (0:+X 1:+Y 2:-X 3:-Y)
   Eigen::Vector2d last_contact_world_ = Eigen::Vector2d::Zero();
+  std::vector<FaceSample> face_;                       ///< face slabs of the current traversal (corner fill)
+  std::optional<std::vector<FaceSample>> turned_face_;  ///< the previous face, if it ended in a turn
 };
 
 }  // namespace mapping_pcl

@@ -226,6 +226,7 @@ class XplorerGraph : public SimGraph {
     m["slabs"] = ms.slabs;
     m["map_raw_points"] = map_->map().size();  // as written to map.ply
     m["corner_slabs"] = ms.corner_slabs;
+    m["corner_fills"] = ms.corner_fills;  // mapping_pcl README "Corner fill"
     // The map as exported: 1 cm voxel filter + statistical outlier removal.
     mapping_pcl::PointMap copy(map_->params().map);
     std::vector<mapping_pcl::Vec3> pts;
