@@ -70,7 +70,7 @@ TEST(TactileDepthLogic, DefaultParameters) {
   EXPECT_EQ(m.get_double("kf.slip_fraction"), 0.0);  // off: the shipped courses lose with it (README "Slip gate")
   EXPECT_EQ(m.get_int("kf.slip_window_samples", 1, 100), 25);
   EXPECT_EQ(m.get_double("kf.slip_r_mm2"), 1.0e4);
-  EXPECT_EQ(m.get_int("kf.slip_max_samples"), 0);               // no limit (README "Slip gate")
+  EXPECT_EQ(m.get_int("kf.slip_max_samples", 0, 100), 0);               // no limit (README "Slip gate")
   EXPECT_EQ(m.get_double("kf.saturation_sum_pa"), 0.0);         // off (README "Saturated contact")
   EXPECT_EQ(m.get_double("kf.saturation_r_mm2"), 1.0e4);
   EXPECT_EQ(m.values().size(), 14u);
@@ -122,7 +122,7 @@ TEST(TactileDepthLogic, ParamsFromAndModelFileResolution) {
   // 2^32 + 25 is 25 as an int: rejected as given, before it is narrowed.
   expect_param_error("kf.slip_window_samples", (int64_t{1} << 32) + 25, "kf.slip_window_samples: must be in [1, 100], got 4294967321");
   expect_param_error("kf.slip_r_mm2", -1.0, "kf.slip_r_mm2: must be finite and > 0");
-  expect_param_error("kf.slip_max_samples", int64_t{-1}, "tactile_depth.ros__parameters.kf.slip_max_samples: must be in [0, 100] (0 = no limit), got -1");
+  expect_param_error("kf.slip_max_samples", int64_t{-1}, "tactile_depth.ros__parameters.kf.slip_max_samples: must be in [0, 100], got -1");
   expect_param_error("kf.slip_max_samples", int64_t{1} << 40, "kf.slip_max_samples: must be in [0, 100]");
   expect_param_error("kf.saturation_sum_pa", -1.0, "kf.saturation_sum_pa: must be finite and >= 0");
   expect_param_error("kf.saturation_r_mm2", 0.0, "kf.saturation_r_mm2: must be finite and > 0");
