@@ -201,7 +201,8 @@ std::optional<sensor_msgs::msg::PointCloud2> XplorerMapLogic::on_timer(int64_t n
       fsm_state_ && !params_.stamp_states.empty() &&
       (std::find(params_.stamp_states.begin(), params_.stamp_states.end(), *fsm_state_) == params_.stamp_states.end() ||
        tactile_common::to_seconds(now_ns) - fsm_state_since_s_ <
-           (fsm_previous_state_ == kTurningState ? params_.min_state_time_after_turn_s : params_.min_state_time_s));
+           (short_gate_after_turn() && fsm_previous_state_ == kTurningState ? params_.min_state_time_after_turn_s
+                                                                            : params_.min_state_time_s));
   if (gated) {
     ++stats_.ticks_gated;
     // The initiation latch sees the force in every state: the firm contact

@@ -324,7 +324,9 @@ int XplorerContactMapper::update(const ContactSample& s) {
   }
   const Eigen::Vector2d xy(s.position.x(), s.position.y());
   stamp(s.t, face_slab_world(s, c_w, offset));
-  face_.push_back({s.t, xy + offset * c_w, c_w, s.position.z()});
+  // The face's slabs, for the corner fill only (off: not kept; with stamp_states empty a face
+  // would otherwise last the whole flight).
+  if (p_.corner_fill_max_gap > 0.0) face_.push_back({s.t, xy + offset * c_w, c_w, s.position.z()});
   ++stats_.slabs;
   ++stamped;
   const Eigen::Vector2d m_w = Eigen::Rotation2Dd(-M_PI / 2) * c_w;  // lambda in the world (right-hand)

@@ -490,10 +490,22 @@ TEST(XplorerMappingRules, SlabsOnlyWhileTheLatestSamplesPressAlongTheAveragesAxi
 // README "Recent axis": a traversal entered from Tactile-turning stamps after
 // min_state_time_after_turn_s (0.3 s), one entered from Exploration after
 // min_state_time_s (1 s): 0.4 s after the entry, a slab only after the turn.
+// Without the recent-axis check (recent_axis false, or no latest samples: force_now_samples
+// 0) the shorter gate would stamp the average of the face before the turn: the 1 s applies.
 TEST(XplorerMappingRules, LogicGatesATraversalAfterATurnForTheShorterTime) {
-  for (const std::string previous : {"tactile_turning", "exploration"}) {
+  struct Case {
+    std::string previous;
+    bool recent_axis;
+    int64_t force_now_samples;
+    uint64_t slabs;
+  };
+  for (const Case& c : {Case{"tactile_turning", true, 10, 1}, Case{"exploration", true, 10, 0},
+                        Case{"tactile_turning", false, 10, 0}, Case{"tactile_turning", true, 0, 0}}) {
+    const std::string& previous = c.previous;
     auto d = XplorerMapLogic::default_parameters();
     d.set("publish_rate_hz", 0.0);
+    d.set("recent_axis", c.recent_axis);
+    d.set("force_now_samples", c.force_now_samples);
     XplorerMapLogic logic(XplorerMapLogic::params_from(d));
     tactile_msgs::msg::FsmState st;
     st.state = "tactile_traversal";
@@ -510,6 +522,7 @@ TEST(XplorerMappingRules, LogicGatesATraversalAfterATurnForTheShorterTime) {
     tactile_common::to_stamp(tactile_common::from_seconds(0.4), o.header.stamp);
     logic.on_odometry(o);
     logic.on_timer(tactile_common::from_seconds(0.4));
-    EXPECT_EQ(logic.mapper().stats().slabs, previous == "tactile_turning" ? 1u : 0u) << previous;
+    EXPECT_EQ(logic.mapper().stats().slabs, c.slabs)
+        << previous << " recent_axis " << c.recent_axis << " force_now_samples " << c.force_now_samples;
   }
 }
