@@ -216,10 +216,11 @@ TickOutput TactileDepthEstimator::update(const TickInput& in) {
 
   // Saturated contact (issue 17): both input sums at or above saturation_sum_pa
   // and a wall angle of an unsaturated tick to hold.
-  const double sum_l = in.sp_left[0] + in.sp_left[1] + in.sp_left[2];
-  const double sum_r = in.sp_right[0] + in.sp_right[1] + in.sp_right[2];
-  const bool saturated_now = params_.saturation_sum_pa > 0.0 && sum_l >= params_.saturation_sum_pa &&
-                             sum_r >= params_.saturation_sum_pa;
+  // Off (the default and the paper): nothing of it runs.
+  const bool saturation_on = params_.saturation_sum_pa > 0.0;
+  const bool saturated_now =
+      saturation_on && in.sp_left[0] + in.sp_left[1] + in.sp_left[2] >= params_.saturation_sum_pa &&
+      in.sp_right[0] + in.sp_right[1] + in.sp_right[2] >= params_.saturation_sum_pa;
   saturated_ = false;
 
   bool fused = false;
@@ -259,7 +260,7 @@ TickOutput TactileDepthEstimator::update(const TickInput& in) {
     fused = true;
     // World angle of the wall normal (000 eq. 21/24) of this unsaturated tick,
     // held over the next saturated ones.
-    if (params_.model == EstimatorModel::kKfFull && !saturated_now) {
+    if (saturation_on && params_.model == EstimatorModel::kKfFull && !saturated_now) {
       wall_world_ = in.pose.yaw - ProcessModel::wall_angle(kf_[0].depth(), kf_[1].depth(), s);
       have_wall_world_ = true;
     }

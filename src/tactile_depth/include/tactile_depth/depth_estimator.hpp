@@ -210,7 +210,8 @@ class TactileDepthEstimator {
   /// x its window maximum (the update used slip_r_mm2).
   bool slipping(int side) const { return slipping_[static_cast<std::size_t>(side)]; }
   /// True if both input sums at the last tick were >= saturation_sum_pa and a
-  /// wall angle of an unsaturated tick was held (the update used slip_r_mm2).
+  /// wall angle of an unsaturated tick was held (kf_full only: the update used
+  /// saturation_r_mm2, or slip_r_mm2 if larger and the whisker was also slipping).
   bool saturated() const { return saturated_; }
 
   /// Bytes of the filter state (this object without the models' parameters).
