@@ -168,6 +168,7 @@ void Writer::open(const std::string& dir) {
     count_ = 0;
     min_ts_ = max_ts_ = 0;
     last_commit_ = std::chrono::steady_clock::now();
+    bytes_since_commit_ = 0;
     write_metadata_locked();
     stop_ = false;
     if (opt_.flush_interval.count() > 0) flusher_ = std::thread([this] { flusher_main(); });
@@ -217,6 +218,7 @@ void Writer::open(const std::string& dir) {
   min_ts_ = max_ts_ = 0;
   in_txn_ = false;
   last_commit_ = std::chrono::steady_clock::now();
+  bytes_since_commit_ = 0;
   write_metadata_locked();
   stop_ = false;
   if (opt_.flush_interval.count() > 0) flusher_ = std::thread([this] { flusher_main(); });

@@ -132,9 +132,9 @@ TEST(Durability, SizeOnlyCommitsKeepEveryFullChunkOfAKilledRecording) {
     EXPECT_EQ(r.message_count(), 200u);
     fs::remove_all(res.dir);
   }
-  // mcap: a chunk goes to the file once its records reach 800 bytes: 21 messages of 39
-  // bytes (the first chunk also holds the channel record, so fewer): the messages of the
-  // last partial chunk (at most 21) are lost, and some are (242 of 250 here).
+  // mcap: a chunk goes to the file once its records reach 800 bytes: at most 21 messages of
+  // 39 bytes (every chunk also holds the channel record, so fewer): the messages of the last
+  // partial chunk (at most 21) are lost, and some are (242 of 250 here).
   o.storage = "mcap";
   {
     const auto res = run_and_kill("size_mcap", 250, std::chrono::milliseconds(900), o);

@@ -229,7 +229,7 @@ TEST(Reproducible, ZeroFlushIntervalFileDependsOnTheMessagesNotTheTiming) {
     o.storage = storage;
     o.ros_distro = "kilted";
     o.flush_interval = interval;
-    o.chunk_size = 4096;
+    o.chunk_size = 800;  // 400 messages: commits by size in the middle of the recording
     {
       Writer w(o);
       w.open(dir);
