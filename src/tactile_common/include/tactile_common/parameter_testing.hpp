@@ -33,7 +33,10 @@ std::map<std::string, WrappedInteger> wrapped_integers(const ParamMap& defaults,
   for (const auto& [key, value] : defaults.values()) {
     const auto* v = std::get_if<int64_t>(&value);
     if (v == nullptr) continue;
-    WrappedInteger w{key, *v + (int64_t{1} << 32), ""};
+    // Wrapping a default within 2^32 of INT64_MAX would overflow: such a key is read as a
+    // 64-bit value anyway (nothing to narrow), so it goes the other way.
+    const int64_t step = *v > INT64_MAX - (int64_t{1} << 32) ? -(int64_t{1} << 32) : (int64_t{1} << 32);
+    WrappedInteger w{key, *v + step, ""};
     ParamMap m = defaults;
     m.set(key, w.value);
     try {
