@@ -122,8 +122,8 @@ struct XplorerMapParams {
   /// corner (the vehicle backs away along -C_n while the 1 s average still
   /// presses) or turns round it, and those slabs land 5-20 cm outside both
   /// faces (choice; README "Steady first contact"). 0: off.
-  double steady_distance = 0.0;   ///< [m]
-  double steady_angle = 0.1;      ///< [rad]
+  double steady_distance = 0.05;  ///< [m]
+  double steady_angle = 0.35;     ///< [rad] (20 deg: a 0.4 m cylinder turns C_n by 0.24 rad over 0.1 m of path)
   double steady_offset = 0.02;    ///< [m]
   double arm_hinge_offset = 0.05;  ///< centre -> arm hinge along the diagonal [m] (vehicle CAD; the SITL's value)
   double arm_length = 0.15;        ///< hinge -> motor [m] (vehicle CAD)
