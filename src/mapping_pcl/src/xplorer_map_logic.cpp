@@ -73,6 +73,9 @@ ParamMap XplorerMapLogic::default_parameters() {
   m.set("corner_fill_max_gap", d.stamping.corner_fill_max_gap);
   m.set("corner_fill_min_turn", d.stamping.corner_fill_min_turn);
   m.set("corner_fill_fit_length", d.stamping.corner_fill_fit_length);
+  m.set("steady_distance", d.stamping.steady_distance);
+  m.set("steady_angle", d.stamping.steady_angle);
+  m.set("steady_offset", d.stamping.steady_offset);
   return m;
 }
 
@@ -119,6 +122,9 @@ XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
   p.stamping.corner_fill_max_gap = m.get_double("corner_fill_max_gap");
   p.stamping.corner_fill_min_turn = m.get_double("corner_fill_min_turn");
   p.stamping.corner_fill_fit_length = m.get_double("corner_fill_fit_length");
+  p.stamping.steady_distance = m.get_double("steady_distance");
+  p.stamping.steady_angle = m.get_double("steady_angle");
+  p.stamping.steady_offset = m.get_double("steady_offset");
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {
@@ -179,6 +185,12 @@ void XplorerMapLogic::on_fsm_state(const tactile_msgs::msg::FsmState& msg) {
   // The end of a face traversal (README "Corner fill"): the corner between it
   // and the face before is filled if that one ended in a Tactile-turning.
   if (left_stamp_state) mapper_.end_face(msg.state == kTurningState);
+  // A traversal after an impact (entered from a state of contact_now_after:
+  // Exploration) holds its slabs until C_n is steady (README "Steady first contact").
+  if (changed && std::find(params_.stamp_states.begin(), params_.stamp_states.end(), msg.state) != params_.stamp_states.end() &&
+      std::find(params_.contact_now_after.begin(), params_.contact_now_after.end(), msg.previous_state) !=
+          params_.contact_now_after.end())
+    mapper_.begin_steady_hold();
 }
 
 void XplorerMapLogic::on_arm_imu(const tactile_msgs::msg::ArmImuArray& msg) {

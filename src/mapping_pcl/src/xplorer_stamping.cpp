@@ -76,6 +76,10 @@ void XplorerMapParams::validate() const {
     bad("corner_fill_min_turn", "must be in [0, 3 pi / 4]", corner_fill_min_turn);
   if (!(corner_fill_fit_length > 0.0) || !std::isfinite(corner_fill_fit_length))
     bad("corner_fill_fit_length", "must be finite and > 0", corner_fill_fit_length);
+  if (!(steady_distance >= 0.0) || !std::isfinite(steady_distance))
+    bad("steady_distance", "must be finite and >= 0 (0: no steady first contact)", steady_distance);
+  if (!(steady_angle > 0.0) || !(steady_angle <= M_PI / 2)) bad("steady_angle", "must be in (0, pi/2]", steady_angle);
+  if (!(steady_offset > 0.0) || !std::isfinite(steady_offset)) bad("steady_offset", "must be finite and > 0", steady_offset);
 }
 
 namespace {
@@ -140,7 +144,11 @@ Box XplorerContactMapper::corner_slab(const ContactSample& s, const Eigen::Vecto
   return b;
 }
 
-void XplorerContactMapper::stamp(double t, const Box& b) {
+void XplorerContactMapper::stamp(double t, const Box& b, const Eigen::Vector2d& contact, const Eigen::Vector2d& near) {
+  if (holding_) {  // README "Steady first contact"
+    held_.push_back({t, b, contact, near, path_});
+    return;
+  }
   if (p_.corner_release_s <= 0.0) {
     map_->insert_box(b, p_.slab_spacing);
   } else {
@@ -166,7 +174,21 @@ std::size_t XplorerContactMapper::release_corner(double t) {
   return n;
 }
 
+void XplorerContactMapper::begin_steady_hold() {
+  drop_held();
+  holding_ = p_.steady_distance > 0.0;
+}
+
+void XplorerContactMapper::drop_held() {
+  stats_.dropped_unsteady += held_.size();
+  held_.clear();
+}
+
 void XplorerContactMapper::end_face(bool turned) {
+  if (holding_) {  // the traversal ended before a steady stretch: its slabs do not say where the face is
+    drop_held();
+    holding_ = false;
+  }
   if (face_.empty()) {
     turned_face_.reset();  // a face without slabs between two turns: the faces either side are not adjacent
     return;
@@ -279,6 +301,9 @@ int XplorerContactMapper::update(const ContactSample& s) {
   }
   observe_force(s.force_body);
   commit(s.t);
+  const Eigen::Vector2d here(s.position.x(), s.position.y());
+  if (last_xy_) path_ += (here - *last_xy_).norm();  // steady_distance
+  last_xy_ = here;
   if (s.t - last_stamp_t_ < 1.0 / p_.rate_hz - 1e-9) {  // 001 Sec. IV-B: 30 Hz
     ++stats_.skipped_rate;
     return 0;
@@ -323,10 +348,15 @@ int XplorerContactMapper::update(const ContactSample& s) {
     ++stats_.offset_from_arms;
   }
   const Eigen::Vector2d xy(s.position.x(), s.position.y());
-  stamp(s.t, face_slab_world(s, c_w, offset));
+  const Eigen::Vector2d near = xy + offset * c_w;  // the slab's near face
+  if (holding_ && !held_.empty() &&
+      (held_.front().contact.dot(c_w) < std::cos(p_.steady_angle) ||
+       std::abs((near - held_.front().near).dot(held_.front().contact)) > p_.steady_offset))
+    drop_held();  // off the face of the held slabs: the stretch starts again here (README "Steady first contact")
+  stamp(s.t, face_slab_world(s, c_w, offset), c_w, near);
   // The face's slabs, for the corner fill only (off: not kept; with stamp_states empty a face
   // would otherwise last the whole flight).
-  if (p_.corner_fill_max_gap > 0.0) face_.push_back({s.t, xy + offset * c_w, c_w, s.position.z()});
+  if (p_.corner_fill_max_gap > 0.0) face_.push_back({s.t, near, c_w, s.position.z()});
   ++stats_.slabs;
   ++stamped;
   const Eigen::Vector2d m_w = Eigen::Rotation2Dd(-M_PI / 2) * c_w;  // lambda in the world (right-hand)
@@ -334,7 +364,7 @@ int XplorerContactMapper::update(const ContactSample& s) {
   const int move_world = static_cast<int>(std::lround(ang / (M_PI / 2))) & 3;  // nearest world axis
   if (last_move_world_ && *last_move_world_ != move_world) {  // 001 Sec. IV-B: corner
     if (is_right_angle_corner(last_contact_, last_contact_world_, *c, c_w, p_.corner_angle_tolerance)) {
-      stamp(s.t, corner_slab(s, last_contact_world_, c_w));
+      stamp(s.t, corner_slab(s, last_contact_world_, c_w), c_w, near);
       ++stats_.corner_slabs;
       ++stamped;
     } else {
@@ -344,6 +374,11 @@ int XplorerContactMapper::update(const ContactSample& s) {
   last_move_world_ = move_world;
   last_contact_world_ = c_w;
   last_contact_ = c;
+  if (holding_ && !held_.empty() && path_ - held_.front().path >= p_.steady_distance) {
+    holding_ = false;  // steady over steady_distance: the held slabs enter as any other
+    for (const auto& h : held_) stamp(h.t, h.box, h.contact, h.near);
+    held_.clear();
+  }
   return stamped;
 }
 

@@ -526,3 +526,78 @@ TEST(XplorerMappingRules, LogicGatesATraversalAfterATurnForTheShorterTime) {
         << previous << " recent_axis " << c.recent_axis << " force_now_samples " << c.force_now_samples;
   }
 }
+
+// README "Steady first contact": after an impact the vehicle backs off the
+// face (x 0.79 -> 0.71 m, C_n = +b1 along the world x, the 1 s average still
+// pressing) and comes back to traverse it along -y. The face is at x = 1.0 m
+// (0.21 m ahead of x = 0.79). With the rule, the three slabs of the rebound
+// (near faces at 1.00, 0.96, 0.92 m: each off the held line by 0.04 m) are
+// dropped and the map starts at the face; without it, it reaches to 0.92 m.
+// A traversal that ends while its slabs are still held leaves nothing.
+TEST(XplorerMappingRules, SteadyFirstContactDropsTheRebound) {
+  for (const bool on : {true, false}) {
+    XplorerMapParams p;
+    p.corner_release_s = 0.0;
+    p.steady_distance = on ? 0.1 : 0.0;
+    PointMap map;
+    XplorerContactMapper m(p, map);
+    m.begin_steady_hold();
+    auto at = [](double t, double x, double y) {
+      ContactSample s = sample(t, x, -2.0);
+      s.arm_angles.reset();  // the fixed 0.21 m slab offset
+      s.position.y() = y;
+      return s;
+    };
+    const double rebound[3] = {0.79, 0.75, 0.71};
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(m.update(at(0.1 * k, rebound[k], 0.0)), 1);
+    for (int k = 0; k < 8; ++k) m.update(at(0.3 + 0.1 * k, 0.79, -0.02 * k));
+    EXPECT_EQ(m.stats().slabs, 11u);
+    EXPECT_EQ(m.held(), 0u);
+    EXPECT_EQ(m.stats().dropped_unsteady, on ? 3u : 0u);
+    double min_x = 1e9;
+    for (const auto& q : map.cloud()) min_x = std::min(min_x, static_cast<double>(q.x));
+    EXPECT_NEAR(min_x, on ? 1.0 : 0.92, 1e-3) << on;
+  }
+  XplorerMapParams p;
+  p.corner_release_s = 0.0;
+  p.steady_distance = 0.1;
+  PointMap map;
+  XplorerContactMapper m(p, map);
+  m.begin_steady_hold();
+  ContactSample s = sample(0.0, 0.79, -2.0);
+  EXPECT_EQ(m.update(s), 1);
+  EXPECT_EQ(m.held(), 1u);
+  m.end_face(false);  // back to Exploration before a steady stretch
+  EXPECT_EQ(m.held(), 0u);
+  EXPECT_EQ(map.size(), 0u);
+  EXPECT_EQ(m.stats().dropped_unsteady, 1u);
+}
+
+// The node logic holds only a traversal entered from Exploration (contact_now_after).
+TEST(XplorerMappingRules, LogicHoldsATraversalAfterExplorationOnly) {
+  for (const std::string previous : {"exploration", "tactile_turning"}) {
+    auto d = XplorerMapLogic::default_parameters();
+    d.set("publish_rate_hz", 0.0);
+    d.set("min_state_time_s", 0.0);
+    d.set("min_state_time_after_turn_s", 0.0);
+    d.set("steady_distance", 0.1);
+    XplorerMapLogic logic(XplorerMapLogic::params_from(d));
+    tactile_msgs::msg::FsmState st;
+    st.state = "tactile_traversal";
+    st.previous_state = previous;
+    logic.on_fsm_state(st);
+    geometry_msgs::msg::WrenchStamped w;
+    w.header.frame_id = "base_link";
+    w.wrench.force.x = -1.6;
+    logic.on_wrench_body(w);
+    nav_msgs::msg::Odometry o;
+    o.child_frame_id = "base_link";
+    o.pose.pose.position.z = 0.7;
+    o.pose.pose.orientation.w = 1.0;
+    tactile_common::to_stamp(tactile_common::from_seconds(0.1), o.header.stamp);
+    logic.on_odometry(o);
+    logic.on_timer(tactile_common::from_seconds(0.1));
+    EXPECT_EQ(logic.mapper().stats().slabs, 1u) << previous;
+    EXPECT_EQ(logic.mapper().held(), previous == "exploration" ? 1u : 0u) << previous;
+  }
+}

@@ -111,6 +111,20 @@ struct XplorerMapParams {
   double corner_fill_max_gap = 0.0;       ///< [m] (0.4 as tried)
   double corner_fill_min_turn = 0.35;     ///< [rad] (20 deg)
   double corner_fill_fit_length = 0.3;    ///< [m] face length used for each line
+  /// Steady first contact: after begin_steady_hold() (the node logic calls it
+  /// when a traversal starts from Exploration, i.e. after an impact) the
+  /// slabs are held until they have lain on one face over steady_distance
+  /// of path: the world C_n within steady_angle of the first held slab's and
+  /// the slabs' near faces within steady_offset of its line (along its C_n).
+  /// A slab off that face drops the held ones before it and starts the
+  /// stretch again; slabs still held when the traversal ends are dropped. A
+  /// first contact next to a corner of an oblique box rebounds off the
+  /// corner (the vehicle backs away along -C_n while the 1 s average still
+  /// presses) or turns round it, and those slabs land 5-20 cm outside both
+  /// faces (choice; README "Steady first contact"). 0: off.
+  double steady_distance = 0.05;  ///< [m]
+  double steady_angle = 0.35;     ///< [rad] (20 deg: a 0.4 m cylinder turns C_n by 0.24 rad over 0.1 m of path)
+  double steady_offset = 0.02;    ///< [m]
   double arm_hinge_offset = 0.05;  ///< centre -> arm hinge along the diagonal [m] (vehicle CAD; the SITL's value)
   double arm_length = 0.15;        ///< hinge -> motor [m] (vehicle CAD)
   double guard_radius = 0.07;      ///< propeller guard radius round the motor [m] (vehicle CAD)
@@ -168,6 +182,7 @@ class XplorerContactMapper {
     uint64_t skipped_recent_axis = 0;     ///< the latest samples press along another body axis than the average (recent_axis)
     uint64_t corner_fills = 0;            ///< corners filled between two faces (corner_fill_max_gap)
     uint64_t skipped_corner_fill = 0;     ///< two faces joined by a turn whose corner was not filled (angle or gap)
+    uint64_t dropped_unsteady = 0;        ///< held slabs dropped before a steady stretch (steady_distance)
   };
 
   XplorerContactMapper(const XplorerMapParams& params, PointMap& map);
@@ -213,6 +228,10 @@ class XplorerContactMapper {
   /// Inserts the fill triangle's points (slab_spacing, slab height); returns how many.
   std::size_t fill_corner(const CornerFill& f);
   std::size_t pending() const { return pending_.size(); }
+  /// Starts holding the slabs until a steady stretch (steady_distance; no-op if 0).
+  void begin_steady_hold();
+  /// Slabs held for the steady stretch.
+  std::size_t held() const { return held_.size(); }
 
   /// The slab that `update` would stamp for a contact direction (tests, pictures).
   Box face_slab(const ContactSample& s, BodyDirection contact) const;
@@ -230,9 +249,21 @@ class XplorerContactMapper {
   XplorerMapParams p_;
   PointMap* map_;
   Stats stats_;
-  void stamp(double t, const Box& b);
+  void stamp(double t, const Box& b, const Eigen::Vector2d& contact, const Eigen::Vector2d& near);
   double last_stamp_t_ = -1e300;
   std::deque<std::pair<double, Box>> pending_;  ///< held-back slabs (corner_release_s) with their stamp time
+  struct Held {
+    double t;
+    Box box;
+    Eigen::Vector2d contact;  ///< C_n in the world of the face slab stamped with it
+    Eigen::Vector2d near;     ///< that face slab's near face (the surface) [m]
+    double path;              ///< path length at the stamp [m]
+  };
+  bool holding_ = false;
+  std::vector<Held> held_;   ///< slabs held until a steady stretch (steady_distance)
+  double path_ = 0.0;        ///< path length over the samples update() saw [m]
+  std::optional<Eigen::Vector2d> last_xy_;
+  void drop_held();
   bool initiated_ = false;
   std::optional<BodyDirection> last_contact_;
   std::optional<int> last_move_world_;       ///< lambda quantised to a world axis (0:+X 1:+Y 2:-X 3:-Y)
