@@ -62,6 +62,25 @@ auto contact_now_params() {
   d.set("force_now_samples", static_cast<int64_t>(5));
   return XplorerMapLogic::params_from(d);
 }
+// A traversal entered at 0 s from `previous`, pressed along -x (1.6 N), at rest 0.7 m up;
+// one odometry sample and one timer tick at `t` seconds.
+void enter_traversal_and_press(XplorerMapLogic& logic, const std::string& previous, double t) {
+  tactile_msgs::msg::FsmState st;
+  st.state = "tactile_traversal";
+  st.previous_state = previous;
+  logic.on_fsm_state(st);
+  geometry_msgs::msg::WrenchStamped w;
+  w.header.frame_id = "base_link";
+  w.wrench.force.x = -1.6;
+  logic.on_wrench_body(w);
+  nav_msgs::msg::Odometry o;
+  o.child_frame_id = "base_link";
+  o.pose.pose.position.z = 0.7;
+  o.pose.pose.orientation.w = 1.0;
+  tactile_common::to_stamp(tactile_common::from_seconds(t), o.header.stamp);
+  logic.on_odometry(o);
+  logic.on_timer(tactile_common::from_seconds(t));
+}
 }  // namespace
 
 // 001 Sec. IV-B: "obstacle map generation initializes when |b_delta_f| >=
@@ -507,21 +526,7 @@ TEST(XplorerMappingRules, LogicGatesATraversalAfterATurnForTheShorterTime) {
     d.set("recent_axis", c.recent_axis);
     d.set("force_now_samples", c.force_now_samples);
     XplorerMapLogic logic(XplorerMapLogic::params_from(d));
-    tactile_msgs::msg::FsmState st;
-    st.state = "tactile_traversal";
-    st.previous_state = previous;
-    logic.on_fsm_state(st);  // entered at 0 s
-    geometry_msgs::msg::WrenchStamped w;
-    w.header.frame_id = "base_link";
-    w.wrench.force.x = -1.6;
-    logic.on_wrench_body(w);
-    nav_msgs::msg::Odometry o;
-    o.child_frame_id = "base_link";
-    o.pose.pose.position.z = 0.7;
-    o.pose.pose.orientation.w = 1.0;
-    tactile_common::to_stamp(tactile_common::from_seconds(0.4), o.header.stamp);
-    logic.on_odometry(o);
-    logic.on_timer(tactile_common::from_seconds(0.4));
+    enter_traversal_and_press(logic, previous, 0.4);
     EXPECT_EQ(logic.mapper().stats().slabs, c.slabs)
         << previous << " recent_axis " << c.recent_axis << " force_now_samples " << c.force_now_samples;
   }
@@ -582,21 +587,7 @@ TEST(XplorerMappingRules, LogicHoldsATraversalAfterExplorationOnly) {
     d.set("min_state_time_after_turn_s", 0.0);
     d.set("steady_distance", 0.1);
     XplorerMapLogic logic(XplorerMapLogic::params_from(d));
-    tactile_msgs::msg::FsmState st;
-    st.state = "tactile_traversal";
-    st.previous_state = previous;
-    logic.on_fsm_state(st);
-    geometry_msgs::msg::WrenchStamped w;
-    w.header.frame_id = "base_link";
-    w.wrench.force.x = -1.6;
-    logic.on_wrench_body(w);
-    nav_msgs::msg::Odometry o;
-    o.child_frame_id = "base_link";
-    o.pose.pose.position.z = 0.7;
-    o.pose.pose.orientation.w = 1.0;
-    tactile_common::to_stamp(tactile_common::from_seconds(0.1), o.header.stamp);
-    logic.on_odometry(o);
-    logic.on_timer(tactile_common::from_seconds(0.1));
+    enter_traversal_and_press(logic, previous, 0.1);
     EXPECT_EQ(logic.mapper().stats().slabs, 1u) << previous;
     EXPECT_EQ(logic.mapper().held(), previous == "exploration" ? 1u : 0u) << previous;
   }
