@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "tactile_common/time.hpp"
@@ -12,6 +13,13 @@
 namespace mapping_pcl {
 
 using tactile_common::ParamMap;
+
+namespace {
+/// `state` is one of the FSM state names in `list` (stamp_states, release_states, contact_now_after).
+bool listed(const std::vector<std::string>& list, const std::string& state) {
+  return std::find(list.begin(), list.end(), state) != list.end();
+}
+}  // namespace
 
 void XplorerMapLogic::Params::validate() const {
   stamping.validate();
@@ -173,23 +181,21 @@ void XplorerMapLogic::on_fsm_state(const tactile_msgs::msg::FsmState& msg) {
   const bool changed = !fsm_state_ || *fsm_state_ != msg.state;
   const bool left_stamp_state =
       changed && fsm_state_ &&
-      std::find(params_.stamp_states.begin(), params_.stamp_states.end(), *fsm_state_) != params_.stamp_states.end();
+      listed(params_.stamp_states, *fsm_state_);
   fsm_state_ = msg.state;
   fsm_state_since_s_ = tactile_common::to_seconds(tactile_common::from_stamp(msg.header.stamp)) - msg.time_in_state;
   fsm_previous_state_ = msg.previous_state;
   // A corner release (001 Sec. IV-A: the yaw-rate peak that starts Tactile-turning):
   // the slabs stamped just before it overhang the face's end (corner_release_s).
   // Likewise at every other end of a traversal in release_states (README "Release on every end of a traversal").
-  if (changed && std::find(params_.release_states.begin(), params_.release_states.end(), msg.state) != params_.release_states.end())
+  if (changed && listed(params_.release_states, msg.state))
     mapper_.release_corner(fsm_state_since_s_);
   // The end of a face traversal (README "Corner fill"): the corner between it
   // and the face before is filled if that one ended in a Tactile-turning.
   if (left_stamp_state) mapper_.end_face(msg.state == kTurningState);
   // A traversal after an impact (entered from a state of contact_now_after:
   // Exploration) holds its slabs until C_n is steady (README "Steady first contact").
-  if (changed && std::find(params_.stamp_states.begin(), params_.stamp_states.end(), msg.state) != params_.stamp_states.end() &&
-      std::find(params_.contact_now_after.begin(), params_.contact_now_after.end(), msg.previous_state) !=
-          params_.contact_now_after.end())
+  if (changed && listed(params_.stamp_states, msg.state) && listed(params_.contact_now_after, msg.previous_state))
     mapper_.begin_steady_hold();
 }
 
@@ -211,7 +217,7 @@ std::optional<sensor_msgs::msg::PointCloud2> XplorerMapLogic::on_timer(int64_t n
   mapper_.commit(tactile_common::to_seconds(now_ns));
   const bool gated =
       fsm_state_ && !params_.stamp_states.empty() &&
-      (std::find(params_.stamp_states.begin(), params_.stamp_states.end(), *fsm_state_) == params_.stamp_states.end() ||
+      (!listed(params_.stamp_states, *fsm_state_) ||
        tactile_common::to_seconds(now_ns) - fsm_state_since_s_ <
            (short_gate_after_turn() && fsm_previous_state_ == kTurningState ? params_.min_state_time_after_turn_s
                                                                             : params_.min_state_time_s));
@@ -232,9 +238,8 @@ std::optional<sensor_msgs::msg::PointCloud2> XplorerMapLogic::on_timer(int64_t n
     s.yaw = tactile_common::yaw_of(q);
     s.height = p.z - params_.floor_z;
     s.force_body = force_sum_ / static_cast<double>(forces_.size());
-    const bool check_now = !fsm_state_ || params_.contact_now_after.empty() ||
-                           std::find(params_.contact_now_after.begin(), params_.contact_now_after.end(),
-                                     fsm_previous_state_) != params_.contact_now_after.end();
+    const bool check_now =
+        !fsm_state_ || params_.contact_now_after.empty() || listed(params_.contact_now_after, fsm_previous_state_);
     if (params_.force_now_samples > 0) {  // README "Contact now": the latest samples, not the 1 s average
       const std::size_t k = std::min<std::size_t>(forces_.size(), static_cast<std::size_t>(params_.force_now_samples));
       Eigen::Vector2d now = Eigen::Vector2d::Zero();
