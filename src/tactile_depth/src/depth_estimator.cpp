@@ -193,13 +193,17 @@ TickOutput TactileDepthEstimator::update(const TickInput& in) {
   const bool both = in.contact_left && in.contact_right;
   const double s = params_.whisker_spacing;
 
+  // The input sums (S_c of the three barometers) of the slip gate and the saturated contact.
+  const std::array<double, 2> input_sum = {in.sp_left[0] + in.sp_left[1] + in.sp_left[2],
+                                           in.sp_right[0] + in.sp_right[1] + in.sp_right[2]};
+
   // Slip gate (issue 17): input sum against its maximum over the last
   // slip_window_samples ticks, this one included. Off (slip_fraction 0, the
   // paper): no window is kept and slipping_ stays false.
   if (params_.slip_fraction > 0.0) {
     const int window = params_.slip_window_samples;
-    input_sum_[0][static_cast<std::size_t>(slip_head_)] = in.sp_left[0] + in.sp_left[1] + in.sp_left[2];
-    input_sum_[1][static_cast<std::size_t>(slip_head_)] = in.sp_right[0] + in.sp_right[1] + in.sp_right[2];
+    input_sum_[0][static_cast<std::size_t>(slip_head_)] = input_sum[0];
+    input_sum_[1][static_cast<std::size_t>(slip_head_)] = input_sum[1];
     if (slip_count_ < window) ++slip_count_;
     for (std::size_t i = 0; i < 2; ++i) {
       double peak = input_sum_[i][static_cast<std::size_t>(slip_head_)];
@@ -219,8 +223,7 @@ TickOutput TactileDepthEstimator::update(const TickInput& in) {
   // Off (the default and the paper): nothing of it runs.
   const bool saturation_on = params_.saturation_sum_pa > 0.0;
   const bool saturated_now =
-      saturation_on && in.sp_left[0] + in.sp_left[1] + in.sp_left[2] >= params_.saturation_sum_pa &&
-      in.sp_right[0] + in.sp_right[1] + in.sp_right[2] >= params_.saturation_sum_pa;
+      saturation_on && input_sum[0] >= params_.saturation_sum_pa && input_sum[1] >= params_.saturation_sum_pa;
   saturated_ = false;
 
   bool fused = false;
