@@ -2,7 +2,9 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <charconv>
 #include <cmath>
+#include <limits>
 #include <fstream>
 #include <stdexcept>
 #include <string>
@@ -26,6 +28,25 @@ struct Reader {
     } catch (const YAML::Exception&) {
       throw std::runtime_error(file + ": " + path + ": must be a number");
     }
+  }
+  /// A whole number in [lo, hi] (a count or a seed): "2.5", "1e3", "-1" for a seed or
+  /// a value out of range stop with the file, the key and the value as written, never
+  /// truncated or wrapped into range.
+  template <class T>
+  T integer(const YAML::Node& n, const std::string& path, T def, T lo, T hi) const {
+    if (!n || n.IsNull()) return def;
+    const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+    if (!n.IsScalar()) throw std::runtime_error(file + ": " + path + ": must be an integer in " + range);
+    const std::string& text = n.Scalar();
+    T v{};
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+    if (ec == std::errc::result_out_of_range || (ec == std::errc() && end == text.data() + text.size() && (v < lo || v > hi))) {
+      throw std::runtime_error(file + ": " + path + ": must be in " + range + ", got " + text);
+    }
+    if (ec != std::errc() || end != text.data() + text.size()) {
+      throw std::runtime_error(file + ": " + path + ": must be an integer in " + range + ", got \"" + text + "\"");
+    }
+    return v;
   }
   std::vector<double> nums(const YAML::Node& n, const std::string& path, const std::vector<double>& def,
                            double scale) const {
@@ -62,7 +83,8 @@ json run_bench_protocol(const std::string& scenario_path, std::optional<uint64_t
   } catch (const YAML::Exception&) {
     throw std::runtime_error(scenario_path + ": protocol: must be \"table1\" or \"table2\"");
   }
-  const uint64_t seed_value = seed ? *seed : static_cast<uint64_t>(r.num(r.root["seed"], "seed", 1.0));
+  const uint64_t seed_value =
+      seed ? *seed : r.integer<uint64_t>(r.root["seed"], "seed", 1, 0, std::numeric_limits<uint64_t>::max());
   MomentNoise noise;
   const YAML::Node nz = r.root["noise"];
   noise.relative = r.num(nz ? nz["relative"] : YAML::Node(), "noise.relative", noise.relative);
@@ -78,7 +100,7 @@ json run_bench_protocol(const std::string& scenario_path, std::optional<uint64_t
     const YAML::Node t = r.root["table1"];
     p.contacts = r.nums(t ? t["contacts_mm"] : YAML::Node(), "table1.contacts_mm", p.contacts, 1e-3);
     p.displacements = r.nums(t ? t["displacements_mm"] : YAML::Node(), "table1.displacements_mm", p.displacements, 1e-3);
-    p.trials = static_cast<int>(r.num(t ? t["trials"] : YAML::Node(), "table1.trials", p.trials));
+    p.trials = r.integer<int>(t ? t["trials"] : YAML::Node(), "table1.trials", p.trials, 1, std::numeric_limits<int>::max());
     json rows = json::array();
     for (const auto& row : run_table1(p)) {
       rows.push_back({{"p_x_mm", row.p_x * 1e3},
@@ -100,7 +122,7 @@ json run_bench_protocol(const std::string& scenario_path, std::optional<uint64_t
     p.bounded_noise = r.flag(nz ? nz["bounded"] : YAML::Node(), "noise.bounded", false);
     const YAML::Node t = r.root["table2"];
     p.sweep_starts = r.nums(t ? t["sweep_starts_mm"] : YAML::Node(), "table2.sweep_starts_mm", p.sweep_starts, 1e-3);
-    p.steps = static_cast<int>(r.num(t ? t["steps"] : YAML::Node(), "table2.steps", p.steps));
+    p.steps = r.integer<int>(t ? t["steps"] : YAML::Node(), "table2.steps", p.steps, 4, std::numeric_limits<int>::max());
     p.step = r.num(t ? t["step_mm"] : YAML::Node(), "table2.step_mm", p.step * 1e3) * 1e-3;
     p.fillet_radius = r.num(t ? t["fillet_radius_mm"] : YAML::Node(), "table2.fillet_radius_mm", p.fillet_radius * 1e3) * 1e-3;
     p.attack_deg = r.num(t ? t["attack_deg"] : YAML::Node(), "table2.attack_deg", p.attack_deg);

@@ -86,8 +86,9 @@ class WhiskerStageGraph : public SimGraph {
     protocol_ = p.get_string("protocol");
     t2_.sweep_starts = p.get_double_array("sweep_starts_mm");
     for (auto& x : t2_.sweep_starts) x *= 1e-3;
-    // >= 4 (table2) / >= 1 (table1): validate() of the protocol run, below.
-    t2_.steps = p.get_int("steps", std::numeric_limits<int>::min(), std::numeric_limits<int>::max());
+    // The protocols' own bounds (Table2Params/Table1Params::validate): an out-of-range
+    // value names this node's key and range here, whichever table the scenario runs.
+    t2_.steps = p.get_int("steps", 4, std::numeric_limits<int>::max());
     t2_.step = p.get_double("step_mm") * 1e-3;
     t2_.fillet_radius = p.get_double("fillet_radius_mm") * 1e-3;
     t2_.attack_deg = p.get_double("attack_deg");
@@ -97,7 +98,7 @@ class WhiskerStageGraph : public SimGraph {
     for (auto& x : t1_.contacts) x *= 1e-3;
     t1_.displacements = p.get_double_array("displacements_mm");
     for (auto& x : t1_.displacements) x *= 1e-3;
-    t1_.trials = p.get_int("trials", std::numeric_limits<int>::min(), std::numeric_limits<int>::max());
+    t1_.trials = p.get_int("trials", 1, std::numeric_limits<int>::max());
     const auto& arena = ctx.sim->arena();
     try {
       if (protocol_ == "table2") {
