@@ -128,11 +128,24 @@ nlohmann::json run_once(const Scenario& scenario, const SimOptions& options, uin
   if (whisker) truth = std::make_unique<WhiskerTruth>(host);
   GraphContext ctx{scenario, host, sim, seed, arena_yaw, dir, truth.get()};
   std::unique_ptr<DepthEvaluation> depth_eval;
-  if (ctx.flag("depth_evaluation")) {
-    if (!whisker) throw std::runtime_error(scenario.source + ": metrics.depth_evaluation: needs the whiskered Crazyflie");
-    depth_eval = std::make_unique<DepthEvaluation>(host, *truth, sim->arena(), ctx.overrides("tactile_depth"));
+  std::unique_ptr<SimGraph> graph;
+  try {
+    if (ctx.flag("depth_evaluation")) {
+      if (!whisker) throw std::runtime_error(scenario.source + ": metrics.depth_evaluation: needs the whiskered Crazyflie");
+      depth_eval = std::make_unique<DepthEvaluation>(host, *truth, sim->arena(), ctx.overrides("tactile_depth"));
+    }
+    graph = info.build(ctx);  // a bad node parameter stops here
+  } catch (...) {
+    // Nothing was flown: take back the bag this run opened (it holds no message), so
+    // the same command with the scenario mended does not stop on "bag directory
+    // exists and is not empty".
+    if (recorder) {
+      recorder->close();
+      std::error_code ec;
+      fs::remove_all(dir / "bag", ec);
+    }
+    throw;
   }
-  const std::unique_ptr<SimGraph> graph = info.build(ctx);
 
   Progress progress{options.progress, label, scenario.duration_s};
   host.executor().add_timer(tactile_common::from_seconds(0.1),

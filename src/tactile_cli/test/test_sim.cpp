@@ -218,7 +218,18 @@ TEST(Sim, MalformedScenarioStopsWithFileKeyAndReason) {
   msg = error_of("name: b\nduration_s: 2\nvehicle: {type: whisker_stage}\ngraph: whisker_stage\n" + walls +
                  "node_parameters:\n  whisker_stage_protocol: {protocol: table1, trials: 4294967316}\n");
   EXPECT_NE(msg.find("bad.yaml (node_parameters.whisker_stage_protocol): whisker_stage_protocol.ros__parameters.trials: "
-                     "must be in [-2147483648, 2147483647], got 4294967316"),
+                     "must be in [1, 2147483647], got 4294967316"),
+            std::string::npos) << msg;
+  // A node that fails to start leaves no bag behind (a rerun would stop on it).
+  EXPECT_FALSE(fs::exists(dir / "out" / "bag"));
+  // The protocols' own lower bounds are named at the key too (Table II needs 4 steps).
+  msg = error_of("name: b\nduration_s: 2\nvehicle: {type: whisker_stage}\ngraph: whisker_stage\n" + walls +
+                 "node_parameters:\n  whisker_stage_protocol: {protocol: table2, steps: 3}\n");
+  EXPECT_NE(msg.find("whisker_stage_protocol.ros__parameters.steps: must be in [4, 2147483647], got 3"),
+            std::string::npos) << msg;
+  msg = error_of("name: b\nduration_s: 2\nvehicle: {type: whisker_stage}\ngraph: whisker_stage\n" + walls +
+                 "node_parameters:\n  whisker_stage_protocol: {protocol: table1, trials: 0}\n");
+  EXPECT_NE(msg.find("whisker_stage_protocol.ros__parameters.trials: must be in [1, 2147483647], got 0"),
             std::string::npos) << msg;
   msg = error_of("name: b\nduration_s: 2\n  bad indent: [\n");
   EXPECT_NE(msg.find("YAML syntax error"), std::string::npos) << msg;
