@@ -167,6 +167,8 @@ void XplorerParams::validate() const {
   if (!(settle_time >= 0.0)) bad("XplorerParams", "settle_time", "must be >= 0", settle_time);
   pos("loop_closure_radius", loop_closure_radius);
   pos("loop_min_path", loop_min_path);
+  if (!(contact_lost_turn_min_s >= 0.0) || !std::isfinite(contact_lost_turn_min_s))
+    bad("XplorerParams", "contact_lost_turn_min_s", "must be finite and >= 0", contact_lost_turn_min_s);
   if (max_clockwise_turns_in_a_row < 0)
     bad("XplorerParams", "max_clockwise_turns_in_a_row", "must be >= 0", max_clockwise_turns_in_a_row);
   if (!(loop_min_winding >= 0.0 && loop_min_winding <= 2.0 * M_PI))
@@ -353,7 +355,27 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
         traverse_history_.clear();  // the face ahead is the new one
       }
       if (f_body_avg_.norm() < p_.release_force) {
-        if (low_force_since_ < 0) low_force_since_ = in.t;
+        if (low_force_since_ < 0) {
+          low_force_since_ = in.t;
+          lost_p_ = p2;  // the face as it was when the force went
+          lost_yaw_ = in.yaw;
+        }
+        if (in.t - low_force_since_ > p_.release_time && p_.turn_on_contact_lost && p_.turn_pivot &&
+            in.t - t_enter_ >= p_.contact_lost_turn_min_s) {
+          // The face ended without a yaw-rate peak (an obtuse convex corner the yaw followed
+          // slowly): right-hand traversal round a convex object goes on round the corner,
+          // so turn counter-clockwise about it instead of flying off along the lost C_n.
+          turn_sign_ = 1.0;
+          clockwise_in_a_row_ = 0;
+          ++turns_;
+          face_yaw_ = lost_yaw_;
+          face_n_ = rot(lost_yaw_, unit(contact_));
+          face_t_ = rot(lost_yaw_, unit(move_));
+          pivot_ = lost_p_ + p_.contact_reach * face_n_ + (p2 - lost_p_).dot(face_t_) * face_t_;
+          phi0_ = std::clamp(wrap(in.yaw - face_yaw_), 0.0, p_.turn_limit);
+          enter(XplorerState::kTactileTurning, in, "contact lost: turn about the corner");
+          break;
+        }
         if (in.t - low_force_since_ > p_.release_time) {
           explore_dir_ = rot(in.yaw, unit(contact_));
           hold_yaw_ = in.yaw;

@@ -225,6 +225,40 @@ TEST(XplorerExplorer, SecondClockwiseTurnInARowIsNoConvexCorner) {
   }
 }
 
+// Contact lost (averaged force < 0.3 N for 1 s) after a traversal of >= 4 s: the face
+// ended without a yaw-rate peak, so Tactile-turning counter-clockwise about its end; the
+// pivot is on the face as it was when the force went (vehicle at (0, -0.5), yaw 0: C_n
+// +x, 0.21 m ahead), abreast of the vehicle along lambda. A contact lost 2 s into a
+// traversal (it never settled) and turn_on_contact_lost = false go back to Exploration.
+TEST(XplorerExplorer, ContactLostAfterALongTraversalTurnsAboutTheFacesEnd) {
+  for (const double traverse_s : {5.0, 2.0}) {
+    for (const bool turn : {true, false}) {
+      XplorerParams p;
+      p.turn_on_contact_lost = turn;
+      XplorerExplorer x{p};
+      double t = take_off_and_press(x, XVec3(0, 0, 0.7), XVec3(0, 0, 0.7), XVec3(-2, 0, 0));
+      ASSERT_EQ(x.state(), XplorerState::kTactileTraversal);
+      const double t0 = t;
+      while (t < t0 + traverse_s - 1.0)
+        x.update(input(t += 0.02, XVec3(0, -0.5, 0.7), 0.0, XVec3(-1.3, 0, 0)), 0.02);
+      for (int i = 0; i < 150 && x.state() == XplorerState::kTactileTraversal; ++i)
+        x.update(input(t += 0.02, XVec3(0, -0.5, 0.7), 0.0, XVec3::Zero()), 0.02);
+      if (turn && traverse_s > 4.0) {
+        ASSERT_EQ(x.state(), XplorerState::kTactileTurning) << x.reason();
+        EXPECT_EQ(x.turns(), 1u);
+        EXPECT_NEAR(x.pivot().x(), 0.21, 1e-9);
+        EXPECT_NEAR(x.pivot().y(), -0.5, 1e-9);
+        XplorerOutput o;
+        for (int i = 0; i < 50; ++i) o = x.update(input(t += 0.02, XVec3(0, -0.5, 0.7), 0.0, XVec3::Zero()), 0.02);
+        EXPECT_NEAR(o.yaw, 0.26 * 1.0, 0.03);  // counter-clockwise at turn_rate
+      } else {
+        EXPECT_EQ(x.state(), XplorerState::kExploration) << traverse_s << " s, turn " << turn;
+        EXPECT_EQ(x.turns(), 0u);
+      }
+    }
+  }
+}
+
 // Convex corner with turn_pivot (default): the face is the one of 0.6 s
 // before the trigger (yaw 0, C_n = +x, lambda = -y), the pivot on it abreast
 // of the vehicle, phi starts at the 0.2 rad the vehicle has already turned;
@@ -401,6 +435,9 @@ TEST(XplorerParams, ValidateNamesTheField) {
   EXPECT_THROW(p.validate(), std::invalid_argument);
   p = XplorerParams{};
   p.max_clockwise_turns_in_a_row = -1;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = XplorerParams{};
+  p.contact_lost_turn_min_s = -1.0;
   EXPECT_THROW(p.validate(), std::invalid_argument);
   p = XplorerParams{};
   p.admittance.damping[1] = -1;

@@ -154,6 +154,16 @@ struct XplorerParams {
   /// 2028: 3 clockwise turns of 130-142 deg, open or a false closure) (choice; 0: never,
   /// a large number: always).
   int max_clockwise_turns_in_a_row = 1;
+  /// Contact lost (release_force for release_time) in a traversal that has lasted at least
+  /// contact_lost_turn_min_s: the face ended without a yaw-rate peak (an obtuse convex
+  /// corner the admittance yaw followed slowly), so Tactile-turning counter-clockwise about
+  /// the face's end (the pivot from the pose when the force went) instead of Exploration
+  /// along the lost C_n, which flies past a convex corner (issue 17: seed 1036 flew 20 m
+  /// off, 2007 hit the next face at 5-15 N and stuck). Contact lost 2.4-3.1 s into a
+  /// traversal (the contact never settled after an impact: 17 of 21 losses on the tuning
+  /// seeds) still goes back to Exploration (choice; false: always Exploration).
+  bool turn_on_contact_lost = true;
+  double contact_lost_turn_min_s = 4.0;  ///< [s]
   double static_force = 1.0;         ///< static-wrench reference |delta_f_ref| [N] (001 Sec. V-B)
   XVec2 goal = XVec2(1.0, 0.0);      ///< ricochet / waypoint goal, world [m]
   double ricochet_speed = 1.5;       ///< approach speed [m/s] ("maximum velocity", 001 Sec. IV-C; the SITL controller's limit)
@@ -235,7 +245,8 @@ class XplorerExplorer {
   int clockwise_in_a_row_ = 0;
   bool loop_closed_ = false, started_path_ = false, initialised_ = false, peak_against_ = false;
   double loop_closure_t_ = -1.0, first_contact_t_ = -1.0, path_ = 0.0, collision_peak_ = 0.0;
-  double winding_ = 0.0, last_yaw_ = 0.0;
+  double winding_ = 0.0, last_yaw_ = 0.0, lost_yaw_ = 0.0;
+  XVec2 lost_p_ = XVec2::Zero();
   XVec2 first_contact_p_ = XVec2::Zero(), last_p_ = XVec2::Zero();
   XVec2 collision_normal_ = XVec2::Zero();
   XVec3 recovery_sp_ = XVec3::Zero();
