@@ -160,7 +160,7 @@ struct XplorerParams {
   /// the face's end (the pivot from the pose when the force went) instead of Exploration
   /// along the lost C_n, which flies past a convex corner (issue 17: seed 1036 flew 20 m
   /// off, 2007 hit the next face at 5-15 N and stuck). Contact lost 2.4-3.1 s into a
-  /// traversal (the contact never settled after an impact: 17 of 21 losses on the tuning
+  /// traversal (the contact never settled after an impact: 16 of 20 losses on the tuning
   /// seeds) still goes back to Exploration (choice; false: always Exploration).
   bool turn_on_contact_lost = true;
   double contact_lost_turn_min_s = 4.0;  ///< [s]
