@@ -167,6 +167,12 @@ void XplorerParams::validate() const {
   if (!(settle_time >= 0.0)) bad("XplorerParams", "settle_time", "must be >= 0", settle_time);
   pos("loop_closure_radius", loop_closure_radius);
   pos("loop_min_path", loop_min_path);
+  if (!(contact_lost_turn_min_s >= 0.0) || !std::isfinite(contact_lost_turn_min_s))
+    bad("XplorerParams", "contact_lost_turn_min_s", "must be finite and >= 0", contact_lost_turn_min_s);
+  if (max_clockwise_turns_in_a_row < 0)
+    bad("XplorerParams", "max_clockwise_turns_in_a_row", "must be >= 0", max_clockwise_turns_in_a_row);
+  if (!(loop_min_winding >= 0.0 && loop_min_winding <= 2.0 * M_PI))
+    bad("XplorerParams", "loop_min_winding", "must be in [0, 2 pi] (one circuit turns the heading by 2 pi)", loop_min_winding);
   pos("static_force", static_force);
   if (!goal.allFinite()) bad("XplorerParams", "goal", "must be finite", goal.x());
   pos("ricochet_speed", ricochet_speed);
@@ -240,8 +246,12 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
   have_rate_ = true;
 
   const XVec2 p2 = in.position.head<2>();
-  if (started_path_ && state_ != XplorerState::kDone) path_ += (p2 - last_p_).norm();
+  if (started_path_ && state_ != XplorerState::kDone) {
+    path_ += (p2 - last_p_).norm();
+    winding_ += wrap(in.yaw - last_yaw_);  // counter-clockwise positive: the right-hand sense
+  }
   last_p_ = p2;
+  last_yaw_ = in.yaw;
 
   if (!initialised_) {  // take off where the vehicle stands
     initialised_ = true;
@@ -254,8 +264,10 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
   // Loop closure (001 Sec. V-C2): back at the first contact point after going round,
   // traversing its face (001: "continues traversing all the edges until it returns to
   // the initial contact position"), not while a turn swings past it.
+  // Once round the object: the heading has wound by ~2 pi counter-clockwise (right-hand
+  // traversal); wobbling round one corner back to the first contact point has not.
   if (started_path_ && !loop_closed_ && state_ == XplorerState::kTactileTraversal && path_ > p_.loop_min_path &&
-      (p2 - first_contact_p_).norm() < p_.loop_closure_radius) {
+      winding_ >= p_.loop_min_winding && (p2 - first_contact_p_).norm() < p_.loop_closure_radius) {
     loop_closed_ = true;
     loop_closure_t_ = in.t;
     enter(XplorerState::kDone, in, "loop closed");
@@ -305,8 +317,20 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
       traverse_history_.push_back({in.t, p2, in.yaw});
       while (traverse_history_.size() > 1 && in.t - traverse_history_[1].t >= p_.corner_lookback)
         traverse_history_.pop_front();
-      if (in.t - t_quiet_ > p_.settle_time && std::abs(yaw_rate_f_) > p_.yaw_rate_trigger) {
+      // A convex corner of the right-hand traversal turns counter-clockwise (yaw rate > 0).
+      // A clockwise peak may turn once (re-aligning after an oblique contact); a second
+      // clockwise turn before a counter-clockwise one would cycle round one corner point,
+      // so that peak leaves the traversal going on (C_n follows the yaw).
+      const bool against = yaw_rate_f_ < 0.0 && clockwise_in_a_row_ >= p_.max_clockwise_turns_in_a_row;
+      if (in.t - t_quiet_ > p_.settle_time && std::abs(yaw_rate_f_) > p_.yaw_rate_trigger && against) {
+        if (!peak_against_) ++turns_against_;
+        peak_against_ = true;
+      } else if (std::abs(yaw_rate_f_) <= p_.yaw_rate_trigger) {
+        peak_against_ = false;
+      }
+      if (in.t - t_quiet_ > p_.settle_time && std::abs(yaw_rate_f_) > p_.yaw_rate_trigger && !against) {
         turn_sign_ = yaw_rate_f_ > 0 ? 1.0 : -1.0;
+        clockwise_in_a_row_ = turn_sign_ > 0 ? 0 : clockwise_in_a_row_ + 1;
         ++turns_;
         // The face as it was before the release (the yaw has already turned by the
         // time the low-passed rate crosses the trigger): its yaw, its normal C_n and
@@ -331,7 +355,27 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
         traverse_history_.clear();  // the face ahead is the new one
       }
       if (f_body_avg_.norm() < p_.release_force) {
-        if (low_force_since_ < 0) low_force_since_ = in.t;
+        if (low_force_since_ < 0) {
+          low_force_since_ = in.t;
+          lost_p_ = p2;  // the face as it was when the force went
+          lost_yaw_ = in.yaw;
+        }
+        if (in.t - low_force_since_ > p_.release_time && p_.turn_on_contact_lost && p_.turn_pivot &&
+            in.t - t_enter_ >= p_.contact_lost_turn_min_s) {
+          // The face ended without a yaw-rate peak (an obtuse convex corner the yaw followed
+          // slowly): right-hand traversal round a convex object goes on round the corner,
+          // so turn counter-clockwise about it instead of flying off along the lost C_n.
+          turn_sign_ = 1.0;
+          clockwise_in_a_row_ = 0;
+          ++turns_;
+          face_yaw_ = lost_yaw_;
+          face_n_ = rot(lost_yaw_, unit(contact_));
+          face_t_ = rot(lost_yaw_, unit(move_));
+          pivot_ = lost_p_ + p_.contact_reach * face_n_ + (p2 - lost_p_).dot(face_t_) * face_t_;
+          phi0_ = std::clamp(wrap(in.yaw - face_yaw_), 0.0, p_.turn_limit);
+          enter(XplorerState::kTactileTurning, in, "contact lost: turn about the corner");
+          break;
+        }
         if (in.t - low_force_since_ > p_.release_time) {
           explore_dir_ = rot(in.yaw, unit(contact_));
           hold_yaw_ = in.yaw;

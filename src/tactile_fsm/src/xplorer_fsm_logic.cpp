@@ -52,6 +52,10 @@ ParamMap XplorerFsmLogic::default_parameters() {
   m.set("settle_time", f.settle_time);
   m.set("loop_closure_radius", f.loop_closure_radius);
   m.set("loop_min_path", f.loop_min_path);
+  m.set("loop_min_winding", f.loop_min_winding);
+  m.set("max_clockwise_turns_in_a_row", static_cast<int64_t>(f.max_clockwise_turns_in_a_row));
+  m.set("turn_on_contact_lost", f.turn_on_contact_lost);
+  m.set("contact_lost_turn_min_s", f.contact_lost_turn_min_s);
   m.set("static_force", f.static_force);
   m.set("goal", std::vector<double>{f.goal.x(), f.goal.y()});
   m.set("ricochet_speed", f.ricochet_speed);
@@ -106,6 +110,10 @@ XplorerFsmLogic::Params XplorerFsmLogic::params_from(const ParamMap& m) {
   f.settle_time = m.get_double("settle_time");
   f.loop_closure_radius = m.get_double("loop_closure_radius");
   f.loop_min_path = m.get_double("loop_min_path");
+  f.loop_min_winding = m.get_double("loop_min_winding");
+  f.max_clockwise_turns_in_a_row = m.get_int("max_clockwise_turns_in_a_row", 0, 1000);
+  f.turn_on_contact_lost = m.get_bool("turn_on_contact_lost");
+  f.contact_lost_turn_min_s = m.get_double("contact_lost_turn_min_s");
   f.static_force = m.get_double("static_force");
   const auto g = m.get_double_array("goal");
   if (g.size() != 2) throw m.error("goal", "must be [x, y], got " + std::to_string(g.size()) + " elements");

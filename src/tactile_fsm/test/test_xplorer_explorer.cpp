@@ -161,10 +161,102 @@ TEST(XplorerExplorer, TurnIsLimitedTo180Degrees) {
   ASSERT_EQ(x.state(), XplorerState::kTactileTraversal);
   XplorerOutput o;
   for (int i = 0; i < 100 && x.state() != XplorerState::kTactileTurning; ++i)
-    o = x.update(input(t += 0.02, XVec3(0, 0, 0.7), 0.0, XVec3(-1, 0, 0), -2.0), 0.02);
+    o = x.update(input(t += 0.02, XVec3(0, 0, 0.7), 0.0, XVec3(-1, 0, 0), 2.0), 0.02);
   ASSERT_EQ(x.state(), XplorerState::kTactileTurning);
   for (int i = 0; i < 700; ++i) o = x.update(input(t += 0.02, XVec3(0, 0, 0.7), 0.0, XVec3::Zero()), 0.02);
-  EXPECT_NEAR(std::abs(o.yaw), M_PI, 1e-9);  // -pi limit (13 s > pi / 0.26 = 12.1 s)
+  EXPECT_NEAR(std::abs(o.yaw), M_PI, 1e-9);  // pi limit (13 s > pi / 0.26 = 12.1 s)
+}
+
+// Right-hand traversal (C_n = +x, lambda = -y: the object on the left of the motion)
+// goes round a convex object counter-clockwise, so every convex corner turns the yaw
+// up. With max_clockwise_turns_in_a_row = 1 a clockwise yaw-rate peak (-2 rad/s) turns
+// clockwise once; after the re-contact a second clockwise peak is ignored (counted once
+// per peak) and the traversal goes on; a counter-clockwise turn re-arms it. With 0 no
+// clockwise peak turns; with 5 both turn.
+namespace {
+/// One yaw-rate peak of 1 s (after 1.2 s of steady traversal at 1.3 N), then, if it
+/// turned, 2 s of turning and a re-contact at 2.5 N along body +x. Returns the sign of
+/// the yaw setpoint at the end of the turn (0: no turn).
+int peak(XplorerExplorer& x, double& t, double rate) {
+  for (int i = 0; i < 60; ++i) x.update(input(t += 0.02, XVec3(0, 0, 0.7), 0.0, XVec3(-1.3, 0, 0)), 0.02);
+  EXPECT_EQ(x.state(), XplorerState::kTactileTraversal);
+  for (int i = 0; i < 50 && x.state() == XplorerState::kTactileTraversal; ++i)
+    x.update(input(t += 0.02, XVec3(0, 0, 0.7), 0.0, XVec3(-1.3, 0, 0), rate), 0.02);
+  if (x.state() == XplorerState::kTactileTraversal) return 0;
+  XplorerOutput o;
+  for (int i = 0; i < 100; ++i) o = x.update(input(t += 0.02, XVec3(0, 0, 0.7), 0.0, XVec3::Zero()), 0.02);
+  const int sign = o.yaw > 0.2 ? 1 : (o.yaw < -0.2 ? -1 : 99);
+  for (int i = 0; i < 100 && x.state() == XplorerState::kTactileTurning; ++i)
+    x.update(input(t += 0.02, XVec3(0, 0, 0.7), 0.0, XVec3(-2.5, 0, 0)), 0.02);
+  EXPECT_EQ(x.state(), XplorerState::kTactileTraversal);
+  return sign;
+}
+}  // namespace
+
+TEST(XplorerExplorer, SecondClockwiseTurnInARowIsNoConvexCorner) {
+  {
+    XplorerExplorer x{XplorerParams{}};
+    double t = take_off_and_press(x, XVec3(0, 0, 0.7), XVec3(0, 0, 0.7), XVec3(-2, 0, 0));
+    EXPECT_EQ(peak(x, t, -2.0), -1);  // the first clockwise peak turns clockwise
+    EXPECT_EQ(peak(x, t, -2.0), 0);   // the second is ignored
+    EXPECT_EQ(x.turns_against(), 1u);
+    EXPECT_EQ(peak(x, t, -2.0), 0);   // and the next, as a peak of its own
+    EXPECT_EQ(x.turns_against(), 2u);
+    EXPECT_EQ(peak(x, t, 2.0), 1);    // counter-clockwise turns
+    EXPECT_EQ(peak(x, t, -2.0), -1);  // and re-arms one clockwise turn
+    EXPECT_EQ(x.turns(), 3u);
+  }
+  {
+    XplorerParams p;
+    p.max_clockwise_turns_in_a_row = 0;
+    XplorerExplorer x{p};
+    double t = take_off_and_press(x, XVec3(0, 0, 0.7), XVec3(0, 0, 0.7), XVec3(-2, 0, 0));
+    EXPECT_EQ(peak(x, t, -2.0), 0);
+    EXPECT_EQ(peak(x, t, 2.0), 1);
+  }
+  {
+    XplorerParams p;
+    p.max_clockwise_turns_in_a_row = 5;
+    XplorerExplorer x{p};
+    double t = take_off_and_press(x, XVec3(0, 0, 0.7), XVec3(0, 0, 0.7), XVec3(-2, 0, 0));
+    EXPECT_EQ(peak(x, t, -2.0), -1);
+    EXPECT_EQ(peak(x, t, -2.0), -1);
+    EXPECT_EQ(x.turns_against(), 0u);
+  }
+}
+
+// Contact lost (averaged force < 0.3 N for 1 s) after a traversal of >= 4 s: the face
+// ended without a yaw-rate peak, so Tactile-turning counter-clockwise about its end; the
+// pivot is on the face as it was when the force went (vehicle at (0, -0.5), yaw 0: C_n
+// +x, 0.21 m ahead), abreast of the vehicle along lambda. A contact lost 2 s into a
+// traversal (it never settled) and turn_on_contact_lost = false go back to Exploration.
+TEST(XplorerExplorer, ContactLostAfterALongTraversalTurnsAboutTheFacesEnd) {
+  for (const double traverse_s : {5.0, 2.0}) {
+    for (const bool turn : {true, false}) {
+      XplorerParams p;
+      p.turn_on_contact_lost = turn;
+      XplorerExplorer x{p};
+      double t = take_off_and_press(x, XVec3(0, 0, 0.7), XVec3(0, 0, 0.7), XVec3(-2, 0, 0));
+      ASSERT_EQ(x.state(), XplorerState::kTactileTraversal);
+      const double t0 = t;
+      while (t < t0 + traverse_s - 1.0)
+        x.update(input(t += 0.02, XVec3(0, -0.5, 0.7), 0.0, XVec3(-1.3, 0, 0)), 0.02);
+      for (int i = 0; i < 150 && x.state() == XplorerState::kTactileTraversal; ++i)
+        x.update(input(t += 0.02, XVec3(0, -0.5, 0.7), 0.0, XVec3::Zero()), 0.02);
+      if (turn && traverse_s > 4.0) {
+        ASSERT_EQ(x.state(), XplorerState::kTactileTurning) << x.reason();
+        EXPECT_EQ(x.turns(), 1u);
+        EXPECT_NEAR(x.pivot().x(), 0.21, 1e-9);
+        EXPECT_NEAR(x.pivot().y(), -0.5, 1e-9);
+        XplorerOutput o;
+        for (int i = 0; i < 50; ++i) o = x.update(input(t += 0.02, XVec3(0, -0.5, 0.7), 0.0, XVec3::Zero()), 0.02);
+        EXPECT_NEAR(o.yaw, 0.26 * 1.0, 0.03);  // counter-clockwise at turn_rate
+      } else {
+        EXPECT_EQ(x.state(), XplorerState::kExploration) << traverse_s << " s, turn " << turn;
+        EXPECT_EQ(x.turns(), 0u);
+      }
+    }
+  }
 }
 
 // Convex corner with turn_pivot (default): the face is the one of 0.6 s
@@ -250,23 +342,62 @@ TEST(XplorerExplorer, RicochetCollidesRecoversAndRegulatesAtTheGoal) {
   EXPECT_NEAR(o.position.x(), 2.0, 1e-12);
 }
 
-TEST(XplorerExplorer, LoopClosureEndsTheExploration) {
-  XplorerExplorer x{XplorerParams{}};
+namespace {
+/// Takes off, presses at the origin facing +x (C_n = +x, lambda = -y), then goes round
+/// a square of side 1 m counter-clockwise (right-hand: -y, +x, +y, -x; the object at
+/// (0.5, -0.5) on the left) with the yaw `winding_per_side` x the perimeter position in
+/// sides (pi / 2: a real circuit, C_n turning with the faces; 0: the same path without
+/// turning the heading), pressing 1.3 N along body +x. Ends after `ticks` ticks or
+/// when the traversal ends.
+void go_round_square(XplorerExplorer& x, double winding_per_side, int ticks = 400) {
   double t = take_off_and_press(x, XVec3(0, 0, 0.7), XVec3(0, 0, 0.7), XVec3(-1.6, 0, 0));
   ASSERT_EQ(x.state(), XplorerState::kTactileTraversal);
-  // Go round a 1 m square (traversal path) and come back.
-  for (int i = 1; i <= 400 && x.state() == XplorerState::kTactileTraversal; ++i) {
+  for (int i = 1; i <= ticks && x.state() == XplorerState::kTactileTraversal; ++i) {
     const double s = 4.0 * i / 400.0;  // perimeter position
     XVec3 p(0, 0, 0.7);
     if (s < 1) p.y() = -s;
-    else if (s < 2) p = XVec3(-(s - 1), -1, 0.7);
-    else if (s < 3) p = XVec3(-1, -1 + (s - 2), 0.7);
-    else p = XVec3(-1 + (s - 3), 0, 0.7);
-    x.update(input(t += 0.02, p, 0.0, XVec3(-1.3, 0, 0)), 0.02);
+    else if (s < 2) p = XVec3(s - 1, -1, 0.7);
+    else if (s < 3) p = XVec3(1, -1 + (s - 2), 0.7);
+    else p = XVec3(1 - (s - 3), 0, 0.7);
+    const double yaw = winding_per_side * std::min(s, 3.999);
+    x.update(input(t += 0.02, p, yaw, XVec3(-1.3 * std::cos(yaw), -1.3 * std::sin(yaw), 0)), 0.02);
   }
+}
+}  // namespace
+
+TEST(XplorerExplorer, LoopClosureEndsTheExploration) {
+  XplorerExplorer x{XplorerParams{}};
+  go_round_square(x, M_PI / 2);
   EXPECT_TRUE(x.loop_closed());
   EXPECT_EQ(x.state(), XplorerState::kDone);
   EXPECT_GT(x.traversed_path(), 3.5);
+  // 90 deg counter-clockwise per side; the closure fires 0.25 m before the start point.
+  EXPECT_NEAR(x.winding(), (4.0 - 0.25) * M_PI / 2, 0.05);
+}
+
+// Back at the first contact point after 4 m of path but with the heading not wound
+// (the vehicle wobbling round one corner, issue 17 seed 2028): no closure with
+// loop_min_winding = pi, a closure with 0 (the test off). Wound clockwise (-2 pi): none.
+TEST(XplorerExplorer, LoopClosureNeedsTheHeadingWoundOnce) {
+  {
+    XplorerExplorer x{XplorerParams{}};
+    go_round_square(x, 0.0);
+    EXPECT_FALSE(x.loop_closed());
+    EXPECT_NEAR(x.winding(), 0.0, 1e-9);
+  }
+  {
+    XplorerExplorer x{XplorerParams{}};
+    go_round_square(x, -M_PI / 2);
+    EXPECT_FALSE(x.loop_closed());
+    EXPECT_LT(x.winding(), -M_PI);
+  }
+  {
+    XplorerParams p;
+    p.loop_min_winding = 0.0;
+    XplorerExplorer x{p};
+    go_round_square(x, 0.0);
+    EXPECT_TRUE(x.loop_closed());
+  }
 }
 
 // A turn swinging past the first contact point does not close the loop (the
@@ -296,6 +427,17 @@ TEST(XplorerParams, ValidateNamesTheField) {
   }
   p = XplorerParams{};
   p.turn_limit = 4.0;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = XplorerParams{};
+  p.loop_min_winding = -0.1;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p.loop_min_winding = 7.0;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = XplorerParams{};
+  p.max_clockwise_turns_in_a_row = -1;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = XplorerParams{};
+  p.contact_lost_turn_min_s = -1.0;
   EXPECT_THROW(p.validate(), std::invalid_argument);
   p = XplorerParams{};
   p.admittance.damping[1] = -1;

@@ -60,7 +60,7 @@ TEST(XplorerFsmLogic, DefaultsAndRepoConfig) {
 TEST(XplorerFsmLogic, IntegerParametersAreCheckedBeforeTheyAreNarrowed) {
   const auto wrapped = tactile_common::wrapped_integers(XplorerFsmLogic::default_parameters(),
                                                         [](const ParamMap& m) { XplorerFsmLogic::params_from(m); });
-  EXPECT_EQ(wrapped.size(), 1u);  // force_average_samples
+  EXPECT_EQ(wrapped.size(), 2u);  // force_average_samples, max_clockwise_turns_in_a_row
   for (const auto& [key, w] : wrapped) EXPECT_TRUE(w.rejected_as_given()) << key << ": " << w.error;
 }
 

@@ -139,6 +139,31 @@ struct XplorerParams {
   double settle_time = 1.0;          ///< no turning trigger this long after a contact / turn [s] (choice)
   double loop_closure_radius = 0.25; ///< back within this of the first contact point -> done [m] (choice)
   double loop_min_path = 2.0;        ///< ... after at least this much traversed path [m] (choice)
+  /// ... and after the vehicle's yaw has wound by at least this much since the first
+  /// contact, counted in the right-hand traversal's sense (counter-clockwise): going once
+  /// round a convex object turns the heading by 2 pi; wobbling at one corner does not
+  /// (issue 17: a false closure after 3.8 m round one corner wound by -235 deg, true
+  /// closures 261-383 deg) [rad] (choice; 0: off).
+  double loop_min_winding = M_PI;
+  /// Right-hand traversal round a convex object turns counter-clockwise at every convex
+  /// corner. A clockwise yaw-rate peak starts a clockwise Tactile-turning (001 Sec. IV-A:
+  /// "in the direction of the peak") only while fewer than this many clockwise turns came
+  /// since the last counter-clockwise one; otherwise the traversal goes on. One such turn
+  /// re-aligns the vehicle after an oblique contact (issue 17: seeds 2031, 1024, 2002 close
+  /// their loops through one); two in a row cycle round one corner point (seeds 1036: 7,
+  /// 2028: 3 clockwise turns of 130-142 deg, open or a false closure) (choice; 0: never,
+  /// a large number: always).
+  int max_clockwise_turns_in_a_row = 1;
+  /// Contact lost (release_force for release_time) in a traversal that has lasted at least
+  /// contact_lost_turn_min_s: the face ended without a yaw-rate peak (an obtuse convex
+  /// corner the admittance yaw followed slowly), so Tactile-turning counter-clockwise about
+  /// the face's end (the pivot from the pose when the force went) instead of Exploration
+  /// along the lost C_n, which flies past a convex corner (issue 17: seed 1036 flew 20 m
+  /// off, 2007 hit the next face at 5-15 N and stuck). Contact lost 2.4-3.1 s into a
+  /// traversal (the contact never settled after an impact: 16 of 20 losses on the tuning
+  /// seeds) still goes back to Exploration (choice; false: always Exploration).
+  bool turn_on_contact_lost = true;
+  double contact_lost_turn_min_s = 4.0;  ///< [s]
   double static_force = 1.0;         ///< static-wrench reference |delta_f_ref| [N] (001 Sec. V-B)
   XVec2 goal = XVec2(1.0, 0.0);      ///< ricochet / waypoint goal, world [m]
   double ricochet_speed = 1.5;       ///< approach speed [m/s] ("maximum velocity", 001 Sec. IV-C; the SITL controller's limit)
@@ -189,6 +214,8 @@ class XplorerExplorer {
   double loop_closure_time() const { return loop_closure_t_; }
   double first_contact_time() const { return first_contact_t_; }
   double traversed_path() const { return path_; }
+  double winding() const { return winding_; }  ///< yaw turned since the first contact, counter-clockwise positive [rad]
+  uint32_t turns_against() const { return turns_against_; }  ///< clockwise yaw-rate peaks ignored (max_clockwise_turns_in_a_row)
   uint32_t turns() const { return turns_; }
   const XVec2& pivot() const { return pivot_; }  ///< corner pivot of the last Tactile-turning (turn_pivot)
   uint32_t collisions() const { return collisions_; }
@@ -214,9 +241,12 @@ class XplorerExplorer {
   XVec3 hold_ = XVec3::Zero();
   double hold_yaw_ = 0.0;
   std::string reason_;
-  uint32_t transitions_ = 0, turns_ = 0, collisions_ = 0;
-  bool loop_closed_ = false, started_path_ = false, initialised_ = false;
+  uint32_t transitions_ = 0, turns_ = 0, collisions_ = 0, turns_against_ = 0;
+  int clockwise_in_a_row_ = 0;
+  bool loop_closed_ = false, started_path_ = false, initialised_ = false, peak_against_ = false;
   double loop_closure_t_ = -1.0, first_contact_t_ = -1.0, path_ = 0.0, collision_peak_ = 0.0;
+  double winding_ = 0.0, last_yaw_ = 0.0, lost_yaw_ = 0.0;
+  XVec2 lost_p_ = XVec2::Zero();
   XVec2 first_contact_p_ = XVec2::Zero(), last_p_ = XVec2::Zero();
   XVec2 collision_normal_ = XVec2::Zero();
   XVec3 recovery_sp_ = XVec3::Zero();
