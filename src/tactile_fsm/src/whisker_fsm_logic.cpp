@@ -43,6 +43,11 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   m.set("hold_heading_trailing_lost", true);
   m.set("same_obstacle_distance", d.same_obstacle_distance);
   m.set("max_heading_offset", d.max_heading_offset);
+  // Pressed whisker (issue 17): on in the whisker FSM node, off in the core
+  // (as hold_heading_trailing_lost). 900 Pa, no hold: tuning blocks, README.
+  m.set("press_sum_pa", 900.0);
+  m.set("press_hold_s", 0.0);
+  m.set("press_depth", d.press_depth);
   m.set("target_radius", d.target_radius);
   m.set("land_past_target", d.land_past_target);
   m.set("landing_duration_s", d.landing_duration_s);
@@ -80,6 +85,9 @@ WhiskerFsmLogic::Params WhiskerFsmLogic::params_from(const ParamMap& m) {
   f.hold_heading_trailing_lost = m.get_bool("hold_heading_trailing_lost");
   f.same_obstacle_distance = m.get_double("same_obstacle_distance");
   f.max_heading_offset = m.get_double("max_heading_offset");
+  f.press_sum_pa = m.get_double("press_sum_pa");
+  f.press_hold_s = m.get_double("press_hold_s");
+  f.press_depth = m.get_double("press_depth");
   f.target_radius = m.get_double("target_radius");
   f.land_past_target = m.get_bool("land_past_target");
   f.landing_duration_s = m.get_double("landing_duration_s");
@@ -128,7 +136,7 @@ void WhiskerFsmLogic::on_depth(const tactile_msgs::msg::TactileDepth& msg) {
 }
 
 bool WhiskerFsmLogic::on_signal(const tactile_msgs::msg::WhiskerSignal& msg, uint8_t expected_id, int64_t& stamp_ns,
-                                bool& contact) {
+                                bool& contact, double& input_sum) {
   if (msg.whisker_id != expected_id) {
     ++stats_.dropped_wrong_whisker;
     return false;
@@ -146,17 +154,21 @@ bool WhiskerFsmLogic::on_signal(const tactile_msgs::msg::WhiskerSignal& msg, uin
   }
   stamp_ns = stamp;
   contact = msg.contact;  // S_p over T_c (000 eq. 4-11, tdorc_filter)
+  // Sum of the three S_c (000 eq. 5), the depth model's input: the FSM's
+  // pressed-whisker rule (press_sum_pa). NaN if not finite.
+  const double sum = msg.calibrated[0] + msg.calibrated[1] + msg.calibrated[2];
+  input_sum = std::isfinite(sum) ? sum : NAN;
   return true;
 }
 
 void WhiskerFsmLogic::on_left_signal(const tactile_msgs::msg::WhiskerSignal& msg) {
   ++stats_.received_signal_left;
-  on_signal(msg, tactile_msgs::msg::WhiskerPressure::WHISKER_LEFT, left_ns_, left_contact_);
+  on_signal(msg, tactile_msgs::msg::WhiskerPressure::WHISKER_LEFT, left_ns_, left_contact_, left_sum_);
 }
 
 void WhiskerFsmLogic::on_right_signal(const tactile_msgs::msg::WhiskerSignal& msg) {
   ++stats_.received_signal_right;
-  on_signal(msg, tactile_msgs::msg::WhiskerPressure::WHISKER_RIGHT, right_ns_, right_contact_);
+  on_signal(msg, tactile_msgs::msg::WhiskerPressure::WHISKER_RIGHT, right_ns_, right_contact_, right_sum_);
 }
 
 void WhiskerFsmLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
@@ -188,6 +200,8 @@ WhiskerFsmLogic::Outputs WhiskerFsmLogic::on_timer(int64_t now_ns) {
   in_.tdorc_contact_left = left_contact_ && left_ns_ != INT64_MIN && in_.t - tactile_common::to_seconds(left_ns_) <= age;
   in_.tdorc_contact_right =
       right_contact_ && right_ns_ != INT64_MIN && in_.t - tactile_common::to_seconds(right_ns_) <= age;
+  in_.input_sum_left = left_ns_ != INT64_MIN && in_.t - tactile_common::to_seconds(left_ns_) <= age ? left_sum_ : NAN;
+  in_.input_sum_right = right_ns_ != INT64_MIN && in_.t - tactile_common::to_seconds(right_ns_) <= age ? right_sum_ : NAN;
   const WallFollowerOutput o = fsm_.step(in_);
 
   Outputs out;

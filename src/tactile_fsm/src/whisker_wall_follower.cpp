@@ -79,6 +79,9 @@ void WallFollowerParams::validate() const {
           "max_heading_offset", "must be in [0, pi]", max_heading_offset);
   require(finite_nonneg(same_obstacle_distance), "same_obstacle_distance", "must be finite and >= 0",
           same_obstacle_distance);
+  require(finite_nonneg(press_sum_pa), "press_sum_pa", "must be finite and >= 0 (0 = off)", press_sum_pa);
+  require(finite_nonneg(press_hold_s), "press_hold_s", "must be finite and >= 0", press_hold_s);
+  require(finite_positive(press_depth), "press_depth", "must be finite and > 0", press_depth);
   require(finite_positive(target_radius), "target_radius", "must be finite and > 0", target_radius);
   require(finite_nonneg(landing_duration_s), "landing_duration_s", "must be finite and >= 0", landing_duration_s);
   require(finite_positive(max_input_age_s), "max_input_age_s", "must be finite and > 0", max_input_age_s);
@@ -167,6 +170,7 @@ void WhiskerWallFollower::reset() {
   both_touched_ = false;
   last_contact_t_ = 0.0;
   f_left_ = f_right_ = NAN;
+  pressed_t_left_ = pressed_t_right_ = -INFINITY;
   wall_heading_ = theta_ = NAN;
   origin_set_ = false;
   origin_x_ = origin_y_ = clear_x_ = clear_y_ = 0.0;
@@ -330,8 +334,20 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
     }
   }
 
+  // Pressed past the depth model (issue 17, README "Pressed whisker"): the
+  // whisker's S_c sum bounds its depth by press_depth whatever depth is read.
+  double d_left = f_left_, d_right = f_right_;
+  if (p_.press_sum_pa > 0.0) {
+    if (l_valid && in.input_sum_left >= p_.press_sum_pa) pressed_t_left_ = t;
+    if (r_valid && in.input_sum_right >= p_.press_sum_pa) pressed_t_right_ = t;
+    if (!l_valid) pressed_t_left_ = -INFINITY;
+    if (!r_valid) pressed_t_right_ = -INFINITY;
+    if (l_valid && t - pressed_t_left_ <= p_.press_hold_s + kTimeEps) d_left = std::fmin(d_left, p_.press_depth);
+    if (r_valid && t - pressed_t_right_ <= p_.press_hold_s + kTimeEps) d_right = std::fmin(d_right, p_.press_depth);
+  }
+
   if (state_ == FsmState::kWallFollowing) {
-    WallSubState next = wall_sub_state(f_left_, l_valid, f_right_, r_valid, side_, both_touched_, sub_, p_, theta_);
+    WallSubState next = wall_sub_state(d_left, l_valid, d_right, r_valid, side_, both_touched_, sub_, p_, theta_);
     // Heading limit about the course heading (issue 17, README): no turn beyond
     // max_heading_offset; translate on the depths instead.
     if (p_.max_heading_offset > 0.0 && origin_set_ && std::isfinite(in.yaw) &&
@@ -339,8 +355,8 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
       const double off = std::remainder(in.yaw - course_yaw_, 2.0 * M_PI);
       if ((next == WallSubState::kTurnLeft && off >= p_.max_heading_offset) ||
           (next == WallSubState::kTurnRight && off <= -p_.max_heading_offset)) {
-        const double lo = std::fmin(l_valid ? f_left_ : INFINITY, r_valid ? f_right_ : INFINITY);
-        const double hi = std::fmax(l_valid ? f_left_ : -INFINITY, r_valid ? f_right_ : -INFINITY);
+        const double lo = std::fmin(l_valid ? d_left : INFINITY, r_valid ? d_right : INFINITY);
+        const double hi = std::fmax(l_valid ? d_left : -INFINITY, r_valid ? d_right : -INFINITY);
         next = (l_valid || r_valid) && lo < p_.t_min   ? WallSubState::kFlyBackward
                : (l_valid || r_valid) && hi > p_.t_max ? WallSubState::kFlyForward
                                                        : WallSubState::kFlySideways;

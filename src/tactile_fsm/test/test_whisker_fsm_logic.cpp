@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "tactile_common/parameters.hpp"
 #include "tactile_common/time.hpp"
@@ -103,6 +104,9 @@ TEST(WhiskerFsmLogic, RepositoryConfigMatchesDefaults) {
   EXPECT_EQ(p.fsm.clear_margin, d.fsm.clear_margin);
   EXPECT_EQ(p.fsm.max_input_age_s, d.fsm.max_input_age_s);
   EXPECT_EQ(p.fsm.failsafe_land_after_s, d.fsm.failsafe_land_after_s);
+  EXPECT_EQ(p.fsm.press_sum_pa, d.fsm.press_sum_pa);
+  EXPECT_EQ(p.fsm.press_hold_s, d.fsm.press_hold_s);
+  EXPECT_EQ(p.fsm.press_depth, d.fsm.press_depth);
   EXPECT_EQ(p.target_x, d.target_x);
   EXPECT_EQ(p.target_y, d.target_y);
 }
@@ -119,6 +123,12 @@ TEST(WhiskerFsmLogic, ParameterErrorsNameTheKey) {
   m = WhiskerFsmLogic::default_parameters();
   m.set("target_x", std::nan(""));
   EXPECT_NE(param_error(m).find("target_x"), std::string::npos) << param_error(m);
+  m = WhiskerFsmLogic::default_parameters();
+  m.set("press_sum_pa", -5.0);
+  EXPECT_NE(param_error(m).find("press_sum_pa"), std::string::npos) << param_error(m);
+  m = WhiskerFsmLogic::default_parameters();
+  m.set("press_depth", 0.0);
+  EXPECT_NE(param_error(m).find("press_depth"), std::string::npos) << param_error(m);
   m = WhiskerFsmLogic::default_parameters();
   m.set("v_max", std::string("fast"));  // wrong type
   EXPECT_THROW(WhiskerFsmLogic::params_from(m), ParamError);
@@ -183,6 +193,47 @@ TEST(WhiskerFsmLogic, FlightThroughMessages) {
   EXPECT_EQ(o.state->state, "LANDING");
   EXPECT_TRUE(o.setpoint.land);
   EXPECT_EQ(o.setpoint.height, 0.0);
+}
+
+// Issue 17, pressed whisker: the sum of the three S_c of each WhiskerSignal
+// reaches the rule. Wall following with both depths at 70 mm (in band,
+// aligned): FLY_SIDEWAYS while the sums are 300 Pa; the left sum at
+// 400 + 400 + 400 = 1200 Pa (>= press_sum_pa, 900 Pa by default in this node)
+// makes it FLY_BACKWARD (vx = -V_max/2); with press_sum_pa 0 it stays sideways.
+TEST(WhiskerFsmLogic, PressedWhiskerFromSignalSums) {
+  auto run = [](double press_sum_pa) {
+    ParamMap m = WhiskerFsmLogic::default_parameters();
+    m.set("press_sum_pa", press_sum_pa);
+    auto p = WhiskerFsmLogic::params_from(m);
+    p.target_x = 5.0;
+    WhiskerFsmLogic l(p);
+    for (int k = 0; k <= 100; ++k) tick(l, k * kStepNs);
+    std::vector<std::string> states;
+    for (int k = 101; k <= 103; ++k) {
+      const int64_t ns = k * kStepNs;
+      l.on_depth(depth(ns, true, 0.07, true, 0.07));
+      l.on_odometry(odom(ns, 0.5, 0.0, 0.0));
+      auto left = signal(ns, 0, true);
+      auto right = signal(ns, 1, true);
+      const double each = k == 103 ? 400.0 : 100.0;
+      left.calibrated = {{each, each, each}};
+      right.calibrated = {{100.0, 100.0, 100.0}};
+      l.on_left_signal(left);
+      l.on_right_signal(right);
+      const auto o = l.on_timer(ns);
+      states.push_back(o.state ? o.state->state : "");
+      if (k == 103) {
+        EXPECT_NEAR(o.setpoint.vx, press_sum_pa > 0.0 ? -0.1 : 0.0, 1e-12);
+      }
+    }
+    return states;
+  };
+  EXPECT_DOUBLE_EQ(WhiskerFsmLogic::params_from(WhiskerFsmLogic::default_parameters()).fsm.press_sum_pa, 900.0);
+  const auto on = run(900.0);
+  EXPECT_EQ(on[0], "WALL_FOLLOWING/FLY_SIDEWAYS");
+  EXPECT_EQ(on[2], "WALL_FOLLOWING/FLY_BACKWARD");
+  const auto off = run(0.0);
+  EXPECT_EQ(off[2], "");  // no transition: still FLY_SIDEWAYS
 }
 
 TEST(WhiskerFsmLogic, BadInputDroppedAndCounted) {

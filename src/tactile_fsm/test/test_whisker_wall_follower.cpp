@@ -256,6 +256,64 @@ TEST(WhiskerWallFollower, HeadingLimitAboutTheCourse) {
   EXPECT_EQ(fsm.step(in).sub_state, WallSubState::kTurnRight);
 }
 
+// Issue 17, README "Pressed whisker": both depths read 70 mm (in the 60-100 mm
+// band, aligned: FLY_SIDEWAYS), but the left whisker's S_c sum is 1200 Pa, over
+// press_sum_pa (900 Pa): its depth counts as press_depth (50 mm) < T_min, the
+// two whiskers are in different intervals and aligned, so the drone backs off.
+// Both pressed: FLY_BACKWARD. Sums below the threshold, unknown sums (NaN), the
+// rule off (0 Pa) or a band whose T_min is below press_depth (darkness, 40 mm):
+// FLY_SIDEWAYS as before. press_hold_s keeps a pressed whisker pressed for that
+// long after its sum fell.
+TEST(WhiskerWallFollower, PressedWhiskerCountsAsAtPressDepth) {
+  auto sub_at = [](WallFollowerParams p, double sum_l, double sum_r, double sum_l_later = NAN) {
+    WhiskerWallFollower fsm(p);
+    double t = 0.0;
+    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t));
+    WallFollowerInput in = input(t, 1.0, 0.0);
+    set_depths(in, 0.07, 0.07);
+    in.input_sum_left = sum_l;
+    in.input_sum_right = sum_r;
+    WallSubState s = fsm.step(in).sub_state;
+    if (std::isfinite(sum_l_later)) {
+      in = input(t += 0.1, 1.0, 0.0);
+      set_depths(in, 0.07, 0.07);
+      in.input_sum_left = sum_l_later;
+      in.input_sum_right = sum_r;
+      s = fsm.step(in).sub_state;
+    }
+    return s;
+  };
+  WallFollowerParams p;
+  p.press_sum_pa = 900.0;
+  p.press_hold_s = 0.0;
+  EXPECT_EQ(sub_at(p, 1200.0, 300.0), WallSubState::kFlyBackward);
+  EXPECT_EQ(sub_at(p, 1200.0, 1000.0), WallSubState::kFlyBackward);
+  EXPECT_EQ(sub_at(p, 850.0, 300.0), WallSubState::kFlySideways);
+  EXPECT_EQ(sub_at(p, NAN, NAN), WallSubState::kFlySideways);
+  // Held: 0.1 s after the sum fell to 300 Pa, pressed with a 0.2 s hold, not with none.
+  EXPECT_EQ(sub_at(p, 1200.0, 300.0, 300.0), WallSubState::kFlySideways);
+  p.press_hold_s = 0.2;
+  EXPECT_EQ(sub_at(p, 1200.0, 300.0, 300.0), WallSubState::kFlyBackward);
+  // Darkness band 40-100 mm: 50 mm is inside, nothing changes.
+  WallFollowerParams dark = p;
+  dark.t_min = 0.04;
+  EXPECT_EQ(sub_at(dark, 1200.0, 1200.0), WallSubState::kFlySideways);
+  // Off (the paper, the core default).
+  EXPECT_EQ(WallFollowerParams{}.press_sum_pa, 0.0);
+  EXPECT_EQ(sub_at(WallFollowerParams{}, 1200.0, 1200.0), WallSubState::kFlySideways);
+  // Bad values name the field.
+  p.press_sum_pa = -1.0;
+  try {
+    p.validate();
+    ADD_FAILURE() << "negative press_sum_pa accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("WallFollowerParams.press_sum_pa"), std::string::npos) << e.what();
+  }
+  p.press_sum_pa = 900.0;
+  p.press_depth = 0.0;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+}
+
 TEST(Saturation, ScalesSpeedAndClampsYawRate) {
   const WallFollowerParams p;
   Setpoint s;

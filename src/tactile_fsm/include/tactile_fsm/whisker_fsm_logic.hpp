@@ -81,7 +81,7 @@ class WhiskerFsmLogic {
   const WhiskerWallFollower& fsm() const { return fsm_; }
 
  private:
-  bool on_signal(const tactile_msgs::msg::WhiskerSignal& msg, uint8_t expected_id, int64_t& stamp, bool& contact);
+  bool on_signal(const tactile_msgs::msg::WhiskerSignal& msg, uint8_t expected_id, int64_t& stamp, bool& contact, double& input_sum);
 
   Params params_;
   WhiskerWallFollower fsm_;
@@ -89,6 +89,7 @@ class WhiskerFsmLogic {
   WallFollowerInput in_;
   int64_t depth_ns_ = INT64_MIN, odom_ns_ = INT64_MIN, left_ns_ = INT64_MIN, right_ns_ = INT64_MIN;
   bool left_contact_ = false, right_contact_ = false;
+  double left_sum_ = NAN, right_sum_ = NAN;  ///< sum of the three S_c of the last signal [Pa]
   int64_t last_state_pub_ns_ = INT64_MIN;
   std::string previous_state_name_;  ///< state before the last transition ("" at start)
   std::string current_state_name_;   ///< "STATE" or "WALL_FOLLOWING/SUB_STATE"

@@ -107,6 +107,20 @@ struct WallFollowerParams {
   /// most 25 deg plus the alignment overshoot (45 deg: 35/50 on block 2000,
   /// 60 deg: 33/50). 0 = off. [rad]
   double max_heading_offset = 45.0 * M_PI / 180.0;
+  /// Pressed past the depth model (issue 17, README "Pressed whisker"): a
+  /// whisker pressed and sliding along a baffle is friction-limited, its input
+  /// (sum of the three S_c, 000 eq. 5) stops growing below ~70 mm and the
+  /// depth estimate reads ~70 mm (inside the band) at any true depth down to
+  /// the guard. A whisker whose S_c sum was >= press_sum_pa within the last
+  /// press_hold_s is taken at min(depth, press_depth) in the sub-state rule:
+  /// the reading is only an upper bound, press_depth the depth such loads
+  /// come from in the SITL (20-50 mm). Below T_min (band 60-100 mm) the drone
+  /// backs off or turns away until the load is in the range the model
+  /// resolves; inside the band (darkness, 40-100 mm) the rule does nothing.
+  /// press_sum_pa 0 = off (the paper). [Pa]
+  double press_sum_pa = 0.0;
+  double press_hold_s = 0.2;   ///< [s]
+  double press_depth = 0.05;   ///< [m]
   double target_radius = 0.15;                 ///< land within this distance of the target [m]
   bool land_past_target = true;                ///< also land once past the target along the course direction
   double landing_duration_s = 2.0;             ///< LANDING -> LANDED after this [s]
@@ -129,6 +143,9 @@ struct WallFollowerInput {
   // TDORC contact flags (S_p over T_c, 000 eq. 4-11); false when stale.
   bool tdorc_contact_left = false;
   bool tdorc_contact_right = false;
+  // Sum of the three S_c of each whisker (TDORC, 000 eq. 5) [Pa]; NaN = unknown/stale.
+  double input_sum_left = NAN;
+  double input_sum_right = NAN;
   // Odometry pose (world frame, REP-103).
   double odom_stamp = NAN;
   double x = 0.0, y = 0.0, yaw = 0.0;
@@ -225,6 +242,7 @@ class WhiskerWallFollower {
   bool both_touched_ = false;
   double last_contact_t_ = 0.0;
   double f_left_ = NAN, f_right_ = NAN;
+  double pressed_t_left_ = -INFINITY, pressed_t_right_ = -INFINITY;  ///< last tick with sum >= press_sum_pa
   double wall_heading_ = NAN;  ///< filtered yaw - theta [rad]
   double theta_ = NAN;
   bool origin_set_ = false;
