@@ -60,6 +60,7 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   m.set("phantom_quiet_samples", static_cast<int64_t>(n.phantom_quiet_samples));
   m.set("phantom_travel", 0.03);
   m.set("phantom_resume_max", 0.6);
+  m.set("phantom_latch", d.phantom_latch);  // off: found after the held-out block was flown (README)
   m.set("target_radius", d.target_radius);
   m.set("land_past_target", d.land_past_target);
   m.set("landing_duration_s", d.landing_duration_s);
@@ -104,6 +105,7 @@ WhiskerFsmLogic::Params WhiskerFsmLogic::params_from(const ParamMap& m) {
   p.phantom_quiet_samples = m.get_int("phantom_quiet_samples", 2, 10000);
   f.phantom_travel = m.get_double("phantom_travel");
   f.phantom_resume_max = m.get_double("phantom_resume_max");
+  f.phantom_latch = m.get_bool("phantom_latch");
   f.target_radius = m.get_double("target_radius");
   f.land_past_target = m.get_bool("land_past_target");
   f.landing_duration_s = m.get_double("landing_duration_s");

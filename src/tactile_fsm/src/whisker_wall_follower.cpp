@@ -241,13 +241,18 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
     auto gate = [&](bool& valid, bool& tdorc, double rms, double& lx, double& ly, bool& phantom) {
       const bool held = valid || tdorc;
       // Free, unknown or moving: the contact (if any) is live here.
-      if (!held || !std::isfinite(rms) || rms >= p_.phantom_quiet_rms || !std::isfinite(lx)) {
+      // phantom_latch: once taken for a phantom, a whisker stays one until its
+      // contact ends or its sum moves clearly (RMS >= twice the quiet level, a
+      // new touch); without it the free whisker's noise, which crosses the
+      // quiet level itself, lets the phantom back in for a moment.
+      const double live_rms = (p_.phantom_latch && phantom) ? 2.0 * p_.phantom_quiet_rms : p_.phantom_quiet_rms;
+      if (!held || !std::isfinite(rms) || rms >= live_rms || !std::isfinite(lx)) {
         lx = in.x;
         ly = in.y;
         phantom = false;
         return;
       }
-      phantom = std::hypot(in.x - lx, in.y - ly) > p_.phantom_travel;
+      phantom = (p_.phantom_latch && phantom) || std::hypot(in.x - lx, in.y - ly) > p_.phantom_travel;
       if (!phantom) return;
       valid = false;
       tdorc = false;

@@ -109,6 +109,8 @@ TEST(WhiskerFsmLogic, RepositoryConfigMatchesDefaults) {
   EXPECT_EQ(p.fsm.press_depth, d.fsm.press_depth);
   EXPECT_EQ(p.fsm.phantom_quiet_rms, d.fsm.phantom_quiet_rms);
   EXPECT_EQ(p.fsm.phantom_travel, d.fsm.phantom_travel);
+  EXPECT_EQ(p.fsm.phantom_resume_max, d.fsm.phantom_resume_max);
+  EXPECT_EQ(p.fsm.phantom_latch, d.fsm.phantom_latch);
   EXPECT_EQ(p.phantom_quiet_samples, d.phantom_quiet_samples);
   EXPECT_EQ(p.target_x, d.target_x);
   EXPECT_EQ(p.target_y, d.target_y);

@@ -409,6 +409,41 @@ TEST(WhiskerWallFollower, ResumeKeepsSideSteppingWhilePhantomHeld) {
   EXPECT_THROW(p.validate(), std::invalid_argument);
 }
 
+// phantom_latch (tried, off): the hand case of the gate, then from tick 30
+// the quiet sum's RMS reads 9 Pa (noise crossing the 8 Pa quiet level):
+// without the latch the phantom is let back in (wall following again at tick
+// 30); with it the whisker stays a phantom (still RESUME_FORWARD at tick 39),
+// and an RMS of 20 Pa (>= 2 * 8 Pa, a new touch) brings it back.
+TEST(WhiskerWallFollower, PhantomLatch) {
+  auto state_at_39 = [](bool latch, double later_rms) {
+    WallFollowerParams p;
+    p.phantom_quiet_rms = 8.0;
+    p.phantom_travel = 0.05;
+    p.phantom_latch = latch;
+    WhiskerWallFollower fsm(p);
+    double t = 0.0;
+    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t, 1.0, 0.0));
+    FsmState s = FsmState::kHoverInit;
+    for (int k = 0; k < 40; ++k, t += kDt) {
+      WallFollowerInput in = input(t, 1.0, -0.004 * k);
+      in.target_x = 5.0;
+      set_depths(in, 0.07, 0.07);
+      in.tdorc_contact_left = in.tdorc_contact_right = true;
+      in.input_sum_left = in.input_sum_right = 400.0;
+      in.input_change_rms_left = in.input_change_rms_right = k < 30 ? 3.0 : later_rms;
+      s = fsm.step(in).state;
+      if (k == 29) {
+        EXPECT_EQ(s, FsmState::kResumeForward);
+      }
+    }
+    return s;
+  };
+  EXPECT_EQ(state_at_39(false, 9.0), FsmState::kWallFollowing);
+  EXPECT_EQ(state_at_39(true, 9.0), FsmState::kResumeForward);
+  EXPECT_EQ(state_at_39(true, 20.0), FsmState::kWallFollowing);
+  EXPECT_FALSE(WallFollowerParams{}.phantom_latch);
+}
+
 TEST(Saturation, ScalesSpeedAndClampsYawRate) {
   const WallFollowerParams p;
   Setpoint s;

@@ -140,6 +140,10 @@ struct WallFollowerParams {
   /// RESUME_FORWARD keeps side-stepping past clear_margin while a whisker is
   /// still held as a phantom, up to this distance from the clearing [m].
   double phantom_resume_max = 0.0;
+  /// Latch (issue 17, README "Round 4", tried, off): a whisker taken for a
+  /// phantom stays one until its contact ends or the RMS of its sum's changes
+  /// reaches 2 * phantom_quiet_rms.
+  bool phantom_latch = false;
   double target_radius = 0.15;                 ///< land within this distance of the target [m]
   bool land_past_target = true;                ///< also land once past the target along the course direction
   double landing_duration_s = 2.0;             ///< LANDING -> LANDED after this [s]
