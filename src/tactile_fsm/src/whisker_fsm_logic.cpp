@@ -1,5 +1,6 @@
 #include "tactile_fsm/whisker_fsm_logic.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -16,6 +17,10 @@ void WhiskerFsmLogic::Params::validate() const {
   fsm.validate();
   if (!std::isfinite(target_x)) throw std::invalid_argument("WhiskerFsmLogic.target_x: must be finite");
   if (!std::isfinite(target_y)) throw std::invalid_argument("WhiskerFsmLogic.target_y: must be finite");
+  if (phantom_quiet_samples < 2 || phantom_quiet_samples > 10000) {
+    throw std::invalid_argument("WhiskerFsmLogic.phantom_quiet_samples: must be in [2, 10000], got " +
+                                std::to_string(phantom_quiet_samples));
+  }
 }
 
 ParamMap WhiskerFsmLogic::default_parameters() {
@@ -48,6 +53,14 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   m.set("press_sum_pa", 900.0);
   m.set("press_hold_s", 0.0);
   m.set("press_depth", d.press_depth);
+  // Phantom hold gated by odometry (issue 17, round 4): on in the whisker FSM
+  // node, off in the core. 6.5 Pa over 25 samples, 0.03 m, 0.6 m: tuning
+  // blocks, README "Round 4".
+  m.set("phantom_quiet_rms", 6.5);
+  m.set("phantom_quiet_samples", static_cast<int64_t>(n.phantom_quiet_samples));
+  m.set("phantom_travel", 0.03);
+  m.set("phantom_resume_max", 0.6);
+  m.set("phantom_latch", d.phantom_latch);  // off: found after the held-out block was flown (README)
   m.set("target_radius", d.target_radius);
   m.set("land_past_target", d.land_past_target);
   m.set("landing_duration_s", d.landing_duration_s);
@@ -88,6 +101,11 @@ WhiskerFsmLogic::Params WhiskerFsmLogic::params_from(const ParamMap& m) {
   f.press_sum_pa = m.get_double("press_sum_pa");
   f.press_hold_s = m.get_double("press_hold_s");
   f.press_depth = m.get_double("press_depth");
+  f.phantom_quiet_rms = m.get_double("phantom_quiet_rms");
+  p.phantom_quiet_samples = m.get_int("phantom_quiet_samples", 2, 10000);
+  f.phantom_travel = m.get_double("phantom_travel");
+  f.phantom_resume_max = m.get_double("phantom_resume_max");
+  f.phantom_latch = m.get_bool("phantom_latch");
   f.target_radius = m.get_double("target_radius");
   f.land_past_target = m.get_bool("land_past_target");
   f.landing_duration_s = m.get_double("landing_duration_s");
@@ -113,6 +131,29 @@ WhiskerFsmLogic::WhiskerFsmLogic(const Params& params) : params_(params), fsm_(p
   in_.has_target = true;
   in_.target_x = params_.target_x;
   in_.target_y = params_.target_y;
+  left_window_.v.assign(static_cast<std::size_t>(params_.phantom_quiet_samples), 0.0);
+  right_window_.v.assign(static_cast<std::size_t>(params_.phantom_quiet_samples), 0.0);
+}
+
+void WhiskerFsmLogic::SumWindow::push(double sum) {
+  if (!std::isfinite(sum)) {
+    count = 0;
+    return;
+  }
+  v[next] = sum;
+  next = (next + 1) % v.size();
+  count = std::min(count + 1, v.size());
+}
+
+double WhiskerFsmLogic::SumWindow::change_rms() const {
+  if (v.size() < 2 || count < v.size()) return NAN;
+  double sq = 0.0;
+  // Oldest sample at next; the ring is full.
+  for (std::size_t k = 1; k < v.size(); ++k) {
+    const double d = v[(next + k) % v.size()] - v[(next + k - 1) % v.size()];
+    sq += d * d;
+  }
+  return std::sqrt(sq / static_cast<double>(v.size() - 1));
 }
 
 void WhiskerFsmLogic::on_depth(const tactile_msgs::msg::TactileDepth& msg) {
@@ -136,7 +177,7 @@ void WhiskerFsmLogic::on_depth(const tactile_msgs::msg::TactileDepth& msg) {
 }
 
 bool WhiskerFsmLogic::on_signal(const tactile_msgs::msg::WhiskerSignal& msg, uint8_t expected_id, int64_t& stamp_ns,
-                                bool& contact, double& input_sum) {
+                                bool& contact, double& input_sum, SumWindow& window) {
   if (msg.whisker_id != expected_id) {
     ++stats_.dropped_wrong_whisker;
     return false;
@@ -158,17 +199,18 @@ bool WhiskerFsmLogic::on_signal(const tactile_msgs::msg::WhiskerSignal& msg, uin
   // pressed-whisker rule (press_sum_pa). NaN if not finite.
   const double sum = msg.calibrated[0] + msg.calibrated[1] + msg.calibrated[2];
   input_sum = std::isfinite(sum) ? sum : NAN;
+  window.push(input_sum);  // phantom_quiet_rms
   return true;
 }
 
 void WhiskerFsmLogic::on_left_signal(const tactile_msgs::msg::WhiskerSignal& msg) {
   ++stats_.received_signal_left;
-  on_signal(msg, tactile_msgs::msg::WhiskerPressure::WHISKER_LEFT, left_ns_, left_contact_, left_sum_);
+  on_signal(msg, tactile_msgs::msg::WhiskerPressure::WHISKER_LEFT, left_ns_, left_contact_, left_sum_, left_window_);
 }
 
 void WhiskerFsmLogic::on_right_signal(const tactile_msgs::msg::WhiskerSignal& msg) {
   ++stats_.received_signal_right;
-  on_signal(msg, tactile_msgs::msg::WhiskerPressure::WHISKER_RIGHT, right_ns_, right_contact_, right_sum_);
+  on_signal(msg, tactile_msgs::msg::WhiskerPressure::WHISKER_RIGHT, right_ns_, right_contact_, right_sum_, right_window_);
 }
 
 void WhiskerFsmLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
@@ -202,6 +244,8 @@ WhiskerFsmLogic::Outputs WhiskerFsmLogic::on_timer(int64_t now_ns) {
       right_contact_ && right_ns_ != INT64_MIN && in_.t - tactile_common::to_seconds(right_ns_) <= age;
   in_.input_sum_left = left_ns_ != INT64_MIN && in_.t - tactile_common::to_seconds(left_ns_) <= age ? left_sum_ : NAN;
   in_.input_sum_right = right_ns_ != INT64_MIN && in_.t - tactile_common::to_seconds(right_ns_) <= age ? right_sum_ : NAN;
+  in_.input_change_rms_left = std::isfinite(in_.input_sum_left) ? left_window_.change_rms() : NAN;
+  in_.input_change_rms_right = std::isfinite(in_.input_sum_right) ? right_window_.change_rms() : NAN;
   const WallFollowerOutput o = fsm_.step(in_);
 
   Outputs out;

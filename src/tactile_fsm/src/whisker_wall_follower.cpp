@@ -82,6 +82,10 @@ void WallFollowerParams::validate() const {
   require(finite_nonneg(press_sum_pa), "press_sum_pa", "must be finite and >= 0 (0 = off)", press_sum_pa);
   require(finite_nonneg(press_hold_s), "press_hold_s", "must be finite and >= 0", press_hold_s);
   require(finite_positive(press_depth), "press_depth", "must be finite and > 0", press_depth);
+  require(finite_nonneg(phantom_quiet_rms), "phantom_quiet_rms", "must be finite and >= 0 (0 = off)",
+          phantom_quiet_rms);
+  require(finite_nonneg(phantom_travel), "phantom_travel", "must be finite and >= 0", phantom_travel);
+  require(finite_nonneg(phantom_resume_max), "phantom_resume_max", "must be finite and >= 0", phantom_resume_max);
   require(finite_positive(target_radius), "target_radius", "must be finite and > 0", target_radius);
   require(finite_nonneg(landing_duration_s), "landing_duration_s", "must be finite and >= 0", landing_duration_s);
   require(finite_positive(max_input_age_s), "max_input_age_s", "must be finite and > 0", max_input_age_s);
@@ -171,6 +175,8 @@ void WhiskerWallFollower::reset() {
   last_contact_t_ = 0.0;
   f_left_ = f_right_ = NAN;
   pressed_t_left_ = pressed_t_right_ = -INFINITY;
+  live_x_l_ = live_y_l_ = live_x_r_ = live_y_r_ = NAN;
+  phantom_l_ = phantom_r_ = false;
   wall_heading_ = theta_ = NAN;
   origin_set_ = false;
   origin_x_ = origin_y_ = clear_x_ = clear_y_ = 0.0;
@@ -221,8 +227,41 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
 
   const bool depth_fresh = std::isfinite(in.depth_stamp) && t - in.depth_stamp <= p_.max_input_age_s + kTimeEps;
   const bool odom_fresh = std::isfinite(in.odom_stamp) && t - in.odom_stamp <= p_.max_input_age_s + kTimeEps;
-  const bool l_valid = depth_fresh && in.left_valid && std::isfinite(in.depth_left);
-  const bool r_valid = depth_fresh && in.right_valid && std::isfinite(in.depth_right);
+  bool l_valid = depth_fresh && in.left_valid && std::isfinite(in.depth_left);
+  bool r_valid = depth_fresh && in.right_valid && std::isfinite(in.depth_right);
+  bool tdorc_l = in.tdorc_contact_left, tdorc_r = in.tdorc_contact_right;
+  // Contact as reported, before the phantom gate below.
+  const bool held_raw_l = l_valid || tdorc_l, held_raw_r = r_valid || tdorc_r;
+
+  // Phantom hold gated by odometry (issue 17, README "Round 4"): a held
+  // contact whose S_c sum (000 eq. 5) stays quiet while the drone travels
+  // more than phantom_travel is the gel-hysteresis offset (000 eq. 1, N_h) of
+  // a whisker that left the wall, not a wall: ignore it.
+  if (p_.phantom_quiet_rms > 0.0 && odom_fresh && std::isfinite(in.x) && std::isfinite(in.y)) {
+    auto gate = [&](bool& valid, bool& tdorc, double rms, double& lx, double& ly, bool& phantom) {
+      const bool held = valid || tdorc;
+      // Free, unknown or moving: the contact (if any) is live here.
+      // phantom_latch: once taken for a phantom, a whisker stays one until its
+      // contact ends or its sum moves clearly (RMS >= twice the quiet level, a
+      // new touch); without it the free whisker's noise, which crosses the
+      // quiet level itself, lets the phantom back in for a moment.
+      const double live_rms = (p_.phantom_latch && phantom) ? 2.0 * p_.phantom_quiet_rms : p_.phantom_quiet_rms;
+      if (!held || !std::isfinite(rms) || rms >= live_rms || !std::isfinite(lx)) {
+        lx = in.x;
+        ly = in.y;
+        phantom = false;
+        return;
+      }
+      phantom = (p_.phantom_latch && phantom) || std::hypot(in.x - lx, in.y - ly) > p_.phantom_travel;
+      if (!phantom) return;
+      valid = false;
+      tdorc = false;
+    };
+    gate(l_valid, tdorc_l, in.input_change_rms_left, live_x_l_, live_y_l_, phantom_l_);
+    gate(r_valid, tdorc_r, in.input_change_rms_right, live_x_r_, live_y_r_, phantom_r_);
+  } else {
+    phantom_l_ = phantom_r_ = false;
+  }
 
   // First-order low-pass of the depths for the sub-state rule (our choice;
   // restarts when a whisker loses the wall).
@@ -243,8 +282,8 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
 
   // 000 Methods: wall following is triggered when either whisker's S_p
   // exceeds T_c (TDORC flags); the depth node's contact flags count too.
-  const bool contact_l = l_valid || in.tdorc_contact_left;
-  const bool contact_r = r_valid || in.tdorc_contact_right;
+  const bool contact_l = l_valid || tdorc_l;
+  const bool contact_r = r_valid || tdorc_r;
   const bool contact = contact_l || contact_r;
   const bool flying =
       state_ == FsmState::kFlyForward || state_ == FsmState::kWallFollowing || state_ == FsmState::kResumeForward;
@@ -301,7 +340,12 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
           last_contact_t_ = t;
           enter(FsmState::kWallFollowing, "whisker contact", t);
         } else if (state_ == FsmState::kResumeForward &&
-                   std::hypot(in.x - clear_x_, in.y - clear_y_) >= p_.clear_margin) {
+                   std::hypot(in.x - clear_x_, in.y - clear_y_) >= p_.clear_margin &&
+                   (!(held_raw_l || held_raw_r) ||
+                    std::hypot(in.x - clear_x_, in.y - clear_y_) >= p_.phantom_resume_max)) {
+          // A whisker still held as a phantom: TDORC has not released it yet,
+          // and its window learns what follows the release (a new contact
+          // would go unseen); keep side-stepping, up to phantom_resume_max.
           after_clear_ = true;
           resume_x_ = in.x;
           resume_y_ = in.y;

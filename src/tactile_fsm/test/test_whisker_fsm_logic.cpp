@@ -107,6 +107,11 @@ TEST(WhiskerFsmLogic, RepositoryConfigMatchesDefaults) {
   EXPECT_EQ(p.fsm.press_sum_pa, d.fsm.press_sum_pa);
   EXPECT_EQ(p.fsm.press_hold_s, d.fsm.press_hold_s);
   EXPECT_EQ(p.fsm.press_depth, d.fsm.press_depth);
+  EXPECT_EQ(p.fsm.phantom_quiet_rms, d.fsm.phantom_quiet_rms);
+  EXPECT_EQ(p.fsm.phantom_travel, d.fsm.phantom_travel);
+  EXPECT_EQ(p.fsm.phantom_resume_max, d.fsm.phantom_resume_max);
+  EXPECT_EQ(p.fsm.phantom_latch, d.fsm.phantom_latch);
+  EXPECT_EQ(p.phantom_quiet_samples, d.phantom_quiet_samples);
   EXPECT_EQ(p.target_x, d.target_x);
   EXPECT_EQ(p.target_y, d.target_y);
 }
@@ -129,6 +134,12 @@ TEST(WhiskerFsmLogic, ParameterErrorsNameTheKey) {
   m = WhiskerFsmLogic::default_parameters();
   m.set("press_depth", 0.0);
   EXPECT_NE(param_error(m).find("press_depth"), std::string::npos) << param_error(m);
+  m = WhiskerFsmLogic::default_parameters();
+  m.set("phantom_quiet_rms", -1.0);
+  EXPECT_NE(param_error(m).find("phantom_quiet_rms"), std::string::npos) << param_error(m);
+  m = WhiskerFsmLogic::default_parameters();
+  m.set("phantom_quiet_samples", int64_t{1});
+  EXPECT_NE(param_error(m).find("phantom_quiet_samples"), std::string::npos) << param_error(m);
   m = WhiskerFsmLogic::default_parameters();
   m.set("v_max", std::string("fast"));  // wrong type
   EXPECT_THROW(WhiskerFsmLogic::params_from(m), ParamError);
@@ -234,6 +245,46 @@ TEST(WhiskerFsmLogic, PressedWhiskerFromSignalSums) {
   EXPECT_EQ(on[2], "WALL_FOLLOWING/FLY_BACKWARD");
   const auto off = run(0.0);
   EXPECT_EQ(off[2], "");  // no transition: still FLY_SIDEWAYS
+}
+
+// Issue 17, round 4: the RMS of the sample-to-sample changes of each
+// whisker's S_c sum reaches the phantom gate. Both whiskers in contact at
+// 70 / 70 mm, the drone moved 4 mm per tick along -y (odometry by hand), each
+// channel at 100 +- 1 Pa (sum 300 +- 3, changes of 6 Pa: RMS 6 < 8, quiet) or
+// 100 +- 10 Pa (changes of 60 Pa, moving). The window fills with the 25th
+// signal (tick 125), so the contact counts as live up to tick 124; the drone
+// is 52 mm further at tick 137, the whiskers count as off and the obstacle is
+// cleared 0.2 s after the last tick in contact (136): tick 146; a moving
+// sum, or the gate off, keeps the wall following.
+TEST(WhiskerFsmLogic, QuietSignalSumsReachThePhantomGate) {
+  auto run = [](double quiet_rms, double swing) {
+    ParamMap m = WhiskerFsmLogic::default_parameters();
+    m.set("phantom_quiet_rms", quiet_rms);
+    m.set("phantom_travel", 0.05);
+    auto p = WhiskerFsmLogic::params_from(m);
+    p.target_x = 5.0;
+    WhiskerFsmLogic l(p);
+    for (int k = 0; k <= 100; ++k) tick(l, k * kStepNs);
+    int cleared = -1;
+    for (int k = 101; k <= 160; ++k) {
+      const int64_t ns = k * kStepNs;
+      l.on_depth(depth(ns, true, 0.07, true, 0.07));
+      l.on_odometry(odom(ns, 0.5, -0.004 * (k - 101), 0.0));
+      auto left = signal(ns, 0, true);
+      auto right = signal(ns, 1, true);
+      const double each = 100.0 + (k % 2 ? swing : -swing);
+      left.calibrated = {{each, each, each}};
+      right.calibrated = {{each, each, each}};
+      l.on_left_signal(left);
+      l.on_right_signal(right);
+      l.on_timer(ns);
+      if (cleared < 0 && l.fsm().state() == tactile_fsm::FsmState::kResumeForward) cleared = k;
+    }
+    return cleared;
+  };
+  EXPECT_EQ(run(8.0, 1.0), 146);
+  EXPECT_EQ(run(8.0, 10.0), -1);
+  EXPECT_EQ(run(0.0, 1.0), -1);
 }
 
 TEST(WhiskerFsmLogic, BadInputDroppedAndCounted) {

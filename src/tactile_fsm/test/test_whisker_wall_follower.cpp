@@ -314,6 +314,136 @@ TEST(WhiskerWallFollower, PressedWhiskerCountsAsAtPressDepth) {
   EXPECT_THROW(p.validate(), std::invalid_argument);
 }
 
+// Issue 17, round 4: a held contact whose S_c sum stays quiet while the drone
+// travels is a phantom (gel hysteresis, 000 eq. 1). Hand case: both whiskers
+// in contact at 70 / 70 mm (in band, aligned: FLY_SIDEWAYS to the right, the
+// drone moved 4 mm per tick by hand along -y from where it hovered). With a
+// quiet sum (RMS 3 Pa < 8 Pa) the whiskers count as off the wall once the
+// drone is more than 0.05 m from where the contact began: tick 13 (52 mm),
+// and the obstacle is cleared clear_confirm_s (0.2 s = 10 ticks) after the
+// last tick in contact (12): tick 22; without the rule, with a moving
+// sum (20 Pa), with an unknown RMS or with the drone hovering in place the
+// wall following goes on.
+TEST(WhiskerWallFollower, QuietHeldContactWhileTravellingIsPhantom) {
+  struct Run {
+    int first_phantom_tick = -1;
+    int cleared_tick = -1;
+  };
+  auto fly = [](WallFollowerParams p, double rms, double step_m) {
+    WhiskerWallFollower fsm(p);
+    double t = 0.0;
+    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t, 1.0, 0.0));
+    Run r;
+    for (int k = 0; k < 40; ++k, t += kDt) {
+      WallFollowerInput in = input(t, 1.0, -step_m * k);
+      set_depths(in, 0.07, 0.07);
+      in.tdorc_contact_left = in.tdorc_contact_right = true;
+      in.input_sum_left = in.input_sum_right = 400.0;
+      in.input_change_rms_left = in.input_change_rms_right = rms;
+      const WallFollowerOutput o = fsm.step(in);
+      if (r.first_phantom_tick < 0 && fsm.phantom_left() && fsm.phantom_right()) r.first_phantom_tick = k;
+      if (r.cleared_tick < 0 && o.state == FsmState::kResumeForward) r.cleared_tick = k;
+    }
+    return r;
+  };
+  WallFollowerParams p;
+  p.phantom_quiet_rms = 8.0;
+  p.phantom_travel = 0.05;
+  const Run quiet = fly(p, 3.0, 0.004);
+  EXPECT_EQ(quiet.first_phantom_tick, 13);
+  EXPECT_EQ(quiet.cleared_tick, 22);
+  EXPECT_EQ(fly(p, 20.0, 0.004).cleared_tick, -1);  // the sum moves: a wall
+  EXPECT_EQ(fly(p, NAN, 0.004).cleared_tick, -1);   // unknown: kept
+  EXPECT_EQ(fly(p, 3.0, 0.0).cleared_tick, -1);     // quiet but hovering: kept
+  // Off (the paper, the core default).
+  EXPECT_EQ(WallFollowerParams{}.phantom_quiet_rms, 0.0);
+  EXPECT_EQ(fly(WallFollowerParams{}, 3.0, 0.004).cleared_tick, -1);
+  // Bad values name the field.
+  p.phantom_travel = -0.1;
+  try {
+    p.validate();
+    ADD_FAILURE() << "negative phantom_travel accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("WallFollowerParams.phantom_travel"), std::string::npos) << e.what();
+  }
+  p.phantom_travel = 0.05;
+  p.phantom_quiet_rms = NAN;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+}
+
+// Issue 17, round 4: after a phantom clearing, RESUME_FORWARD keeps
+// side-stepping while the whisker is still held (TDORC has not released it),
+// up to phantom_resume_max from the clearing. Same hand case as above (4 mm
+// per tick along -y, cleared at tick 22, y = -0.088 m): with
+// phantom_resume_max 0 FLY_FORWARD begins once 0.30 m (clear_margin) from the
+// clearing, tick 97 (75 ticks of 4 mm); with 0.6 m not before tick 172 (150
+// ticks), or at the first tick past the margin without a held contact (the
+// hold ends at tick 120).
+TEST(WhiskerWallFollower, ResumeKeepsSideSteppingWhilePhantomHeld) {
+  auto fly = [](double resume_max, int release_tick) {
+    WallFollowerParams p;
+    p.phantom_quiet_rms = 8.0;
+    p.phantom_travel = 0.05;
+    p.phantom_resume_max = resume_max;
+    WhiskerWallFollower fsm(p);
+    double t = 0.0;
+    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t, 1.0, 0.0));
+    for (int k = 0; k < 250; ++k, t += kDt) {
+      WallFollowerInput in = input(t, 1.0, -0.004 * k);
+      in.target_x = 5.0;
+      if (k < release_tick) {
+        set_depths(in, 0.07, 0.07);
+        in.tdorc_contact_left = in.tdorc_contact_right = true;
+        in.input_sum_left = in.input_sum_right = 400.0;
+        in.input_change_rms_left = in.input_change_rms_right = 3.0;
+      }
+      if (fsm.step(in).state == FsmState::kFlyForward) return k;
+    }
+    return -1;
+  };
+  EXPECT_EQ(fly(0.0, 1000), 97);
+  EXPECT_EQ(fly(0.6, 1000), 172);
+  EXPECT_EQ(fly(0.6, 120), 120);
+  WallFollowerParams p;
+  p.phantom_resume_max = -1.0;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+}
+
+// phantom_latch (tried, off): the hand case of the gate, then from tick 30
+// the quiet sum's RMS reads 9 Pa (noise crossing the 8 Pa quiet level):
+// without the latch the phantom is let back in (wall following again at tick
+// 30); with it the whisker stays a phantom (still RESUME_FORWARD at tick 39),
+// and an RMS of 20 Pa (>= 2 * 8 Pa, a new touch) brings it back.
+TEST(WhiskerWallFollower, PhantomLatch) {
+  auto state_at_39 = [](bool latch, double later_rms) {
+    WallFollowerParams p;
+    p.phantom_quiet_rms = 8.0;
+    p.phantom_travel = 0.05;
+    p.phantom_latch = latch;
+    WhiskerWallFollower fsm(p);
+    double t = 0.0;
+    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t, 1.0, 0.0));
+    FsmState s = FsmState::kHoverInit;
+    for (int k = 0; k < 40; ++k, t += kDt) {
+      WallFollowerInput in = input(t, 1.0, -0.004 * k);
+      in.target_x = 5.0;
+      set_depths(in, 0.07, 0.07);
+      in.tdorc_contact_left = in.tdorc_contact_right = true;
+      in.input_sum_left = in.input_sum_right = 400.0;
+      in.input_change_rms_left = in.input_change_rms_right = k < 30 ? 3.0 : later_rms;
+      s = fsm.step(in).state;
+      if (k == 29) {
+        EXPECT_EQ(s, FsmState::kResumeForward);
+      }
+    }
+    return s;
+  };
+  EXPECT_EQ(state_at_39(false, 9.0), FsmState::kWallFollowing);
+  EXPECT_EQ(state_at_39(true, 9.0), FsmState::kResumeForward);
+  EXPECT_EQ(state_at_39(true, 20.0), FsmState::kWallFollowing);
+  EXPECT_FALSE(WallFollowerParams{}.phantom_latch);
+}
+
 TEST(Saturation, ScalesSpeedAndClampsYawRate) {
   const WallFollowerParams p;
   Setpoint s;

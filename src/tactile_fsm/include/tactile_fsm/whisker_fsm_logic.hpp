@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "nav_msgs/msg/odometry.hpp"
 #include "tactile_common/parameters.hpp"
@@ -41,6 +42,10 @@ class WhiskerFsmLogic {
     /// three-baffle scenario's target, 0.6 m past the last baffle.
     double target_x = 3.6;
     double target_y = 0.0;
+    /// Window of the RMS of the sample-to-sample changes of each whisker's
+    /// S_c sum (phantom_quiet_rms of the core), in signal samples (25 = 0.5 s
+    /// at 50 Hz, as tdorc_filter's hold_quiet_samples).
+    int phantom_quiet_samples = 25;
     void validate() const;
   };
 
@@ -81,7 +86,16 @@ class WhiskerFsmLogic {
   const WhiskerWallFollower& fsm() const { return fsm_; }
 
  private:
-  bool on_signal(const tactile_msgs::msg::WhiskerSignal& msg, uint8_t expected_id, int64_t& stamp, bool& contact, double& input_sum);
+  /// Last phantom_quiet_samples S_c sums of one whisker (ring, allocated once).
+  struct SumWindow {
+    std::vector<double> v;
+    std::size_t next = 0, count = 0;
+    void push(double sum);
+    /// RMS of the sample-to-sample changes over the full window; NaN until full.
+    double change_rms() const;
+  };
+  bool on_signal(const tactile_msgs::msg::WhiskerSignal& msg, uint8_t expected_id, int64_t& stamp, bool& contact,
+                 double& input_sum, SumWindow& window);
 
   Params params_;
   WhiskerWallFollower fsm_;
@@ -90,6 +104,7 @@ class WhiskerFsmLogic {
   int64_t depth_ns_ = INT64_MIN, odom_ns_ = INT64_MIN, left_ns_ = INT64_MIN, right_ns_ = INT64_MIN;
   bool left_contact_ = false, right_contact_ = false;
   double left_sum_ = NAN, right_sum_ = NAN;  ///< sum of the three S_c of the last signal [Pa]
+  SumWindow left_window_, right_window_;
   int64_t last_state_pub_ns_ = INT64_MIN;
   std::string previous_state_name_;  ///< state before the last transition ("" at start)
   std::string current_state_name_;   ///< "STATE" or "WALL_FOLLOWING/SUB_STATE"

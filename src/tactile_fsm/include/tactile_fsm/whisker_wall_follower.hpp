@@ -121,6 +121,29 @@ struct WallFollowerParams {
   double press_sum_pa = 0.0;
   double press_hold_s = 0.2;   ///< [s]
   double press_depth = 0.05;   ///< [m]
+  /// Phantom hold gated by odometry (issue 17, README "Round 4"): the gel
+  /// hysteresis (000 eq. 1, N_h) can leave a whisker held "in contact" by
+  /// TDORC after it left a baffle, its S_c frozen on a slowly decaying offset.
+  /// A whisker pressed by a moving drone follows every millimetre of the
+  /// motion (stick-slip), so its S_c sum changes; a free one only shows the
+  /// barometer noise. A whisker in contact whose S_c sum has stayed quiet
+  /// (RMS of its sample-to-sample changes < phantom_quiet_rms, computed by the
+  /// node logic over its last phantom_quiet_samples signals) while the drone
+  /// moved more than phantom_travel [m] (odometry) since the sum last moved,
+  /// or since the contact began, is not on a wall: the FSM ignores its depth
+  /// and contact flag. Unlike tdorc_filter's hold_quiet_rms it does not end
+  /// the filter's hold (no window learns pressed samples) and a pressed
+  /// whisker of a hovering or turning drone is never dropped.
+  /// phantom_quiet_rms 0 = off (the paper). [Pa]
+  double phantom_quiet_rms = 0.0;
+  double phantom_travel = 0.05;  ///< [m]
+  /// RESUME_FORWARD keeps side-stepping past clear_margin while a whisker is
+  /// still held as a phantom, up to this distance from the clearing [m].
+  double phantom_resume_max = 0.0;
+  /// Latch (issue 17, README "Round 4", tried, off): a whisker taken for a
+  /// phantom stays one until its contact ends or the RMS of its sum's changes
+  /// reaches 2 * phantom_quiet_rms.
+  bool phantom_latch = false;
   double target_radius = 0.15;                 ///< land within this distance of the target [m]
   bool land_past_target = true;                ///< also land once past the target along the course direction
   double landing_duration_s = 2.0;             ///< LANDING -> LANDED after this [s]
@@ -146,6 +169,9 @@ struct WallFollowerInput {
   // Sum of the three S_c of each whisker (TDORC, 000 eq. 5) [Pa]; NaN = unknown/stale.
   double input_sum_left = NAN;
   double input_sum_right = NAN;
+  // RMS of the sample-to-sample changes of that sum over the node's window [Pa]; NaN = unknown.
+  double input_change_rms_left = NAN;
+  double input_change_rms_right = NAN;
   // Odometry pose (world frame, REP-103).
   double odom_stamp = NAN;
   double x = 0.0, y = 0.0, yaw = 0.0;
@@ -218,6 +244,9 @@ class WhiskerWallFollower {
   /// Low-pass filtered depths used by the rule (NaN when invalid).
   double filtered_left() const { return f_left_; }
   double filtered_right() const { return f_right_; }
+  /// Whisker held in contact but taken for a phantom (phantom_quiet_rms) on the last tick.
+  bool phantom_left() const { return phantom_l_; }
+  bool phantom_right() const { return phantom_r_; }
   /// Wall angle in the body frame used by the rule [rad] (NaN unless both valid).
   double wall_angle() const { return theta_; }
   const WallFollowerParams& params() const { return p_; }
@@ -243,6 +272,9 @@ class WhiskerWallFollower {
   double last_contact_t_ = 0.0;
   double f_left_ = NAN, f_right_ = NAN;
   double pressed_t_left_ = -INFINITY, pressed_t_right_ = -INFINITY;  ///< last tick with sum >= press_sum_pa
+  double live_x_l_ = NAN, live_y_l_ = NAN;  ///< where the left S_c sum last moved (or the whisker was free)
+  double live_x_r_ = NAN, live_y_r_ = NAN;
+  bool phantom_l_ = false, phantom_r_ = false;
   double wall_heading_ = NAN;  ///< filtered yaw - theta [rad]
   double theta_ = NAN;
   bool origin_set_ = false;
