@@ -7,7 +7,9 @@
 #include <array>
 #include <cmath>
 #include <memory>
+#include <string>
 #include <tuple>
+#include <vector>
 
 #include "mapping_pcl/xplorer_map_logic.hpp"
 #include "mapping_pcl/xplorer_stamping.hpp"
@@ -590,5 +592,80 @@ TEST(XplorerMappingRules, LogicHoldsATraversalAfterExplorationOnly) {
     enter_traversal_and_press(logic, previous, 0.1);
     EXPECT_EQ(logic.mapper().stats().slabs, 1u) << previous;
     EXPECT_EQ(logic.mapper().held(), previous == "exploration" ? 1u : 0u) << previous;
+  }
+}
+
+// README "Re-contact after a contact-lost turn": tactile_fsm turns about a face's end
+// when the contact is lost ("contact lost: turn about the corner"); the traversal
+// after that turn re-contacts the object from off its face, an impact like the one
+// after Exploration. With impact_turn_reasons = ["contact lost"] (default) it gets the
+// first-contact rules: contact now (the average 1.81 N, the latest samples 0.1 N: no
+// slab), the steady hold and the 1 s state gate; after a corner turn ("yaw rate peak")
+// none of them; with impact_turn_reasons empty the contact-lost turn is a corner turn.
+TEST(XplorerMappingRules, LogicTreatsTheReContactAfterAContactLostTurnAsAnImpact) {
+  struct Case {
+    std::string reason;
+    bool rule_on;
+    bool impact;
+  };
+  for (const Case& c : {Case{"contact lost: turn about the corner", true, true}, Case{"yaw rate peak", true, false},
+                        Case{"contact lost: turn about the corner", false, false}}) {
+    const std::string what = c.reason + (c.rule_on ? " (rule on)" : " (rule off)");
+    auto make = [&](bool no_gate) {
+      auto d = XplorerMapLogic::default_parameters();
+      d.set("publish_rate_hz", 0.0);
+      d.set("corner_release_s", 0.0);
+      if (no_gate) {
+        d.set("min_state_time_s", 0.0);
+        d.set("min_state_time_after_turn_s", 0.0);
+      }
+      if (!c.rule_on) d.set("impact_turn_reasons", std::vector<std::string>{});
+      return XplorerMapLogic::params_from(d);
+    };
+    auto turn_then_traverse = [&](XplorerMapLogic& logic) {
+      tactile_msgs::msg::FsmState st;
+      st.state = "tactile_turning";
+      st.previous_state = "tactile_traversal";
+      st.reason = c.reason;
+      logic.on_fsm_state(st);
+      st.state = "tactile_traversal";
+      st.previous_state = "tactile_turning";
+      st.reason = "re-contact +X";
+      logic.on_fsm_state(st);
+    };
+    auto press = [](XplorerMapLogic& logic, double t, int n_strong, int n) {
+      geometry_msgs::msg::WrenchStamped w;
+      w.header.frame_id = "base_link";
+      for (int i = 0; i < n; ++i) {
+        w.wrench.force.x = i < n_strong ? -2.0 : -0.1;
+        logic.on_wrench_body(w);
+      }
+      nav_msgs::msg::Odometry o;
+      o.child_frame_id = "base_link";
+      o.pose.pose.position.z = 0.7;
+      o.pose.pose.orientation.w = 1.0;
+      tactile_common::to_stamp(tactile_common::from_seconds(t), o.header.stamp);
+      logic.on_odometry(o);
+      logic.on_timer(tactile_common::from_seconds(t));
+    };
+    {  // contact now: the average 1.81 N, the latest 10 samples 0.1 N
+      XplorerMapLogic logic(make(true));
+      turn_then_traverse(logic);
+      press(logic, 0.0, 40, 50);
+      EXPECT_EQ(logic.mapper().stats().slabs, c.impact ? 0u : 1u) << what;
+    }
+    {  // a firm press 0.4 s into the traversal: the 1 s gate after an impact, 0.3 s after a corner turn
+      XplorerMapLogic logic(make(false));
+      turn_then_traverse(logic);
+      press(logic, 0.4, 50, 50);
+      EXPECT_EQ(logic.mapper().stats().slabs, c.impact ? 0u : 1u) << what;
+    }
+    {  // no gate: the slab is held until steady after an impact, in the map at once otherwise
+      XplorerMapLogic logic(make(true));
+      turn_then_traverse(logic);
+      press(logic, 0.1, 50, 50);
+      EXPECT_EQ(logic.mapper().stats().slabs, 1u) << what;
+      EXPECT_EQ(logic.mapper().held(), c.impact ? 1u : 0u) << what;
+    }
   }
 }
