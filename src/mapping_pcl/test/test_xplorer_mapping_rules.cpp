@@ -599,18 +599,26 @@ TEST(XplorerMappingRules, LogicHoldsATraversalAfterExplorationOnly) {
 // when the contact is lost ("contact lost: turn about the corner"); the traversal
 // after that turn re-contacts the object from off its face, an impact like the one
 // after Exploration. With impact_turn_reasons = ["contact lost"] (default) it gets the
-// first-contact rules: contact now (the average 1.81 N, the latest samples 0.1 N: no
-// slab), the steady hold and the 1 s state gate; after a corner turn ("yaw rate peak")
-// none of them; with impact_turn_reasons empty the contact-lost turn is a corner turn.
+// first-contact rules listed in impact_turn_rules: contact now (the average 1.81 N, the
+// latest samples 0.1 N: no slab), the steady hold and the 1 s state gate; after a corner
+// turn ("yaw rate peak") none of them; with impact_turn_reasons empty the contact-lost
+// turn is a corner turn.
 TEST(XplorerMappingRules, LogicTreatsTheReContactAfterAContactLostTurnAsAnImpact) {
+  const std::string lost = "contact lost: turn about the corner";
+  const std::vector<std::string> all = {"contact_now", "steady", "gate"};
   struct Case {
     std::string reason;
-    bool rule_on;
-    bool impact;
+    std::vector<std::string> reasons;  // impact_turn_reasons
+    std::vector<std::string> rules;    // impact_turn_rules
+    bool now, gate, steady;            // which rules apply
   };
-  for (const Case& c : {Case{"contact lost: turn about the corner", true, true}, Case{"yaw rate peak", true, false},
-                        Case{"contact lost: turn about the corner", false, false}}) {
-    const std::string what = c.reason + (c.rule_on ? " (rule on)" : " (rule off)");
+  for (const Case& c : {Case{lost, {"contact lost"}, all, true, true, true},
+                        Case{"yaw rate peak", {"contact lost"}, all, false, false, false},
+                        Case{lost, {}, all, false, false, false},
+                        Case{lost, {"contact lost"}, {"contact_now", "steady"}, true, false, true},
+                        Case{lost, {"contact lost"}, {"gate"}, false, true, false}}) {
+    std::string what = c.reason + " reasons " + std::to_string(c.reasons.size()) + " rules";
+    for (const auto& r : c.rules) what += " " + r;
     auto make = [&](bool no_gate) {
       auto d = XplorerMapLogic::default_parameters();
       d.set("publish_rate_hz", 0.0);
@@ -619,7 +627,8 @@ TEST(XplorerMappingRules, LogicTreatsTheReContactAfterAContactLostTurnAsAnImpact
         d.set("min_state_time_s", 0.0);
         d.set("min_state_time_after_turn_s", 0.0);
       }
-      if (!c.rule_on) d.set("impact_turn_reasons", std::vector<std::string>{});
+      d.set("impact_turn_reasons", c.reasons);
+      d.set("impact_turn_rules", c.rules);
       return XplorerMapLogic::params_from(d);
     };
     auto turn_then_traverse = [&](XplorerMapLogic& logic) {
@@ -652,20 +661,28 @@ TEST(XplorerMappingRules, LogicTreatsTheReContactAfterAContactLostTurnAsAnImpact
       XplorerMapLogic logic(make(true));
       turn_then_traverse(logic);
       press(logic, 0.0, 40, 50);
-      EXPECT_EQ(logic.mapper().stats().slabs, c.impact ? 0u : 1u) << what;
+      EXPECT_EQ(logic.mapper().stats().slabs, c.now ? 0u : 1u) << what;
     }
     {  // a firm press 0.4 s into the traversal: the 1 s gate after an impact, 0.3 s after a corner turn
       XplorerMapLogic logic(make(false));
       turn_then_traverse(logic);
       press(logic, 0.4, 50, 50);
-      EXPECT_EQ(logic.mapper().stats().slabs, c.impact ? 0u : 1u) << what;
+      EXPECT_EQ(logic.mapper().stats().slabs, c.gate ? 0u : 1u) << what;
     }
     {  // no gate: the slab is held until steady after an impact, in the map at once otherwise
       XplorerMapLogic logic(make(true));
       turn_then_traverse(logic);
       press(logic, 0.1, 50, 50);
       EXPECT_EQ(logic.mapper().stats().slabs, 1u) << what;
-      EXPECT_EQ(logic.mapper().held(), c.impact ? 1u : 0u) << what;
+      EXPECT_EQ(logic.mapper().held(), c.steady ? 1u : 0u) << what;
     }
+  }
+  auto d = XplorerMapLogic::default_parameters();
+  d.set("impact_turn_rules", std::vector<std::string>{"contact_now", "bogus"});
+  try {
+    XplorerMapLogic::params_from(d);
+    ADD_FAILURE() << "an unknown rule must be rejected";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("impact_turn_rules"), std::string::npos) << e.what();
   }
 }
