@@ -35,6 +35,11 @@ void XplorerMapLogic::Params::validate() const {
   if (!(min_state_time_after_turn_s >= 0.0) || !std::isfinite(min_state_time_after_turn_s))
     bad("min_state_time_after_turn_s", "must be finite and >= 0");
   if (frame_id.empty()) bad("frame_id", "must not be empty");
+  for (const auto& r : impact_turn_reasons)
+    if (r.empty()) bad("impact_turn_reasons", "must not hold an empty reason (it would match every turn)");
+  for (const auto& r : impact_turn_rules)
+    if (r != "contact_now" && r != "steady" && r != "gate")
+      bad("impact_turn_rules", "must hold only \"contact_now\", \"steady\", \"gate\", got \"" + r + "\"");
   if (!(max_arm_age_s > 0.0)) bad("max_arm_age_s", "must be > 0");
   if (force_now_samples < 0 || force_now_samples > force_average_samples)
     bad("force_now_samples", "must be in [0, force_average_samples], got " + std::to_string(force_now_samples));
@@ -77,6 +82,8 @@ ParamMap XplorerMapLogic::default_parameters() {
   m.set("corner_angle_tolerance", d.stamping.corner_angle_tolerance);
   m.set("release_states", d.release_states);
   m.set("contact_now_after", d.contact_now_after);
+  m.set("impact_turn_reasons", d.impact_turn_reasons);
+  m.set("impact_turn_rules", d.impact_turn_rules);
   m.set("recent_axis", d.stamping.recent_axis);
   m.set("corner_fill_max_gap", d.stamping.corner_fill_max_gap);
   m.set("corner_fill_min_turn", d.stamping.corner_fill_min_turn);
@@ -126,6 +133,8 @@ XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
   p.stamping.corner_angle_tolerance = m.get_double("corner_angle_tolerance");
   p.release_states = m.get_string_array("release_states");
   p.contact_now_after = m.get_string_array("contact_now_after");
+  p.impact_turn_reasons = m.get_string_array("impact_turn_reasons");
+  p.impact_turn_rules = m.get_string_array("impact_turn_rules");
   p.stamping.recent_axis = m.get_bool("recent_axis");
   p.stamping.corner_fill_max_gap = m.get_double("corner_fill_max_gap");
   p.stamping.corner_fill_min_turn = m.get_double("corner_fill_min_turn");
@@ -185,6 +194,16 @@ void XplorerMapLogic::on_fsm_state(const tactile_msgs::msg::FsmState& msg) {
   fsm_state_ = msg.state;
   fsm_state_since_s_ = tactile_common::to_seconds(tactile_common::from_stamp(msg.header.stamp)) - msg.time_in_state;
   fsm_previous_state_ = msg.previous_state;
+  if (changed) {
+    // README "Re-contact after a contact-lost turn": a turn entered because the face was
+    // lost brings the vehicle back to the object from off its face, like Exploration.
+    if (msg.state == kTurningState)
+      turn_after_impact_reason_ = std::any_of(params_.impact_turn_reasons.begin(), params_.impact_turn_reasons.end(),
+                                              [&](const std::string& r) { return msg.reason.rfind(r, 0) == 0; });
+    entered_after_impact_turn_ = !listed(params_.contact_now_after, msg.previous_state) &&
+                                 msg.previous_state == kTurningState && turn_after_impact_reason_;
+    entered_after_impact_ = listed(params_.contact_now_after, msg.previous_state) || entered_after_impact_turn_;
+  }
   // A corner release (001 Sec. IV-A: the yaw-rate peak that starts Tactile-turning):
   // the slabs stamped just before it overhang the face's end (corner_release_s).
   // Likewise at every other end of a traversal in release_states (README "Release on every end of a traversal").
@@ -195,7 +214,7 @@ void XplorerMapLogic::on_fsm_state(const tactile_msgs::msg::FsmState& msg) {
   if (left_stamp_state) mapper_.end_face(msg.state == kTurningState);
   // A traversal after an impact (entered from a state of contact_now_after:
   // Exploration) holds its slabs until C_n is steady (README "Steady first contact").
-  if (changed && listed(params_.stamp_states, msg.state) && listed(params_.contact_now_after, msg.previous_state))
+  if (changed && listed(params_.stamp_states, msg.state) && entered_after_impact_ && impact_rule("steady"))
     mapper_.begin_steady_hold();
 }
 
@@ -219,8 +238,9 @@ std::optional<sensor_msgs::msg::PointCloud2> XplorerMapLogic::on_timer(int64_t n
       fsm_state_ && !params_.stamp_states.empty() &&
       (!listed(params_.stamp_states, *fsm_state_) ||
        tactile_common::to_seconds(now_ns) - fsm_state_since_s_ <
-           (short_gate_after_turn() && fsm_previous_state_ == kTurningState ? params_.min_state_time_after_turn_s
-                                                                            : params_.min_state_time_s));
+           (short_gate_after_turn() && fsm_previous_state_ == kTurningState && !(entered_after_impact_ && impact_rule("gate"))
+                ? params_.min_state_time_after_turn_s
+                : params_.min_state_time_s));
   if (gated) {
     ++stats_.ticks_gated;
     // The initiation latch sees the force in every state: the firm contact
@@ -239,7 +259,7 @@ std::optional<sensor_msgs::msg::PointCloud2> XplorerMapLogic::on_timer(int64_t n
     s.height = p.z - params_.floor_z;
     s.force_body = force_sum_ / static_cast<double>(forces_.size());
     const bool check_now =
-        !fsm_state_ || params_.contact_now_after.empty() || listed(params_.contact_now_after, fsm_previous_state_);
+        !fsm_state_ || params_.contact_now_after.empty() || (entered_after_impact_ && impact_rule("contact_now"));
     if (params_.force_now_samples > 0) {  // README "Contact now": the latest samples, not the 1 s average
       const std::size_t k = std::min<std::size_t>(forces_.size(), static_cast<std::size_t>(params_.force_now_samples));
       Eigen::Vector2d now = Eigen::Vector2d::Zero();

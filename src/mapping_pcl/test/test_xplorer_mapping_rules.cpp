@@ -7,7 +7,9 @@
 #include <array>
 #include <cmath>
 #include <memory>
+#include <string>
 #include <tuple>
+#include <vector>
 
 #include "mapping_pcl/xplorer_map_logic.hpp"
 #include "mapping_pcl/xplorer_stamping.hpp"
@@ -590,5 +592,97 @@ TEST(XplorerMappingRules, LogicHoldsATraversalAfterExplorationOnly) {
     enter_traversal_and_press(logic, previous, 0.1);
     EXPECT_EQ(logic.mapper().stats().slabs, 1u) << previous;
     EXPECT_EQ(logic.mapper().held(), previous == "exploration" ? 1u : 0u) << previous;
+  }
+}
+
+// README "Re-contact after a contact-lost turn": tactile_fsm turns about a face's end
+// when the contact is lost ("contact lost: turn about the corner"); the traversal
+// after that turn re-contacts the object from off its face, an impact like the one
+// after Exploration. With impact_turn_reasons = ["contact lost"] (default) it gets the
+// first-contact rules listed in impact_turn_rules: contact now (the average 1.81 N, the
+// latest samples 0.1 N: no slab), the steady hold and the 1 s state gate; after a corner
+// turn ("yaw rate peak") none of them; with impact_turn_reasons empty the contact-lost
+// turn is a corner turn.
+TEST(XplorerMappingRules, LogicTreatsTheReContactAfterAContactLostTurnAsAnImpact) {
+  const std::string lost = "contact lost: turn about the corner";
+  const std::vector<std::string> all = {"contact_now", "steady", "gate"};
+  struct Case {
+    std::string reason;
+    std::vector<std::string> reasons;  // impact_turn_reasons
+    std::vector<std::string> rules;    // impact_turn_rules
+    bool now, gate, steady;            // which rules apply
+  };
+  for (const Case& c : {Case{lost, {"contact lost"}, all, true, true, true},
+                        Case{"yaw rate peak", {"contact lost"}, all, false, false, false},
+                        Case{lost, {}, all, false, false, false},
+                        Case{lost, {"contact lost"}, {"contact_now", "steady"}, true, false, true},
+                        Case{lost, {"contact lost"}, {"gate"}, false, true, false}}) {
+    std::string what = c.reason + " reasons " + std::to_string(c.reasons.size()) + " rules";
+    for (const auto& r : c.rules) what += " " + r;
+    auto make = [&](bool no_gate) {
+      auto d = XplorerMapLogic::default_parameters();
+      d.set("publish_rate_hz", 0.0);
+      d.set("corner_release_s", 0.0);
+      if (no_gate) {
+        d.set("min_state_time_s", 0.0);
+        d.set("min_state_time_after_turn_s", 0.0);
+      }
+      d.set("impact_turn_reasons", c.reasons);
+      d.set("impact_turn_rules", c.rules);
+      return XplorerMapLogic::params_from(d);
+    };
+    auto turn_then_traverse = [&](XplorerMapLogic& logic) {
+      tactile_msgs::msg::FsmState st;
+      st.state = "tactile_turning";
+      st.previous_state = "tactile_traversal";
+      st.reason = c.reason;
+      logic.on_fsm_state(st);
+      st.state = "tactile_traversal";
+      st.previous_state = "tactile_turning";
+      st.reason = "re-contact +X";
+      logic.on_fsm_state(st);
+    };
+    auto press = [](XplorerMapLogic& logic, double t, int n_strong, int n) {
+      geometry_msgs::msg::WrenchStamped w;
+      w.header.frame_id = "base_link";
+      for (int i = 0; i < n; ++i) {
+        w.wrench.force.x = i < n_strong ? -2.0 : -0.1;
+        logic.on_wrench_body(w);
+      }
+      nav_msgs::msg::Odometry o;
+      o.child_frame_id = "base_link";
+      o.pose.pose.position.z = 0.7;
+      o.pose.pose.orientation.w = 1.0;
+      tactile_common::to_stamp(tactile_common::from_seconds(t), o.header.stamp);
+      logic.on_odometry(o);
+      logic.on_timer(tactile_common::from_seconds(t));
+    };
+    {  // contact now: the average 1.81 N, the latest 10 samples 0.1 N
+      XplorerMapLogic logic(make(true));
+      turn_then_traverse(logic);
+      press(logic, 0.0, 40, 50);
+      EXPECT_EQ(logic.mapper().stats().slabs, c.now ? 0u : 1u) << what;
+    }
+    {  // a firm press 0.4 s into the traversal: the 1 s gate after an impact, 0.3 s after a corner turn
+      XplorerMapLogic logic(make(false));
+      turn_then_traverse(logic);
+      press(logic, 0.4, 50, 50);
+      EXPECT_EQ(logic.mapper().stats().slabs, c.gate ? 0u : 1u) << what;
+    }
+    {  // no gate: the slab is held until steady after an impact, in the map at once otherwise
+      XplorerMapLogic logic(make(true));
+      turn_then_traverse(logic);
+      press(logic, 0.1, 50, 50);
+      EXPECT_EQ(logic.mapper().stats().slabs, 1u) << what;
+      EXPECT_EQ(logic.mapper().held(), c.steady ? 1u : 0u) << what;
+    }
+  }
+  auto d = XplorerMapLogic::default_parameters();
+  d.set("impact_turn_rules", std::vector<std::string>{"contact_now", "bogus"});
+  try {
+    XplorerMapLogic::params_from(d);
+    ADD_FAILURE() << "an unknown rule must be rejected";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("impact_turn_rules"), std::string::npos) << e.what();
   }
 }

@@ -245,6 +245,9 @@ TEST(XplorerExplorer, ContactLostAfterALongTraversalTurnsAboutTheFacesEnd) {
         x.update(input(t += 0.02, XVec3(0, -0.5, 0.7), 0.0, XVec3::Zero()), 0.02);
       if (turn && traverse_s > 4.0) {
         ASSERT_EQ(x.state(), XplorerState::kTactileTurning) << x.reason();
+        // mapping_pcl's rule 10 (impact_turn_reasons: ["contact lost"]) tells this turn
+        // from a corner turn by its reason's prefix (FsmState.reason).
+        EXPECT_EQ(x.reason().rfind("contact lost", 0), 0u) << x.reason();
         EXPECT_EQ(x.turns(), 1u);
         EXPECT_NEAR(x.pivot().x(), 0.21, 1e-9);
         EXPECT_NEAR(x.pivot().y(), -0.5, 1e-9);
@@ -275,6 +278,7 @@ TEST(XplorerExplorer, ConvexCornerTurnOrbitsThePivot) {
   for (int i = 0; i < 20 && x.state() == XplorerState::kTactileTraversal; ++i)
     x.update(input(t += dt, XVec3(0.80, -0.5, 0.7), 0.2, XVec3(-1.0, 0, 0), 1.0), dt);
   ASSERT_EQ(x.state(), XplorerState::kTactileTurning);
+  EXPECT_NE(x.reason().rfind("contact lost", 0), 0u) << x.reason();  // a corner turn (mapping_pcl rule 10)
   EXPECT_NEAR(x.pivot().x(), 0.79 + 0.21, 1e-12);  // on the face (x = 0.79 + contact_reach)
   EXPECT_NEAR(x.pivot().y(), -0.5, 1e-12);         // abreast of the vehicle along lambda
   const double t_turn = t;

@@ -3,6 +3,8 @@
 // cloud out (sensor_msgs/PointCloud2) and, on request, a PLY file. No rclcpp.
 #pragma once
 
+#include <algorithm>
+
 #include <array>
 #include <cstdint>
 #include <deque>
@@ -69,6 +71,24 @@ class XplorerMapLogic {
     /// intermittent but the vehicle stays at the face, and the check cut
     /// their coverage (choice; README "Contact now").
     std::vector<std::string> contact_now_after = {"exploration"};
+    /// A Tactile-turning entered for one of these reasons (FsmState.reason,
+    /// matched as a prefix) counts as a state of contact_now_after for the
+    /// traversal that follows it: the first-contact rules of impact_turn_rules
+    /// (default contact now and the steady first contact; min_state_time_s
+    /// instead of the shorter gate after a turn only with "gate") apply to its
+    /// re-contact. tactile_fsm's turn about a face's end after a contact lost
+    /// ("contact lost: turn about the corner") is no corner turn of a steady
+    /// traversal: the vehicle comes back to the object from off its face, and
+    /// the re-contact is an impact like the one after Exploration (choice;
+    /// README "Re-contact after a contact-lost turn"). Empty: off.
+    std::vector<std::string> impact_turn_reasons = {"contact lost"};
+    /// Which first-contact rules the traversal after such a turn gets: "contact_now"
+    /// (stamping.min_force_now), "steady" (the steady hold), "gate" (min_state_time_s
+    /// instead of min_state_time_after_turn_s; not by default: on the polygons 3012
+    /// and 3016 the 1 s gate undid what contact now gained, hull 0.994 -> 0.952
+    /// and 0.984 -> 0.938) (choice; README
+    /// "Re-contact after a contact-lost turn").
+    std::vector<std::string> impact_turn_rules = {"contact_now", "steady"};
     /// Entering one of these FSM states releases the held-back slabs of the
     /// last corner_release_s (dated by the state's entry): Tactile-turning (a
     /// corner, 001 Sec. IV-A), the loop closed ("done": the vehicle stops at
@@ -127,6 +147,13 @@ class XplorerMapLogic {
   std::optional<std::string> fsm_state_;
   double fsm_state_since_s_ = 0.0;  ///< stamp time of entering the current state
   std::string fsm_previous_state_;  ///< FsmState.previous_state of the current state
+  bool turn_after_impact_reason_ = false;  ///< the latest Tactile-turning was entered for one of impact_turn_reasons
+  bool entered_after_impact_ = false;      ///< the current state was entered from contact_now_after or such a turn
+  bool entered_after_impact_turn_ = false; ///< ... from such a turn (impact_turn_rules apply)
+  bool impact_rule(const char* r) const {
+    return !entered_after_impact_turn_ ||
+           std::find(params_.impact_turn_rules.begin(), params_.impact_turn_rules.end(), r) != params_.impact_turn_rules.end();
+  }
   int64_t last_publish_ns_ = -1;
   std::array<double, 4> arm_angles_{};
   std::array<int64_t, 4> arm_stamp_ns_{-1, -1, -1, -1};
