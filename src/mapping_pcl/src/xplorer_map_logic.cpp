@@ -91,6 +91,8 @@ ParamMap XplorerMapLogic::default_parameters() {
   m.set("steady_distance", d.stamping.steady_distance);
   m.set("steady_angle", d.stamping.steady_angle);
   m.set("steady_offset", d.stamping.steady_offset);
+  m.set("touching_half_ratio", d.stamping.touching_half_ratio);
+  m.set("touching_half_s", d.stamping.touching_half_s);
   return m;
 }
 
@@ -142,6 +144,8 @@ XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
   p.stamping.steady_distance = m.get_double("steady_distance");
   p.stamping.steady_angle = m.get_double("steady_angle");
   p.stamping.steady_offset = m.get_double("steady_offset");
+  p.stamping.touching_half_ratio = m.get_double("touching_half_ratio");
+  p.stamping.touching_half_s = m.get_double("touching_half_s");
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {
@@ -258,6 +262,7 @@ std::optional<sensor_msgs::msg::PointCloud2> XplorerMapLogic::on_timer(int64_t n
     s.yaw = tactile_common::yaw_of(q);
     s.height = p.z - params_.floor_z;
     s.force_body = force_sum_ / static_cast<double>(forces_.size());
+    if (fsm_state_) s.time_in_state = s.t - fsm_state_since_s_;
     const bool check_now =
         !fsm_state_ || params_.contact_now_after.empty() || (entered_after_impact_ && impact_rule("contact_now"));
     if (params_.force_now_samples > 0) {  // README "Contact now": the latest samples, not the 1 s average

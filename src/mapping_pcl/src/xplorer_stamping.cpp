@@ -80,6 +80,9 @@ void XplorerMapParams::validate() const {
     bad("steady_distance", "must be finite and >= 0 (0: no steady first contact)", steady_distance);
   if (!(steady_angle > 0.0) || !(steady_angle <= M_PI / 2)) bad("steady_angle", "must be in (0, pi/2]", steady_angle);
   if (!(steady_offset > 0.0) || !std::isfinite(steady_offset)) bad("steady_offset", "must be finite and > 0", steady_offset);
+  if (!(touching_half_ratio >= 0.0) || !(touching_half_ratio <= 1.0))
+    bad("touching_half_ratio", "must be in [0, 1] (0: off)", touching_half_ratio);
+  if (!(touching_half_s >= 0.0) || !std::isfinite(touching_half_s)) bad("touching_half_s", "must be finite and >= 0", touching_half_s);
 }
 
 namespace {
@@ -100,6 +103,22 @@ bool both_arms_touch(const Eigen::Vector2d& d, const std::array<double, 4>& thet
       return false;
   }
   return true;
+}
+
+// README "Touching-guard half": +1 (-1) if only the facing arm left (right) of the body
+// direction d touches by the ratio rule, 0 otherwise.
+int touching_side(const Eigen::Vector2d& d, const std::array<double, 4>& theta, double ratio) {
+  double left = -1.0, right = -1.0;
+  for (int i = 0; i < 4; ++i) {
+    const Eigen::Vector2d a(std::cos(kArmDir[i]), std::sin(kArmDir[i]));
+    if (a.dot(d) <= 1e-9) continue;
+    const double cross = d.x() * a.y() - d.y() * a.x();
+    (cross > 0.0 ? left : right) = std::abs(theta[i]);
+  }
+  if (left < 0.0 || right < 0.0) return 0;  // C_n not between two arms
+  if (right < ratio * left) return 1;
+  if (left < ratio * right) return -1;
+  return 0;
 }
 
 double outline_reach(const XplorerMapParams& p, const Eigen::Vector2d& d, const std::array<double, 4>& theta) {
@@ -353,7 +372,19 @@ int XplorerContactMapper::update(const ContactSample& s) {
       (held_.front().contact.dot(c_w) < std::cos(p_.steady_angle) ||
        std::abs((near - held_.front().near).dot(held_.front().contact)) > p_.steady_offset))
     drop_held();  // off the face of the held slabs: the stretch starts again here (README "Steady first contact")
-  stamp(s.t, face_slab_world(s, c_w, offset), c_w, near);
+  Box slab = face_slab_world(s, c_w, offset);
+  if (p_.touching_half_ratio > 0.0 && arms_known && !(s.time_in_state && *s.time_in_state > p_.touching_half_s)) {
+    if (const int side = touching_side(R.inverse() * c_w, *s.arm_angles, p_.touching_half_ratio)) {
+      // box x is along the face, to the left of C_n: keep the half on the touching guard's side
+      const Eigen::Vector2d left = Eigen::Rotation2Dd(M_PI / 2) * c_w;
+      const double q = 0.25 * slab.size.x() * side;
+      slab.center.x() += q * left.x();
+      slab.center.y() += q * left.y();
+      slab.size.x() *= 0.5;
+      ++stats_.touching_half;
+    }
+  }
+  stamp(s.t, slab, c_w, near);
   // The face's slabs, for the corner fill only (off: not kept; with stamp_states empty a face
   // would otherwise last the whole flight).
   if (p_.corner_fill_max_gap > 0.0) face_.push_back({s.t, near, c_w, s.position.z()});

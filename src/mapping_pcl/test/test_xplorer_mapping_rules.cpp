@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -684,5 +685,98 @@ TEST(XplorerMappingRules, LogicTreatsTheReContactAfterAContactLostTurnAsAnImpact
     ADD_FAILURE() << "an unknown rule must be rejected";
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("impact_turn_rules"), std::string::npos) << e.what();
+  }
+}
+
+// README "Touching-guard half": with the yaw off the face after an oblique (re-)contact one
+// front guard touches and the slab half on the other guard's side stands out of the face.
+// Contact ahead (+x); arm 1 (+45 deg, the left guard, +y) deflected 0.10 rad, arm 0 (-45
+// deg, right) 0.01 rad (< 0.3 x 0.10): only the left half, y in [0, 0.125] m, is stamped;
+// square (-0.056 / +0.069, 2045 on a face) the whole slab, y in [-0.125, 0.125] m; with
+// the ratio 0 (off) or later than touching_half_s into the state the whole slab too.
+TEST(XplorerMappingRules, OnlyTheTouchingGuardsHalfAfterAnObliqueContact) {
+  auto y_range = [](double ratio, std::array<double, 4> arms, std::optional<double> in_state) {
+    XplorerMapParams p;
+    p.corner_release_s = 0.0;
+    p.touching_half_ratio = ratio;
+    p.touching_half_s = 5.0;
+    PointMap map;
+    XplorerContactMapper m(p, map);
+    ContactSample s = sample(0.0, 0.0, -2.0, arms);
+    s.time_in_state = in_state;
+    EXPECT_EQ(m.update(s), 1);
+    double lo = 1e9, hi = -1e9;
+    for (const auto& q : map.cloud()) {
+      lo = std::min(lo, static_cast<double>(q.y));
+      hi = std::max(hi, static_cast<double>(q.y));
+    }
+    return std::make_tuple(lo, hi, m.stats().touching_half);
+  };
+  const std::array<double, 4> left{-0.01, 0.10, 0.0, 0.0}, right{-0.10, 0.01, 0.0, 0.0}, square{-0.056, 0.069, 0.0, 0.0};
+  auto [lo, hi, n] = y_range(0.3, left, 1.0);
+  EXPECT_NEAR(lo, 0.0, 1e-3);
+  EXPECT_NEAR(hi, 0.125, 1e-3);
+  EXPECT_EQ(n, 1u);
+  std::tie(lo, hi, n) = y_range(0.3, right, 1.0);
+  EXPECT_NEAR(lo, -0.125, 1e-3);
+  EXPECT_NEAR(hi, 0.0, 1e-3);
+  EXPECT_EQ(n, 1u);
+  for (const auto& [ratio, arms, in_state] :
+       {std::make_tuple(0.3, square, std::optional<double>(1.0)), std::make_tuple(0.0, left, std::optional<double>(1.0)),
+        std::make_tuple(0.3, left, std::optional<double>(6.0))}) {
+    std::tie(lo, hi, n) = y_range(ratio, arms, in_state);
+    EXPECT_NEAR(lo, -0.125, 1e-3);
+    EXPECT_NEAR(hi, 0.125, 1e-3);
+    EXPECT_EQ(n, 0u);
+  }
+  // Unknown time in the state (no FSM heard): the rule applies.
+  std::tie(lo, hi, n) = y_range(0.3, left, std::nullopt);
+  EXPECT_NEAR(lo, 0.0, 1e-3);
+  EXPECT_EQ(n, 1u);
+  XplorerMapParams bad;
+  bad.touching_half_ratio = 1.5;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
+// The node logic dates the sample by the FSM state's entry: a traversal entered 6 s ago
+// (time_in_state of the state message) stamps whole slabs although one guard touches.
+TEST(XplorerMappingRules, LogicAppliesTheTouchingHalfEarlyInAStateOnly) {
+  for (const double in_state : {0.0, 6.0}) {
+    auto d = XplorerMapLogic::default_parameters();
+    d.set("publish_rate_hz", 0.0);
+    d.set("min_state_time_s", 0.0);
+    d.set("min_state_time_after_turn_s", 0.0);
+    d.set("corner_release_s", 0.0);
+    d.set("touching_half_ratio", 0.3);
+    d.set("touching_half_s", 5.0);
+    XplorerMapLogic logic(XplorerMapLogic::params_from(d));
+    tactile_msgs::msg::ArmImuArray a;
+    tactile_common::to_stamp(tactile_common::from_seconds(10.0), a.header.stamp);
+    for (int i = 0; i < 4; ++i) {
+      tactile_msgs::msg::ArmImu arm;
+      arm.arm_id = static_cast<uint8_t>(i);
+      arm.arm_angle = i == 0 ? -0.01 : i == 1 ? 0.10 : 0.0;
+      a.arms.push_back(arm);
+    }
+    logic.on_arm_imu(a);
+    tactile_msgs::msg::FsmState st;
+    st.state = "tactile_traversal";
+    st.previous_state = "tactile_turning";
+    st.time_in_state = in_state;
+    tactile_common::to_stamp(tactile_common::from_seconds(10.0), st.header.stamp);
+    logic.on_fsm_state(st);
+    geometry_msgs::msg::WrenchStamped w;
+    w.header.frame_id = "base_link";
+    w.wrench.force.x = -1.6;
+    logic.on_wrench_body(w);
+    nav_msgs::msg::Odometry o;
+    o.child_frame_id = "base_link";
+    o.pose.pose.position.z = 0.7;
+    o.pose.pose.orientation.w = 1.0;
+    tactile_common::to_stamp(tactile_common::from_seconds(10.0), o.header.stamp);
+    logic.on_odometry(o);
+    logic.on_timer(tactile_common::from_seconds(10.0));
+    EXPECT_EQ(logic.mapper().stats().slabs, 1u) << in_state;
+    EXPECT_EQ(logic.mapper().stats().touching_half, in_state > 5.0 ? 0u : 1u) << in_state;
   }
 }

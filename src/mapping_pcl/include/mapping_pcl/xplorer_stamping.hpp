@@ -125,6 +125,22 @@ struct XplorerMapParams {
   double steady_distance = 0.05;  ///< [m]
   double steady_angle = 0.35;     ///< [rad] (20 deg: a 0.4 m cylinder turns C_n by 0.24 rad over 0.1 m of path)
   double steady_offset = 0.02;    ///< [m]
+  /// Touching-guard half: with arm angles known, when the less deflected of
+  /// the two arms on the C_n side is deflected by less than this fraction of
+  /// the more deflected one, only the slab half on the more deflected arm's
+  /// side (from the vehicle's C_n line on) is stamped. With the yaw 10-39 deg
+  /// off the face after an oblique (re-)contact, one guard touches
+  /// (2045: front arms -0.00..-0.04 / +0.05..+0.13 rad; square: -0.056 /
+  /// +0.069) and the slab half on the other side stands out of the face by
+  /// up to 0.125 m x sin(yaw error) (choice; README "Touching-guard half":
+  /// 0.3 gained 3 of 200 tuning objects and lost 2 of 50 held-out polygons,
+  /// not kept). 0: off, the default.
+  double touching_half_ratio = 0.0;
+  /// ... only within this long of the state's entry (ContactSample::time_in_state;
+  /// unknown: always). The oblique stretches follow a (re-)contact (2045: 0-7 s);
+  /// a cylinder is traversed with one guard pressed harder all the way round and
+  /// its hull needs the whole slab (choice; README "Touching-guard half").
+  double touching_half_s = 5.0;  ///< [s]
   double arm_hinge_offset = 0.05;  ///< centre -> arm hinge along the diagonal [m] (vehicle CAD; the SITL's value)
   double arm_length = 0.15;        ///< hinge -> motor [m] (vehicle CAD)
   double guard_radius = 0.07;      ///< propeller guard radius round the motor [m] (vehicle CAD)
@@ -144,6 +160,8 @@ struct ContactSample {
   std::optional<Eigen::Vector2d> force_body_now;
   /// Mean body force of the last few wrench samples [N], if known, in every state (recent_axis).
   std::optional<Eigen::Vector2d> force_body_recent;
+  /// Time since the FSM entered its current state [s] (touching_half_s); unset: unknown.
+  std::optional<double> time_in_state;
 };
 
 /// Reach of the vehicle's outline along the body direction `d` (unit, x-y):
@@ -175,6 +193,7 @@ class XplorerContactMapper {
     uint64_t releases = 0;            ///< the force fell below delta_map_hold with mapping initiated
     uint64_t rejected_nonfinite = 0;
     uint64_t offset_from_arms = 0;    ///< slabs placed with the deflected-arm outline
+    uint64_t touching_half = 0;       ///< slabs cut to the touching guard's half (touching_half_ratio)
     uint64_t skipped_one_arm = 0;     ///< an arm on the C_n side deflected less than min_arm_deflection
     uint64_t dropped_at_corner = 0;   ///< slabs dropped by a corner release (corner_release_s)
     uint64_t skipped_no_contact_now = 0;  ///< the last samples' force below min_force_now
