@@ -63,6 +63,16 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   // blocks (279 of 300), switched on after the fresh held-out block 10000-10099 (README).
   m.set("phantom_resume_max", 2.0);
   m.set("phantom_latch", true);
+  // Active whisking (issue 17, round 5): off (whisk_amplitude 0). The values
+  // best on the tuning blocks (0.23 rad every 0.7 s, up to 3 rad/s, only after
+  // a clearing, paused while a whisker's sum moves, 13 Pa) gave 413 -> 424 of
+  // 450 there but 268 -> 269 of 300 on the fresh held-out block 11000-11099 and
+  // more collisions in the darkness rigid course (README "Round 5").
+  m.set("whisk_amplitude", 0.0);
+  m.set("whisk_period_s", 0.7);
+  m.set("whisk_rate_max", 3.0);
+  m.set("whisk_after_clear_only", true);
+  m.set("whisk_pause_rms", 13.0);
   m.set("target_radius", d.target_radius);
   m.set("land_past_target", d.land_past_target);
   m.set("landing_duration_s", d.landing_duration_s);
@@ -108,6 +118,11 @@ WhiskerFsmLogic::Params WhiskerFsmLogic::params_from(const ParamMap& m) {
   f.phantom_travel = m.get_double("phantom_travel");
   f.phantom_resume_max = m.get_double("phantom_resume_max");
   f.phantom_latch = m.get_bool("phantom_latch");
+  f.whisk_amplitude = m.get_double("whisk_amplitude");
+  f.whisk_period_s = m.get_double("whisk_period_s");
+  f.whisk_rate_max = m.get_double("whisk_rate_max");
+  f.whisk_after_clear_only = m.get_bool("whisk_after_clear_only");
+  f.whisk_pause_rms = m.get_double("whisk_pause_rms");
   f.target_radius = m.get_double("target_radius");
   f.land_past_target = m.get_bool("land_past_target");
   f.landing_duration_s = m.get_double("landing_duration_s");

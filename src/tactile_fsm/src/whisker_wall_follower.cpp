@@ -86,6 +86,13 @@ void WallFollowerParams::validate() const {
           phantom_quiet_rms);
   require(finite_nonneg(phantom_travel), "phantom_travel", "must be finite and >= 0", phantom_travel);
   require(finite_nonneg(phantom_resume_max), "phantom_resume_max", "must be finite and >= 0", phantom_resume_max);
+  require(finite_nonneg(whisk_amplitude) && whisk_amplitude <= M_PI / 2.0, "whisk_amplitude",
+          "must be in [0, pi/2] (0 = off)", whisk_amplitude);
+  require(std::isfinite(whisk_period_s) && whisk_period_s > 0.0, "whisk_period_s", "must be finite and > 0",
+          whisk_period_s);
+  require(std::isfinite(whisk_rate_max) && whisk_rate_max > 0.0, "whisk_rate_max", "must be finite and > 0",
+          whisk_rate_max);
+  require(finite_nonneg(whisk_pause_rms), "whisk_pause_rms", "must be finite and >= 0 (0 = off)", whisk_pause_rms);
   require(finite_positive(target_radius), "target_radius", "must be finite and > 0", target_radius);
   require(finite_nonneg(landing_duration_s), "landing_duration_s", "must be finite and >= 0", landing_duration_s);
   require(finite_positive(max_input_age_s), "max_input_age_s", "must be finite and > 0", max_input_age_s);
@@ -417,6 +424,10 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
   out.sub_state = sub_;
   out.transitioned = state_ != state_before || sub_ != sub_before;
   out.setpoint = saturate(command(in), p_);
+  if (p_.whisk_amplitude > 0.0 && state_ == FsmState::kFlyForward && origin_set_ && std::isfinite(in.yaw) &&
+      (after_clear_ || !p_.whisk_after_clear_only)) {
+    out.setpoint = whisk(in, out.setpoint);
+  }
   return out;
 }
 
@@ -454,6 +465,30 @@ Setpoint WhiskerWallFollower::command(const WallFollowerInput& in) const {
       break;
   }
   return s;
+}
+
+Setpoint WhiskerWallFollower::whisk(const WallFollowerInput& in, const Setpoint& s) const {
+  // Active whisking (README "Round 5"): yaw reference course + A sin(w t),
+  // tracked with the realignment gain plus the reference's rate; the phase
+  // starts at 0 on entering FLY_FORWARD (a continuous reference from the
+  // course heading). The velocity is the course direction in the world frame,
+  // expressed in the body-yaw frame.
+  Setpoint o = s;
+  const double w = 2.0 * M_PI / p_.whisk_period_s;
+  const double ph = w * (in.t - entered_);
+  const double ref = course_yaw_ + p_.whisk_amplitude * std::sin(ph);
+  const double ff = p_.whisk_amplitude * w * std::cos(ph);
+  const double gain = p_.realign_gain > 0.0 ? p_.realign_gain : 1.5;
+  o.yaw_rate = std::clamp(ff + gain * std::remainder(ref - in.yaw, 2.0 * M_PI), -p_.whisk_rate_max, p_.whisk_rate_max);
+  // A whisker's sum moving: a touch TDORC has not flagged yet; hold the yaw.
+  if (p_.whisk_pause_rms > 0.0 && ((std::isfinite(in.input_change_rms_left) && in.input_change_rms_left >= p_.whisk_pause_rms) ||
+                                   (std::isfinite(in.input_change_rms_right) && in.input_change_rms_right >= p_.whisk_pause_rms))) {
+    o.yaw_rate = 0.0;
+  }
+  const double rel = std::remainder(course_yaw_ - in.yaw, 2.0 * M_PI);
+  o.vx = p_.v_max * std::cos(rel);
+  o.vy = p_.v_max * std::sin(rel);
+  return o;
 }
 
 double WhiskerWallFollower::realign(const WallFollowerInput& in) const {

@@ -889,3 +889,79 @@ TEST(BaffleCourse, TiltedBafflesReachTarget) {
   EXPECT_GT(r.final_x, 3.0);
   EXPECT_GT(r.min_frame_clearance, 0.06);
 }
+
+// Active whisking (issue 17, README "Round 5"): in FLY_FORWARD the heading
+// oscillates about the course heading so the whisker tips (0.19 m ahead of
+// the centre, bases 25 mm off the axis) sweep the guard's 80 mm half-width,
+// while the track stays on the course. Kinematic drone integrating the
+// setpoint; without the rule the tips stay 25 mm off the axis.
+TEST(WhiskerWallFollower, ActiveWhiskingSweepsGuardWidthOnCourse) {
+  auto fly = [](double amplitude) {
+    WallFollowerParams p;
+    p.whisk_amplitude = amplitude;
+    p.whisk_period_s = 1.0;
+    WhiskerWallFollower fsm(p);
+    double t = 0.0, x = 0.0, y = 0.0, yaw = 0.0, max_tip = 0.0, max_y = 0.0, min_speed = 1.0;
+    for (; t < p.hover_init_s + 3.0; t += kDt) {
+      WallFollowerInput in = input(t, x, y, yaw);
+      in.target_x = 10.0;
+      const WallFollowerOutput o = fsm.step(in);
+      if (o.state != FsmState::kFlyForward) continue;
+      EXPECT_LE(std::fabs(o.setpoint.yaw_rate), p.whisk_rate_max + 1e-12);
+      // Body -> world velocity.
+      const double vx = std::cos(yaw) * o.setpoint.vx - std::sin(yaw) * o.setpoint.vy;
+      const double vy = std::sin(yaw) * o.setpoint.vx + std::cos(yaw) * o.setpoint.vy;
+      min_speed = std::min(min_speed, vx);
+      x += vx * kDt;
+      y += vy * kDt;
+      yaw += o.setpoint.yaw_rate * kDt;
+      // Lateral offset of the left whisker's tip (base (0.05, 0.025), reach 0.141 m).
+      max_tip = std::max(max_tip, 0.191 * std::sin(yaw) + 0.025 * std::cos(yaw));
+      max_y = std::max(max_y, std::fabs(y));
+    }
+    EXPECT_GT(x, 0.5);
+    return std::vector<double>{max_tip, max_y, min_speed};
+  };
+  const std::vector<double> off = fly(0.0);
+  EXPECT_NEAR(off[0], 0.025, 1e-9);
+  const std::vector<double> on = fly(20.0 * kDeg);
+  EXPECT_GT(on[0], 0.08);           // the tip reaches the guard's radius
+  EXPECT_LT(on[1], 0.005);          // track kept on the course (world frame)
+  EXPECT_NEAR(on[2], 0.2, 1e-9);    // full V_max along the course
+  WallFollowerParams bad;
+  bad.whisk_amplitude = 2.0;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+  bad.whisk_amplitude = 0.2;
+  bad.whisk_period_s = 0.0;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
+// Whisking only after a clearing (whisk_after_clear_only) and paused while a
+// whisker's S_c sum moves (whisk_pause_rms), README "Round 5".
+TEST(WhiskerWallFollower, WhiskingAfterClearOnlyAndPausedOnMovingSum) {
+  WallFollowerParams p;
+  p.whisk_amplitude = 0.23;
+  p.whisk_period_s = 0.7;
+  p.whisk_rate_max = 3.0;
+  auto first_forward_rate = [&](const WallFollowerParams& q, double rms) {
+    WhiskerWallFollower fsm(q);
+    double t = 0.0;
+    for (; t < q.hover_init_s + 1e-9; t += kDt) fsm.step(input(t));
+    WallFollowerInput in = input(t + 0.05);
+    in.input_change_rms_left = rms;
+    in.input_change_rms_right = 5.0;
+    const WallFollowerOutput o = fsm.step(in);
+    EXPECT_EQ(o.state, FsmState::kFlyForward);
+    return o.setpoint.yaw_rate;
+  };
+  EXPECT_GT(first_forward_rate(p, 5.0), 1.0);  // whisking from the first FLY_FORWARD
+  WallFollowerParams q = p;
+  q.whisk_pause_rms = 13.0;
+  EXPECT_GT(first_forward_rate(q, 12.0), 1.0);       // quiet sum: whisking
+  EXPECT_EQ(first_forward_rate(q, 13.0), 0.0);       // moving sum: yaw held
+  q.whisk_pause_rms = 0.0;
+  q.whisk_after_clear_only = true;
+  EXPECT_EQ(first_forward_rate(q, 5.0), 0.0);        // before the first obstacle: no whisk
+  q.whisk_pause_rms = -1.0;
+  EXPECT_THROW(q.validate(), std::invalid_argument);
+}

@@ -144,6 +144,30 @@ struct WallFollowerParams {
   /// phantom stays one until its contact ends or the RMS of its sum's changes
   /// reaches 2 * phantom_quiet_rms.
   bool phantom_latch = false;
+  /// Active whisking (issue 17, README "Round 5", choice): the two forward
+  /// whiskers (bases 25 mm off the axis, tips 0.19 m ahead) are blind to a
+  /// baffle tip 3-8 cm beside the axis, inside the guard's 80 mm. In
+  /// FLY_FORWARD the heading oscillates about the course heading,
+  /// yaw = course + whisk_amplitude * sin(2 pi t / whisk_period_s), so the
+  /// whisker tips sweep the guard's width (rats whisk); the velocity is then
+  /// set along the course heading in the world frame (body vx, vy rotated), so
+  /// the track stays straight while the yaw oscillates. The yaw rate of the
+  /// whisk is limited by whisk_rate_max, not omega_max (the wall-following
+  /// turn rate). whisk_amplitude 0 = off (the paper: fly forward, no whisking). [rad]
+  double whisk_amplitude = 0.0;
+  double whisk_period_s = 1.0;                 ///< [s]
+  double whisk_rate_max = 2.0;                 ///< [rad/s]
+  /// Whisk only in a FLY_FORWARD that follows a clearing (not on the way to
+  /// the first obstacle): the first contact is then met on the course heading,
+  /// as without whisking (README "Round 5": whisking before the first contact
+  /// lowered the darkness sweeps' first-sweep in-band fraction).
+  bool whisk_after_clear_only = false;
+  /// Pause the whisk (hold the yaw, keep the course velocity) while either
+  /// whisker's S_c sum moves (RMS of its changes >= whisk_pause_rms, the
+  /// node's phantom window): a touch starts 0.2-0.3 s before TDORC flags it,
+  /// and a whisk continuing through that sweeps the whisker into the wall.
+  /// 0 = never pause. [Pa]
+  double whisk_pause_rms = 0.0;
   double target_radius = 0.15;                 ///< land within this distance of the target [m]
   bool land_past_target = true;                ///< also land once past the target along the course direction
   double landing_duration_s = 2.0;             ///< LANDING -> LANDED after this [s]
@@ -257,6 +281,7 @@ class WhiskerWallFollower {
   void set_origin(const WallFollowerInput& in);
   Setpoint command(const WallFollowerInput& in) const;
   double realign(const WallFollowerInput& in) const;
+  Setpoint whisk(const WallFollowerInput& in, const Setpoint& s) const;
 
   WallFollowerParams p_;
   FsmState state_ = FsmState::kHoverInit;
