@@ -67,6 +67,18 @@ auto contact_now_params() {
 }
 // A traversal entered at 0 s from `previous`, pressed along -x (1.6 N), at rest 0.7 m up;
 // one odometry sample and one timer tick at `t` seconds.
+// Odometry at the origin (0.7 m up, yaw 0) stamped t, then the node's timer at t.
+void tick_at_origin(XplorerMapLogic& logic, double t) {
+  const int64_t ns = tactile_common::from_seconds(t);
+  nav_msgs::msg::Odometry o;
+  o.child_frame_id = "base_link";
+  o.pose.pose.position.z = 0.7;
+  o.pose.pose.orientation.w = 1.0;
+  tactile_common::to_stamp(ns, o.header.stamp);
+  logic.on_odometry(o);
+  logic.on_timer(ns);
+}
+
 void enter_traversal_and_press(XplorerMapLogic& logic, const std::string& previous, double t) {
   tactile_msgs::msg::FsmState st;
   st.state = "tactile_traversal";
@@ -76,13 +88,7 @@ void enter_traversal_and_press(XplorerMapLogic& logic, const std::string& previo
   w.header.frame_id = "base_link";
   w.wrench.force.x = -1.6;
   logic.on_wrench_body(w);
-  nav_msgs::msg::Odometry o;
-  o.child_frame_id = "base_link";
-  o.pose.pose.position.z = 0.7;
-  o.pose.pose.orientation.w = 1.0;
-  tactile_common::to_stamp(tactile_common::from_seconds(t), o.header.stamp);
-  logic.on_odometry(o);
-  logic.on_timer(tactile_common::from_seconds(t));
+  tick_at_origin(logic, t);
 }
 }  // namespace
 
@@ -376,13 +382,7 @@ TEST(XplorerMappingRules, LogicChecksTheContactNowAfterExplorationOnly) {
       w.wrench.force.x = i < 45 ? -2.0 : -0.1;  // average 1.81 N, latest 5: 0.1 N
       logic.on_wrench_body(w);
     }
-    nav_msgs::msg::Odometry o;
-    o.child_frame_id = "base_link";
-    o.pose.pose.position.z = 0.7;
-    o.pose.pose.orientation.w = 1.0;
-    tactile_common::to_stamp(0, o.header.stamp);
-    logic.on_odometry(o);
-    logic.on_timer(0);
+    tick_at_origin(logic, 0.0);
     EXPECT_EQ(logic.mapper().stats().slabs, previous == "exploration" ? 0u : 1u) << previous;
   }
 }
@@ -650,13 +650,7 @@ TEST(XplorerMappingRules, LogicTreatsTheReContactAfterAContactLostTurnAsAnImpact
         w.wrench.force.x = i < n_strong ? -2.0 : -0.1;
         logic.on_wrench_body(w);
       }
-      nav_msgs::msg::Odometry o;
-      o.child_frame_id = "base_link";
-      o.pose.pose.position.z = 0.7;
-      o.pose.pose.orientation.w = 1.0;
-      tactile_common::to_stamp(tactile_common::from_seconds(t), o.header.stamp);
-      logic.on_odometry(o);
-      logic.on_timer(tactile_common::from_seconds(t));
+      tick_at_origin(logic, t);
     };
     {  // contact now: the average 1.81 N, the latest 10 samples 0.1 N
       XplorerMapLogic logic(make(true));
@@ -769,13 +763,7 @@ TEST(XplorerMappingRules, LogicAppliesTheTouchingHalfEarlyInAStateOnly) {
     w.header.frame_id = "base_link";
     w.wrench.force.x = -1.6;
     logic.on_wrench_body(w);
-    nav_msgs::msg::Odometry o;
-    o.child_frame_id = "base_link";
-    o.pose.pose.position.z = 0.7;
-    o.pose.pose.orientation.w = 1.0;
-    tactile_common::to_stamp(tactile_common::from_seconds(10.0), o.header.stamp);
-    logic.on_odometry(o);
-    logic.on_timer(tactile_common::from_seconds(10.0));
+    tick_at_origin(logic, 10.0);
     EXPECT_EQ(logic.mapper().stats().slabs, 1u) << in_state;
     EXPECT_EQ(logic.mapper().stats().touching_half, in_state > 5.0 ? 0u : 1u) << in_state;
   }
