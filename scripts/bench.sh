@@ -66,20 +66,29 @@ trap 'rm -rf "$tmp"' EXIT
 scenario="${BENCH_SIM_SCENARIO:-config/scenarios/whisker_three_baffles_fsm.yaml}"
 trials="${BENCH_SIM_TRIALS:-10}"
 rounds="${BENCH_SIM_ROUNDS:-${BENCH_SIM_REPEAT:-5}}"
+[[ -f "$scenario" ]] || { echo "bench: no scenario file '$scenario' (BENCH_SIM_SCENARIO)" >&2; exit 1; }
 run_sim() {  # run_sim NAME ARGS...: prints "wall_s cpu_s" of one `tactile sim ARGS`
   local name="$1"; shift
   rm -rf "${tmp:?}/$name"
   local TIMEFORMAT="%R %U %S"  # bash's time keyword: wall, user, sys of the command
-  { time tactile sim "$scenario" --out "$tmp/$name" --quiet --no-png "$@" >/dev/null 2>"$tmp/$name.err" \
-      || { cat "$tmp/$name.err" >&2; exit 1; }; } 2>"$tmp/$name.time"
+  # The command's stderr goes to its own file (the `time` report to another), so a failed
+  # run's message is printed here; the caller's guard below stops the script.
+  if ! { time tactile sim "$scenario" --out "$tmp/$name" --quiet --no-png "$@" >/dev/null 2>"$tmp/$name.err"; } \
+      2>"$tmp/$name.time"; then
+    echo "bench: tactile sim $scenario $* failed:" >&2
+    cat "$tmp/$name.err" >&2
+    return 1
+  fi
   awk '{printf "%.3f %.3f\n", $1, $2 + $3}' "$tmp/$name.time"
 }
 pair() {  # pair: the slower wall time of two `--trials 5 --jobs 1` processes started together
-  local a b
-  run_sim pa --trials 5 --jobs 1 >"$tmp/pa.out" & local pid=$!
-  run_sim pb --trials 5 --jobs 1 >"$tmp/pb.out"
-  wait "$pid"
-  read -r a _ <"$tmp/pa.out"; read -r b _ <"$tmp/pb.out"
+  local a b pid status=0
+  run_sim pa --trials 5 --jobs 1 >"$tmp/pa.out" & pid=$!
+  run_sim pb --trials 5 --jobs 1 >"$tmp/pb.out" || status=1
+  wait "$pid" || status=1
+  read -r a _ <"$tmp/pa.out" || true
+  read -r b _ <"$tmp/pb.out" || true
+  [[ "$status" == 0 && -n "$a" && -n "$b" ]] || return 1
   awk -v a="$a" -v b="$b" 'BEGIN { print (a > b ? a : b) }'
 }
 sim_s="$(python3 -c 'import sys,yaml; print(yaml.safe_load(open(sys.argv[1]))["duration_s"])' "$scenario" 2>/dev/null \
@@ -87,13 +96,15 @@ sim_s="$(python3 -c 'import sys,yaml; print(yaml.safe_load(open(sys.argv[1]))["d
 table="$out/sim_rounds.tsv"
 printf 'round\tw1\tc1\twn\tcn\tw2\tc2\twb\tcb\two\tco\tws\twp\tload\n' >"$table"
 for ((r = 1; r <= rounds; r++)); do
-  read -r w1 c1 < <(run_sim jobs1 --trials "$trials" --jobs 1)
-  read -r wn cn < <(run_sim jobs1_nobag --trials "$trials" --jobs 1 --no-bag)
-  read -r w2 c2 < <(run_sim jobs2 --trials "$trials" --jobs 2)
-  read -r wb cb < <(run_sim bag)
-  read -r wo co < <(run_sim nobag --no-bag)
-  read -r ws _ < <(run_sim single5 --trials 5 --jobs 1)
-  wp="$(pair)"
+  # A failed run prints its message (run_sim) and leaves its figures empty: the guard stops.
+  w1="" wn="" w2="" wb="" wo="" ws="" wp=""
+  read -r w1 c1 < <(run_sim jobs1 --trials "$trials" --jobs 1) || true
+  read -r wn cn < <(run_sim jobs1_nobag --trials "$trials" --jobs 1 --no-bag) || true
+  read -r w2 c2 < <(run_sim jobs2 --trials "$trials" --jobs 2) || true
+  read -r wb cb < <(run_sim bag) || true
+  read -r wo co < <(run_sim nobag --no-bag) || true
+  read -r ws _ < <(run_sim single5 --trials 5 --jobs 1) || true
+  wp="$(pair)" || wp=""
   for v in "$w1" "$wn" "$w2" "$wb" "$wo" "$ws" "$wp"; do
     [[ -n "$v" ]] || { echo "bench: a tactile sim run of round $r failed (above)" >&2; exit 1; }
   done

@@ -65,8 +65,6 @@ auto contact_now_params() {
   d.set("force_now_samples", static_cast<int64_t>(5));
   return XplorerMapLogic::params_from(d);
 }
-// A traversal entered at 0 s from `previous`, pressed along -x (1.6 N), at rest 0.7 m up;
-// one odometry sample and one timer tick at `t` seconds.
 // Odometry at the origin (0.7 m up, yaw 0) stamped t, then the node's timer at t.
 void tick_at_origin(XplorerMapLogic& logic, double t) {
   const int64_t ns = tactile_common::from_seconds(t);
@@ -79,6 +77,8 @@ void tick_at_origin(XplorerMapLogic& logic, double t) {
   logic.on_timer(ns);
 }
 
+// A traversal entered at 0 s from `previous`, pressed along -x (1.6 N), at rest 0.7 m up;
+// one odometry sample and one timer tick at `t` seconds.
 void enter_traversal_and_press(XplorerMapLogic& logic, const std::string& previous, double t) {
   tactile_msgs::msg::FsmState st;
   st.state = "tactile_traversal";

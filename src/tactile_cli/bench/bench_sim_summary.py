@@ -28,8 +28,10 @@ def read_rounds(path):
             except (KeyError, TypeError, ValueError) as e:
                 raise SystemExit(f"{path}:{n}: round {row.get('round', '?')}: missing or bad figure ({e}); "
                                  "a `tactile sim` run of that round failed")
-            if any(v <= 0.0 for k, v in values.items() if k.startswith("w")):
-                raise SystemExit(f"{path}:{n}: a wall time is not positive: {values}")
+            bad = [k for k, v in values.items() if not v > 0.0]
+            if bad:
+                raise SystemExit(f"{path}:{n}: round {row.get('round', '?')}: {', '.join(bad)} not positive "
+                                 "(wall and CPU seconds divide the simulated time)")
             values["load"] = row.get("load", "")
             rows.append(values)
     if not rows:

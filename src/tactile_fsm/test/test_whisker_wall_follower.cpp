@@ -409,7 +409,7 @@ TEST(WhiskerWallFollower, ResumeKeepsSideSteppingWhilePhantomHeld) {
   EXPECT_THROW(p.validate(), std::invalid_argument);
 }
 
-// phantom_latch (tried, off): the hand case of the gate, then from tick 30
+// phantom_latch (on in the node since round 4b): the hand case of the gate, then from tick 30
 // the quiet sum's RMS reads 9 Pa (noise crossing the 8 Pa quiet level):
 // without the latch the phantom is let back in (wall following again at tick
 // 30); with it the whisker stays a phantom (still RESUME_FORWARD at tick 39),

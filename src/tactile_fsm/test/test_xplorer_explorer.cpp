@@ -440,6 +440,10 @@ TEST(XplorerParams, ValidateNamesTheField) {
   p = XplorerParams{};
   p.max_clockwise_turns_in_a_row = -1;
   EXPECT_THROW(p.validate(), std::invalid_argument);
+  p.max_clockwise_turns_in_a_row = 1001;  // the node's range [0, 1000] (xplorer_fsm_logic)
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p.max_clockwise_turns_in_a_row = 1000;
+  EXPECT_NO_THROW(p.validate());
   p = XplorerParams{};
   p.contact_lost_turn_min_s = -1.0;
   EXPECT_THROW(p.validate(), std::invalid_argument);

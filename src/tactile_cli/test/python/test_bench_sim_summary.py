@@ -54,3 +54,9 @@ def test_no_rounds_is_an_error(tmp_path):
     p = write(tmp_path, [])
     with pytest.raises(SystemExit, match="no rounds"):
         summary.main([str(p), "--sim-s", "75", "--trials", "10"])
+
+
+def test_a_zero_cpu_time_is_named_not_divided_by(tmp_path):
+    p = write(tmp_path, [(1, 1.0, 0.0, 1.0, 1.0, 0.5, 1.0, 0.1, 0.1, 0.1, 0.1, 0.5, 0.5, "0.1")])
+    with pytest.raises(SystemExit, match=r"rounds.tsv:2: round 1: c1 not positive"):
+        summary.main([str(p), "--sim-s", "75", "--trials", "10"])

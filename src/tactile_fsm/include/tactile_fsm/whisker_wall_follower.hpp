@@ -140,7 +140,8 @@ struct WallFollowerParams {
   /// RESUME_FORWARD keeps side-stepping past clear_margin while a whisker is
   /// still held as a phantom, up to this distance from the clearing [m].
   double phantom_resume_max = 0.0;
-  /// Latch (issue 17, README "Round 4", tried, off): a whisker taken for a
+  /// Latch (issue 17, README "Round 4" and "4b"; off in the core struct, on in
+  /// the whisker FSM node with phantom_resume_max 2 m): a whisker taken for a
   /// phantom stays one until its contact ends or the RMS of its sum's changes
   /// reaches 2 * phantom_quiet_rms.
   bool phantom_latch = false;

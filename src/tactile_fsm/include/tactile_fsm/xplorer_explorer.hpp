@@ -161,7 +161,9 @@ struct XplorerParams {
   /// along the lost C_n, which flies past a convex corner (issue 17: seed 1036 flew 20 m
   /// off, 2007 hit the next face at 5-15 N and stuck). Contact lost 2.4-3.1 s into a
   /// traversal (the contact never settled after an impact: 16 of 20 losses on the tuning
-  /// seeds) still goes back to Exploration (choice; false: always Exploration).
+  /// seeds) still goes back to Exploration (choice; false: always Exploration). The turn
+  /// orbits a pivot, so it needs turn_pivot; without it a lost contact always goes back to
+  /// Exploration.
   bool turn_on_contact_lost = true;
   double contact_lost_turn_min_s = 4.0;  ///< [s]
   double static_force = 1.0;         ///< static-wrench reference |delta_f_ref| [N] (001 Sec. V-B)
