@@ -21,8 +21,8 @@ summary="$(colcon test-result --verbose --all 2>&1)" || true
 echo "$summary" | grep -v '^build/.*: [0-9]* tests, 0 errors, 0 failures' || true
 line="$(echo "$summary" | grep -E '^Summary: [0-9]+ tests' | tail -n 1)"
 total=$(echo "$line" | sed -E 's/Summary: ([0-9]+) tests.*/\1/')
-errors=$(echo "$line" | sed -E 's/.* ([0-9]+) errors.*/\1/')
-failures=$(echo "$line" | sed -E 's/.* ([0-9]+) failures.*/\1/')
+errors=$(echo "$line" | sed -E 's/.* ([0-9]+) errors?,.*/\1/')
+failures=$(echo "$line" | sed -E 's/.* ([0-9]+) failures?,.*/\1/')
 skipped=$(echo "$line" | sed -E 's/.* ([0-9]+) skipped.*/\1/')
 failed=$((errors + failures))
 passed=$((total - failed - skipped))
