@@ -106,6 +106,7 @@ TEST(WhiskerFsmLogic, RepositoryConfigMatchesDefaults) {
   EXPECT_EQ(p.fsm.failsafe_land_after_s, d.fsm.failsafe_land_after_s);
   EXPECT_EQ(p.fsm.press_sum_pa, d.fsm.press_sum_pa);
   EXPECT_EQ(p.fsm.press_hold_s, d.fsm.press_hold_s);
+  EXPECT_EQ(p.fsm.press_rms_pa, d.fsm.press_rms_pa);
   EXPECT_EQ(p.fsm.press_depth, d.fsm.press_depth);
   EXPECT_EQ(p.fsm.phantom_quiet_rms, d.fsm.phantom_quiet_rms);
   EXPECT_EQ(p.fsm.phantom_travel, d.fsm.phantom_travel);
