@@ -52,6 +52,10 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   // (as hold_heading_trailing_lost). 900 Pa, no hold: tuning blocks, README.
   m.set("press_sum_pa", 900.0);
   m.set("press_hold_s", 0.0);
+  // Pressed by the stick-slip amplitude (issue 17, round 6): off. 450 Pa, best on
+  // the tuning blocks (413 -> 419 of 450), lost on the fresh held-out block
+  // 12000-12099 (273 -> 270 of 300; README "Round 6").
+  m.set("press_rms_pa", 0.0);
   m.set("press_depth", d.press_depth);
   // Phantom hold gated by odometry (issue 17, round 4): on in the whisker FSM
   // node, off in the core. 6.5 Pa over 25 samples, 0.03 m, latched: tuning
@@ -112,6 +116,7 @@ WhiskerFsmLogic::Params WhiskerFsmLogic::params_from(const ParamMap& m) {
   f.max_heading_offset = m.get_double("max_heading_offset");
   f.press_sum_pa = m.get_double("press_sum_pa");
   f.press_hold_s = m.get_double("press_hold_s");
+  f.press_rms_pa = m.get_double("press_rms_pa");
   f.press_depth = m.get_double("press_depth");
   f.phantom_quiet_rms = m.get_double("phantom_quiet_rms");
   p.phantom_quiet_samples = m.get_int("phantom_quiet_samples", 2, 10000);

@@ -81,6 +81,7 @@ void WallFollowerParams::validate() const {
           same_obstacle_distance);
   require(finite_nonneg(press_sum_pa), "press_sum_pa", "must be finite and >= 0 (0 = off)", press_sum_pa);
   require(finite_nonneg(press_hold_s), "press_hold_s", "must be finite and >= 0", press_hold_s);
+  require(finite_nonneg(press_rms_pa), "press_rms_pa", "must be finite and >= 0 (0 = off)", press_rms_pa);
   require(finite_positive(press_depth), "press_depth", "must be finite and > 0", press_depth);
   require(finite_nonneg(phantom_quiet_rms), "phantom_quiet_rms", "must be finite and >= 0 (0 = off)",
           phantom_quiet_rms);
@@ -388,9 +389,13 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
   // Pressed past the depth model (issue 17, README "Pressed whisker"): the
   // whisker's S_c sum bounds its depth by press_depth whatever depth is read.
   double d_left = f_left_, d_right = f_right_;
-  if (p_.press_sum_pa > 0.0) {
-    if (l_valid && in.input_sum_left >= p_.press_sum_pa) pressed_t_left_ = t;
-    if (r_valid && in.input_sum_right >= p_.press_sum_pa) pressed_t_right_ = t;
+  if (p_.press_sum_pa > 0.0 || p_.press_rms_pa > 0.0) {
+    const double sum_level = p_.press_sum_pa > 0.0 ? p_.press_sum_pa : INFINITY;
+    const double rms_level = p_.press_rms_pa > 0.0 ? p_.press_rms_pa : INFINITY;
+    // Pressed: the sum beyond the model's range, or its stick-slip changes as large
+    // as a whisker pressed to the depths the model cannot resolve (README "Round 6").
+    if (l_valid && (in.input_sum_left >= sum_level || in.input_change_rms_left >= rms_level)) pressed_t_left_ = t;
+    if (r_valid && (in.input_sum_right >= sum_level || in.input_change_rms_right >= rms_level)) pressed_t_right_ = t;
     if (!l_valid) pressed_t_left_ = -INFINITY;
     if (!r_valid) pressed_t_right_ = -INFINITY;
     if (l_valid && t - pressed_t_left_ <= p_.press_hold_s + kTimeEps) d_left = std::fmin(d_left, p_.press_depth);

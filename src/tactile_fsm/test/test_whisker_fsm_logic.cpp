@@ -106,6 +106,7 @@ TEST(WhiskerFsmLogic, RepositoryConfigMatchesDefaults) {
   EXPECT_NEAR(p.fsm.omega_max, 25.0 * M_PI / 180.0, 1e-15);  // 000 Fig. S4e, 25 deg/s
   EXPECT_EQ(p.fsm.whisk_amplitude, 0.0);                     // round 5: not kept
   EXPECT_TRUE(p.fsm.phantom_latch);                          // round 4b
+  EXPECT_EQ(p.fsm.press_rms_pa, 0.0);                        // round 6: not kept
 }
 
 TEST(WhiskerFsmLogic, ParameterErrorsNameTheKey) {

@@ -965,3 +965,37 @@ TEST(WhiskerWallFollower, WhiskingAfterClearOnlyAndPausedOnMovingSum) {
   q.whisk_pause_rms = -1.0;
   EXPECT_THROW(q.validate(), std::invalid_argument);
 }
+
+// Issue 17, README "Round 6": both depths read 70 mm (in band, aligned:
+// FLY_SIDEWAYS) and both sums are 500 Pa (under press_sum_pa), but the left
+// whisker's S_c sum jumps by ~600 Pa from sample to sample (change RMS 600 Pa,
+// the stick-slip of a whisker pressed to 20-50 mm): with press_rms_pa 450 Pa
+// its depth counts as press_depth (50 mm) < T_min and the drone backs off;
+// at 300 Pa of RMS (70-100 mm), an unknown RMS or with the rule off it flies
+// sideways as before.
+TEST(WhiskerWallFollower, StickSlipAmplitudeCountsAsPressed) {
+  auto sub_at = [](WallFollowerParams p, double rms_l) {
+    WhiskerWallFollower fsm(p);
+    double t = 0.0;
+    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t));
+    WallFollowerInput in = input(t, 1.0, 0.0);
+    set_depths(in, 0.07, 0.07);
+    in.input_sum_left = in.input_sum_right = 500.0;
+    in.input_change_rms_left = rms_l;
+    in.input_change_rms_right = 300.0;
+    return fsm.step(in).sub_state;
+  };
+  WallFollowerParams p;
+  p.press_sum_pa = 900.0;
+  p.press_hold_s = 0.0;
+  EXPECT_EQ(sub_at(p, 600.0), WallSubState::kFlySideways);  // rule off: the sum alone is not pressed
+  p.press_rms_pa = 450.0;
+  EXPECT_EQ(sub_at(p, 600.0), WallSubState::kFlyBackward);
+  EXPECT_EQ(sub_at(p, 300.0), WallSubState::kFlySideways);
+  EXPECT_EQ(sub_at(p, NAN), WallSubState::kFlySideways);
+  // Works without the sum rule too.
+  p.press_sum_pa = 0.0;
+  EXPECT_EQ(sub_at(p, 600.0), WallSubState::kFlyBackward);
+  p.press_rms_pa = -1.0;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+}

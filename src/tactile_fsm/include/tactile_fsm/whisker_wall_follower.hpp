@@ -120,6 +120,18 @@ struct WallFollowerParams {
   /// press_sum_pa 0 = off (the paper). [Pa]
   double press_sum_pa = 0.0;
   double press_hold_s = 0.2;   ///< [s]
+  /// Pressed by the stick-slip amplitude (issue 17, README "Round 6"): the
+  /// mean load of a whisker sliding on a wall is friction-limited, but each
+  /// slip releases the bending stored since the last stick, which grows with
+  /// the deflection, so the sample-to-sample changes of the S_c sum grow
+  /// monotonically as the whisker is pressed (SITL bags of the tuning blocks'
+  /// failures, RMS over 0.5 s, median 650 / 530 / 540 Pa at 20-30 / 30-40 /
+  /// 40-50 mm true depth against 350 / 310 / 250 at 70-80 / 80-90 / 90-100
+  /// mm; the sum's own median is ~500 at 20-50 and at 70-80 mm). A whisker in
+  /// contact whose change RMS (the node's phantom window) is >= press_rms_pa
+  /// counts as pressed, as for press_sum_pa. Our choice, not in 000.
+  /// 0 = off. [Pa]
+  double press_rms_pa = 0.0;
   double press_depth = 0.05;   ///< [m]
   /// Phantom hold gated by odometry (issue 17, README "Round 4"): the gel
   /// hysteresis (000 eq. 1, N_h) can leave a whisker held "in contact" by
