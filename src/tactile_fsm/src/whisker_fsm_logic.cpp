@@ -47,9 +47,10 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   // users of wall_sub_state() (gpis_explorer's wall follows) keep their rule.
   m.set("hold_heading_trailing_lost", true);
   // One depth left beyond wall_end_depth after both touched = the wall ends
-  // (issue 17, round 7): off in the core; the node's value is chosen on the
-  // tuning blocks (README "Round 7").
-  m.set("wall_end_depth", 0.0);
+  // (issue 17, round 7): on in the whisker FSM node, off in the core. 105 mm:
+  // tuning blocks 413 -> 415 of 450 (tied with 110 / 115 mm), seen blocks
+  // 5000-8000 1068 -> 1088 of 1200 (README "Round 7").
+  m.set("wall_end_depth", 0.105);
   m.set("same_obstacle_distance", d.same_obstacle_distance);
   m.set("max_heading_offset", d.max_heading_offset);
   // Pressed whisker (issue 17): on in the whisker FSM node, off in the core
