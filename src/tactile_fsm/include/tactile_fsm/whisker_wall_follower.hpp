@@ -94,12 +94,12 @@ struct WallFollowerParams {
   /// remaining depth > wall_end_depth asks for FLY_SIDEWAYS (keep passing
   /// the edge, as for the leading whisker lost) instead of FLY_FORWARD at
   /// V_max / 2 toward a wall ahead. In the SITL bags this case is a whisker
-  /// held by TDORC (104-125 mm estimated, truly free) past a baffle's end
+  /// held by TDORC (105-120 mm estimated, truly free) past a baffle's end
   /// after the other whisker was released there: FLY_FORWARD drove the guard
-  /// into that end (mocap 3019: 1.0 s at 0.1 m/s, the end 2-3 cm beside the
-  /// axis) before the phantom gate's 0.5 s window had emptied. A drone that
-  /// has both whiskers on a wall and loses one gets nearer with a turn, not
-  /// a forward flight, so the forward flight is not needed there. 0 = off
+  /// into that end (mocap 3019: 1.0 s at 0.1 m/s, the end 4 cm left of the
+  /// axis) before the phantom gate's RMS window had quietened. A wall
+  /// the other whisker just lost is not ahead; if the drone had only drifted
+  /// off, the next touch brings it back to the rule of both depths. 0 = off
   /// (the previous rule); otherwise >= t_max. [m]
   double wall_end_depth = 0.0;
   /// A contact in FLY_FORWARD less than this far ahead (along the course
