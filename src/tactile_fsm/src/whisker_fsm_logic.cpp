@@ -46,6 +46,11 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   // On in the whisker FSM node (issue 17); the core default stays off so the other
   // users of wall_sub_state() (gpis_explorer's wall follows) keep their rule.
   m.set("hold_heading_trailing_lost", true);
+  // One depth left beyond wall_end_depth after both touched = the wall ends
+  // (issue 17, round 7): on in the whisker FSM node, off in the core. 105 mm:
+  // tuning blocks 413 -> 415 of 450 (tied with 110 / 115 mm), seen blocks
+  // 5000-8000 1068 -> 1088 of 1200 (README "Round 7").
+  m.set("wall_end_depth", 0.105);
   m.set("same_obstacle_distance", d.same_obstacle_distance);
   m.set("max_heading_offset", d.max_heading_offset);
   // Pressed whisker (issue 17): on in the whisker FSM node, off in the core
@@ -112,6 +117,7 @@ WhiskerFsmLogic::Params WhiskerFsmLogic::params_from(const ParamMap& m) {
   f.clear_margin = m.get_double("clear_margin");
   f.realign_gain = m.get_double("realign_gain");
   f.hold_heading_trailing_lost = m.get_bool("hold_heading_trailing_lost");
+  f.wall_end_depth = m.get_double("wall_end_depth");
   f.same_obstacle_distance = m.get_double("same_obstacle_distance");
   f.max_heading_offset = m.get_double("max_heading_offset");
   f.press_sum_pa = m.get_double("press_sum_pa");

@@ -77,6 +77,8 @@ void WallFollowerParams::validate() const {
   require(finite_nonneg(realign_gain), "realign_gain", "must be finite and >= 0", realign_gain);
   require(std::isfinite(max_heading_offset) && max_heading_offset >= 0.0 && max_heading_offset <= M_PI,
           "max_heading_offset", "must be in [0, pi]", max_heading_offset);
+  require(std::isfinite(wall_end_depth) && (wall_end_depth == 0.0 || wall_end_depth >= t_max), "wall_end_depth",
+          "must be 0 (off) or finite and >= t_max", wall_end_depth);
   require(finite_nonneg(same_obstacle_distance), "same_obstacle_distance", "must be finite and >= 0",
           same_obstacle_distance);
   require(finite_nonneg(press_sum_pa), "press_sum_pa", "must be finite and >= 0 (0 = off)", press_sum_pa);
@@ -108,6 +110,13 @@ WallSubState wall_sub_state(double d_l, bool l_valid, double d_r, bool r_valid, 
   if (!l_valid && !r_valid) return WallSubState::kFlySideways;
   if (l_valid != r_valid) {
     const bool leading_lost = (side == Side::kRight) ? !r_valid : !l_valid;
+    if (both_touched && p.wall_end_depth > 0.0 && (l_valid ? d_l : d_r) > p.wall_end_depth) {
+      // One whisker lost after both touched, the other beyond wall_end_depth:
+      // the wall ends here (a whisker held past the end), not a wall ahead;
+      // keep passing the edge instead of flying forward into the end (issue
+      // 17, README "Round 7"; our choice).
+      return WallSubState::kFlySideways;
+    }
     if (both_touched && leading_lost) {
       // The leading whisker ran off the wall's end: keep passing the edge.
       const double remaining = l_valid ? d_l : d_r;

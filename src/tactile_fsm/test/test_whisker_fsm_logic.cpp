@@ -107,6 +107,7 @@ TEST(WhiskerFsmLogic, RepositoryConfigMatchesDefaults) {
   EXPECT_EQ(p.fsm.whisk_amplitude, 0.0);                     // round 5: not kept
   EXPECT_TRUE(p.fsm.phantom_latch);                          // round 4b
   EXPECT_EQ(p.fsm.press_rms_pa, 0.0);                        // round 6: not kept
+  EXPECT_DOUBLE_EQ(p.fsm.wall_end_depth, 0.105);             // round 7
 }
 
 TEST(WhiskerFsmLogic, ParameterErrorsNameTheKey) {

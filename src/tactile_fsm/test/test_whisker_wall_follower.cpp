@@ -182,6 +182,68 @@ TEST(WallSubStateRule, TrailingWhiskerLostHoldsHeading) {
   EXPECT_EQ(wall_sub_state(0.08, true, NAN, false, Side::kLeft, false, ws, p), WallSubState::kTurnLeft);
 }
 
+// Issue 17, README "Round 7": after both touched, one whisker lost and the
+// other beyond T_max. Following right, the leading (right) whisker ran off a
+// baffle's end and is still held at 115 mm (truly free), the trailing (left)
+// one is released at the end: without the rule the remaining depth asks for
+// FLY_FORWARD at V_max / 2 (mocap 3019 flew 1.0 s forward into the end);
+// with wall_end_depth the wall ends: FLY_SIDEWAYS. A remaining depth in the
+// band or below, and the approach (before both touched), are unchanged.
+TEST(WallSubStateRule, OneDepthBeyondWallEndDepthAfterBothTouchedPassesTheEdge) {
+  WallFollowerParams p;
+  p.hold_heading_trailing_lost = true;  // the whisker FSM node's default
+  const auto ws = WallSubState::kFlySideways;
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.115, true, Side::kRight, true, ws, p), WallSubState::kFlyForward);
+  p.wall_end_depth = 0.10;
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.115, true, Side::kRight, true, ws, p), WallSubState::kFlySideways);
+  EXPECT_EQ(wall_sub_state(0.115, true, NAN, false, Side::kLeft, true, ws, p), WallSubState::kFlySideways);
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kRight, true, ws, p), WallSubState::kFlySideways);
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.05, true, Side::kRight, true, ws, p), WallSubState::kFlyBackward);
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.115, true, Side::kRight, false, ws, p), WallSubState::kFlyForward);  // approach
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kRight, false, ws, p), WallSubState::kTurnRight);
+  // Above the remaining depth: unchanged (FLY_FORWARD); also without the hold rule.
+  p.wall_end_depth = 0.12;
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.115, true, Side::kRight, true, ws, p), WallSubState::kFlyForward);
+  p.hold_heading_trailing_lost = false;
+  p.wall_end_depth = 0.10;
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.115, true, Side::kRight, true, ws, p), WallSubState::kFlySideways);
+  // Through step(): both whiskers on the wall, then the left released with the
+  // right still read at 115 mm.
+  auto sub_after_release = [](WallFollowerParams q) {
+    WhiskerWallFollower fsm(q);
+    double t = 0.0;
+    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t, 1.0, 0.0));
+    for (int k = 0; k < 10; ++k, t += kDt) {
+      WallFollowerInput in = input(t, 1.0, 0.0);
+      set_depths(in, 0.08, 0.08);
+      fsm.step(in);
+    }
+    WallSubState sub = WallSubState::kNone;
+    for (int k = 0; k < 10; ++k, t += kDt) {
+      WallFollowerInput in = input(t, 1.0, 0.0);
+      set_depths(in, NAN, 0.115);
+      in.left_valid = false;
+      sub = fsm.step(in).sub_state;
+    }
+    return sub;
+  };
+  WallFollowerParams q;
+  q.hold_heading_trailing_lost = true;
+  EXPECT_EQ(sub_after_release(q), WallSubState::kFlyForward);  // off: the core default
+  EXPECT_EQ(WallFollowerParams{}.wall_end_depth, 0.0);
+  q.wall_end_depth = 0.10;
+  EXPECT_EQ(sub_after_release(q), WallSubState::kFlySideways);
+  // 0 (off) or >= t_max, finite.
+  q.wall_end_depth = 0.08;
+  EXPECT_THROW(q.validate(), std::invalid_argument);
+  q.wall_end_depth = -0.1;
+  EXPECT_THROW(q.validate(), std::invalid_argument);
+  q.wall_end_depth = NAN;
+  EXPECT_THROW(q.validate(), std::invalid_argument);
+  q.wall_end_depth = 0.0;
+  EXPECT_NO_THROW(q.validate());
+}
+
 // Issue 17: a contact right after a clearing (less than same_obstacle_distance
 // along the course from where the side-step ended) keeps the side although the
 // target is now clearly on the other side; further on, the side is re-chosen.

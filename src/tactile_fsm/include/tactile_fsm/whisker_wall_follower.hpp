@@ -88,6 +88,20 @@ struct WallFollowerParams {
   /// these params and were not re-measured); the whisker FSM node's default
   /// and config/tactile_fsm.yaml turn it on.
   bool hold_heading_trailing_lost = false;
+  /// One whisker left beyond this depth after both touched: the wall ends
+  /// (issue 17, README "Round 7"; our choice, 000 Fig. S4e has no case for a
+  /// lost depth). With one depth missing after both whiskers touched, a
+  /// remaining depth > wall_end_depth asks for FLY_SIDEWAYS (keep passing
+  /// the edge, as for the leading whisker lost) instead of FLY_FORWARD at
+  /// V_max / 2 toward a wall ahead. In the SITL bags this case is a whisker
+  /// held by TDORC (105-120 mm estimated, truly free) past a baffle's end
+  /// after the other whisker was released there: FLY_FORWARD drove the guard
+  /// into that end (mocap 3019: 1.0 s at 0.1 m/s, the end 4 cm left of the
+  /// axis) before the phantom gate's RMS window had quietened. A wall
+  /// the other whisker just lost is not ahead; if the drone had only drifted
+  /// off, the next touch brings it back to the rule of both depths. 0 = off
+  /// (the previous rule); otherwise >= t_max. [m]
+  double wall_end_depth = 0.0;
   /// A contact in FLY_FORWARD less than this far ahead (along the course
   /// heading) of where the side-step after a clearing ended is the same
   /// obstacle: keep the side (issue 17, README "Random baffle courses": on rigid
@@ -248,9 +262,11 @@ struct WallFollowerOutput {
 ///  - one depth missing:
 ///    * before both whiskers touched in this episode (approach): the missing
 ///      one counts as beyond T_max (the rule above)
-///    * after (whisker lost the wall): the leading whisker (in the sideways
-///      direction) lost -> passing the edge: FLY_SIDEWAYS, or FLY_BACKWARD
-///      if the remaining depth < T_min; the trailing one lost -> as approach
+///    * after (whisker lost the wall): the remaining depth > wall_end_depth
+///      (when on) -> the wall ends: FLY_SIDEWAYS; the leading whisker (in the
+///      sideways direction) lost -> passing the edge: FLY_SIDEWAYS, or
+///      FLY_BACKWARD if the remaining depth < T_min; the trailing one lost ->
+///      as approach (or, hold_heading_trailing_lost, translate)
 ///  - none: FLY_SIDEWAYS (clearing is decided by the top level).
 /// theta: wall angle estimate to use when both depths are valid; NaN = compute
 /// it from the depths (000 eq. 21).
