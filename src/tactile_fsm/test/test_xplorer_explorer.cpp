@@ -461,6 +461,7 @@ TEST(XplorerExplorer, EveryTickPublishesADesignedSetpointTransitionsIncluded) {
   for (const double backoff_s : {0.0, 0.3}) {
     XplorerParams p;
     p.contact_backoff_time = backoff_s;
+    p.contact_backoff_gain = 0.02;
     XplorerExplorer x{p};
     SetpointChecker c;
     const double yaw = 1.0;

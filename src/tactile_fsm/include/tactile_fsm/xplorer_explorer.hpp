@@ -176,9 +176,9 @@ struct XplorerParams {
   /// vehicle is. Using it at first contact is our choice: it takes out the approach momentum
   /// the position loop carries into the face (issue 17; README "Transition ticks and the
   /// contact back-off"). contact_backoff_time 0: off (the traversal starts at once).
-  double contact_backoff_gain = 0.02;  ///< [m/N] (choice, as recovery_gain)
-  double contact_backoff_max = 0.1;    ///< [m] (choice)
-  double contact_backoff_time = 0.0;   ///< [s] (choice; 0: off)
+  double contact_backoff_gain = 0.04;  ///< [m/N] (choice, tuned; recovery_gain is 0.02)
+  double contact_backoff_max = 0.15;   ///< [m] (choice)
+  double contact_backoff_time = 0.3;   ///< [s] (choice, as recovery_time; 0: off)
   double static_force = 1.0;         ///< static-wrench reference |delta_f_ref| [N] (001 Sec. V-B)
   XVec2 goal = XVec2(1.0, 0.0);      ///< ricochet / waypoint goal, world [m]
   double ricochet_speed = 1.5;       ///< approach speed [m/s] ("maximum velocity", 001 Sec. IV-C; the SITL controller's limit)
