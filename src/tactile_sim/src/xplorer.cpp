@@ -35,8 +35,8 @@ CascadedControllerParams XplorerParams::default_controller() {
   c.rate_p = Vec3(20.0, 20.0, 10.0);
   c.rate_i = Vec3(5.0, 5.0, 3.0);
   c.rate_d = Vec3(0.2, 0.2, 0.0);
-  // Roll/pitch before yaw in the allocation (PX4's mixer order, 001's
-  // PIXHAWK): the arms' springs pass contact yaw torques (up to 0.68 N m per
+  // Roll/pitch before yaw in the allocation (PX4's mixer order; 001 flies a
+  // PIXHAWK; our choice): the arms' springs pass contact yaw torques (up to 0.68 N m per
   // arm at the 30 deg stop) that the rotors cannot match (~0.18 N m at
   // hover); scaling every axis alike gave up the attitude with the yaw and
   // the vehicle sank in contact (tactile_fsm README, "Height lost in contact").

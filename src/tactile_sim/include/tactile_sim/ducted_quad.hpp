@@ -37,7 +37,8 @@ enum class TorqueDesaturation {
   /// Roll and pitch first (scaled only if they alone exceed the rotors), yaw
   /// gets what is left: the PX4 multicopter mixer's order ("mix roll, pitch
   /// and thrust without yaw ... mix in yaw and scale if it leads to limit
-  /// violation"), the firmware of 001's PIXHAWK (001 Sec. V-A1).
+  /// violation"). 001 flies a PIXHAWK (Sec. V-A1) without naming its
+  /// firmware: our choice for the SITL's flight controller.
   kYawFirst,
 };
 
