@@ -173,6 +173,12 @@ void XplorerParams::validate() const {
     bad("XplorerParams", "max_clockwise_turns_in_a_row", "must be in [0, 1000]", max_clockwise_turns_in_a_row);
   if (!(loop_min_winding >= 0.0 && loop_min_winding <= 2.0 * M_PI))
     bad("XplorerParams", "loop_min_winding", "must be in [0, 2 pi] (one circuit turns the heading by 2 pi)", loop_min_winding);
+  if (!(contact_backoff_gain >= 0.0) || !std::isfinite(contact_backoff_gain))
+    bad("XplorerParams", "contact_backoff_gain", "must be finite and >= 0", contact_backoff_gain);
+  if (!(contact_backoff_max >= 0.0 && contact_backoff_max <= 0.5))
+    bad("XplorerParams", "contact_backoff_max", "must be in [0, 0.5] m", contact_backoff_max);
+  if (!(contact_backoff_time >= 0.0 && contact_backoff_time <= 2.0))
+    bad("XplorerParams", "contact_backoff_time", "must be in [0, 2] s", contact_backoff_time);
   pos("static_force", static_force);
   if (!goal.allFinite()) bad("XplorerParams", "goal", "must be finite", goal.x());
   pos("ricochet_speed", ricochet_speed);
@@ -216,6 +222,51 @@ void XplorerExplorer::enter(XplorerState s, const XplorerInput& in, const std::s
     t_quiet_ = in.t;
     traverse_history_.clear();
   }
+}
+
+void XplorerExplorer::hold_backoff(const XplorerInput& in) {
+  adm_.reset(XVec3(in.position.x(), in.position.y(), p_.hover_height), in.yaw);
+  r_star_ = in.position.head<2>();
+  t_quiet_ = in.t;
+  low_force_since_ = -1.0;
+  traverse_history_.clear();
+}
+
+void XplorerExplorer::start_backoff(const XplorerInput& in) {
+  // 001 Sec. III-B3 collision recovery at the contact that ends Exploration: a setpoint
+  // away from the obstacle along the measured force, proportional to its magnitude.
+  backoff_sp_ = XVec3(in.position.x(), in.position.y(), p_.hover_height);
+  if (!(p_.contact_backoff_time > 0.0)) return;
+  const XVec2 f = in.force.head<2>();
+  const double fn = f.norm();
+  // The fused force points out of the obstacle; a vanishing one (the average crossed delta_0
+  // on older samples) falls back on -C_n.
+  const XVec2 dir = fn > 1e-6 ? XVec2(f / fn) : XVec2(-rot(in.yaw, unit(contact_)));
+  backoff_sp_.head<2>() += std::min(p_.contact_backoff_gain * fn, p_.contact_backoff_max) * dir;
+  backoff_until_ = in.t + p_.contact_backoff_time;
+  ++backoffs_;
+}
+
+XVec3 XplorerExplorer::turning_setpoint(const XplorerInput& in, double* yaw) const {
+  const XVec2 p2 = in.position.head<2>();
+  if (p_.turn_pivot) {
+    // Orbit the pivot: yaw and position setpoints turn together at psi_c (001 Sec.
+    // V-C: 0.26 rad/s), from the angle the vehicle has already turned, limited to 180 deg.
+    const double phi = std::min(phi0_ + p_.turn_rate * (in.t - t_enter_), p_.turn_limit);
+    *yaw = wrap(face_yaw_ + turn_sign_ * phi);
+    const double radius = p_.turn_radius + p_.turn_backoff * std::exp(-(in.t - t_enter_) / p_.turn_backoff_tau);
+    // The pivot is abreast of the vehicle along lambda at the trigger; from there it
+    // moves on along lambda at traverse_speed to turn_slide past the pivot.
+    const double slide = std::min(p_.turn_slide, p_.traverse_speed * (in.t - t_enter_));
+    const XVec2 sp = pivot_ + rot(turn_sign_ * phi, slide * face_t_ - radius * face_n_);
+    return XVec3(sp.x(), sp.y(), p_.hover_height);
+  }
+  const double turned = std::min(p_.turn_rate * (in.t - t_enter_), p_.turn_limit);  // 001: limited to 180 deg
+  *yaw = wrap(yaw_enter_ + turn_sign_ * turned);
+  const XVec2 n = rot(in.yaw, unit(contact_)), t = rot(in.yaw, unit(move_));
+  XVec3 out(p2.x(), p2.y(), p_.hover_height);
+  out.head<2>() += p_.turn_push * n + (p_.traverse_speed / p_.position_gain) * t;
+  return out;
 }
 
 XDir XplorerExplorer::detect_contact(double threshold) const {
@@ -296,6 +347,7 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
         contact_ = c;
         if (p_.mission == XplorerMission::kStaticWrench) {
           enter(XplorerState::kStaticWrench, in, std::string("contact ") + to_string(c));
+          start_backoff(in);
         } else {
           move_ = right_hand(c);  // 001 Sec. IV-A: right-hand traversal
           if (first_contact_t_ < 0) {
@@ -304,6 +356,7 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
             started_path_ = true;
           }
           enter(XplorerState::kTactileTraversal, in, std::string("contact ") + to_string(c));
+          start_backoff(in);
         }
         break;
       }
@@ -313,6 +366,14 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
       break;
     }
     case XplorerState::kTactileTraversal: {
+      if (in.t < backoff_until_) {
+        // Contact back-off: hold its setpoint; the traversal starts afterwards from where the
+        // vehicle is (no turn trigger, release timer or reshaped r* from the back-off).
+        hold_backoff(in);
+        out.position = backoff_sp_;
+        out.yaw = hold_yaw_;
+        break;
+      }
       // 001 Sec. IV-A: a yaw-rate peak (release at a corner) starts Tactile-turning.
       traverse_history_.push_back({in.t, p2, in.yaw});
       while (traverse_history_.size() > 1 && in.t - traverse_history_[1].t >= p_.corner_lookback)
@@ -396,24 +457,7 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
       break;
     }
     case XplorerState::kTactileTurning: {
-      if (p_.turn_pivot) {
-        // Orbit the pivot: yaw and position setpoints turn together at psi_c (001 Sec.
-        // V-C: 0.26 rad/s), from the angle the vehicle has already turned, limited to 180 deg.
-        const double phi = std::min(phi0_ + p_.turn_rate * (in.t - t_enter_), p_.turn_limit);
-        out.yaw = wrap(face_yaw_ + turn_sign_ * phi);
-        const double radius = p_.turn_radius + p_.turn_backoff * std::exp(-(in.t - t_enter_) / p_.turn_backoff_tau);
-        // The pivot is abreast of the vehicle along lambda at the trigger; from there it
-        // moves on along lambda at traverse_speed to turn_slide past the pivot.
-        const double slide = std::min(p_.turn_slide, p_.traverse_speed * (in.t - t_enter_));
-        const XVec2 sp = pivot_ + rot(turn_sign_ * phi, slide * face_t_ - radius * face_n_);
-        out.position = XVec3(sp.x(), sp.y(), p_.hover_height);
-      } else {
-        const double turned = std::min(p_.turn_rate * (in.t - t_enter_), p_.turn_limit);  // 001: limited to 180 deg
-        out.yaw = wrap(yaw_enter_ + turn_sign_ * turned);
-        const XVec2 n = rot(in.yaw, unit(contact_)), t = rot(in.yaw, unit(move_));
-        out.position = XVec3(p2.x(), p2.y(), p_.hover_height);
-        out.position.head<2>() += p_.turn_push * n + lead_t * t;
-      }
+      out.position = turning_setpoint(in, &out.yaw);
       // Re-contact (|b_delta_f_x| or |b_delta_f_y| > delta_psi0), once the moving
       // average no longer holds the force of the face just left.
       if (in.t - t_enter_ > p_.settle_time &&
@@ -431,6 +475,12 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
       break;
     }
     case XplorerState::kStaticWrench: {
+      if (in.t < backoff_until_) {
+        hold_backoff(in);
+        out.position = backoff_sp_;
+        out.yaw = hold_yaw_;
+        break;
+      }
       // 001 Sec. V-B: delta_f_ref = 1 N onto the surface, r* = current position
       // (the setpoint is reshaped by the force error only).
       const XVec2 n = rot(in.yaw, unit(contact_));
@@ -487,16 +537,29 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
   }
   out.state = state_;
   out.transitioned = state_ != before;
-  // Known defect (README, "Known defect: the setpoint of a transition tick"): a branch that
-  // enters Tactile-traversal, -turning or the static wrench and breaks before its setpoint
-  // returns the default output (origin, z = 0, yaw 0) for that tick; the issue-17 rules were
-  // tuned with it, and mending it alone loses maps (measured there).
-  if (out.transitioned && state_ != XplorerState::kTactileTraversal && state_ != XplorerState::kStaticWrench &&
-      state_ != XplorerState::kTactileTurning && state_ != XplorerState::kRicocheting) {
-    // First tick of a plain state: its own setpoint next tick; hold now.
-    out.position = XVec3(p2.x(), p2.y(), p_.hover_height);
-    if (state_ == XplorerState::kGoTo) out.position = XVec3(p_.goal.x(), p_.goal.y(), p_.hover_height);
-    out.yaw = hold_yaw_;
+  // The tick of a transition publishes the entered state's own setpoint (a branch that
+  // enters a state and breaks has not set one; the output's default is the world origin at
+  // z = 0, which must never be published).
+  if (out.transitioned) {
+    switch (state_) {
+      case XplorerState::kTactileTurning: out.position = turning_setpoint(in, &out.yaw); break;
+      case XplorerState::kTactileTraversal:
+      case XplorerState::kStaticWrench:
+        // The contact back-off's setpoint (or, without one, the vehicle's position; the
+        // admittance starts there next tick).
+        out.position = in.t < backoff_until_ ? backoff_sp_ : XVec3(p2.x(), p2.y(), p_.hover_height);
+        out.yaw = hold_yaw_;
+        break;
+      case XplorerState::kRicocheting: break;  // the take-off's hover setpoint, set above
+      case XplorerState::kGoTo:
+        out.position = XVec3(p_.goal.x(), p_.goal.y(), p_.hover_height);
+        out.yaw = hold_yaw_;
+        break;
+      default:  // first tick of a plain state: its own setpoint next tick; hold now
+        out.position = XVec3(p2.x(), p2.y(), p_.hover_height);
+        out.yaw = hold_yaw_;
+        break;
+    }
   }
   return out;
 }

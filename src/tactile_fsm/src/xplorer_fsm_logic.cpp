@@ -56,6 +56,9 @@ ParamMap XplorerFsmLogic::default_parameters() {
   m.set("max_clockwise_turns_in_a_row", static_cast<int64_t>(f.max_clockwise_turns_in_a_row));
   m.set("turn_on_contact_lost", f.turn_on_contact_lost);
   m.set("contact_lost_turn_min_s", f.contact_lost_turn_min_s);
+  m.set("contact_backoff_gain", f.contact_backoff_gain);
+  m.set("contact_backoff_max", f.contact_backoff_max);
+  m.set("contact_backoff_time", f.contact_backoff_time);
   m.set("static_force", f.static_force);
   m.set("goal", std::vector<double>{f.goal.x(), f.goal.y()});
   m.set("ricochet_speed", f.ricochet_speed);
@@ -114,6 +117,9 @@ XplorerFsmLogic::Params XplorerFsmLogic::params_from(const ParamMap& m) {
   f.max_clockwise_turns_in_a_row = m.get_int("max_clockwise_turns_in_a_row", 0, 1000);
   f.turn_on_contact_lost = m.get_bool("turn_on_contact_lost");
   f.contact_lost_turn_min_s = m.get_double("contact_lost_turn_min_s");
+  f.contact_backoff_gain = m.get_double("contact_backoff_gain");
+  f.contact_backoff_max = m.get_double("contact_backoff_max");
+  f.contact_backoff_time = m.get_double("contact_backoff_time");
   f.static_force = m.get_double("static_force");
   const auto g = m.get_double_array("goal");
   if (g.size() != 2) throw m.error("goal", "must be [x, y], got " + std::to_string(g.size()) + " elements");

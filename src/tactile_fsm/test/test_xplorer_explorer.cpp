@@ -420,6 +420,161 @@ TEST(XplorerExplorer, LoopDoesNotCloseWhileTurning) {
   EXPECT_EQ(x.state(), XplorerState::kTactileTurning);
 }
 
+// Every tick publishes a designed setpoint, the tick of a transition included (review,
+// 2026-11-26: a branch that entered Tactile-traversal, -turning or the static wrench and
+// broke returned the output's default, the world origin at z = 0 with yaw 0, for that
+// tick). Far from the origin (the vehicle at x ~ 3, y ~ 2) and at yaw 1 rad, every
+// setpoint must be finite, at hover height and within reach of the vehicle (the turn's
+// orbit, at most turn_radius + turn_backoff + turn_slide from the pivot 0.21 m beyond the
+// vehicle: < 0.6 m), on a transition tick the yaw within 0.5 rad of the vehicle's; and the tick that enters a state
+// carries the state's own setpoint (the orbit's first point, the contact back-off's point).
+namespace {
+struct SetpointChecker {
+  double max_xy = 0.0, max_yaw = 0.0;
+  int ticks = 0, bad = 0;
+  XplorerOutput step(XplorerExplorer& x, const XplorerInput& in) {
+    const XplorerOutput o = x.update(in, 0.02);
+    ++ticks;
+    const double dxy = (o.position.head<2>() - in.position.head<2>()).norm();
+    const double dyaw = std::abs(std::remainder(o.yaw - in.yaw, 2 * M_PI));
+    // The turn's yaw setpoint runs ahead of a vehicle that does not follow (scripted
+    // inputs), so the yaw is bounded on the transition ticks only.
+    const bool ok = o.position.allFinite() && std::isfinite(o.yaw) && std::abs(o.position.z() - 0.7) < 1e-9 &&
+                    dxy < 0.6 && (!o.transitioned || dyaw < 0.5);
+    if (!ok) {
+      ++bad;
+      ADD_FAILURE() << "t = " << in.t << " state " << to_string(o.state) << (o.transitioned ? " (transition tick)" : "")
+                    << ": setpoint (" << o.position.transpose() << ") yaw " << o.yaw << " for the vehicle at ("
+                    << in.position.transpose() << ") yaw " << in.yaw;
+    }
+    max_xy = std::max(max_xy, dxy);
+    max_yaw = std::max(max_yaw, dyaw);
+    return o;
+  }
+};
+XVec3 world(double yaw, double bx, double by) {  // a body-frame force in the world frame
+  return XVec3(std::cos(yaw) * bx - std::sin(yaw) * by, std::sin(yaw) * bx + std::cos(yaw) * by, 0.0);
+}
+}  // namespace
+
+TEST(XplorerExplorer, EveryTickPublishesADesignedSetpointTransitionsIncluded) {
+  for (const double backoff_s : {0.0, 0.3}) {
+    XplorerParams p;
+    p.contact_backoff_time = backoff_s;
+    p.contact_backoff_gain = 0.02;
+    XplorerExplorer x{p};
+    SetpointChecker c;
+    const double yaw = 1.0;
+    const XVec3 p0(3.0, 2.0, 0.7);
+    double t = 0.0;
+    c.step(x, input(t, XVec3(3.0, 2.0, 0.69), yaw, XVec3::Zero()));
+    XplorerOutput o = c.step(x, input(t += 0.02, p0, yaw, XVec3::Zero()));
+    ASSERT_EQ(o.state, XplorerState::kExploration);
+    // First contact: 2 N against body +x -> Tactile-traversal.
+    const XVec3 f_contact = world(yaw, -2.0, 0.0);
+    while (x.state() == XplorerState::kExploration && t < 1.0) o = c.step(x, input(t += 0.02, p0, yaw, f_contact));
+    ASSERT_EQ(o.state, XplorerState::kTactileTraversal);
+    ASSERT_TRUE(o.transitioned);
+    if (backoff_s > 0.0) {
+      // 0.02 m/N x 2 N = 4 cm along the force (out of the obstacle), yaw held.
+      EXPECT_EQ(x.backoffs(), 1u);
+      EXPECT_NEAR((o.position - (p0 + 0.04 * f_contact.normalized())).norm(), 0.0, 1e-9);
+      EXPECT_NEAR(o.yaw, yaw, 1e-12);
+    } else {
+      EXPECT_EQ(x.backoffs(), 0u);
+      EXPECT_NEAR((o.position - p0).norm(), 0.0, 1e-9);  // holds where the contact was
+    }
+    // Traversal for 5 s (the face along lambda = body -y), then a yaw-rate peak -> turning.
+    XVec3 q = p0;
+    for (int i = 0; i < 250; ++i) {
+      q.head<2>() += 0.003 * world(yaw, 0, -1).head<2>();
+      c.step(x, input(t += 0.02, q, yaw, world(yaw, -1.3, 0.0)));
+    }
+    ASSERT_EQ(x.state(), XplorerState::kTactileTraversal);
+    for (int i = 0; i < 20 && x.state() == XplorerState::kTactileTraversal; ++i)
+      o = c.step(x, input(t += 0.02, q, yaw + 0.1, world(yaw, -1.0, 0.0), 1.0));
+    ASSERT_EQ(o.state, XplorerState::kTactileTurning);
+    ASSERT_TRUE(o.transitioned);
+    // The transition tick carries the orbit's first point: 0.35 m (turn_radius +
+    // turn_backoff) from the pivot, the pivot 0.21 m out along C_n.
+    EXPECT_NEAR((o.position.head<2>() - x.pivot()).norm(), 0.35, 1e-9);
+    // Re-contact (2.5 N on body +x after 1 s) -> traversal.
+    for (int i = 0; i < 200 && x.state() == XplorerState::kTactileTurning; ++i)
+      o = c.step(x, input(t += 0.02, q, yaw + 0.2, world(yaw + 0.2, -2.5, 0.0)));
+    ASSERT_EQ(o.state, XplorerState::kTactileTraversal);
+    // A long traversal, then the contact lost -> a counter-clockwise turn about the face's end.
+    for (int i = 0; i < 250; ++i) c.step(x, input(t += 0.02, q, yaw + 0.2, world(yaw + 0.2, -1.3, 0.0)));
+    for (int i = 0; i < 100 && x.state() == XplorerState::kTactileTraversal; ++i)
+      o = c.step(x, input(t += 0.02, q, yaw + 0.2, XVec3::Zero()));
+    ASSERT_EQ(o.state, XplorerState::kTactileTurning) << x.reason();
+    ASSERT_TRUE(o.transitioned);
+    // No re-contact: the turn ends in Exploration after its limit.
+    for (int i = 0; i < 800 && x.state() == XplorerState::kTactileTurning; ++i)
+      c.step(x, input(t += 0.02, q, yaw + 0.2, XVec3::Zero()));
+    EXPECT_EQ(x.state(), XplorerState::kExploration);
+    // Contact again from Exploration, lost after 2 s -> Exploration.
+    for (int i = 0; i < 100 && x.state() == XplorerState::kExploration; ++i)
+      c.step(x, input(t += 0.02, q, yaw + 0.2, world(yaw + 0.2, -2.0, 0.0)));
+    ASSERT_EQ(x.state(), XplorerState::kTactileTraversal);
+    for (int i = 0; i < 200 && x.state() == XplorerState::kTactileTraversal; ++i)
+      c.step(x, input(t += 0.02, q, yaw + 0.2, XVec3::Zero()));
+    EXPECT_EQ(x.state(), XplorerState::kExploration);
+    EXPECT_EQ(c.bad, 0) << "of " << c.ticks << " ticks";
+  }
+  // The static wrench's contact tick.
+  for (const double backoff_s : {0.0, 0.3}) {
+    XplorerParams p;
+    p.mission = XplorerMission::kStaticWrench;
+    p.contact_backoff_time = backoff_s;
+    XplorerExplorer x{p};
+    SetpointChecker c;
+    const XVec3 p0(-2.0, 4.0, 0.7);
+    double t = 0.0;
+    c.step(x, input(t, p0, -2.0, XVec3::Zero()));
+    XplorerOutput o;
+    for (int i = 0; i < 100 && x.state() != XplorerState::kStaticWrench; ++i)
+      o = c.step(x, input(t += 0.02, p0, -2.0, world(-2.0, 0.0, 2.0)));
+    ASSERT_EQ(o.state, XplorerState::kStaticWrench);
+    ASSERT_TRUE(o.transitioned);
+    for (int i = 0; i < 100; ++i) c.step(x, input(t += 0.02, p0, -2.0, world(-2.0, 0.0, 1.0)));
+    EXPECT_EQ(c.bad, 0) << "of " << c.ticks << " ticks";
+  }
+}
+
+// The contact back-off (001 Sec. III-B3 collision recovery at first contact): its setpoint
+// is held for contact_backoff_time, capped at contact_backoff_max, and no turn, release or
+// reshaping runs meanwhile; afterwards the traversal starts from where the vehicle is.
+TEST(XplorerExplorer, ContactBackOffHoldsItsSetpointThenTraverses) {
+  XplorerParams p;
+  p.contact_backoff_time = 0.5;
+  p.contact_backoff_gain = 0.02;
+  p.contact_backoff_max = 0.05;
+  XplorerExplorer x{p};
+  double t = 0.0;
+  x.update(input(t, XVec3(0, 0, 0.7), 0.0, XVec3::Zero()), 0.02);
+  XplorerOutput o;
+  for (int i = 0; i < 100 && x.state() != XplorerState::kTactileTraversal; ++i)
+    o = x.update(input(t += 0.02, XVec3(0.79, 0, 0.7), 0.0, XVec3(-4.0, 0, 0)), 0.02);
+  ASSERT_EQ(o.state, XplorerState::kTactileTraversal);
+  const double t0 = t;
+  EXPECT_NEAR(o.position.x(), 0.79 - 0.05, 1e-12);  // 0.02 m/N x 4 N = 8 cm, capped at 5 cm
+  EXPECT_NEAR(o.position.y(), 0.0, 1e-12);
+  // During the back-off: a yaw-rate peak and a vanishing force change nothing.
+  while (t < t0 + 0.48) {
+    o = x.update(input(t += 0.02, XVec3(0.76, 0, 0.7), 0.0, XVec3::Zero(), 1.0), 0.02);
+    ASSERT_EQ(o.state, XplorerState::kTactileTraversal);
+    EXPECT_NEAR(o.position.x(), 0.74, 1e-12);
+    EXPECT_NEAR(o.yaw, 0.0, 1e-12);
+  }
+  // Afterwards the traversal's admittance from the vehicle's position (pressing at 1.25 N:
+  // along lambda = -y, no offset along C_n).
+  for (int i = 0; i < 100; ++i) o = x.update(input(t += 0.02, XVec3(0.76, 0, 0.7), 0.0, XVec3(-1.25, 0, 0)), 0.02);
+  EXPECT_EQ(o.state, XplorerState::kTactileTraversal);
+  EXPECT_NEAR(o.position.x(), 0.76, 1e-3);
+  EXPECT_LT(o.position.y(), -0.05);
+  EXPECT_EQ(x.turns(), 0u);
+}
+
 TEST(XplorerParams, ValidateNamesTheField) {
   XplorerParams p;
   p.delta_psi0 = 1.4;  // must exceed delta_0 = 1.5
@@ -446,6 +601,15 @@ TEST(XplorerParams, ValidateNamesTheField) {
   EXPECT_NO_THROW(p.validate());
   p = XplorerParams{};
   p.contact_lost_turn_min_s = -1.0;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = XplorerParams{};
+  p.contact_backoff_time = -0.1;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = XplorerParams{};
+  p.contact_backoff_max = 0.6;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = XplorerParams{};
+  p.contact_backoff_gain = std::nan("");
   EXPECT_THROW(p.validate(), std::invalid_argument);
   p = XplorerParams{};
   p.admittance.damping[1] = -1;

@@ -50,6 +50,8 @@ void CascadedControllerParams::validate() const {
   non_negative3(t, "rate_d", rate_d);
   non_negative(t, "rate_i_limit", rate_i_limit);
   positive3(t, "max_rate", max_rate);
+  if (desaturation != TorqueDesaturation::kScaleAll && desaturation != TorqueDesaturation::kYawFirst)
+    bad(t, "desaturation", "must be kScaleAll or kYawFirst", static_cast<double>(desaturation));
 }
 
 CascadedController::CascadedController(const CascadedControllerParams& params, double mass,
@@ -124,8 +126,22 @@ CascadedController::Output CascadedController::update(const RigidBodyState& s,
   return out;
 }
 
+namespace {
+
+/// Largest s in [0, 1] with 0 <= base + s d <= max for every rotor.
+double feasible_scale(const Eigen::Vector4d& base, const Eigen::Vector4d& d, double max_thrust) {
+  double s = 1.0;
+  for (int i = 0; i < 4; ++i) {
+    if (d[i] > 0.0) s = std::min(s, std::max(0.0, (max_thrust - base[i]) / d[i]));
+    if (d[i] < 0.0) s = std::min(s, std::max(0.0, -base[i] / d[i]));
+  }
+  return s;
+}
+
+}  // namespace
+
 std::array<double, 4> allocate_rotors(const RotorGeometry& g, double thrust, const Vec3& torque,
-                                      double max_thrust) {
+                                      double max_thrust, TorqueDesaturation mode) {
   // Rows: T = sum f_i; tau = sum (r_i x f_i e3 + s_i c_tau f_i e3) (004 eq. 7, no wall).
   Eigen::Matrix4d M;
   for (int i = 0; i < 4; ++i) {
@@ -138,14 +154,18 @@ std::array<double, 4> allocate_rotors(const RotorGeometry& g, double thrust, con
   const Eigen::Matrix4d Minv = M.inverse();
   thrust = std::clamp(thrust, 0.0, 4.0 * max_thrust);
   const Eigen::Vector4d f_t = Minv * Eigen::Vector4d(thrust, 0.0, 0.0, 0.0);
-  const Eigen::Vector4d f_tau = Minv * Eigen::Vector4d(0.0, torque.x(), torque.y(), torque.z());
-  // Largest s in [0, 1] with 0 <= f_t + s f_tau <= max for every rotor.
-  double s = 1.0;
-  for (int i = 0; i < 4; ++i) {
-    if (f_tau[i] > 0.0) s = std::min(s, std::max(0.0, (max_thrust - f_t[i]) / f_tau[i]));
-    if (f_tau[i] < 0.0) s = std::min(s, std::max(0.0, -f_t[i] / f_tau[i]));
-  }
   std::array<double, 4> out{};
+  if (mode == TorqueDesaturation::kYawFirst) {
+    // Roll/pitch within what the rotors can give at this thrust, then yaw in what is left.
+    const Eigen::Vector4d f_rp = Minv * Eigen::Vector4d(0.0, torque.x(), torque.y(), 0.0);
+    const Eigen::Vector4d f_yaw = Minv * Eigen::Vector4d(0.0, 0.0, 0.0, torque.z());
+    const Eigen::Vector4d base = f_t + feasible_scale(f_t, f_rp, max_thrust) * f_rp;
+    const double s_yaw = feasible_scale(base, f_yaw, max_thrust);
+    for (int i = 0; i < 4; ++i) out[i] = std::clamp(base[i] + s_yaw * f_yaw[i], 0.0, max_thrust);
+    return out;
+  }
+  const Eigen::Vector4d f_tau = Minv * Eigen::Vector4d(0.0, torque.x(), torque.y(), torque.z());
+  const double s = feasible_scale(f_t, f_tau, max_thrust);
   for (int i = 0; i < 4; ++i) out[i] = std::clamp(f_t[i] + s * f_tau[i], 0.0, max_thrust);
   return out;
 }

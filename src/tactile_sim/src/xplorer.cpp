@@ -35,6 +35,12 @@ CascadedControllerParams XplorerParams::default_controller() {
   c.rate_p = Vec3(20.0, 20.0, 10.0);
   c.rate_i = Vec3(5.0, 5.0, 3.0);
   c.rate_d = Vec3(0.2, 0.2, 0.0);
+  // Roll/pitch before yaw in the allocation (PX4's mixer order; 001 flies a
+  // PIXHAWK; our choice): the arms' springs pass contact yaw torques (up to 0.68 N m per
+  // arm at the 30 deg stop) that the rotors cannot match (~0.18 N m at
+  // hover); scaling every axis alike gave up the attitude with the yaw and
+  // the vehicle sank in contact (tactile_fsm README, "Height lost in contact").
+  c.desaturation = TorqueDesaturation::kYawFirst;
   return c;
 }
 
@@ -146,7 +152,7 @@ void Xplorer::step(double dt, const Arena& arena) {
   // Cascaded P-PID (001 Sec. II) with the nominal (undeflected) allocation:
   // the paper relies on the controller's robustness to the small geometry change.
   const CascadedController::Output u = controller_.update(state_, setpoint_, dt, landed_);
-  command_ = allocate_rotors(nominal_, u.thrust, u.torque, max_rotor);
+  command_ = allocate_rotors(nominal_, u.thrust, u.torque, max_rotor, p_.controller.desaturation);
   thrust_command_ = (command_[0] + command_[1] + command_[2] + command_[3]) / p_.thrust_scale;  // 001 V-A3
   const double km = 1.0 - std::exp(-dt / p_.motor_time_constant);
   for (int i = 0; i < 4; ++i) {

@@ -268,3 +268,60 @@ TEST(DuctedQuad, ParamsValidate) {
   DuctedQuad q(DuctedQuadParams{}, RigidBodyState{});
   EXPECT_THROW(q.step(0.0, Arena{}), std::invalid_argument);
 }
+
+namespace {
+
+/// Thrust and torque the rotor forces f produce (the rows of allocate_rotors' M).
+Eigen::Vector4d wrench_of(const RotorGeometry& g, const std::array<double, 4>& f) {
+  Eigen::Vector4d w = Eigen::Vector4d::Zero();
+  for (int i = 0; i < 4; ++i) {
+    const Vec3& r = g.position_body[i];
+    w += f[i] * Eigen::Vector4d(1.0, r.y(), -r.x(), g.spin_sign[i] * g.torque_coefficient);
+  }
+  return w;
+}
+
+}  // namespace
+
+TEST(Allocation, YawFirstKeepsRollAndPitchWhenTheYawDemandSaturates) {
+  // XPLORER's rotors (0.2 m along the diagonals, c_tau 0.016 m, 8.125 N max
+  // each) at the 11 N hover thrust: the yaw authority is 0.016 x 11 = 0.176
+  // N m (two rotors at 5.5 N, two at 0). Demand 0.5 N m of yaw (an arm
+  // pressed by a contact passes up to 0.68 N m) and 0.2 N m of roll.
+  RotorGeometry g;
+  g.torque_coefficient = 0.016;
+  const double d = 0.2 / std::sqrt(2.0);
+  g.position_body = {Vec3(d, -d, 0), Vec3(d, d, 0), Vec3(-d, d, 0), Vec3(-d, -d, 0)};
+  const double T = 11.0, max = 8.125;
+  const Vec3 torque(0.2, 0.0, 0.5);
+  // One factor for every axis: the roll torque shrinks with the yaw's.
+  const Eigen::Vector4d all = wrench_of(g, allocate_rotors(g, T, torque, max, TorqueDesaturation::kScaleAll));
+  EXPECT_NEAR(all[0], T, 1e-9);
+  EXPECT_LT(all[1], 0.5 * torque.x());
+  EXPECT_NEAR(all[1] / torque.x(), all[3] / torque.z(), 1e-9);  // direction kept
+  // Roll/pitch first (PX4's mixer order): the full roll torque, yaw in what is left.
+  const Eigen::Vector4d yf = wrench_of(g, allocate_rotors(g, T, torque, max, TorqueDesaturation::kYawFirst));
+  EXPECT_NEAR(yf[0], T, 1e-9);
+  EXPECT_NEAR(yf[1], torque.x(), 1e-9);
+  EXPECT_NEAR(yf[2], 0.0, 1e-9);
+  EXPECT_GT(yf[3], 0.1);
+  EXPECT_LT(yf[3], 0.176 + 1e-9);
+  // Within the rotors' authority both rules give the demanded wrench.
+  const Vec3 small(0.1, -0.05, 0.05);
+  for (auto mode : {TorqueDesaturation::kScaleAll, TorqueDesaturation::kYawFirst}) {
+    const Eigen::Vector4d w = wrench_of(g, allocate_rotors(g, T, small, max, mode));
+    EXPECT_NEAR(w[1], small.x(), 1e-9);
+    EXPECT_NEAR(w[2], small.y(), 1e-9);
+    EXPECT_NEAR(w[3], small.z(), 1e-9);
+  }
+  // The default is the ducted quadrotor's rule, unchanged.
+  EXPECT_EQ(CascadedControllerParams{}.desaturation, TorqueDesaturation::kScaleAll);
+  CascadedControllerParams p;
+  p.desaturation = static_cast<TorqueDesaturation>(7);
+  try {
+    p.validate();
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("CascadedControllerParams.desaturation"), std::string::npos);
+  }
+}

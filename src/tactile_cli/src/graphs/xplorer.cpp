@@ -210,6 +210,7 @@ class XplorerGraph : public SimGraph {
     m["first_contact_time_s"] = f.first_contact_time() >= 0 ? nlohmann::json(f.first_contact_time()) : nlohmann::json(nullptr);
     m["traversed_path_m"] = f.traversed_path();
     m["turns"] = f.turns();
+    m["contact_backoffs"] = f.backoffs();
     // How each Tactile-turning ended (001 Sec. V-C4: the rigid UAV turns but
     // never re-establishes contact) and how often traversal lost the contact.
     int recontacted = 0, turn_failed = 0, contact_lost = 0;

@@ -166,6 +166,19 @@ struct XplorerParams {
   /// Exploration.
   bool turn_on_contact_lost = true;
   double contact_lost_turn_min_s = 4.0;  ///< [s]
+  /// Back-off on contact from Exploration (entering Tactile-traversal or the static wrench):
+  /// the collision-recovery reaction of 001 Sec. III-B3 ("a setpoint away from the collision
+  /// direction, proportional to the collision intensity", ref. [12]) applied to the impact
+  /// that ends Exploration. For contact_backoff_time s the setpoint is the vehicle's position
+  /// at the contact plus contact_backoff_gain |delta_f| (the fused force of the contact tick)
+  /// along the measured force (out of the obstacle), capped at contact_backoff_max, at hover
+  /// height with the yaw held; then the traversal (or the wrench) starts from where the
+  /// vehicle is. Using it at first contact is our choice: it takes out the approach momentum
+  /// the position loop carries into the face (issue 17; README "Transition ticks and the
+  /// contact back-off"). contact_backoff_time 0: off (the traversal starts at once).
+  double contact_backoff_gain = 0.04;  ///< [m/N] (choice, tuned; recovery_gain is 0.02)
+  double contact_backoff_max = 0.15;   ///< [m] (choice)
+  double contact_backoff_time = 0.3;   ///< [s] (choice, as recovery_time; 0: off)
   double static_force = 1.0;         ///< static-wrench reference |delta_f_ref| [N] (001 Sec. V-B)
   XVec2 goal = XVec2(1.0, 0.0);      ///< ricochet / waypoint goal, world [m]
   double ricochet_speed = 1.5;       ///< approach speed [m/s] ("maximum velocity", 001 Sec. IV-C; the SITL controller's limit)
@@ -221,6 +234,8 @@ class XplorerExplorer {
   uint32_t turns() const { return turns_; }
   const XVec2& pivot() const { return pivot_; }  ///< corner pivot of the last Tactile-turning (turn_pivot)
   uint32_t collisions() const { return collisions_; }
+  uint32_t backoffs() const { return backoffs_; }  ///< contact back-offs flown (contact_backoff_*)
+  bool backing_off(double t) const { return t < backoff_until_; }
   double collision_peak() const { return collision_peak_; }
   const XplorerParams& params() const { return p_; }
 
@@ -228,6 +243,9 @@ class XplorerExplorer {
   void enter(XplorerState s, const XplorerInput& in, const std::string& why);
   XDir detect_contact(double threshold) const;
   double reshape(const XVec2& n, const XVec2& p, const XVec3& force, const XVec3& f_des, double dt);
+  void start_backoff(const XplorerInput& in);
+  void hold_backoff(const XplorerInput& in);
+  XVec3 turning_setpoint(const XplorerInput& in, double* yaw) const;
 
   XplorerParams p_;
   AdmittanceController adm_;
@@ -253,6 +271,9 @@ class XplorerExplorer {
   XVec2 collision_normal_ = XVec2::Zero();
   XVec3 recovery_sp_ = XVec3::Zero();
   XVec2 r_star_ = XVec2::Zero();  ///< reshaped setpoint r* (x-y) in contact states
+  XVec3 backoff_sp_ = XVec3::Zero();  ///< contact back-off setpoint (contact_backoff_*)
+  double backoff_until_ = -1e9;
+  uint32_t backoffs_ = 0;
   struct PoseSample {
     double t;
     XVec2 p;

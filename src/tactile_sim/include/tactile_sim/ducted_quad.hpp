@@ -27,6 +27,21 @@ struct PositionSetpoint {
   Vec3 velocity_ff = Vec3::Zero();  ///< world velocity feed-forward [m/s]
 };
 
+/// How allocate_rotors() gives up torque the rotors cannot produce within
+/// [0, max_thrust] at the commanded collective thrust.
+enum class TorqueDesaturation {
+  /// One factor scales roll, pitch and yaw torque alike (the torque's
+  /// direction is kept): a yaw demand beyond the rotors' authority shrinks
+  /// the roll/pitch torque with it.
+  kScaleAll,
+  /// Roll and pitch first (scaled only if they alone exceed the rotors), yaw
+  /// gets what is left: the PX4 multicopter mixer's order ("mix roll, pitch
+  /// and thrust without yaw ... mix in yaw and scale if it leads to limit
+  /// violation"). 001 flies a PIXHAWK (Sec. V-A1) without naming its
+  /// firmware: our choice for the SITL's flight controller.
+  kYawFirst,
+};
+
 /// Gains of the cascaded P-PID controller: position P -> velocity PID ->
 /// acceleration/tilt -> attitude P (quaternion error) -> body-rate PID ->
 /// torque (J alpha + w x J w) -> allocation (001 Sec. II: "cascaded P-PID
@@ -46,6 +61,11 @@ struct CascadedControllerParams {
   Vec3 rate_d = Vec3(0.3, 0.3, 0.0);    ///< [-]
   double rate_i_limit = 20.0;           ///< |integral term| per axis [rad/s^2]
   Vec3 max_rate = Vec3(6.0, 6.0, 3.0);  ///< [rad/s]
+  /// Allocation's saturation rule (allocate_rotors). Default kScaleAll (the
+  /// ducted quadrotor, 004, as tuned); XplorerParams::default_controller()
+  /// sets kYawFirst (XPLORER's arms pass contact yaw torques of up to
+  /// k x 30 deg = 0.68 N m per arm, ~4x the rotors' yaw authority at hover).
+  TorqueDesaturation desaturation = TorqueDesaturation::kScaleAll;
 
   void validate() const;
 };
@@ -79,10 +99,12 @@ class CascadedController {
 /// Solves [T, tau_x, tau_y, tau_z] = M f for the rotor forces f of a
 /// quadrotor (M from 004 eq. 7 without walls: tau = sum r_i x f_i e3 + s_i c_tau f_i e3).
 /// Saturation: the collective thrust is kept (clamped to [0, 4 max]) and the
-/// torque part is scaled down until every rotor is within [0, max_thrust].
-/// Allocation-free.
+/// torque part is scaled down until every rotor is within [0, max_thrust]:
+/// all three axes by one factor (kScaleAll) or roll/pitch first and yaw in
+/// what is left (kYawFirst, TorqueDesaturation). Allocation-free.
 std::array<double, 4> allocate_rotors(const RotorGeometry& g, double thrust, const Vec3& torque,
-                                      double max_thrust);
+                                      double max_thrust,
+                                      TorqueDesaturation mode = TorqueDesaturation::kScaleAll);
 
 /// Parameters of the ducted quadrotor. "004" marks paper values; the rest are
 /// documented estimates/choices (docs/physics.md).
