@@ -141,21 +141,22 @@ struct XplorerMapParams {
   /// a cylinder is traversed with one guard pressed harder all the way round and
   /// its hull needs the whole slab (choice; README "Touching-guard half").
   double touching_half_s = 5.0;  ///< [s]
-  /// Face clip: when a face traversal ends (end_face), a line is fitted to its
-  /// slabs' near faces (the surface points, vehicle + outline reach along C_n),
-  /// trimmed to those within face_clip_max_residual of it; if those span at
-  /// least face_clip_min_length along it and are at least half the face's
-  /// slabs, the line is a face of the object, and every map point more than
-  /// face_clip_tolerance on the vehicle's side of it (along the mean C_n), within
-  /// the face's span extended by face_clip_margin, is removed, now and as slabs
-  /// enter the map later. The box faces that were stamped while the yaw was off
-  /// the face (a first contact holding a corner between the front guards: the
-  /// 0.25 m slab turned with the yaw) stick 2-4 cm out of the faces that the
-  /// steady traversals map later (tuning boxes 1008, 1041, 2028, 3017, 3047). A
-  /// line is fitted from the path, not from C_n, so a tilted C_n does not tilt it;
-  /// a cylinder's traversal is no line (residual) and is not clipped (choice;
-  /// README "Face clip", rule 12; 001 maps convex objects: nothing of the object
-  /// lies outside a face's line). 0: off.
+  /// Face clip (rule 12): when a face traversal ends (end_face), a line is
+  /// fitted to its slabs' near faces (the surface points, vehicle + outline
+  /// reach along C_n), trimmed to the slabs within face_clip_max_residual of it
+  /// whose C_n lies within face_clip_angle_tolerance of its normal; if those
+  /// span at least face_clip_min_length along it and are at least half the
+  /// face's slabs, the line is a face of the object, and every map point more
+  /// than face_clip_tolerance on the vehicle's side of it, within the face's
+  /// span extended by face_clip_margin, is removed, now and as slabs enter the
+  /// map later. Slabs stamped while the yaw was 10-35 deg off a face (a first
+  /// contact holding a box corner between the front guards: the 0.25 m slab
+  /// turned with the yaw) stick 2-4 cm out of the face that the steady
+  /// traversals map later (tuning boxes 1008, 1041, 2040, 3017, 3047: 93-97 %).
+  /// The line comes from the near-face points, not from C_n, so a tilted C_n
+  /// does not tilt it; a cylinder's traversal is no line and is not clipped
+  /// (choice, not in 001; on a convex object nothing lies outside a face's
+  /// line; README "Face clip"). 0: off.
   double face_clip_min_length = 0.2;     ///< [m]
   double face_clip_max_residual = 0.01;  ///< [m]
   double face_clip_tolerance = 0.01;     ///< [m]
