@@ -56,14 +56,15 @@ void PointMap::insert(const std::vector<Vec3>& points) {
   maybe_auto_filter();
 }
 
-std::size_t PointMap::insert_box(const Box& b, double spacing) {
+std::vector<Vec3> PointMap::box_points(const Box& b, double spacing) {
   if (!(spacing > 0.0) || !std::isfinite(spacing)) throw std::invalid_argument("PointMap::insert_box: spacing must be > 0");
   if (!b.center.allFinite() || !b.size.allFinite() || !std::isfinite(b.yaw) || (b.size.array() < 0.0).any())
     throw std::invalid_argument("PointMap::insert_box: non-finite or negative box");
   std::array<int, 3> n{};
   for (int a = 0; a < 3; ++a) n[a] = std::max(2, static_cast<int>(std::ceil(b.size[a] / spacing - 1e-9)) + 1);
   const double c = std::cos(b.yaw), s = std::sin(b.yaw);
-  reserve_for(static_cast<std::size_t>(n[0]) * n[1] * n[2]);
+  std::vector<Vec3> pts;
+  pts.reserve(static_cast<std::size_t>(n[0]) * n[1] * n[2]);
   for (int i = 0; i < n[0]; ++i) {
     const double u = -0.5 * b.size.x() + b.size.x() * i / (n[0] - 1);
     for (int j = 0; j < n[1]; ++j) {
@@ -71,12 +72,29 @@ std::size_t PointMap::insert_box(const Box& b, double spacing) {
       const double x = b.center.x() + c * u - s * v, y = b.center.y() + s * u + c * v;
       for (int k = 0; k < n[2]; ++k) {
         const double w = -0.5 * b.size.z() + b.size.z() * k / (n[2] - 1);
-        cloud_->push_back(pcl::PointXYZ(static_cast<float>(x), static_cast<float>(y), static_cast<float>(b.center.z() + w)));
+        pts.emplace_back(static_cast<float>(x), static_cast<float>(y), static_cast<float>(b.center.z() + w));
       }
     }
   }
+  return pts;
+}
+
+std::size_t PointMap::insert_box(const Box& b, double spacing) {
+  const std::vector<Vec3> pts = box_points(b, spacing);
+  reserve_for(pts.size());
+  for (const auto& p : pts)
+    cloud_->push_back(pcl::PointXYZ(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z())));
   maybe_auto_filter();
-  return static_cast<std::size_t>(n[0]) * n[1] * n[2];
+  return pts.size();
+}
+
+std::size_t PointMap::remove_if(const std::function<bool(const Vec3&)>& drop) {
+  const std::size_t before = cloud_->size();
+  auto& v = cloud_->points;
+  v.erase(std::remove_if(v.begin(), v.end(), [&](const pcl::PointXYZ& p) { return drop(Vec3(p.x, p.y, p.z)); }), v.end());
+  cloud_->width = static_cast<uint32_t>(v.size());
+  cloud_->height = 1;
+  return before - cloud_->size();
 }
 
 void PointMap::maybe_auto_filter() {

@@ -93,6 +93,11 @@ ParamMap XplorerMapLogic::default_parameters() {
   m.set("steady_offset", d.stamping.steady_offset);
   m.set("touching_half_ratio", d.stamping.touching_half_ratio);
   m.set("touching_half_s", d.stamping.touching_half_s);
+  m.set("face_clip_min_length", d.stamping.face_clip_min_length);
+  m.set("face_clip_max_residual", d.stamping.face_clip_max_residual);
+  m.set("face_clip_tolerance", d.stamping.face_clip_tolerance);
+  m.set("face_clip_margin", d.stamping.face_clip_margin);
+  m.set("face_clip_angle_tolerance", d.stamping.face_clip_angle_tolerance);
   return m;
 }
 
@@ -146,6 +151,11 @@ XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
   p.stamping.steady_offset = m.get_double("steady_offset");
   p.stamping.touching_half_ratio = m.get_double("touching_half_ratio");
   p.stamping.touching_half_s = m.get_double("touching_half_s");
+  p.stamping.face_clip_min_length = m.get_double("face_clip_min_length");
+  p.stamping.face_clip_max_residual = m.get_double("face_clip_max_residual");
+  p.stamping.face_clip_tolerance = m.get_double("face_clip_tolerance");
+  p.stamping.face_clip_margin = m.get_double("face_clip_margin");
+  p.stamping.face_clip_angle_tolerance = m.get_double("face_clip_angle_tolerance");
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {

@@ -1,6 +1,7 @@
 // XPLORER contact map stamping rules (001 Sec. IV-B, V-D).
 #include "mapping_pcl/xplorer_stamping.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -82,6 +83,15 @@ void XplorerMapParams::validate() const {
   if (!(steady_offset > 0.0) || !std::isfinite(steady_offset)) bad("steady_offset", "must be finite and > 0", steady_offset);
   if (!(touching_half_ratio >= 0.0) || !(touching_half_ratio <= 1.0))
     bad("touching_half_ratio", "must be in [0, 1] (0: off)", touching_half_ratio);
+  if (!(face_clip_min_length >= 0.0) || !std::isfinite(face_clip_min_length))
+    bad("face_clip_min_length", "must be finite and >= 0 (0: no face clip)", face_clip_min_length);
+  if (!(face_clip_max_residual > 0.0) || !std::isfinite(face_clip_max_residual))
+    bad("face_clip_max_residual", "must be finite and > 0", face_clip_max_residual);
+  if (!(face_clip_tolerance >= 0.0) || !std::isfinite(face_clip_tolerance))
+    bad("face_clip_tolerance", "must be finite and >= 0", face_clip_tolerance);
+  if (!(face_clip_angle_tolerance >= 0.0) || !(face_clip_angle_tolerance <= M_PI))
+    bad("face_clip_angle_tolerance", "must be in [0, pi]", face_clip_angle_tolerance);
+  if (!(face_clip_margin >= 0.0) || !std::isfinite(face_clip_margin)) bad("face_clip_margin", "must be finite and >= 0", face_clip_margin);
   if (!(touching_half_s >= 0.0) || !std::isfinite(touching_half_s)) bad("touching_half_s", "must be finite and >= 0", touching_half_s);
 }
 
@@ -169,15 +179,90 @@ void XplorerContactMapper::stamp(double t, const Box& b, const Eigen::Vector2d& 
     return;
   }
   if (p_.corner_release_s <= 0.0) {
-    map_->insert_box(b, p_.slab_spacing);
+    insert_slab(b);
   } else {
     pending_.emplace_back(t, b);
   }
 }
 
+void XplorerContactMapper::insert_slab(const Box& b) {
+  if (std::none_of(lines_.begin(), lines_.end(), [](const FaceLine& l) { return l.clips; })) {
+    map_->insert_box(b, p_.slab_spacing);
+    return;
+  }
+  std::vector<Vec3> pts = PointMap::box_points(b, p_.slab_spacing);
+  const std::size_t before = pts.size();
+  pts.erase(std::remove_if(pts.begin(), pts.end(), [&](const Vec3& q) { return outside_faces(q); }), pts.end());
+  stats_.clipped_points += before - pts.size();
+  map_->insert(pts);
+}
+
+bool XplorerContactMapper::right_angle(const FaceLine& a, const FaceLine& b) const {
+  const double cross = std::abs(a.dir.x() * b.dir.y() - a.dir.y() * b.dir.x());  // sin of the angle between the lines
+  return std::abs(std::asin(std::clamp(cross, 0.0, 1.0)) - M_PI / 2) <= p_.face_clip_angle_tolerance;
+}
+
+bool XplorerContactMapper::outside_faces(const Vec3& q) const {
+  for (const auto& l : lines_) {
+    if (!l.clips) continue;
+    const Eigen::Vector2d d = Eigen::Vector2d(q.x(), q.y()) - l.point;
+    const double s = d.dot(l.dir);
+    if (s < l.s_min - p_.face_clip_margin || s > l.s_max + p_.face_clip_margin) continue;
+    if (d.dot(l.contact) < -p_.face_clip_tolerance) return true;  // on the vehicle's side of the face
+  }
+  return false;
+}
+
+std::optional<XplorerContactMapper::FaceLine> XplorerContactMapper::fit_face(const std::vector<FaceSample>& f) const {
+  constexpr std::size_t kMinSamples = 10;
+  if (f.size() < kMinSamples) return std::nullopt;
+  Eigen::Vector2d mean_c = Eigen::Vector2d::Zero();
+  for (const auto& s : f) mean_c += s.contact;
+  if (mean_c.norm() < 1e-9) return std::nullopt;
+  mean_c.normalize();
+  std::vector<bool> in(f.size(), true);
+  const double cos_tol = std::cos(std::min(p_.face_clip_angle_tolerance, M_PI / 6));
+  FaceLine l;
+  for (int iter = 0; iter < 4; ++iter) {  // trimmed least squares: fit, keep the points near the line, refit
+    Eigen::Vector2d c = Eigen::Vector2d::Zero();
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < f.size(); ++i)
+      if (in[i]) c += f[i].point, ++n;
+    if (n < kMinSamples) return std::nullopt;
+    c /= static_cast<double>(n);
+    Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+    for (std::size_t i = 0; i < f.size(); ++i)
+      if (in[i]) cov += (f[i].point - c) * (f[i].point - c).transpose();
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(cov);
+    l.point = c;
+    l.dir = es.eigenvectors().col(1);  // largest eigenvalue: along the face
+    Eigen::Vector2d nrm(-l.dir.y(), l.dir.x());
+    if (nrm.dot(mean_c) < 0.0) nrm = -nrm;
+    l.contact = nrm;
+    // On the line: the near face within face_clip_max_residual of it and C_n across it within
+    // face_clip_angle_tolerance (a traversal round a polygon's corner without a turn fits a chord
+    // whose normal is the mean of the two faces' C_n, 30-40 deg off each: tuning polygon 1004).
+    for (std::size_t i = 0; i < f.size(); ++i)
+      in[i] = std::abs((f[i].point - c).dot(nrm)) <= p_.face_clip_max_residual && f[i].contact.dot(nrm) >= cos_tol;
+  }
+  std::size_t n = 0;
+  l.s_min = 1e300;
+  l.s_max = -1e300;
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    if (!in[i]) continue;
+    ++n;
+    const double s = (f[i].point - l.point).dot(l.dir);
+    l.s_min = std::min(l.s_min, s);
+    l.s_max = std::max(l.s_max, s);
+  }
+  if (n < kMinSamples || 2 * n < f.size()) return std::nullopt;  // most of the face's slabs on the line
+  if (l.s_max - l.s_min < p_.face_clip_min_length) return std::nullopt;
+  return l;
+}
+
 void XplorerContactMapper::commit(double t) {
   while (!pending_.empty() && pending_.front().first <= t - p_.corner_release_s) {
-    map_->insert_box(pending_.front().second, p_.slab_spacing);
+    insert_slab(pending_.front().second);
     pending_.pop_front();
   }
 }
@@ -204,6 +289,8 @@ void XplorerContactMapper::drop_held() {
 }
 
 void XplorerContactMapper::end_face(bool turned) {
+  const std::optional<std::size_t> prev_line = prev_line_;  // face clip: the face before, if it ended in a turn
+  prev_line_.reset();
   if (holding_) {  // the traversal ended before a steady stretch: its slabs do not say where the face is
     drop_held();
     holding_ = false;
@@ -218,6 +305,17 @@ void XplorerContactMapper::end_face(bool turned) {
       ++stats_.corner_fills;
     } else {
       ++stats_.skipped_corner_fill;
+    }
+  }
+  if (p_.face_clip_min_length > 0.0) {  // README "Face clip"
+    if (const auto l = fit_face(face_)) {
+      lines_.push_back(*l);
+      ++stats_.face_lines;
+      // Right-angle corner with the face before, joined by a turn (face_clip_angle_tolerance).
+      if (prev_line && right_angle(lines_[*prev_line], lines_.back())) lines_[*prev_line].clips = lines_.back().clips = true;
+      if (p_.face_clip_angle_tolerance >= M_PI / 2) lines_.back().clips = true;
+      stats_.clipped_points += map_->remove_if([&](const Vec3& q) { return outside_faces(q); });
+      if (turned) prev_line_ = lines_.size() - 1;
     }
   }
   if (turned) {
@@ -295,7 +393,7 @@ std::size_t XplorerContactMapper::fill_corner(const CornerFill& f) {
 
 void XplorerContactMapper::flush() {
   end_face(false);
-  for (const auto& [t, b] : pending_) map_->insert_box(b, p_.slab_spacing);
+  for (const auto& [t, b] : pending_) insert_slab(b);
   pending_.clear();
 }
 
@@ -387,7 +485,7 @@ int XplorerContactMapper::update(const ContactSample& s) {
   stamp(s.t, slab, c_w, near);
   // The face's slabs, for the corner fill only (off: not kept; with stamp_states empty a face
   // would otherwise last the whole flight).
-  if (p_.corner_fill_max_gap > 0.0) face_.push_back({s.t, near, c_w, s.position.z()});
+  if (p_.corner_fill_max_gap > 0.0 || p_.face_clip_min_length > 0.0) face_.push_back({s.t, near, c_w, s.position.z()});
   ++stats_.slabs;
   ++stamped;
   const Eigen::Vector2d m_w = Eigen::Rotation2Dd(-M_PI / 2) * c_w;  // lambda in the world (right-hand)

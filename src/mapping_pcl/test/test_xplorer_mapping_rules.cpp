@@ -768,3 +768,76 @@ TEST(XplorerMappingRules, LogicAppliesTheTouchingHalfEarlyInAStateOnly) {
     EXPECT_EQ(logic.mapper().stats().touching_half, in_state > 5.0 ? 0u : 1u) << in_state;
   }
 }
+
+// Rule 12, face clip (README "Face clip"): face a (surface y = 0, C_n = +y, x 0-0.8 m)
+// three of whose slabs (x 0.15-0.25 m) were stamped with the yaw 15 deg off the face (the slab
+// turned with it sticks 3.2 cm out of the face), then a turn to face b at
+// 90 deg (x = 1, C_n = -x). Once both faces are lines meeting at a right angle,
+// the points outside face a are removed, and a later tilted slab is clipped as
+// it enters. At a 72 deg corner (a polygon) nothing is clipped.
+TEST(XplorerMappingRules, FaceClipRemovesTiltedSlabsOutsideAFaceOfARightAngledObject) {
+  auto run = [](double min_length, double turn_deg) {
+    XplorerMapParams p;
+    p.corner_release_s = 0.0;
+    p.edge_from_arms = false;  // near face at slab_offset = 0.21 m
+    p.face_clip_min_length = min_length;
+    auto map = std::make_shared<PointMap>();
+    auto m = std::make_shared<XplorerContactMapper>(p, *map);
+    double t = 0.0;
+    auto at = [&](const Eigen::Vector2d& surface, const Eigen::Vector2d& c, double tilt) {
+      ContactSample s = sample(t, 0.0, -2.0);
+      s.arm_angles.reset();
+      const Eigen::Vector2d cn = Eigen::Rotation2Dd(tilt) * c;  // the yaw (C_n = +b1) off the face normal
+      s.position = Vec3(surface.x() - 0.21 * cn.x(), surface.y() - 0.21 * cn.y(), 0.7);
+      s.yaw = std::atan2(cn.y(), cn.x());
+      m->update(s);
+      t += 0.1;
+    };
+    const double tilt = 15.0 * M_PI / 180.0;
+    for (int k = 0; k <= 16; ++k) at(Eigen::Vector2d(0.05 * k, 0.0), Eigen::Vector2d(0.0, 1.0), k >= 3 && k < 6 ? tilt : 0.0);
+    m->end_face(true);  // Tactile-turning
+    const double a = turn_deg * M_PI / 180.0;
+    const Eigen::Vector2d cb(-std::sin(a), std::cos(a)), tb(std::cos(a), std::sin(a));
+    for (int k = 0; k <= 10; ++k) at(Eigen::Vector2d(1.0, 0.0) + (0.3 + 0.05 * k) * tb, cb, 0.0);
+    m->end_face(true);
+    const double before_late = [&] {
+      double y = 1e9;
+      for (const auto& q : map->cloud()) y = std::min<double>(y, q.y);
+      return y;
+    }();
+    at(Eigen::Vector2d(0.4, 0.0), Eigen::Vector2d(0.0, 1.0), tilt);  // a later tilted slab on face a
+    double y_min = 1e9;
+    for (const auto& q : map->cloud()) y_min = std::min<double>(y_min, q.y);
+    return std::make_tuple(before_late, y_min, m->stats().face_lines, m->face_lines().size() >= 2 && m->face_lines()[0].clips);
+  };
+  // 0.125 m x sin 15 deg + 0.08 m x (1 - cos 15 deg) ~ 0.035 m out of the face without the rule.
+  const auto [off_before, off_after, off_lines, off_clips] = run(0.0, 90.0);
+  EXPECT_LT(off_before, -0.03);
+  EXPECT_LT(off_after, -0.03);
+  EXPECT_EQ(off_lines, 0u);
+  const auto [on_before, on_after, on_lines, on_clips] = run(0.2, 90.0);
+  EXPECT_GE(on_before, -0.0101);  // face_clip_tolerance 0.01 m
+  EXPECT_GE(on_after, -0.0101);
+  EXPECT_EQ(on_lines, 2u);
+  EXPECT_TRUE(on_clips);
+  const auto [poly_before, poly_after, poly_lines, poly_clips] = run(0.2, 72.0);  // not a right angle
+  EXPECT_LT(poly_before, -0.03);
+  EXPECT_EQ(poly_lines, 2u);
+  EXPECT_FALSE(poly_clips);
+  EXPECT_LT(std::get<0>(run(0.6, 90.0)), -0.03);  // faces shorter than face_clip_min_length: no line
+  XplorerMapParams bad;
+  bad.face_clip_min_length = -0.1;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+  bad = XplorerMapParams{};
+  bad.face_clip_max_residual = 0.0;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+  bad = XplorerMapParams{};
+  bad.face_clip_tolerance = -0.01;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+  bad = XplorerMapParams{};
+  bad.face_clip_margin = std::nan("");
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+  bad = XplorerMapParams{};
+  bad.face_clip_angle_tolerance = 4.0;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}

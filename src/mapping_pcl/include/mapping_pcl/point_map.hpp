@@ -9,6 +9,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -63,6 +64,10 @@ class PointMap {
   /// Fills `box` with a grid of points `spacing` apart (at least 2 per axis,
   /// faces included). Returns the number of points added.
   std::size_t insert_box(const Box& box, double spacing);
+  /// The points insert_box would add (the same grid).
+  static std::vector<Vec3> box_points(const Box& box, double spacing);
+  /// Removes the points for which `drop` is true; returns how many.
+  std::size_t remove_if(const std::function<bool(const Vec3&)>& drop);
 
   /// pcl::VoxelGrid with the given leaf (centroid per occupied voxel).
   void voxel_filter(double leaf);
