@@ -132,11 +132,11 @@ int touching_side(const Eigen::Vector2d& d, const std::array<double, 4>& theta, 
 }
 
 double outline_reach(const XplorerMapParams& p, const Eigen::Vector2d& d, const std::array<double, 4>& theta) {
-  static constexpr double kDir[4] = {-M_PI / 4, M_PI / 4, 3 * M_PI / 4, -3 * M_PI / 4};  // tactile_msgs/ArmImu.arm_id
   double reach = -1e300;
   for (int i = 0; i < 4; ++i) {
-    const Eigen::Vector2d tip = p.arm_hinge_offset * Eigen::Vector2d(std::cos(kDir[i]), std::sin(kDir[i])) +
-                                p.arm_length * Eigen::Vector2d(std::cos(kDir[i] + theta[i]), std::sin(kDir[i] + theta[i]));
+    const Eigen::Vector2d tip =
+        p.arm_hinge_offset * Eigen::Vector2d(std::cos(kArmDir[i]), std::sin(kArmDir[i])) +
+        p.arm_length * Eigen::Vector2d(std::cos(kArmDir[i] + theta[i]), std::sin(kArmDir[i] + theta[i]));
     reach = std::max(reach, tip.dot(d));
   }
   return reach + p.guard_radius;

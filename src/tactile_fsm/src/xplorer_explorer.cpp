@@ -224,7 +224,9 @@ void XplorerExplorer::enter(XplorerState s, const XplorerInput& in, const std::s
   }
 }
 
-void XplorerExplorer::hold_backoff(const XplorerInput& in) {
+void XplorerExplorer::hold_backoff(const XplorerInput& in, XplorerOutput& out) {
+  out.position = backoff_sp_;
+  out.yaw = hold_yaw_;
   adm_.reset(XVec3(in.position.x(), in.position.y(), p_.hover_height), in.yaw);
   r_star_ = in.position.head<2>();
   t_quiet_ = in.t;
@@ -369,9 +371,7 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
       if (in.t < backoff_until_) {
         // Contact back-off: hold its setpoint; the traversal starts afterwards from where the
         // vehicle is (no turn trigger, release timer or reshaped r* from the back-off).
-        hold_backoff(in);
-        out.position = backoff_sp_;
-        out.yaw = hold_yaw_;
+        hold_backoff(in, out);
         break;
       }
       // 001 Sec. IV-A: a yaw-rate peak (release at a corner) starts Tactile-turning.
@@ -476,9 +476,7 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
     }
     case XplorerState::kStaticWrench: {
       if (in.t < backoff_until_) {
-        hold_backoff(in);
-        out.position = backoff_sp_;
-        out.yaw = hold_yaw_;
+        hold_backoff(in, out);
         break;
       }
       // 001 Sec. V-B: delta_f_ref = 1 N onto the surface, r* = current position

@@ -244,7 +244,7 @@ class XplorerExplorer {
   XDir detect_contact(double threshold) const;
   double reshape(const XVec2& n, const XVec2& p, const XVec3& force, const XVec3& f_des, double dt);
   void start_backoff(const XplorerInput& in);
-  void hold_backoff(const XplorerInput& in);
+  void hold_backoff(const XplorerInput& in, XplorerOutput& out);  ///< publishes backoff_sp_, holds the traversal state
   XVec3 turning_setpoint(const XplorerInput& in, double* yaw) const;
 
   XplorerParams p_;
