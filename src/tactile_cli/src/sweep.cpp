@@ -171,9 +171,19 @@ Row fly_one(const std::string& file, const SweepOptions& options, const fs::path
       fs::copy_file(png, failures_dir / (row.name + ".png"), fs::copy_options::overwrite_existing);
       row.topview = (fs::path("failures") / (row.name + ".png")).string();
     }
-  } else if (!options.keep_bags) {
+  } else {
+    // A success keeps its metrics and top view; its bag and its other files
+    // (trajectory.csv ~1 MB per simulated minute; XPLORER's map.ply,
+    // map_binary.ply and forces.csv ~10 MB) only on request: a sweep of
+    // hundreds would fill a disk with files nobody reads.
     std::error_code ec;
-    fs::remove_all(dir / "bag", ec);
+    if (!options.keep_bags) fs::remove_all(dir / "bag", ec);
+    if (!options.keep_success_files) {
+      for (const auto& entry : fs::directory_iterator(dir, ec)) {
+        const auto file = entry.path().filename();
+        if (entry.is_regular_file() && file != "metrics.json" && file != "topview.png") fs::remove(entry.path(), ec);
+      }
+    }
   }
   return row;
 }
