@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -730,6 +731,13 @@ TEST(XplorerMappingRules, OnlyTheTouchingGuardsHalfAfterAnObliqueContact) {
   XplorerMapParams bad;
   bad.touching_half_ratio = 1.5;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
+  bad = XplorerMapParams{};
+  bad.touching_half_s = -1.0;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+  bad.touching_half_s = std::numeric_limits<double>::infinity();
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+  bad.touching_half_s = 0.0;  // 0: the rule only at a state's first tick
+  EXPECT_NO_THROW(bad.validate());
 }
 
 // The node logic dates the sample by the FSM state's entry: a traversal entered 6 s ago

@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "graphs/xplorer_area.hpp"
 #include "graphs/xplorer_nodes.hpp"
 #include "tactile_bag/bag.hpp"
 #include "tactile_bag/typed.hpp"
@@ -217,13 +218,7 @@ nlohmann::json evaluate_xplorer(const tactile_sim::Scenario& s, const EvaluateOp
     throw std::runtime_error(s.source + ": xplorer_fsm mission '" + tactile_fsm::to_string(fsm_params.fsm.mission) +
                              "': tactile evaluate knows the mission explore only");
   }
-  std::optional<std::array<double, 2>> box_size;
-  if (auto it = s.metrics.find("box_size"); it != s.metrics.end()) {
-    const auto* v = std::get_if<std::vector<double>>(&it->second);
-    if (!v || v->size() != 2 || !((*v)[0] > 0) || !((*v)[1] > 0))
-      throw std::runtime_error(s.source + ": metrics.box_size: must be [length, width] > 0 in metres");
-    box_size = {std::max((*v)[0], (*v)[1]), std::min((*v)[0], (*v)[1])};
-  }
+  const XplorerAreaGoal area_goal = XplorerAreaGoal::from(s);
   tactile_common::ParamMap map_extra;
   map_extra.set("floor_z", world.arena().floor_z());
   map_extra.set("publish_rate_hz", 0.1);
@@ -272,38 +267,20 @@ nlohmann::json evaluate_xplorer(const tactile_sim::Scenario& s, const EvaluateOp
   x["slabs"] = ms.slabs;
   x["map_raw_points"] = map->map().size();
   x["corner_slabs"] = ms.corner_slabs;
-  // The map as exported: 1 cm voxel filter + statistical outlier removal.
-  mapping_pcl::PointMap copy(map->params().map);
-  std::vector<mapping_pcl::Vec3> pts;
-  pts.reserve(map->map().size());
-  for (const auto& p : map->map().cloud()) pts.emplace_back(p.x, p.y, p.z);
-  copy.insert(pts);
-  copy.voxel_filter();
-  copy.remove_outliers();
-  const auto r = copy.measure();
-  x["map_points"] = r.points;
-  x["map_length_m"] = r.length;
-  x["map_width_m"] = r.width;
-  x["map_height_m"] = r.height;
-  x["map_area_m2"] = r.obb_area;
-  x["map_hull_area_m2"] = r.hull_area;
-  if (box_size) {
-    const double a_true = (*box_size)[0] * (*box_size)[1];
-    x["true_length_m"] = (*box_size)[0];
-    x["true_width_m"] = (*box_size)[1];
-    x["map_area_accuracy"] = r.points > 0 ? 1.0 - std::abs(r.obb_area - a_true) / a_true : 0.0;
-  }
+  const auto area = measure_map_area(map->map(), area_goal, object_hull_area(world.arena()), x);
 
   nlohmann::json m = header(s, o, seed, arena_yaw, in);
   replay.write(m);
   add_collisions(m, collisions);
   m["xplorer"] = x;
-  // As XplorerGraph::reached_goal for explore without metrics.min_traversed_m.
+  // As XplorerGraph::reached_goal for explore without metrics.min_traversed_m:
+  // the loop closed and, with metrics.min_area_accuracy, the map's area accuracy.
   if (s.metrics.count("min_traversed_m")) {
     throw std::runtime_error(s.source + ": metrics.min_traversed_m: the traversed path is the FSM's own; "
                                         "tactile evaluate judges explore flights by loop closure only");
   }
-  m["success"] = closure >= 0 && (ctx.flag("allow_collisions") || collisions.empty());
+  const bool area_ok = !area_goal.min_accuracy || (area && *area >= *area_goal.min_accuracy);
+  m["success"] = closure >= 0 && area_ok && (ctx.flag("allow_collisions") || collisions.empty());
   return m;
 }
 

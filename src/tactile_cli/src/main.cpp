@@ -172,6 +172,8 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   sweep_cmd->add_flag("!--no-bag", sweep.write_bags, "do not record bags (failures keep theirs otherwise)");
   sweep_cmd->add_flag("--keep-bags", sweep.keep_bags, "keep the bags of successes too");
+  sweep_cmd->add_flag("--keep-success-files", sweep.keep_success_files,
+                      "keep every file of successes too (trajectory.csv, maps; bags: --keep-bags)");
   sweep_cmd->add_flag("!--quiet", sweep.progress, "no line per environment");
 
   CLI11_PARSE(app, argc, argv);

@@ -154,6 +154,15 @@ Row fly_one(const std::string& file, const SweepOptions& options, const fs::path
       if (m.contains("gpis")) goal = m["gpis"].value("exit_found", false) && m["gpis"].value("outside_room", false);
       if (m.contains("xplorer") && m["xplorer"].contains("loop_closed")) goal = m["xplorer"]["loop_closed"].get<bool>();
       if (!goal) why = "goal not reached";
+      if (goal && m.contains("xplorer") && m["xplorer"].value("min_area_accuracy", json()).is_number()) {
+        const json& a = m["xplorer"]["area_accuracy"];
+        const double min = m["xplorer"]["min_area_accuracy"].get<double>();
+        if (!a.is_number() || a.get<double>() < min) {
+          char b[96];
+          std::snprintf(b, sizeof b, "area accuracy %.3f < %.2f", a.is_number() ? a.get<double>() : 0.0, min);
+          why = b;
+        }
+      }
       if (row.collisions > 0) {
         why += std::string(why.empty() ? "" : ", ") + std::to_string(row.collisions) + " collision" +
                (row.collisions == 1 ? "" : "s");
@@ -171,9 +180,19 @@ Row fly_one(const std::string& file, const SweepOptions& options, const fs::path
       fs::copy_file(png, failures_dir / (row.name + ".png"), fs::copy_options::overwrite_existing);
       row.topview = (fs::path("failures") / (row.name + ".png")).string();
     }
-  } else if (!options.keep_bags) {
+  } else {
+    // A success keeps its metrics and top view; its bag and its other files
+    // (trajectory.csv ~1 MB per simulated minute; XPLORER's map.ply,
+    // map_binary.ply and forces.csv ~10 MB) only on request: a sweep of
+    // hundreds would fill a disk with files nobody reads.
     std::error_code ec;
-    fs::remove_all(dir / "bag", ec);
+    if (!options.keep_bags) fs::remove_all(dir / "bag", ec);
+    if (!options.keep_success_files) {
+      for (const auto& entry : fs::directory_iterator(dir, ec)) {
+        const auto file = entry.path().filename();
+        if (entry.is_regular_file() && file != "metrics.json" && file != "topview.png") fs::remove(entry.path(), ec);
+      }
+    }
   }
   return row;
 }

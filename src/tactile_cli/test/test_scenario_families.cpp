@@ -220,6 +220,10 @@ TEST(Sweep, WritesTableAndSummaryWithFailuresAndErrors) {
   EXPECT_FALSE(fs::exists(out / "failures" / "a_hover.png"));
   EXPECT_TRUE(fs::exists(out / "runs" / "b_crash" / "bag"));   // failures keep their bag
   EXPECT_FALSE(fs::exists(out / "runs" / "a_hover" / "bag"));  // successes do not
+  EXPECT_TRUE(fs::exists(out / "runs" / "b_crash" / "trajectory.csv"));    // nor their trajectory
+  EXPECT_FALSE(fs::exists(out / "runs" / "a_hover" / "trajectory.csv"));
+  EXPECT_TRUE(fs::exists(out / "runs" / "a_hover" / "metrics.json"));
+  EXPECT_TRUE(fs::exists(out / "runs" / "a_hover" / "topview.png"));
   EXPECT_EQ(s["failures"][1]["outcome"].get<std::string>().rfind("error: ", 0), 0u) << s["failures"][1]["outcome"];
   EXPECT_NE(s["failures"][1]["outcome"].get<std::string>().find("c_broken.yaml"), std::string::npos);
   EXPECT_EQ(s["by_state_estimate"]["mocap"]["environments"], 2);
@@ -231,6 +235,13 @@ TEST(Sweep, WritesTableAndSummaryWithFailuresAndErrors) {
   int rows = 0;
   while (std::getline(csv, line)) ++rows;
   EXPECT_EQ(rows, 3);
+  // --keep-success-files: the success keeps its trajectory too.
+  fs::remove(dir / "b_crash.yaml");
+  fs::remove(dir / "c_broken.yaml");
+  fs::remove_all(out);
+  o.keep_success_files = true;
+  EXPECT_EQ(tactile_cli::run_sweep(o)["successes"], 1);
+  EXPECT_TRUE(fs::exists(out / "runs" / "a_hover" / "trajectory.csv"));
   fs::remove_all(dir);
   fs::remove_all(out);
 }

@@ -3,8 +3,9 @@
 // scenario file of a directory, e.g. one written by `tactile scenarios
 // generate`) and writes a table and a summary:
 //   OUT/scenarios/<name>.yaml   the generated environments (FAMILY only) + index.json
-//   OUT/runs/<name>/            each run (metrics.json, trajectory.csv, topview.png;
-//                               bag/ kept for failures only unless --keep-bags)
+//   OUT/runs/<name>/            each run (metrics.json, topview.png; its other files,
+//                               e.g. trajectory.csv, map.ply, and bag/ kept for
+//                               failures only unless --keep-success-files / --keep-bags)
 //   OUT/failures/<name>.png     the top view of every failure
 //   OUT/table.csv, table.md     per environment: outcome, collisions (guard, body),
 //                               the behaviour's metrics
@@ -30,6 +31,7 @@ struct SweepOptions {
   int jobs = 0;            ///< environments flown at once (0: all cores)
   bool write_bags = true;  ///< record bags (kept for failures)
   bool keep_bags = false;  ///< keep the bags of successes too
+  bool keep_success_files = false;  ///< keep every file of successes (trajectory, maps), bag aside
   bool progress = true;    ///< one line per environment on stderr
 };
 

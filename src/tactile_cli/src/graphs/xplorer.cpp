@@ -12,6 +12,7 @@
 
 #include "graphs.hpp"
 #include "tactile_common/time.hpp"
+#include "xplorer_area.hpp"
 #include "xplorer_nodes.hpp"
 
 namespace tactile_cli::graphs {
@@ -43,14 +44,8 @@ class XplorerGraph : public SimGraph {
     map_extra.set("floor_z", sim_->arena().floor_z());
     map_extra.set("publish_rate_hz", 0.1);  // the whole map every 10 s: keeps recorded bags small
     map_ = add_xplorer_mapping(ctx.host, ctx.overrides("xplorer_mapping", map_extra));
-    auto it = ctx.scenario.metrics.find("box_size");
-    if (it != ctx.scenario.metrics.end()) {
-      const auto* v = std::get_if<std::vector<double>>(&it->second);
-      if (!v || v->size() != 2 || !((*v)[0] > 0) || !((*v)[1] > 0))
-        throw std::runtime_error(ctx.scenario.source + ": metrics.box_size: must be [length, width] > 0 in metres");
-      box_size_ = {std::max((*v)[0], (*v)[1]), std::min((*v)[0], (*v)[1])};
-    }
-    it = ctx.scenario.metrics.find("min_traversed_m");
+    area_goal_ = XplorerAreaGoal::from(ctx.scenario);
+    auto it = ctx.scenario.metrics.find("min_traversed_m");
     if (it != ctx.scenario.metrics.end()) {
       const double* d = std::get_if<double>(&it->second);
       if (!d || !(*d > 0)) throw std::runtime_error(ctx.scenario.source + ": metrics.min_traversed_m: must be a number > 0 [m]");
@@ -95,7 +90,11 @@ class XplorerGraph : public SimGraph {
     const auto s = fsm_->fsm().state();
     if (mission == XplorerMission::kExplore) {
       if (min_traversed_m_) return fsm_->fsm().traversed_path() >= *min_traversed_m_;
-      return fsm_->fsm().loop_closed();
+      if (!fsm_->fsm().loop_closed()) return false;
+      if (!area_goal_.min_accuracy) return true;
+      nlohmann::json unused;  // metrics() measures the same map again for its table
+      const auto acc = measure_map_area(map_->map(), area_goal_, object_hull_area(sim_->arena()), unused);
+      return acc && *acc >= *area_goal_.min_accuracy;
     }
     if (mission == XplorerMission::kStaticWrench) return s == XplorerState::kStaticWrench;
     return s == XplorerState::kGoTo;
@@ -228,54 +227,11 @@ class XplorerGraph : public SimGraph {
     m["map_raw_points"] = map_->map().size();  // as written to map.ply
     m["corner_slabs"] = ms.corner_slabs;
     m["corner_fills"] = ms.corner_fills;  // mapping_pcl README "Corner fill"
-    // The map as exported: 1 cm voxel filter + statistical outlier removal.
-    mapping_pcl::PointMap copy(map_->params().map);
-    std::vector<mapping_pcl::Vec3> pts;
-    pts.reserve(map_->map().size());
-    for (const auto& p : map_->map().cloud()) pts.emplace_back(p.x, p.y, p.z);
-    copy.insert(pts);
-    copy.voxel_filter();
-    copy.remove_outliers();
-    const auto r = copy.measure();
-    m["map_points"] = r.points;
-    m["map_length_m"] = r.length;
-    m["map_width_m"] = r.width;
-    m["map_height_m"] = r.height;
-    m["map_area_m2"] = r.obb_area;
-    m["map_hull_area_m2"] = r.hull_area;
-    // Footprint of the object: the convex hull of the arena's walls and
-    // cylinders (a box, a convex polygon or a cylinder, the objects of 001 and
-    // of the xplorer_objects family) against the hull of the map, for the
-    // shapes whose map has no meaningful bounding rectangle (issue 17).
-    const double a_obj = object_area();
-    if (a_obj > 0.0) {
-      m["true_area_m2"] = a_obj;
-      m["map_hull_area_accuracy"] = r.points > 0 ? 1.0 - std::abs(r.hull_area - a_obj) / a_obj : 0.0;
-    }
-    if (box_size_) {
-      const double a_true = (*box_size_)[0] * (*box_size_)[1];
-      m["true_length_m"] = (*box_size_)[0];
-      m["true_width_m"] = (*box_size_)[1];
-      m["map_area_accuracy"] = r.points > 0 ? 1.0 - std::abs(r.obb_area - a_true) / a_true : 0.0;
-    }
-  }
-
-  /// Area of the convex hull of every wall end point and cylinder (sampled at
-  /// 0.5 deg) of the arena [m^2]; 0 for an arena without obstacles.
-  double object_area() const {
-    std::vector<Eigen::Vector2d> pts;
-    for (const auto& w : sim_->arena().walls()) {
-      pts.push_back(w.a);
-      pts.push_back(w.b);
-    }
-    for (const auto& c : sim_->arena().cylinders()) {
-      for (int k = 0; k < 720; ++k) {
-        const double a = 2.0 * M_PI * k / 720.0;
-        pts.emplace_back(c.center.x() + c.radius * std::cos(a), c.center.y() + c.radius * std::sin(a));
-      }
-    }
-    if (pts.size() < 3) return 0.0;
-    return mapping_pcl::min_area_rectangle(pts).hull_area;
+    // The map as exported against the object's footprint: the bounding
+    // rectangle (box_size, 001 Sec. V-D) and the convex hull of the arena's
+    // walls and cylinders (polygons and cylinders, whose map has no meaningful
+    // bounding rectangle; issue 17).
+    measure_map_area(map_->map(), area_goal_, object_hull_area(sim_->arena()), m);
   }
 
   /// 001 Sec. V-E: rise time (90 % of the start -> goal distance) and settling
@@ -333,7 +289,7 @@ class XplorerGraph : public SimGraph {
   std::shared_ptr<xplorer_force_est::XplorerForceEstLogic> force_;
   std::shared_ptr<tactile_fsm::XplorerFsmLogic> fsm_;
   std::shared_ptr<mapping_pcl::XplorerMapLogic> map_;
-  std::optional<std::array<double, 2>> box_size_;
+  XplorerAreaGoal area_goal_;
   std::optional<double> min_traversed_m_;
   std::vector<ForceSample> forces_;
   std::vector<TruthSample> truth_;

@@ -107,10 +107,43 @@ def test_evaluate_of_an_xplorer_sim_bag_equals_the_sim_metrics(tmp_path):
     assert sim["xplorer"]["loop_closed"]  # the paper's outcome, or the comparison says little
     for key in ("loop_closed", "final_state", "turns_recontacted", "turns_without_recontact",
                 "traversal_contact_lost", "slabs", "map_raw_points", "map_points", "map_length_m",
-                "map_width_m", "map_area_m2", "map_area_accuracy"):
+                "map_width_m", "map_area_m2", "map_area_accuracy", "map_hull_area_accuracy", "area_accuracy"):
         assert ev["xplorer"][key] == sim["xplorer"][key], key
     # The FSM's own clock vs the stamp of its first "done" message: the same 50 Hz tick.
     assert ev["xplorer"]["loop_closure_time_s"] == pytest.approx(sim["xplorer"]["loop_closure_time_s"], abs=0.02)
+
+
+def with_area_goal(tmp_path, minimum):
+    """The paper's box scenario with metrics.min_area_accuracy (issue 17's goal)."""
+    text = XPLORER.read_text().replace("arena_file: arenas/", f"arena_file: {SCENARIOS / 'arenas'}/")
+    text = text.replace("metrics:\n", f"metrics:\n  area_accuracy_of: rectangle\n  min_area_accuracy: {minimum}\n")
+    path = tmp_path / f"box_min_{minimum}.yaml"
+    path.write_text(text)
+    return path
+
+
+def test_min_area_accuracy_gates_success_in_flight_and_from_the_bag(tmp_path):
+    """metrics.min_area_accuracy: the loop closed is not enough when the map's area is
+    farther from the box's than allowed; `tactile sim` and `tactile evaluate` agree."""
+    strict = with_area_goal(tmp_path, 0.9999)  # no contact map is that exact
+    loose = with_area_goal(tmp_path, 0.5)
+    r = tactile("sim", strict, "--out", tmp_path / "sim", "--no-png", "--quiet")
+    assert r.returncode == 0, r.stderr
+    sim = json.loads((tmp_path / "sim" / "metrics.json").read_text())
+    assert sim["xplorer"]["loop_closed"]
+    assert sim["xplorer"]["min_area_accuracy"] == 0.9999
+    assert 0.5 < sim["xplorer"]["area_accuracy"] < 0.9999
+    assert sim["xplorer"]["area_accuracy"] == sim["xplorer"]["map_area_accuracy"]
+    assert not sim["success"]
+    for scenario, success in ((strict, False), (loose, True)):
+        out = tmp_path / f"ev_{scenario.stem}"
+        r = tactile("evaluate", tmp_path / "sim" / "bag", "--scenario", scenario, "--out", out)
+        assert r.returncode == 0, r.stderr
+        assert json.loads((out / "metrics.json").read_text())["success"] is success, scenario.name
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(with_area_goal(tmp_path, 1.5).read_text())
+    r = tactile("sim", bad, "--out", tmp_path / "bad", "--no-png", "--quiet")
+    assert r.returncode != 0 and "metrics.min_area_accuracy" in r.stderr, r.stderr
 
 
 DUCTED = SCENARIOS / "ducted_estimation.yaml"
