@@ -101,6 +101,7 @@ ParamMap XplorerMapLogic::default_parameters() {
   m.set("face_clip_angle_tolerance", d.stamping.face_clip_angle_tolerance);
   m.set("face_clip_corner_reach", d.stamping.face_clip_corner_reach);
   m.set("face_clip_tilted", d.stamping.face_clip_tilted);
+  m.set("face_clip_tilted_reach", d.stamping.face_clip_tilted_reach);
   return m;
 }
 
@@ -162,6 +163,7 @@ XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
   p.stamping.face_clip_angle_tolerance = m.get_double("face_clip_angle_tolerance");
   p.stamping.face_clip_corner_reach = m.get_double("face_clip_corner_reach");
   p.stamping.face_clip_tilted = m.get_bool("face_clip_tilted");
+  p.stamping.face_clip_tilted_reach = m.get_double("face_clip_tilted_reach");
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {

@@ -92,6 +92,8 @@ void XplorerMapParams::validate() const {
   if (!(face_clip_angle_tolerance >= 0.0) || !(face_clip_angle_tolerance <= M_PI))
     bad("face_clip_angle_tolerance", "must be in [0, pi]", face_clip_angle_tolerance);
   if (!(face_clip_margin >= 0.0) || !std::isfinite(face_clip_margin)) bad("face_clip_margin", "must be finite and >= 0", face_clip_margin);
+  if (!(face_clip_tilted_reach >= 0.0) || !std::isfinite(face_clip_tilted_reach))
+    bad("face_clip_tilted_reach", "must be finite and >= 0", face_clip_tilted_reach);
   if (!(face_clip_corner_reach >= 0.0) || !std::isfinite(face_clip_corner_reach))
     bad("face_clip_corner_reach", "must be finite and >= 0 (0: the clip span is not extended to the corners)", face_clip_corner_reach);
   if (!(touching_half_s >= 0.0) || !std::isfinite(touching_half_s)) bad("touching_half_s", "must be finite and >= 0", touching_half_s);
@@ -317,7 +319,7 @@ std::size_t XplorerContactMapper::clip_tilted(const FaceLine& l, const std::vect
   for (const auto& q : f) {
     if (q.contact.dot(l.contact) >= cos_tol) continue;
     const double s = (q.point - l.point).dot(l.dir);
-    if (s < l.clip_min - p_.face_clip_corner_reach || s > l.clip_max + p_.face_clip_corner_reach) continue;
+    if (s < l.clip_min - p_.face_clip_tilted_reach || s > l.clip_max + p_.face_clip_tilted_reach) continue;
     tilted.push_back(&q);
   }
   if (tilted.empty()) return 0;

@@ -995,4 +995,7 @@ TEST(XplorerMappingRules, TiltedSlabsOutsideTheirFacesLineAreRemovedAtAnyCorner)
   EXPECT_TRUE(on_lines);      // no right angle: rule 12 does not clip
   EXPECT_GT(off_over, 0u);
   EXPECT_GT(on_over, 0u);  // A's overhang past the corner, outside B's line, is kept
+  XplorerMapParams bad;
+  bad.face_clip_tilted_reach = -0.1;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
 }
