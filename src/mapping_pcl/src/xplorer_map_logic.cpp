@@ -50,6 +50,7 @@ ParamMap XplorerMapLogic::default_parameters() {
   ParamMap m(kNodeName, "defaults");
   m.set("delta_map", d.stamping.delta_map);
   m.set("delta_map_hold", d.stamping.delta_map_hold);
+  m.set("hold_in_traversal", d.stamping.hold_in_traversal);
   m.set("slab_size", std::vector<double>{d.stamping.slab_size.x(), d.stamping.slab_size.y(), d.stamping.slab_size.z()});
   m.set("slab_offset", d.stamping.slab_offset);
   m.set("corner_offset", d.stamping.corner_offset);
@@ -98,6 +99,9 @@ ParamMap XplorerMapLogic::default_parameters() {
   m.set("face_clip_tolerance", d.stamping.face_clip_tolerance);
   m.set("face_clip_margin", d.stamping.face_clip_margin);
   m.set("face_clip_angle_tolerance", d.stamping.face_clip_angle_tolerance);
+  m.set("face_clip_corner_reach", d.stamping.face_clip_corner_reach);
+  m.set("face_clip_tilted", d.stamping.face_clip_tilted);
+  m.set("face_clip_tilted_reach", d.stamping.face_clip_tilted_reach);
   return m;
 }
 
@@ -105,6 +109,7 @@ XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
   Params p;
   p.stamping.delta_map = m.get_double("delta_map");
   p.stamping.delta_map_hold = m.get_double("delta_map_hold");
+  p.stamping.hold_in_traversal = m.get_bool("hold_in_traversal");
   const std::vector<double> s = m.get_double_array("slab_size");
   if (s.size() != 3) throw m.error("slab_size", "must have 3 elements (along the face, along C_n, height), got " + std::to_string(s.size()));
   p.stamping.slab_size = Vec3(s[0], s[1], s[2]);
@@ -156,6 +161,9 @@ XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
   p.stamping.face_clip_tolerance = m.get_double("face_clip_tolerance");
   p.stamping.face_clip_margin = m.get_double("face_clip_margin");
   p.stamping.face_clip_angle_tolerance = m.get_double("face_clip_angle_tolerance");
+  p.stamping.face_clip_corner_reach = m.get_double("face_clip_corner_reach");
+  p.stamping.face_clip_tilted = m.get_bool("face_clip_tilted");
+  p.stamping.face_clip_tilted_reach = m.get_double("face_clip_tilted_reach");
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {
@@ -225,7 +233,9 @@ void XplorerMapLogic::on_fsm_state(const tactile_msgs::msg::FsmState& msg) {
     mapper_.release_corner(fsm_state_since_s_);
   // The end of a face traversal (README "Corner fill"): the corner between it
   // and the face before is filled if that one ended in a Tactile-turning.
-  if (left_stamp_state) mapper_.end_face(msg.state == kTurningState);
+  // README "Hold through a traversal": an initiated mapping lasts the traversal.
+  if (changed) mapper_.hold_initiation(listed(params_.stamp_states, msg.state));
+  if (left_stamp_state) mapper_.end_face(msg.state == kTurningState, msg.state == kDoneState);
   // A traversal after an impact (entered from a state of contact_now_after:
   // Exploration) holds its slabs until C_n is steady (README "Steady first contact").
   if (changed && listed(params_.stamp_states, msg.state) && entered_after_impact_ && impact_rule("steady"))

@@ -92,6 +92,10 @@ void XplorerMapParams::validate() const {
   if (!(face_clip_angle_tolerance >= 0.0) || !(face_clip_angle_tolerance <= M_PI))
     bad("face_clip_angle_tolerance", "must be in [0, pi]", face_clip_angle_tolerance);
   if (!(face_clip_margin >= 0.0) || !std::isfinite(face_clip_margin)) bad("face_clip_margin", "must be finite and >= 0", face_clip_margin);
+  if (!(face_clip_tilted_reach >= 0.0) || !std::isfinite(face_clip_tilted_reach))
+    bad("face_clip_tilted_reach", "must be finite and >= 0", face_clip_tilted_reach);
+  if (!(face_clip_corner_reach >= 0.0) || !std::isfinite(face_clip_corner_reach))
+    bad("face_clip_corner_reach", "must be finite and >= 0 (0: the clip span is not extended to the corners)", face_clip_corner_reach);
   if (!(touching_half_s >= 0.0) || !std::isfinite(touching_half_s)) bad("touching_half_s", "must be finite and >= 0", touching_half_s);
 }
 
@@ -207,7 +211,7 @@ bool XplorerContactMapper::outside_faces(const Vec3& q) const {
     if (!l.clips) continue;
     const Eigen::Vector2d d = Eigen::Vector2d(q.x(), q.y()) - l.point;
     const double s = d.dot(l.dir);
-    if (s < l.s_min - p_.face_clip_margin || s > l.s_max + p_.face_clip_margin) continue;
+    if (s < l.clip_min - p_.face_clip_margin || s > l.clip_max + p_.face_clip_margin) continue;
     if (d.dot(l.contact) < -p_.face_clip_tolerance) return true;  // on the vehicle's side of the face
   }
   return false;
@@ -257,6 +261,8 @@ std::optional<XplorerContactMapper::FaceLine> XplorerContactMapper::fit_face(con
   }
   if (n < kMinSamples || 2 * n < f.size()) return std::nullopt;  // most of the face's slabs on the line
   if (l.s_max - l.s_min < p_.face_clip_min_length) return std::nullopt;
+  l.clip_min = l.s_min;
+  l.clip_max = l.s_max;
   return l;
 }
 
@@ -288,7 +294,52 @@ void XplorerContactMapper::drop_held() {
   held_.clear();
 }
 
-void XplorerContactMapper::end_face(bool turned) {
+void XplorerContactMapper::join_lines(std::size_t ia, std::size_t ib) {
+  FaceLine& a = lines_[ia];
+  FaceLine& b = lines_[ib];
+  a.clips = b.clips = true;
+  if (p_.face_clip_corner_reach <= 0.0) return;
+  // The corner: a.point + sa a.dir = b.point + sb b.dir (README "Face clip to the corner").
+  Eigen::Matrix2d m;
+  m << a.dir, -b.dir;
+  if (std::abs(m.determinant()) < 1e-6) return;
+  const Eigen::Vector2d st = m.inverse() * (b.point - a.point);
+  auto extend = [&](FaceLine& l, double s) {
+    if (s < l.s_min && l.s_min - s <= p_.face_clip_corner_reach) l.clip_min = std::min(l.clip_min, s);
+    if (s > l.s_max && s - l.s_max <= p_.face_clip_corner_reach) l.clip_max = std::max(l.clip_max, s);
+  };
+  extend(a, st.x());
+  extend(b, st.y());
+}
+
+std::size_t XplorerContactMapper::clip_tilted(const FaceLine& l, const std::vector<FaceSample>& f) {
+  const double cos_tol = std::cos(p_.face_clip_angle_tolerance);
+  const double half = 0.5 * p_.slab_size.x() + p_.slab_spacing, depth = p_.slab_size.y() + p_.slab_spacing;
+  std::vector<const FaceSample*> tilted;
+  for (const auto& q : f) {
+    if (q.contact.dot(l.contact) >= cos_tol) continue;
+    const double s = (q.point - l.point).dot(l.dir);
+    if (s < l.clip_min - p_.face_clip_tilted_reach || s > l.clip_max + p_.face_clip_tilted_reach) continue;
+    tilted.push_back(&q);
+  }
+  if (tilted.empty()) return 0;
+  return map_->remove_if([&](const Vec3& v) {
+    const Eigen::Vector2d x(v.x(), v.y());
+    if ((x - l.point).dot(l.contact) >= -p_.face_clip_tolerance) return false;  // not outside the line
+    for (const FaceSample* q : tilted) {
+      const Eigen::Vector2d d = x - q->point;
+      const double along_c = d.dot(q->contact);
+      const double across = d.x() * q->contact.y() - d.y() * q->contact.x();
+      if (along_c >= -p_.slab_spacing && along_c <= depth && std::abs(across) <= half) return true;
+    }
+    return false;
+  });
+}
+
+void XplorerContactMapper::end_face(bool turned, bool loop_closed) {
+  const bool after_first_turn = face_after_first_turn_;
+  face_after_first_turn_ = false;
+  if (turned && ++turns_ended_ == 1) face_after_first_turn_ = true;
   const std::optional<std::size_t> prev_line = prev_line_;  // face clip: the face before, if it ended in a turn
   prev_line_.reset();
   if (holding_) {  // the traversal ended before a steady stretch: its slabs do not say where the face is
@@ -298,6 +349,10 @@ void XplorerContactMapper::end_face(bool turned) {
   if (face_.empty()) {
     turned_face_.reset();  // a face without slabs between two turns: the faces either side are not adjacent
     return;
+  }
+  if (!first_face_seen_) {
+    first_face_seen_ = true;
+    if (p_.face_clip_tilted) first_face_ = face_;
   }
   if (turned_face_ && p_.corner_fill_max_gap > 0.0) {
     if (const auto f = corner_between(*turned_face_, face_)) {
@@ -311,10 +366,20 @@ void XplorerContactMapper::end_face(bool turned) {
     if (const auto l = fit_face(face_)) {
       lines_.push_back(*l);
       ++stats_.face_lines;
+      const std::size_t last = lines_.size() - 1;
+      if (after_first_turn) after_first_turn_line_ = last;
       // Right-angle corner with the face before, joined by a turn (face_clip_angle_tolerance).
-      if (prev_line && right_angle(lines_[*prev_line], lines_.back())) lines_[*prev_line].clips = lines_.back().clips = true;
+      if (prev_line && right_angle(lines_[*prev_line], lines_.back())) join_lines(*prev_line, last);
+      // The loop closed on the first contact's face: the face after the first turn is its neighbour (rule 13).
+      if (loop_closed && after_first_turn_line_ && *after_first_turn_line_ != last &&
+          right_angle(lines_[*after_first_turn_line_], lines_.back()))
+        join_lines(*after_first_turn_line_, last);
       if (p_.face_clip_angle_tolerance >= M_PI / 2) lines_.back().clips = true;
       stats_.clipped_points += map_->remove_if([&](const Vec3& q) { return outside_faces(q); });
+      if (p_.face_clip_tilted) {  // README "Tilted slabs"
+        stats_.clipped_points += clip_tilted(lines_.back(), face_);
+        if (loop_closed) stats_.clipped_points += clip_tilted(lines_.back(), first_face_);
+      }
       if (turned) prev_line_ = lines_.size() - 1;
     }
   }
@@ -403,7 +468,7 @@ void XplorerContactMapper::observe_force(const Eigen::Vector2d& f) {
   if (!initiated_ && n >= p_.delta_map) {  // 001 Sec. IV-B: "initializes when |b_delta_f| >= delta_map"
     initiated_ = true;
     ++stats_.initiations;
-  } else if (initiated_ && n < p_.delta_map_hold) {
+  } else if (initiated_ && n < p_.delta_map_hold && !(p_.hold_in_traversal && in_traversal_)) {  // README "Hold through a traversal"
     initiated_ = false;
     ++stats_.releases;
   }

@@ -789,6 +789,7 @@ TEST(XplorerMappingRules, FaceClipRemovesTiltedSlabsOutsideAFaceOfARightAngledOb
     p.corner_release_s = 0.0;
     p.edge_from_arms = false;  // near face at slab_offset = 0.21 m
     p.face_clip_min_length = min_length;
+    p.face_clip_tilted = false;  // rule 12 alone (rule 15 removes the tilted slabs outside a line at any angle)
     auto map = std::make_shared<PointMap>();
     auto m = std::make_shared<XplorerContactMapper>(p, *map);
     double t = 0.0;
@@ -847,5 +848,162 @@ TEST(XplorerMappingRules, FaceClipRemovesTiltedSlabsOutsideAFaceOfARightAngledOb
   EXPECT_THROW(bad.validate(), std::invalid_argument);
   bad = XplorerMapParams{};
   bad.face_clip_angle_tolerance = 4.0;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
+// README "Face clip to the corner" (rule 13). A square object {0 < x < 1, 0 < y < 1}
+// traversed right-hand from a first contact next to its corner (1, 0): the first
+// traversal (5 slabs tilted 15 deg, no line) sticks ~3.5 cm out of face A (y = 0) at
+// x = 0.7-0.9; face B (x = 1) starts with three tilted slabs at y = 0.05-0.15 before its
+// steady part (y >= 0.35: the fitted span, + 0.15 m margin reaches y = 0.2 only); faces
+// C and D are clean; the last traversal maps face A over x = 0.3-0.6 and closes the
+// loop there. Without the rule the tilted slabs next to the corners stay (their points
+// lie beyond the spans + margin); with it the spans of two lines at a right angle reach
+// their corner, and at the closure face A joins face B (the face after the first turn).
+TEST(XplorerMappingRules, FaceClipReachesTheCornersAndJoinsTheLastFaceAtTheClosure) {
+  auto run = [](double reach, bool close) {
+    XplorerMapParams p;
+    p.corner_release_s = 0.0;
+    p.edge_from_arms = false;  // near face at slab_offset = 0.21 m
+    p.face_clip_corner_reach = reach;
+    p.face_clip_tilted = false;  // rule 13 alone (rule 15 would remove the tilted slabs too)
+    auto map = std::make_shared<PointMap>();
+    auto m = std::make_shared<XplorerContactMapper>(p, *map);
+    double t = 0.0;
+    auto at = [&](const Eigen::Vector2d& surface, const Eigen::Vector2d& c, double tilt) {
+      ContactSample s = sample(t, 0.0, -2.0);
+      s.arm_angles.reset();
+      const Eigen::Vector2d cn = Eigen::Rotation2Dd(tilt) * c;
+      s.position = Vec3(surface.x() - 0.21 * cn.x(), surface.y() - 0.21 * cn.y(), 0.7);
+      s.yaw = std::atan2(cn.y(), cn.x());
+      m->update(s);
+      t += 0.1;
+    };
+    const double tilt = 15.0 * M_PI / 180.0;
+    const Eigen::Vector2d ca(0.0, 1.0), cb(-1.0, 0.0), cc(0.0, -1.0), cd(1.0, 0.0);
+    for (int k = 0; k < 5; ++k) at({0.7 + 0.05 * k, 0.0}, ca, tilt);  // first contact, face A
+    m->end_face(true);
+    for (int k = 0; k < 3; ++k) at({1.0, 0.05 + 0.05 * k}, cb, tilt);  // face B, re-contact
+    for (int k = 0; k <= 10; ++k) at({1.0, 0.35 + 0.05 * k}, cb, 0.0);
+    m->end_face(true);
+    for (int k = 0; k < 3; ++k) at({0.95 - 0.05 * k, 1.0}, cc, tilt);  // face C, re-contact
+    for (int k = 0; k <= 10; ++k) at({0.6 - 0.05 * k, 1.0}, cc, 0.0);
+    m->end_face(true);
+    for (int k = 0; k <= 10; ++k) at({0.0, 0.8 - 0.05 * k}, cd, 0.0);  // face D
+    m->end_face(true);
+    for (int k = 0; k <= 10; ++k) at({0.1 + 0.05 * k, 0.0}, ca, 0.0);  // face A again: the loop closes at x = 0.6
+    m->end_face(false, close);
+    double out_b = -1e9, out_a = 1e9, out_c = -1e9;  // outside B (x > 1), A (y < 0) past the closure, C (y > 1)
+    for (const auto& q : map->cloud()) {
+      if (q.y > 0.0 && q.y < 0.35) out_b = std::max<double>(out_b, q.x - 1.0);
+      if (q.x > 0.8 && q.x < 1.0) out_a = std::min<double>(out_a, q.y);
+      if (q.x > 0.75 && q.x < 1.0) out_c = std::max<double>(out_c, q.y - 1.0);
+    }
+    return std::make_tuple(out_b, out_a, out_c);
+  };
+  const auto [off_b, off_a, off_c] = run(0.0, true);
+  EXPECT_GT(off_b, 0.02);  // 0.125 m x sin 15 deg ~ 0.03 m out
+  EXPECT_LT(off_a, -0.02);
+  EXPECT_GT(off_c, 0.02);
+  const auto [on_b, on_a, on_c] = run(0.6, true);
+  EXPECT_LE(on_b, 0.0101);  // face_clip_tolerance 0.01 m
+  EXPECT_GE(on_a, -0.0101);
+  EXPECT_LE(on_c, 0.0101);  // C joined to B (consecutive faces): C's span reaches their corner (1, 1)
+  const auto [open_b, open_a, open_c] = run(0.6, false);  // no closure: B's start and A are not joined
+  EXPECT_GT(open_b, 0.02);
+  EXPECT_LT(open_a, -0.02);
+  EXPECT_LE(open_c, 0.0101);
+  const auto [near_b, near_a, near_c] = run(0.1, true);  // the corners lie 0.3-0.4 m beyond the spans
+  EXPECT_GT(near_b, 0.02);
+  EXPECT_LT(near_a, -0.02);
+  EXPECT_GT(near_c, 0.02);
+  XplorerMapParams bad;
+  bad.face_clip_corner_reach = -0.1;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
+// README "Hold through a traversal" (rule 14): the contact back-off of tactile_fsm pulls
+// the averaged force of a first contact under delta_map_hold for a moment, and the
+// steady traversal then reads 1.3 N, under delta_map. Inside a traversal
+// (hold_initiation, set by the node logic from stamp_states) an initiated mapping is
+// kept; outside, or with hold_in_traversal false, the 0.5 N hold releases it.
+TEST(XplorerMappingRules, InitiationHeldThroughATraversal) {
+  for (const bool rule : {true, false}) {
+    XplorerMapParams p;
+    p.hold_in_traversal = rule;
+    PointMap map;
+    XplorerContactMapper m(p, map);
+    m.hold_initiation(true);
+    EXPECT_EQ(m.update(sample(0.0, 0.0, -2.6)), 1);  // the first contact's impact: initiated
+    m.observe_force({-0.25, 0.0});                    // the back-off
+    EXPECT_EQ(m.initiated(), rule);
+    EXPECT_EQ(m.update(sample(0.5, 0.0, -1.3)), rule ? 1 : 0);  // the steady traversal
+    m.hold_initiation(false);  // the traversal ended
+    m.observe_force({-0.25, 0.0});
+    EXPECT_FALSE(m.initiated());
+  }
+  // The node logic holds the initiation in the stamp states (Tactile-traversal) only.
+  auto d = XplorerMapLogic::default_parameters();
+  XplorerMapLogic logic(XplorerMapLogic::params_from(d));
+  EXPECT_FALSE(logic.mapper().initiation_held());
+  tactile_msgs::msg::FsmState st;
+  for (const std::string state : {"exploration", "tactile_traversal", "tactile_turning", "tactile_traversal", "done"}) {
+    st.state = state;
+    logic.on_fsm_state(st);
+    EXPECT_EQ(logic.mapper().initiation_held(), state == "tactile_traversal") << state;
+  }
+}
+
+// README "Tilted slabs" (rule 15). Two faces of a hexagon-like polygon meeting at a
+// 120 deg corner at (1, 0) (no right angle: rule 12 does not clip): face A along y = 0,
+// then, after a turn, face B along (cos 60, sin 60) deg, re-contacted with the yaw 30 deg
+// off its normal: its first three slabs (0.05-0.15 m from the corner) are tilted and
+// stick out of B. With the rule, B's line removes their points outside it; B's steady
+// slabs and A's slabs overhanging the corner (outside B's line, C_n of another face) stay.
+TEST(XplorerMappingRules, TiltedSlabsOutsideTheirFacesLineAreRemovedAtAnyCorner) {
+  auto run = [](bool rule) {
+    XplorerMapParams p;
+    p.corner_release_s = 0.0;
+    p.edge_from_arms = false;
+    p.face_clip_tilted = rule;
+    auto map = std::make_shared<PointMap>();
+    auto m = std::make_shared<XplorerContactMapper>(p, *map);
+    double t = 0.0;
+    auto at = [&](const Eigen::Vector2d& surface, const Eigen::Vector2d& c, double tilt) {
+      ContactSample s = sample(t, 0.0, -2.0);
+      s.arm_angles.reset();
+      const Eigen::Vector2d cn = Eigen::Rotation2Dd(tilt) * c;
+      s.position = Vec3(surface.x() - 0.21 * cn.x(), surface.y() - 0.21 * cn.y(), 0.7);
+      s.yaw = std::atan2(cn.y(), cn.x());
+      m->update(s);
+      t += 0.1;
+    };
+    for (int k = 0; k <= 18; ++k) at({0.05 * k, 0.0}, {0.0, 1.0}, 0.0);  // face A up to x = 0.9
+    m->end_face(true);
+    const double a = 60.0 * M_PI / 180.0;
+    const Eigen::Vector2d tb(std::cos(a), std::sin(a)), cb(-std::sin(a), std::cos(a));
+    for (int k = 0; k < 3; ++k) at(Eigen::Vector2d(1.0, 0.0) + (0.05 + 0.05 * k) * tb, cb, -30.0 * M_PI / 180.0);
+    for (int k = 0; k <= 10; ++k) at(Eigen::Vector2d(1.0, 0.0) + (0.3 + 0.05 * k) * tb, cb, 0.0);
+    m->end_face(true);
+    double out_b = -1e9;    // outside B, beside it (past the corner along B)
+    std::size_t a_over = 0;  // A's last slab past the corner, outside B's line
+    for (const auto& q : map->cloud()) {
+      const Eigen::Vector2d d = Eigen::Vector2d(q.x, q.y) - Eigen::Vector2d(1.0, 0.0);
+      const double along = d.dot(tb), out = -d.dot(cb);
+      if (along > 0.1 && along < 0.3) out_b = std::max(out_b, out);  // beyond A's overhang (along < 0.09)
+      if (q.x > 1.005 && q.y > 0.0 && q.y < 0.08 && out > 0.0101) ++a_over;
+    }
+    return std::make_tuple(out_b, a_over, m->face_lines().size() == 2 && !m->face_lines()[0].clips);
+  };
+  const auto [off_out, off_over, off_lines] = run(false);
+  EXPECT_GT(off_out, 0.03);  // 0.125 m x sin 30 deg ~ 0.06 m out of B
+  EXPECT_TRUE(off_lines);
+  const auto [on_out, on_over, on_lines] = run(true);
+  EXPECT_LE(on_out, 0.0101);  // face_clip_tolerance
+  EXPECT_TRUE(on_lines);      // no right angle: rule 12 does not clip
+  EXPECT_GT(off_over, 0u);
+  EXPECT_GT(on_over, 0u);  // A's overhang past the corner, outside B's line, is kept
+  XplorerMapParams bad;
+  bad.face_clip_tilted_reach = -0.1;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
 }

@@ -34,6 +34,7 @@ class XplorerMapLogic {
   /// the latest force samples: without them the 1 s average still pressing the face before the
   /// turn would be stamped on the new one (README "Recent axis"), so min_state_time_s applies.
   bool short_gate_after_turn() const { return params_.stamping.recent_axis && params_.force_now_samples > 0; }
+  static constexpr const char* kDoneState = "done";  // tactile_fsm's loop closure (issue 17): ends the last face, the first contact's
   static constexpr const char* kTurningState = "tactile_turning";  // tactile_fsm's Tactile-turning (001 Gamma 2): ends a face at a convex corner
   static constexpr const char* kFsmStateTopic = "/xplorer/fsm_state";      // tactile_msgs/msg/FsmState (optional)
   static constexpr const char* kArmImuTopic = "/arm_imu";                  // tactile_msgs/msg/ArmImuArray (optional: edge_from_arms)

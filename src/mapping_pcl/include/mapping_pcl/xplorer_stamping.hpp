@@ -38,6 +38,19 @@ struct XplorerMapParams {
   /// stamp needs delta_map again. delta_map_hold = delta_map: the force gates
   /// every stamp (the reading before issue 17) (choice; README "Mapping is initiated").
   double delta_map_hold = 0.5;                 ///< [N]
+  /// Hold through a traversal (rule 14): once initiated inside a face
+  /// traversal (hold_initiation(true), the node logic's stamp_states),
+  /// mapping is not released by the force falling below delta_map_hold until
+  /// that traversal ends. The FSM's contact back-off (tactile_fsm README,
+  /// "Transition ticks and the contact back-off") pulls the averaged force of
+  /// every first contact down to ~0.25 N for a moment; the steady traversal
+  /// then reads 1.27-1.49 N, under delta_map, and the first face stayed
+  /// unmapped (held-out polygons 12796, 12854, 12946, 12972, 12983: one face
+  /// 4-18 % covered, hull 0.88-0.94). Within the traversal the other gates
+  /// (contact now, two arms, steady first contact) still stamp only on a
+  /// contact (choice, README "Hold through a traversal"); false: the 0.5 N hold
+  /// everywhere.
+  bool hold_in_traversal = true;
   Vec3 slab_size = Vec3(0.25, 0.08, 0.5);      ///< along the face, along C_n, height [m] (001 Sec. IV-B)
   double slab_offset = 0.21;                   ///< vehicle centre -> slab's near face along C_n [m] (001 Sec. IV-B)
   double corner_offset = 0.417;                ///< vehicle centre -> corner slab centre, diagonal [m] (001 Sec. IV-B)
@@ -169,6 +182,32 @@ struct XplorerMapParams {
   /// (tuning polygons 1004, 2015, 2019, 3027: 0.97-0.98 -> 0.96-0.97) (choice;
   /// README "Face clip"). >= pi/2: every line clips.
   double face_clip_angle_tolerance = 0.175;  ///< [rad] (10 deg)
+  /// Face clip to the corner (rule 13): two face lines joined at a right angle
+  /// (rule 12) meet at the object's corner; each one's clip span is extended to
+  /// that intersection when it lies within this distance beyond the span's end
+  /// (the gates at a face's ends and the corner release leave the fitted span
+  /// 0.1-0.3 m short of the corners, and the tilted slabs of a re-contact after
+  /// a turn and of a first contact next to a corner stick 3-7 cm out of the face
+  /// there, beyond face_clip_margin). At the loop's closure (end_face(false,
+  /// true)) the last face, the first contact's face, is joined the same way to
+  /// the face after the first turn. Choice, not in 001 (README "Face clip to the
+  /// corner"); 0: off, the default (on block 12700 it changed no seed's
+  /// outcome: 283 of 300 with 0.6 m and without, seed by seed).
+  double face_clip_corner_reach = 0.0;  ///< [m]
+  /// Tilted slabs (rule 15): every fitted face line, at a right angle to
+  /// another or not, removes the map points outside it (face_clip_tolerance)
+  /// that lie in a slab of its own face stamped with C_n more than
+  /// face_clip_angle_tolerance off its normal, within its span extended by
+  /// face_clip_tilted_reach; at the loop's closure the first traversal's
+  /// slabs are checked against the last face's line too. A re-contact after a
+  /// turn comes in with the yaw 30-60 deg off the new face and the admittance
+  /// squares it over 5-8 s while stamping: those slabs stick 4-7 cm out of the
+  /// face's start (held-out polygons 12716, 12808 at 120 deg corners, where
+  /// rule 12 does not clip). The slabs on the line are kept, so a polygon's
+  /// corners keep the steady slabs' overhang (rule 12's reason for the right
+  /// angle). Choice, not in 001 (README "Tilted slabs"); false: off.
+  bool face_clip_tilted = true;
+  double face_clip_tilted_reach = 0.6;  ///< [m] (choice: a face's fitted span ends 0.1-0.3 m short of its corners)
   double arm_hinge_offset = 0.05;  ///< centre -> arm hinge along the diagonal [m] (vehicle CAD; the SITL's value)
   double arm_length = 0.15;        ///< hinge -> motor [m] (vehicle CAD)
   double guard_radius = 0.07;      ///< propeller guard radius round the motor [m] (vehicle CAD)
@@ -245,6 +284,9 @@ class XplorerContactMapper {
   void observe_force(const Eigen::Vector2d& force_body);
   /// Mapping initiated (force reached delta_map and has not fallen below delta_map_hold since).
   bool initiated() const { return initiated_; }
+  /// Inside a face traversal (hold_in_traversal): an initiated mapping is not released by the force.
+  void hold_initiation(bool on) { in_traversal_ = on; }
+  bool initiation_held() const { return in_traversal_; }
 
   /// Moves the slabs stamped at least corner_release_s before `t` into the map.
   void commit(double t);
@@ -257,7 +299,7 @@ class XplorerContactMapper {
   /// `turned`: it ended in a Tactile-turning, so the next face starts at a
   /// convex corner of this one. Fills the corner between the previous face
   /// and this one if the previous face ended in a turn (corner_fill_max_gap).
-  void end_face(bool turned);
+  void end_face(bool turned, bool loop_closed = false);
   /// Corner of two faces for the corner fill, from their slabs' near-face
   /// points `a` (the face that ended in a turn) and `b` (the next face), each
   /// with its world C_n, in traversal order. Empty if the turn angle or the
@@ -282,6 +324,7 @@ class XplorerContactMapper {
   struct FaceLine {
     Eigen::Vector2d point = Eigen::Vector2d::Zero(), dir = Eigen::Vector2d::UnitX(), contact = Eigen::Vector2d::UnitY();
     double s_min = 0.0, s_max = 0.0;
+    double clip_min = 0.0, clip_max = 0.0;  ///< clip span: [s_min, s_max] extended to the corners (face_clip_corner_reach)
     bool clips = false;  ///< another line meets it at a right angle (face_clip_angle_tolerance)
   };
   /// The line of a face's near-face points (face_clip_*), empty if they are no straight face.
@@ -314,6 +357,15 @@ class XplorerContactMapper {
   std::vector<FaceLine> lines_;
   std::optional<std::size_t> prev_line_;  ///< line of the previous face if it ended in a turn
   bool right_angle(const FaceLine& a, const FaceLine& b) const;
+  /// Joins two face lines at a right angle: both clip, spans extended to their corner (face_clip_corner_reach).
+  void join_lines(std::size_t a, std::size_t b);
+  std::vector<FaceSample> first_face_;  ///< the first traversal's slabs (face_clip_tilted at the closure)
+  bool first_face_seen_ = false;
+  /// Removes the points outside `l` in the slabs of `f` tilted off its normal (face_clip_tilted); returns how many.
+  std::size_t clip_tilted(const FaceLine& l, const std::vector<FaceSample>& f);
+  std::optional<std::size_t> after_first_turn_line_;  ///< line of the face after the first turn (loop closure)
+  bool face_after_first_turn_ = false;                ///< the current face began after the first turn
+  int turns_ended_ = 0;                               ///< faces ended in a turn so far
   double last_stamp_t_ = -1e300;
   std::deque<std::pair<double, Box>> pending_;  ///< held-back slabs (corner_release_s) with their stamp time
   struct Held {
@@ -329,6 +381,7 @@ class XplorerContactMapper {
   std::optional<Eigen::Vector2d> last_xy_;
   void drop_held();
   bool initiated_ = false;
+  bool in_traversal_ = false;  ///< hold_initiation
   std::optional<BodyDirection> last_contact_;
   std::optional<int> last_move_world_;       ///< lambda quantised to a world axis (0:+X 1:+Y 2:-X 3:-Y)
   Eigen::Vector2d last_contact_world_ = Eigen::Vector2d::Zero();
