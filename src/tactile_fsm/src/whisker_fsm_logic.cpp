@@ -62,6 +62,13 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   // 12000-12099 (273 -> 270 of 300; README "Round 6").
   m.set("press_rms_pa", 0.0);
   m.set("press_depth", d.press_depth);
+  // Depth bounded by the drone's own motion since the contact's onset (issue 17,
+  // round 8; our choice): off. 0.04 m/s: tuning blocks 415 -> 417 of 450, seen
+  // blocks 1088 -> 1081 of 1200, imu_tof loses (README "Round 8"); not kept.
+  m.set("motion_depth_relax", 0.0);
+  m.set("motion_depth_margin", d.motion_depth_margin);
+  m.set("motion_depth_baseline", d.motion_depth_baseline);
+  m.set("whisker_base_x", d.whisker_base_x);
   // Phantom hold gated by odometry (issue 17, round 4): on in the whisker FSM
   // node, off in the core. 6.5 Pa over 25 samples, 0.03 m, latched: tuning
   // blocks, README "Round 4".
@@ -124,6 +131,10 @@ WhiskerFsmLogic::Params WhiskerFsmLogic::params_from(const ParamMap& m) {
   f.press_hold_s = m.get_double("press_hold_s");
   f.press_rms_pa = m.get_double("press_rms_pa");
   f.press_depth = m.get_double("press_depth");
+  f.motion_depth_relax = m.get_double("motion_depth_relax");
+  f.motion_depth_margin = m.get_double("motion_depth_margin");
+  f.motion_depth_baseline = m.get_double("motion_depth_baseline");
+  f.whisker_base_x = m.get_double("whisker_base_x");
   f.phantom_quiet_rms = m.get_double("phantom_quiet_rms");
   p.phantom_quiet_samples = m.get_int("phantom_quiet_samples", 2, 10000);
   f.phantom_travel = m.get_double("phantom_travel");

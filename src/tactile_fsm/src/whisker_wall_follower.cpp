@@ -85,6 +85,12 @@ void WallFollowerParams::validate() const {
   require(finite_nonneg(press_hold_s), "press_hold_s", "must be finite and >= 0", press_hold_s);
   require(finite_nonneg(press_rms_pa), "press_rms_pa", "must be finite and >= 0 (0 = off)", press_rms_pa);
   require(finite_positive(press_depth), "press_depth", "must be finite and > 0", press_depth);
+  require(finite_nonneg(motion_depth_relax), "motion_depth_relax", "must be finite and >= 0 (0 = off)",
+          motion_depth_relax);
+  require(finite_nonneg(motion_depth_margin), "motion_depth_margin", "must be finite and >= 0", motion_depth_margin);
+  require(finite_nonneg(motion_depth_baseline), "motion_depth_baseline", "must be finite and >= 0",
+          motion_depth_baseline);
+  require(std::isfinite(whisker_base_x), "whisker_base_x", "must be finite", whisker_base_x);
   require(finite_nonneg(phantom_quiet_rms), "phantom_quiet_rms", "must be finite and >= 0 (0 = off)",
           phantom_quiet_rms);
   require(finite_nonneg(phantom_travel), "phantom_travel", "must be finite and >= 0", phantom_travel);
@@ -194,6 +200,10 @@ void WhiskerWallFollower::reset() {
   pressed_t_left_ = pressed_t_right_ = -INFINITY;
   live_x_l_ = live_y_l_ = live_x_r_ = live_y_r_ = NAN;
   phantom_l_ = phantom_r_ = false;
+  motion_b_l_ = motion_b_r_ = NAN;
+  motion_qx_l_ = motion_qy_l_ = motion_qx_r_ = motion_qy_r_ = NAN;
+  onset_x_l_ = onset_y_l_ = onset_x_r_ = onset_y_r_ = NAN;
+  motion_nx_ = motion_ny_ = NAN;
   wall_heading_ = theta_ = NAN;
   origin_set_ = false;
   origin_x_ = origin_y_ = clear_x_ = clear_y_ = 0.0;
@@ -278,6 +288,90 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
     gate(r_valid, tdorc_r, in.input_change_rms_right, live_x_r_, live_y_r_, phantom_r_);
   } else {
     phantom_l_ = phantom_r_ = false;
+  }
+
+  // Depth bounded by the drone's own motion (issue 17, README "Round 8"; our
+  // choice): the wall is fixed in the world, so the depth a whisker had at
+  // its contact's onset, carried with the odometry, bounds the depth now; the
+  // published depth of a pressed whisker (friction-limited load, the model
+  // saturating at ~70 mm) cannot undo a measured approach.
+  if (p_.motion_depth_relax > 0.0 && odom_fresh && std::isfinite(in.x) && std::isfinite(in.y) &&
+      std::isfinite(in.yaw) && (l_valid || r_valid)) {
+    const double c = std::cos(in.yaw), s = std::sin(in.yaw);
+    auto base = [&](double side, double& bx, double& by) {  // side +1 left, -1 right
+      bx = in.x + c * p_.whisker_base_x - s * side * 0.5 * p_.whisker_spacing;
+      by = in.y + s * p_.whisker_base_x + c * side * 0.5 * p_.whisker_spacing;
+    };
+    // The wall's normal is fixed in the world for the contact (both whiskers'
+    // contacts, until neither is in contact): the heading at the first onset
+    // (wall taken square to it), replaced once the other whisker touches by
+    // the normal of the line through the two first contact points when they
+    // are >= motion_depth_baseline apart, else by eq. 21 on the depths at that
+    // moment (before a long press saturates them).
+    const bool first_onset = !std::isfinite(motion_nx_);
+    auto onset = [&](bool valid, double d_pub, double side, double& ox, double& oy) {
+      if (!valid || std::isfinite(ox)) return false;
+      double bx, by;
+      base(side, bx, by);
+      ox = bx + d_pub * c;
+      oy = by + d_pub * s;
+      return true;
+    };
+    const bool new_l = onset(l_valid, in.depth_left, 1.0, onset_x_l_, onset_y_l_);
+    const bool new_r = onset(r_valid, in.depth_right, -1.0, onset_x_r_, onset_y_r_);
+    if (first_onset) {
+      motion_nx_ = c;
+      motion_ny_ = s;
+    }
+    if ((new_l || new_r) && std::isfinite(onset_x_l_) && std::isfinite(onset_x_r_)) {
+      const double dx = onset_x_r_ - onset_x_l_, dy = onset_y_r_ - onset_y_l_;
+      const double len = std::hypot(dx, dy);
+      double mx = NAN, my = NAN;
+      if (p_.motion_depth_baseline > 0.0 && len >= p_.motion_depth_baseline) {
+        mx = dy / len;
+        my = -dx / len;
+        if (mx * c + my * s < 0.0) {
+          mx = -mx;
+          my = -my;
+        }
+      } else if (l_valid && r_valid) {
+        const double w = in.yaw - std::atan((in.depth_left - in.depth_right) / p_.whisker_spacing);
+        mx = std::cos(w);
+        my = std::sin(w);
+      }
+      // More than 60 deg off the heading: not a wall the whiskers point at.
+      if (std::isfinite(mx) && mx * c + my * s >= 0.5) {
+        motion_nx_ = mx;
+        motion_ny_ = my;
+      }
+    }
+    const double nx = motion_nx_, ny = motion_ny_;
+    const double nu = std::fmax(nx * c + ny * s, 0.1);
+    auto carry = [&](bool valid, double d_pub, double side, double& b, double& qx, double& qy) {
+      if (!valid) {
+        b = qx = qy = NAN;
+        return;
+      }
+      double bx, by;
+      base(side, bx, by);
+      if (!std::isfinite(b)) {
+        b = d_pub;  // (re)touch: the published depth of this contact's first tick
+      } else {
+        // Depth along body x from the base to the wall line through the
+        // bound's point with normal n, allowed to rise by relax * dt.
+        const double carried = (nx * (qx - bx) + ny * (qy - by)) / nu;
+        b = std::fmin(d_pub, carried + p_.motion_depth_relax * dt);
+      }
+      qx = bx + b * c;
+      qy = by + b * s;
+    };
+    carry(l_valid, in.depth_left, 1.0, motion_b_l_, motion_qx_l_, motion_qy_l_);
+    carry(r_valid, in.depth_right, -1.0, motion_b_r_, motion_qx_r_, motion_qy_r_);
+  } else {
+    motion_b_l_ = motion_b_r_ = NAN;
+    motion_qx_l_ = motion_qy_l_ = motion_qx_r_ = motion_qy_r_ = NAN;
+    onset_x_l_ = onset_y_l_ = onset_x_r_ = onset_y_r_ = NAN;
+    motion_nx_ = motion_ny_ = NAN;
   }
 
   // First-order low-pass of the depths for the sub-state rule (our choice;
@@ -410,6 +504,9 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
     if (l_valid && t - pressed_t_left_ <= p_.press_hold_s + kTimeEps) d_left = std::fmin(d_left, p_.press_depth);
     if (r_valid && t - pressed_t_right_ <= p_.press_hold_s + kTimeEps) d_right = std::fmin(d_right, p_.press_depth);
   }
+
+  if (std::isfinite(motion_b_l_) && l_valid) d_left = std::fmin(d_left, motion_b_l_ + p_.motion_depth_margin);
+  if (std::isfinite(motion_b_r_) && r_valid) d_right = std::fmin(d_right, motion_b_r_ + p_.motion_depth_margin);
 
   if (state_ == FsmState::kWallFollowing) {
     WallSubState next = wall_sub_state(d_left, l_valid, d_right, r_valid, side_, both_touched_, sub_, p_, theta_);

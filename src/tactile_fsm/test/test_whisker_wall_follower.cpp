@@ -1061,3 +1061,99 @@ TEST(WhiskerWallFollower, StickSlipAmplitudeCountsAsPressed) {
   p.press_rms_pa = -1.0;
   EXPECT_THROW(p.validate(), std::invalid_argument);
 }
+
+// Issue 17, round 8: the depth bounded by the drone's own motion. Hand case:
+// both whiskers touch a wall square to the heading at a published 100 mm
+// (tick 0, drone at x = 1.0), the drone then moves 3 mm per tick toward it
+// (+x) while the published depths stay at a saturated 75 / 75 mm (inside the
+// band: FLY_SIDEWAYS without the rule). With relax 0.02 m/s (0.4 mm per tick)
+// and margin 0.01 m: tick 1 carries 100 - 3 + 0.4 = 97.4 mm, the published
+// 75 mm is lower and becomes the bound; from there it falls by 2.6 mm per
+// tick, 75 - 2.6 (k - 1), and the rule reads it + 10 mm < T_min = 60 mm once
+// k - 1 > 9.6: FLY_BACKWARD from tick 11.
+TEST(WhiskerWallFollower, MotionTowardTheWallBoundsAPressedDepth) {
+  auto fly = [](WallFollowerParams p, double step_m, double dy_m) {
+    WhiskerWallFollower fsm(p);
+    double t = 0.0;
+    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t, 1.0, 0.0));
+    int first_backward = -1;
+    for (int k = 0; k < 40; ++k, t += kDt) {
+      WallFollowerInput in = input(t, 1.0 + step_m * k, dy_m * k);
+      if (k == 0) {
+        set_depths(in, 0.100, 0.100);
+      } else {
+        set_depths(in, 0.075, 0.075);
+      }
+      in.tdorc_contact_left = in.tdorc_contact_right = true;
+      const WallFollowerOutput o = fsm.step(in);
+      if (first_backward < 0 && o.sub_state == WallSubState::kFlyBackward) first_backward = k;
+    }
+    return first_backward;
+  };
+  WallFollowerParams p;
+  p.motion_depth_relax = 0.02;
+  p.motion_depth_margin = 0.01;
+  EXPECT_EQ(fly(p, 0.003, 0.0), 11);
+  // Off (the paper, the core default): the saturated 75 mm is flown sideways.
+  EXPECT_EQ(WallFollowerParams{}.motion_depth_relax, 0.0);
+  EXPECT_EQ(fly(WallFollowerParams{}, 0.003, 0.0), -1);
+  // Hovering, or sliding along a wall square to the heading: the bound only
+  // relaxes back to the published depth, no back-off.
+  EXPECT_EQ(fly(p, 0.0, 0.0), -1);
+  EXPECT_EQ(fly(p, 0.0, -0.004), -1);
+  // Bad values name the field.
+  p.motion_depth_relax = -0.1;
+  try {
+    p.validate();
+    ADD_FAILURE() << "negative motion_depth_relax accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("WallFollowerParams.motion_depth_relax"), std::string::npos) << e.what();
+  }
+  p.motion_depth_relax = 0.02;
+  p.motion_depth_margin = NAN;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+}
+
+// Round 8: the wall normal, fixed in the world for the contact. The drone
+// (heading 0) touches a wall tilted by 20 deg (nearer on the right): left at
+// 100 mm, right at 100 - 50 tan 20 deg = 81.8 mm (contact points 0.05 m
+// apart), then slides right (-y) by 4 mm per tick while the published depths
+// stay at 75 / 75 mm (the wall read square). Sliding right closes the wall by
+// 4 tan 20 deg = 1.456 mm per tick; with relax 0.4 mm per tick the right
+// bound is 75 - 1.056 (k - 1) mm from tick 1 (the published 75 mm is lower
+// than the carried 80.7 mm there), and it + 10 mm < 60 mm once k - 1 > 23.7:
+// tick 25. The same with the baseline off (eq. 21 on the depths of the tick
+// both touched gives the same 20 deg). A wall touched square (100 / 100 mm)
+// does not move the bound when sliding along it.
+TEST(WhiskerWallFollower, MotionBoundUsesTheWallFromTheContactPoints) {
+  auto fly = [](WallFollowerParams p, double dr0) {
+    WhiskerWallFollower fsm(p);
+    double t = 0.0;
+    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t, 1.0, 0.0));
+    int first = -1;
+    for (int k = 0; k < 45; ++k, t += kDt) {
+      WallFollowerInput in = input(t, 1.0, -0.004 * k);
+      if (k == 0) {
+        set_depths(in, 0.100, dr0);
+      } else {
+        set_depths(in, 0.075, 0.075);
+      }
+      in.tdorc_contact_left = in.tdorc_contact_right = true;
+      fsm.step(in);
+      if (k > 0 && first < 0 && std::isfinite(fsm.motion_bound_right()) &&
+          fsm.motion_bound_right() + p.motion_depth_margin < p.t_min) {
+        first = k;
+      }
+    }
+    return first;
+  };
+  const double tilted = 0.100 - 0.05 * std::tan(20.0 * kDeg);
+  WallFollowerParams p;
+  p.motion_depth_relax = 0.02;
+  p.motion_depth_margin = 0.01;
+  EXPECT_EQ(fly(p, tilted), 25);
+  EXPECT_EQ(fly(p, 0.100), -1);
+  p.motion_depth_baseline = 0.0;  // no contact-point line: eq. 21 at the onset
+  EXPECT_EQ(fly(p, tilted), 25);
+  EXPECT_EQ(fly(WallFollowerParams{}, tilted), -1);  // off: no bound
+}

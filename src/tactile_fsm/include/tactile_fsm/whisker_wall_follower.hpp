@@ -147,6 +147,25 @@ struct WallFollowerParams {
   /// 0 = off. [Pa]
   double press_rms_pa = 0.0;
   double press_depth = 0.05;   ///< [m]
+  /// Depth bounded by the drone's own motion (issue 17, README "Round 8"; our
+  /// choice, 000's depth is the pressure regression alone). The wall is fixed
+  /// in the world: from the whisker's first published depth of a contact, the
+  /// bound is carried with the odometry (the whisker base moved along the wall
+  /// normal, the heading turned), and at every tick it is the lower of that and
+  /// the published depth. It may rise by at most motion_depth_relax [m/s]
+  /// (odometry drift, wall-angle error, the depth model's own noise), so a
+  /// drone that closed 60 mm on the wall cannot read 30 mm further from it.
+  /// The rule takes min(filtered depth, bound + motion_depth_margin). The wall
+  /// normal is fixed in the world for the contact (until neither whisker is in
+  /// contact): the heading at the first onset, replaced once the other whisker
+  /// touches by the normal of the line through the two first contact points
+  /// when they are >= motion_depth_baseline apart, else by eq. 21 on the
+  /// depths of that tick. Tried on the tuning and seen blocks, not kept
+  /// (README "Round 8"). motion_depth_relax 0 = off (core and node).
+  double motion_depth_relax = 0.0;     ///< [m/s]
+  double motion_depth_margin = 0.01;   ///< [m]
+  double motion_depth_baseline = 0.05; ///< [m]; 0 = never use the contact points
+  double whisker_base_x = 0.05;        ///< whisker bases ahead of the odometry origin [m] (000 frame, tactile_sim)
   /// Phantom hold gated by odometry (issue 17, README "Round 4"): the gel
   /// hysteresis (000 eq. 1, N_h) can leave a whisker held "in contact" by
   /// TDORC after it left a baffle, its S_c frozen on a slowly decaying offset.
@@ -300,6 +319,9 @@ class WhiskerWallFollower {
   /// Whisker held in contact but taken for a phantom (phantom_quiet_rms) on the last tick.
   bool phantom_left() const { return phantom_l_; }
   bool phantom_right() const { return phantom_r_; }
+  /// Motion-carried depth bound of each whisker (motion_depth_relax; NaN when off or not in contact) [m].
+  double motion_bound_left() const { return motion_b_l_; }
+  double motion_bound_right() const { return motion_b_r_; }
   /// Wall angle in the body frame used by the rule [rad] (NaN unless both valid).
   double wall_angle() const { return theta_; }
   const WallFollowerParams& params() const { return p_; }
@@ -329,6 +351,12 @@ class WhiskerWallFollower {
   double live_x_l_ = NAN, live_y_l_ = NAN;  ///< where the left S_c sum last moved (or the whisker was free)
   double live_x_r_ = NAN, live_y_r_ = NAN;
   bool phantom_l_ = false, phantom_r_ = false;
+  double motion_b_l_ = NAN, motion_b_r_ = NAN;      ///< motion-carried depth bound [m] (NaN: no contact)
+  double motion_qx_l_ = NAN, motion_qy_l_ = NAN;    ///< world point of the bound on the wall
+  double motion_qx_r_ = NAN, motion_qy_r_ = NAN;
+  double onset_x_l_ = NAN, onset_y_l_ = NAN;        ///< first contact point of the current contact
+  double onset_x_r_ = NAN, onset_y_r_ = NAN;
+  double motion_nx_ = NAN, motion_ny_ = NAN;        ///< wall normal (world) of the current contact
   double wall_heading_ = NAN;  ///< filtered yaw - theta [rad]
   double theta_ = NAN;
   bool origin_set_ = false;
