@@ -82,6 +82,9 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   m.set("whisk_rate_max", 3.0);
   m.set("whisk_after_clear_only", true);
   m.set("whisk_pause_rms", 13.0);
+  // Yaw offset after a clearing (issue 17, round 8): off (README "Round 8").
+  m.set("clear_yaw_offset", 0.0);
+  m.set("clear_yaw_in_resume", false);
   m.set("target_radius", d.target_radius);
   m.set("land_past_target", d.land_past_target);
   m.set("landing_duration_s", d.landing_duration_s);
@@ -134,6 +137,8 @@ WhiskerFsmLogic::Params WhiskerFsmLogic::params_from(const ParamMap& m) {
   f.whisk_rate_max = m.get_double("whisk_rate_max");
   f.whisk_after_clear_only = m.get_bool("whisk_after_clear_only");
   f.whisk_pause_rms = m.get_double("whisk_pause_rms");
+  f.clear_yaw_offset = m.get_double("clear_yaw_offset");
+  f.clear_yaw_in_resume = m.get_bool("clear_yaw_in_resume");
   f.target_radius = m.get_double("target_radius");
   f.land_past_target = m.get_bool("land_past_target");
   f.landing_duration_s = m.get_double("landing_duration_s");
