@@ -98,6 +98,8 @@ void WallFollowerParams::validate() const {
   require(finite_nonneg(whisk_pause_rms), "whisk_pause_rms", "must be finite and >= 0 (0 = off)", whisk_pause_rms);
   require(finite_nonneg(clear_yaw_offset) && clear_yaw_offset <= M_PI / 4.0, "clear_yaw_offset",
           "must be in [0, pi/4] (0 = off)", clear_yaw_offset);
+  require(finite_nonneg(clear_yaw_release_rms), "clear_yaw_release_rms", "must be finite and >= 0 (0 = off)",
+          clear_yaw_release_rms);
   require(finite_positive(target_radius), "target_radius", "must be finite and > 0", target_radius);
   require(finite_nonneg(landing_duration_s), "landing_duration_s", "must be finite and >= 0", landing_duration_s);
   require(finite_positive(max_input_age_s), "max_input_age_s", "must be finite and > 0", max_input_age_s);
@@ -202,6 +204,7 @@ void WhiskerWallFollower::reset() {
   after_clear_ = false;
   resume_x_ = resume_y_ = 0.0;
   track_yaw_ = NAN;
+  yaw_offset_released_ = false;
   course_yaw_ = 0.0;
 }
 
@@ -452,6 +455,7 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
     out.setpoint = offset_yaw(in, out.setpoint, dt);
   } else {
     track_yaw_ = NAN;
+    yaw_offset_released_ = false;
   }
   return out;
 }
@@ -468,7 +472,15 @@ Setpoint WhiskerWallFollower::offset_yaw(const WallFollowerInput& in, const Setp
   const double track_rate = std::clamp(p_.realign_gain * std::remainder(course_yaw_ - track_yaw_, 2.0 * M_PI),
                                        -p_.omega_max, p_.omega_max);
   track_yaw_ = std::remainder(track_yaw_ + track_rate * dt, 2.0 * M_PI);
-  const double ref = track_yaw_ + sign * p_.clear_yaw_offset;
+  // A whisker's sum moving: a touch TDORC has not flagged yet; back to the
+  // track's heading (latched until the next clearing), so that the wall
+  // following starts as without the offset.
+  if (p_.clear_yaw_release_rms > 0.0 &&
+      ((std::isfinite(in.input_change_rms_left) && in.input_change_rms_left >= p_.clear_yaw_release_rms) ||
+       (std::isfinite(in.input_change_rms_right) && in.input_change_rms_right >= p_.clear_yaw_release_rms))) {
+    yaw_offset_released_ = true;
+  }
+  const double ref = track_yaw_ + (yaw_offset_released_ ? 0.0 : sign * p_.clear_yaw_offset);
   const double gain = p_.realign_gain > 0.0 ? p_.realign_gain : 1.5;
   Setpoint o = s;
   o.yaw_rate = std::clamp(track_rate + gain * std::remainder(ref - in.yaw, 2.0 * M_PI), -p_.omega_max, p_.omega_max);

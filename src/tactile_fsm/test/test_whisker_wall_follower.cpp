@@ -1134,3 +1134,44 @@ TEST(WhiskerWallFollower, YawOffsetAfterClearingTurnsWhiskersNotTrack) {
   bad.clear_yaw_offset = 1.0;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
 }
+
+// clear_yaw_release_rms (README "Round 8"): once a whisker's S_c sum moves
+// (a touch TDORC has not flagged yet) the offset is dropped until the next
+// clearing: the yaw goes back to the track's heading.
+TEST(WhiskerWallFollower, YawOffsetReleasedOnMovingSum) {
+  auto final_yaw = [](double release_rms, double rms) {
+    WallFollowerParams p;
+    p.clear_yaw_offset = 20.0 * kDeg;
+    p.clear_yaw_release_rms = release_rms;
+    WhiskerWallFollower fsm(p);
+    double t = 0.0, x = 0.0, y = 0.0, yaw = 0.0;
+    for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t, x, y, yaw));
+    for (int k = 0; k < 50; ++k, t += kDt) {
+      WallFollowerInput in = input(t, x, y, yaw);
+      set_depths(in, 0.08, 0.08);
+      fsm.step(in);
+    }
+    double forward_s = 0.0;
+    for (int k = 0; k < 400; ++k, t += kDt) {
+      WallFollowerInput in = input(t, x, y, yaw);
+      // The sum starts moving 2 s into FLY_FORWARD (no contact flagged).
+      in.input_change_rms_left = forward_s > 2.0 ? rms : 3.0;
+      in.input_change_rms_right = 3.0;
+      const WallFollowerOutput o = fsm.step(in);
+      if (o.state == FsmState::kFlyForward) forward_s += kDt;
+      const double vx = std::cos(yaw) * o.setpoint.vx - std::sin(yaw) * o.setpoint.vy;
+      const double vy = std::sin(yaw) * o.setpoint.vx + std::cos(yaw) * o.setpoint.vy;
+      x += vx * kDt;
+      y += vy * kDt;
+      yaw += o.setpoint.yaw_rate * kDt;
+    }
+    EXPECT_GT(forward_s, 4.0);
+    return yaw;
+  };
+  EXPECT_NEAR(final_yaw(0.0, 20.0), 20.0 * kDeg, 0.5 * kDeg);   // off: offset kept
+  EXPECT_NEAR(final_yaw(13.0, 5.0), 20.0 * kDeg, 0.5 * kDeg);   // quiet sum: kept
+  EXPECT_NEAR(final_yaw(13.0, 20.0), 0.0, 0.5 * kDeg);          // moving sum: back to the track
+  WallFollowerParams bad;
+  bad.clear_yaw_release_rms = -1.0;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}

@@ -213,6 +213,11 @@ struct WallFollowerParams {
   /// Also hold the offset during RESUME_FORWARD's side-step (it is then
   /// established when FLY_FORWARD begins).
   bool clear_yaw_in_resume = false;
+  /// Back to the track's heading (until the next clearing) once either
+  /// whisker's S_c sum moves (RMS of its changes >= this, the node's phantom
+  /// window): a touch TDORC has not flagged yet, so that the wall following
+  /// starts at the heading it has without the offset. 0 = never. [Pa]
+  double clear_yaw_release_rms = 0.0;
   double target_radius = 0.15;                 ///< land within this distance of the target [m]
   bool land_past_target = true;                ///< also land once past the target along the course direction
   double landing_duration_s = 2.0;             ///< LANDING -> LANDED after this [s]
@@ -357,6 +362,7 @@ class WhiskerWallFollower {
   bool after_clear_ = false;                 ///< FLY_FORWARD entered from RESUME_FORWARD
   double resume_x_ = 0.0, resume_y_ = 0.0;  ///< where that FLY_FORWARD began
   double track_yaw_ = NAN;  ///< clear_yaw_offset: the heading the drone would fly without the offset [rad]
+  bool yaw_offset_released_ = false;  ///< clear_yaw_release_rms reached since the clearing
 };
 
 }  // namespace tactile_fsm
