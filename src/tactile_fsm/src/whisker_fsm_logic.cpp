@@ -89,6 +89,14 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   m.set("whisk_rate_max", 3.0);
   m.set("whisk_after_clear_only", true);
   m.set("whisk_pause_rms", 13.0);
+  // Yaw offset after a clearing (issue 17, README "Round 9"): 14 deg (0.2443 rad) with
+  // the release at 13 Pa: tuning blocks 415 -> 433 of 450, seen blocks 1088 -> 1123 of
+  // 1200, the shipped courses pass on seeds 1-20. 20 deg wins as much but fails the
+  // shipped wide-spacing (heading error 11-14 deg > 8) and tilted-30 (a guard touch in
+  // every trial) courses. Core struct: off.
+  m.set("clear_yaw_offset", 0.2443);
+  m.set("clear_yaw_in_resume", false);
+  m.set("clear_yaw_release_rms", 13.0);
   m.set("target_radius", d.target_radius);
   m.set("land_past_target", d.land_past_target);
   m.set("landing_duration_s", d.landing_duration_s);
@@ -145,6 +153,9 @@ WhiskerFsmLogic::Params WhiskerFsmLogic::params_from(const ParamMap& m) {
   f.whisk_rate_max = m.get_double("whisk_rate_max");
   f.whisk_after_clear_only = m.get_bool("whisk_after_clear_only");
   f.whisk_pause_rms = m.get_double("whisk_pause_rms");
+  f.clear_yaw_offset = m.get_double("clear_yaw_offset");
+  f.clear_yaw_in_resume = m.get_bool("clear_yaw_in_resume");
+  f.clear_yaw_release_rms = m.get_double("clear_yaw_release_rms");
   f.target_radius = m.get_double("target_radius");
   f.land_past_target = m.get_bool("land_past_target");
   f.landing_duration_s = m.get_double("landing_duration_s");

@@ -102,6 +102,10 @@ void WallFollowerParams::validate() const {
   require(std::isfinite(whisk_rate_max) && whisk_rate_max > 0.0, "whisk_rate_max", "must be finite and > 0",
           whisk_rate_max);
   require(finite_nonneg(whisk_pause_rms), "whisk_pause_rms", "must be finite and >= 0 (0 = off)", whisk_pause_rms);
+  require(finite_nonneg(clear_yaw_offset) && clear_yaw_offset <= M_PI / 4.0, "clear_yaw_offset",
+          "must be in [0, pi/4] (0 = off)", clear_yaw_offset);
+  require(finite_nonneg(clear_yaw_release_rms), "clear_yaw_release_rms", "must be finite and >= 0 (0 = off)",
+          clear_yaw_release_rms);
   require(finite_positive(target_radius), "target_radius", "must be finite and > 0", target_radius);
   require(finite_nonneg(landing_duration_s), "landing_duration_s", "must be finite and >= 0", landing_duration_s);
   require(finite_positive(max_input_age_s), "max_input_age_s", "must be finite and > 0", max_input_age_s);
@@ -209,6 +213,8 @@ void WhiskerWallFollower::reset() {
   origin_x_ = origin_y_ = clear_x_ = clear_y_ = 0.0;
   after_clear_ = false;
   resume_x_ = resume_y_ = 0.0;
+  track_yaw_ = NAN;
+  yaw_offset_released_ = false;
   course_yaw_ = 0.0;
 }
 
@@ -539,7 +545,46 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
       (after_clear_ || !p_.whisk_after_clear_only)) {
     out.setpoint = whisk(in, out.setpoint);
   }
+  const bool offset_on = p_.clear_yaw_offset > 0.0 && origin_set_ && std::isfinite(in.yaw) &&
+                         ((state_ == FsmState::kResumeForward && p_.clear_yaw_in_resume) ||
+                          (state_ == FsmState::kFlyForward && after_clear_));
+  if (offset_on) {
+    out.setpoint = offset_yaw(in, out.setpoint, dt);
+  } else {
+    track_yaw_ = NAN;
+    yaw_offset_released_ = false;
+  }
   return out;
+}
+
+Setpoint WhiskerWallFollower::offset_yaw(const WallFollowerInput& in, const Setpoint& s, double dt) {
+  // Yaw offset after a clearing (README "Round 9"). track_yaw_ is the heading
+  // the drone flies without the rule: it starts at the yaw on entering
+  // RESUME_FORWARD and realigns to the course as realign() does (omega_max at
+  // most). The body is held clear_yaw_offset beyond it away from the
+  // side-step side; the body-frame velocity of s, meant for that
+  // heading, is rotated into the body's frame, so the track stays the same.
+  const double sign = side_ == Side::kLeft ? -1.0 : 1.0;  // away from the side-step (yaw > 0 is left)
+  if (!std::isfinite(track_yaw_)) track_yaw_ = in.yaw;
+  const double track_rate = std::clamp(p_.realign_gain * std::remainder(course_yaw_ - track_yaw_, 2.0 * M_PI),
+                                       -p_.omega_max, p_.omega_max);
+  track_yaw_ = std::remainder(track_yaw_ + track_rate * dt, 2.0 * M_PI);
+  // A whisker's sum moving: a touch TDORC has not flagged yet; back to the
+  // track's heading (latched until the next clearing), so that the wall
+  // following starts as without the offset.
+  if (p_.clear_yaw_release_rms > 0.0 &&
+      ((std::isfinite(in.input_change_rms_left) && in.input_change_rms_left >= p_.clear_yaw_release_rms) ||
+       (std::isfinite(in.input_change_rms_right) && in.input_change_rms_right >= p_.clear_yaw_release_rms))) {
+    yaw_offset_released_ = true;
+  }
+  const double ref = track_yaw_ + (yaw_offset_released_ ? 0.0 : sign * p_.clear_yaw_offset);
+  const double gain = p_.realign_gain > 0.0 ? p_.realign_gain : 1.5;
+  Setpoint o = s;
+  o.yaw_rate = std::clamp(track_rate + gain * std::remainder(ref - in.yaw, 2.0 * M_PI), -p_.omega_max, p_.omega_max);
+  const double rel = std::remainder(track_yaw_ - in.yaw, 2.0 * M_PI);
+  o.vx = std::cos(rel) * s.vx - std::sin(rel) * s.vy;
+  o.vy = std::sin(rel) * s.vx + std::cos(rel) * s.vy;
+  return o;
 }
 
 Setpoint WhiskerWallFollower::command(const WallFollowerInput& in) const {

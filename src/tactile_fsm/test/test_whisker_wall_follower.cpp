@@ -1157,3 +1157,117 @@ TEST(WhiskerWallFollower, MotionBoundUsesTheWallFromTheContactPoints) {
   EXPECT_EQ(fly(p, tilted), 25);
   EXPECT_EQ(fly(WallFollowerParams{}, tilted), -1);  // off: no bound
 }
+
+// Issue 17, README "Round 9": after a clearing the body yaw is held
+// clear_yaw_offset away from the side-step side (left here: the target is
+// ahead, follow_side right, the drone side-steps right), in the FLY_FORWARD
+// after it (and with clear_yaw_in_resume during the side-step), while the
+// track is the one flown without the offset (side-step along -y, then +x at
+// V_max). Kinematic drone: the left whisker's tip (base (0.05, 0.025), reach
+// 0.141 m) reaches beyond the guard's 80 mm on the left, where the next
+// baffle's outer end lies; off, it stays at 25 mm.
+TEST(WhiskerWallFollower, YawOffsetAfterClearingTurnsWhiskersNotTrack) {
+  auto fly = [](double offset, bool in_resume) {
+    WallFollowerParams p;
+    p.clear_yaw_offset = offset;
+    p.clear_yaw_in_resume = in_resume;
+    WhiskerWallFollower fsm(p);
+    double t = 0.0, x = 0.0, y = 0.0, yaw = 0.0;
+    for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t, x, y, yaw));
+    // Touch: both whiskers in the band for 1 s (square wall, FLY_SIDEWAYS right).
+    for (int k = 0; k < 50; ++k, t += kDt) {
+      WallFollowerInput in = input(t, x, y, yaw);
+      set_depths(in, 0.08, 0.08);
+      fsm.step(in);
+    }
+    EXPECT_EQ(fsm.state(), FsmState::kWallFollowing);
+    double tip_left = 0.0, max_track_x = 0.0, min_fwd_y = 1.0, max_fwd_y = -1.0, resume_y0 = NAN;
+    double max_resume_yaw = 0.0;
+    bool resumed = false, forward = false;
+    for (int k = 0; k < 300; ++k, t += kDt) {
+      const WallFollowerOutput o = fsm.step(input(t, x, y, yaw));
+      EXPECT_LE(std::fabs(o.setpoint.yaw_rate), p.omega_max + 1e-12);
+      const double vx = std::cos(yaw) * o.setpoint.vx - std::sin(yaw) * o.setpoint.vy;
+      const double vy = std::sin(yaw) * o.setpoint.vx + std::cos(yaw) * o.setpoint.vy;
+      if (o.state == FsmState::kResumeForward) {
+        if (!resumed) resume_y0 = y;
+        resumed = true;
+        max_track_x = std::max(max_track_x, std::fabs(vx));  // side-step stays along -y
+        max_resume_yaw = std::max(max_resume_yaw, std::fabs(yaw));
+      }
+      if (o.state == FsmState::kFlyForward) {
+        forward = true;
+        EXPECT_NEAR(vx, p.v_max, 1e-9);  // full V_max along the course
+        min_fwd_y = std::min(min_fwd_y, y);
+        max_fwd_y = std::max(max_fwd_y, y);
+        // Lateral reach of the left whisker's tip to the left of the axis.
+        tip_left = std::max(tip_left, 0.191 * std::sin(yaw) + 0.025 * std::cos(yaw));
+      }
+      x += vx * kDt;
+      y += vy * kDt;
+      yaw += o.setpoint.yaw_rate * kDt;
+    }
+    EXPECT_TRUE(resumed);
+    EXPECT_TRUE(forward);
+    EXPECT_LT(max_track_x, 1e-9);
+    EXPECT_NEAR(max_fwd_y - min_fwd_y, 0.0, 1e-9);  // straight along the course
+    EXPECT_LT(y, resume_y0 - p.clear_margin + 1e-6);
+    return std::vector<double>{tip_left, yaw, max_resume_yaw};
+  };
+  const std::vector<double> off = fly(0.0, false);
+  EXPECT_NEAR(off[0], 0.025, 1e-9);
+  EXPECT_NEAR(off[1], 0.0, 1e-9);
+  const std::vector<double> on = fly(20.0 * kDeg, false);
+  EXPECT_GT(on[0], 0.085);                       // beyond the guard's 80 mm
+  EXPECT_NEAR(on[1], 20.0 * kDeg, 0.5 * kDeg);   // held to the left, away from the side-step
+  EXPECT_NEAR(on[2], 0.0, 1e-9);                 // not during the side-step
+  const std::vector<double> resume = fly(20.0 * kDeg, true);
+  EXPECT_GT(resume[2], 15.0 * kDeg);             // already during the side-step
+  EXPECT_NEAR(resume[1], 20.0 * kDeg, 0.5 * kDeg);
+  WallFollowerParams bad;
+  bad.clear_yaw_offset = -0.1;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+  bad.clear_yaw_offset = 1.0;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
+// clear_yaw_release_rms (README "Round 9"): once a whisker's S_c sum moves
+// (a touch TDORC has not flagged yet) the offset is dropped until the next
+// clearing: the yaw goes back to the track's heading.
+TEST(WhiskerWallFollower, YawOffsetReleasedOnMovingSum) {
+  auto final_yaw = [](double release_rms, double rms) {
+    WallFollowerParams p;
+    p.clear_yaw_offset = 20.0 * kDeg;
+    p.clear_yaw_release_rms = release_rms;
+    WhiskerWallFollower fsm(p);
+    double t = 0.0, x = 0.0, y = 0.0, yaw = 0.0;
+    for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t, x, y, yaw));
+    for (int k = 0; k < 50; ++k, t += kDt) {
+      WallFollowerInput in = input(t, x, y, yaw);
+      set_depths(in, 0.08, 0.08);
+      fsm.step(in);
+    }
+    double forward_s = 0.0;
+    for (int k = 0; k < 400; ++k, t += kDt) {
+      WallFollowerInput in = input(t, x, y, yaw);
+      // The sum starts moving 2 s into FLY_FORWARD (no contact flagged).
+      in.input_change_rms_left = forward_s > 2.0 ? rms : 3.0;
+      in.input_change_rms_right = 3.0;
+      const WallFollowerOutput o = fsm.step(in);
+      if (o.state == FsmState::kFlyForward) forward_s += kDt;
+      const double vx = std::cos(yaw) * o.setpoint.vx - std::sin(yaw) * o.setpoint.vy;
+      const double vy = std::sin(yaw) * o.setpoint.vx + std::cos(yaw) * o.setpoint.vy;
+      x += vx * kDt;
+      y += vy * kDt;
+      yaw += o.setpoint.yaw_rate * kDt;
+    }
+    EXPECT_GT(forward_s, 4.0);
+    return yaw;
+  };
+  EXPECT_NEAR(final_yaw(0.0, 20.0), 20.0 * kDeg, 0.5 * kDeg);   // off: offset kept
+  EXPECT_NEAR(final_yaw(13.0, 5.0), 20.0 * kDeg, 0.5 * kDeg);   // quiet sum: kept
+  EXPECT_NEAR(final_yaw(13.0, 20.0), 0.0, 0.5 * kDeg);          // moving sum: back to the track
+  WallFollowerParams bad;
+  bad.clear_yaw_release_rms = -1.0;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}

@@ -214,6 +214,29 @@ struct WallFollowerParams {
   /// and a whisk continuing through that sweeps the whisker into the wall.
   /// 0 = never pause. [Pa]
   double whisk_pause_rms = 0.0;
+  /// Yaw offset after a clearing (issue 17, README "Round 9", choice): the
+  /// two forward whiskers (bases 25 mm off the axis, tips 0.191 m ahead) leave
+  /// a band 25-80 mm beside the axis, inside the guard's radius, where a
+  /// baffle's end meets the guard without a whisker touching. After a
+  /// clearing such an end lies on the side the drone side-stepped away from
+  /// (the next baffle's outer end, whose baffle lies on that side; an end on
+  /// the side-step side has its baffle across the axis, where the whiskers
+  /// touch it). In the FLY_FORWARD after a clearing the body's yaw is held
+  /// clear_yaw_offset away from the side-step side of the heading the drone
+  /// would otherwise fly (realigning to the course as before), and the
+  /// velocity setpoint is turned back into that heading, so the track is
+  /// unchanged and only the whiskers turn: that side's whisker tip then
+  /// reaches 0.191 sin(a) + 0.025 cos(a) beside the axis (20 deg: 89 mm,
+  /// beyond the guard). 0 = off (the paper: no offset). [rad]
+  double clear_yaw_offset = 0.0;
+  /// Also hold the offset during RESUME_FORWARD's side-step (it is then
+  /// established when FLY_FORWARD begins).
+  bool clear_yaw_in_resume = false;
+  /// Back to the track's heading (until the next clearing) once either
+  /// whisker's S_c sum moves (RMS of its changes >= this, the node's phantom
+  /// window): a touch TDORC has not flagged yet, so that the wall following
+  /// starts at the heading it has without the offset. 0 = never. [Pa]
+  double clear_yaw_release_rms = 0.0;
   double target_radius = 0.15;                 ///< land within this distance of the target [m]
   bool land_past_target = true;                ///< also land once past the target along the course direction
   double landing_duration_s = 2.0;             ///< LANDING -> LANDED after this [s]
@@ -333,6 +356,7 @@ class WhiskerWallFollower {
   Setpoint command(const WallFollowerInput& in) const;
   double realign(const WallFollowerInput& in) const;
   Setpoint whisk(const WallFollowerInput& in, const Setpoint& s) const;
+  Setpoint offset_yaw(const WallFollowerInput& in, const Setpoint& s, double dt);
 
   WallFollowerParams p_;
   FsmState state_ = FsmState::kHoverInit;
@@ -365,6 +389,8 @@ class WhiskerWallFollower {
   double clear_x_ = 0.0, clear_y_ = 0.0;    ///< where the obstacle was cleared
   bool after_clear_ = false;                 ///< FLY_FORWARD entered from RESUME_FORWARD
   double resume_x_ = 0.0, resume_y_ = 0.0;  ///< where that FLY_FORWARD began
+  double track_yaw_ = NAN;  ///< clear_yaw_offset: the heading the drone would fly without the offset [rad]
+  bool yaw_offset_released_ = false;  ///< clear_yaw_release_rms reached since the clearing
 };
 
 }  // namespace tactile_fsm
