@@ -91,6 +91,19 @@ void enter_traversal_and_press(XplorerMapLogic& logic, const std::string& previo
   logic.on_wrench_body(w);
   tick_at_origin(logic, t);
 }
+
+/// One traversal stamp 0.21 m (slab_offset, edge_from_arms off) behind a surface
+/// point, the yaw (C_n = +b1) on the face normal c turned by tilt; t advances 0.1 s.
+void stamp_at(XplorerContactMapper& m, double& t, const Eigen::Vector2d& surface, const Eigen::Vector2d& c,
+              double tilt = 0.0) {
+  ContactSample s = sample(t, 0.0, -2.0);
+  s.arm_angles.reset();
+  const Eigen::Vector2d cn = Eigen::Rotation2Dd(tilt) * c;
+  s.position = Vec3(surface.x() - 0.21 * cn.x(), surface.y() - 0.21 * cn.y(), 0.7);
+  s.yaw = std::atan2(cn.y(), cn.x());
+  m.update(s);
+  t += 0.1;
+}
 }  // namespace
 
 // 001 Sec. IV-B: "obstacle map generation initializes when |b_delta_f| >=
@@ -404,14 +417,7 @@ TEST(XplorerMappingRules, CornerFillBetweenTwoFacesJoinedByATurn) {
     auto map = std::make_shared<PointMap>();
     auto m = std::make_shared<XplorerContactMapper>(p, *map);
     double t = 0.0;
-    auto at = [&](const Eigen::Vector2d& surface, const Eigen::Vector2d& c) {
-      ContactSample s = sample(t, 0.0, -2.0);
-      s.arm_angles.reset();
-      s.position = Vec3(surface.x() - 0.21 * c.x(), surface.y() - 0.21 * c.y(), 0.7);
-      s.yaw = std::atan2(c.y(), c.x());  // C_n = +b1
-      m->update(s);
-      t += 0.1;
-    };
+    auto at = [&](const Eigen::Vector2d& surface, const Eigen::Vector2d& c) { stamp_at(*m, t, surface, c); };
     for (int k = 0; k <= 14; ++k) at(Eigen::Vector2d(0.05 * k, 0.0), Eigen::Vector2d(0.0, 1.0));
     m->end_face(true);  // Tactile-turning
     const double a = turn_deg * M_PI / 180.0;
@@ -794,13 +800,7 @@ TEST(XplorerMappingRules, FaceClipRemovesTiltedSlabsOutsideAFaceOfARightAngledOb
     auto m = std::make_shared<XplorerContactMapper>(p, *map);
     double t = 0.0;
     auto at = [&](const Eigen::Vector2d& surface, const Eigen::Vector2d& c, double tilt) {
-      ContactSample s = sample(t, 0.0, -2.0);
-      s.arm_angles.reset();
-      const Eigen::Vector2d cn = Eigen::Rotation2Dd(tilt) * c;  // the yaw (C_n = +b1) off the face normal
-      s.position = Vec3(surface.x() - 0.21 * cn.x(), surface.y() - 0.21 * cn.y(), 0.7);
-      s.yaw = std::atan2(cn.y(), cn.x());
-      m->update(s);
-      t += 0.1;
+      stamp_at(*m, t, surface, c, tilt);
     };
     const double tilt = 15.0 * M_PI / 180.0;
     for (int k = 0; k <= 16; ++k) at(Eigen::Vector2d(0.05 * k, 0.0), Eigen::Vector2d(0.0, 1.0), k >= 3 && k < 6 ? tilt : 0.0);
@@ -871,13 +871,7 @@ TEST(XplorerMappingRules, FaceClipReachesTheCornersAndJoinsTheLastFaceAtTheClosu
     auto m = std::make_shared<XplorerContactMapper>(p, *map);
     double t = 0.0;
     auto at = [&](const Eigen::Vector2d& surface, const Eigen::Vector2d& c, double tilt) {
-      ContactSample s = sample(t, 0.0, -2.0);
-      s.arm_angles.reset();
-      const Eigen::Vector2d cn = Eigen::Rotation2Dd(tilt) * c;
-      s.position = Vec3(surface.x() - 0.21 * cn.x(), surface.y() - 0.21 * cn.y(), 0.7);
-      s.yaw = std::atan2(cn.y(), cn.x());
-      m->update(s);
-      t += 0.1;
+      stamp_at(*m, t, surface, c, tilt);
     };
     const double tilt = 15.0 * M_PI / 180.0;
     const Eigen::Vector2d ca(0.0, 1.0), cb(-1.0, 0.0), cc(0.0, -1.0), cd(1.0, 0.0);
@@ -970,13 +964,7 @@ TEST(XplorerMappingRules, TiltedSlabsOutsideTheirFacesLineAreRemovedAtAnyCorner)
     auto m = std::make_shared<XplorerContactMapper>(p, *map);
     double t = 0.0;
     auto at = [&](const Eigen::Vector2d& surface, const Eigen::Vector2d& c, double tilt) {
-      ContactSample s = sample(t, 0.0, -2.0);
-      s.arm_angles.reset();
-      const Eigen::Vector2d cn = Eigen::Rotation2Dd(tilt) * c;
-      s.position = Vec3(surface.x() - 0.21 * cn.x(), surface.y() - 0.21 * cn.y(), 0.7);
-      s.yaw = std::atan2(cn.y(), cn.x());
-      m->update(s);
-      t += 0.1;
+      stamp_at(*m, t, surface, c, tilt);
     };
     for (int k = 0; k <= 18; ++k) at({0.05 * k, 0.0}, {0.0, 1.0}, 0.0);  // face A up to x = 0.9
     m->end_face(true);

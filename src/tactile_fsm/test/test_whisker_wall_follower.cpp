@@ -54,6 +54,16 @@ WallSubState rule(double dl, double dr, WallSubState current = WallSubState::kFl
   return wall_sub_state(dl, true, dr, true, Side::kRight, true, current, WallFollowerParams{});
 }
 
+/// validate() rejects p with an error naming WallFollowerParams.<field>.
+void expect_rejected(const WallFollowerParams& p, const std::string& field) {
+  try {
+    p.validate();
+    ADD_FAILURE() << field << " accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("WallFollowerParams." + field), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 
 TEST(WallFollowerParams, DefaultsArePaperValuesAndValidate) {
@@ -365,12 +375,7 @@ TEST(WhiskerWallFollower, PressedWhiskerCountsAsAtPressDepth) {
   EXPECT_EQ(sub_at(WallFollowerParams{}, 1200.0, 1200.0), WallSubState::kFlySideways);
   // Bad values name the field.
   p.press_sum_pa = -1.0;
-  try {
-    p.validate();
-    ADD_FAILURE() << "negative press_sum_pa accepted";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("WallFollowerParams.press_sum_pa"), std::string::npos) << e.what();
-  }
+  expect_rejected(p, "press_sum_pa");
   p.press_sum_pa = 900.0;
   p.press_depth = 0.0;
   EXPECT_THROW(p.validate(), std::invalid_argument);
@@ -422,12 +427,7 @@ TEST(WhiskerWallFollower, QuietHeldContactWhileTravellingIsPhantom) {
   EXPECT_EQ(fly(WallFollowerParams{}, 3.0, 0.004).cleared_tick, -1);
   // Bad values name the field.
   p.phantom_travel = -0.1;
-  try {
-    p.validate();
-    ADD_FAILURE() << "negative phantom_travel accepted";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("WallFollowerParams.phantom_travel"), std::string::npos) << e.what();
-  }
+  expect_rejected(p, "phantom_travel");
   p.phantom_travel = 0.05;
   p.phantom_quiet_rms = NAN;
   EXPECT_THROW(p.validate(), std::invalid_argument);
@@ -1103,12 +1103,7 @@ TEST(WhiskerWallFollower, MotionTowardTheWallBoundsAPressedDepth) {
   EXPECT_EQ(fly(p, 0.0, -0.004), -1);
   // Bad values name the field.
   p.motion_depth_relax = -0.1;
-  try {
-    p.validate();
-    ADD_FAILURE() << "negative motion_depth_relax accepted";
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("WallFollowerParams.motion_depth_relax"), std::string::npos) << e.what();
-  }
+  expect_rejected(p, "motion_depth_relax");
   p.motion_depth_relax = 0.02;
   p.motion_depth_margin = NAN;
   EXPECT_THROW(p.validate(), std::invalid_argument);
