@@ -173,6 +173,8 @@ void XplorerParams::validate() const {
     bad("XplorerParams", "max_clockwise_turns_in_a_row", "must be in [0, 1000]", max_clockwise_turns_in_a_row);
   if (!(loop_min_winding >= 0.0 && loop_min_winding <= 2.0 * M_PI))
     bad("XplorerParams", "loop_min_winding", "must be in [0, 2 pi] (one circuit turns the heading by 2 pi)", loop_min_winding);
+  if (!(loop_turn_min_winding >= 0.0 && loop_turn_min_winding <= 2.0 * M_PI))
+    bad("XplorerParams", "loop_turn_min_winding", "must be in [0, 2 pi] (0: off)", loop_turn_min_winding);
   if (!(contact_backoff_gain >= 0.0) || !std::isfinite(contact_backoff_gain))
     bad("XplorerParams", "contact_backoff_gain", "must be finite and >= 0", contact_backoff_gain);
   if (!(contact_backoff_max >= 0.0 && contact_backoff_max <= 0.5))
@@ -319,7 +321,12 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
   // the initial contact position"), not while a turn swings past it.
   // Once round the object: the heading has wound by ~2 pi counter-clockwise (right-hand
   // traversal); wobbling round one corner back to the first contact point has not.
-  if (started_path_ && !loop_closed_ && state_ == XplorerState::kTactileTraversal && path_ > p_.loop_min_path &&
+  // Optionally also inside a turn, once (nearly) round (loop_turn_min_winding).
+  const bool closure_state =
+      state_ == XplorerState::kTactileTraversal ||
+      (state_ == XplorerState::kTactileTurning && p_.loop_turn_min_winding > 0.0 &&
+       winding_ >= p_.loop_turn_min_winding);
+  if (started_path_ && !loop_closed_ && closure_state && path_ > p_.loop_min_path &&
       winding_ >= p_.loop_min_winding && (p2 - first_contact_p_).norm() < p_.loop_closure_radius) {
     loop_closed_ = true;
     loop_closure_t_ = in.t;

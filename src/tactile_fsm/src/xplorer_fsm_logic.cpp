@@ -53,6 +53,7 @@ ParamMap XplorerFsmLogic::default_parameters() {
   m.set("loop_closure_radius", f.loop_closure_radius);
   m.set("loop_min_path", f.loop_min_path);
   m.set("loop_min_winding", f.loop_min_winding);
+  m.set("loop_turn_min_winding", f.loop_turn_min_winding);
   m.set("max_clockwise_turns_in_a_row", static_cast<int64_t>(f.max_clockwise_turns_in_a_row));
   m.set("turn_on_contact_lost", f.turn_on_contact_lost);
   m.set("contact_lost_turn_min_s", f.contact_lost_turn_min_s);
@@ -114,6 +115,7 @@ XplorerFsmLogic::Params XplorerFsmLogic::params_from(const ParamMap& m) {
   f.loop_closure_radius = m.get_double("loop_closure_radius");
   f.loop_min_path = m.get_double("loop_min_path");
   f.loop_min_winding = m.get_double("loop_min_winding");
+  f.loop_turn_min_winding = m.get_double("loop_turn_min_winding");
   f.max_clockwise_turns_in_a_row = m.get_int("max_clockwise_turns_in_a_row", 0, 1000);
   f.turn_on_contact_lost = m.get_bool("turn_on_contact_lost");
   f.contact_lost_turn_min_s = m.get_double("contact_lost_turn_min_s");

@@ -420,6 +420,63 @@ TEST(XplorerExplorer, LoopDoesNotCloseWhileTurning) {
   EXPECT_EQ(x.state(), XplorerState::kTactileTurning);
 }
 
+// loop_turn_min_winding (issue 17, 13020): a first contact next to a convex corner is
+// passed again inside the turn at that corner. Round the square to 0.4 m short of the
+// first contact point (heading wound by 3.6 x 90 deg = 5.65 rad), a yaw-rate peak starts
+// the turn, the turn swings to 0.05 m of the point: closed with the closure allowed in a
+// turn from 5.5 rad, not by default (0: off) nor from 2 pi; the early turn of
+// LoopDoesNotCloseWhileTurning (wound 0.3 rad) does not close with 5.5 either.
+namespace {
+bool turn_past_first_contact_after_a_circuit(double loop_turn_min_winding) {
+  XplorerParams p;
+  p.loop_turn_min_winding = loop_turn_min_winding;
+  XplorerExplorer x{p};
+  double t = take_off_and_press(x, XVec3(0, 0, 0.7), XVec3(0, 0, 0.7), XVec3(-1.6, 0, 0));
+  EXPECT_EQ(x.state(), XplorerState::kTactileTraversal);
+  double yaw = 0.0;
+  XVec3 pos(0, 0, 0.7);
+  for (int i = 1; i <= 360; ++i) {
+    const double s = 4.0 * i / 400.0;
+    if (s < 1) pos = XVec3(0, -s, 0.7);
+    else if (s < 2) pos = XVec3(s - 1, -1, 0.7);
+    else if (s < 3) pos = XVec3(1, -1 + (s - 2), 0.7);
+    else pos = XVec3(1 - (s - 3), 0, 0.7);
+    yaw = M_PI / 2 * s;
+    x.update(input(t += 0.02, pos, yaw, XVec3(-1.3 * std::cos(yaw), -1.3 * std::sin(yaw), 0)), 0.02);
+  }
+  EXPECT_EQ(x.state(), XplorerState::kTactileTraversal);
+  EXPECT_FALSE(x.loop_closed());
+  for (int i = 0; i < 20 && x.state() == XplorerState::kTactileTraversal; ++i)
+    x.update(input(t += 0.02, pos, yaw, XVec3(-1.0 * std::cos(yaw), -1.0 * std::sin(yaw), 0), 1.0), 0.02);
+  EXPECT_EQ(x.state(), XplorerState::kTactileTurning);
+  for (int i = 0; i < 10 && !x.loop_closed(); ++i)
+    x.update(input(t += 0.02, XVec3(0.05, 0.0, 0.7), yaw + 0.1, XVec3::Zero()), 0.02);
+  EXPECT_GT(x.winding(), 5.5);
+  EXPECT_LT(x.winding(), 2 * M_PI);
+  if (x.loop_closed()) EXPECT_EQ(x.state(), XplorerState::kDone);
+  return x.loop_closed();
+}
+}  // namespace
+
+TEST(XplorerExplorer, LoopClosesInsideTheLastTurnWhenAllowed) {
+  EXPECT_FALSE(turn_past_first_contact_after_a_circuit(0.0));
+  EXPECT_FALSE(turn_past_first_contact_after_a_circuit(2 * M_PI));
+  EXPECT_TRUE(turn_past_first_contact_after_a_circuit(5.5));
+  XplorerParams p;
+  p.loop_turn_min_winding = 5.5;
+  XplorerExplorer x{p};
+  double t = take_off_and_press(x, XVec3(0, 0, 0.7), XVec3(0, 0, 0.7), XVec3(-1.6, 0, 0));
+  for (int i = 1; i <= 300; ++i) x.update(input(t += 0.02, XVec3(0, -3.0 * i / 300, 0.7), 0.0, XVec3(-1.3, 0, 0)), 0.02);
+  for (int i = 0; i < 20 && x.state() == XplorerState::kTactileTraversal; ++i)
+    x.update(input(t += 0.02, XVec3(0, -3.0, 0.7), 0.0, XVec3(-1.0, 0, 0), 1.0), 0.02);
+  ASSERT_EQ(x.state(), XplorerState::kTactileTurning);
+  for (int i = 0; i < 10; ++i) x.update(input(t += 0.02, XVec3(0.05, 0.0, 0.7), 0.3, XVec3::Zero()), 0.02);
+  EXPECT_FALSE(x.loop_closed());
+  XplorerParams bad;
+  bad.loop_turn_min_winding = -0.1;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
 // Every tick publishes a designed setpoint, the tick of a transition included (review,
 // 2026-11-26: a branch that entered Tactile-traversal, -turning or the static wrench and
 // broke returned the output's default, the world origin at z = 0 with yaw 0, for that

@@ -145,6 +145,13 @@ struct XplorerParams {
   /// (issue 17: a false closure after 3.8 m round one corner wound by -235 deg, true
   /// closures 261-383 deg) [rad] (choice; 0: off).
   double loop_min_winding = M_PI;
+  /// Loop closure also inside Tactile-turning once the heading has wound by at least this
+  /// much (issue 17: a first contact next to a convex corner is passed again inside the
+  /// turn at that corner, the closure tested only in traversal misses it and the next lap
+  /// runs out of time, 13020: within 0.25 m for 5 s at 305 deg). Below a full circuit it
+  /// keeps the earlier turns' orbits from closing early [rad] (choice; 0: off, closure only
+  /// in traversal).
+  double loop_turn_min_winding = 0.0;
   /// Right-hand traversal round a convex object turns counter-clockwise at every convex
   /// corner. A clockwise yaw-rate peak starts a clockwise Tactile-turning (001 Sec. IV-A:
   /// "in the direction of the peak") only while fewer than this many clockwise turns came
