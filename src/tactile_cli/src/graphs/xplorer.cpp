@@ -212,15 +212,17 @@ class XplorerGraph : public SimGraph {
     m["contact_backoffs"] = f.backoffs();
     // How each Tactile-turning ended (001 Sec. V-C4: the rigid UAV turns but
     // never re-establishes contact) and how often traversal lost the contact.
-    int recontacted = 0, turn_failed = 0, contact_lost = 0;
+    // A turn ended by the loop's closure (loop_turn_min_winding) is neither.
+    int recontacted = 0, turn_failed = 0, turn_closing = 0, contact_lost = 0;
     for (size_t i = 1; i < states_.size(); ++i) {
       const auto& a = states_[i - 1].second;
       const auto& b = states_[i].second;
-      if (a == "tactile_turning") (b == "tactile_traversal" ? recontacted : turn_failed)++;
+      if (a == "tactile_turning") (b == "tactile_traversal" ? recontacted : b == "done" ? turn_closing : turn_failed)++;
       if (a == "tactile_traversal" && b == "exploration") ++contact_lost;
     }
     m["turns_recontacted"] = recontacted;
     m["turns_without_recontact"] = turn_failed;
+    m["turns_closing_the_loop"] = turn_closing;
     m["traversal_contact_lost"] = contact_lost;
     const auto& ms = map_->mapper().stats();
     m["slabs"] = ms.slabs;

@@ -105,7 +105,7 @@ def test_evaluate_of_an_xplorer_sim_bag_equals_the_sim_metrics(tmp_path):
     ev = json.loads((tmp_path / "ev" / "metrics.json").read_text())
     assert ev["success"] == sim["success"]
     assert sim["xplorer"]["loop_closed"]  # the paper's outcome, or the comparison says little
-    for key in ("loop_closed", "final_state", "turns_recontacted", "turns_without_recontact",
+    for key in ("loop_closed", "final_state", "turns_recontacted", "turns_without_recontact", "turns_closing_the_loop",
                 "traversal_contact_lost", "slabs", "map_raw_points", "map_points", "map_length_m",
                 "map_width_m", "map_area_m2", "map_area_accuracy", "map_hull_area_accuracy", "area_accuracy"):
         assert ev["xplorer"][key] == sim["xplorer"][key], key

@@ -149,9 +149,10 @@ struct XplorerParams {
   /// much (issue 17: a first contact next to a convex corner is passed again inside the
   /// turn at that corner, the closure tested only in traversal misses it and the next lap
   /// runs out of time, 13020: within 0.25 m for 5 s at 305 deg). Below a full circuit it
-  /// keeps the earlier turns' orbits from closing early [rad] (choice; 0: off, closure only
-  /// in traversal).
-  double loop_turn_min_winding = 0.0;
+  /// keeps the earlier turns' orbits from closing early [rad] (choice, on at 5.5 = 315 deg
+  /// since 2026-11-27, README "Open loops on the held-out blocks"; 0: off, closure only in
+  /// traversal).
+  double loop_turn_min_winding = 5.5;
   /// Right-hand traversal round a convex object turns counter-clockwise at every convex
   /// corner. A clockwise yaw-rate peak starts a clockwise Tactile-turning (001 Sec. IV-A:
   /// "in the direction of the peak") only while fewer than this many clockwise turns came
