@@ -189,8 +189,8 @@ Row fly_one(const std::string& file, const SweepOptions& options, const fs::path
     if (!options.keep_bags) fs::remove_all(dir / "bag", ec);
     if (!options.keep_success_files) {
       for (const auto& entry : fs::directory_iterator(dir, ec)) {
-        const auto file = entry.path().filename();
-        if (entry.is_regular_file() && file != "metrics.json" && file != "topview.png") fs::remove(entry.path(), ec);
+        const auto base = entry.path().filename();
+        if (entry.is_regular_file() && base != "metrics.json" && base != "topview.png") fs::remove(entry.path(), ec);
       }
     }
   }

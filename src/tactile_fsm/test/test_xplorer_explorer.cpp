@@ -453,7 +453,9 @@ bool turn_past_first_contact_after_a_circuit(double loop_turn_min_winding) {
     x.update(input(t += 0.02, XVec3(0.05, 0.0, 0.7), yaw + 0.1, XVec3::Zero()), 0.02);
   EXPECT_GT(x.winding(), 5.5);
   EXPECT_LT(x.winding(), 2 * M_PI);
-  if (x.loop_closed()) EXPECT_EQ(x.state(), XplorerState::kDone);
+  if (x.loop_closed()) {
+    EXPECT_EQ(x.state(), XplorerState::kDone);
+  }
   return x.loop_closed();
 }
 }  // namespace
