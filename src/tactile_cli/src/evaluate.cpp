@@ -252,19 +252,7 @@ nlohmann::json evaluate_xplorer(const tactile_sim::Scenario& s, const EvaluateOp
   }
   x["loop_closed"] = closure >= 0;
   x["loop_closure_time_s"] = closure >= 0 ? nlohmann::json(closure) : nlohmann::json(nullptr);
-  // As XplorerGraph::explore_metrics: how each Tactile-turning ended.
-  // A turn ended by the loop's closure (loop_turn_min_winding) is neither.
-  int recontacted = 0, turn_failed = 0, turn_closing = 0, contact_lost = 0;
-  for (size_t i = 1; i < states.size(); ++i) {
-    const auto& a = states[i - 1].second;
-    const auto& b = states[i].second;
-    if (a == "tactile_turning") (b == "tactile_traversal" ? recontacted : b == "done" ? turn_closing : turn_failed)++;
-    if (a == "tactile_traversal" && b == "exploration") ++contact_lost;
-  }
-  x["turns_recontacted"] = recontacted;
-  x["turns_without_recontact"] = turn_failed;
-  x["turns_closing_the_loop"] = turn_closing;
-  x["traversal_contact_lost"] = contact_lost;
+  add_turn_outcomes(states, x);  // as XplorerGraph::explore_metrics
   const auto& ms = map->mapper().stats();
   x["slabs"] = ms.slabs;
   x["map_raw_points"] = map->map().size();

@@ -56,6 +56,17 @@ void require(bool ok, const char* field, const std::string& reason, double value
 bool finite_positive(double v) { return std::isfinite(v) && v > 0.0; }
 bool finite_nonneg(double v) { return std::isfinite(v) && v >= 0.0; }
 
+/// Either whisker's S_c sum moving (RMS of its changes >= level > 0): a touch
+/// TDORC has not flagged yet (whisk_pause_rms, clear_yaw_release_rms).
+bool sum_moves(const WallFollowerInput& in, double level) {
+  return level > 0.0 && ((std::isfinite(in.input_change_rms_left) && in.input_change_rms_left >= level) ||
+                         (std::isfinite(in.input_change_rms_right) && in.input_change_rms_right >= level));
+}
+
+/// Gain of the yaw tracking of a moving reference (whisk, yaw offset): the realignment's, or
+/// 1.5 1/s with the realignment off.
+double tracking_gain(const WallFollowerParams& p) { return p.realign_gain > 0.0 ? p.realign_gain : 1.5; }
+
 }  // namespace
 
 void WallFollowerParams::validate() const {
@@ -566,21 +577,16 @@ Setpoint WhiskerWallFollower::offset_yaw(const WallFollowerInput& in, const Setp
   // heading, is rotated into the body's frame, so the track stays the same.
   const double sign = side_ == Side::kLeft ? -1.0 : 1.0;  // away from the side-step (yaw > 0 is left)
   if (!std::isfinite(track_yaw_)) track_yaw_ = in.yaw;
-  const double track_rate = std::clamp(p_.realign_gain * std::remainder(course_yaw_ - track_yaw_, 2.0 * M_PI),
-                                       -p_.omega_max, p_.omega_max);
+  const double track_rate = std::clamp(realign_rate(track_yaw_), -p_.omega_max, p_.omega_max);
   track_yaw_ = std::remainder(track_yaw_ + track_rate * dt, 2.0 * M_PI);
   // A whisker's sum moving: a touch TDORC has not flagged yet; back to the
   // track's heading (latched until the next clearing), so that the wall
   // following starts as without the offset.
-  if (p_.clear_yaw_release_rms > 0.0 &&
-      ((std::isfinite(in.input_change_rms_left) && in.input_change_rms_left >= p_.clear_yaw_release_rms) ||
-       (std::isfinite(in.input_change_rms_right) && in.input_change_rms_right >= p_.clear_yaw_release_rms))) {
-    yaw_offset_released_ = true;
-  }
+  if (sum_moves(in, p_.clear_yaw_release_rms)) yaw_offset_released_ = true;
   const double ref = track_yaw_ + (yaw_offset_released_ ? 0.0 : sign * p_.clear_yaw_offset);
-  const double gain = p_.realign_gain > 0.0 ? p_.realign_gain : 1.5;
   Setpoint o = s;
-  o.yaw_rate = std::clamp(track_rate + gain * std::remainder(ref - in.yaw, 2.0 * M_PI), -p_.omega_max, p_.omega_max);
+  o.yaw_rate = std::clamp(track_rate + tracking_gain(p_) * std::remainder(ref - in.yaw, 2.0 * M_PI), -p_.omega_max,
+                          p_.omega_max);
   const double rel = std::remainder(track_yaw_ - in.yaw, 2.0 * M_PI);
   o.vx = std::cos(rel) * s.vx - std::sin(rel) * s.vy;
   o.vy = std::sin(rel) * s.vx + std::cos(rel) * s.vy;
@@ -634,13 +640,10 @@ Setpoint WhiskerWallFollower::whisk(const WallFollowerInput& in, const Setpoint&
   const double ph = w * (in.t - entered_);
   const double ref = course_yaw_ + p_.whisk_amplitude * std::sin(ph);
   const double ff = p_.whisk_amplitude * w * std::cos(ph);
-  const double gain = p_.realign_gain > 0.0 ? p_.realign_gain : 1.5;
-  o.yaw_rate = std::clamp(ff + gain * std::remainder(ref - in.yaw, 2.0 * M_PI), -p_.whisk_rate_max, p_.whisk_rate_max);
+  o.yaw_rate = std::clamp(ff + tracking_gain(p_) * std::remainder(ref - in.yaw, 2.0 * M_PI), -p_.whisk_rate_max,
+                          p_.whisk_rate_max);
   // A whisker's sum moving: a touch TDORC has not flagged yet; hold the yaw.
-  if (p_.whisk_pause_rms > 0.0 && ((std::isfinite(in.input_change_rms_left) && in.input_change_rms_left >= p_.whisk_pause_rms) ||
-                                   (std::isfinite(in.input_change_rms_right) && in.input_change_rms_right >= p_.whisk_pause_rms))) {
-    o.yaw_rate = 0.0;
-  }
+  if (sum_moves(in, p_.whisk_pause_rms)) o.yaw_rate = 0.0;
   const double rel = std::remainder(course_yaw_ - in.yaw, 2.0 * M_PI);
   o.vx = p_.v_max * std::cos(rel);
   o.vy = p_.v_max * std::sin(rel);
@@ -650,7 +653,11 @@ Setpoint WhiskerWallFollower::whisk(const WallFollowerInput& in, const Setpoint&
 double WhiskerWallFollower::realign(const WallFollowerInput& in) const {
   // Back to the course heading after a (tilted) obstacle; saturate() limits it to omega_max.
   if (!origin_set_ || !std::isfinite(in.yaw)) return 0.0;
-  return p_.realign_gain * std::remainder(course_yaw_ - in.yaw, 2.0 * M_PI);
+  return realign_rate(in.yaw);
+}
+
+double WhiskerWallFollower::realign_rate(double yaw) const {
+  return p_.realign_gain * std::remainder(course_yaw_ - yaw, 2.0 * M_PI);
 }
 
 }  // namespace tactile_fsm

@@ -92,8 +92,7 @@ class XplorerGraph : public SimGraph {
       if (min_traversed_m_) return fsm_->fsm().traversed_path() >= *min_traversed_m_;
       if (!fsm_->fsm().loop_closed()) return false;
       if (!area_goal_.min_accuracy) return true;
-      nlohmann::json unused;  // metrics() measures the same map again for its table
-      const auto acc = measure_map_area(map_->map(), area_goal_, object_hull_area(sim_->arena()), unused);
+      const auto acc = map_area().accuracy;
       return acc && *acc >= *area_goal_.min_accuracy;
     }
     if (mission == XplorerMission::kStaticWrench) return s == XplorerState::kStaticWrench;
@@ -210,20 +209,7 @@ class XplorerGraph : public SimGraph {
     m["traversed_path_m"] = f.traversed_path();
     m["turns"] = f.turns();
     m["contact_backoffs"] = f.backoffs();
-    // How each Tactile-turning ended (001 Sec. V-C4: the rigid UAV turns but
-    // never re-establishes contact) and how often traversal lost the contact.
-    // A turn ended by the loop's closure (loop_turn_min_winding) is neither.
-    int recontacted = 0, turn_failed = 0, turn_closing = 0, contact_lost = 0;
-    for (size_t i = 1; i < states_.size(); ++i) {
-      const auto& a = states_[i - 1].second;
-      const auto& b = states_[i].second;
-      if (a == "tactile_turning") (b == "tactile_traversal" ? recontacted : b == "done" ? turn_closing : turn_failed)++;
-      if (a == "tactile_traversal" && b == "exploration") ++contact_lost;
-    }
-    m["turns_recontacted"] = recontacted;
-    m["turns_without_recontact"] = turn_failed;
-    m["turns_closing_the_loop"] = turn_closing;
-    m["traversal_contact_lost"] = contact_lost;
+    add_turn_outcomes(states_, m);
     const auto& ms = map_->mapper().stats();
     m["slabs"] = ms.slabs;
     m["map_raw_points"] = map_->map().size();  // as written to map.ply
@@ -233,7 +219,27 @@ class XplorerGraph : public SimGraph {
     // rectangle (box_size, 001 Sec. V-D) and the convex hull of the arena's
     // walls and cylinders (polygons and cylinders, whose map has no meaningful
     // bounding rectangle; issue 17).
-    measure_map_area(map_->map(), area_goal_, object_hull_area(sim_->arena()), m);
+    m.update(map_area().metrics);
+  }
+
+  /// The map's area measured once after the flight for reached_goal() and metrics()
+  /// (the voxel filter and outlier removal of the whole map); measured again if the map
+  /// changed since (its size or the mapper's slab and clip counts).
+  struct MapArea {
+    std::array<uint64_t, 3> key{};
+    nlohmann::json metrics;
+    std::optional<double> accuracy;
+  };
+  const MapArea& map_area() const {
+    const auto& st = map_->mapper().stats();
+    const std::array<uint64_t, 3> key{map_->map().size(), st.slabs, st.clipped_points};
+    if (!area_ || area_->key != key) {
+      MapArea a;
+      a.key = key;
+      a.accuracy = measure_map_area(map_->map(), area_goal_, object_hull_area(sim_->arena()), a.metrics);
+      area_ = std::move(a);
+    }
+    return *area_;
   }
 
   /// 001 Sec. V-E: rise time (90 % of the start -> goal distance) and settling
@@ -292,6 +298,7 @@ class XplorerGraph : public SimGraph {
   std::shared_ptr<tactile_fsm::XplorerFsmLogic> fsm_;
   std::shared_ptr<mapping_pcl::XplorerMapLogic> map_;
   XplorerAreaGoal area_goal_;
+  mutable std::optional<MapArea> area_;
   std::optional<double> min_traversed_m_;
   std::vector<ForceSample> forces_;
   std::vector<TruthSample> truth_;

@@ -86,4 +86,18 @@ std::optional<double> measure_map_area(const mapping_pcl::PointMap& map, const X
   return acc;
 }
 
+void add_turn_outcomes(const std::vector<std::pair<double, std::string>>& states, nlohmann::json& out) {
+  int recontacted = 0, turn_failed = 0, turn_closing = 0, contact_lost = 0;
+  for (std::size_t i = 1; i < states.size(); ++i) {
+    const auto& a = states[i - 1].second;
+    const auto& b = states[i].second;
+    if (a == "tactile_turning") (b == "tactile_traversal" ? recontacted : b == "done" ? turn_closing : turn_failed)++;
+    if (a == "tactile_traversal" && b == "exploration") ++contact_lost;
+  }
+  out["turns_recontacted"] = recontacted;
+  out["turns_without_recontact"] = turn_failed;
+  out["turns_closing_the_loop"] = turn_closing;
+  out["traversal_contact_lost"] = contact_lost;
+}
+
 }  // namespace tactile_cli

@@ -1,11 +1,14 @@
-// The XPLORER map's area against the object's (001 Sec. V-D), shared by the
-// graph that flies it (`tactile sim`) and the bag re-evaluation (`tactile
-// evaluate`), so the two measure one map the same way.
+// The XPLORER explore metrics shared by the graph that flies it (`tactile
+// sim`) and the bag re-evaluation (`tactile evaluate`), so the two measure one
+// flight the same way: the map's area against the object's (001 Sec. V-D) and
+// how each Tactile-turning ended.
 #pragma once
 
 #include <array>
 #include <optional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -44,5 +47,12 @@ double object_hull_area(const tactile_sim::Arena& arena);
 /// min_area_accuracy. Returns area_accuracy (unset if it cannot be measured).
 std::optional<double> measure_map_area(const mapping_pcl::PointMap& map, const XplorerAreaGoal& goal,
                                        double object_area, nlohmann::json& out);
+
+/// From the FSM's state changes (time, state), in order: how each Tactile-turning ended
+/// (001 Sec. V-C4: the rigid UAV turns but never re-establishes contact) and how often a
+/// traversal lost the contact. Fills turns_recontacted, turns_without_recontact,
+/// turns_closing_the_loop (a turn ended by the loop's closure, loop_turn_min_winding, is
+/// neither) and traversal_contact_lost.
+void add_turn_outcomes(const std::vector<std::pair<double, std::string>>& states, nlohmann::json& out);
 
 }  // namespace tactile_cli

@@ -355,6 +355,7 @@ class WhiskerWallFollower {
   void set_origin(const WallFollowerInput& in);
   Setpoint command(const WallFollowerInput& in) const;
   double realign(const WallFollowerInput& in) const;
+  double realign_rate(double yaw) const;  ///< realign()'s rate toward the course from `yaw` (unsaturated)
   Setpoint whisk(const WallFollowerInput& in, const Setpoint& s) const;
   Setpoint offset_yaw(const WallFollowerInput& in, const Setpoint& s, double dt);
 
