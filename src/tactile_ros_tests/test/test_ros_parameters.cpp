@@ -10,6 +10,7 @@
 #include <fstream>
 #include <memory>
 #include <string>
+#include <system_error>
 #include <unistd.h>
 #include <vector>
 
@@ -29,12 +30,19 @@ ParamMap defaults() {
   return d;
 }
 
+/// The temporary directories write_file() made; the fixture removes them after each test.
+std::vector<std::filesystem::path>& written_dirs() {
+  static std::vector<std::filesystem::path> dirs;
+  return dirs;
+}
+
 /// A parameter file in a fresh temporary directory.
 std::string write_file(const std::string& name, const std::string& text) {
   static std::atomic<int> counter{0};
   const auto dir = std::filesystem::temp_directory_path() /
                    ("tactile_ros_parameters_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
   std::filesystem::create_directories(dir);
+  written_dirs().push_back(dir);
   const auto path = dir / name;
   std::ofstream(path) << text;
   return path.string();
@@ -63,6 +71,9 @@ class RosParameters : public ::testing::Test {
  protected:
   void TearDown() override {
     for (auto& c : contexts_) c->shutdown("test done");
+    std::error_code ignored;
+    for (const auto& d : written_dirs()) std::filesystem::remove_all(d, ignored);
+    written_dirs().clear();
   }
   rclcpp::NodeOptions options(std::vector<std::string> process_args) {
     contexts_.push_back(context_with(std::move(process_args)));
