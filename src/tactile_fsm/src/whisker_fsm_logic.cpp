@@ -97,6 +97,12 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   m.set("clear_yaw_offset", 0.2443);
   m.set("clear_yaw_in_resume", false);
   m.set("clear_yaw_release_rms", 13.0);
+  // Whisking on the first approach (issue 17, README "Round 10"): off.
+  m.set("first_whisk_amplitude", 0.0);
+  m.set("first_whisk_period_s", 0.7);
+  m.set("first_whisk_speed", 0.0);
+  m.set("first_whisk_pause_to_course", false);
+  m.set("end_contact_lateral", 0.0);
   m.set("target_radius", d.target_radius);
   m.set("land_past_target", d.land_past_target);
   m.set("landing_duration_s", d.landing_duration_s);
@@ -156,6 +162,11 @@ WhiskerFsmLogic::Params WhiskerFsmLogic::params_from(const ParamMap& m) {
   f.clear_yaw_offset = m.get_double("clear_yaw_offset");
   f.clear_yaw_in_resume = m.get_bool("clear_yaw_in_resume");
   f.clear_yaw_release_rms = m.get_double("clear_yaw_release_rms");
+  f.first_whisk_amplitude = m.get_double("first_whisk_amplitude");
+  f.first_whisk_period_s = m.get_double("first_whisk_period_s");
+  f.first_whisk_speed = m.get_double("first_whisk_speed");
+  f.first_whisk_pause_to_course = m.get_bool("first_whisk_pause_to_course");
+  f.end_contact_lateral = m.get_double("end_contact_lateral");
   f.target_radius = m.get_double("target_radius");
   f.land_past_target = m.get_bool("land_past_target");
   f.landing_duration_s = m.get_double("landing_duration_s");

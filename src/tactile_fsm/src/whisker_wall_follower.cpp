@@ -117,6 +117,14 @@ void WallFollowerParams::validate() const {
           "must be in [0, pi/4] (0 = off)", clear_yaw_offset);
   require(finite_nonneg(clear_yaw_release_rms), "clear_yaw_release_rms", "must be finite and >= 0 (0 = off)",
           clear_yaw_release_rms);
+  require(finite_nonneg(first_whisk_amplitude) && first_whisk_amplitude <= M_PI / 2.0, "first_whisk_amplitude",
+          "must be in [0, pi/2] (0 = off)", first_whisk_amplitude);
+  require(finite_positive(first_whisk_period_s), "first_whisk_period_s", "must be finite and > 0",
+          first_whisk_period_s);
+  require(finite_nonneg(first_whisk_speed) && first_whisk_speed <= v_max, "first_whisk_speed",
+          "must be in [0, v_max] (0 = v_max)", first_whisk_speed);
+  require(finite_nonneg(end_contact_lateral), "end_contact_lateral", "must be finite and >= 0 (0 = off)",
+          end_contact_lateral);
   require(finite_positive(target_radius), "target_radius", "must be finite and > 0", target_radius);
   require(finite_nonneg(landing_duration_s), "landing_duration_s", "must be finite and >= 0", landing_duration_s);
   require(finite_positive(max_input_age_s), "max_input_age_s", "must be finite and > 0", max_input_age_s);
@@ -226,6 +234,7 @@ void WhiskerWallFollower::reset() {
   resume_x_ = resume_y_ = 0.0;
   track_yaw_ = NAN;
   yaw_offset_released_ = false;
+  contacted_ = false;
   course_yaw_ = 0.0;
 }
 
@@ -466,7 +475,16 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
           }
           both_touched_ = false;
           last_contact_t_ = t;
-          enter(FsmState::kWallFollowing, "whisker contact", t);
+          // A baffle's end met by one whisker beside the axis (README "Round
+          // 10"): pass it on the other side, as an edge (rule 2).
+          const double end_lat = end_contact_offset(in, contact_l, contact_r, l_valid, r_valid);
+          if (p_.end_contact_lateral > 0.0 && std::fabs(end_lat) > p_.end_contact_lateral) {
+            side_ = end_lat > 0.0 ? Side::kRight : Side::kLeft;
+            both_touched_ = true;
+            enter(FsmState::kWallFollowing, "whisker contact at a baffle's end beside the axis", t);
+          } else {
+            enter(FsmState::kWallFollowing, "whisker contact", t);
+          }
         } else if (state_ == FsmState::kResumeForward &&
                    std::hypot(in.x - clear_x_, in.y - clear_y_) >= p_.clear_margin &&
                    (!(held_raw_l || held_raw_r) ||
@@ -554,7 +572,15 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
   out.setpoint = saturate(command(in), p_);
   if (p_.whisk_amplitude > 0.0 && state_ == FsmState::kFlyForward && origin_set_ && std::isfinite(in.yaw) &&
       (after_clear_ || !p_.whisk_after_clear_only)) {
-    out.setpoint = whisk(in, out.setpoint);
+    out.setpoint = whisk(in, out.setpoint, p_.whisk_amplitude, p_.whisk_period_s, p_.v_max);
+  }
+  if (state_ == FsmState::kWallFollowing) contacted_ = true;
+  // Whisking on the first approach (README "Round 10"): no clearing yet, the
+  // first baffle's end may lie in the blind band on either side.
+  if (p_.first_whisk_amplitude > 0.0 && state_ == FsmState::kFlyForward && !contacted_ && !after_clear_ &&
+      origin_set_ && std::isfinite(in.yaw)) {
+    out.setpoint = whisk(in, out.setpoint, p_.first_whisk_amplitude, p_.first_whisk_period_s,
+                         p_.first_whisk_speed > 0.0 ? p_.first_whisk_speed : p_.v_max, p_.first_whisk_pause_to_course);
   }
   const bool offset_on = p_.clear_yaw_offset > 0.0 && origin_set_ && std::isfinite(in.yaw) &&
                          ((state_ == FsmState::kResumeForward && p_.clear_yaw_in_resume) ||
@@ -593,6 +619,23 @@ Setpoint WhiskerWallFollower::offset_yaw(const WallFollowerInput& in, const Setp
   return o;
 }
 
+double WhiskerWallFollower::end_contact_offset(const WallFollowerInput& in, bool contact_l, bool contact_r,
+                                               bool l_valid, bool r_valid) const {
+  // Lateral offset (left > 0) of the touching whisker's contact point from the
+  // course axis through the drone: the point (whisker_base_x + d, +-s/2) of the
+  // body frame turned by the yaw off the course heading. Exactly one whisker,
+  // with its depth.
+  if (contact_l == contact_r || !origin_set_ || !std::isfinite(in.yaw)) return 0.0;
+  const bool left = contact_l;
+  if (left ? !l_valid : !r_valid) return 0.0;
+  const double d = left ? in.depth_left : in.depth_right;
+  const double side = left ? 1.0 : -1.0;
+  const double rel = std::remainder(in.yaw - course_yaw_, 2.0 * M_PI);
+  const double lat = std::sin(rel) * (p_.whisker_base_x + d) + std::cos(rel) * side * 0.5 * p_.whisker_spacing;
+  // Only on that whisker's side (the end lies where its baffle is).
+  return lat * side > 0.0 ? lat : 0.0;
+}
+
 Setpoint WhiskerWallFollower::command(const WallFollowerInput& in) const {
   Setpoint s;
   s.height = p_.flight_height;
@@ -629,24 +672,27 @@ Setpoint WhiskerWallFollower::command(const WallFollowerInput& in) const {
   return s;
 }
 
-Setpoint WhiskerWallFollower::whisk(const WallFollowerInput& in, const Setpoint& s) const {
+Setpoint WhiskerWallFollower::whisk(const WallFollowerInput& in, const Setpoint& s, double amplitude, double period,
+                                    double speed, bool pause_to_course) const {
   // Active whisking (README "Round 5"): yaw reference course + A sin(w t),
   // tracked with the realignment gain plus the reference's rate; the phase
   // starts at 0 on entering FLY_FORWARD (a continuous reference from the
   // course heading). The velocity is the course direction in the world frame,
   // expressed in the body-yaw frame.
   Setpoint o = s;
-  const double w = 2.0 * M_PI / p_.whisk_period_s;
+  const double w = 2.0 * M_PI / period;
   const double ph = w * (in.t - entered_);
-  const double ref = course_yaw_ + p_.whisk_amplitude * std::sin(ph);
-  const double ff = p_.whisk_amplitude * w * std::cos(ph);
+  const double ref = course_yaw_ + amplitude * std::sin(ph);
+  const double ff = amplitude * w * std::cos(ph);
   o.yaw_rate = std::clamp(ff + tracking_gain(p_) * std::remainder(ref - in.yaw, 2.0 * M_PI), -p_.whisk_rate_max,
                           p_.whisk_rate_max);
   // A whisker's sum moving: a touch TDORC has not flagged yet; hold the yaw.
-  if (sum_moves(in, p_.whisk_pause_rms)) o.yaw_rate = 0.0;
+  if (sum_moves(in, p_.whisk_pause_rms)) {
+    o.yaw_rate = pause_to_course ? std::clamp(realign_rate(in.yaw), -p_.omega_max, p_.omega_max) : 0.0;
+  }
   const double rel = std::remainder(course_yaw_ - in.yaw, 2.0 * M_PI);
-  o.vx = p_.v_max * std::cos(rel);
-  o.vy = p_.v_max * std::sin(rel);
+  o.vx = speed * std::cos(rel);
+  o.vy = speed * std::sin(rel);
   return o;
 }
 

@@ -1266,3 +1266,150 @@ TEST(WhiskerWallFollower, YawOffsetReleasedOnMovingSum) {
   bad.clear_yaw_release_rms = -1.0;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
 }
+
+// Issue 17, README "Round 10": the first baffle of tuning course 1003, its end
+// 65 mm right of the course axis and the baffle receding to the right: flown
+// straight (the paper) the guard meets the end before either whisker touches
+// the baffle (the blind band); whisking on the first approach (0.35 rad,
+// 0.7 s, 0.14 m/s) puts the right whisker across it first. Kinematic drone
+// (the setpoint's velocity and yaw rate applied), whiskers as segments from
+// (0.05, +-0.025) to (0.191, +-0.025) in the body frame, guard circle 80 mm.
+TEST(WhiskerWallFollower, FirstApproachWhiskReachesAnEndInTheBlindBand) {
+  const double ax = 0.7141, ay = -0.0647, bx = 1.0361, by = -0.9199;  // baffle_1 of baffles_*_1003
+  auto cross = [](double px, double py, double qx, double qy, double rx, double ry, double sx, double sy) {
+    auto cr = [](double ox, double oy, double ux, double uy, double vx, double vy) {
+      return (ux - ox) * (vy - oy) - (uy - oy) * (vx - ox);
+    };
+    return cr(rx, ry, sx, sy, px, py) * cr(rx, ry, sx, sy, qx, qy) < 0.0 &&
+           cr(px, py, qx, qy, rx, ry) * cr(px, py, qx, qy, sx, sy) < 0.0;
+  };
+  auto guard_dist = [&](double x, double y) {
+    const double ux = bx - ax, uy = by - ay;
+    const double k = std::clamp(((x - ax) * ux + (y - ay) * uy) / (ux * ux + uy * uy), 0.0, 1.0);
+    return std::hypot(x - ax - k * ux, y - ay - k * uy);
+  };
+  // "whisker" or "guard": which meets the baffle first.
+  auto fly = [&](double amplitude) {
+    WallFollowerParams p;
+    p.first_whisk_amplitude = amplitude;
+    p.first_whisk_period_s = 0.7;
+    p.first_whisk_speed = 0.14;
+    p.whisk_rate_max = 3.0;
+    WhiskerWallFollower fsm(p);
+    double x = 0.0, y = 0.0, yaw = 0.0;
+    for (double t = 0.0; t < 30.0; t += kDt) {
+      WallFollowerInput in = input(t, x, y, yaw);
+      in.target_x = 3.0;
+      const WallFollowerOutput o = fsm.step(in);
+      EXPECT_LE(std::fabs(o.setpoint.yaw_rate), p.whisk_rate_max + 1e-12);
+      const double vx = std::cos(yaw) * o.setpoint.vx - std::sin(yaw) * o.setpoint.vy;
+      const double vy = std::sin(yaw) * o.setpoint.vx + std::cos(yaw) * o.setpoint.vy;
+      if (o.state == FsmState::kFlyForward) {
+        EXPECT_NEAR(vx, amplitude > 0.0 ? 0.14 : p.v_max, 1e-9);  // along the course
+        EXPECT_NEAR(vy, 0.0, 1e-9);
+      }
+      for (int k = 0; k < 10; ++k) {  // 2 ms sub-steps of the 20 ms tick
+        x += 0.1 * vx * kDt;
+        y += 0.1 * vy * kDt;
+        yaw += 0.1 * o.setpoint.yaw_rate * kDt;
+        const double c = std::cos(yaw), s = std::sin(yaw);
+        for (double side : {1.0, -1.0}) {
+          const double b0x = x + c * 0.05 - s * side * 0.025, b0y = y + s * 0.05 + c * side * 0.025;
+          const double t0x = x + c * 0.191 - s * side * 0.025, t0y = y + s * 0.191 + c * side * 0.025;
+          if (cross(b0x, b0y, t0x, t0y, ax, ay, bx, by)) return std::string("whisker");
+        }
+        if (guard_dist(x, y) <= 0.08) return std::string("guard");
+      }
+    }
+    return std::string("none");
+  };
+  EXPECT_EQ(fly(0.0), "guard");     // the paper's straight approach: blind band
+  EXPECT_EQ(fly(0.35), "whisker");  // whisked: the right whisker crosses the baffle first
+  WallFollowerParams bad;
+  bad.first_whisk_amplitude = -0.1;
+  expect_rejected(bad, "first_whisk_amplitude");
+  bad.first_whisk_amplitude = 0.35;
+  bad.first_whisk_speed = 0.3;  // > v_max
+  expect_rejected(bad, "first_whisk_speed");
+}
+
+// Only the first approach is whisked: after a contact and a clearing the
+// FLY_FORWARD flies as without the rule (yaw rate of the realignment only).
+TEST(WhiskerWallFollower, FirstApproachWhiskEndsAtTheFirstContact) {
+  WallFollowerParams p;
+  p.first_whisk_amplitude = 0.35;
+  p.first_whisk_period_s = 0.7;
+  p.whisk_rate_max = 3.0;
+  WhiskerWallFollower fsm(p);
+  double t = 0.0, x = 0.0, y = 0.0, yaw = 0.0;
+  auto move = [&](const WallFollowerOutput& o) {
+    x += (std::cos(yaw) * o.setpoint.vx - std::sin(yaw) * o.setpoint.vy) * kDt;
+    y += (std::sin(yaw) * o.setpoint.vx + std::cos(yaw) * o.setpoint.vy) * kDt;
+    yaw += o.setpoint.yaw_rate * kDt;
+  };
+  for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t));
+  double max_rate = 0.0;
+  for (int k = 0; k < 35; ++k, t += kDt) {  // one period
+    const WallFollowerOutput o = fsm.step(input(t, x, y, yaw));
+    max_rate = std::max(max_rate, std::fabs(o.setpoint.yaw_rate));
+    move(o);
+  }
+  EXPECT_GT(max_rate, 1.0);  // whisking before the first contact
+  for (int k = 0; k < 50; ++k, t += kDt) {
+    WallFollowerInput in = input(t, x, y, yaw);
+    set_depths(in, 0.08, 0.08);
+    move(fsm.step(in));
+  }
+  EXPECT_EQ(fsm.state(), FsmState::kWallFollowing);
+  int forward = 0;
+  max_rate = 0.0;
+  for (int k = 0; k < 400; ++k, t += kDt) {
+    const WallFollowerOutput o = fsm.step(input(t, x, y, yaw));
+    if (o.state == FsmState::kFlyForward) {
+      ++forward;
+      max_rate = std::max(max_rate, std::fabs(o.setpoint.yaw_rate));
+    }
+    move(o);
+  }
+  EXPECT_GT(forward, 100);
+  EXPECT_LT(max_rate, p.omega_max + 1e-9);  // realignment only, no 3 rad/s whisk
+  EXPECT_LT(std::fabs(yaw), 5.0 * kDeg);    // and back on the course heading
+}
+
+// end_contact_lateral (README "Round 10"): a first touch by the right whisker
+// alone, depth 100 mm, at a yaw 20 deg right of the course puts the contact
+// point 0.15 sin 20 + 0.025 cos 20 = 75 mm right of the axis: a baffle's end
+// on the right; with the rule the drone passes it on the left, side-stepping
+// (as at an edge) instead of approaching it. At yaw 0 (25 mm) or with the rule
+// off the contact is an approach on the default side (right).
+TEST(WhiskerWallFollower, EndContactBesideTheAxisIsPassedOnTheOtherSide) {
+  auto first_touch = [](double lateral, double yaw) {
+    WallFollowerParams p;
+    p.end_contact_lateral = lateral;
+    p.side_toward_target = false;  // the default side (right) unless the rule picks
+    WhiskerWallFollower fsm(p);
+    double t = 0.0;
+    for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t));
+    fsm.step(input(t, 0.1, 0.0, yaw));
+    t += kDt;
+    WallFollowerInput in = input(t, 0.1, 0.0, yaw);
+    in.right_valid = true;
+    in.depth_right = 0.10;
+    in.tdorc_contact_right = true;
+    const WallFollowerOutput o = fsm.step(in);
+    EXPECT_EQ(o.state, FsmState::kWallFollowing);
+    return std::make_pair(fsm.active_side(), o.sub_state);
+  };
+  const auto on = first_touch(0.045, -20.0 * kDeg);
+  EXPECT_EQ(on.first, Side::kLeft);
+  EXPECT_EQ(on.second, WallSubState::kFlySideways);
+  const auto square = first_touch(0.045, 0.0);
+  EXPECT_EQ(square.first, Side::kRight);
+  EXPECT_NE(square.second, WallSubState::kFlySideways);
+  const auto off = first_touch(0.0, -20.0 * kDeg);
+  EXPECT_EQ(off.first, Side::kRight);
+  EXPECT_NE(off.second, WallSubState::kFlySideways);
+  WallFollowerParams bad;
+  bad.end_contact_lateral = -0.01;
+  expect_rejected(bad, "end_contact_lateral");
+}

@@ -237,6 +237,31 @@ struct WallFollowerParams {
   /// window): a touch TDORC has not flagged yet, so that the wall following
   /// starts at the heading it has without the offset. 0 = never. [Pa]
   double clear_yaw_release_rms = 0.0;
+  /// Whisking on the first approach (issue 17, README "Round 10", choice): the
+  /// first baffle is met with no clearing before it, so clear_yaw_offset has
+  /// no side to turn to; its end can lie in the blind band (25-80 mm beside
+  /// the axis) on either side. In the FLY_FORWARD before the flight's first
+  /// contact the yaw whisks about the course heading by first_whisk_amplitude
+  /// with period first_whisk_period_s (rate limit whisk_rate_max, paused while
+  /// a whisker's sum moves, whisk_pause_rms), the track kept on the course at
+  /// first_whisk_speed (0 = V_max). 0 = off (the paper). [rad]
+  double first_whisk_amplitude = 0.0;
+  double first_whisk_period_s = 1.0;   ///< [s]
+  double first_whisk_speed = 0.0;      ///< [m/s]; 0 = v_max
+  /// While a whisker's sum moves (whisk_pause_rms) the first-approach whisk
+  /// turns back to the course heading (realign_gain) instead of holding the
+  /// yaw, so that the wall following starts nearer the course heading.
+  bool first_whisk_pause_to_course = false;
+  /// A baffle's end met by one whisker (issue 17, README "Round 10", choice):
+  /// a first touch in FLY_FORWARD by exactly one whisker whose contact point
+  /// (the depth along the whisker, turned by the yaw off the course heading)
+  /// lies more than end_contact_lateral beside the course axis on that
+  /// whisker's side is taken for a baffle's end lying on that side (the
+  /// whisked whisker reaching into the blind band): the wall following
+  /// starts as when passing an edge (both touched), side-stepping away from
+  /// it, instead of approaching it (which drove the guard into the end 65-75
+  /// mm beside the axis). 0 = off. [m]
+  double end_contact_lateral = 0.0;
   double target_radius = 0.15;                 ///< land within this distance of the target [m]
   bool land_past_target = true;                ///< also land once past the target along the course direction
   double landing_duration_s = 2.0;             ///< LANDING -> LANDED after this [s]
@@ -354,9 +379,12 @@ class WhiskerWallFollower {
   bool target_reached(const WallFollowerInput& in) const;
   void set_origin(const WallFollowerInput& in);
   Setpoint command(const WallFollowerInput& in) const;
+  double end_contact_offset(const WallFollowerInput& in, bool contact_l, bool contact_r, bool l_valid,
+                            bool r_valid) const;
   double realign(const WallFollowerInput& in) const;
   double realign_rate(double yaw) const;  ///< realign()'s rate toward the course from `yaw` (unsaturated)
-  Setpoint whisk(const WallFollowerInput& in, const Setpoint& s) const;
+  Setpoint whisk(const WallFollowerInput& in, const Setpoint& s, double amplitude, double period, double speed,
+                 bool pause_to_course = false) const;
   Setpoint offset_yaw(const WallFollowerInput& in, const Setpoint& s, double dt);
 
   WallFollowerParams p_;
@@ -392,6 +420,7 @@ class WhiskerWallFollower {
   double resume_x_ = 0.0, resume_y_ = 0.0;  ///< where that FLY_FORWARD began
   double track_yaw_ = NAN;  ///< clear_yaw_offset: the heading the drone would fly without the offset [rad]
   bool yaw_offset_released_ = false;  ///< clear_yaw_release_rms reached since the clearing
+  bool contacted_ = false;  ///< wall following entered at least once in this flight (first_whisk_amplitude)
 };
 
 }  // namespace tactile_fsm
