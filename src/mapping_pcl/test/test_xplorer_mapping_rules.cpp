@@ -1042,3 +1042,37 @@ TEST(XplorerMappingRules, FanPastARightAngledCornerIsClippedAtTheNextFace) {
   EXPECT_DOUBLE_EQ(poly_out, poly_off_out);
 }
 
+
+// Rule 16 the other way round: face A (nine steady slabs up to x = 0.9, then two slabs turned
+// by 48 and 54 deg at x = 0.97) is no line (fewer than ten slabs on one), the next face B is
+// one (x = 1, 12 slabs over 0.33 m). A's mean C_n (8.6 deg off its steady slabs') meets B's
+// normal at 90 deg; A's side is then taken perpendicular to B's line through A's near-face
+// points, and A's fan outside B's line goes.
+TEST(XplorerMappingRules, FanClipWhenOnlyTheNextFaceIsALine) {
+  auto run = [](bool rule) {
+    XplorerMapParams p;
+    p.corner_release_s = 0.0;
+    p.edge_from_arms = false;
+    p.corner_fan_clip = rule;
+    auto map = std::make_shared<PointMap>();
+    auto m = std::make_shared<XplorerContactMapper>(p, *map);
+    double t = 0.0;
+    for (int k = 0; k <= 8; ++k) stamp_at(*m, t, {0.5 + 0.05 * k, 0.0}, {0.0, 1.0}, 0.0);
+    for (int k = 0; k < 2; ++k) stamp_at(*m, t, {0.97, 0.0}, {0.0, 1.0}, (48.0 + 6.0 * k) * M_PI / 180.0);
+    m->end_face(true);
+    for (int k = 0; k < 12; ++k) stamp_at(*m, t, {1.0, 0.06 + 0.03 * k}, {-1.0, 0.0}, 0.0);
+    m->end_face(true);
+    double fan_out = -1e9;
+    for (const auto& q : map->cloud())
+      if (q.x > 1.03) fan_out = std::max(fan_out, static_cast<double>(q.x) - 1.0);
+    return std::make_tuple(fan_out, m->face_lines().size(), m->stats().fan_clips);
+  };
+  const auto [off_out, off_lines, off_clips] = run(false);
+  EXPECT_GT(off_out, 0.04);
+  EXPECT_EQ(off_lines, 1u);  // B only
+  EXPECT_EQ(off_clips, 0u);
+  const auto [on_out, on_lines, on_clips] = run(true);
+  EXPECT_LE(on_out, 0.0101);
+  EXPECT_EQ(on_lines, 1u);
+  EXPECT_EQ(on_clips, 1u);
+}
