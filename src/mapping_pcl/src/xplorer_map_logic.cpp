@@ -102,6 +102,7 @@ ParamMap XplorerMapLogic::default_parameters() {
   m.set("face_clip_corner_reach", d.stamping.face_clip_corner_reach);
   m.set("face_clip_tilted", d.stamping.face_clip_tilted);
   m.set("face_clip_tilted_reach", d.stamping.face_clip_tilted_reach);
+  m.set("corner_fan_clip", d.stamping.corner_fan_clip);
   return m;
 }
 
@@ -164,6 +165,7 @@ XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
   p.stamping.face_clip_corner_reach = m.get_double("face_clip_corner_reach");
   p.stamping.face_clip_tilted = m.get_bool("face_clip_tilted");
   p.stamping.face_clip_tilted_reach = m.get_double("face_clip_tilted_reach");
+  p.stamping.corner_fan_clip = m.get_bool("corner_fan_clip");
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {

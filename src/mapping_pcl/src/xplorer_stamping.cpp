@@ -336,6 +336,57 @@ std::size_t XplorerContactMapper::clip_tilted(const FaceLine& l, const std::vect
   });
 }
 
+std::size_t XplorerContactMapper::clip_fan(const std::vector<FaceSample>& f, const Eigen::Vector2d& n, double offset) {
+  const double half = 0.5 * p_.slab_size.x() + p_.slab_spacing, depth = p_.slab_size.y() + p_.slab_spacing;
+  std::vector<const FaceSample*> near;  // the slabs that can reach outside the line
+  for (const auto& q : f)
+    if (q.point.dot(n) < offset + std::hypot(half, depth)) near.push_back(&q);
+  if (near.empty()) return 0;
+  return map_->remove_if([&](const Vec3& v) {
+    const Eigen::Vector2d x(v.x(), v.y());
+    if (x.dot(n) >= offset - p_.face_clip_tolerance) return false;  // not outside the other face
+    for (const FaceSample* q : near) {  // in one of the face's slabs
+      const Eigen::Vector2d d = x - q->point;
+      const double along_c = d.dot(q->contact);
+      const double across = d.x() * q->contact.y() - d.y() * q->contact.x();
+      if (along_c >= -p_.slab_spacing && along_c <= depth && std::abs(across) <= half) return true;
+    }
+    return false;
+  });
+}
+
+void XplorerContactMapper::clip_corner_fan(const FanFace& fan, const std::optional<FaceLine>& line) {
+  // Each face's normal: its line's, else its slabs' mean C_n.
+  auto normal = [](const std::optional<FaceLine>& l, const std::vector<FaceSample>& f) {
+    if (l) return l->contact;
+    Eigen::Vector2d c = Eigen::Vector2d::Zero();
+    for (const auto& q : f) c += q.contact;
+    return c.norm() > 1e-9 ? Eigen::Vector2d(c.normalized()) : c;
+  };
+  const Eigen::Vector2d ca = normal(fan.line, fan.samples), cb = normal(line, face_);
+  if (ca.norm() < 0.5 || cb.norm() < 0.5) return;
+  const double turn = std::acos(std::clamp(ca.dot(cb), -1.0, 1.0));
+  if (std::abs(turn - M_PI / 2) > p_.face_clip_angle_tolerance) return;  // no right-angled corner
+  // Each face's side: its line, else the face perpendicular to the other one's line (a box)
+  // through the median of its near-face points; none if neither face is a line.
+  if (!fan.line && !line) return;
+  auto side = [](const std::optional<FaceLine>& l, const std::optional<FaceLine>& other, const std::vector<FaceSample>& f,
+                 const Eigen::Vector2d& c) {
+    if (l) return std::make_pair(l->contact, l->point.dot(l->contact));
+    const Eigen::Vector2d n = other->dir.dot(c) >= 0.0 ? other->dir : Eigen::Vector2d(-other->dir);
+    std::vector<double> off;
+    off.reserve(f.size());
+    for (const auto& q : f) off.push_back(q.point.dot(n));
+    std::nth_element(off.begin(), off.begin() + static_cast<std::ptrdiff_t>(off.size() / 2), off.end());
+    return std::make_pair(n, off[off.size() / 2]);
+  };
+  const auto [na, oa] = side(fan.line, line, fan.samples, ca);
+  const auto [nb, ob] = side(line, fan.line, face_, cb);
+  stats_.clipped_points += clip_fan(fan.samples, nb, ob);  // A's slabs (its fan) outside B
+  stats_.clipped_points += clip_fan(face_, na, oa);        // B's slabs outside A
+  ++stats_.fan_clips;
+}
+
 void XplorerContactMapper::end_face(bool turned, bool loop_closed) {
   const bool after_first_turn = face_after_first_turn_;
   face_after_first_turn_ = false;
@@ -348,8 +399,10 @@ void XplorerContactMapper::end_face(bool turned, bool loop_closed) {
   }
   if (face_.empty()) {
     turned_face_.reset();  // a face without slabs between two turns: the faces either side are not adjacent
+    fan_face_.reset();
     return;
   }
+  const bool first = !first_face_seen_;
   if (!first_face_seen_) {
     first_face_seen_ = true;
     if (p_.face_clip_tilted) first_face_ = face_;
@@ -362,8 +415,10 @@ void XplorerContactMapper::end_face(bool turned, bool loop_closed) {
       ++stats_.skipped_corner_fill;
     }
   }
+  std::optional<FaceLine> fitted;  // this face's line (face clip)
   if (p_.face_clip_min_length > 0.0) {  // README "Face clip"
-    if (const auto l = fit_face(face_)) {
+    fitted = fit_face(face_);
+    if (const auto& l = fitted) {
       lines_.push_back(*l);
       ++stats_.face_lines;
       const std::size_t last = lines_.size() - 1;
@@ -382,6 +437,14 @@ void XplorerContactMapper::end_face(bool turned, bool loop_closed) {
       }
       if (turned) prev_line_ = lines_.size() - 1;
     }
+  }
+  if (p_.corner_fan_clip) {  // README "Fan past a right-angled corner" (rule 16)
+    if (fan_face_) clip_corner_fan(*fan_face_, fitted);
+    // At the loop's closure the last face may meet the first traversal's face at a corner too.
+    if (loop_closed && first_fan_face_) clip_corner_fan(*first_fan_face_, fitted);
+    fan_face_.reset();
+    if (turned) fan_face_ = FanFace{fitted, face_};
+    if (first) first_fan_face_ = FanFace{fitted, face_};
   }
   if (turned) {
     turned_face_ = std::move(face_);

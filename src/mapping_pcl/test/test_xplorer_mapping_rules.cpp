@@ -995,3 +995,84 @@ TEST(XplorerMappingRules, TiltedSlabsOutsideTheirFacesLineAreRemovedAtAnyCorner)
   bad.face_clip_tilted_reach = -0.1;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
 }
+
+// Rule 16 (README "Fan past a right-angled corner"): face A along y = 0 (object at y > 0,
+// x < 1) is traversed up to x = 0.9; the vehicle then pivots a guard on the corner (1, 0)
+// without a turn, the yaw following by 12-54 deg, and its slabs, turned with the yaw, fan
+// past the corner, outside face B (x = 1). The turn comes later; B is traversed over 0.08 m
+// only (5 slabs: no line, so rules 12, 13 and 15 do not clip there). With the rule, B's C_n
+// at 90 deg to A's normal places B through its near-face points and the fan's points
+// outside it go; A's steady slabs (their overhang of 0.025 m) stay. At a 60 deg turn
+// (a polygon) nothing is clipped.
+TEST(XplorerMappingRules, FanPastARightAngledCornerIsClippedAtTheNextFace) {
+  auto run = [](bool rule, double turn_deg) {
+    XplorerMapParams p;
+    p.corner_release_s = 0.0;
+    p.edge_from_arms = false;
+    p.corner_fan_clip = rule;
+    auto map = std::make_shared<PointMap>();
+    auto m = std::make_shared<XplorerContactMapper>(p, *map);
+    double t = 0.0;
+    for (int k = 0; k <= 18; ++k) stamp_at(*m, t, {0.05 * k, 0.0}, {0.0, 1.0}, 0.0);  // face A up to x = 0.9
+    for (int k = 0; k < 8; ++k) stamp_at(*m, t, {0.95, 0.0}, {0.0, 1.0}, (12.0 + 6.0 * k) * M_PI / 180.0);  // the fan
+    m->end_face(true);
+    const double a = turn_deg * M_PI / 180.0;
+    const Eigen::Vector2d tb(std::cos(a), std::sin(a)), cb(-std::sin(a), std::cos(a));  // B's direction, C_n
+    for (int k = 0; k < 5; ++k) stamp_at(*m, t, Eigen::Vector2d(1.0, 0.0) + (0.12 + 0.02 * k) * tb, cb, 0.0);
+    m->end_face(true);
+    double fan_out = -1e9;  // outside B beyond A's steady overhang
+    std::size_t inside = 0;  // points inside the object
+    for (const auto& q : map->cloud()) {
+      const Eigen::Vector2d d = Eigen::Vector2d(q.x, q.y) - Eigen::Vector2d(1.0, 0.0);
+      if (d.x() > 0.03) fan_out = std::max(fan_out, -d.dot(cb));
+      if (d.x() < -0.01 && q.y > 0.01) ++inside;
+    }
+    return std::make_tuple(fan_out, inside, m->stats().fan_clips);
+  };
+  const auto [off_out, off_over, off_clips] = run(false, 90.0);
+  EXPECT_GT(off_out, 0.04);  // 0.95 + 0.125 cos 12 deg: 0.07 m past the corner
+  EXPECT_EQ(off_clips, 0u);
+  const auto [on_out, on_over, on_clips] = run(true, 90.0);
+  EXPECT_LE(on_out, 0.0101);  // face_clip_tolerance (nothing past 0.03 m at all: -1e9)
+  EXPECT_EQ(on_clips, 1u);
+  EXPECT_EQ(on_over, off_over);  // nothing inside the object is removed
+  const auto [poly_out, poly_over, poly_clips] = run(true, 60.0);
+  const auto [poly_off_out, poly_off_over, poly_off_clips] = run(false, 60.0);
+  EXPECT_EQ(poly_clips, 0u);
+  EXPECT_DOUBLE_EQ(poly_out, poly_off_out);
+}
+
+
+// Rule 16 the other way round: face A (nine steady slabs up to x = 0.9, then two slabs turned
+// by 48 and 54 deg at x = 0.97) is no line (fewer than ten slabs on one), the next face B is
+// one (x = 1, 12 slabs over 0.33 m). A's mean C_n (8.6 deg off its steady slabs') meets B's
+// normal at 90 deg; A's side is then taken perpendicular to B's line through A's near-face
+// points, and A's fan outside B's line goes.
+TEST(XplorerMappingRules, FanClipWhenOnlyTheNextFaceIsALine) {
+  auto run = [](bool rule) {
+    XplorerMapParams p;
+    p.corner_release_s = 0.0;
+    p.edge_from_arms = false;
+    p.corner_fan_clip = rule;
+    auto map = std::make_shared<PointMap>();
+    auto m = std::make_shared<XplorerContactMapper>(p, *map);
+    double t = 0.0;
+    for (int k = 0; k <= 8; ++k) stamp_at(*m, t, {0.5 + 0.05 * k, 0.0}, {0.0, 1.0}, 0.0);
+    for (int k = 0; k < 2; ++k) stamp_at(*m, t, {0.97, 0.0}, {0.0, 1.0}, (48.0 + 6.0 * k) * M_PI / 180.0);
+    m->end_face(true);
+    for (int k = 0; k < 12; ++k) stamp_at(*m, t, {1.0, 0.06 + 0.03 * k}, {-1.0, 0.0}, 0.0);
+    m->end_face(true);
+    double fan_out = -1e9;
+    for (const auto& q : map->cloud())
+      if (q.x > 1.03) fan_out = std::max(fan_out, static_cast<double>(q.x) - 1.0);
+    return std::make_tuple(fan_out, m->face_lines().size(), m->stats().fan_clips);
+  };
+  const auto [off_out, off_lines, off_clips] = run(false);
+  EXPECT_GT(off_out, 0.04);
+  EXPECT_EQ(off_lines, 1u);  // B only
+  EXPECT_EQ(off_clips, 0u);
+  const auto [on_out, on_lines, on_clips] = run(true);
+  EXPECT_LE(on_out, 0.0101);
+  EXPECT_EQ(on_lines, 1u);
+  EXPECT_EQ(on_clips, 1u);
+}

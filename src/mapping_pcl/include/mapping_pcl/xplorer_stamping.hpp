@@ -208,6 +208,23 @@ struct XplorerMapParams {
   /// angle). Choice, not in 001 (README "Tilted slabs"); false: off.
   bool face_clip_tilted = true;
   double face_clip_tilted_reach = 0.6;  ///< [m] (choice: a face's fitted span ends 0.1-0.3 m short of its corners)
+  /// Fan past a right-angled corner (rule 16): when a face A ended in a
+  /// Tactile-turning and the next face B's normal (its line's, else its
+  /// slabs' mean C_n) lies at 90 deg (face_clip_angle_tolerance) to A's, and
+  /// at least one of them is fitted as a line, each face's side is its line
+  /// or, if it is no line, the face perpendicular to the other's line (a box,
+  /// 001's object) through the median of its near-face points; the map points
+  /// of A's slabs more than face_clip_tolerance outside B's side are removed,
+  /// and those of B's slabs outside A's. At the loop's closure the first
+  /// traversal's face is checked against the last face the same way. A
+  /// traversal that rounds a convex corner without a yaw-rate peak pivots a
+  /// guard on the corner for 5-7 s with the yaw following at ~0.17 rad/s; its
+  /// slabs, turned with the yaw, reach 2-5 cm past the corner, outside the next
+  /// face (held-out boxes 13408, 13485, 13500: 0.93-0.97), and that next face
+  /// is often too short or too messy a traversal to be fitted as a line, so
+  /// rule 12 (two lines at a right angle) leaves the fan. Choice, not in 001
+  /// (README "Fan past a right-angled corner"); false: off.
+  bool corner_fan_clip = true;
   double arm_hinge_offset = 0.05;  ///< centre -> arm hinge along the diagonal [m] (vehicle CAD; the SITL's value)
   double arm_length = 0.15;        ///< hinge -> motor [m] (vehicle CAD)
   double guard_radius = 0.07;      ///< propeller guard radius round the motor [m] (vehicle CAD)
@@ -271,6 +288,7 @@ class XplorerContactMapper {
     uint64_t dropped_unsteady = 0;        ///< held slabs dropped before a steady stretch (steady_distance)
     uint64_t face_lines = 0;              ///< faces fitted as lines (face_clip_min_length)
     uint64_t clipped_points = 0;          ///< map points removed outside a fitted face (face_clip_min_length)
+    uint64_t fan_clips = 0;               ///< right-angled corners whose fans were clipped (corner_fan_clip)
   };
 
   XplorerContactMapper(const XplorerMapParams& params, PointMap& map);
@@ -363,6 +381,18 @@ class XplorerContactMapper {
   bool first_face_seen_ = false;
   /// Removes the points outside `l` in the slabs of `f` tilted off its normal (face_clip_tilted); returns how many.
   std::size_t clip_tilted(const FaceLine& l, const std::vector<FaceSample>& f);
+  /// The face that ended in a turn, for the fan clip of the next face (corner_fan_clip).
+  struct FanFace {
+    std::optional<FaceLine> line;
+    std::vector<FaceSample> samples;
+  };
+  std::optional<FanFace> fan_face_;
+  std::optional<FanFace> first_fan_face_;  ///< the first traversal's face, for the loop's closure
+  /// The fan clip between `fan` (face A) and the current face B, fitted as `line` or not (corner_fan_clip).
+  void clip_corner_fan(const FanFace& fan, const std::optional<FaceLine>& line);
+  /// Removes the points of `f`'s slabs that lie more than face_clip_tolerance outside the line
+  /// x . n = offset (the object at >=); returns how many.
+  std::size_t clip_fan(const std::vector<FaceSample>& f, const Eigen::Vector2d& n, double offset);
   std::optional<std::size_t> after_first_turn_line_;  ///< line of the face after the first turn (loop closure)
   bool face_after_first_turn_ = false;                ///< the current face began after the first turn
   int turns_ended_ = 0;                               ///< faces ended in a turn so far
