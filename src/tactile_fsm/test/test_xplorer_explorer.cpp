@@ -725,6 +725,7 @@ TEST(XplorerExplorer, FaceSlidAlongInExplorationIsSquaredUpTo) {
   }
   XplorerParams p;
   p.square_min_deflection = 0.35;
+  p.square_to_x = false;  // the nearest body axis first; square_to_x below
   SlideResult r = slide_along_a_face(p, -40.0, true);
   XplorerExplorer& x = r.x;
   ASSERT_EQ(x.state(), XplorerState::kTactileTraversal);

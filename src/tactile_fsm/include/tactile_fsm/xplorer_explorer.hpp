@@ -203,14 +203,14 @@ struct XplorerParams {
   /// and the traversal first yaws at turn_rate (001's controlled yaw rate, Sec. V-C) to put
   /// that axis on the normal, holding the contact along the face's normal without moving
   /// along it; then the traversal goes on as before. square_min_deflection 0: off.
-  double square_min_deflection = 0.0;  ///< [rad] (choice; 0: off)
+  double square_min_deflection = 0.35;  ///< [rad] (choice, 20 deg, on since 2026-11-27; 0: off)
   double square_window = 1.0;          ///< path window before the contact [s] (choice; the force average's 1 s)
   double square_min_path = 0.1;        ///< ... at least this long [m] (choice)
   double square_hold = 1.0;            ///< after the yaw ramp, wait at most this long for the yaw to arrive [s] (choice)
   /// true: C_n is body +X, the Exploration axis (the frame of a square first contact, 001
   /// Sec. V-C2: move along body +x, contact, traverse along -y), up to 90 deg of yaw; false:
   /// the body axis nearest to the normal (at most 45 deg) (choice).
-  bool square_to_x = false;
+  bool square_to_x = true;
   double static_force = 1.0;         ///< static-wrench reference |delta_f_ref| [N] (001 Sec. V-B)
   XVec2 goal = XVec2(1.0, 0.0);      ///< ricochet / waypoint goal, world [m]
   double ricochet_speed = 1.5;       ///< approach speed [m/s] ("maximum velocity", 001 Sec. IV-C; the SITL controller's limit)
