@@ -181,6 +181,12 @@ void XplorerParams::validate() const {
     bad("XplorerParams", "contact_backoff_max", "must be in [0, 0.5] m", contact_backoff_max);
   if (!(contact_backoff_time >= 0.0 && contact_backoff_time <= 2.0))
     bad("XplorerParams", "contact_backoff_time", "must be in [0, 2] s", contact_backoff_time);
+  if (!(square_min_deflection >= 0.0 && square_min_deflection < 0.5 * M_PI))
+    bad("XplorerParams", "square_min_deflection", "must be in [0, pi/2) (0: off)", square_min_deflection);
+  pos("square_window", square_window);
+  if (!(square_min_path >= 0.0) || !std::isfinite(square_min_path))
+    bad("XplorerParams", "square_min_path", "must be finite and >= 0", square_min_path);
+  if (!(square_hold >= 0.0 && square_hold <= 10.0)) bad("XplorerParams", "square_hold", "must be in [0, 10] s", square_hold);
   pos("static_force", static_force);
   if (!goal.allFinite()) bad("XplorerParams", "goal", "must be finite", goal.x());
   pos("ricochet_speed", ricochet_speed);
@@ -218,6 +224,8 @@ void XplorerExplorer::enter(XplorerState s, const XplorerInput& in, const std::s
   hold_ = in.position;
   hold_yaw_ = in.yaw;
   yaw_enter_ = in.yaw;
+  squaring_ = false;
+  if (s == XplorerState::kExploration) explore_history_.clear();
   if (s == XplorerState::kTactileTraversal || s == XplorerState::kStaticWrench) {
     adm_.reset(XVec3(in.position.x(), in.position.y(), p_.hover_height), in.yaw);
     r_star_ = in.position.head<2>();
@@ -249,6 +257,41 @@ void XplorerExplorer::start_backoff(const XplorerInput& in) {
   backoff_sp_.head<2>() += std::min(p_.contact_backoff_gain * fn, p_.contact_backoff_max) * dir;
   backoff_until_ = in.t + p_.contact_backoff_time;
   ++backoffs_;
+}
+
+bool XplorerExplorer::plan_square(const XplorerInput& in) {
+  // Issue 17, class B (our choice; README "Oblique first face"): the path of the last
+  // square_window s of Exploration, deflected from the Exploration direction, runs along the
+  // face the vehicle slid on; the face's normal is perpendicular to it, on the side the force
+  // comes from (the fused force points out of the obstacle).
+  if (!(p_.square_min_deflection > 0.0) || p_.mission != XplorerMission::kExplore || explore_history_.empty())
+    return false;
+  const XVec2 d = in.position.head<2>() - explore_history_.front().p;
+  if (d.norm() < p_.square_min_path || d.norm() < 1e-9) return false;
+  const XVec2 t = d.normalized();
+  const double cos_defl = std::clamp(t.dot(explore_dir_), -1.0, 1.0);
+  // Deflected by at least square_min_deflection, but still forward (at most 80 deg: a rebound
+  // from a square hit runs back along the force, not along a face).
+  if (std::acos(cos_defl) < p_.square_min_deflection || cos_defl < std::cos(80.0 * M_PI / 180.0)) return false;
+  const XVec2 fw = rot(in.yaw, f_body_avg_);
+  if (!(fw.norm() > 1e-6) || std::abs(t.dot(fw.normalized())) > std::cos(M_PI / 4.0)) return false;  // slid across the force
+  XVec2 n(-t.y(), t.x());
+  if (n.dot(fw) > 0.0) n = -n;                    // into the obstacle
+  if (n.dot(explore_dir_) <= 0.0) return false;  // the face lies ahead of the approach
+  // C_n: body +X (square_to_x) or the body axis nearest to the normal; the yaw that puts it on
+  // the normal (|.| < 90 / <= 45 deg).
+  const XVec2 nb = rot(-in.yaw, n);
+  const XDir c = p_.square_to_x ? XDir::kPlusX
+                : std::abs(nb.x()) >= std::abs(nb.y()) ? (nb.x() > 0 ? XDir::kPlusX : XDir::kMinusX)
+                                                      : (nb.y() > 0 ? XDir::kPlusY : XDir::kMinusY);
+  const XVec2 cw = rot(in.yaw, unit(c));
+  contact_ = c;
+  move_ = right_hand(c);  // 001 Sec. IV-A: right-hand traversal
+  square_yaw0_ = in.yaw;
+  square_yaw_ = wrap(in.yaw + std::atan2(cw.x() * n.y() - cw.y() * n.x(), cw.dot(n)));
+  squaring_ = true;
+  ++squarings_;
+  return true;
 }
 
 XVec3 XplorerExplorer::turning_setpoint(const XplorerInput& in, double* yaw) const {
@@ -366,12 +409,24 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
           }
           enter(XplorerState::kTactileTraversal, in, std::string("contact ") + to_string(c));
           start_backoff(in);
+          if (plan_square(in)) {  // a face slid along: square up to it first (square_*)
+            square_t0_ = std::max(in.t, backoff_until_);
+            std::ostringstream r;
+            r << "contact " << to_string(contact_) << " (square up "
+              << std::lround(wrap(square_yaw_ - square_yaw0_) * 180.0 / M_PI) << " deg)";
+            reason_ = r.str();
+          }
         }
         break;
       }
       out.position = XVec3(p2.x(), p2.y(), p_.hover_height);
       out.position.head<2>() += (p_.explore_speed / p_.position_gain) * explore_dir_;
       out.yaw = hold_yaw_;
+      if (p_.square_min_deflection > 0.0) {  // the path for squaring up (square_window)
+        explore_history_.push_back({in.t, p2, in.yaw});
+        while (explore_history_.size() > 1 && in.t - explore_history_[1].t >= p_.square_window)
+          explore_history_.pop_front();
+      }
       break;
     }
     case XplorerState::kTactileTraversal: {
@@ -380,6 +435,40 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
         // vehicle is (no turn trigger, release timer or reshaped r* from the back-off).
         hold_backoff(in, out);
         break;
+      }
+      if (squaring_) {
+        // Squaring up to the face slid along (square_*, our choice): the yaw setpoint ramps at
+        // turn_rate (001 Sec. V-C) to put C_n on the face normal, then holds square_hold s; the
+        // contact is held along the normal (eq. 8 with r* reshaped along it), no lead along
+        // the face; no turn trigger, concave-corner update or face lookback meanwhile.
+        const double dpsi = wrap(square_yaw_ - square_yaw0_);
+        const double ramp_s = std::abs(dpsi) / p_.turn_rate, el = in.t - square_t0_;
+        const XVec2 n = rot(square_yaw_, unit(contact_));
+        if (f_body_avg_.norm() < p_.release_force) {
+          if (low_force_since_ < 0) low_force_since_ = in.t;
+          if (in.t - low_force_since_ > p_.release_time) {  // the face went: Exploration towards it
+            explore_dir_ = n;
+            hold_yaw_ = in.yaw;
+            enter(XplorerState::kExploration, in, "contact lost while squaring up");
+            break;
+          }
+        } else {
+          low_force_since_ = -1.0;
+        }
+        if (el < ramp_s + p_.square_hold) {
+          const XVec3 f_des(-p_.contact_force * n.x(), -p_.contact_force * n.y(), 0.0);
+          const double rn = reshape(n, p2, in.force, f_des, dt);
+          const XVec2 rs = p2 + (rn - p2.dot(n)) * n;
+          adm_.update(in.force, f_des, XVec3(rs.x(), rs.y(), p_.hover_height), in.torque_z, 0.0, in.yaw, dt);
+          out.position = adm_.position();
+          out.yaw = wrap(square_yaw0_ + std::copysign(std::min(p_.turn_rate * std::max(el, 0.0), std::abs(dpsi)), dpsi));
+          t_quiet_ = in.t;
+          break;
+        }
+        squaring_ = false;  // squared: the traversal of 001 from here
+        t_quiet_ = in.t;
+        low_force_since_ = -1.0;
+        traverse_history_.clear();
       }
       // 001 Sec. IV-A: a yaw-rate peak (release at a corner) starts Tactile-turning.
       traverse_history_.push_back({in.t, p2, in.yaw});

@@ -60,6 +60,11 @@ ParamMap XplorerFsmLogic::default_parameters() {
   m.set("contact_backoff_gain", f.contact_backoff_gain);
   m.set("contact_backoff_max", f.contact_backoff_max);
   m.set("contact_backoff_time", f.contact_backoff_time);
+  m.set("square_min_deflection", f.square_min_deflection);
+  m.set("square_window", f.square_window);
+  m.set("square_min_path", f.square_min_path);
+  m.set("square_hold", f.square_hold);
+  m.set("square_to_x", f.square_to_x);
   m.set("static_force", f.static_force);
   m.set("goal", std::vector<double>{f.goal.x(), f.goal.y()});
   m.set("ricochet_speed", f.ricochet_speed);
@@ -122,6 +127,11 @@ XplorerFsmLogic::Params XplorerFsmLogic::params_from(const ParamMap& m) {
   f.contact_backoff_gain = m.get_double("contact_backoff_gain");
   f.contact_backoff_max = m.get_double("contact_backoff_max");
   f.contact_backoff_time = m.get_double("contact_backoff_time");
+  f.square_min_deflection = m.get_double("square_min_deflection");
+  f.square_window = m.get_double("square_window");
+  f.square_min_path = m.get_double("square_min_path");
+  f.square_hold = m.get_double("square_hold");
+  f.square_to_x = m.get_bool("square_to_x");
   f.static_force = m.get_double("static_force");
   const auto g = m.get_double_array("goal");
   if (g.size() != 2) throw m.error("goal", "must be [x, y], got " + std::to_string(g.size()) + " elements");

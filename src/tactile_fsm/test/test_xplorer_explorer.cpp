@@ -675,3 +675,117 @@ TEST(XplorerParams, ValidateNamesTheField) {
   EXPECT_THROW(p.validate(), std::invalid_argument);
   EXPECT_THROW(mission_from_string("fly"), std::invalid_argument);
 }
+
+// Issue 17, class B (square_*): Exploration along +x slides along a face at -40 deg to the
+// approach (the path deflected along the face's tangent t, the force out of the face with a
+// friction part against the motion, both axes under delta_0 for 2 s), then the average
+// crosses delta_0 on body x. Without the rule C_n is body +X (50 deg off the face's normal)
+// and the traversal keeps the approach yaw; with it C_n is body +Y (the axis nearest to the
+// normal, 40 deg off), lambda = +X, and the traversal first yaws clockwise at turn_rate to
+// -40 deg, holding the contact along the normal with no lead along the face, no turn on a
+// yaw-rate peak meanwhile; then it traverses along body +X = the face's tangent.
+namespace {
+struct SlideResult {
+  XplorerExplorer x;
+  double t;
+  XVec3 p;
+};
+SlideResult slide_along_a_face(const XplorerParams& prm, double face_deg, bool slide) {
+  SlideResult r{XplorerExplorer{prm}, 0.0, XVec3(0, 0, 0.7)};
+  const double a = face_deg * M_PI / 180.0;
+  const XVec2 t(std::cos(a), std::sin(a));
+  const XVec2 n = a < 0 ? XVec2(-t.y(), t.x()) : XVec2(t.y(), -t.x());  // into the obstacle
+  r.x.update(input(r.t, r.p, 0.0, XVec3::Zero()), 0.02);
+  // 1 s of free Exploration along +x at 0.3 m/s.
+  for (int i = 0; i < 50; ++i) {
+    r.p.x() += 0.3 * 0.02;
+    r.x.update(input(r.t += 0.02, r.p, 0.0, XVec3::Zero()), 0.02);
+  }
+  // Touching the face: 2 s at ~1.1 N per axis, then ~1.9 N until the average crosses delta_0.
+  for (int i = 0; i < 400 && r.x.state() == XplorerState::kExploration; ++i) {
+    const double fn = i < 100 ? 1.4 : 2.2;
+    const XVec2 f = -fn * n - 0.3 * fn * (slide ? t : XVec2::Zero());
+    if (slide) r.p.head<2>() += 0.25 * 0.02 * t;
+    r.x.update(input(r.t += 0.02, r.p, 0.0, XVec3(f.x(), f.y(), 0.0)), 0.02);
+  }
+  return r;
+}
+}  // namespace
+
+TEST(XplorerExplorer, FaceSlidAlongInExplorationIsSquaredUpTo) {
+  const double target = -40.0 * M_PI / 180.0;
+  {  // rule off (main's behaviour): C_n from the body axes, no squaring
+    XplorerParams p;
+    p.square_min_deflection = 0.0;
+    SlideResult r = slide_along_a_face(p, -40.0, true);
+    ASSERT_EQ(r.x.state(), XplorerState::kTactileTraversal);
+    EXPECT_EQ(r.x.contact(), XDir::kPlusX);
+    EXPECT_EQ(r.x.move(), XDir::kMinusY);
+    EXPECT_EQ(r.x.squarings(), 0u);
+  }
+  XplorerParams p;
+  p.square_min_deflection = 0.35;
+  p.square_to_x = false;  // the nearest body axis first; square_to_x below
+  SlideResult r = slide_along_a_face(p, -40.0, true);
+  XplorerExplorer& x = r.x;
+  ASSERT_EQ(x.state(), XplorerState::kTactileTraversal);
+  EXPECT_EQ(x.contact(), XDir::kPlusY);
+  EXPECT_EQ(x.move(), XDir::kPlusX);
+  EXPECT_EQ(x.squarings(), 1u);
+  EXPECT_NEAR(x.square_target_yaw(), target, 1e-6);
+  EXPECT_EQ(x.reason().rfind("contact +Y (square up -40 deg)", 0), 0u) << x.reason();
+  const double t0 = r.t + p.contact_backoff_time;  // the squaring starts after the back-off
+  const XVec2 tf(std::cos(target), std::sin(target)), nf(-std::sin(target), std::cos(target));
+  XplorerOutput o;
+  double yaw = 0.0;
+  // The yaw setpoint ramps at turn_rate; the vehicle follows it; a yaw-rate peak changes nothing.
+  while (r.t < t0 + -target / p.turn_rate + p.square_hold - 0.05) {
+    const XVec2 f = -1.25 * nf;
+    o = x.update(input(r.t += 0.02, r.p, yaw, XVec3(f.x(), f.y(), 0.0), 1.0), 0.02);
+    ASSERT_EQ(o.state, XplorerState::kTactileTraversal) << r.t;
+    ASSERT_TRUE(x.squaring() || r.t < t0) << r.t;
+    if (r.t > t0 + 0.02) {
+      EXPECT_NEAR(o.yaw, std::max(target, -p.turn_rate * (r.t - t0)), 0.021) << r.t;
+      EXPECT_NEAR((o.position.head<2>() - r.p.head<2>()).dot(tf), 0.0, 1e-3) << r.t;  // no lead along the face
+    }
+    yaw = o.yaw;
+  }
+  EXPECT_EQ(x.turns(), 0u);
+  EXPECT_NEAR(yaw, target, 1e-6);
+  // Squared: the traversal of 001 along lambda = body +X, i.e. along the face.
+  for (int i = 0; i < 100; ++i) {
+    const XVec2 f = -1.25 * nf;
+    o = x.update(input(r.t += 0.02, r.p, target, XVec3(f.x(), f.y(), 0.0)), 0.02);
+  }
+  EXPECT_FALSE(x.squaring());
+  EXPECT_EQ(o.state, XplorerState::kTactileTraversal);
+  EXPECT_GT((o.position.head<2>() - r.p.head<2>()).dot(tf), 0.05);
+  EXPECT_NEAR((o.position.head<2>() - r.p.head<2>()).dot(nf), 0.0, 1e-3);
+  EXPECT_EQ(x.turns(), 0u);
+  // The mirrored face (+40 deg, the vehicle slides left): C_n = -Y, squared counter-clockwise.
+  SlideResult m = slide_along_a_face(p, 40.0, true);
+  EXPECT_EQ(m.x.contact(), XDir::kMinusY);
+  EXPECT_EQ(m.x.move(), XDir::kMinusX);
+  EXPECT_NEAR(m.x.square_target_yaw(), -target, 1e-6);
+  // square_to_x: C_n is body +X (the frame of a square first contact), lambda = -Y, squared
+  // counter-clockwise by 50 deg onto the face's normal.
+  {
+    XplorerParams px = p;
+    px.square_to_x = true;
+    SlideResult rx = slide_along_a_face(px, -40.0, true);
+    EXPECT_EQ(rx.x.contact(), XDir::kPlusX);
+    EXPECT_EQ(rx.x.move(), XDir::kMinusY);
+    EXPECT_NEAR(rx.x.square_target_yaw(), 50.0 * M_PI / 180.0, 1e-6);
+    EXPECT_EQ(rx.x.reason().rfind("contact +X (square up 50 deg)", 0), 0u) << rx.x.reason();
+  }
+  // No slide (a square hit, or the vehicle stopped at the face): nothing changes.
+  SlideResult s = slide_along_a_face(p, -40.0, false);
+  EXPECT_EQ(s.x.squarings(), 0u);
+  EXPECT_EQ(s.x.contact(), XDir::kPlusY);  // 001's body axis of the larger force component
+  EXPECT_FALSE(s.x.squaring());
+  p.square_hold = -1.0;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p = XplorerParams{};
+  p.square_min_deflection = 1.6;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+}

@@ -187,6 +187,30 @@ struct XplorerParams {
   double contact_backoff_gain = 0.04;  ///< [m/N] (choice, tuned; recovery_gain is 0.02)
   double contact_backoff_max = 0.15;   ///< [m] (choice)
   double contact_backoff_time = 0.3;   ///< [s] (choice, as recovery_time; 0: off)
+  /// Square up to a face slid along in Exploration (issue 17, class B open loops; README
+  /// "Oblique first face: squaring up to the face slid along"). 001 keeps the yaw in
+  /// admittance "ensuring two arms of the UAV are in contact with the obstacle" (Sec. V-C1);
+  /// on a face at ~40-50 deg to the approach the force on the leading arm points nearly
+  /// through the centre, gives no yaw torque, and the vehicle slides along the face with the
+  /// approach yaw until the per-axis average crosses delta_0 (both axes read ~1 N). The
+  /// traversal, C_n and the turn at the next corner then work in body axes 40 deg off the
+  /// face and the turn orbits in the wrong frame. Rule (our choice): on the contact that
+  /// ends Exploration, if the vehicle's path over the last square_window s deviates from the
+  /// Exploration direction by at least square_min_deflection (it was deflected along the
+  /// face: its direction is the face's tangent, to 0.4-2.5 deg on the class B seeds, where the
+  /// averaged force, tilted by friction, was 1-25 deg off the normal), C_n is the body axis
+  /// nearest to the face normal (the normal perpendicular to the path on the force's side)
+  /// and the traversal first yaws at turn_rate (001's controlled yaw rate, Sec. V-C) to put
+  /// that axis on the normal, holding the contact along the face's normal without moving
+  /// along it; then the traversal goes on as before. square_min_deflection 0: off.
+  double square_min_deflection = 0.35;  ///< [rad] (choice, 20 deg, on since 2026-11-27; 0: off)
+  double square_window = 1.0;          ///< path window before the contact [s] (choice; the force average's 1 s)
+  double square_min_path = 0.1;        ///< ... at least this long [m] (choice)
+  double square_hold = 1.0;            ///< after the yaw ramp, wait at most this long for the yaw to arrive [s] (choice)
+  /// true: C_n is body +X, the Exploration axis (the frame of a square first contact, 001
+  /// Sec. V-C2: move along body +x, contact, traverse along -y), up to 90 deg of yaw; false:
+  /// the body axis nearest to the normal (at most 45 deg) (choice).
+  bool square_to_x = true;
   double static_force = 1.0;         ///< static-wrench reference |delta_f_ref| [N] (001 Sec. V-B)
   XVec2 goal = XVec2(1.0, 0.0);      ///< ricochet / waypoint goal, world [m]
   double ricochet_speed = 1.5;       ///< approach speed [m/s] ("maximum velocity", 001 Sec. IV-C; the SITL controller's limit)
@@ -243,6 +267,9 @@ class XplorerExplorer {
   const XVec2& pivot() const { return pivot_; }  ///< corner pivot of the last Tactile-turning (turn_pivot)
   uint32_t collisions() const { return collisions_; }
   uint32_t backoffs() const { return backoffs_; }  ///< contact back-offs flown (contact_backoff_*)
+  uint32_t squarings() const { return squarings_; }  ///< squarings up to a face slid along (square_*)
+  bool squaring() const { return squaring_; }
+  double square_target_yaw() const { return square_yaw_; }
   bool backing_off(double t) const { return t < backoff_until_; }
   double collision_peak() const { return collision_peak_; }
   const XplorerParams& params() const { return p_; }
@@ -252,6 +279,7 @@ class XplorerExplorer {
   XDir detect_contact(double threshold) const;
   double reshape(const XVec2& n, const XVec2& p, const XVec3& force, const XVec3& f_des, double dt);
   void start_backoff(const XplorerInput& in);
+  bool plan_square(const XplorerInput& in);  ///< square_*: sets contact_, move_ and the squaring's yaw
   void hold_backoff(const XplorerInput& in, XplorerOutput& out);  ///< publishes backoff_sp_, holds the traversal state
   XVec3 turning_setpoint(const XplorerInput& in, double* yaw) const;
 
@@ -288,6 +316,10 @@ class XplorerExplorer {
     double yaw;
   };
   std::deque<PoseSample> traverse_history_;  ///< last corner_lookback s of Tactile-traversal
+  std::deque<PoseSample> explore_history_;   ///< last square_window s of Exploration
+  bool squaring_ = false;
+  double square_yaw0_ = 0.0, square_yaw_ = 0.0, square_t0_ = 0.0;
+  uint32_t squarings_ = 0;
   XVec2 pivot_ = XVec2::Zero(), face_n_ = XVec2(1, 0), face_t_ = XVec2(0, -1);
   double face_yaw_ = 0.0, phi0_ = 0.0;
 };
