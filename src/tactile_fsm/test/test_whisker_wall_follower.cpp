@@ -1266,3 +1266,72 @@ TEST(WhiskerWallFollower, YawOffsetReleasedOnMovingSum) {
   bad.clear_yaw_release_rms = -1.0;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
 }
+
+// lost_far_depth (README "Round 10"): after both touched, a whisker lost while
+// it was already beyond lost_far_depth, the other beyond T_max: the drone
+// drifted off the wall (mocap 12007: sliding sideways 5-6 deg off the baffle's
+// line, true depths 99 -> 138 mm), not past an end. Without the rule the
+// leading whisker lost (or wall_end_depth) asks for FLY_SIDEWAYS, which slid
+// on until both flags dropped mid-wall; with it FLY_FORWARD back to the wall.
+// A lost whisker last read in the band (an end), a remaining depth in the
+// band, or the approach are unchanged.
+TEST(WallSubStateRule, WhiskerLostOutOfReachFliesBackToTheWall) {
+  WallFollowerParams p;
+  p.hold_heading_trailing_lost = true;  // the whisker FSM node's defaults
+  p.wall_end_depth = 0.105;
+  const auto ws = WallSubState::kFlySideways;
+  // Following left, the leading (left) whisker lost at 106 mm, the right at 128 mm.
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.128, true, Side::kLeft, true, ws, p, NAN, 0.106, 0.12),
+            WallSubState::kFlySideways);  // off: the core default
+  EXPECT_EQ(WallFollowerParams{}.lost_far_depth, 0.0);
+  p.lost_far_depth = 0.095;
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.128, true, Side::kLeft, true, ws, p, NAN, 0.106, 0.12),
+            WallSubState::kFlyForward);
+  // The trailing (right) one lost at 101 mm, the left at 121 mm (wall_end_depth's case).
+  EXPECT_EQ(wall_sub_state(0.121, true, NAN, false, Side::kLeft, true, ws, p, NAN, 0.12, 0.101),
+            WallSubState::kFlyForward);
+  // Lost whisker last read in the band (it ran off an end): wall_end_depth as before.
+  EXPECT_EQ(wall_sub_state(0.121, true, NAN, false, Side::kLeft, true, ws, p, NAN, 0.12, 0.08),
+            WallSubState::kFlySideways);
+  // Remaining depth in the band: the leading lost keeps passing the edge.
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.09, true, Side::kLeft, true, ws, p, NAN, 0.106, 0.09),
+            WallSubState::kFlySideways);
+  // Unknown last depth, or the approach (before both touched): unchanged.
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.128, true, Side::kLeft, true, ws, p), WallSubState::kFlySideways);
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.128, true, Side::kLeft, false, ws, p, NAN, 0.106, 0.12),
+            WallSubState::kFlyForward);
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.09, true, Side::kLeft, false, ws, p, NAN, 0.106, 0.09),
+            WallSubState::kTurnRight);
+  // Through step(): both on the wall drifting out (depths growing past T_max),
+  // then the left flag drops at 106 mm with the right read at 128 mm.
+  auto sub_after_loss = [](WallFollowerParams q) {
+    WhiskerWallFollower fsm(q);
+    double t = 0.0;
+    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t, 1.0, 0.0));
+    for (int k = 0; k < 20; ++k, t += kDt) {
+      WallFollowerInput in = input(t, 1.0, 0.0);
+      set_depths(in, 0.09 + 0.0008 * k, 0.09 + 0.0015 * k);
+      fsm.step(in);
+    }
+    WallSubState sub = WallSubState::kNone;
+    for (int k = 0; k < 10; ++k, t += kDt) {
+      WallFollowerInput in = input(t, 1.0, 0.0);
+      set_depths(in, NAN, 0.128);
+      in.left_valid = false;
+      sub = fsm.step(in).sub_state;
+    }
+    return sub;
+  };
+  WallFollowerParams q;
+  q.hold_heading_trailing_lost = true;
+  q.wall_end_depth = 0.105;
+  q.follow_side = Side::kLeft;
+  q.side_toward_target = false;
+  EXPECT_EQ(sub_after_loss(q), WallSubState::kFlySideways);
+  q.lost_far_depth = 0.095;
+  EXPECT_EQ(sub_after_loss(q), WallSubState::kFlyForward);
+  q.lost_far_depth = -0.01;
+  EXPECT_THROW(q.validate(), std::invalid_argument);
+  q.lost_far_depth = NAN;
+  EXPECT_THROW(q.validate(), std::invalid_argument);
+}
