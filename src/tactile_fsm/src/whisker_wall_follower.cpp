@@ -102,6 +102,7 @@ void WallFollowerParams::validate() const {
   require(finite_nonneg(motion_depth_baseline), "motion_depth_baseline", "must be finite and >= 0",
           motion_depth_baseline);
   require(std::isfinite(whisker_base_x), "whisker_base_x", "must be finite", whisker_base_x);
+  require(finite_nonneg(resume_quiet_rms), "resume_quiet_rms", "must be finite and >= 0 (0 = off)", resume_quiet_rms);
   require(finite_nonneg(lost_far_depth), "lost_far_depth", "must be finite and >= 0 (0 = off)", lost_far_depth);
   require(finite_nonneg(phantom_quiet_rms), "phantom_quiet_rms", "must be finite and >= 0 (0 = off)",
           phantom_quiet_rms);
@@ -452,6 +453,13 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
         break;
       case FsmState::kFlyForward:
       case FsmState::kResumeForward:
+        // resume_quiet_rms: a sum still moving is a whisker still on the wall;
+        // the margin counts from here (README "Round 10"; our choice).
+        if (state_ == FsmState::kResumeForward && sum_moves(in, p_.resume_quiet_rms) &&
+            std::hypot(in.x - clear_x_, in.y - clear_y_) < p_.phantom_resume_max) {
+          margin_x_ = in.x;
+          margin_y_ = in.y;
+        }
         if (contact && state_ == FsmState::kResumeForward) {
           // Contact again while side-stepping past the edge: the same
           // obstacle's end (the contact flags dropped early). Keep the side and
@@ -482,7 +490,7 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
           last_contact_t_ = t;
           enter(FsmState::kWallFollowing, "whisker contact", t);
         } else if (state_ == FsmState::kResumeForward &&
-                   std::hypot(in.x - clear_x_, in.y - clear_y_) >= p_.clear_margin &&
+                   std::hypot(in.x - margin_x_, in.y - margin_y_) >= p_.clear_margin &&
                    (!(held_raw_l || held_raw_r) ||
                     std::hypot(in.x - clear_x_, in.y - clear_y_) >= p_.phantom_resume_max)) {
           // A whisker still held as a phantom: TDORC has not released it yet,
@@ -498,8 +506,8 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
         if (contact) last_contact_t_ = t;
         if (l_valid && r_valid) both_touched_ = true;
         if (!contact && t - last_contact_t_ >= p_.clear_confirm_s - kTimeEps) {
-          clear_x_ = in.x;
-          clear_y_ = in.y;
+          clear_x_ = margin_x_ = in.x;
+          clear_y_ = margin_y_ = in.y;
           enter(FsmState::kResumeForward, "obstacle cleared (both whiskers off the wall)", t);
         }
         break;

@@ -1335,3 +1335,48 @@ TEST(WallSubStateRule, WhiskerLostOutOfReachFliesBackToTheWall) {
   q.lost_far_depth = NAN;
   EXPECT_THROW(q.validate(), std::invalid_argument);
 }
+
+// resume_quiet_rms (README "Round 10"): the side-step after a clearing counts
+// clear_margin from where both sums went quiet. A sum still moving in the
+// first second of RESUME_FORWARD (a whisker still on the wall although its
+// flag dropped) lengthens the side-step by the distance flown meanwhile; a
+// quiet sum or the rule off leave it at clear_margin.
+TEST(WhiskerWallFollower, SideStepCountsFromWhereTheSumsWentQuiet) {
+  auto side_step = [](double quiet_rms, double rms) {
+    WallFollowerParams p;
+    p.resume_quiet_rms = quiet_rms;
+    p.phantom_resume_max = 2.0;
+    WhiskerWallFollower fsm(p);
+    double t = 0.0, x = 0.0, y = 0.0;
+    for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t, x, y));
+    for (int k = 0; k < 50; ++k, t += kDt) {
+      WallFollowerInput in = input(t, x, y);
+      set_depths(in, 0.08, 0.08);
+      fsm.step(in);
+    }
+    double resume_s = 0.0, y0 = NAN, y1 = NAN;
+    for (int k = 0; k < 600; ++k, t += kDt) {
+      WallFollowerInput in = input(t, x, y);
+      in.input_change_rms_left = resume_s < 1.0 ? rms : 3.0;
+      in.input_change_rms_right = 3.0;
+      const WallFollowerOutput o = fsm.step(in);
+      if (o.state == FsmState::kResumeForward) {
+        if (std::isnan(y0)) y0 = y;
+        resume_s += kDt;
+      } else if (o.state == FsmState::kFlyForward && std::isfinite(y0) && std::isnan(y1)) {
+        y1 = y;
+      }
+      x += o.setpoint.vx * kDt;
+      y += o.setpoint.vy * kDt;
+    }
+    EXPECT_TRUE(std::isfinite(y1));
+    return std::fabs(y1 - y0);
+  };
+  const double off = side_step(0.0, 30.0);
+  EXPECT_NEAR(off, 0.30, 0.03);                          // clear_margin
+  EXPECT_NEAR(side_step(20.0, 5.0), off, 1e-9);          // quiet sums: unchanged
+  EXPECT_GT(side_step(20.0, 30.0), off + 0.1);           // moving for 1 s: longer
+  WallFollowerParams bad;
+  bad.resume_quiet_rms = -1.0;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}

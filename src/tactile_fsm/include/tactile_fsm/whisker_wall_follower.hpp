@@ -117,6 +117,13 @@ struct WallFollowerParams {
   /// it) with wall_end_depth. Checked before wall_end_depth. 0 = off;
   /// otherwise > 0. [m]
   double lost_far_depth = 0.0;
+  /// The side-step after a clearing counts clear_margin from where both
+  /// whiskers' S_c sums went quiet (RMS of their changes < this), not from
+  /// where the flags dropped (issue 17, README "Round 10"; our choice): a
+  /// clearing declared while the whiskers still touch the wall (true 133-141
+  /// mm, flags dropped) ended the side-step short of the true end (mocap
+  /// 12007). Within phantom_resume_max of the clearing. 0 = off. [Pa]
+  double resume_quiet_rms = 0.0;
   /// A contact in FLY_FORWARD less than this far ahead (along the course
   /// heading) of where the side-step after a clearing ended is the same
   /// obstacle: keep the side (issue 17, README "Random baffle courses": on rigid
@@ -408,6 +415,7 @@ class WhiskerWallFollower {
   bool origin_set_ = false;
   double origin_x_ = 0.0, origin_y_ = 0.0;  ///< course start (end of hover)
   double course_yaw_ = 0.0;                   ///< heading at the course start [rad]
+  double margin_x_ = 0.0, margin_y_ = 0.0;  ///< where the side-step's clear_margin counts from (resume_quiet_rms)
   double clear_x_ = 0.0, clear_y_ = 0.0;    ///< where the obstacle was cleared
   bool after_clear_ = false;                 ///< FLY_FORWARD entered from RESUME_FORWARD
   double resume_x_ = 0.0, resume_y_ = 0.0;  ///< where that FLY_FORWARD began
