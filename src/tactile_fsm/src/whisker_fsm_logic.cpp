@@ -51,6 +51,10 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   // tuning blocks 413 -> 415 of 450 (tied with 110 / 115 mm), seen blocks
   // 5000-8000 1068 -> 1088 of 1200 (README "Round 7").
   m.set("wall_end_depth", 0.105);
+  // A whisker lost out of reach, not off an end (issue 17, round 10).
+  m.set("lost_far_depth", 0.0);
+  // The side-step's margin from where the sums went quiet (issue 17, round 10).
+  m.set("resume_quiet_rms", 0.0);
   m.set("same_obstacle_distance", d.same_obstacle_distance);
   m.set("max_heading_offset", d.max_heading_offset);
   // Pressed whisker (issue 17): on in the whisker FSM node, off in the core
@@ -139,6 +143,8 @@ WhiskerFsmLogic::Params WhiskerFsmLogic::params_from(const ParamMap& m) {
   f.realign_gain = m.get_double("realign_gain");
   f.hold_heading_trailing_lost = m.get_bool("hold_heading_trailing_lost");
   f.wall_end_depth = m.get_double("wall_end_depth");
+  f.lost_far_depth = m.get_double("lost_far_depth");
+  f.resume_quiet_rms = m.get_double("resume_quiet_rms");
   f.same_obstacle_distance = m.get_double("same_obstacle_distance");
   f.max_heading_offset = m.get_double("max_heading_offset");
   f.press_sum_pa = m.get_double("press_sum_pa");

@@ -102,6 +102,8 @@ void WallFollowerParams::validate() const {
   require(finite_nonneg(motion_depth_baseline), "motion_depth_baseline", "must be finite and >= 0",
           motion_depth_baseline);
   require(std::isfinite(whisker_base_x), "whisker_base_x", "must be finite", whisker_base_x);
+  require(finite_nonneg(resume_quiet_rms), "resume_quiet_rms", "must be finite and >= 0 (0 = off)", resume_quiet_rms);
+  require(finite_nonneg(lost_far_depth), "lost_far_depth", "must be finite and >= 0 (0 = off)", lost_far_depth);
   require(finite_nonneg(phantom_quiet_rms), "phantom_quiet_rms", "must be finite and >= 0 (0 = off)",
           phantom_quiet_rms);
   require(finite_nonneg(phantom_travel), "phantom_travel", "must be finite and >= 0", phantom_travel);
@@ -133,12 +135,23 @@ void WallFollowerParams::validate() const {
 }
 
 WallSubState wall_sub_state(double d_l, bool l_valid, double d_r, bool r_valid, Side side, bool both_touched,
-                            WallSubState current, const WallFollowerParams& p, double theta_in) {
+                            WallSubState current, const WallFollowerParams& p, double theta_in, double last_l,
+                            double last_r) {
   l_valid = l_valid && std::isfinite(d_l);
   r_valid = r_valid && std::isfinite(d_r);
   if (!l_valid && !r_valid) return WallSubState::kFlySideways;
   if (l_valid != r_valid) {
     const bool leading_lost = (side == Side::kRight) ? !r_valid : !l_valid;
+    const double lost_last = l_valid ? last_r : last_l;
+    if (both_touched && p.lost_far_depth > 0.0 && std::isfinite(lost_last) && lost_last > p.lost_far_depth &&
+        (l_valid ? d_l : d_r) > p.t_max) {
+      // One whisker lost while it was already beyond lost_far_depth and the
+      // other beyond T_max (last_l / last_r: NaN unless the other was beyond
+      // T_max when it was lost): out of reach, not off an end; both far ->
+      // FLY_FORWARD back to the wall (000 Fig. S4e; issue 17, README "Round 11";
+      // our choice).
+      return WallSubState::kFlyForward;
+    }
     if (both_touched && p.wall_end_depth > 0.0 && (l_valid ? d_l : d_r) > p.wall_end_depth) {
       // One whisker lost after both touched, the other beyond wall_end_depth:
       // the wall ends here (a whisker held past the end), not a wall ahead;
@@ -220,6 +233,8 @@ void WhiskerWallFollower::reset() {
   both_touched_ = false;
   last_contact_t_ = 0.0;
   f_left_ = f_right_ = NAN;
+  last_l_ = last_r_ = NAN;
+  lost_far_l_ = lost_far_r_ = prev_l_valid_ = prev_r_valid_ = false;
   pressed_t_left_ = pressed_t_right_ = -INFINITY;
   live_x_l_ = live_y_l_ = live_x_r_ = live_y_r_ = NAN;
   phantom_l_ = phantom_r_ = false;
@@ -447,6 +462,13 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
         break;
       case FsmState::kFlyForward:
       case FsmState::kResumeForward:
+        // resume_quiet_rms: a sum still moving is a whisker still on the wall;
+        // the margin counts from here (README "Round 11"; our choice).
+        if (state_ == FsmState::kResumeForward && sum_moves(in, p_.resume_quiet_rms) &&
+            std::hypot(in.x - clear_x_, in.y - clear_y_) < p_.phantom_resume_max) {
+          margin_x_ = in.x;
+          margin_y_ = in.y;
+        }
         if (contact && state_ == FsmState::kResumeForward) {
           // Contact again while side-stepping past the edge: the same
           // obstacle's end (the contact flags dropped early). Keep the side and
@@ -486,7 +508,7 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
             enter(FsmState::kWallFollowing, "whisker contact", t);
           }
         } else if (state_ == FsmState::kResumeForward &&
-                   std::hypot(in.x - clear_x_, in.y - clear_y_) >= p_.clear_margin &&
+                   std::hypot(in.x - margin_x_, in.y - margin_y_) >= p_.clear_margin &&
                    (!(held_raw_l || held_raw_r) ||
                     std::hypot(in.x - clear_x_, in.y - clear_y_) >= p_.phantom_resume_max)) {
           // A whisker still held as a phantom: TDORC has not released it yet,
@@ -502,8 +524,8 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
         if (contact) last_contact_t_ = t;
         if (l_valid && r_valid) both_touched_ = true;
         if (!contact && t - last_contact_t_ >= p_.clear_confirm_s - kTimeEps) {
-          clear_x_ = in.x;
-          clear_y_ = in.y;
+          clear_x_ = margin_x_ = in.x;
+          clear_y_ = margin_y_ = in.y;
           enter(FsmState::kResumeForward, "obstacle cleared (both whiskers off the wall)", t);
         }
         break;
@@ -543,8 +565,32 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
   if (std::isfinite(motion_b_l_) && l_valid) d_left = std::fmin(d_left, motion_b_l_ + p_.motion_depth_margin);
   if (std::isfinite(motion_b_r_) && r_valid) d_right = std::fmin(d_right, motion_b_r_ + p_.motion_depth_margin);
 
+  if (state_ != FsmState::kWallFollowing) {
+    last_l_ = last_r_ = NAN;
+    lost_far_l_ = lost_far_r_ = false;
+  }
   if (state_ == FsmState::kWallFollowing) {
-    WallSubState next = wall_sub_state(d_left, l_valid, d_right, r_valid, side_, both_touched_, sub_, p_, theta_);
+    // lost_far_depth: a whisker lost counts as out of reach only if it was
+    // beyond lost_far_depth and the other beyond T_max on the tick it was lost
+    // (both drifting off the wall). A whisker run off an end while the other
+    // is still in the band, and read far afterwards (held past the end), is
+    // round 7's case (mocap 1023, 1025, 1029), left to wall_end_depth.
+    if (l_valid) {
+      lost_far_l_ = false;
+    } else if (std::isfinite(last_l_) && !lost_far_l_ && prev_l_valid_) {
+      lost_far_l_ = last_l_ > p_.lost_far_depth && r_valid && d_right > p_.t_max;
+    }
+    if (r_valid) {
+      lost_far_r_ = false;
+    } else if (std::isfinite(last_r_) && !lost_far_r_ && prev_r_valid_) {
+      lost_far_r_ = last_r_ > p_.lost_far_depth && l_valid && d_left > p_.t_max;
+    }
+    WallSubState next = wall_sub_state(d_left, l_valid, d_right, r_valid, side_, both_touched_, sub_, p_, theta_,
+                                       lost_far_l_ ? last_l_ : NAN, lost_far_r_ ? last_r_ : NAN);
+    if (l_valid && std::isfinite(d_left)) last_l_ = d_left;
+    if (r_valid && std::isfinite(d_right)) last_r_ = d_right;
+    prev_l_valid_ = l_valid;
+    prev_r_valid_ = r_valid;
     // Heading limit about the course heading (issue 17, README): no turn beyond
     // max_heading_offset; translate on the depths instead.
     if (p_.max_heading_offset > 0.0 && origin_set_ && std::isfinite(in.yaw) &&

@@ -1413,3 +1413,117 @@ TEST(WhiskerWallFollower, EndContactBesideTheAxisIsPassedOnTheOtherSide) {
   bad.end_contact_lateral = -0.01;
   expect_rejected(bad, "end_contact_lateral");
 }
+
+// lost_far_depth (README "Round 11"): after both touched, a whisker lost while
+// it was already beyond lost_far_depth, the other beyond T_max: the drone
+// drifted off the wall (mocap 12007: sliding sideways 5-6 deg off the baffle's
+// line, true depths 99 -> 138 mm), not past an end. Without the rule the
+// leading whisker lost (or wall_end_depth) asks for FLY_SIDEWAYS, which slid
+// on until both flags dropped mid-wall; with it FLY_FORWARD back to the wall.
+// A lost whisker last read in the band (an end), a remaining depth in the
+// band, or the approach are unchanged.
+TEST(WallSubStateRule, WhiskerLostOutOfReachFliesBackToTheWall) {
+  WallFollowerParams p;
+  p.hold_heading_trailing_lost = true;  // the whisker FSM node's defaults
+  p.wall_end_depth = 0.105;
+  const auto ws = WallSubState::kFlySideways;
+  // Following left, the leading (left) whisker lost at 106 mm, the right at 128 mm.
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.128, true, Side::kLeft, true, ws, p, NAN, 0.106, 0.12),
+            WallSubState::kFlySideways);  // off: the core default
+  EXPECT_EQ(WallFollowerParams{}.lost_far_depth, 0.0);
+  p.lost_far_depth = 0.095;
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.128, true, Side::kLeft, true, ws, p, NAN, 0.106, 0.12),
+            WallSubState::kFlyForward);
+  // The trailing (right) one lost at 101 mm, the left at 121 mm (wall_end_depth's case).
+  EXPECT_EQ(wall_sub_state(0.121, true, NAN, false, Side::kLeft, true, ws, p, NAN, 0.12, 0.101),
+            WallSubState::kFlyForward);
+  // Lost whisker last read in the band (it ran off an end): wall_end_depth as before.
+  EXPECT_EQ(wall_sub_state(0.121, true, NAN, false, Side::kLeft, true, ws, p, NAN, 0.12, 0.08),
+            WallSubState::kFlySideways);
+  // Remaining depth in the band: the leading lost keeps passing the edge.
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.09, true, Side::kLeft, true, ws, p, NAN, 0.106, 0.09),
+            WallSubState::kFlySideways);
+  // Unknown last depth, or the approach (before both touched): unchanged.
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.128, true, Side::kLeft, true, ws, p), WallSubState::kFlySideways);
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.128, true, Side::kLeft, false, ws, p, NAN, 0.106, 0.12),
+            WallSubState::kFlyForward);
+  EXPECT_EQ(wall_sub_state(NAN, false, 0.09, true, Side::kLeft, false, ws, p, NAN, 0.106, 0.09),
+            WallSubState::kTurnRight);
+  // Through step(): both on the wall drifting out (depths growing past T_max),
+  // then the left flag drops at 106 mm with the right read at 128 mm.
+  auto sub_after_loss = [](WallFollowerParams q) {
+    WhiskerWallFollower fsm(q);
+    double t = 0.0;
+    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t, 1.0, 0.0));
+    for (int k = 0; k < 20; ++k, t += kDt) {
+      WallFollowerInput in = input(t, 1.0, 0.0);
+      set_depths(in, 0.09 + 0.0008 * k, 0.09 + 0.0015 * k);
+      fsm.step(in);
+    }
+    WallSubState sub = WallSubState::kNone;
+    for (int k = 0; k < 10; ++k, t += kDt) {
+      WallFollowerInput in = input(t, 1.0, 0.0);
+      set_depths(in, NAN, 0.128);
+      in.left_valid = false;
+      sub = fsm.step(in).sub_state;
+    }
+    return sub;
+  };
+  WallFollowerParams q;
+  q.hold_heading_trailing_lost = true;
+  q.wall_end_depth = 0.105;
+  q.follow_side = Side::kLeft;
+  q.side_toward_target = false;
+  EXPECT_EQ(sub_after_loss(q), WallSubState::kFlySideways);
+  q.lost_far_depth = 0.095;
+  EXPECT_EQ(sub_after_loss(q), WallSubState::kFlyForward);
+  q.lost_far_depth = -0.01;
+  EXPECT_THROW(q.validate(), std::invalid_argument);
+  q.lost_far_depth = NAN;
+  EXPECT_THROW(q.validate(), std::invalid_argument);
+}
+
+// resume_quiet_rms (README "Round 11"): the side-step after a clearing counts
+// clear_margin from where both sums went quiet. A sum still moving in the
+// first second of RESUME_FORWARD (a whisker still on the wall although its
+// flag dropped) lengthens the side-step by the distance flown meanwhile; a
+// quiet sum or the rule off leave it at clear_margin.
+TEST(WhiskerWallFollower, SideStepCountsFromWhereTheSumsWentQuiet) {
+  auto side_step = [](double quiet_rms, double rms) {
+    WallFollowerParams p;
+    p.resume_quiet_rms = quiet_rms;
+    p.phantom_resume_max = 2.0;
+    WhiskerWallFollower fsm(p);
+    double t = 0.0, x = 0.0, y = 0.0;
+    for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t, x, y));
+    for (int k = 0; k < 50; ++k, t += kDt) {
+      WallFollowerInput in = input(t, x, y);
+      set_depths(in, 0.08, 0.08);
+      fsm.step(in);
+    }
+    double resume_s = 0.0, y0 = NAN, y1 = NAN;
+    for (int k = 0; k < 600; ++k, t += kDt) {
+      WallFollowerInput in = input(t, x, y);
+      in.input_change_rms_left = resume_s < 1.0 ? rms : 3.0;
+      in.input_change_rms_right = 3.0;
+      const WallFollowerOutput o = fsm.step(in);
+      if (o.state == FsmState::kResumeForward) {
+        if (std::isnan(y0)) y0 = y;
+        resume_s += kDt;
+      } else if (o.state == FsmState::kFlyForward && std::isfinite(y0) && std::isnan(y1)) {
+        y1 = y;
+      }
+      x += o.setpoint.vx * kDt;
+      y += o.setpoint.vy * kDt;
+    }
+    EXPECT_TRUE(std::isfinite(y1));
+    return std::fabs(y1 - y0);
+  };
+  const double off = side_step(0.0, 30.0);
+  EXPECT_NEAR(off, 0.30, 0.03);                          // clear_margin
+  EXPECT_NEAR(side_step(20.0, 5.0), off, 1e-9);          // quiet sums: unchanged
+  EXPECT_GT(side_step(20.0, 30.0), off + 0.1);           // moving for 1 s: longer
+  WallFollowerParams bad;
+  bad.resume_quiet_rms = -1.0;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}

@@ -102,6 +102,28 @@ struct WallFollowerParams {
   /// off, the next touch brings it back to the rule of both depths. 0 = off
   /// (the previous rule); otherwise >= t_max. [m]
   double wall_end_depth = 0.0;
+  /// A whisker lost out of reach, not off an end (issue 17, README "Round 11";
+  /// our choice). After both touched, one whisker lost while its last depth
+  /// was > lost_far_depth and the other's depth was beyond T_max on that tick,
+  /// the other still beyond T_max: the drone has drifted away from the wall
+  /// (a sideways slide a few degrees off the wall's line), not reached an
+  /// end: FLY_FORWARD back to the wall (000 Fig. S4e: both beyond T_max)
+  /// instead of FLY_SIDEWAYS (leading whisker lost, or wall_end_depth), which
+  /// slid on until the other flag dropped too and the drone "cleared"
+  /// mid-wall (mocap 12007, 14026: whiskers truly on the wall at 130-140 mm,
+  /// the side-step ended short of the true end, which the guard then met in
+  /// the blind band). The other's depth at the loss keeps round 7's case (a
+  /// whisker run off an end while the other is in the band, then held past
+  /// it) with wall_end_depth. Checked before wall_end_depth. 0 = off;
+  /// otherwise > 0. [m]
+  double lost_far_depth = 0.0;
+  /// The side-step after a clearing counts clear_margin from where both
+  /// whiskers' S_c sums went quiet (RMS of their changes < this), not from
+  /// where the flags dropped (issue 17, README "Round 11"; our choice): a
+  /// clearing declared while the whiskers still touch the wall (true 133-141
+  /// mm, flags dropped) ended the side-step short of the true end (mocap
+  /// 12007). Within phantom_resume_max of the clearing. 0 = off. [Pa]
+  double resume_quiet_rms = 0.0;
   /// A contact in FLY_FORWARD less than this far ahead (along the course
   /// heading) of where the side-step after a clearing ended is the same
   /// obstacle: keep the side (issue 17, README "Random baffle courses": on rigid
@@ -337,8 +359,11 @@ struct WallFollowerOutput {
 ///  - none: FLY_SIDEWAYS (clearing is decided by the top level).
 /// theta: wall angle estimate to use when both depths are valid; NaN = compute
 /// it from the depths (000 eq. 21).
+/// last_l, last_r: the last depth each whisker had while valid in this
+/// episode (NaN = unknown), read only by lost_far_depth.
 WallSubState wall_sub_state(double d_l, bool l_valid, double d_r, bool r_valid, Side side, bool both_touched,
-                            WallSubState current, const WallFollowerParams& p, double theta = NAN);
+                            WallSubState current, const WallFollowerParams& p, double theta = NAN,
+                            double last_l = NAN, double last_r = NAN);
 
 /// |(vx, vy)| <= v_max (scaled, direction kept), |yaw_rate| <= omega_max,
 /// non-finite values -> 0.
@@ -400,6 +425,9 @@ class WhiskerWallFollower {
   bool both_touched_ = false;
   double last_contact_t_ = 0.0;
   double f_left_ = NAN, f_right_ = NAN;
+  double last_l_ = NAN, last_r_ = NAN;  ///< last valid depth of each whisker in this episode (lost_far_depth)
+  bool lost_far_l_ = false, lost_far_r_ = false;      ///< lost beyond lost_far_depth with the other beyond T_max
+  bool prev_l_valid_ = false, prev_r_valid_ = false;  ///< validity on the previous wall-following tick
   double pressed_t_left_ = -INFINITY, pressed_t_right_ = -INFINITY;  ///< last tick with sum >= press_sum_pa
   double live_x_l_ = NAN, live_y_l_ = NAN;  ///< where the left S_c sum last moved (or the whisker was free)
   double live_x_r_ = NAN, live_y_r_ = NAN;
@@ -415,6 +443,7 @@ class WhiskerWallFollower {
   bool origin_set_ = false;
   double origin_x_ = 0.0, origin_y_ = 0.0;  ///< course start (end of hover)
   double course_yaw_ = 0.0;                   ///< heading at the course start [rad]
+  double margin_x_ = 0.0, margin_y_ = 0.0;  ///< where the side-step's clear_margin counts from (resume_quiet_rms)
   double clear_x_ = 0.0, clear_y_ = 0.0;    ///< where the obstacle was cleared
   bool after_clear_ = false;                 ///< FLY_FORWARD entered from RESUME_FORWARD
   double resume_x_ = 0.0, resume_y_ = 0.0;  ///< where that FLY_FORWARD began
