@@ -8,6 +8,7 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <unordered_map>
 
 #include <pcl/filters/statistical_outlier_removal.h>
 #include <pcl/filters/voxel_grid.h>
@@ -22,6 +23,8 @@ void MapParams::validate() const {
   if (outlier_mean_k < 1) bad("outlier_mean_k", "must be >= 1, got " + std::to_string(outlier_mean_k));
   if (!(outlier_stddev > 0.0) || !std::isfinite(outlier_stddev))
     bad("outlier_stddev", "must be finite and > 0, got " + std::to_string(outlier_stddev));
+  if (!(outlier_leaf >= 0.0) || !std::isfinite(outlier_leaf))
+    bad("outlier_leaf", "must be finite and >= 0 (0: the removal on the map's own points), got " + std::to_string(outlier_leaf));
   if (!(auto_filter_growth == 0.0 || auto_filter_growth > 1.0) || !std::isfinite(auto_filter_growth))
     bad("auto_filter_growth", "must be 0 (off) or > 1, got " + std::to_string(auto_filter_growth));
 }
@@ -121,12 +124,64 @@ void PointMap::voxel_filter(double leaf) {
 std::size_t PointMap::remove_outliers(int mean_k, double stddev) {
   if (mean_k < 1 || !(stddev > 0.0)) throw std::invalid_argument("PointMap::remove_outliers: mean_k >= 1 and stddev > 0");
   if (cloud_->size() <= static_cast<std::size_t>(mean_k)) return 0;
+  if (params_.outlier_leaf > 0.0) return remove_outliers_at_leaf(mean_k, stddev, params_.outlier_leaf);
   pcl::StatisticalOutlierRemoval<pcl::PointXYZ> sor;
   sor.setInputCloud(cloud_);
   sor.setMeanK(mean_k);
   sor.setStddevMulThresh(stddev);
   Cloud::Ptr out(new Cloud);
   sor.filter(*out);
+  const std::size_t removed = cloud_->size() - out->size();
+  cloud_ = out;
+  size_after_filter_ = std::min(size_after_filter_, cloud_->size());
+  return removed;
+}
+
+std::size_t PointMap::remove_outliers_at_leaf(int mean_k, double stddev, double leaf) {
+  // README "Outlier removal at the slab spacing" (rule 17): voxel centroids at `leaf`
+  // (floor(p / leaf), as PCL's voxel grid), PCL's statistical outlier removal on them,
+  // and every point of an outlier voxel removed.
+  struct KeyHash {
+    std::size_t operator()(const std::array<int64_t, 3>& k) const {
+      return static_cast<std::size_t>(k[0] * 73856093LL ^ k[1] * 19349663LL ^ k[2] * 83492791LL);
+    }
+  };
+  std::unordered_map<std::array<int64_t, 3>, std::size_t, KeyHash> index;
+  std::vector<std::size_t> voxel_of(cloud_->size());
+  std::vector<Eigen::Vector3d> sum;
+  std::vector<std::size_t> count;
+  for (std::size_t i = 0; i < cloud_->size(); ++i) {
+    const auto& p = cloud_->points[i];
+    const std::array<int64_t, 3> k{static_cast<int64_t>(std::floor(p.x / leaf)), static_cast<int64_t>(std::floor(p.y / leaf)),
+                                   static_cast<int64_t>(std::floor(p.z / leaf))};
+    const auto [it, fresh] = index.emplace(k, sum.size());
+    if (fresh) {
+      sum.emplace_back(Eigen::Vector3d::Zero());
+      count.push_back(0);
+    }
+    sum[it->second] += Eigen::Vector3d(p.x, p.y, p.z);
+    ++count[it->second];
+    voxel_of[i] = it->second;
+  }
+  if (sum.size() <= static_cast<std::size_t>(mean_k)) return 0;
+  Cloud::Ptr centroids(new Cloud);
+  centroids->reserve(sum.size());
+  for (std::size_t v = 0; v < sum.size(); ++v) {
+    const Eigen::Vector3d c = sum[v] / static_cast<double>(count[v]);
+    centroids->push_back(pcl::PointXYZ(static_cast<float>(c.x()), static_cast<float>(c.y()), static_cast<float>(c.z())));
+  }
+  pcl::StatisticalOutlierRemoval<pcl::PointXYZ> sor;
+  sor.setInputCloud(centroids);
+  sor.setMeanK(mean_k);
+  sor.setStddevMulThresh(stddev);
+  pcl::Indices kept;
+  sor.filter(kept);
+  std::vector<bool> keep(sum.size(), false);
+  for (const auto k : kept) keep[static_cast<std::size_t>(k)] = true;
+  Cloud::Ptr out(new Cloud);
+  out->reserve(cloud_->size());
+  for (std::size_t i = 0; i < cloud_->size(); ++i)
+    if (keep[voxel_of[i]]) out->push_back(cloud_->points[i]);
   const std::size_t removed = cloud_->size() - out->size();
   cloud_ = out;
   size_after_filter_ = std::min(size_after_filter_, cloud_->size());

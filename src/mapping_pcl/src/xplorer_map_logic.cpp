@@ -62,6 +62,7 @@ ParamMap XplorerMapLogic::default_parameters() {
   m.set("voxel_leaf", d.map.voxel_leaf);
   m.set("outlier_mean_k", static_cast<int64_t>(d.map.outlier_mean_k));
   m.set("outlier_stddev", d.map.outlier_stddev);
+  m.set("outlier_leaf", d.map.outlier_leaf);
   m.set("force_average_samples", static_cast<int64_t>(d.force_average_samples));
   m.set("floor_z", d.floor_z);
   m.set("publish_rate_hz", d.publish_rate_hz);
@@ -124,6 +125,7 @@ XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
   p.map.voxel_leaf = m.get_double("voxel_leaf");
   p.map.outlier_mean_k = m.get_int("outlier_mean_k", 1, std::numeric_limits<int>::max());
   p.map.outlier_stddev = m.get_double("outlier_stddev");
+  p.map.outlier_leaf = m.get_double("outlier_leaf");
   p.force_average_samples = m.get_int("force_average_samples", 1, std::numeric_limits<int>::max());
   p.floor_z = m.get_double("floor_z");
   p.publish_rate_hz = m.get_double("publish_rate_hz");

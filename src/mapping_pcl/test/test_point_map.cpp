@@ -149,3 +149,71 @@ TEST(MapParams, ValidateNamesTheField) {
   p.auto_filter_growth = 0.5;
   EXPECT_THROW(p.validate(), std::invalid_argument);
 }
+
+// README "Outlier removal at the slab spacing" (rule 17): a face mapped by
+// overlapping 2 cm slabs (every 1 cm voxel filled) with one slab at its end
+// (one point per 2 x 2 x 2 cm): at 1 cm the end's points have twice the mean
+// neighbour distance of the bulk and the removal takes them; judged at 2 cm
+// they stay. A stray cluster of three points 3 m off is removed with the rule.
+namespace {
+PointMap face_with_single_slab_end(double outlier_leaf, bool stray) {
+  MapParams mp;
+  mp.outlier_leaf = outlier_leaf;
+  mp.auto_filter_growth = 0.0;
+  PointMap m(mp);
+  for (int dx = 0; dx < 2; ++dx)
+    for (int dy = 0; dy < 2; ++dy)
+      for (int dz = 0; dz < 2; ++dz) {  // mid-face: slabs at every 1 cm offset
+        Box b;
+        b.center = Vec3(0.5 + 0.01 * dx + 0.003, 0.04 + 0.01 * dy + 0.003, 0.7 + 0.01 * dz + 0.003);
+        b.size = Vec3(1.0, 0.08, 0.5);
+        m.insert_box(b, 0.02);
+      }
+  Box end;  // the face's last slab, alone: x 1.0 .. 1.25
+  end.center = Vec3(1.125 + 0.003, 0.04 + 0.003, 0.7 + 0.003);
+  end.size = Vec3(0.25, 0.08, 0.5);
+  m.insert_box(end, 0.02);
+  if (stray) m.insert({Vec3(3.0, 2.0, 0.7), Vec3(3.01, 2.0, 0.7), Vec3(3.0, 2.01, 0.7)});
+  m.voxel_filter();
+  return m;
+}
+double max_x(const PointMap& m) {
+  double x = -1e9;
+  for (const auto& p : m.cloud()) x = std::max(x, static_cast<double>(p.x));
+  return x;
+}
+}  // namespace
+
+TEST(PointMap, OutlierRemovalAtTheSlabSpacingKeepsAFacesSingleSlabEnd) {
+  PointMap off = face_with_single_slab_end(0.0, false);
+  ASSERT_GT(max_x(off), 1.23);
+  off.remove_outliers();
+  EXPECT_LT(max_x(off), 1.05);  // the end slab taken as outliers (before rule 17)
+
+  PointMap on = face_with_single_slab_end(0.02, false);
+  const std::size_t before = on.size();
+  const std::size_t removed = on.remove_outliers();
+  EXPECT_EQ(before - removed, on.size());
+  EXPECT_GT(max_x(on), 1.23);  // the end slab kept
+
+  PointMap stray = face_with_single_slab_end(0.02, true);
+  ASSERT_GT(max_x(stray), 2.9);
+  stray.remove_outliers();
+  EXPECT_GT(max_x(stray), 1.23);  // the end slab kept
+  EXPECT_LT(max_x(stray), 2.0);   // the stray cluster removed
+}
+
+TEST(MapParams, OutlierLeafMustBeFiniteAndNotNegative) {
+  MapParams p;
+  p.outlier_leaf = -0.01;
+  try {
+    p.validate();
+    FAIL();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("MapParams.outlier_leaf"), std::string::npos);
+  }
+  p.outlier_leaf = std::nan("");
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p.outlier_leaf = 0.02;
+  EXPECT_NO_THROW(p.validate());
+}
