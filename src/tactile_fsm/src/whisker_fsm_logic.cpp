@@ -106,6 +106,7 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   m.set("first_whisk_period_s", 0.7);
   m.set("first_whisk_speed", 0.0);
   m.set("first_whisk_pause_to_course", false);
+  m.set("first_whisk_wall_rate", 0.0);
   m.set("end_contact_lateral", 0.0);
   m.set("target_radius", d.target_radius);
   m.set("land_past_target", d.land_past_target);
@@ -172,6 +173,7 @@ WhiskerFsmLogic::Params WhiskerFsmLogic::params_from(const ParamMap& m) {
   f.first_whisk_period_s = m.get_double("first_whisk_period_s");
   f.first_whisk_speed = m.get_double("first_whisk_speed");
   f.first_whisk_pause_to_course = m.get_bool("first_whisk_pause_to_course");
+  f.first_whisk_wall_rate = m.get_double("first_whisk_wall_rate");
   f.end_contact_lateral = m.get_double("end_contact_lateral");
   f.target_radius = m.get_double("target_radius");
   f.land_past_target = m.get_bool("land_past_target");

@@ -125,6 +125,8 @@ void WallFollowerParams::validate() const {
           first_whisk_period_s);
   require(finite_nonneg(first_whisk_speed) && first_whisk_speed <= v_max, "first_whisk_speed",
           "must be in [0, v_max] (0 = v_max)", first_whisk_speed);
+  require(finite_nonneg(first_whisk_wall_rate), "first_whisk_wall_rate", "must be finite and >= 0 (0 = off)",
+          first_whisk_wall_rate);
   require(finite_nonneg(end_contact_lateral), "end_contact_lateral", "must be finite and >= 0 (0 = off)",
           end_contact_lateral);
   require(finite_positive(target_radius), "target_radius", "must be finite and > 0", target_radius);
@@ -627,6 +629,24 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
       origin_set_ && std::isfinite(in.yaw)) {
     out.setpoint = whisk(in, out.setpoint, p_.first_whisk_amplitude, p_.first_whisk_period_s,
                          p_.first_whisk_speed > 0.0 ? p_.first_whisk_speed : p_.v_max, p_.first_whisk_pause_to_course);
+    // A wall ahead (README "Round 10b", our choice): at a yaw toward one side a
+    // square wall is met first by the other side's whisker (its tip lies
+    // further ahead), an end beside the axis by the yaw side's whisker. The
+    // former turns the yaw back to the course before TDORC flags it, so the
+    // wall following starts as without the whisk.
+    if (p_.first_whisk_wall_rate > 0.0) {
+      const double rel = std::remainder(in.yaw - course_yaw_, 2.0 * M_PI);
+      const double lvl = p_.whisk_pause_rms;
+      const bool mv_l = lvl > 0.0 && std::isfinite(in.input_change_rms_left) && in.input_change_rms_left >= lvl;
+      const bool mv_r = lvl > 0.0 && std::isfinite(in.input_change_rms_right) && in.input_change_rms_right >= lvl;
+      if ((mv_l && mv_r) || (mv_l && rel < 0.0) || (mv_r && rel > 0.0)) first_whisk_wall_ = true;
+      if (first_whisk_wall_) {
+        out.setpoint.yaw_rate =
+            std::clamp(-8.0 * rel, -p_.first_whisk_wall_rate, p_.first_whisk_wall_rate);  // 8 1/s: our choice
+      }
+    }
+  } else {
+    first_whisk_wall_ = false;
   }
   const bool offset_on = p_.clear_yaw_offset > 0.0 && origin_set_ && std::isfinite(in.yaw) &&
                          ((state_ == FsmState::kResumeForward && p_.clear_yaw_in_resume) ||

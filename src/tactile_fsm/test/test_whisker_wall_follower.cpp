@@ -1376,6 +1376,39 @@ TEST(WhiskerWallFollower, FirstApproachWhiskEndsAtTheFirstContact) {
   EXPECT_LT(std::fabs(yaw), 5.0 * kDeg);    // and back on the course heading
 }
 
+// first_whisk_wall_rate (README "Round 10b"): whisked left of the course, the
+// right whisker's sum moving (a square wall ahead is met first by the whisker
+// opposite the yaw) turns the yaw back to the course; the left one's (the yaw
+// side: a baffle's end beside the axis) holds it as the whisk pause does. Off,
+// the right one's holds it too.
+TEST(WhiskerWallFollower, FirstWhiskTurnsBackToTheCourseAtAWallAhead) {
+  auto run = [](double wall_rate, bool right_moves) {
+    WallFollowerParams p;
+    p.first_whisk_amplitude = 0.35;
+    p.first_whisk_period_s = 0.7;
+    p.whisk_rate_max = 3.0;
+    p.first_whisk_wall_rate = wall_rate;
+    p.whisk_pause_rms = 13.0;
+    WhiskerWallFollower fsm(p);
+    double t = 0.0, yaw = 0.0;
+    for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t));
+    for (int k = 0; k < 35 && yaw < 0.2; ++k, t += kDt) yaw += fsm.step(input(t, 0.0, 0.0, yaw)).setpoint.yaw_rate * kDt;
+    EXPECT_GT(yaw, 0.2);  // whisked left
+    for (int k = 0; k < 15; ++k, t += kDt) {  // 0.3 s of a moving sum, no contact flagged
+      WallFollowerInput in = input(t, 0.0, 0.0, yaw);
+      (right_moves ? in.input_change_rms_right : in.input_change_rms_left) = 30.0;
+      yaw += fsm.step(in).setpoint.yaw_rate * kDt;
+    }
+    return yaw;
+  };
+  EXPECT_LT(std::fabs(run(3.0, true)), 2.0 * kDeg);  // a wall ahead: back on the course
+  EXPECT_GT(run(3.0, false), 0.2);                    // an end on the yaw side: held
+  EXPECT_GT(run(0.0, true), 0.2);                     // off: held
+  WallFollowerParams bad;
+  bad.first_whisk_wall_rate = -1.0;
+  expect_rejected(bad, "first_whisk_wall_rate");
+}
+
 // end_contact_lateral (README "Round 10"): a first touch by the right whisker
 // alone, depth 100 mm, at a yaw 20 deg right of the course puts the contact
 // point 0.15 sin 20 + 0.025 cos 20 = 75 mm right of the axis: a baffle's end

@@ -274,6 +274,11 @@ struct WallFollowerParams {
   /// turns back to the course heading (realign_gain) instead of holding the
   /// yaw, so that the wall following starts nearer the course heading.
   bool first_whisk_pause_to_course = false;
+  /// Our choice (README "Round 10b"): in the first-approach whisk, a whisker's
+  /// S_c sum moving (whisk_pause_rms) on the side opposite the yaw (or both) is
+  /// a wall ahead, not an end beside the axis: the yaw is turned back to the
+  /// course at up to this rate for the rest of that FLY_FORWARD. 0 = off. [rad/s]
+  double first_whisk_wall_rate = 0.0;
   /// A baffle's end met by one whisker (issue 17, README "Round 10", choice):
   /// a first touch in FLY_FORWARD by exactly one whisker whose contact point
   /// (the depth along the whisker, turned by the yaw off the course heading)
@@ -449,6 +454,7 @@ class WhiskerWallFollower {
   double resume_x_ = 0.0, resume_y_ = 0.0;  ///< where that FLY_FORWARD began
   double track_yaw_ = NAN;  ///< clear_yaw_offset: the heading the drone would fly without the offset [rad]
   bool yaw_offset_released_ = false;  ///< clear_yaw_release_rms reached since the clearing
+  bool first_whisk_wall_ = false;  ///< first_whisk_wall_rate latched in this FLY_FORWARD
   bool contacted_ = false;  ///< wall following entered at least once in this flight (first_whisk_amplitude)
 };
 
