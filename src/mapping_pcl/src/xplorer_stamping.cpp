@@ -312,9 +312,22 @@ void XplorerContactMapper::join_lines(std::size_t ia, std::size_t ib) {
   extend(b, st.y());
 }
 
+bool XplorerContactMapper::in_slab(const Eigen::Vector2d& x, const FaceSample& q) const {
+  const double half = 0.5 * p_.slab_size.x() + p_.slab_spacing, depth = p_.slab_size.y() + p_.slab_spacing;
+  const Eigen::Vector2d d = x - q.point;
+  const double along_c = d.dot(q.contact);
+  const double across = d.x() * q.contact.y() - d.y() * q.contact.x();
+  return along_c >= -p_.slab_spacing && along_c <= depth && std::abs(across) <= half;
+}
+
+bool XplorerContactMapper::convex_corner(const FaceLine& a, const FaceLine& b) const {
+  auto middle = [](const FaceLine& l) -> Eigen::Vector2d { return l.point + 0.5 * (l.s_min + l.s_max) * l.dir; };
+  return (middle(b) - a.point).dot(a.contact) >= -p_.slab_size.y() &&
+         (middle(a) - b.point).dot(b.contact) >= -p_.slab_size.y();
+}
+
 std::size_t XplorerContactMapper::clip_tilted(const FaceLine& l, const std::vector<FaceSample>& f) {
   const double cos_tol = std::cos(p_.face_clip_angle_tolerance);
-  const double half = 0.5 * p_.slab_size.x() + p_.slab_spacing, depth = p_.slab_size.y() + p_.slab_spacing;
   std::vector<const FaceSample*> tilted;
   for (const auto& q : f) {
     if (q.contact.dot(l.contact) >= cos_tol) continue;
@@ -326,12 +339,8 @@ std::size_t XplorerContactMapper::clip_tilted(const FaceLine& l, const std::vect
   return map_->remove_if([&](const Vec3& v) {
     const Eigen::Vector2d x(v.x(), v.y());
     if ((x - l.point).dot(l.contact) >= -p_.face_clip_tolerance) return false;  // not outside the line
-    for (const FaceSample* q : tilted) {
-      const Eigen::Vector2d d = x - q->point;
-      const double along_c = d.dot(q->contact);
-      const double across = d.x() * q->contact.y() - d.y() * q->contact.x();
-      if (along_c >= -p_.slab_spacing && along_c <= depth && std::abs(across) <= half) return true;
-    }
+    for (const FaceSample* q : tilted)
+      if (in_slab(x, *q)) return true;
     return false;
   });
 }
@@ -345,12 +354,8 @@ std::size_t XplorerContactMapper::clip_fan(const std::vector<FaceSample>& f, con
   return map_->remove_if([&](const Vec3& v) {
     const Eigen::Vector2d x(v.x(), v.y());
     if (x.dot(n) >= offset - p_.face_clip_tolerance) return false;  // not outside the other face
-    for (const FaceSample* q : near) {  // in one of the face's slabs
-      const Eigen::Vector2d d = x - q->point;
-      const double along_c = d.dot(q->contact);
-      const double across = d.x() * q->contact.y() - d.y() * q->contact.x();
-      if (along_c >= -p_.slab_spacing && along_c <= depth && std::abs(across) <= half) return true;
-    }
+    for (const FaceSample* q : near)  // in one of the face's slabs
+      if (in_slab(x, *q)) return true;
     return false;
   });
 }
@@ -370,18 +375,29 @@ void XplorerContactMapper::clip_corner_fan(const FanFace& fan, const std::option
   // Each face's side: its line, else the face perpendicular to the other one's line (a box)
   // through the median of its near-face points; none if neither face is a line.
   if (!fan.line && !line) return;
-  auto side = [](const std::optional<FaceLine>& l, const std::optional<FaceLine>& other, const std::vector<FaceSample>& f,
-                 const Eigen::Vector2d& c) {
-    if (l) return std::make_pair(l->contact, l->point.dot(l->contact));
-    const Eigen::Vector2d n = other->dir.dot(c) >= 0.0 ? other->dir : Eigen::Vector2d(-other->dir);
+  // The median offset of a face's near-face points along n.
+  auto median_offset = [](const std::vector<FaceSample>& f, const Eigen::Vector2d& n) {
     std::vector<double> off;
     off.reserve(f.size());
     for (const auto& q : f) off.push_back(q.point.dot(n));
     std::nth_element(off.begin(), off.begin() + static_cast<std::ptrdiff_t>(off.size() / 2), off.end());
-    return std::make_pair(n, off[off.size() / 2]);
+    return off[off.size() / 2];
+  };
+  auto side = [&](const std::optional<FaceLine>& l, const std::optional<FaceLine>& other, const std::vector<FaceSample>& f,
+                  const Eigen::Vector2d& c) {
+    if (l) return std::make_pair(l->contact, l->point.dot(l->contact));
+    const Eigen::Vector2d n = other->dir.dot(c) >= 0.0 ? other->dir : Eigen::Vector2d(-other->dir);
+    return std::make_pair(n, median_offset(f, n));
   };
   const auto [na, oa] = side(fan.line, line, fan.samples, ca);
   const auto [nb, ob] = side(line, fan.line, face_, cb);
+  // A convex corner only: there each face lies, by the median of its near-face points, on the
+  // object's side of the other (the side C_n points to). At a concave corner each lies on the
+  // other's free side, and clipping there would remove the faces themselves.
+  if (median_offset(face_, na) < oa - p_.slab_size.y() || median_offset(fan.samples, nb) < ob - p_.slab_size.y()) {
+    ++stats_.skipped_concave_fan_clips;
+    return;
+  }
   stats_.clipped_points += clip_fan(fan.samples, nb, ob);  // A's slabs (its fan) outside B
   stats_.clipped_points += clip_fan(face_, na, oa);        // B's slabs outside A
   ++stats_.fan_clips;
@@ -424,10 +440,15 @@ void XplorerContactMapper::end_face(bool turned, bool loop_closed) {
       const std::size_t last = lines_.size() - 1;
       if (after_first_turn) after_first_turn_line_ = last;
       // Right-angle corner with the face before, joined by a turn (face_clip_angle_tolerance).
-      if (prev_line && right_angle(lines_[*prev_line], lines_.back())) join_lines(*prev_line, last);
+      // A concave corner (each face on the other's free side) is not joined: clipping there
+      // would remove the faces themselves.
+      if (prev_line && right_angle(lines_[*prev_line], lines_.back()) &&
+          convex_corner(lines_[*prev_line], lines_.back()))
+        join_lines(*prev_line, last);
       // The loop closed on the first contact's face: the face after the first turn is its neighbour (rule 13).
       if (loop_closed && after_first_turn_line_ && *after_first_turn_line_ != last &&
-          right_angle(lines_[*after_first_turn_line_], lines_.back()))
+          right_angle(lines_[*after_first_turn_line_], lines_.back()) &&
+          convex_corner(lines_[*after_first_turn_line_], lines_.back()))
         join_lines(*after_first_turn_line_, last);
       if (p_.face_clip_angle_tolerance >= M_PI / 2) lines_.back().clips = true;
       stats_.clipped_points += map_->remove_if([&](const Vec3& q) { return outside_faces(q); });

@@ -1076,3 +1076,37 @@ TEST(XplorerMappingRules, FanClipWhenOnlyTheNextFaceIsALine) {
   EXPECT_EQ(on_lines, 1u);
   EXPECT_EQ(on_clips, 1u);
 }
+
+// Rule 16 at a concave corner: face A along y = 0 (object at y > 0) up to x = 0.9, then a
+// clockwise turn onto a wall B at x = 1 whose object lies at x > 1, traversed towards -y
+// (12 slabs: a line). The faces meet at 90 deg, but each lies on the other's free side; rule
+// 16's clip, and rule 12's face clip of two joined lines, would take every point of A (all of
+// it is at x < 1, "outside" B). Neither clips.
+TEST(XplorerMappingRules, FanClipLeavesAConcaveCornerAlone) {
+  auto run = [](bool rule) {
+    XplorerMapParams p;
+    p.corner_release_s = 0.0;
+    p.edge_from_arms = false;
+    p.corner_fan_clip = rule;
+    auto map = std::make_shared<PointMap>();
+    auto m = std::make_shared<XplorerContactMapper>(p, *map);
+    double t = 0.0;
+    for (int k = 0; k <= 18; ++k) stamp_at(*m, t, {0.05 * k, 0.0}, {0.0, 1.0}, 0.0);  // face A, a line
+    m->end_face(true);
+    for (int k = 0; k < 12; ++k) stamp_at(*m, t, {1.0, -0.06 - 0.03 * k}, {1.0, 0.0}, 0.0);  // face B
+    m->end_face(true);
+    std::size_t on_a = 0;
+    for (const auto& q : map->cloud())
+      if (q.x < 0.85 && q.y > -0.01) ++on_a;
+    EXPECT_EQ(m->face_lines().size(), 2u);
+    for (const auto& l : m->face_lines()) EXPECT_FALSE(l.clips);  // rule 12 does not join them either
+    return std::make_tuple(on_a, m->stats().fan_clips, m->stats().skipped_concave_fan_clips);
+  };
+  const auto [off_a, off_clips, off_skipped] = run(false);
+  EXPECT_GT(off_a, 50u);
+  EXPECT_EQ(off_clips, 0u);
+  const auto [on_a, on_clips, on_skipped] = run(true);
+  EXPECT_EQ(on_a, off_a);  // face A kept whole
+  EXPECT_EQ(on_clips, 0u);
+  EXPECT_EQ(on_skipped, 1u);
+}

@@ -289,6 +289,7 @@ class XplorerContactMapper {
     uint64_t face_lines = 0;              ///< faces fitted as lines (face_clip_min_length)
     uint64_t clipped_points = 0;          ///< map points removed outside a fitted face (face_clip_min_length)
     uint64_t fan_clips = 0;               ///< right-angled corners whose fans were clipped (corner_fan_clip)
+    uint64_t skipped_concave_fan_clips = 0;  ///< right-angled corners left unclipped as concave (corner_fan_clip)
   };
 
   XplorerContactMapper(const XplorerMapParams& params, PointMap& map);
@@ -381,6 +382,11 @@ class XplorerContactMapper {
   bool first_face_seen_ = false;
   /// Removes the points outside `l` in the slabs of `f` tilted off its normal (face_clip_tilted); returns how many.
   std::size_t clip_tilted(const FaceLine& l, const std::vector<FaceSample>& f);
+  /// Whether the world x-y point `x` lies in the slab stamped at `q` (its footprint grown by one slab_spacing).
+  bool in_slab(const Eigen::Vector2d& x, const FaceSample& q) const;
+  /// Whether two face lines meet at a convex corner: the middle of each one's mapped span lies
+  /// on the object's side of the other (not more than a slab's depth outside it).
+  bool convex_corner(const FaceLine& a, const FaceLine& b) const;
   /// The face that ended in a turn, for the fan clip of the next face (corner_fan_clip).
   struct FanFace {
     std::optional<FaceLine> line;
