@@ -51,9 +51,9 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   // tuning blocks 413 -> 415 of 450 (tied with 110 / 115 mm), seen blocks
   // 5000-8000 1068 -> 1088 of 1200 (README "Round 7").
   m.set("wall_end_depth", 0.105);
-  // A whisker lost out of reach, not off an end (issue 17, round 10).
+  // A whisker lost out of reach, not off an end (issue 17, round 11).
   m.set("lost_far_depth", 0.0);
-  // The side-step's margin from where the sums went quiet (issue 17, round 10).
+  // The side-step's margin from where the sums went quiet (issue 17, round 11).
   m.set("resume_quiet_rms", 0.0);
   m.set("same_obstacle_distance", d.same_obstacle_distance);
   m.set("max_heading_offset", d.max_heading_offset);

@@ -103,6 +103,9 @@ void WallFollowerParams::validate() const {
           motion_depth_baseline);
   require(std::isfinite(whisker_base_x), "whisker_base_x", "must be finite", whisker_base_x);
   require(finite_nonneg(resume_quiet_rms), "resume_quiet_rms", "must be finite and >= 0 (0 = off)", resume_quiet_rms);
+  // The margin moves only within phantom_resume_max of the clearing (README "Round 11").
+  require(resume_quiet_rms == 0.0 || phantom_resume_max > 0.0, "resume_quiet_rms",
+          "has no effect unless phantom_resume_max > 0", resume_quiet_rms);
   require(finite_nonneg(lost_far_depth), "lost_far_depth", "must be finite and >= 0 (0 = off)", lost_far_depth);
   require(finite_nonneg(phantom_quiet_rms), "phantom_quiet_rms", "must be finite and >= 0 (0 = off)",
           phantom_quiet_rms);

@@ -40,6 +40,11 @@ void AdmittanceController::reset(const XVec3& r, double yaw) {
   yaw_rate_ = 0.0;
 }
 
+void AdmittanceController::reset_yaw(double yaw) {
+  yaw_ = yaw;
+  yaw_rate_ = 0.0;
+}
+
 const XVec3& AdmittanceController::update(const XVec3& force, const XVec3& force_des, const XVec3& r_star,
                                           double torque_z, double torque_des, double yaw_star, double dt) {
   for (int i = 0; i < 3; ++i) {
@@ -466,6 +471,9 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
           break;
         }
         squaring_ = false;  // squared: the traversal of 001 from here
+        // The yaw row ran on under the ramp (yaw* = the measured yaw): restarted at rest from
+        // the squared heading, or its lag and rate would carry the setpoint ~8 deg past it.
+        adm_.reset_yaw(in.yaw);
         t_quiet_ = in.t;
         low_force_since_ = -1.0;
         traverse_history_.clear();

@@ -756,6 +756,8 @@ TEST(XplorerExplorer, FaceSlidAlongInExplorationIsSquaredUpTo) {
   for (int i = 0; i < 100; ++i) {
     const XVec2 f = -1.25 * nf;
     o = x.update(input(r.t += 0.02, r.p, target, XVec3(f.x(), f.y(), 0.0)), 0.02);
+    // No torque: the yaw setpoint stays on the squared heading (the yaw row restarts there).
+    EXPECT_NEAR(o.yaw, target, 0.5 * M_PI / 180.0) << r.t;
   }
   EXPECT_FALSE(x.squaring());
   EXPECT_EQ(o.state, XplorerState::kTactileTraversal);

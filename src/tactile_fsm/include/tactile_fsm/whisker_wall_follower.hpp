@@ -268,7 +268,7 @@ struct WallFollowerParams {
   /// a whisker's sum moves, whisk_pause_rms), the track kept on the course at
   /// first_whisk_speed (0 = V_max). 0 = off (the paper). [rad]
   double first_whisk_amplitude = 0.0;
-  double first_whisk_period_s = 1.0;   ///< [s]
+  double first_whisk_period_s = 0.7;   ///< [s]
   double first_whisk_speed = 0.0;      ///< [m/s]; 0 = v_max
   /// While a whisker's sum moves (whisk_pause_rms) the first-approach whisk
   /// turns back to the course heading (realign_gain) instead of holding the

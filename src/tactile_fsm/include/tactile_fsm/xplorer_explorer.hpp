@@ -43,6 +43,8 @@ class AdmittanceController {
  public:
   explicit AdmittanceController(const AdmittanceParams& p = AdmittanceParams{});
   void reset(const XVec3& r, double yaw);
+  /// Restarts the yaw row alone at `yaw`, at rest (the position row keeps its state).
+  void reset_yaw(double yaw);
   /// One step; returns r_d (yaw: yaw()).
   const XVec3& update(const XVec3& force, const XVec3& force_des, const XVec3& r_star, double torque_z,
                       double torque_des, double yaw_star, double dt);
@@ -206,7 +208,7 @@ struct XplorerParams {
   double square_min_deflection = 0.35;  ///< [rad] (choice, 20 deg, on since 2026-11-27; 0: off)
   double square_window = 1.0;          ///< path window before the contact [s] (choice; the force average's 1 s)
   double square_min_path = 0.1;        ///< ... at least this long [m] (choice)
-  double square_hold = 1.0;            ///< after the yaw ramp, wait at most this long for the yaw to arrive [s] (choice)
+  double square_hold = 1.0;            ///< after the yaw ramp, hold the squared yaw setpoint this long before the traversal [s] (choice)
   /// true: C_n is body +X, the Exploration axis (the frame of a square first contact, 001
   /// Sec. V-C2: move along body +x, contact, traverse along -y), up to 90 deg of yaw; false:
   /// the body axis nearest to the normal (at most 45 deg) (choice).
