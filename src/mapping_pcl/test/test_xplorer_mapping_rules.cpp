@@ -104,6 +104,15 @@ void stamp_at(XplorerContactMapper& m, double& t, const Eigen::Vector2d& surface
   m.update(s);
   t += 0.1;
 }
+
+/// The stamping rules' tests' parameters: no corner release, and the near face at
+/// slab_offset = 0.21 m behind the contact (edge_from_arms off), as stamp_at() assumes.
+XplorerMapParams rule_params() {
+  XplorerMapParams p;
+  p.corner_release_s = 0.0;
+  p.edge_from_arms = false;
+  return p;
+}
 }  // namespace
 
 // 001 Sec. IV-B: "obstacle map generation initializes when |b_delta_f| >=
@@ -410,9 +419,7 @@ TEST(XplorerMappingRules, LogicChecksTheContactNowAfterExplorationOnly) {
 // map point is the end of face a's last slab, 0.175 m from the corner.
 TEST(XplorerMappingRules, CornerFillBetweenTwoFacesJoinedByATurn) {
   auto run = [](double fill_gap, double turn_deg, double start_b) {
-    XplorerMapParams p;
-    p.corner_release_s = 0.0;
-    p.edge_from_arms = false;  // near face at slab_offset = 0.21 m
+    XplorerMapParams p = rule_params();
     p.corner_fill_max_gap = fill_gap;
     auto map = std::make_shared<PointMap>();
     auto m = std::make_shared<XplorerContactMapper>(p, *map);
@@ -791,9 +798,7 @@ TEST(XplorerMappingRules, LogicAppliesTheTouchingHalfEarlyInAStateOnly) {
 // it enters. At a 72 deg corner (a polygon) nothing is clipped.
 TEST(XplorerMappingRules, FaceClipRemovesTiltedSlabsOutsideAFaceOfARightAngledObject) {
   auto run = [](double min_length, double turn_deg) {
-    XplorerMapParams p;
-    p.corner_release_s = 0.0;
-    p.edge_from_arms = false;  // near face at slab_offset = 0.21 m
+    XplorerMapParams p = rule_params();
     p.face_clip_min_length = min_length;
     p.face_clip_tilted = false;  // rule 12 alone (rule 15 removes the tilted slabs outside a line at any angle)
     auto map = std::make_shared<PointMap>();
@@ -862,9 +867,7 @@ TEST(XplorerMappingRules, FaceClipRemovesTiltedSlabsOutsideAFaceOfARightAngledOb
 // their corner, and at the closure face A joins face B (the face after the first turn).
 TEST(XplorerMappingRules, FaceClipReachesTheCornersAndJoinsTheLastFaceAtTheClosure) {
   auto run = [](double reach, bool close) {
-    XplorerMapParams p;
-    p.corner_release_s = 0.0;
-    p.edge_from_arms = false;  // near face at slab_offset = 0.21 m
+    XplorerMapParams p = rule_params();
     p.face_clip_corner_reach = reach;
     p.face_clip_tilted = false;  // rule 13 alone (rule 15 would remove the tilted slabs too)
     auto map = std::make_shared<PointMap>();
@@ -956,9 +959,7 @@ TEST(XplorerMappingRules, InitiationHeldThroughATraversal) {
 // slabs and A's slabs overhanging the corner (outside B's line, C_n of another face) stay.
 TEST(XplorerMappingRules, TiltedSlabsOutsideTheirFacesLineAreRemovedAtAnyCorner) {
   auto run = [](bool rule) {
-    XplorerMapParams p;
-    p.corner_release_s = 0.0;
-    p.edge_from_arms = false;
+    XplorerMapParams p = rule_params();
     p.face_clip_tilted = rule;
     auto map = std::make_shared<PointMap>();
     auto m = std::make_shared<XplorerContactMapper>(p, *map);
@@ -1006,9 +1007,7 @@ TEST(XplorerMappingRules, TiltedSlabsOutsideTheirFacesLineAreRemovedAtAnyCorner)
 // (a polygon) nothing is clipped.
 TEST(XplorerMappingRules, FanPastARightAngledCornerIsClippedAtTheNextFace) {
   auto run = [](bool rule, double turn_deg) {
-    XplorerMapParams p;
-    p.corner_release_s = 0.0;
-    p.edge_from_arms = false;
+    XplorerMapParams p = rule_params();
     p.corner_fan_clip = rule;
     auto map = std::make_shared<PointMap>();
     auto m = std::make_shared<XplorerContactMapper>(p, *map);
@@ -1050,9 +1049,7 @@ TEST(XplorerMappingRules, FanPastARightAngledCornerIsClippedAtTheNextFace) {
 // points, and A's fan outside B's line goes.
 TEST(XplorerMappingRules, FanClipWhenOnlyTheNextFaceIsALine) {
   auto run = [](bool rule) {
-    XplorerMapParams p;
-    p.corner_release_s = 0.0;
-    p.edge_from_arms = false;
+    XplorerMapParams p = rule_params();
     p.corner_fan_clip = rule;
     auto map = std::make_shared<PointMap>();
     auto m = std::make_shared<XplorerContactMapper>(p, *map);
@@ -1084,9 +1081,7 @@ TEST(XplorerMappingRules, FanClipWhenOnlyTheNextFaceIsALine) {
 // it is at x < 1, "outside" B). Neither clips.
 TEST(XplorerMappingRules, FanClipLeavesAConcaveCornerAlone) {
   auto run = [](bool rule) {
-    XplorerMapParams p;
-    p.corner_release_s = 0.0;
-    p.edge_from_arms = false;
+    XplorerMapParams p = rule_params();
     p.corner_fan_clip = rule;
     auto map = std::make_shared<PointMap>();
     auto m = std::make_shared<XplorerContactMapper>(p, *map);
