@@ -56,11 +56,13 @@ void require(bool ok, const char* field, const std::string& reason, double value
 bool finite_positive(double v) { return std::isfinite(v) && v > 0.0; }
 bool finite_nonneg(double v) { return std::isfinite(v) && v >= 0.0; }
 
-/// Either whisker's S_c sum moving (RMS of its changes >= level > 0): a touch
-/// TDORC has not flagged yet (whisk_pause_rms, clear_yaw_release_rms).
+/// One whisker's S_c sum moving: the RMS of its changes >= level > 0.
+bool moves(double change_rms, double level) { return level > 0.0 && std::isfinite(change_rms) && change_rms >= level; }
+
+/// Either whisker's S_c sum moving: a touch TDORC has not flagged yet
+/// (whisk_pause_rms, clear_yaw_release_rms).
 bool sum_moves(const WallFollowerInput& in, double level) {
-  return level > 0.0 && ((std::isfinite(in.input_change_rms_left) && in.input_change_rms_left >= level) ||
-                         (std::isfinite(in.input_change_rms_right) && in.input_change_rms_right >= level));
+  return moves(in.input_change_rms_left, level) || moves(in.input_change_rms_right, level);
 }
 
 /// Gain of the yaw tracking of a moving reference (whisk, yaw offset): the realignment's, or
@@ -639,9 +641,8 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
     // wall following starts as without the whisk.
     if (p_.first_whisk_wall_rate > 0.0) {
       const double rel = std::remainder(in.yaw - course_yaw_, 2.0 * M_PI);
-      const double lvl = p_.whisk_pause_rms;
-      const bool mv_l = lvl > 0.0 && std::isfinite(in.input_change_rms_left) && in.input_change_rms_left >= lvl;
-      const bool mv_r = lvl > 0.0 && std::isfinite(in.input_change_rms_right) && in.input_change_rms_right >= lvl;
+      const bool mv_l = moves(in.input_change_rms_left, p_.whisk_pause_rms);
+      const bool mv_r = moves(in.input_change_rms_right, p_.whisk_pause_rms);
       if ((mv_l && mv_r) || (mv_l && rel < 0.0) || (mv_r && rel > 0.0)) first_whisk_wall_ = true;
       if (first_whisk_wall_) {
         out.setpoint.yaw_rate =

@@ -264,6 +264,11 @@ void XplorerExplorer::start_backoff(const XplorerInput& in) {
   ++backoffs_;
 }
 
+void XplorerExplorer::push_window(std::deque<PoseSample>& h, const PoseSample& s, double window) {
+  h.push_back(s);
+  while (h.size() > 1 && s.t - h[1].t >= window) h.pop_front();
+}
+
 bool XplorerExplorer::plan_square(const XplorerInput& in) {
   // Issue 17, class B (our choice; README "Oblique first face"): the path of the last
   // square_window s of Exploration, deflected from the Exploration direction, runs along the
@@ -428,9 +433,7 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
       out.position.head<2>() += (p_.explore_speed / p_.position_gain) * explore_dir_;
       out.yaw = hold_yaw_;
       if (p_.square_min_deflection > 0.0) {  // the path for squaring up (square_window)
-        explore_history_.push_back({in.t, p2, in.yaw});
-        while (explore_history_.size() > 1 && in.t - explore_history_[1].t >= p_.square_window)
-          explore_history_.pop_front();
+        push_window(explore_history_, {in.t, p2, in.yaw}, p_.square_window);
       }
       break;
     }
@@ -479,9 +482,7 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
         traverse_history_.clear();
       }
       // 001 Sec. IV-A: a yaw-rate peak (release at a corner) starts Tactile-turning.
-      traverse_history_.push_back({in.t, p2, in.yaw});
-      while (traverse_history_.size() > 1 && in.t - traverse_history_[1].t >= p_.corner_lookback)
-        traverse_history_.pop_front();
+      push_window(traverse_history_, {in.t, p2, in.yaw}, p_.corner_lookback);
       // A convex corner of the right-hand traversal turns counter-clockwise (yaw rate > 0).
       // A clockwise peak may turn once (re-aligning after an oblique contact); a second
       // clockwise turn before a counter-clockwise one would cycle round one corner point,

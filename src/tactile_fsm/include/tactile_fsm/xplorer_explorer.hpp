@@ -317,6 +317,8 @@ class XplorerExplorer {
     XVec2 p;
     double yaw;
   };
+  /// Appends `s` and drops the samples older than `window` s, keeping one at or beyond it.
+  static void push_window(std::deque<PoseSample>& h, const PoseSample& s, double window);
   std::deque<PoseSample> traverse_history_;  ///< last corner_lookback s of Tactile-traversal
   std::deque<PoseSample> explore_history_;   ///< last square_window s of Exploration
   bool squaring_ = false;
