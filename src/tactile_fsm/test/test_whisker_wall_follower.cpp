@@ -1559,4 +1559,11 @@ TEST(WhiskerWallFollower, SideStepCountsFromWhereTheSumsWentQuiet) {
   WallFollowerParams bad;
   bad.resume_quiet_rms = -1.0;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
+  // Set where it cannot act (the margin moves only within phantom_resume_max): rejected.
+  WallFollowerParams idle;
+  idle.resume_quiet_rms = 20.0;
+  idle.phantom_resume_max = 0.0;
+  expect_rejected(idle, "resume_quiet_rms");
+  idle.phantom_resume_max = 2.0;
+  EXPECT_NO_THROW(idle.validate());
 }
