@@ -102,12 +102,14 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   m.set("clear_yaw_in_resume", false);
   m.set("clear_yaw_release_rms", 13.0);
   // Whisking on the first approach (issue 17, README "Round 10"): off.
-  m.set("first_whisk_amplitude", 0.0);
+  m.set("first_whisk_amplitude", 0.44);
   m.set("first_whisk_period_s", 0.7);
   m.set("first_whisk_speed", 0.0);
   m.set("first_whisk_pause_to_course", false);
   m.set("first_whisk_wall_rate", 0.0);
-  m.set("end_contact_lateral", 0.0);
+  m.set("first_scan_step", 0.08);
+  m.set("first_scan_rate", 2.0);
+  m.set("end_contact_lateral", 0.045);
   m.set("target_radius", d.target_radius);
   m.set("land_past_target", d.land_past_target);
   m.set("landing_duration_s", d.landing_duration_s);
@@ -174,6 +176,8 @@ WhiskerFsmLogic::Params WhiskerFsmLogic::params_from(const ParamMap& m) {
   f.first_whisk_speed = m.get_double("first_whisk_speed");
   f.first_whisk_pause_to_course = m.get_bool("first_whisk_pause_to_course");
   f.first_whisk_wall_rate = m.get_double("first_whisk_wall_rate");
+  f.first_scan_step = m.get_double("first_scan_step");
+  f.first_scan_rate = m.get_double("first_scan_rate");
   f.end_contact_lateral = m.get_double("end_contact_lateral");
   f.target_radius = m.get_double("target_radius");
   f.land_past_target = m.get_bool("land_past_target");

@@ -132,6 +132,9 @@ void WallFollowerParams::validate() const {
           "must be in [0, v_max] (0 = v_max)", first_whisk_speed);
   require(finite_nonneg(first_whisk_wall_rate), "first_whisk_wall_rate", "must be finite and >= 0 (0 = off)",
           first_whisk_wall_rate);
+  require(finite_nonneg(first_scan_step), "first_scan_step", "must be finite and >= 0 (0 = off)", first_scan_step);
+  require(finite_positive(first_scan_rate) && first_scan_rate <= whisk_rate_max, "first_scan_rate",
+          "must be finite, > 0 and <= whisk_rate_max", first_scan_rate);
   require(finite_nonneg(end_contact_lateral), "end_contact_lateral", "must be finite and >= 0 (0 = off)",
           end_contact_lateral);
   require(finite_positive(target_radius), "target_radius", "must be finite and > 0", target_radius);
@@ -258,6 +261,10 @@ void WhiskerWallFollower::reset() {
   yaw_offset_released_ = false;
   contacted_ = false;
   course_yaw_ = 0.0;
+  scan_goal_ = NAN;
+  scanning_ = false;
+  scan_ref_ = 0.0;
+  scan_leg_ = 0;
 }
 
 void WhiskerWallFollower::enter(FsmState s, const char* reason, double t) {
@@ -632,8 +639,11 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
   // first baffle's end may lie in the blind band on either side.
   if (p_.first_whisk_amplitude > 0.0 && state_ == FsmState::kFlyForward && !contacted_ && !after_clear_ &&
       origin_set_ && std::isfinite(in.yaw)) {
-    out.setpoint = whisk(in, out.setpoint, p_.first_whisk_amplitude, p_.first_whisk_period_s,
-                         p_.first_whisk_speed > 0.0 ? p_.first_whisk_speed : p_.v_max, p_.first_whisk_pause_to_course);
+    out.setpoint = p_.first_scan_step > 0.0
+                       ? step_and_scan(in, out.setpoint, dt)
+                       : whisk(in, out.setpoint, p_.first_whisk_amplitude, p_.first_whisk_period_s,
+                               p_.first_whisk_speed > 0.0 ? p_.first_whisk_speed : p_.v_max,
+                               p_.first_whisk_pause_to_course);
     // A wall ahead (README "Round 10b", our choice): at a yaw toward one side a
     // square wall is met first by the other side's whisker (its tip lies
     // further ahead), an end beside the axis by the yaw side's whisker. The
@@ -651,7 +661,11 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
     }
   } else {
     first_whisk_wall_ = false;
-  }
+    scan_goal_ = NAN;
+    scanning_ = false;
+    scan_ref_ = 0.0;
+    scan_leg_ = 0;
+    }
   const bool offset_on = p_.clear_yaw_offset > 0.0 && origin_set_ && std::isfinite(in.yaw) &&
                          ((state_ == FsmState::kResumeForward && p_.clear_yaw_in_resume) ||
                           (state_ == FsmState::kFlyForward && after_clear_));
@@ -763,6 +777,57 @@ Setpoint WhiskerWallFollower::whisk(const WallFollowerInput& in, const Setpoint&
   const double rel = std::remainder(course_yaw_ - in.yaw, 2.0 * M_PI);
   o.vx = speed * std::cos(rel);
   o.vy = speed * std::sin(rel);
+  return o;
+}
+
+Setpoint WhiskerWallFollower::step_and_scan(const WallFollowerInput& in, const Setpoint& s, double dt) {
+  // Step and scan (README "Round 12", our choice). Along the course the
+  // drone flies to the step's end, v = (goal - progress) / kApproachTau
+  // (at most V_max), and holds it there while it scans; the velocity is the
+  // course direction in the world frame, expressed in the body-yaw frame.
+  constexpr double kApproachTau = 0.3;  // [s], our choice: the vehicle's velocity lag is ~0.23 s
+  constexpr double kAtGoal = 0.015;     // [m] the step is done this near its end
+  constexpr double kSettled = 0.05;     // [rad] back on the course: the next step starts
+  const double c = std::cos(course_yaw_), sn = std::sin(course_yaw_);
+  const double progress = c * (in.x - origin_x_) + sn * (in.y - origin_y_);
+  if (!std::isfinite(scan_goal_)) {
+    scan_goal_ = progress + p_.first_scan_step;
+    scanning_ = false;
+  }
+  const double a = p_.first_whisk_amplitude;
+  const double r = p_.first_scan_rate;
+  double ff = 0.0;
+  if (!scanning_ && scan_goal_ - progress < kAtGoal) {
+    scanning_ = true;
+    scan_ref_ = 0.0;
+    scan_leg_ = 0;
+  }
+  if (scanning_) {
+    // A whisker's sum moving: a touch TDORC has not flagged yet; hold the yaw.
+    if (!sum_moves(in, p_.whisk_pause_rms)) {
+      switch (scan_leg_) {
+        case 0: scan_ref_ = std::fmin(a, scan_ref_ + r * dt); ff = r; if (scan_ref_ >= a) scan_leg_ = 1; break;
+        case 1: scan_ref_ = std::fmax(-a, scan_ref_ - r * dt); ff = -r; if (scan_ref_ <= -a) scan_leg_ = 2; break;
+        case 2: scan_ref_ = std::fmin(0.0, scan_ref_ + r * dt); ff = r; if (scan_ref_ >= 0.0) scan_leg_ = 3; break;
+        default: break;
+      }
+    }
+    if (scan_leg_ == 3 && std::fabs(std::remainder(in.yaw - course_yaw_, 2.0 * M_PI)) < kSettled) {
+      scanning_ = false;
+      scan_goal_ += p_.first_scan_step;
+    }
+  }
+  Setpoint o = s;
+  if (scanning_ && sum_moves(in, p_.whisk_pause_rms)) {
+    o.yaw_rate = 0.0;
+  } else {
+    o.yaw_rate = std::clamp(ff + tracking_gain(p_) * std::remainder(course_yaw_ + scan_ref_ - in.yaw, 2.0 * M_PI),
+                            -p_.whisk_rate_max, p_.whisk_rate_max);
+  }
+  const double v = std::clamp((scan_goal_ - progress) / kApproachTau, -p_.v_max, p_.v_max);
+  const double rel = std::remainder(course_yaw_ - in.yaw, 2.0 * M_PI);
+  o.vx = v * std::cos(rel);
+  o.vy = v * std::sin(rel);
   return o;
 }
 

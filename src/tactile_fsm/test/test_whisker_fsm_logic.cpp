@@ -282,7 +282,11 @@ TEST(WhiskerFsmLogic, QuietSignalSumsReachThePhantomGate) {
 }
 
 TEST(WhiskerFsmLogic, BadInputDroppedAndCounted) {
-  WhiskerFsmLogic l(WhiskerFsmLogic::params_from(WhiskerFsmLogic::default_parameters()));
+  // The paper's straight approach (V_max in FLY_FORWARD), not the first-approach
+  // scan, whose step would brake at the odometry's 0.1 m below.
+  auto m = WhiskerFsmLogic::default_parameters();
+  m.set("first_whisk_amplitude", 0.0);
+  WhiskerFsmLogic l(WhiskerFsmLogic::params_from(m));
   for (int k = 0; k <= 100; ++k) tick(l, k * kStepNs);
   ASSERT_EQ(l.fsm().state(), tactile_fsm::FsmState::kFlyForward);
   const int64_t ns = 101 * kStepNs;

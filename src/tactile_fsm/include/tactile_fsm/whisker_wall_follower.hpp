@@ -279,6 +279,17 @@ struct WallFollowerParams {
   /// a wall ahead, not an end beside the axis: the yaw is turned back to the
   /// course at up to this rate for the rest of that FLY_FORWARD. 0 = off. [rad/s]
   double first_whisk_wall_rate = 0.0;
+  /// Step and scan on the first approach (issue 17, README "Round 12", our
+  /// choice; first_whisk_amplitude 0 turns it off with the whisk): instead of whisking while
+  /// flying, the first approach alternates steps of first_scan_step along the
+  /// course (yaw on the course, the speed brought down to 0 at the step's end)
+  /// and scans in place (yaw course -> +A -> -A -> course at first_scan_rate,
+  /// A = first_whisk_amplitude, held while a whisker's sum moves,
+  /// whisk_pause_rms). Yawed in place the whisker tips lie nearer than when
+  /// straight, so a wall ahead is met in a step at the course heading and only
+  /// an end beside the axis in a scan. 0 = off (the continuous whisk). [m]
+  double first_scan_step = 0.0;
+  double first_scan_rate = 2.0;  ///< [rad/s], at most whisk_rate_max
   /// A baffle's end met by one whisker (issue 17, README "Round 10", choice):
   /// a first touch in FLY_FORWARD by exactly one whisker whose contact point
   /// (the depth along the whisker, turned by the yaw off the course heading)
@@ -416,6 +427,7 @@ class WhiskerWallFollower {
   Setpoint whisk(const WallFollowerInput& in, const Setpoint& s, double amplitude, double period, double speed,
                  bool pause_to_course = false) const;
   Setpoint offset_yaw(const WallFollowerInput& in, const Setpoint& s, double dt);
+  Setpoint step_and_scan(const WallFollowerInput& in, const Setpoint& s, double dt);
 
   WallFollowerParams p_;
   FsmState state_ = FsmState::kHoverInit;
@@ -456,6 +468,13 @@ class WhiskerWallFollower {
   bool yaw_offset_released_ = false;  ///< clear_yaw_release_rms reached since the clearing
   bool first_whisk_wall_ = false;  ///< first_whisk_wall_rate latched in this FLY_FORWARD
   bool contacted_ = false;  ///< wall following entered at least once in this flight (first_whisk_amplitude)
+  // first_scan_step: the step's end along the course [m] (NaN: not started),
+  // scanning (else stepping), the scan's yaw reference off the course [rad] and
+  // its leg (0: to +A, 1: to -A, 2: back to the course, 3: settling).
+  double scan_goal_ = NAN;
+  bool scanning_ = false;
+  double scan_ref_ = 0.0;
+  int scan_leg_ = 0;
 };
 
 }  // namespace tactile_fsm
