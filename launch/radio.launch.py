@@ -15,7 +15,9 @@ commander hover setpoints, clamped, with the stale-input chain hover -> land -> 
     tactile fly --uri radio://0/80/2M/E7E7E7E7E7 --out out/flight
 
 Parameters come from config/ (crazyflie_bridge.yaml, tdorc_filter.yaml,
-tactile_depth.yaml, tactile_fsm.yaml); `uri` overrides the bridge's. The Crazyradio needs
+tactile_depth.yaml, tactile_fsm.yaml); `uri` overrides the bridge's. The FSM's first
+approach steps and scans by default (tactile_fsm README "Round 12"); against a single wall
+ahead set first_whisk_amplitude: 0 there for the paper's straight approach. The Crazyradio needs
 the Bitcraze udev rules (or run as root / pass the device into the container). Without a
 Crazyradio the bridge cannot start and the launch ends with its message ("no Crazyradio found").
 """

@@ -133,8 +133,14 @@ void WallFollowerParams::validate() const {
   require(finite_nonneg(first_whisk_wall_rate), "first_whisk_wall_rate", "must be finite and >= 0 (0 = off)",
           first_whisk_wall_rate);
   require(finite_nonneg(first_scan_step), "first_scan_step", "must be finite and >= 0 (0 = off)", first_scan_step);
-  require(finite_positive(first_scan_rate) && first_scan_rate <= whisk_rate_max, "first_scan_rate",
-          "must be finite, > 0 and <= whisk_rate_max", first_scan_rate);
+  require(first_scan_step == 0.0 || first_scan_step >= 0.02, "first_scan_step",
+          "must be 0 (off) or >= 0.02 m (the step ends 15 mm before its end)", first_scan_step);
+  if (first_scan_step > 0.0) {
+    require(finite_positive(first_scan_rate) && first_scan_rate <= whisk_rate_max, "first_scan_rate",
+            "must be finite, > 0 and <= whisk_rate_max", first_scan_rate);
+    require(!first_whisk_pause_to_course, "first_whisk_pause_to_course",
+            "has no effect with first_scan_step > 0 (the scan holds the yaw on a moving sum)", 1.0);
+  }
   require(finite_nonneg(end_contact_lateral), "end_contact_lateral", "must be finite and >= 0 (0 = off)",
           end_contact_lateral);
   require(finite_positive(target_radius), "target_radius", "must be finite and > 0", target_radius);
@@ -638,7 +644,7 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
   // Whisking on the first approach (README "Round 10"): no clearing yet, the
   // first baffle's end may lie in the blind band on either side.
   if (p_.first_whisk_amplitude > 0.0 && state_ == FsmState::kFlyForward && !contacted_ && !after_clear_ &&
-      origin_set_ && std::isfinite(in.yaw)) {
+      origin_set_ && std::isfinite(in.yaw) && std::isfinite(in.x) && std::isfinite(in.y)) {
     out.setpoint = p_.first_scan_step > 0.0
                        ? step_and_scan(in, out.setpoint, dt)
                        : whisk(in, out.setpoint, p_.first_whisk_amplitude, p_.first_whisk_period_s,
@@ -665,7 +671,7 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
     scanning_ = false;
     scan_ref_ = 0.0;
     scan_leg_ = 0;
-    }
+  }
   const bool offset_on = p_.clear_yaw_offset > 0.0 && origin_set_ && std::isfinite(in.yaw) &&
                          ((state_ == FsmState::kResumeForward && p_.clear_yaw_in_resume) ||
                           (state_ == FsmState::kFlyForward && after_clear_));
@@ -788,11 +794,20 @@ Setpoint WhiskerWallFollower::step_and_scan(const WallFollowerInput& in, const S
   constexpr double kApproachTau = 0.3;  // [s], our choice: the vehicle's velocity lag is ~0.23 s
   constexpr double kAtGoal = 0.015;     // [m] the step is done this near its end
   constexpr double kSettled = 0.05;     // [rad] back on the course: the next step starts
+  constexpr double kMaxHold = 1.0;      // [s] per scan: a moving sum no flag follows holds no longer
+  constexpr double kMaxSettle = 2.0;    // [s] back toward the course at most this long, then step
   const double c = std::cos(course_yaw_), sn = std::sin(course_yaw_);
   const double progress = c * (in.x - origin_x_) + sn * (in.y - origin_y_);
+  const double off = std::remainder(in.yaw - course_yaw_, 2.0 * M_PI);
   if (!std::isfinite(scan_goal_)) {
-    scan_goal_ = progress + p_.first_scan_step;
-    scanning_ = false;
+    // (Re)entering the first approach, e.g. after a fail-safe hover in a
+    // scan: off the course, settle first rather than step at a yawed heading.
+    const bool settle = std::fabs(off) >= kSettled;
+    scan_goal_ = settle ? progress : progress + p_.first_scan_step;
+    scanning_ = settle;
+    scan_ref_ = 0.0;
+    scan_leg_ = settle ? 3 : 0;
+    scan_hold_s_ = scan_settle_s_ = 0.0;
   }
   const double a = p_.first_whisk_amplitude;
   const double r = p_.first_scan_rate;
@@ -801,33 +816,37 @@ Setpoint WhiskerWallFollower::step_and_scan(const WallFollowerInput& in, const S
     scanning_ = true;
     scan_ref_ = 0.0;
     scan_leg_ = 0;
+    scan_hold_s_ = scan_settle_s_ = 0.0;
   }
+  // A whisker's sum moving: a touch TDORC has not flagged yet; hold the yaw
+  // (up to kMaxHold per scan, so that a brush no flag follows cannot stop the
+  // approach for good).
+  const bool held = scanning_ && sum_moves(in, p_.whisk_pause_rms) && scan_hold_s_ < kMaxHold;
+  if (held) scan_hold_s_ += dt;
   if (scanning_) {
-    // A whisker's sum moving: a touch TDORC has not flagged yet; hold the yaw.
-    if (!sum_moves(in, p_.whisk_pause_rms)) {
+    if (!held) {
       switch (scan_leg_) {
         case 0: scan_ref_ = std::fmin(a, scan_ref_ + r * dt); ff = r; if (scan_ref_ >= a) scan_leg_ = 1; break;
         case 1: scan_ref_ = std::fmax(-a, scan_ref_ - r * dt); ff = -r; if (scan_ref_ <= -a) scan_leg_ = 2; break;
         case 2: scan_ref_ = std::fmin(0.0, scan_ref_ + r * dt); ff = r; if (scan_ref_ >= 0.0) scan_leg_ = 3; break;
-        default: break;
+        default: scan_settle_s_ += dt; break;
       }
     }
-    if (scan_leg_ == 3 && std::fabs(std::remainder(in.yaw - course_yaw_, 2.0 * M_PI)) < kSettled) {
+    if (scan_leg_ == 3 && (std::fabs(off) < kSettled || scan_settle_s_ >= kMaxSettle)) {
       scanning_ = false;
       scan_goal_ += p_.first_scan_step;
     }
   }
   Setpoint o = s;
-  if (scanning_ && sum_moves(in, p_.whisk_pause_rms)) {
+  if (held) {
     o.yaw_rate = 0.0;
   } else {
     o.yaw_rate = std::clamp(ff + tracking_gain(p_) * std::remainder(course_yaw_ + scan_ref_ - in.yaw, 2.0 * M_PI),
                             -p_.whisk_rate_max, p_.whisk_rate_max);
   }
   const double v = std::clamp((scan_goal_ - progress) / kApproachTau, -p_.v_max, p_.v_max);
-  const double rel = std::remainder(course_yaw_ - in.yaw, 2.0 * M_PI);
-  o.vx = v * std::cos(rel);
-  o.vy = v * std::sin(rel);
+  o.vx = v * std::cos(off);
+  o.vy = -v * std::sin(off);
   return o;
 }
 

@@ -283,7 +283,8 @@ TEST(WhiskerFsmLogic, QuietSignalSumsReachThePhantomGate) {
 
 TEST(WhiskerFsmLogic, BadInputDroppedAndCounted) {
   // The paper's straight approach (V_max in FLY_FORWARD), not the first-approach
-  // scan, whose step would brake at the odometry's 0.1 m below.
+  // scan, whose step (0.08 m) the odometry's 0.1 m below lies past: it would fly
+  // back to the step's end.
   auto m = WhiskerFsmLogic::default_parameters();
   m.set("first_whisk_amplitude", 0.0);
   WhiskerFsmLogic l(WhiskerFsmLogic::params_from(m));

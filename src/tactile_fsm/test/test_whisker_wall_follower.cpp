@@ -1666,7 +1666,8 @@ TEST(WhiskerWallFollower, StepAndScanFindsTheEndAndMeetsAWallAheadInAStep) {
 }
 
 // The scan is held while a whisker's sum moves (a touch TDORC has not flagged
-// yet), and the step's speed is never above V_max; parameters are validated.
+// yet), from where it stopped, for at most 1 s per scan; the step's speed is
+// never above V_max; parameters are validated.
 TEST(WhiskerWallFollower, StepAndScanHoldsTheYawOnAMovingSumAndValidates) {
   WallFollowerParams p = scan_params(0.08);
   p.whisk_pause_rms = 13.0;
@@ -1682,18 +1683,104 @@ TEST(WhiskerWallFollower, StepAndScanHoldsTheYawOnAMovingSumAndValidates) {
   }
   ASSERT_GT(std::fabs(yaw), 0.1);  // scanning
   EXPECT_NEAR(x, 0.08, 0.015);     // at the step's end
-  WallFollowerInput in = input(t, x, 0.0, yaw);
-  in.input_change_rms_right = 40.0;  // the sum moves: hold the yaw
-  EXPECT_EQ(fsm.step(in).setpoint.yaw_rate, 0.0);
-  in.t += kDt;
-  in.input_change_rms_right = 2.0;  // quiet again: the scan goes on
-  EXPECT_GT(std::fabs(fsm.step(in).setpoint.yaw_rate), 0.5);
+  // The sum moves for 0.4 s: the yaw is held on every tick.
+  for (int k = 0; k < 20; ++k, t += kDt) {
+    WallFollowerInput in = input(t, x, 0.0, yaw);
+    in.input_change_rms_right = 40.0;
+    EXPECT_EQ(fsm.step(in).setpoint.yaw_rate, 0.0);
+  }
+  // Quiet again: the scan goes on from where it was held (the reference did
+  // not run ahead: the yaw rate is the leg's feed-forward plus a small
+  // correction, not a jump toward a reference 0.8 rad further on).
+  const WallFollowerOutput go = fsm.step(input(t, x, 0.0, yaw));
+  t += kDt;
+  EXPECT_GT(go.setpoint.yaw_rate, 0.5 * p.first_scan_rate);
+  EXPECT_LT(go.setpoint.yaw_rate, 1.5 * p.first_scan_rate);
+  // A sum moving for longer than 1 s without a flag holds the scan 1 s only.
+  int held = 0;
+  for (int k = 0; k < 100; ++k, t += kDt) {
+    WallFollowerInput in = input(t, x, 0.0, yaw);
+    in.input_change_rms_right = 40.0;
+    const WallFollowerOutput o = fsm.step(in);
+    if (o.setpoint.yaw_rate == 0.0) ++held;
+    yaw += o.setpoint.yaw_rate * kDt;
+  }
+  EXPECT_GE(held, 29);  // 1 s in all, 0.4 s of it above
+  EXPECT_LE(held, 32);
   WallFollowerParams bad = scan_params(0.08);
   bad.first_scan_step = -0.01;
+  expect_rejected(bad, "first_scan_step");
+  bad.first_scan_step = 0.01;  // the step would end before it began
   expect_rejected(bad, "first_scan_step");
   bad = scan_params(0.08);
   bad.first_scan_rate = 4.0;  // > whisk_rate_max
   expect_rejected(bad, "first_scan_rate");
   bad.first_scan_rate = 0.0;
   expect_rejected(bad, "first_scan_rate");
+  bad = scan_params(0.08);
+  bad.first_whisk_pause_to_course = true;  // the continuous whisk's only
+  expect_rejected(bad, "first_whisk_pause_to_course");
+  bad.first_scan_step = 0.0;
+  EXPECT_NO_THROW(bad.validate());
+}
+
+// The scan ends at the first contact: after it and a clearing, FLY_FORWARD
+// flies as without the rule; and a first approach re-entered off the course
+// (after a fail-safe hover in a scan) settles before it steps.
+TEST(WhiskerWallFollower, StepAndScanEndsAtTheFirstContactAndSettlesOnReentry) {
+  WallFollowerParams p = scan_params(0.08);
+  p.realign_gain = 1.5;
+  WhiskerWallFollower fsm(p);
+  double t = 0.0, x = 0.0, y = 0.0, yaw = 0.0;
+  auto move = [&](const WallFollowerOutput& o) {
+    x += (std::cos(yaw) * o.setpoint.vx - std::sin(yaw) * o.setpoint.vy) * kDt;
+    y += (std::sin(yaw) * o.setpoint.vx + std::cos(yaw) * o.setpoint.vy) * kDt;
+    yaw += o.setpoint.yaw_rate * kDt;
+  };
+  for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t));
+  while (std::fabs(yaw) < 0.3 && t < 10.0) {  // into the first scan
+    move(fsm.step(input(t, x, y, yaw)));
+    t += kDt;
+  }
+  ASSERT_GE(std::fabs(yaw), 0.3);
+  // Depth stale for 0.3 s: fail-safe hover, then fresh again.
+  for (int k = 0; k < 15; ++k, t += kDt) {
+    WallFollowerInput in = input(t, x, y, yaw);
+    in.depth_stamp = p.hover_init_s;
+    move(fsm.step(in));
+  }
+  EXPECT_EQ(fsm.state(), FsmState::kFailsafeHover);
+  // Back in FLY_FORWARD at ~0.3 rad off the course: no speed along the course
+  // until the yaw is back within 0.05 rad.
+  double along_while_off = 0.0;
+  int settle_ticks = 0;
+  for (; settle_ticks < 150 && std::fabs(yaw) >= 0.05; ++settle_ticks, t += kDt) {
+    const WallFollowerOutput o = fsm.step(input(t, x, y, yaw));
+    ASSERT_EQ(o.state, FsmState::kFlyForward);
+    along_while_off = std::max(along_while_off, std::cos(yaw) * o.setpoint.vx - std::sin(yaw) * o.setpoint.vy);
+    move(o);
+  }
+  EXPECT_LT(settle_ticks, 150);  // settled (1.2 s at the tracking gain)
+  EXPECT_LT(along_while_off, 0.02);
+  // First contact, then a clearing: no scan afterwards.
+  for (int k = 0; k < 50; ++k, t += kDt) {
+    WallFollowerInput in = input(t, x, y, yaw);
+    set_depths(in, 0.08, 0.08);
+    move(fsm.step(in));
+  }
+  EXPECT_EQ(fsm.state(), FsmState::kWallFollowing);
+  int forward = 0;
+  double max_rate = 0.0, min_vx = INFINITY;
+  for (int k = 0; k < 400; ++k, t += kDt) {
+    const WallFollowerOutput o = fsm.step(input(t, x, y, yaw));
+    if (o.state == FsmState::kFlyForward) {
+      ++forward;
+      max_rate = std::max(max_rate, std::fabs(o.setpoint.yaw_rate));
+      min_vx = std::min(min_vx, o.setpoint.vx);
+    }
+    move(o);
+  }
+  EXPECT_GT(forward, 100);
+  EXPECT_LT(max_rate, p.omega_max + 1e-9);  // realignment only, no 2 rad/s scan
+  EXPECT_GT(min_vx, 0.9 * p.v_max);         // no steps: V_max throughout
 }

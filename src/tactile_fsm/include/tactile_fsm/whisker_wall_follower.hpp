@@ -475,6 +475,8 @@ class WhiskerWallFollower {
   bool scanning_ = false;
   double scan_ref_ = 0.0;
   int scan_leg_ = 0;
+  double scan_hold_s_ = 0.0;    ///< time this scan was held on a moving sum [s]
+  double scan_settle_s_ = 0.0;  ///< time in this scan's last leg [s]
 };
 
 }  // namespace tactile_fsm
