@@ -25,6 +25,19 @@ void MapParams::validate() const {
     bad("outlier_stddev", "must be finite and > 0, got " + std::to_string(outlier_stddev));
   if (!(outlier_leaf >= 0.0) || !std::isfinite(outlier_leaf))
     bad("outlier_leaf", "must be finite and >= 0 (0: the removal on the map's own points), got " + std::to_string(outlier_leaf));
+  if (!(outlier_face_length >= 0.0) || !std::isfinite(outlier_face_length))
+    bad("outlier_face_length", "must be finite and >= 0 (0: off), got " + std::to_string(outlier_face_length));
+  if (!(outlier_face_tolerance > 0.0) || !std::isfinite(outlier_face_tolerance))
+    bad("outlier_face_tolerance", "must be finite and > 0, got " + std::to_string(outlier_face_tolerance));
+  if (!std::isfinite(outlier_face_outside)) bad("outlier_face_outside", "must be finite, got " + std::to_string(outlier_face_outside));
+  if (!(outlier_face_bound_length > 0.0) || !std::isfinite(outlier_face_bound_length))
+    bad("outlier_face_bound_length", "must be finite and > 0, got " + std::to_string(outlier_face_bound_length));
+  if (!(outlier_face_depth >= 0.0) || !std::isfinite(outlier_face_depth))
+    bad("outlier_face_depth", "must be finite and >= 0, got " + std::to_string(outlier_face_depth));
+  if (!(outlier_face_reach >= 0.0) || !std::isfinite(outlier_face_reach))
+    bad("outlier_face_reach", "must be finite and >= 0, got " + std::to_string(outlier_face_reach));
+  if (!(outlier_face_support > 0.0 && outlier_face_support <= 1.0))
+    bad("outlier_face_support", "must be in (0, 1], got " + std::to_string(outlier_face_support));
   if (!(auto_filter_growth == 0.0 || auto_filter_growth > 1.0) || !std::isfinite(auto_filter_growth))
     bad("auto_filter_growth", "must be 0 (off) or > 1, got " + std::to_string(auto_filter_growth));
 }
@@ -124,20 +137,31 @@ void PointMap::voxel_filter(double leaf) {
 std::size_t PointMap::remove_outliers(int mean_k, double stddev) {
   if (mean_k < 1 || !(stddev > 0.0)) throw std::invalid_argument("PointMap::remove_outliers: mean_k >= 1 and stddev > 0");
   if (cloud_->size() <= static_cast<std::size_t>(mean_k)) return 0;
-  if (params_.outlier_leaf > 0.0) return remove_outliers_at_leaf(mean_k, stddev, params_.outlier_leaf);
-  pcl::StatisticalOutlierRemoval<pcl::PointXYZ> sor;
-  sor.setInputCloud(cloud_);
-  sor.setMeanK(mean_k);
-  sor.setStddevMulThresh(stddev);
+  std::vector<bool> keep;
+  if (params_.outlier_leaf > 0.0) {
+    keep = outliers_at_leaf(mean_k, stddev, params_.outlier_leaf);
+  } else {
+    pcl::StatisticalOutlierRemoval<pcl::PointXYZ> sor;
+    sor.setInputCloud(cloud_);
+    sor.setMeanK(mean_k);
+    sor.setStddevMulThresh(stddev);
+    pcl::Indices kept;
+    sor.filter(kept);
+    keep.assign(cloud_->size(), false);
+    for (const auto k : kept) keep[static_cast<std::size_t>(k)] = true;
+  }
   Cloud::Ptr out(new Cloud);
-  sor.filter(*out);
-  const std::size_t removed = cloud_->size() - out->size();
+  Cloud removed;
+  out->reserve(cloud_->size());
+  for (std::size_t i = 0; i < cloud_->size(); ++i) (keep[i] ? *out : removed).push_back(cloud_->points[i]);
+  if (params_.outlier_face_length > 0.0 && !removed.empty()) keep_face_ends(*out, removed);
+  const std::size_t n_removed = cloud_->size() - out->size();
   cloud_ = out;
   size_after_filter_ = std::min(size_after_filter_, cloud_->size());
-  return removed;
+  return n_removed;
 }
 
-std::size_t PointMap::remove_outliers_at_leaf(int mean_k, double stddev, double leaf) {
+std::vector<bool> PointMap::outliers_at_leaf(int mean_k, double stddev, double leaf) const {
   // README "Outlier removal at the slab spacing" (rule 17): voxel centroids at `leaf`
   // (floor(p / leaf), as PCL's voxel grid), PCL's statistical outlier removal on them,
   // and every point of an outlier voxel removed.
@@ -163,7 +187,7 @@ std::size_t PointMap::remove_outliers_at_leaf(int mean_k, double stddev, double 
     ++count[it->second];
     voxel_of[i] = it->second;
   }
-  if (sum.size() <= static_cast<std::size_t>(mean_k)) return 0;
+  if (sum.size() <= static_cast<std::size_t>(mean_k)) return std::vector<bool>(cloud_->size(), true);
   Cloud::Ptr centroids(new Cloud);
   centroids->reserve(sum.size());
   for (std::size_t v = 0; v < sum.size(); ++v) {
@@ -176,16 +200,64 @@ std::size_t PointMap::remove_outliers_at_leaf(int mean_k, double stddev, double 
   sor.setStddevMulThresh(stddev);
   pcl::Indices kept;
   sor.filter(kept);
-  std::vector<bool> keep(sum.size(), false);
-  for (const auto k : kept) keep[static_cast<std::size_t>(k)] = true;
-  Cloud::Ptr out(new Cloud);
-  out->reserve(cloud_->size());
-  for (std::size_t i = 0; i < cloud_->size(); ++i)
-    if (keep[voxel_of[i]]) out->push_back(cloud_->points[i]);
-  const std::size_t removed = cloud_->size() - out->size();
-  cloud_ = out;
-  size_after_filter_ = std::min(size_after_filter_, cloud_->size());
-  return removed;
+  std::vector<bool> keep_voxel(sum.size(), false);
+  for (const auto k : kept) keep_voxel[static_cast<std::size_t>(k)] = true;
+  std::vector<bool> keep(cloud_->size());
+  for (std::size_t i = 0; i < cloud_->size(); ++i) keep[i] = keep_voxel[voxel_of[i]];
+  return keep;
+}
+
+std::size_t PointMap::keep_face_ends(Cloud& kept, const Cloud& removed) const {
+  // README "Face ends kept by the faces' lines" (rule 18).
+  const double tol = params_.outlier_face_tolerance, bin = 2.0 * tol;
+  std::vector<Eigen::Vector2d> xy;
+  xy.reserve(kept.size());
+  for (const auto& p : kept) xy.emplace_back(p.x, p.y);
+  if (xy.size() < 3) return 0;
+  const std::vector<Eigen::Vector2d> hull = convex_hull(xy);
+  struct Face {
+    Eigen::Vector2d a, u, n;  // start, direction, outward normal (the hull is counter-clockwise)
+    double length;
+    bool extends;  // long enough to extend (outlier_face_length); shorter ones only bound
+  };
+  std::vector<Face> faces;
+  for (std::size_t i = 0; hull.size() >= 3 && i < hull.size(); ++i) {
+    const Eigen::Vector2d a = hull[i], b = hull[(i + 1) % hull.size()];
+    const double length = (b - a).norm();
+    if (length < std::min(params_.outlier_face_length, params_.outlier_face_bound_length)) continue;
+    const Eigen::Vector2d u = (b - a) / length, n(u.y(), -u.x());
+    const std::size_t bins = std::max<std::size_t>(1, static_cast<std::size_t>(std::ceil(length / bin)));
+    std::vector<char> hit(bins, 0);
+    for (const auto& q : xy) {
+      const Eigen::Vector2d d = q - a;
+      const double t = d.dot(u);
+      if (d.dot(n) < -tol || t < 0.0 || t > length) continue;
+      hit[std::min(bins - 1, static_cast<std::size_t>(t / bin))] = 1;
+    }
+    const auto supported = static_cast<double>(std::count(hit.begin(), hit.end(), 1));
+    if (supported >= params_.outlier_face_support * static_cast<double>(bins))
+      faces.push_back({a, u, n, length, length >= params_.outlier_face_length});
+  }
+  if (faces.empty()) return 0;
+  std::size_t put_back = 0;
+  for (const auto& p : removed) {
+    const Eigen::Vector2d q(p.x, p.y);
+    bool inside = true, on_face = false;
+    for (const auto& f : faces) {
+      const double out = (q - f.a).dot(f.n), t = (q - f.a).dot(f.u);
+      if (out > params_.outlier_face_outside) {
+        inside = false;
+        break;
+      }
+      if (f.extends && out >= -params_.outlier_face_depth && t >= -params_.outlier_face_reach && t <= f.length + params_.outlier_face_reach)
+        on_face = true;
+    }
+    if (inside && on_face) {
+      kept.push_back(p);
+      ++put_back;
+    }
+  }
+  return put_back;
 }
 
 namespace {
@@ -194,17 +266,11 @@ double cross(const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Ve
 }
 }  // namespace
 
-Rect2 min_area_rectangle(const std::vector<Eigen::Vector2d>& pts_in) {
-  Rect2 r;
-  if (pts_in.empty()) return r;
+std::vector<Eigen::Vector2d> convex_hull(const std::vector<Eigen::Vector2d>& pts_in) {
   std::vector<Eigen::Vector2d> p = pts_in;
   std::sort(p.begin(), p.end(), [](const auto& a, const auto& b) { return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y()); });
   p.erase(std::unique(p.begin(), p.end(), [](const auto& a, const auto& b) { return a == b; }), p.end());
-  if (p.size() == 1) {
-    r.cx = p[0].x();
-    r.cy = p[0].y();
-    return r;
-  }
+  if (p.size() <= 1) return p;
   // Andrew's monotone chain convex hull (counter-clockwise).
   std::vector<Eigen::Vector2d> h(2 * p.size());
   std::size_t k = 0;
@@ -217,6 +283,18 @@ Rect2 min_area_rectangle(const std::vector<Eigen::Vector2d>& pts_in) {
     h[k++] = p[i];
   }
   h.resize(k - 1);
+  return h;
+}
+
+Rect2 min_area_rectangle(const std::vector<Eigen::Vector2d>& pts_in) {
+  Rect2 r;
+  if (pts_in.empty()) return r;
+  const std::vector<Eigen::Vector2d> h = convex_hull(pts_in);
+  if (h.size() == 1) {
+    r.cx = h[0].x();
+    r.cy = h[0].y();
+    return r;
+  }
   double area = 0.0;
   for (std::size_t i = 0; i < h.size(); ++i) {
     const auto& a = h[i];

@@ -63,6 +63,13 @@ ParamMap XplorerMapLogic::default_parameters() {
   m.set("outlier_mean_k", static_cast<int64_t>(d.map.outlier_mean_k));
   m.set("outlier_stddev", d.map.outlier_stddev);
   m.set("outlier_leaf", d.map.outlier_leaf);
+  m.set("outlier_face_length", d.map.outlier_face_length);
+  m.set("outlier_face_tolerance", d.map.outlier_face_tolerance);
+  m.set("outlier_face_outside", d.map.outlier_face_outside);
+  m.set("outlier_face_bound_length", d.map.outlier_face_bound_length);
+  m.set("outlier_face_depth", d.map.outlier_face_depth);
+  m.set("outlier_face_reach", d.map.outlier_face_reach);
+  m.set("outlier_face_support", d.map.outlier_face_support);
   m.set("force_average_samples", static_cast<int64_t>(d.force_average_samples));
   m.set("floor_z", d.floor_z);
   m.set("publish_rate_hz", d.publish_rate_hz);
@@ -126,6 +133,13 @@ XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
   p.map.outlier_mean_k = m.get_int("outlier_mean_k", 1, std::numeric_limits<int>::max());
   p.map.outlier_stddev = m.get_double("outlier_stddev");
   p.map.outlier_leaf = m.get_double("outlier_leaf");
+  p.map.outlier_face_length = m.get_double("outlier_face_length");
+  p.map.outlier_face_tolerance = m.get_double("outlier_face_tolerance");
+  p.map.outlier_face_outside = m.get_double("outlier_face_outside");
+  p.map.outlier_face_bound_length = m.get_double("outlier_face_bound_length");
+  p.map.outlier_face_depth = m.get_double("outlier_face_depth");
+  p.map.outlier_face_reach = m.get_double("outlier_face_reach");
+  p.map.outlier_face_support = m.get_double("outlier_face_support");
   p.force_average_samples = m.get_int("force_average_samples", 1, std::numeric_limits<int>::max());
   p.floor_z = m.get_double("floor_z");
   p.publish_rate_hz = m.get_double("publish_rate_hz");

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <limits>
 #include <random>
 
@@ -216,4 +217,131 @@ TEST(MapParams, OutlierLeafMustBeFiniteAndNotNegative) {
   EXPECT_THROW(p.validate(), std::invalid_argument);
   p.outlier_leaf = 0.02;
   EXPECT_NO_THROW(p.validate());
+}
+
+// README "Face ends kept by the faces' lines" (rule 18): a right-angled corner
+// at (1.25, 0) between face A (outer side y = 0, the object at y > 0) and face
+// B (outer side x = 1.25, the object at x < 1.25), each mapped by overlapping
+// slabs (every 1 cm voxel filled) up to 0.25 m short of the corner and by one
+// slab alone from there to the corner (one point per 2 x 2 x 2 cm). A slab's
+// remnant lies past the corner on A's line, outside B (the tilted end of a
+// slab past a polygon's corner). The statistical outlier removal takes both
+// single-slab ends and the remnant; the kept points' hull cuts the corner with an edge 0.34 m long that
+// is supported at its two ends only (not a face). With the rule the two ends
+// come back (the map reaches the corner again) and the remnant stays removed;
+// so does a stray cluster 3 m off (which alone widens the removal's
+// threshold so much that it takes none of the single slabs).
+namespace {
+PointMap corner_with_single_slab_ends(double face_length, bool stray, double b_length = 1.0, double bound_length = 0.05) {
+  MapParams mp;
+  mp.outlier_face_length = face_length;
+  mp.outlier_face_bound_length = bound_length;
+  mp.auto_filter_growth = 0.0;
+  PointMap m(mp);
+  const double o = 0.003;  // off the 1 cm voxel boundaries
+  for (int du = 0; du < 2; ++du)
+    for (int dv = 0; dv < 2; ++dv)
+      for (int dz = 0; dz < 2; ++dz) {  // mid-face: slabs at every 1 cm offset
+        Box a;  // face A: x 0 .. 1.0, y 0 .. 0.08
+        a.center = Vec3(0.5 + 0.01 * du + o, 0.04 + 0.01 * dv + o, 0.7 + 0.01 * dz + o);
+        a.size = Vec3(1.0, 0.08, 0.5);
+        m.insert_box(a, 0.02);
+        Box b;  // face B: x 1.17 .. 1.25, y 0.25 .. 0.25 + b_length
+        b.center = Vec3(1.21 - 0.01 * du - o, 0.25 + 0.5 * b_length + 0.01 * dv + o, 0.7 + 0.01 * dz + o);
+        b.size = Vec3(0.08, b_length, 0.5);
+        m.insert_box(b, 0.02);
+      }
+  Box end_a;  // A's last slab, alone: x 1.0 .. 1.25
+  end_a.center = Vec3(1.125 + o, 0.04 + o, 0.7 + o);
+  end_a.size = Vec3(0.25, 0.08, 0.5);
+  m.insert_box(end_a, 0.02);
+  Box end_b;  // B's first slab, alone: y 0 .. 0.25
+  end_b.center = Vec3(1.21 - o, 0.125 + o, 0.7 + o);
+  end_b.size = Vec3(0.08, 0.25, 0.5);
+  m.insert_box(end_b, 0.02);
+  Box remnant;  // past the corner on A's line: x 1.29 .. 1.45, outside B
+  remnant.center = Vec3(1.37 + o, 0.04 + o, 0.7 + o);
+  remnant.size = Vec3(0.16, 0.08, 0.5);
+  m.insert_box(remnant, 0.02);
+  if (stray) m.insert({Vec3(3.0, 2.0, 0.7), Vec3(3.01, 2.0, 0.7), Vec3(3.0, 2.01, 0.7)});
+  m.voxel_filter();
+  return m;
+}
+bool has_point_in(const PointMap& m, double x0, double x1, double y0, double y1) {
+  for (const auto& p : m.cloud())
+    if (p.x >= x0 && p.x <= x1 && p.y >= y0 && p.y <= y1) return true;
+  return false;
+}
+}  // namespace
+
+TEST(PointMap, FaceEndsKeptByTheFacesLinesOutliersOffTheFacesRemoved) {
+  PointMap off = corner_with_single_slab_ends(0.0, false);
+  ASSERT_TRUE(has_point_in(off, 1.2, 1.26, -0.01, 0.05));  // the corner is mapped
+  ASSERT_TRUE(has_point_in(off, 1.3, 1.46, 0.0, 0.09));    // the remnant
+  off.remove_outliers();
+  EXPECT_FALSE(has_point_in(off, 1.08, 1.26, -0.01, 0.09));  // A's end taken (before rule 18)
+  EXPECT_FALSE(has_point_in(off, 1.16, 1.26, -0.01, 0.18));  // B's end taken
+  EXPECT_FALSE(has_point_in(off, 1.3, 1.46, 0.0, 0.09));     // the remnant taken
+
+  PointMap on = corner_with_single_slab_ends(0.2, false);
+  const std::size_t before = on.size();
+  const std::size_t removed = on.remove_outliers();
+  EXPECT_EQ(before - removed, on.size());
+  EXPECT_TRUE(has_point_in(on, 1.2, 1.26, -0.01, 0.05));  // the corner mapped again: both ends kept
+  EXPECT_TRUE(has_point_in(on, 1.08, 1.12, 0.0, 0.01));   // A's end on A's line
+  EXPECT_TRUE(has_point_in(on, 1.24, 1.26, 0.1, 0.14));   // B's end on B's line
+  EXPECT_FALSE(has_point_in(on, 1.27, 1.46, -0.1, 0.2));  // the remnant outside B stays removed
+
+  PointMap stray = corner_with_single_slab_ends(0.2, true);
+  ASSERT_GT(max_x(stray), 2.9);
+  stray.remove_outliers();
+  EXPECT_LT(max_x(stray), 2.0);  // the stray cluster removed
+}
+
+TEST(MapParams, OutlierFaceParametersAreChecked) {
+  const auto rejects = [](const std::function<void(MapParams&)>& set, const std::string& field) {
+    MapParams p;
+    set(p);
+    try {
+      p.validate();
+      ADD_FAILURE() << field;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("MapParams." + field), std::string::npos) << e.what();
+    }
+  };
+  rejects([](MapParams& p) { p.outlier_face_length = -0.1; }, "outlier_face_length");
+  rejects([](MapParams& p) { p.outlier_face_length = std::nan(""); }, "outlier_face_length");
+  rejects([](MapParams& p) { p.outlier_face_tolerance = 0.0; }, "outlier_face_tolerance");
+  rejects([](MapParams& p) { p.outlier_face_outside = std::numeric_limits<double>::infinity(); }, "outlier_face_outside");
+  rejects([](MapParams& p) { p.outlier_face_bound_length = 0.0; }, "outlier_face_bound_length");
+  rejects([](MapParams& p) { p.outlier_face_depth = -0.01; }, "outlier_face_depth");
+  rejects([](MapParams& p) { p.outlier_face_reach = -0.01; }, "outlier_face_reach");
+  rejects([](MapParams& p) { p.outlier_face_support = 0.0; }, "outlier_face_support");
+  rejects([](MapParams& p) { p.outlier_face_support = 1.5; }, "outlier_face_support");
+  MapParams p;
+  p.outlier_face_length = 0.2;
+  p.outlier_face_outside = -0.005;
+  EXPECT_NO_THROW(p.validate());
+}
+
+// Rule 18's bound (outlier_face_bound_length): the corner above with face B
+// mapped densely over 0.15 m only, so its hull edge is shorter than
+// outlier_face_length. B does not extend, but its short supported edge still
+// bounds A's extension: the remnant past the corner stays removed. Without
+// the bound (a bound length as long as the face length) the remnant comes
+// back with A's end.
+TEST(PointMap, FaceEndsKeptOnlyInsideShortSupportedHullEdgesToo) {
+  PointMap off = corner_with_single_slab_ends(0.0, false, 0.15);
+  off.remove_outliers();
+  ASSERT_FALSE(has_point_in(off, 1.08, 1.12, 0.0, 0.01));  // A's end taken
+  ASSERT_FALSE(has_point_in(off, 1.3, 1.46, 0.0, 0.09));   // the remnant taken
+
+  PointMap on = corner_with_single_slab_ends(0.2, false, 0.15);
+  on.remove_outliers();
+  EXPECT_TRUE(has_point_in(on, 1.08, 1.12, 0.0, 0.01));   // A's end kept
+  EXPECT_FALSE(has_point_in(on, 1.27, 1.46, -0.1, 0.2));  // the remnant outside B stays removed
+
+  PointMap unbounded = corner_with_single_slab_ends(0.2, false, 0.15, 0.2);
+  unbounded.remove_outliers();
+  EXPECT_TRUE(has_point_in(unbounded, 1.3, 1.46, 0.0, 0.09));  // without the bound: the remnant back
 }

@@ -43,6 +43,31 @@ struct MapParams {
   /// fans of polygons that the removal at 1 cm had taken (tuning block
   /// 13300-13599: won 3 polygons, lost 5 boxes and 2 polygons).
   double outlier_leaf = 0.0;  ///< [m]
+  /// Face ends kept by the faces' lines (issue 17, mapping_pcl README, rule
+  /// 18): > 0: after the statistical outlier removal, the faces are the edges
+  /// of the kept points' x-y convex hull at least this long whose length is
+  /// supported (a kept point within outlier_face_tolerance inside the edge in
+  /// at least outlier_face_support of its 2 x outlier_face_tolerance bins; a
+  /// hull edge cutting a corner across a gap is supported at its two ends
+  /// only). A removed point is put back if it lies at most
+  /// outlier_face_outside outside every face's line and within
+  /// outlier_face_depth inside one face's line, at most outlier_face_reach
+  /// beyond that face's ends: a face end stamped by one slab is sparse (the
+  /// removal takes it: held-out polygons 13347, 13363, 13599, tuning polygon
+  /// 13263), not off the face; the remnants of clipped slabs and the tilted
+  /// slab ends past a corner lie outside a face and stay removed (what rule
+  /// 17 kept and lost boxes with). Supported hull edges shorter than
+  /// outlier_face_length but at least outlier_face_bound_length long bound
+  /// (a removed point must lie inside them too) without extending: a fan's
+  /// bump past a corner can hide the next face from the hull but for a short
+  /// edge at its end. 0: off (choice).
+  double outlier_face_length = 0.0;   ///< [m]
+  double outlier_face_tolerance = 0.01;  ///< [m]
+  double outlier_face_outside = 0.0;     ///< [m]
+  double outlier_face_bound_length = 0.05;  ///< [m]
+  double outlier_face_depth = 0.1;    ///< [m] (the slab depth 0.08 m and a margin)
+  double outlier_face_reach = 0.5;    ///< [m]
+  double outlier_face_support = 0.5;  ///< fraction of the face's length, (0, 1]
   /// Re-run the voxel filter when the raw cloud has grown by this factor since
   /// the last filtering (bounds memory at high insert rates); 0 = never
   /// automatically (choice).
@@ -104,7 +129,10 @@ class PointMap {
 
  private:
   void maybe_auto_filter();
-  std::size_t remove_outliers_at_leaf(int mean_k, double stddev, double leaf);  ///< outlier_leaf > 0
+  std::vector<bool> outliers_at_leaf(int mean_k, double stddev, double leaf) const;  ///< outlier_leaf > 0: the mask of the points kept
+  /// outlier_face_length > 0: the removed points of `removed` that lie on a
+  /// face of `kept` (rule 18) appended to `kept`; returns how many.
+  std::size_t keep_face_ends(Cloud& kept, const Cloud& removed) const;
   void reserve_for(std::size_t extra);
 
   MapParams params_;
@@ -119,6 +147,8 @@ struct Rect2 {
   double length = 0, width = 0, yaw = 0, cx = 0, cy = 0, hull_area = 0;
 };
 Rect2 min_area_rectangle(const std::vector<Eigen::Vector2d>& points);
+/// Convex hull of 2D points, counter-clockwise, no collinear vertices.
+std::vector<Eigen::Vector2d> convex_hull(const std::vector<Eigen::Vector2d>& points);
 
 // --- PLY ---------------------------------------------------------------------------
 

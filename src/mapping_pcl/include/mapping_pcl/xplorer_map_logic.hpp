@@ -39,11 +39,20 @@ class XplorerMapLogic {
   static constexpr const char* kFsmStateTopic = "/xplorer/fsm_state";      // tactile_msgs/msg/FsmState (optional)
   static constexpr const char* kArmImuTopic = "/arm_imu";                  // tactile_msgs/msg/ArmImuArray (optional: edge_from_arms)
 
+  /// MapParams with the XPLORER map's rules on (rule 18: outlier_face_length 0.2 m).
+  static MapParams xplorer_map_params() {
+    MapParams m;
+    m.outlier_face_length = 0.2;
+    return m;
+  }
+
   struct Params {
     XplorerMapParams stamping;
     /// The map's filters (outlier_leaf: README "Outlier removal at the slab spacing",
-    /// rule 17, tried at 0.02 m and off: 0, PCL's removal on the 1 cm points).
-    MapParams map;
+    /// rule 17, tried at 0.02 m and off: 0, PCL's removal on the 1 cm points;
+    /// outlier_face_length: README "Face ends kept by the faces' lines", rule 18,
+    /// 0.2 m for the XPLORER map, off in the generic MapParams).
+    MapParams map = xplorer_map_params();
     int force_average_samples = 50;  ///< moving average of the body force (001 Sec. V-C: 50 samples)
     double floor_z = 0.0;            ///< floor height for the flying check [m]
     double publish_rate_hz = 1.0;    ///< PointCloud2 rate (choice: the full map is large)
