@@ -1333,6 +1333,49 @@ TEST(WhiskerWallFollower, FirstApproachWhiskReachesAnEndInTheBlindBand) {
   expect_rejected(bad, "first_whisk_speed");
 }
 
+namespace {
+
+/// A point drone that flies the setpoints exactly (velocity in the body-yaw frame).
+struct PointDrone {
+  double x = 0.0, y = 0.0, yaw = 0.0;
+  void move(const WallFollowerOutput& o) {
+    x += (std::cos(yaw) * o.setpoint.vx - std::sin(yaw) * o.setpoint.vy) * kDt;
+    y += (std::sin(yaw) * o.setpoint.vx + std::cos(yaw) * o.setpoint.vy) * kDt;
+    yaw += o.setpoint.yaw_rate * kDt;
+  }
+};
+
+/// The FLY_FORWARD after a first contact (both whiskers at 80 mm for 1 s) and
+/// its clearing (8 s of free whiskers): its ticks, largest |yaw rate| and
+/// smallest forward speed.
+struct AfterClearing {
+  int forward = 0;
+  double max_rate = 0.0;
+  double min_vx = INFINITY;
+};
+
+AfterClearing contact_then_clear(WhiskerWallFollower& fsm, PointDrone& d, double& t) {
+  for (int k = 0; k < 50; ++k, t += kDt) {
+    WallFollowerInput in = input(t, d.x, d.y, d.yaw);
+    set_depths(in, 0.08, 0.08);
+    d.move(fsm.step(in));
+  }
+  EXPECT_EQ(fsm.state(), FsmState::kWallFollowing);
+  AfterClearing a;
+  for (int k = 0; k < 400; ++k, t += kDt) {
+    const WallFollowerOutput o = fsm.step(input(t, d.x, d.y, d.yaw));
+    if (o.state == FsmState::kFlyForward) {
+      ++a.forward;
+      a.max_rate = std::max(a.max_rate, std::fabs(o.setpoint.yaw_rate));
+      a.min_vx = std::min(a.min_vx, o.setpoint.vx);
+    }
+    d.move(o);
+  }
+  return a;
+}
+
+}  // namespace
+
 // Only the first approach is whisked: after a contact and a clearing the
 // FLY_FORWARD flies as without the rule (yaw rate of the realignment only).
 TEST(WhiskerWallFollower, FirstApproachWhiskEndsAtTheFirstContact) {
@@ -1341,39 +1384,20 @@ TEST(WhiskerWallFollower, FirstApproachWhiskEndsAtTheFirstContact) {
   p.first_whisk_period_s = 0.7;
   p.whisk_rate_max = 3.0;
   WhiskerWallFollower fsm(p);
-  double t = 0.0, x = 0.0, y = 0.0, yaw = 0.0;
-  auto move = [&](const WallFollowerOutput& o) {
-    x += (std::cos(yaw) * o.setpoint.vx - std::sin(yaw) * o.setpoint.vy) * kDt;
-    y += (std::sin(yaw) * o.setpoint.vx + std::cos(yaw) * o.setpoint.vy) * kDt;
-    yaw += o.setpoint.yaw_rate * kDt;
-  };
+  double t = 0.0;
+  PointDrone d;
   for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t));
   double max_rate = 0.0;
   for (int k = 0; k < 35; ++k, t += kDt) {  // one period
-    const WallFollowerOutput o = fsm.step(input(t, x, y, yaw));
+    const WallFollowerOutput o = fsm.step(input(t, d.x, d.y, d.yaw));
     max_rate = std::max(max_rate, std::fabs(o.setpoint.yaw_rate));
-    move(o);
+    d.move(o);
   }
   EXPECT_GT(max_rate, 1.0);  // whisking before the first contact
-  for (int k = 0; k < 50; ++k, t += kDt) {
-    WallFollowerInput in = input(t, x, y, yaw);
-    set_depths(in, 0.08, 0.08);
-    move(fsm.step(in));
-  }
-  EXPECT_EQ(fsm.state(), FsmState::kWallFollowing);
-  int forward = 0;
-  max_rate = 0.0;
-  for (int k = 0; k < 400; ++k, t += kDt) {
-    const WallFollowerOutput o = fsm.step(input(t, x, y, yaw));
-    if (o.state == FsmState::kFlyForward) {
-      ++forward;
-      max_rate = std::max(max_rate, std::fabs(o.setpoint.yaw_rate));
-    }
-    move(o);
-  }
-  EXPECT_GT(forward, 100);
-  EXPECT_LT(max_rate, p.omega_max + 1e-9);  // realignment only, no 3 rad/s whisk
-  EXPECT_LT(std::fabs(yaw), 5.0 * kDeg);    // and back on the course heading
+  const AfterClearing a = contact_then_clear(fsm, d, t);
+  EXPECT_GT(a.forward, 100);
+  EXPECT_LT(a.max_rate, p.omega_max + 1e-9);  // realignment only, no 3 rad/s whisk
+  EXPECT_LT(std::fabs(d.yaw), 5.0 * kDeg);    // and back on the course heading
 }
 
 // first_whisk_wall_rate (README "Round 10b"): whisked left of the course, the
@@ -1731,56 +1755,36 @@ TEST(WhiskerWallFollower, StepAndScanEndsAtTheFirstContactAndSettlesOnReentry) {
   WallFollowerParams p = scan_params(0.08);
   p.realign_gain = 1.5;
   WhiskerWallFollower fsm(p);
-  double t = 0.0, x = 0.0, y = 0.0, yaw = 0.0;
-  auto move = [&](const WallFollowerOutput& o) {
-    x += (std::cos(yaw) * o.setpoint.vx - std::sin(yaw) * o.setpoint.vy) * kDt;
-    y += (std::sin(yaw) * o.setpoint.vx + std::cos(yaw) * o.setpoint.vy) * kDt;
-    yaw += o.setpoint.yaw_rate * kDt;
-  };
+  double t = 0.0;
+  PointDrone d;
   for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t));
-  while (std::fabs(yaw) < 0.3 && t < 10.0) {  // into the first scan
-    move(fsm.step(input(t, x, y, yaw)));
+  while (std::fabs(d.yaw) < 0.3 && t < 10.0) {  // into the first scan
+    d.move(fsm.step(input(t, d.x, d.y, d.yaw)));
     t += kDt;
   }
-  ASSERT_GE(std::fabs(yaw), 0.3);
+  ASSERT_GE(std::fabs(d.yaw), 0.3);
   // Depth stale for 0.3 s: fail-safe hover, then fresh again.
   for (int k = 0; k < 15; ++k, t += kDt) {
-    WallFollowerInput in = input(t, x, y, yaw);
+    WallFollowerInput in = input(t, d.x, d.y, d.yaw);
     in.depth_stamp = p.hover_init_s;
-    move(fsm.step(in));
+    d.move(fsm.step(in));
   }
   EXPECT_EQ(fsm.state(), FsmState::kFailsafeHover);
   // Back in FLY_FORWARD at ~0.3 rad off the course: no speed along the course
   // until the yaw is back within 0.05 rad.
   double along_while_off = 0.0;
   int settle_ticks = 0;
-  for (; settle_ticks < 150 && std::fabs(yaw) >= 0.05; ++settle_ticks, t += kDt) {
-    const WallFollowerOutput o = fsm.step(input(t, x, y, yaw));
+  for (; settle_ticks < 150 && std::fabs(d.yaw) >= 0.05; ++settle_ticks, t += kDt) {
+    const WallFollowerOutput o = fsm.step(input(t, d.x, d.y, d.yaw));
     ASSERT_EQ(o.state, FsmState::kFlyForward);
-    along_while_off = std::max(along_while_off, std::cos(yaw) * o.setpoint.vx - std::sin(yaw) * o.setpoint.vy);
-    move(o);
+    along_while_off = std::max(along_while_off, std::cos(d.yaw) * o.setpoint.vx - std::sin(d.yaw) * o.setpoint.vy);
+    d.move(o);
   }
   EXPECT_LT(settle_ticks, 150);  // settled (1.2 s at the tracking gain)
   EXPECT_LT(along_while_off, 0.02);
   // First contact, then a clearing: no scan afterwards.
-  for (int k = 0; k < 50; ++k, t += kDt) {
-    WallFollowerInput in = input(t, x, y, yaw);
-    set_depths(in, 0.08, 0.08);
-    move(fsm.step(in));
-  }
-  EXPECT_EQ(fsm.state(), FsmState::kWallFollowing);
-  int forward = 0;
-  double max_rate = 0.0, min_vx = INFINITY;
-  for (int k = 0; k < 400; ++k, t += kDt) {
-    const WallFollowerOutput o = fsm.step(input(t, x, y, yaw));
-    if (o.state == FsmState::kFlyForward) {
-      ++forward;
-      max_rate = std::max(max_rate, std::fabs(o.setpoint.yaw_rate));
-      min_vx = std::min(min_vx, o.setpoint.vx);
-    }
-    move(o);
-  }
-  EXPECT_GT(forward, 100);
-  EXPECT_LT(max_rate, p.omega_max + 1e-9);  // realignment only, no 2 rad/s scan
-  EXPECT_GT(min_vx, 0.9 * p.v_max);         // no steps: V_max throughout
+  const AfterClearing a = contact_then_clear(fsm, d, t);
+  EXPECT_GT(a.forward, 100);
+  EXPECT_LT(a.max_rate, p.omega_max + 1e-9);  // realignment only, no 2 rad/s scan
+  EXPECT_GT(a.min_vx, 0.9 * p.v_max);         // no steps: V_max throughout
 }
