@@ -27,8 +27,9 @@ void MapParams::validate() const {
     bad("outlier_leaf", "must be finite and >= 0 (0: the removal on the map's own points), got " + std::to_string(outlier_leaf));
   if (!(outlier_face_length >= 0.0) || !std::isfinite(outlier_face_length))
     bad("outlier_face_length", "must be finite and >= 0 (0: off), got " + std::to_string(outlier_face_length));
-  if (!(outlier_face_tolerance > 0.0) || !std::isfinite(outlier_face_tolerance))
-    bad("outlier_face_tolerance", "must be finite and > 0, got " + std::to_string(outlier_face_tolerance));
+  if (!(outlier_face_tolerance >= 1e-4) || !std::isfinite(outlier_face_tolerance))
+    bad("outlier_face_tolerance", "must be finite and >= 1e-4 m (the support test keeps one byte per 2 x tolerance of every face), got " +
+                                      std::to_string(outlier_face_tolerance));
   if (!std::isfinite(outlier_face_outside)) bad("outlier_face_outside", "must be finite, got " + std::to_string(outlier_face_outside));
   if (!(outlier_face_bound_length > 0.0) || !std::isfinite(outlier_face_bound_length))
     bad("outlier_face_bound_length", "must be finite and > 0, got " + std::to_string(outlier_face_bound_length));
@@ -212,7 +213,12 @@ std::size_t PointMap::keep_face_ends(Cloud& kept, const Cloud& removed) const {
   const double tol = params_.outlier_face_tolerance, bin = 2.0 * tol;
   std::vector<Eigen::Vector2d> xy;
   xy.reserve(kept.size());
-  for (const auto& p : kept) xy.emplace_back(p.x, p.y);
+  double z_lo = INFINITY, z_hi = -INFINITY;  // the removal works in 3-D, the faces in x-y
+  for (const auto& p : kept) {
+    xy.emplace_back(p.x, p.y);
+    z_lo = std::fmin(z_lo, p.z);
+    z_hi = std::fmax(z_hi, p.z);
+  }
   if (xy.size() < 3) return 0;
   const std::vector<Eigen::Vector2d> hull = convex_hull(xy);
   struct Face {
@@ -241,6 +247,7 @@ std::size_t PointMap::keep_face_ends(Cloud& kept, const Cloud& removed) const {
   if (faces.empty()) return 0;
   std::size_t put_back = 0;
   for (const auto& p : removed) {
+    if (p.z < z_lo - tol || p.z > z_hi + tol) continue;  // off the kept points' height range
     const Eigen::Vector2d q(p.x, p.y);
     bool inside = true, on_face = false;
     for (const auto& f : faces) {

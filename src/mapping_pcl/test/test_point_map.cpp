@@ -183,6 +183,11 @@ double max_x(const PointMap& m) {
   for (const auto& p : m.cloud()) x = std::max(x, static_cast<double>(p.x));
   return x;
 }
+double max_z(const PointMap& m) {
+  double z = -1e9;
+  for (const auto& p : m.cloud()) z = std::max(z, static_cast<double>(p.z));
+  return z;
+}
 }  // namespace
 
 TEST(PointMap, OutlierRemovalAtTheSlabSpacingKeepsAFacesSingleSlabEnd) {
@@ -232,7 +237,8 @@ TEST(MapParams, OutlierLeafMustBeFiniteAndNotNegative) {
 // so does a stray cluster 3 m off (which alone widens the removal's
 // threshold so much that it takes none of the single slabs).
 namespace {
-PointMap corner_with_single_slab_ends(double face_length, bool stray, double b_length = 1.0, double bound_length = 0.05) {
+PointMap corner_with_single_slab_ends(double face_length, bool stray, double b_length = 1.0, double bound_length = 0.05,
+                                      const std::vector<Vec3>& extra = {}) {
   MapParams mp;
   mp.outlier_face_length = face_length;
   mp.outlier_face_bound_length = bound_length;
@@ -264,6 +270,7 @@ PointMap corner_with_single_slab_ends(double face_length, bool stray, double b_l
   remnant.size = Vec3(0.16, 0.08, 0.5);
   m.insert_box(remnant, 0.02);
   if (stray) m.insert({Vec3(3.0, 2.0, 0.7), Vec3(3.01, 2.0, 0.7), Vec3(3.0, 2.01, 0.7)});
+  if (!extra.empty()) m.insert(extra);
   m.voxel_filter();
   return m;
 }
@@ -312,6 +319,7 @@ TEST(MapParams, OutlierFaceParametersAreChecked) {
   rejects([](MapParams& p) { p.outlier_face_length = -0.1; }, "outlier_face_length");
   rejects([](MapParams& p) { p.outlier_face_length = std::nan(""); }, "outlier_face_length");
   rejects([](MapParams& p) { p.outlier_face_tolerance = 0.0; }, "outlier_face_tolerance");
+  rejects([](MapParams& p) { p.outlier_face_tolerance = 1e-9; }, "outlier_face_tolerance");  // 1e8 bins per metre
   rejects([](MapParams& p) { p.outlier_face_outside = std::numeric_limits<double>::infinity(); }, "outlier_face_outside");
   rejects([](MapParams& p) { p.outlier_face_bound_length = 0.0; }, "outlier_face_bound_length");
   rejects([](MapParams& p) { p.outlier_face_depth = -0.01; }, "outlier_face_depth");
@@ -344,4 +352,36 @@ TEST(PointMap, FaceEndsKeptOnlyInsideShortSupportedHullEdgesToo) {
   PointMap unbounded = corner_with_single_slab_ends(0.2, false, 0.15, 0.2);
   unbounded.remove_outliers();
   EXPECT_TRUE(has_point_in(unbounded, 1.3, 1.46, 0.0, 0.09));  // without the bound: the remnant back
+}
+
+// Rule 18's other limits, each on a lone point the removal takes and only that
+// limit keeps out (the corner above; the hull's 8 cm end edge at x = 0 not a
+// bound, outlier_face_bound_length 0.2): 0.25 m inside face A (deeper than
+// outlier_face_depth), on A's line 0.6 m before its start (beyond
+// outlier_face_reach; 0.3 m before it comes back), on A's line 1.8 m above the
+// map (off the kept points' height range); and with face B mapped densely
+// over 0.15 m only, B's single-slab end stays removed (B bounds but does not
+// extend).
+TEST(PointMap, FaceEndsKeptOnlyNearAFaceWithinItsReachAndTheMapsHeight) {
+  const std::vector<Vec3> lone = {Vec3(0.5, 0.25, 0.7), Vec3(-0.6, 0.04, 0.7), Vec3(-0.3, 0.04, 0.7),
+                                  Vec3(0.5, 0.04, 2.5)};
+  PointMap off = corner_with_single_slab_ends(0.0, false, 1.0, 0.2, lone);
+  off.remove_outliers();
+  ASSERT_FALSE(has_point_in(off, 0.49, 0.51, 0.24, 0.26));  // each lone point taken by the removal
+  ASSERT_FALSE(has_point_in(off, -0.61, -0.59, 0.03, 0.05));
+  ASSERT_FALSE(has_point_in(off, -0.31, -0.29, 0.03, 0.05));
+  ASSERT_LT(max_z(off), 2.0);
+
+  PointMap on = corner_with_single_slab_ends(0.2, false, 1.0, 0.2, lone);
+  on.remove_outliers();
+  EXPECT_TRUE(has_point_in(on, 1.08, 1.12, 0.0, 0.01));       // A's end kept (the rule acts)
+  EXPECT_FALSE(has_point_in(on, 0.49, 0.51, 0.24, 0.26));     // deeper than outlier_face_depth
+  EXPECT_FALSE(has_point_in(on, -0.61, -0.59, 0.03, 0.05));   // beyond outlier_face_reach
+  EXPECT_TRUE(has_point_in(on, -0.31, -0.29, 0.03, 0.05));    // within it
+  EXPECT_LT(max_z(on), 2.0);                                   // off the map's height range
+
+  PointMap short_b = corner_with_single_slab_ends(0.2, false, 0.15);
+  short_b.remove_outliers();
+  EXPECT_TRUE(has_point_in(short_b, 1.08, 1.12, 0.0, 0.01));   // A's end kept
+  EXPECT_FALSE(has_point_in(short_b, 1.24, 1.26, 0.1, 0.14));  // B's single-slab end: B too short to extend
 }

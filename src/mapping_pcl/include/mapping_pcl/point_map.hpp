@@ -60,9 +60,15 @@ struct MapParams {
   /// outlier_face_length but at least outlier_face_bound_length long bound
   /// (a removed point must lie inside them too) without extending: a fan's
   /// bump past a corner can hide the next face from the hull but for a short
-  /// edge at its end. 0: off (choice).
+  /// edge at its end. A removed point is put back only within the kept
+  /// points' height range (+- outlier_face_tolerance): the removal works in
+  /// 3-D, the faces in x-y. Limits: an edge of at most 4 bins (8 x
+  /// outlier_face_tolerance) counts as supported whatever lies between its
+  /// end vertices (they are kept points); the faces come from the hull of all
+  /// kept points, so a stray cluster the removal keeps replaces that side's
+  /// faces by unsupported edges, which then bound nothing. 0: off (choice).
   double outlier_face_length = 0.0;   ///< [m]
-  double outlier_face_tolerance = 0.01;  ///< [m]
+  double outlier_face_tolerance = 0.01;  ///< [m], >= 1e-4 (one byte per bin per face)
   double outlier_face_outside = 0.0;     ///< [m]
   double outlier_face_bound_length = 0.05;  ///< [m]
   double outlier_face_depth = 0.1;    ///< [m] (the slab depth 0.08 m and a margin)
