@@ -852,6 +852,12 @@ double point_segment_distance(double px, double py, const Segment& s) {
   return std::hypot(px - (s.ax + u * vx), py - (s.ay + u * vy));
 }
 
+/// The two segments cross (proper intersection).
+bool segments_cross(const Segment& p, const Segment& q) {
+  auto side = [](const Segment& s, double x, double y) { return (s.bx - s.ax) * (y - s.ay) - (s.by - s.ay) * (x - s.ax); };
+  return side(q, p.ax, p.ay) * side(q, p.bx, p.by) < 0.0 && side(p, q.ax, q.ay) * side(p, q.bx, q.by) < 0.0;
+}
+
 struct CourseResult {
   FsmState final_state = FsmState::kHoverInit;
   int wall_episodes = 0;
@@ -1276,18 +1282,7 @@ TEST(WhiskerWallFollower, YawOffsetReleasedOnMovingSum) {
 // (0.05, +-0.025) to (0.191, +-0.025) in the body frame, guard circle 80 mm.
 TEST(WhiskerWallFollower, FirstApproachWhiskReachesAnEndInTheBlindBand) {
   const double ax = 0.7141, ay = -0.0647, bx = 1.0361, by = -0.9199;  // baffle_1 of baffles_*_1003
-  auto cross = [](double px, double py, double qx, double qy, double rx, double ry, double sx, double sy) {
-    auto cr = [](double ox, double oy, double ux, double uy, double vx, double vy) {
-      return (ux - ox) * (vy - oy) - (uy - oy) * (vx - ox);
-    };
-    return cr(rx, ry, sx, sy, px, py) * cr(rx, ry, sx, sy, qx, qy) < 0.0 &&
-           cr(px, py, qx, qy, rx, ry) * cr(px, py, qx, qy, sx, sy) < 0.0;
-  };
-  auto guard_dist = [&](double x, double y) {
-    const double ux = bx - ax, uy = by - ay;
-    const double k = std::clamp(((x - ax) * ux + (y - ay) * uy) / (ux * ux + uy * uy), 0.0, 1.0);
-    return std::hypot(x - ax - k * ux, y - ay - k * uy);
-  };
+  const Segment baffle{ax, ay, bx, by};
   // "whisker" or "guard": which meets the baffle first.
   auto fly = [&](double amplitude) {
     WallFollowerParams p;
@@ -1316,9 +1311,9 @@ TEST(WhiskerWallFollower, FirstApproachWhiskReachesAnEndInTheBlindBand) {
         for (double side : {1.0, -1.0}) {
           const double b0x = x + c * 0.05 - s * side * 0.025, b0y = y + s * 0.05 + c * side * 0.025;
           const double t0x = x + c * 0.191 - s * side * 0.025, t0y = y + s * 0.191 + c * side * 0.025;
-          if (cross(b0x, b0y, t0x, t0y, ax, ay, bx, by)) return std::string("whisker");
+          if (segments_cross({b0x, b0y, t0x, t0y}, baffle)) return std::string("whisker");
         }
-        if (guard_dist(x, y) <= 0.08) return std::string("guard");
+        if (point_segment_distance(x, y, baffle) <= 0.08) return std::string("guard");
       }
     }
     return std::string("none");
@@ -1605,18 +1600,7 @@ struct FirstMeet {
 };
 
 FirstMeet first_meet(const WallFollowerParams& p, double ax, double ay, double bx, double by, double lag = 0.23) {
-  auto cr = [](double ox, double oy, double ux, double uy, double vx, double vy) {
-    return (ux - ox) * (vy - oy) - (uy - oy) * (vx - ox);
-  };
-  auto cross = [&](double px, double py, double qx, double qy) {
-    return cr(ax, ay, bx, by, px, py) * cr(ax, ay, bx, by, qx, qy) < 0.0 &&
-           cr(px, py, qx, qy, ax, ay) * cr(px, py, qx, qy, bx, by) < 0.0;
-  };
-  auto guard_dist = [&](double x, double y) {
-    const double ux = bx - ax, uy = by - ay;
-    const double k = std::clamp(((x - ax) * ux + (y - ay) * uy) / (ux * ux + uy * uy), 0.0, 1.0);
-    return std::hypot(x - ax - k * ux, y - ay - k * uy);
-  };
+  const Segment obstacle{ax, ay, bx, by};
   WhiskerWallFollower fsm(p);
   double x = 0.0, y = 0.0, yaw = 0.0, wx = 0.0, wy = 0.0, wr = 0.0;  // world velocity, yaw rate
   for (double t = 0.0; t < 60.0; t += kDt) {
@@ -1637,9 +1621,9 @@ FirstMeet first_meet(const WallFollowerParams& p, double ax, double ay, double b
       for (double side : {1.0, -1.0}) {
         const double b0x = x + c * 0.05 - s * side * 0.025, b0y = y + s * 0.05 + c * side * 0.025;
         const double t0x = x + c * 0.191 - s * side * 0.025, t0y = y + s * 0.191 + c * side * 0.025;
-        if (cross(b0x, b0y, t0x, t0y)) return {"whisker", yaw, t};
+        if (segments_cross({b0x, b0y, t0x, t0y}, obstacle)) return {"whisker", yaw, t};
       }
-      if (guard_dist(x, y) <= 0.08) return {"guard", yaw, t};
+      if (point_segment_distance(x, y, obstacle) <= 0.08) return {"guard", yaw, t};
     }
   }
   return {};
