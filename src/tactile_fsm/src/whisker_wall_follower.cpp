@@ -268,9 +268,6 @@ void WhiskerWallFollower::reset() {
   contacted_ = false;
   course_yaw_ = 0.0;
   scan_goal_ = NAN;
-  scanning_ = false;
-  scan_ref_ = 0.0;
-  scan_leg_ = 0;
 }
 
 void WhiskerWallFollower::enter(FsmState s, const char* reason, double t) {
@@ -667,10 +664,7 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
     }
   } else {
     first_whisk_wall_ = false;
-    scan_goal_ = NAN;
-    scanning_ = false;
-    scan_ref_ = 0.0;
-    scan_leg_ = 0;
+    scan_goal_ = NAN;  // step_and_scan starts afresh on the next first approach
   }
   const bool offset_on = p_.clear_yaw_offset > 0.0 && origin_set_ && std::isfinite(in.yaw) &&
                          ((state_ == FsmState::kResumeForward && p_.clear_yaw_in_resume) ||
@@ -799,25 +793,27 @@ Setpoint WhiskerWallFollower::step_and_scan(const WallFollowerInput& in, const S
   const double c = std::cos(course_yaw_), sn = std::sin(course_yaw_);
   const double progress = c * (in.x - origin_x_) + sn * (in.y - origin_y_);
   const double off = std::remainder(in.yaw - course_yaw_, 2.0 * M_PI);
+  const auto begin_scan = [this](int leg) {
+    scanning_ = true;
+    scan_ref_ = 0.0;
+    scan_leg_ = leg;
+    scan_hold_s_ = scan_settle_s_ = 0.0;
+  };
   if (!std::isfinite(scan_goal_)) {
     // (Re)entering the first approach, e.g. after a fail-safe hover in a
     // scan: off the course, settle first rather than step at a yawed heading.
-    const bool settle = std::fabs(off) >= kSettled;
-    scan_goal_ = settle ? progress : progress + p_.first_scan_step;
-    scanning_ = settle;
-    scan_ref_ = 0.0;
-    scan_leg_ = settle ? 3 : 0;
-    scan_hold_s_ = scan_settle_s_ = 0.0;
+    if (std::fabs(off) >= kSettled) {
+      scan_goal_ = progress;
+      begin_scan(3);
+    } else {
+      scan_goal_ = progress + p_.first_scan_step;
+      scanning_ = false;
+    }
   }
   const double a = p_.first_whisk_amplitude;
   const double r = p_.first_scan_rate;
   double ff = 0.0;
-  if (!scanning_ && scan_goal_ - progress < kAtGoal) {
-    scanning_ = true;
-    scan_ref_ = 0.0;
-    scan_leg_ = 0;
-    scan_hold_s_ = scan_settle_s_ = 0.0;
-  }
+  if (!scanning_ && scan_goal_ - progress < kAtGoal) begin_scan(0);
   // A whisker's sum moving: a touch TDORC has not flagged yet; hold the yaw
   // (up to kMaxHold per scan, so that a brush no flag follows cannot stop the
   // approach for good).

@@ -468,9 +468,10 @@ class WhiskerWallFollower {
   bool yaw_offset_released_ = false;  ///< clear_yaw_release_rms reached since the clearing
   bool first_whisk_wall_ = false;  ///< first_whisk_wall_rate latched in this FLY_FORWARD
   bool contacted_ = false;  ///< wall following entered at least once in this flight (first_whisk_amplitude)
-  // first_scan_step: the step's end along the course [m] (NaN: not started),
-  // scanning (else stepping), the scan's yaw reference off the course [rad] and
-  // its leg (0: to +A, 1: to -A, 2: back to the course, 3: settling).
+  // first_scan_step: the step's end along the course [m] (NaN: not started;
+  // the rest is set when it starts), scanning (else stepping), the scan's yaw
+  // reference off the course [rad] and its leg (0: to +A, 1: to -A, 2: back to
+  // the course, 3: settling).
   double scan_goal_ = NAN;
   bool scanning_ = false;
   double scan_ref_ = 0.0;
