@@ -113,6 +113,17 @@ XplorerMapParams rule_params() {
   p.edge_from_arms = false;
   return p;
 }
+
+/// A point map and the contact mapper stamping into it, with stamp_at()'s clock.
+struct Stamper {
+  explicit Stamper(const XplorerMapParams& p) : mapper(p, map) {}
+  PointMap map;
+  XplorerContactMapper mapper;
+  double t = 0.0;
+  void at(const Eigen::Vector2d& surface, const Eigen::Vector2d& c, double tilt = 0.0) {
+    stamp_at(mapper, t, surface, c, tilt);
+  }
+};
 }  // namespace
 
 // 001 Sec. IV-B: "obstacle map generation initializes when |b_delta_f| >=
@@ -421,19 +432,16 @@ TEST(XplorerMappingRules, CornerFillBetweenTwoFacesJoinedByATurn) {
   auto run = [](double fill_gap, double turn_deg, double start_b) {
     XplorerMapParams p = rule_params();
     p.corner_fill_max_gap = fill_gap;
-    auto map = std::make_shared<PointMap>();
-    auto m = std::make_shared<XplorerContactMapper>(p, *map);
-    double t = 0.0;
-    auto at = [&](const Eigen::Vector2d& surface, const Eigen::Vector2d& c) { stamp_at(*m, t, surface, c); };
-    for (int k = 0; k <= 14; ++k) at(Eigen::Vector2d(0.05 * k, 0.0), Eigen::Vector2d(0.0, 1.0));
-    m->end_face(true);  // Tactile-turning
+    Stamper rig(p);
+    for (int k = 0; k <= 14; ++k) rig.at(Eigen::Vector2d(0.05 * k, 0.0), Eigen::Vector2d(0.0, 1.0));
+    rig.mapper.end_face(true);  // Tactile-turning
     const double a = turn_deg * M_PI / 180.0;
     const Eigen::Vector2d cb(-std::sin(a), std::cos(a)), tb(std::cos(a), std::sin(a));
-    for (int k = 0; k <= 10; ++k) at(Eigen::Vector2d(1.0, 0.0) + (start_b + 0.05 * k) * tb, cb);
-    m->end_face(false);  // the loop closed
+    for (int k = 0; k <= 10; ++k) rig.at(Eigen::Vector2d(1.0, 0.0) + (start_b + 0.05 * k) * tb, cb);
+    rig.mapper.end_face(false);  // the loop closed
     double nearest = 1e9;
-    for (const auto& q : map->cloud()) nearest = std::min(nearest, std::hypot(q.x - 1.0, q.y - 0.0));
-    return std::make_tuple(nearest, m->stats().corner_fills, m->stats().skipped_corner_fill);
+    for (const auto& q : rig.map.cloud()) nearest = std::min(nearest, std::hypot(q.x - 1.0, q.y - 0.0));
+    return std::make_tuple(nearest, rig.mapper.stats().corner_fills, rig.mapper.stats().skipped_corner_fill);
   };
   const auto [with, fills, skipped] = run(0.4, 72.0, 0.3);
   EXPECT_LT(with, 1e-4);
@@ -801,28 +809,23 @@ TEST(XplorerMappingRules, FaceClipRemovesTiltedSlabsOutsideAFaceOfARightAngledOb
     XplorerMapParams p = rule_params();
     p.face_clip_min_length = min_length;
     p.face_clip_tilted = false;  // rule 12 alone (rule 15 removes the tilted slabs outside a line at any angle)
-    auto map = std::make_shared<PointMap>();
-    auto m = std::make_shared<XplorerContactMapper>(p, *map);
-    double t = 0.0;
-    auto at = [&](const Eigen::Vector2d& surface, const Eigen::Vector2d& c, double tilt) {
-      stamp_at(*m, t, surface, c, tilt);
-    };
+    Stamper rig(p);
     const double tilt = 15.0 * M_PI / 180.0;
-    for (int k = 0; k <= 16; ++k) at(Eigen::Vector2d(0.05 * k, 0.0), Eigen::Vector2d(0.0, 1.0), k >= 3 && k < 6 ? tilt : 0.0);
-    m->end_face(true);  // Tactile-turning
+    for (int k = 0; k <= 16; ++k) rig.at(Eigen::Vector2d(0.05 * k, 0.0), Eigen::Vector2d(0.0, 1.0), k >= 3 && k < 6 ? tilt : 0.0);
+    rig.mapper.end_face(true);  // Tactile-turning
     const double a = turn_deg * M_PI / 180.0;
     const Eigen::Vector2d cb(-std::sin(a), std::cos(a)), tb(std::cos(a), std::sin(a));
-    for (int k = 0; k <= 10; ++k) at(Eigen::Vector2d(1.0, 0.0) + (0.3 + 0.05 * k) * tb, cb, 0.0);
-    m->end_face(true);
+    for (int k = 0; k <= 10; ++k) rig.at(Eigen::Vector2d(1.0, 0.0) + (0.3 + 0.05 * k) * tb, cb, 0.0);
+    rig.mapper.end_face(true);
     const double before_late = [&] {
       double y = 1e9;
-      for (const auto& q : map->cloud()) y = std::min<double>(y, q.y);
+      for (const auto& q : rig.map.cloud()) y = std::min<double>(y, q.y);
       return y;
     }();
-    at(Eigen::Vector2d(0.4, 0.0), Eigen::Vector2d(0.0, 1.0), tilt);  // a later tilted slab on face a
+    rig.at(Eigen::Vector2d(0.4, 0.0), Eigen::Vector2d(0.0, 1.0), tilt);  // a later tilted slab on face a
     double y_min = 1e9;
-    for (const auto& q : map->cloud()) y_min = std::min<double>(y_min, q.y);
-    return std::make_tuple(before_late, y_min, m->stats().face_lines, m->face_lines().size() >= 2 && m->face_lines()[0].clips);
+    for (const auto& q : rig.map.cloud()) y_min = std::min<double>(y_min, q.y);
+    return std::make_tuple(before_late, y_min, rig.mapper.stats().face_lines, rig.mapper.face_lines().size() >= 2 && rig.mapper.face_lines()[0].clips);
   };
   // 0.125 m x sin 15 deg + 0.08 m x (1 - cos 15 deg) ~ 0.035 m out of the face without the rule.
   const auto [off_before, off_after, off_lines, off_clips] = run(0.0, 90.0);
@@ -870,28 +873,23 @@ TEST(XplorerMappingRules, FaceClipReachesTheCornersAndJoinsTheLastFaceAtTheClosu
     XplorerMapParams p = rule_params();
     p.face_clip_corner_reach = reach;
     p.face_clip_tilted = false;  // rule 13 alone (rule 15 would remove the tilted slabs too)
-    auto map = std::make_shared<PointMap>();
-    auto m = std::make_shared<XplorerContactMapper>(p, *map);
-    double t = 0.0;
-    auto at = [&](const Eigen::Vector2d& surface, const Eigen::Vector2d& c, double tilt) {
-      stamp_at(*m, t, surface, c, tilt);
-    };
+    Stamper rig(p);
     const double tilt = 15.0 * M_PI / 180.0;
     const Eigen::Vector2d ca(0.0, 1.0), cb(-1.0, 0.0), cc(0.0, -1.0), cd(1.0, 0.0);
-    for (int k = 0; k < 5; ++k) at({0.7 + 0.05 * k, 0.0}, ca, tilt);  // first contact, face A
-    m->end_face(true);
-    for (int k = 0; k < 3; ++k) at({1.0, 0.05 + 0.05 * k}, cb, tilt);  // face B, re-contact
-    for (int k = 0; k <= 10; ++k) at({1.0, 0.35 + 0.05 * k}, cb, 0.0);
-    m->end_face(true);
-    for (int k = 0; k < 3; ++k) at({0.95 - 0.05 * k, 1.0}, cc, tilt);  // face C, re-contact
-    for (int k = 0; k <= 10; ++k) at({0.6 - 0.05 * k, 1.0}, cc, 0.0);
-    m->end_face(true);
-    for (int k = 0; k <= 10; ++k) at({0.0, 0.8 - 0.05 * k}, cd, 0.0);  // face D
-    m->end_face(true);
-    for (int k = 0; k <= 10; ++k) at({0.1 + 0.05 * k, 0.0}, ca, 0.0);  // face A again: the loop closes at x = 0.6
-    m->end_face(false, close);
+    for (int k = 0; k < 5; ++k) rig.at({0.7 + 0.05 * k, 0.0}, ca, tilt);  // first contact, face A
+    rig.mapper.end_face(true);
+    for (int k = 0; k < 3; ++k) rig.at({1.0, 0.05 + 0.05 * k}, cb, tilt);  // face B, re-contact
+    for (int k = 0; k <= 10; ++k) rig.at({1.0, 0.35 + 0.05 * k}, cb, 0.0);
+    rig.mapper.end_face(true);
+    for (int k = 0; k < 3; ++k) rig.at({0.95 - 0.05 * k, 1.0}, cc, tilt);  // face C, re-contact
+    for (int k = 0; k <= 10; ++k) rig.at({0.6 - 0.05 * k, 1.0}, cc, 0.0);
+    rig.mapper.end_face(true);
+    for (int k = 0; k <= 10; ++k) rig.at({0.0, 0.8 - 0.05 * k}, cd, 0.0);  // face D
+    rig.mapper.end_face(true);
+    for (int k = 0; k <= 10; ++k) rig.at({0.1 + 0.05 * k, 0.0}, ca, 0.0);  // face A again: the loop closes at x = 0.6
+    rig.mapper.end_face(false, close);
     double out_b = -1e9, out_a = 1e9, out_c = -1e9;  // outside B (x > 1), A (y < 0) past the closure, C (y > 1)
-    for (const auto& q : map->cloud()) {
+    for (const auto& q : rig.map.cloud()) {
       if (q.y > 0.0 && q.y < 0.35) out_b = std::max<double>(out_b, q.x - 1.0);
       if (q.x > 0.8 && q.x < 1.0) out_a = std::min<double>(out_a, q.y);
       if (q.x > 0.75 && q.x < 1.0) out_c = std::max<double>(out_c, q.y - 1.0);
@@ -961,28 +959,23 @@ TEST(XplorerMappingRules, TiltedSlabsOutsideTheirFacesLineAreRemovedAtAnyCorner)
   auto run = [](bool rule) {
     XplorerMapParams p = rule_params();
     p.face_clip_tilted = rule;
-    auto map = std::make_shared<PointMap>();
-    auto m = std::make_shared<XplorerContactMapper>(p, *map);
-    double t = 0.0;
-    auto at = [&](const Eigen::Vector2d& surface, const Eigen::Vector2d& c, double tilt) {
-      stamp_at(*m, t, surface, c, tilt);
-    };
-    for (int k = 0; k <= 18; ++k) at({0.05 * k, 0.0}, {0.0, 1.0}, 0.0);  // face A up to x = 0.9
-    m->end_face(true);
+    Stamper rig(p);
+    for (int k = 0; k <= 18; ++k) rig.at({0.05 * k, 0.0}, {0.0, 1.0}, 0.0);  // face A up to x = 0.9
+    rig.mapper.end_face(true);
     const double a = 60.0 * M_PI / 180.0;
     const Eigen::Vector2d tb(std::cos(a), std::sin(a)), cb(-std::sin(a), std::cos(a));
-    for (int k = 0; k < 3; ++k) at(Eigen::Vector2d(1.0, 0.0) + (0.05 + 0.05 * k) * tb, cb, -30.0 * M_PI / 180.0);
-    for (int k = 0; k <= 10; ++k) at(Eigen::Vector2d(1.0, 0.0) + (0.3 + 0.05 * k) * tb, cb, 0.0);
-    m->end_face(true);
+    for (int k = 0; k < 3; ++k) rig.at(Eigen::Vector2d(1.0, 0.0) + (0.05 + 0.05 * k) * tb, cb, -30.0 * M_PI / 180.0);
+    for (int k = 0; k <= 10; ++k) rig.at(Eigen::Vector2d(1.0, 0.0) + (0.3 + 0.05 * k) * tb, cb, 0.0);
+    rig.mapper.end_face(true);
     double out_b = -1e9;    // outside B, beside it (past the corner along B)
     std::size_t a_over = 0;  // A's last slab past the corner, outside B's line
-    for (const auto& q : map->cloud()) {
+    for (const auto& q : rig.map.cloud()) {
       const Eigen::Vector2d d = Eigen::Vector2d(q.x, q.y) - Eigen::Vector2d(1.0, 0.0);
       const double along = d.dot(tb), out = -d.dot(cb);
       if (along > 0.1 && along < 0.3) out_b = std::max(out_b, out);  // beyond A's overhang (along < 0.09)
       if (q.x > 1.005 && q.y > 0.0 && q.y < 0.08 && out > 0.0101) ++a_over;
     }
-    return std::make_tuple(out_b, a_over, m->face_lines().size() == 2 && !m->face_lines()[0].clips);
+    return std::make_tuple(out_b, a_over, rig.mapper.face_lines().size() == 2 && !rig.mapper.face_lines()[0].clips);
   };
   const auto [off_out, off_over, off_lines] = run(false);
   EXPECT_GT(off_out, 0.03);  // 0.125 m x sin 30 deg ~ 0.06 m out of B
@@ -1009,24 +1002,22 @@ TEST(XplorerMappingRules, FanPastARightAngledCornerIsClippedAtTheNextFace) {
   auto run = [](bool rule, double turn_deg) {
     XplorerMapParams p = rule_params();
     p.corner_fan_clip = rule;
-    auto map = std::make_shared<PointMap>();
-    auto m = std::make_shared<XplorerContactMapper>(p, *map);
-    double t = 0.0;
-    for (int k = 0; k <= 18; ++k) stamp_at(*m, t, {0.05 * k, 0.0}, {0.0, 1.0}, 0.0);  // face A up to x = 0.9
-    for (int k = 0; k < 8; ++k) stamp_at(*m, t, {0.95, 0.0}, {0.0, 1.0}, (12.0 + 6.0 * k) * M_PI / 180.0);  // the fan
-    m->end_face(true);
+    Stamper rig(p);
+    for (int k = 0; k <= 18; ++k) rig.at({0.05 * k, 0.0}, {0.0, 1.0}, 0.0);  // face A up to x = 0.9
+    for (int k = 0; k < 8; ++k) rig.at({0.95, 0.0}, {0.0, 1.0}, (12.0 + 6.0 * k) * M_PI / 180.0);  // the fan
+    rig.mapper.end_face(true);
     const double a = turn_deg * M_PI / 180.0;
     const Eigen::Vector2d tb(std::cos(a), std::sin(a)), cb(-std::sin(a), std::cos(a));  // B's direction, C_n
-    for (int k = 0; k < 5; ++k) stamp_at(*m, t, Eigen::Vector2d(1.0, 0.0) + (0.12 + 0.02 * k) * tb, cb, 0.0);
-    m->end_face(true);
+    for (int k = 0; k < 5; ++k) rig.at(Eigen::Vector2d(1.0, 0.0) + (0.12 + 0.02 * k) * tb, cb, 0.0);
+    rig.mapper.end_face(true);
     double fan_out = -1e9;  // outside B beyond A's steady overhang
     std::size_t inside = 0;  // points inside the object
-    for (const auto& q : map->cloud()) {
+    for (const auto& q : rig.map.cloud()) {
       const Eigen::Vector2d d = Eigen::Vector2d(q.x, q.y) - Eigen::Vector2d(1.0, 0.0);
       if (d.x() > 0.03) fan_out = std::max(fan_out, -d.dot(cb));
       if (d.x() < -0.01 && q.y > 0.01) ++inside;
     }
-    return std::make_tuple(fan_out, inside, m->stats().fan_clips);
+    return std::make_tuple(fan_out, inside, rig.mapper.stats().fan_clips);
   };
   const auto [off_out, off_over, off_clips] = run(false, 90.0);
   EXPECT_GT(off_out, 0.04);  // 0.95 + 0.125 cos 12 deg: 0.07 m past the corner
@@ -1051,18 +1042,16 @@ TEST(XplorerMappingRules, FanClipWhenOnlyTheNextFaceIsALine) {
   auto run = [](bool rule) {
     XplorerMapParams p = rule_params();
     p.corner_fan_clip = rule;
-    auto map = std::make_shared<PointMap>();
-    auto m = std::make_shared<XplorerContactMapper>(p, *map);
-    double t = 0.0;
-    for (int k = 0; k <= 8; ++k) stamp_at(*m, t, {0.5 + 0.05 * k, 0.0}, {0.0, 1.0}, 0.0);
-    for (int k = 0; k < 2; ++k) stamp_at(*m, t, {0.97, 0.0}, {0.0, 1.0}, (48.0 + 6.0 * k) * M_PI / 180.0);
-    m->end_face(true);
-    for (int k = 0; k < 12; ++k) stamp_at(*m, t, {1.0, 0.06 + 0.03 * k}, {-1.0, 0.0}, 0.0);
-    m->end_face(true);
+    Stamper rig(p);
+    for (int k = 0; k <= 8; ++k) rig.at({0.5 + 0.05 * k, 0.0}, {0.0, 1.0}, 0.0);
+    for (int k = 0; k < 2; ++k) rig.at({0.97, 0.0}, {0.0, 1.0}, (48.0 + 6.0 * k) * M_PI / 180.0);
+    rig.mapper.end_face(true);
+    for (int k = 0; k < 12; ++k) rig.at({1.0, 0.06 + 0.03 * k}, {-1.0, 0.0}, 0.0);
+    rig.mapper.end_face(true);
     double fan_out = -1e9;
-    for (const auto& q : map->cloud())
+    for (const auto& q : rig.map.cloud())
       if (q.x > 1.03) fan_out = std::max(fan_out, static_cast<double>(q.x) - 1.0);
-    return std::make_tuple(fan_out, m->face_lines().size(), m->stats().fan_clips);
+    return std::make_tuple(fan_out, rig.mapper.face_lines().size(), rig.mapper.stats().fan_clips);
   };
   const auto [off_out, off_lines, off_clips] = run(false);
   EXPECT_GT(off_out, 0.04);
@@ -1083,19 +1072,17 @@ TEST(XplorerMappingRules, FanClipLeavesAConcaveCornerAlone) {
   auto run = [](bool rule) {
     XplorerMapParams p = rule_params();
     p.corner_fan_clip = rule;
-    auto map = std::make_shared<PointMap>();
-    auto m = std::make_shared<XplorerContactMapper>(p, *map);
-    double t = 0.0;
-    for (int k = 0; k <= 18; ++k) stamp_at(*m, t, {0.05 * k, 0.0}, {0.0, 1.0}, 0.0);  // face A, a line
-    m->end_face(true);
-    for (int k = 0; k < 12; ++k) stamp_at(*m, t, {1.0, -0.06 - 0.03 * k}, {1.0, 0.0}, 0.0);  // face B
-    m->end_face(true);
+    Stamper rig(p);
+    for (int k = 0; k <= 18; ++k) rig.at({0.05 * k, 0.0}, {0.0, 1.0}, 0.0);  // face A, a line
+    rig.mapper.end_face(true);
+    for (int k = 0; k < 12; ++k) rig.at({1.0, -0.06 - 0.03 * k}, {1.0, 0.0}, 0.0);  // face B
+    rig.mapper.end_face(true);
     std::size_t on_a = 0;
-    for (const auto& q : map->cloud())
+    for (const auto& q : rig.map.cloud())
       if (q.x < 0.85 && q.y > -0.01) ++on_a;
-    EXPECT_EQ(m->face_lines().size(), 2u);
-    for (const auto& l : m->face_lines()) EXPECT_FALSE(l.clips);  // rule 12 does not join them either
-    return std::make_tuple(on_a, m->stats().fan_clips, m->stats().skipped_concave_fan_clips);
+    EXPECT_EQ(rig.mapper.face_lines().size(), 2u);
+    for (const auto& l : rig.mapper.face_lines()) EXPECT_FALSE(l.clips);  // rule 12 does not join them either
+    return std::make_tuple(on_a, rig.mapper.stats().fan_clips, rig.mapper.stats().skipped_concave_fan_clips);
   };
   const auto [off_a, off_clips, off_skipped] = run(false);
   EXPECT_GT(off_a, 50u);
