@@ -137,16 +137,23 @@ TEST(Ply, WriteErrorNamesThePath) {
   }
 }
 
-TEST(MapParams, ValidateNamesTheField) {
+namespace {
+/// validate() of the default MapParams with `set` applied throws, naming MapParams.<field>.
+void expect_rejected(const std::function<void(MapParams&)>& set, const std::string& field) {
   MapParams p;
-  p.voxel_leaf = 0;
+  set(p);
   try {
     p.validate();
-    FAIL();
+    ADD_FAILURE() << field;
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("MapParams.voxel_leaf"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("MapParams." + field), std::string::npos) << e.what();
   }
-  p = MapParams{};
+}
+}  // namespace
+
+TEST(MapParams, ValidateNamesTheField) {
+  expect_rejected([](MapParams& p) { p.voxel_leaf = 0; }, "voxel_leaf");
+  MapParams p;
   p.auto_filter_growth = 0.5;
   EXPECT_THROW(p.validate(), std::invalid_argument);
 }
@@ -210,14 +217,8 @@ TEST(PointMap, OutlierRemovalAtTheSlabSpacingKeepsAFacesSingleSlabEnd) {
 }
 
 TEST(MapParams, OutlierLeafMustBeFiniteAndNotNegative) {
+  expect_rejected([](MapParams& p) { p.outlier_leaf = -0.01; }, "outlier_leaf");
   MapParams p;
-  p.outlier_leaf = -0.01;
-  try {
-    p.validate();
-    FAIL();
-  } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("MapParams.outlier_leaf"), std::string::npos);
-  }
   p.outlier_leaf = std::nan("");
   EXPECT_THROW(p.validate(), std::invalid_argument);
   p.outlier_leaf = 0.02;
@@ -306,26 +307,16 @@ TEST(PointMap, FaceEndsKeptByTheFacesLinesOutliersOffTheFacesRemoved) {
 }
 
 TEST(MapParams, OutlierFaceParametersAreChecked) {
-  const auto rejects = [](const std::function<void(MapParams&)>& set, const std::string& field) {
-    MapParams p;
-    set(p);
-    try {
-      p.validate();
-      ADD_FAILURE() << field;
-    } catch (const std::invalid_argument& e) {
-      EXPECT_NE(std::string(e.what()).find("MapParams." + field), std::string::npos) << e.what();
-    }
-  };
-  rejects([](MapParams& p) { p.outlier_face_length = -0.1; }, "outlier_face_length");
-  rejects([](MapParams& p) { p.outlier_face_length = std::nan(""); }, "outlier_face_length");
-  rejects([](MapParams& p) { p.outlier_face_tolerance = 0.0; }, "outlier_face_tolerance");
-  rejects([](MapParams& p) { p.outlier_face_tolerance = 1e-9; }, "outlier_face_tolerance");  // 1e8 bins per metre
-  rejects([](MapParams& p) { p.outlier_face_outside = std::numeric_limits<double>::infinity(); }, "outlier_face_outside");
-  rejects([](MapParams& p) { p.outlier_face_bound_length = 0.0; }, "outlier_face_bound_length");
-  rejects([](MapParams& p) { p.outlier_face_depth = -0.01; }, "outlier_face_depth");
-  rejects([](MapParams& p) { p.outlier_face_reach = -0.01; }, "outlier_face_reach");
-  rejects([](MapParams& p) { p.outlier_face_support = 0.0; }, "outlier_face_support");
-  rejects([](MapParams& p) { p.outlier_face_support = 1.5; }, "outlier_face_support");
+  expect_rejected([](MapParams& p) { p.outlier_face_length = -0.1; }, "outlier_face_length");
+  expect_rejected([](MapParams& p) { p.outlier_face_length = std::nan(""); }, "outlier_face_length");
+  expect_rejected([](MapParams& p) { p.outlier_face_tolerance = 0.0; }, "outlier_face_tolerance");
+  expect_rejected([](MapParams& p) { p.outlier_face_tolerance = 1e-9; }, "outlier_face_tolerance");  // 1e8 bins per metre
+  expect_rejected([](MapParams& p) { p.outlier_face_outside = std::numeric_limits<double>::infinity(); }, "outlier_face_outside");
+  expect_rejected([](MapParams& p) { p.outlier_face_bound_length = 0.0; }, "outlier_face_bound_length");
+  expect_rejected([](MapParams& p) { p.outlier_face_depth = -0.01; }, "outlier_face_depth");
+  expect_rejected([](MapParams& p) { p.outlier_face_reach = -0.01; }, "outlier_face_reach");
+  expect_rejected([](MapParams& p) { p.outlier_face_support = 0.0; }, "outlier_face_support");
+  expect_rejected([](MapParams& p) { p.outlier_face_support = 1.5; }, "outlier_face_support");
   MapParams p;
   p.outlier_face_length = 0.2;
   p.outlier_face_outside = -0.005;
