@@ -50,6 +50,19 @@ void set_depths(WallFollowerInput& in, double dl, double dr) {
   in.depth_right = dr;
 }
 
+/// Ten ticks at (1, 0) with the left whisker lost and the right one at
+/// `right`: the sub-state after them.
+WallSubState sub_with_left_lost(WhiskerWallFollower& fsm, double& t, double right) {
+  WallSubState sub = WallSubState::kNone;
+  for (int k = 0; k < 10; ++k, t += kDt) {
+    WallFollowerInput in = input(t, 1.0, 0.0);
+    set_depths(in, NAN, right);
+    in.left_valid = false;
+    sub = fsm.step(in).sub_state;
+  }
+  return sub;
+}
+
 WallSubState rule(double dl, double dr, WallSubState current = WallSubState::kFlySideways) {
   return wall_sub_state(dl, true, dr, true, Side::kRight, true, current, WallFollowerParams{});
 }
@@ -228,14 +241,7 @@ TEST(WallSubStateRule, OneDepthBeyondWallEndDepthAfterBothTouchedPassesTheEdge) 
       set_depths(in, 0.08, 0.08);
       fsm.step(in);
     }
-    WallSubState sub = WallSubState::kNone;
-    for (int k = 0; k < 10; ++k, t += kDt) {
-      WallFollowerInput in = input(t, 1.0, 0.0);
-      set_depths(in, NAN, 0.115);
-      in.left_valid = false;
-      sub = fsm.step(in).sub_state;
-    }
-    return sub;
+    return sub_with_left_lost(fsm, t, 0.115);
   };
   WallFollowerParams q;
   q.hold_heading_trailing_lost = true;
@@ -1512,14 +1518,7 @@ TEST(WallSubStateRule, WhiskerLostOutOfReachFliesBackToTheWall) {
       set_depths(in, 0.09 + 0.0008 * k, 0.09 + 0.0015 * k);
       fsm.step(in);
     }
-    WallSubState sub = WallSubState::kNone;
-    for (int k = 0; k < 10; ++k, t += kDt) {
-      WallFollowerInput in = input(t, 1.0, 0.0);
-      set_depths(in, NAN, 0.128);
-      in.left_valid = false;
-      sub = fsm.step(in).sub_state;
-    }
-    return sub;
+    return sub_with_left_lost(fsm, t, 0.128);
   };
   WallFollowerParams q;
   q.hold_heading_trailing_lost = true;
