@@ -1771,3 +1771,17 @@ TEST(WhiskerWallFollower, StepAndScanEndsAtTheFirstContactAndSettlesOnReentry) {
   EXPECT_LT(a.max_rate, p.omega_max + 1e-9);  // realignment only, no 2 rad/s scan
   EXPECT_GT(a.min_vx, 0.9 * p.v_max);         // no steps: V_max throughout
 }
+
+// A non-finite position in the first approach (the core API; the node drops
+// such odometry) gives no step-and-scan setpoint: the output stays finite.
+TEST(WhiskerWallFollower, StepAndScanIgnoresANonFinitePosition) {
+  WallFollowerParams p = scan_params(0.08);
+  WhiskerWallFollower fsm(p);
+  double t = 0.0;
+  for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t));
+  for (int k = 0; k < 10; ++k, t += kDt) fsm.step(input(t, 0.01 * k, 0.0, 0.0));
+  const WallFollowerOutput o = fsm.step(input(t, NAN, 0.0, 0.0));
+  EXPECT_TRUE(std::isfinite(o.setpoint.vx));
+  EXPECT_TRUE(std::isfinite(o.setpoint.vy));
+  EXPECT_TRUE(std::isfinite(o.setpoint.yaw_rate));
+}
