@@ -808,6 +808,7 @@ Setpoint WhiskerWallFollower::step_and_scan(const WallFollowerInput& in, const S
     } else {
       scan_goal_ = progress + p_.first_scan_step;
       scanning_ = false;
+      scan_ref_ = 0.0;  // a scan cut short (e.g. by a fail-safe hover) leaves no yaw offset
     }
   }
   const double a = p_.first_whisk_amplitude;

@@ -1772,6 +1772,33 @@ TEST(WhiskerWallFollower, StepAndScanEndsAtTheFirstContactAndSettlesOnReentry) {
   EXPECT_GT(a.min_vx, 0.9 * p.v_max);         // no steps: V_max throughout
 }
 
+// A scan cut short by a fail-safe hover while the yaw is then back on the
+// course (here: the pose is re-aligned during the hover) steps at the course:
+// the cut scan's yaw offset is not kept while stepping.
+TEST(WhiskerWallFollower, StepAndScanReentryOnTheCourseKeepsNoScanOffset) {
+  WallFollowerParams p = scan_params(0.08);
+  WhiskerWallFollower fsm(p);
+  double t = 0.0;
+  PointDrone d;
+  for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t));
+  while (std::fabs(d.yaw) < 0.3 && t < 10.0) {  // into the first scan
+    d.move(fsm.step(input(t, d.x, d.y, d.yaw)));
+    t += kDt;
+  }
+  ASSERT_GE(std::fabs(d.yaw), 0.3);
+  for (int k = 0; k < 15; ++k, t += kDt) {
+    WallFollowerInput in = input(t, d.x, d.y, d.yaw);
+    in.depth_stamp = p.hover_init_s;
+    d.move(fsm.step(in));
+  }
+  ASSERT_EQ(fsm.state(), FsmState::kFailsafeHover);
+  d.yaw = 0.0;
+  const WallFollowerOutput o = fsm.step(input(t, d.x, d.y, d.yaw));
+  ASSERT_EQ(o.state, FsmState::kFlyForward);
+  EXPECT_NEAR(o.setpoint.yaw_rate, 0.0, 1e-9);  // was 0.48 rad/s: the cut scan's offset tracked
+  EXPECT_GT(o.setpoint.vx, 0.0);                // stepping along the course
+}
+
 // A non-finite position in the first approach (the core API; the node drops
 // such odometry) gives no step-and-scan setpoint: the output stays finite.
 TEST(WhiskerWallFollower, StepAndScanIgnoresANonFinitePosition) {
