@@ -245,6 +245,17 @@ void Gpis::refactorize() {
   solve_alpha();
 }
 
+void Gpis::remove(std::size_t i) {
+  if (i >= n_) return;
+  if (y_(static_cast<Eigen::Index>(i)) == kSurfaceLabel) --surface_count_;
+  for (std::size_t k = i + 1; k < n_; ++k) {
+    X_.col(static_cast<Eigen::Index>(k - 1)) = X_.col(static_cast<Eigen::Index>(k));
+    y_(static_cast<Eigen::Index>(k - 1)) = y_(static_cast<Eigen::Index>(k));
+  }
+  --n_;
+  refactorize();
+}
+
 void Gpis::clear() {
   n_ = 0;
   surface_count_ = 0;

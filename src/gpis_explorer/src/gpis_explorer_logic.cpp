@@ -69,6 +69,7 @@ ParamMap GpisExplorerLogic::default_parameters() {
   m.set("visited_radius", s.visited_radius);
   m.set("whisk_amplitude", s.whisk_amplitude);
   m.set("whisk_rate", s.whisk_rate);
+  m.set("turn_rate", s.turn_rate);
   m.set("whisk_speed", s.whisk_speed);
   m.set("corridor_half_width", s.corridor_half_width);
   m.set("exit_beyond", s.exit_beyond);
@@ -77,6 +78,7 @@ ParamMap GpisExplorerLogic::default_parameters() {
   m.set("check_sample_s", s.check_sample_s);
   m.set("follow_min_forward", s.follow_min_forward);
 
+  m.set("replace_when_full", s.replace_when_full);
   m.set("max_updates", static_cast<int64_t>(s.max_updates));
   m.set("max_time_s", s.max_time_s);
   m.set("landing_duration_s", s.landing_duration_s);
@@ -129,10 +131,12 @@ GpisExplorerLogic::Params GpisExplorerLogic::params_from(const ParamMap& m) {
   s.slow_distance = m.get_double("slow_distance");
   s.slow_fraction = m.get_double("slow_fraction");
   s.align_probes = m.get_bool("align_probes");
+  s.replace_when_full = m.get_bool("replace_when_full");
   s.line_gain = m.get_double("line_gain");
   s.visited_radius = m.get_double("visited_radius");
   s.whisk_amplitude = m.get_double("whisk_amplitude");
   s.whisk_rate = m.get_double("whisk_rate");
+  s.turn_rate = m.get_double("turn_rate");
   s.whisk_speed = m.get_double("whisk_speed");
   s.corridor_half_width = m.get_double("corridor_half_width");
   s.exit_beyond = m.get_double("exit_beyond");

@@ -96,6 +96,9 @@ void SequencerParams::validate() const {
     fail("whisk_amplitude", "must be in [0, pi/2), got " + std::to_string(whisk_amplitude));
   }
   positive("whisk_rate", whisk_rate);
+  if (!(std::isfinite(turn_rate) && turn_rate >= 0.0 && turn_rate <= whisk_rate)) {
+    fail("turn_rate", "must be in [0, whisk_rate], got " + std::to_string(turn_rate));
+  }
   positive("whisk_speed", whisk_speed);
   positive("check_dwell_s", check_dwell_s);
   positive("corridor_half_width", corridor_half_width);
@@ -178,7 +181,38 @@ bool ExplorationSequencer::side_blocked(const SequencerInput& in) const {
   return false;
 }
 
+std::size_t point_to_replace(const Gpis& g, const Eigen::Vector2d& q, double label) {
+  double new_gap = std::numeric_limits<double>::infinity();
+  double pair_gap = std::numeric_limits<double>::infinity();
+  std::size_t victim = g.size();
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    if (g.label(i) == label) new_gap = std::min(new_gap, (g.point(i) - q).squaredNorm());
+    for (std::size_t j = i + 1; j < g.size(); ++j) {
+      if (g.label(i) != g.label(j)) continue;
+      const double d = (g.point(i) - g.point(j)).squaredNorm();
+      if (d < pair_gap) {
+        pair_gap = d;
+        victim = i;  // the older of the pair
+      }
+    }
+  }
+  return new_gap <= pair_gap ? g.size() : victim;
+}
+
 void ExplorationSequencer::add(const Eigen::Vector2d& q, double label) {
+  const AddStatus st = explorer_.add_point(q, label);
+  if (st == AddStatus::kAdded) return;
+  if (st != AddStatus::kBudgetFull || !p_.replace_when_full) {
+    ++points_rejected_;
+    return;
+  }
+  const std::size_t victim = point_to_replace(explorer_.gpis(), q, label);
+  if (victim >= explorer_.gpis().size()) {
+    ++points_rejected_;
+    return;
+  }
+  explorer_.remove(victim);
+  ++points_replaced_;
   if (explorer_.add_point(q, label) != AddStatus::kAdded) ++points_rejected_;
 }
 
@@ -606,7 +640,12 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       break;
     case Phase::kTurn: {
       const double err = wrap(heading_ - in.yaw);
-      sp.yaw_rate = yaw_rate_to(heading_, in.yaw);
+      if (p_.turn_rate > 0.0) {
+        sp.yaw_rate = std::clamp(p_.yaw_gain * 4.0 * err, -p_.turn_rate, p_.turn_rate);
+        whisking_ = true;  // past omega_max (bounded by whisk_rate below)
+      } else {
+        sp.yaw_rate = yaw_rate_to(heading_, in.yaw);
+      }
       if (std::abs(err) < p_.yaw_tolerance) {
         leg_start_ = pos;
         // The leg's line: from here along the heading, except the head-on leg

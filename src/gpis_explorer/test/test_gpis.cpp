@@ -250,3 +250,34 @@ TEST(Gpis, BatchFitEqualsIncrementalAndPopBackUndoesAdd) {
   e.pop_back();
   EXPECT_TRUE(e.empty());
 }
+
+// remove(i) gives the posterior of the other points, fitted afresh (the later
+// points move up one index); out of range changes nothing.
+TEST(Gpis, RemoveEqualsAFitWithoutThePoint) {
+  Gpis g = random_gpis(12, 31);
+  GpisParams q;
+  q.max_points = 12;
+  Gpis rest(q);
+  for (std::size_t i = 0; i < 12; ++i) {
+    if (i != 4) ASSERT_EQ(rest.add_point(g.point(i), g.label(i)), AddStatus::kAdded);
+  }
+  const Vector2d x5 = g.point(5);
+  const std::size_t surfaces = g.surface_count();
+  const bool removed_surface = g.label(4) == 0.0;
+  g.remove(4);
+  EXPECT_EQ(g.size(), 11u);
+  EXPECT_EQ(g.surface_count(), surfaces - (removed_surface ? 1u : 0u));
+  EXPECT_EQ(g.point(4), x5);
+  for (const Vector2d& x : {Vector2d(0.2, 0.3), Vector2d(-1.0, 0.7), Vector2d(1.4, -1.2)}) {
+    double m = 0, v = 0, mr = 0, vr = 0;
+    g.predict(x, &m, &v);
+    rest.predict(x, &mr, &vr);
+    EXPECT_NEAR(m, mr, 1e-10);
+    EXPECT_NEAR(v, vr, 1e-10);
+  }
+  g.remove(11);  // out of range (11 points left)
+  EXPECT_EQ(g.size(), 11u);
+  // The freed slot takes a new point.
+  EXPECT_EQ(g.add_point({0.9, 0.9}, 0.0), AddStatus::kAdded);
+  EXPECT_EQ(g.size(), 12u);
+}

@@ -50,6 +50,9 @@ TEST(SequencerParams, ValidateNamesField) {
   q = SequencerParams{};
   q.exit_beyond = -1.0;
   expect_field(q, "exit_beyond");
+  q = SequencerParams{};
+  q.turn_rate = q.whisk_rate + 0.1;  // faster than the yaw the vehicle is flown at anywhere else
+  expect_field(q, "turn_rate");
 }
 
 TEST(Sequencer, OpenSpaceLandsWithStatus) {
@@ -227,4 +230,102 @@ TEST(Sequencer, WhiskContactBesideTheCorridorLetsTheLegGoOn) {
   });
   EXPECT_TRUE(returned_open);
   EXPECT_EQ(seq.whisk_contacts(), 0u);
+}
+
+// replace_when_full's choice, by hand: surface points at x = 0, 0.125, 1 and
+// interior points 0.5 apart; the closest same-label pair is (0, 0)-(0.125, 0)
+// (distances exact in binary).
+TEST(Sequencer, PointToReplaceIsTheOlderOfTheClosestSameLabelPair) {
+  gpis_explorer::GpisParams gp;
+  gp.max_points = 5;
+  gpis_explorer::Gpis g(gp);
+  ASSERT_EQ(g.add_point({0.0, 0.0}, 0.0), gpis_explorer::AddStatus::kAdded);
+  ASSERT_EQ(g.add_point({0.0, 1.0}, -1.0), gpis_explorer::AddStatus::kAdded);
+  ASSERT_EQ(g.add_point({0.125, 0.0}, 0.0), gpis_explorer::AddStatus::kAdded);
+  ASSERT_EQ(g.add_point({1.0, 0.0}, 0.0), gpis_explorer::AddStatus::kAdded);
+  ASSERT_EQ(g.add_point({0.5, 1.0}, -1.0), gpis_explorer::AddStatus::kAdded);
+  // A new surface point far from the others: the older of the pair goes.
+  EXPECT_EQ(gpis_explorer::point_to_replace(g, {2.0, 0.0}, 0.0), 0u);
+  // 0.05 m from the surface point at x = 1 (closer than the pair's 0.125 m): dropped.
+  EXPECT_EQ(gpis_explorer::point_to_replace(g, {1.05, 0.0}, 0.0), g.size());
+  // An interior point 0.05 m from a surface point is not close to its own
+  // label (0.5 m to the interior points): it replaces the surface pair's older.
+  EXPECT_EQ(gpis_explorer::point_to_replace(g, {0.0, 0.05}, -1.0), 0u);
+  // ... but 0.05 m from an interior point it is dropped.
+  EXPECT_EQ(gpis_explorer::point_to_replace(g, {0.5, 1.05}, -1.0), g.size());
+  // Equally close as the pair: dropped (nothing gained by the swap).
+  EXPECT_EQ(gpis_explorer::point_to_replace(g, {1.125, 0.0}, 0.0), g.size());
+}
+
+// With a small budget, replace_when_full keeps taking the walls touched after
+// the budget filled (the path rules read the training points); dropped, none
+// of them is in the training set.
+TEST(Sequencer, AFullBudgetTakesTheWallsTouchedSince) {
+  for (const bool replace : {false, true}) {
+    SequencerParams p;
+    p.explorer.gpis.max_points = 20;
+    p.replace_when_full = replace;
+    p.turn_rate = 2.0;
+    ExplorationSequencer seq(p);
+    const auto walls = gpis_test::room(3.0, 0.6, 0.4, 0.9);
+    double t_full = NAN;
+    double t = 0.0;
+    gpis_test::fly(seq, walls, 0.0, 500.0, 1.5, 0.4,
+                   [&](const ExplorationSequencer& s, const Eigen::Vector2d&, double) {
+                     t += 0.02;
+                     if (std::isnan(t_full) && s.explorer().gpis().size() == 20u) t_full = t;
+                   });
+    ASSERT_TRUE(std::isfinite(t_full)) << "the budget never filled";
+    const auto& g = seq.explorer().gpis();
+    EXPECT_EQ(g.size(), 20u);
+    std::size_t later = 0;  // training surface points touched after the budget filled
+    for (std::size_t i = 0; i < g.size(); ++i) {
+      if (g.label(i) != 0.0) continue;
+      for (const auto& c : seq.contacts()) {
+        if (c.t > t_full && (c.p - g.point(i)).norm() < 1e-9) {
+          ++later;
+          break;
+        }
+      }
+    }
+    if (replace) {
+      EXPECT_GT(seq.points_replaced(), 0u);
+      EXPECT_GE(later, 4u);
+    } else {
+      EXPECT_EQ(seq.points_replaced(), 0u);
+      EXPECT_EQ(later, 0u);
+      EXPECT_GT(seq.points_rejected(), 0u);
+    }
+  }
+}
+
+// TURN in place at up to turn_rate (gain 4 * yaw_gain); 0 keeps omega_max.
+TEST(Sequencer, TurnsInPlaceAtTurnRate) {
+  for (const double rate : {0.0, 2.0}) {
+    SequencerParams p;
+    p.turn_rate = rate;
+    ExplorationSequencer seq(p);
+    const auto walls = gpis_test::room(2.0, 0.8, 0.3);
+    double max_turn = 0.0, last_yaw = NAN, turn_time = 0.0;
+    Phase last_phase = Phase::kHoverInit;
+    gpis_test::fly(seq, walls, 0.0, 120.0, 1.0, 0.3,
+                   [&](const ExplorationSequencer& s, const Eigen::Vector2d&, double yaw) {
+                     // yaw is the pose this tick's setpoint was computed from;
+                     // the rate shows in the next tick's yaw.
+                     if (last_phase == Phase::kTurn && std::isfinite(last_yaw)) {
+                       max_turn = std::max(max_turn, std::abs(yaw - last_yaw) / 0.02);
+                       turn_time += 0.02;
+                     }
+                     last_yaw = yaw;
+                     last_phase = s.phase();
+                   });
+    std::printf("turn_rate %.1f: max turn rate %.3f rad/s, %.1f s in TURN\n", rate, max_turn, turn_time);
+    if (rate == 0.0) {
+      EXPECT_LE(max_turn, p.wall.omega_max + 1e-9);
+      EXPECT_GT(max_turn, 0.9 * p.wall.omega_max);
+    } else {
+      EXPECT_LE(max_turn, rate + 1e-9);
+      EXPECT_GT(max_turn, 0.9 * rate);
+    }
+  }
 }

@@ -122,6 +122,10 @@ class GpisExplorer {
     gpis_.pop_back();
     vrows_ = std::min(vrows_, gpis_.size());
   }
+  void remove(std::size_t i) {
+    vrows_ = 0;
+    gpis_.remove(i);
+  }
   void refactorize() {
     vrows_ = 0;
     gpis_.refactorize();

@@ -72,6 +72,9 @@ class Gpis {
   /// Removes the most recently added point (the factor loses its last row,
   /// O(n^2) for alpha). No effect when empty.
   void pop_back();
+  /// Removes point i (the later points move up one index) and refactorizes
+  /// (O(n^3)); out of range: no effect.
+  void remove(std::size_t i);
   /// Recomputes the factor from the stored points (O(n^3)).
   void refactorize();
   /// Removes every point (keeps the allocated memory).

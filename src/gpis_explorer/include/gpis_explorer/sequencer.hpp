@@ -77,6 +77,12 @@ struct SequencerParams {
   /// Yaw control: rate = gain * error, |rate| <= omega_max; aligned below tolerance.
   double yaw_gain = 2.0;                ///< [1/s] (choice)
   double yaw_tolerance = 0.05;          ///< [rad] (choice, ~3 deg)
+  /// TURN (in place, hovering) at most this yaw rate, at gain 4 * yaw_gain
+  /// (as the whisk back of CHECK_AHEAD). 0 = the wall follower's omega_max
+  /// (25 deg/s) at yaw_gain, the previous turn. Turning in place moves no
+  /// part of the round guard; issue 17: in the rooms that time out, a third
+  /// of the flight was TURN. [rad/s] (choice, <= whisk_rate)
+  double turn_rate = 2.0;
   double target_radius = 0.10;          ///< target reached [m] (choice)
   /// Beyond a contact-free target, this much more contact-free flight = exit
   /// flown through [m] (choice: about the whisker-to-frame margin plus a room wall).
@@ -157,12 +163,28 @@ struct SequencerParams {
   double check_dwell_s = 0.4;
   double check_sample_s = 0.06;
   double follow_min_forward = 0.11;
+  /// With the training budget full (gpis.max_points, 50 onboard), a new
+  /// point replaces the most redundant one instead of being dropped: of the
+  /// closest pair of same-label points the older goes, or the new point is
+  /// dropped when it is itself the closest to a point of its label (our
+  /// choice; 000 gives the budget, not what happens when it is full). Dropped,
+  /// the map froze after ~6 updates, and the path rules, which read the
+  /// training points, stayed blind to walls touched since (issue 17).
+  bool replace_when_full = true;
   int max_updates = 40;                 ///< give up after this many GPIS updates (choice)
   double max_time_s = 600.0;            ///< give up after this long [s] (choice)
   double landing_duration_s = 2.0;      ///< LANDING -> DONE [s]
   /// Throws std::invalid_argument "SequencerParams.<field>: <reason>".
   void validate() const;
 };
+
+/// replace_when_full's choice for a new point (q, label) with the budget full:
+/// of the closest pair of training points with the same label (000's labels:
+/// 0 surface, -1 interior) the older (lower index) is replaced; when q is at
+/// least as close to a point of its own label, q is the redundant one and
+/// g.size() is returned (drop q). Our rule; 000 gives the budget, not what
+/// happens when it is full. O(n^2).
+std::size_t point_to_replace(const Gpis& g, const Eigen::Vector2d& q, double label);
 
 /// One control tick of input (odometry frame).
 struct SequencerInput {
@@ -216,6 +238,8 @@ class ExplorationSequencer {
   const std::vector<Eigen::Vector2d>& trajectory() const { return trajectory_; }
   double travel_distance() const { return travel_; }
   std::size_t points_rejected() const { return points_rejected_; }
+  /// Training points removed to make room (replace_when_full).
+  std::size_t points_replaced() const { return points_replaced_; }
   std::size_t corner_aborts() const { return corner_aborts_; }
   std::size_t side_stops() const { return side_stops_; }
   /// Targets approached head-on through a staging point / flown at directly.
@@ -324,6 +348,7 @@ class ExplorationSequencer {
   Eigen::Vector2d last_pose_{0, 0};
   double travel_ = 0.0;
   std::size_t points_rejected_ = 0;
+  std::size_t points_replaced_ = 0;
   std::size_t corner_aborts_ = 0;
   std::size_t side_stops_ = 0;
   std::size_t staged_targets_ = 0;

@@ -85,6 +85,7 @@ class GpisExploreGraph : public SimGraph {
     m["training_points"] = ex.gpis().size();
     m["surface_points"] = ex.gpis().surface_count();
     m["points_rejected"] = seq.points_rejected();
+    m["points_replaced"] = seq.points_replaced();
     m["budget_max_points"] = ex.params().gpis.max_points;
     m["budget_grid_cells"] = ex.params().grid_cells;
     m["state_bytes"] = ex.state_bytes();
