@@ -82,6 +82,7 @@ void SequencerParams::validate() const {
   if (!(std::isfinite(exit_beyond) && exit_beyond >= 0.0)) fail("exit_beyond", "must be >= 0");
   if (!(std::isfinite(min_target_distance) && min_target_distance >= 0.0)) fail("min_target_distance", "must be >= 0");
   if (!(std::isfinite(side_clearance) && side_clearance >= 0.0)) fail("side_clearance", "must be >= 0");
+  if (!(std::isfinite(wall_extension) && wall_extension >= 0.0)) fail("wall_extension", "must be >= 0");
   if (!(std::isfinite(approach_standoff) && approach_standoff >= 0.0)) fail("approach_standoff", "must be >= 0");
   if (!(std::isfinite(path_clearance) && path_clearance >= 0.0)) fail("path_clearance", "must be >= 0");
   if (!(std::isfinite(approach_clearance) && approach_clearance >= 0.0)) fail("approach_clearance", "must be >= 0");
@@ -113,7 +114,10 @@ ExplorationSequencer::ExplorationSequencer(const SequencerParams& params)
     : p_(params), explorer_((params.validate(), params.explorer)) {}
 
 void ExplorationSequencer::enter(Phase p, const char* reason, double t) {
-  if (p == Phase::kRetreat) retreat_held_ = false;
+  if (p == Phase::kRetreat) {
+    retreat_held_ = false;
+    retreat_from_follow_ = phase_ == Phase::kFollowWall;
+  }
   previous_ = phase_;
   phase_ = p;
   reason_ = reason;
@@ -178,7 +182,64 @@ bool ExplorationSequencer::side_blocked(const SequencerInput& in) const {
     const double lateral = s * d.dot(fy), forward = d.dot(fx);
     if (lateral > 0.0 && lateral < p_.side_clearance && std::abs(forward) < p_.side_clearance) return true;
   }
+  if (p_.wall_extension <= 0.0) return false;
+  for (const auto& w : wall_lines_) {
+    if (ray_to_wall_line(pos, s * fy, w.a, w.b, p_.wall_extension) < p_.side_clearance) return true;
+  }
   return false;
+}
+
+LineFit fit_line(const std::vector<Eigen::Vector2d>& pts) {
+  LineFit f;
+  const std::size_t n = pts.size();
+  if (n < 2) return f;
+  for (const auto& q : pts) f.mean += q;
+  f.mean /= static_cast<double>(n);
+  Eigen::Matrix2d C = Eigen::Matrix2d::Zero();
+  for (const auto& q : pts) C += (q - f.mean) * (q - f.mean).transpose();
+  C /= static_cast<double>(n);
+  const double tr = C.trace(), det = C(0, 0) * C(1, 1) - C(0, 1) * C(1, 0);
+  const double disc = std::sqrt(std::max(0.0, 0.25 * tr * tr - det));
+  const double l1 = 0.5 * tr + disc, l2 = std::max(0.0, 0.5 * tr - disc);
+  f.spread = 2.0 * std::sqrt(l1);
+  f.thickness = 2.0 * std::sqrt(l2);
+  f.dir = std::abs(C(0, 1)) > 1e-12 ? Eigen::Vector2d(l1 - C(1, 1), C(0, 1))
+                                    : (C(0, 0) >= C(1, 1) ? Eigen::Vector2d(1, 0) : Eigen::Vector2d(0, 1));
+  f.dir.normalize();
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (const auto& q : pts) {
+    lo = std::min(lo, (q - f.mean).dot(f.dir));
+    hi = std::max(hi, (q - f.mean).dot(f.dir));
+  }
+  f.a = f.mean + lo * f.dir;
+  f.b = f.mean + hi * f.dir;
+  f.ok = true;
+  return f;
+}
+
+double ray_to_wall_line(const Eigen::Vector2d& from, const Eigen::Vector2d& dir, const Eigen::Vector2d& a,
+                        const Eigen::Vector2d& b, double extension) {
+  const double miss = std::numeric_limits<double>::infinity();
+  if ((b - a).norm() < 1e-9) return miss;
+  const Eigen::Vector2d u = (b - a).normalized();
+  if (std::abs(dir.dot(u)) > std::sqrt(0.5)) return miss;  // < 45 deg to the ray: beside it, not across
+  const Eigen::Vector2d a0 = a - extension * u;
+  const Eigen::Vector2d e = (b + extension * u) - a0;
+  const double den = dir.x() * e.y() - dir.y() * e.x();
+  const Eigen::Vector2d ap = a0 - from;
+  const double r = (ap.x() * e.y() - ap.y() * e.x()) / den;    // along the ray
+  const double v = (ap.x() * dir.y() - ap.y() * dir.x()) / den;  // along the extended span, 0..1
+  return (r > 0.0 && v >= 0.0 && v <= 1.0) ? r : miss;
+}
+
+void ExplorationSequencer::add_wall_line() {
+  // One wall: the follow's contact points spread >= 5 cm along their line
+  // (2 sigma; short follows beside an exit's jamb count) and <= 2 cm across
+  // (not two walls of a corner).
+  const LineFit f = fit_line(follow_points_);
+  if (!f.ok || f.spread < 0.05 || f.thickness > 0.02) return;
+  if (wall_lines_.size() >= 64) wall_lines_.erase(wall_lines_.begin());
+  wall_lines_.push_back({f.a, f.b});
 }
 
 std::size_t point_to_replace(const Gpis& g, const Eigen::Vector2d& q, double label) {
@@ -445,29 +506,26 @@ void ExplorationSequencer::align_to_wall(const SequencerInput& in) {
   // of its wall follow (>= 8 cm spread), else the heading the wall follow
   // settled to with both whiskers on the wall (it faces the wall's normal).
   double facing = NAN;
-  const std::size_t n = follow_points_.size();
-  if (n >= 2) {
-    Eigen::Vector2d mean = Eigen::Vector2d::Zero();
-    for (const auto& q : follow_points_) mean += q;
-    mean /= static_cast<double>(n);
-    Eigen::Matrix2d C = Eigen::Matrix2d::Zero();
-    for (const auto& q : follow_points_) C += (q - mean) * (q - mean).transpose();
-    C /= static_cast<double>(n);
-    const double tr = C.trace(), det = C(0, 0) * C(1, 1) - C(0, 1) * C(1, 0);
-    const double l1 = 0.5 * tr + std::sqrt(std::max(0.0, 0.25 * tr * tr - det));
-    if (2.0 * std::sqrt(l1) >= 0.08) {  // spread (2 sigma along the wall) >= 8 cm
-      Eigen::Vector2d t = std::abs(C(0, 1)) > 1e-12 ? Eigen::Vector2d(l1 - C(1, 1), C(0, 1)) :
-                          (C(0, 0) >= C(1, 1) ? Eigen::Vector2d(1, 0) : Eigen::Vector2d(0, 1));
-      t.normalize();
-      Eigen::Vector2d nrm(-t.y(), t.x());
-      if (nrm.dot(mean - Eigen::Vector2d(in.x, in.y)) < 0.0) nrm = -nrm;
-      facing = std::atan2(nrm.y(), nrm.x());
-    }
+  const LineFit f = fit_line(follow_points_);
+  if (f.ok && f.spread >= 0.08) {  // spread (2 sigma along the wall) >= 8 cm
+    Eigen::Vector2d nrm(-f.dir.y(), f.dir.x());
+    if (nrm.dot(f.mean - Eigen::Vector2d(in.x, in.y)) < 0.0) nrm = -nrm;
+    facing = std::atan2(nrm.y(), nrm.x());
   }
   if (!std::isfinite(facing) && both_touched_) facing = in.yaw;
   if (!std::isfinite(facing)) return;
   start_yaw_ = facing - 2.0 * M_PI * probe_ / p_.probe_directions;
   aligned_ = true;
+}
+
+void ExplorationSequencer::begin_return(const Eigen::Vector2d& pos, const Eigen::Vector2d& to, const char* reason,
+                                        double t) {
+  // First across to the probe's line (leg_start_ along heading_), then along it.
+  return_to_ = to;
+  const Eigen::Vector2d h(std::cos(heading_), std::sin(heading_));
+  return_via_ = leg_start_ + h * (pos - leg_start_).dot(h);
+  return_via_active_ = p_.return_via_probe_line && (pos - return_via_).norm() > 0.03;
+  enter(Phase::kReturn, reason, t);
 }
 
 void ExplorationSequencer::start_follow(const SequencerInput& in, bool probing) {
@@ -492,11 +550,13 @@ void ExplorationSequencer::start_follow(const SequencerInput& in, bool probing) 
     if (std::abs(lateral) > p_.wall.side_deadband) side_ = lateral > 0 ? tactile_fsm::Side::kLeft : tactile_fsm::Side::kRight;
   }
   if (!probing && has_target_ && visited_.size() < 1000) visited_.push_back(target_);
+  follow_start_ = Eigen::Vector2d(in.x, in.y);
   enter(Phase::kFollowWall, "contact", in.t);
 }
 
 void ExplorationSequencer::commit_points(const SequencerInput& in) {
   // 4 surface points per wall follow, evenly spaced in time (000 downsampling).
+  if (p_.wall_extension > 0.0) add_wall_line();
   const std::size_t n = follow_points_.size();
   const auto k = static_cast<std::size_t>(p_.surface_points_per_follow);
   if (n > 0) {
@@ -673,13 +733,13 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
           open_heading_ = heading_;
           open_origin_ = leg_start_;
         }
-        return_to_ = leg_start_;  // back along the probe's own line
-        enter(Phase::kReturn, "probe found no wall", in.t);
+        begin_return(pos, leg_start_, "probe found no wall", in.t);  // back along the probe's own line
       }
       break;
     case Phase::kReturn: {
-      const Eigen::Vector2d d = return_to_ - pos;
-      if (d.norm() < 0.5 * p_.target_radius) {  // tighter: the next leg starts here
+      if (return_via_active_ && (return_via_ - pos).norm() < 0.02) return_via_active_ = false;
+      const Eigen::Vector2d d = (return_via_active_ ? return_via_ : return_to_) - pos;
+      if (!return_via_active_ && d.norm() < 0.5 * p_.target_radius) {  // tighter: the next leg starts here
         ++probe_;
         if (exit_via_probe_) {
           // Through the opening along the probe's own line (flown without
@@ -693,6 +753,14 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
           exit_whisk_ = false;  // along the open probe's line: its corridor was whisked
           enter(Phase::kTurn, "a probe found the opening", in.t);
           break;
+        }
+        if (probe_ >= p_.probe_directions && p_.diagonal_probes && !diagonal_round_ &&
+            explorer_.gpis().surface_count() == 0) {
+          // No wall in any direction: the diagonals before open_space.
+          diagonal_round_ = true;
+          start_yaw_ += M_PI / p_.probe_directions;
+          probe_ = 0;
+          open_probe_ = -1;
         }
         if (probe_ < p_.probe_directions) {
           heading_ = start_yaw_ + 2.0 * M_PI * probe_ / p_.probe_directions;
@@ -755,14 +823,17 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         retreat_held_ = true;
       } else {
         sp.vx = -p_.retreat_speed;
+        if (p_.retreat_toward_follow_start && retreat_from_follow_) {
+          const double off = (pos - follow_start_).dot(Eigen::Vector2d(-std::sin(in.yaw), std::cos(in.yaw)));
+          sp.vy = std::clamp(-off / p_.retreat_time_s, -p_.retreat_speed, p_.retreat_speed);
+        }
       }
       if (in.t - entered_ >= p_.retreat_time_s) {
         if (p_.align_probes && probing_ && !aligned_ && previous_ != Phase::kReturn) align_to_wall(in);
         if (previous_ != Phase::kReturn) commit_points(in);
         if (probing_ && probe_ + 1 < p_.probe_directions && previous_ != Phase::kReturn) {
           // Back to the start, then the next probe.
-          return_to_ = leg_start_;
-          enter(Phase::kReturn, "retreated: next probe", in.t);
+          begin_return({in.x, in.y}, leg_start_, "retreated: next probe", in.t);
           break;
         }
         probing_ = false;
@@ -770,8 +841,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
           // A probe flew 2 m without touching anything in a walled place: an opening.
           explorer_.update();
           exit_via_probe_ = true;
-          return_to_ = open_origin_;
-          enter(Phase::kReturn, "a probe found the opening: back to the start", in.t);
+          begin_return({in.x, in.y}, open_origin_, "a probe found the opening: back to the start", in.t);
           break;
         }
         if (explorer_.gpis().surface_count() == 0) {

@@ -100,7 +100,7 @@ TEST(GpisExplorerLogic, OpenSpacePublishesMapAndTarget) {
   double x = 0, y = 0, yaw = 0;
   int maps = 0;
   bool landed = false;
-  for (int64_t k = 0; k < 50 * 200 && !landed; ++k) {
+  for (int64_t k = 0; k < 50 * 400 && !landed; ++k) {  // 4 probes, then the 4 diagonals (diagonal_probes)
     const int64_t ns = k * GpisExplorerLogic::kTimerPeriodNs;
     auto o = odom(ns, x, y);
     o.pose.pose.orientation.z = std::sin(yaw / 2);

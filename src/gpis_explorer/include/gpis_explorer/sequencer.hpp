@@ -65,6 +65,12 @@ struct SequencerParams {
   /// Wall-following band and speeds (000 Fig. S4e; tactile_fsm's defaults).
   tactile_fsm::WallFollowerParams wall;
   int probe_directions = 4;             ///< 000: "four orthogonal directions (90 deg apart)"
+  /// No wall within probe_max_distance in any probe direction: probe once
+  /// more, turned by half the probes' spacing (the diagonals), before landing
+  /// with open_space. In a room turned ~45 deg to the start heading whose
+  /// corners lie beyond probe_max_distance (3.4 m square: 2.4 m), every probe
+  /// flies at a corner (issue 17, rooms 1379, 1383, 1467). (choice)
+  bool diagonal_probes = true;
   double follow_time_s = 2.0;           ///< 000: "follows the wall for 2 seconds"
   double retreat_time_s = 1.0;          ///< 000: "flies backward for 1 second"
   int surface_points_per_follow = 4;    ///< 000: "storing four data points per wall-follow"
@@ -72,6 +78,13 @@ struct SequencerParams {
   /// Backward speed of the retreat [m/s]; workspace choice: V_max / 2 as the
   /// FSM's FLY_BACKWARD (000 Fig. S4e).
   double retreat_speed = 0.1;
+  /// The retreat after a wall follow also moves sideways back toward where
+  /// the follow started (body-y = -offset / retreat_time_s, at most
+  /// retreat_speed): back over the band the follow's slide swept, away from
+  /// what the slide ran into. Straight back, the guard's side grazed the
+  /// other wall of a corner the slide had ended beside (issue 17: 8 of 24
+  /// first guard touches on rooms 1000-1599, all side or rear-side). (choice)
+  bool retreat_toward_follow_start = true;
   /// A probe with no contact after this distance found an opening [m] (choice).
   double probe_max_distance = 2.0;
   /// Yaw control: rate = gain * error, |rate| <= omega_max; aligned below tolerance.
@@ -85,8 +98,11 @@ struct SequencerParams {
   double turn_rate = 2.0;
   double target_radius = 0.10;          ///< target reached [m] (choice)
   /// Beyond a contact-free target, this much more contact-free flight = exit
-  /// flown through [m] (choice: about the whisker-to-frame margin plus a room wall).
-  double exit_confirm_distance = 0.8;
+  /// flown through [m] (choice). 0.8 m (about the whisker-to-frame margin plus
+  /// a room wall) reported exits from inside rooms whose far wall no probe had
+  /// touched (the GPIS contour then lies inside the room; issue 17: 11 of 600
+  /// rooms 1000-1599 ended 0.2-0.4 m short of that wall); 1.2 m.
+  double exit_confirm_distance = 1.2;
   /// ... and every known surface point at least this far behind the drone
   /// along the leg (else it keeps going, at most probe_max_distance more). [m]
   double exit_beyond = 0.3;
@@ -97,6 +113,16 @@ struct SequencerParams {
   /// sideways in a corner would be hit (000 Results: corners "risk
   /// collisions"). [m] (choice)
   double side_clearance = 0.25;
+  /// ... or when the line of a wall touched before, extended this far beyond
+  /// the touched span on either end, crosses the sideways path within
+  /// side_clearance of the centre (at >= 45 deg to it). Each wall follow whose
+  /// contact points lie on a line (spread >= 5 cm along it, <= 2 cm across,
+  /// 2 sigma) gives one wall line (the last 64 are kept); a wall continues beyond where it was touched, and in
+  /// a room corner the wall met sideways is the line of a wall touched in its
+  /// middle (issue 17: 6 of 14 first guard touches on rooms 1000-1299 were
+  /// the frame's side meeting a corner's other wall in a wall follow). 0 = off
+  /// (known points only). [m] (choice)
+  double wall_extension = 3.0;
   // --- Collision avoidance of the sequencing (workspace rules; 000 gives the
   // corner penalty eq. 45 and "discourage entry into concave, high-risk
   // areas" but no path rule). The whiskers see only what is ahead within
@@ -130,6 +156,13 @@ struct SequencerParams {
   /// checked (the open probe's, or the head-on leg's), not a parallel line
   /// up to target_radius beside it. [1/s]
   double line_gain = 1.0;
+  /// RETURN after a probe's wall follow first moves across to the probe's
+  /// line (the foot of the perpendicular, back along the wall follow's slide)
+  /// and then along the line to its origin, instead of straight to the
+  /// origin across space no leg swept (issue 17: 3 of 14 first guard touches
+  /// on rooms 1000-1299 were a straight return meeting a pillar or a wall end
+  /// beside the probe's line). Offsets below 3 cm go straight.
+  bool return_via_probe_line = true;
   /// A target whose leg ended in a contact is visited: contour points within
   /// this distance of it are not chosen again. Without it the drone re-flies
   /// the same target once the onboard budget (50 points) is full and the
@@ -185,6 +218,24 @@ struct SequencerParams {
 /// g.size() is returned (drop q). Our rule; 000 gives the budget, not what
 /// happens when it is full. O(n^2).
 std::size_t point_to_replace(const Gpis& g, const Eigen::Vector2d& q, double label);
+
+/// Principal line of a set of points (a wall follow's contacts): the mean,
+/// the unit direction of the larger covariance eigenvalue, the 2-sigma spread
+/// along it and across it (thickness), and the span's ends on the line.
+/// ok = false for fewer than 2 points.
+struct LineFit {
+  bool ok = false;
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero(), dir{1, 0}, a = Eigen::Vector2d::Zero(), b = Eigen::Vector2d::Zero();
+  double spread = 0.0, thickness = 0.0;
+};
+LineFit fit_line(const std::vector<Eigen::Vector2d>& pts);
+
+/// Distance along the ray from `from` in the unit direction `dir` to the
+/// segment a-b extended by `extension` beyond both ends; infinity when the
+/// ray misses it or meets its line at less than 45 deg (a wall beside the
+/// path, not across it). wall_extension's test.
+double ray_to_wall_line(const Eigen::Vector2d& from, const Eigen::Vector2d& dir, const Eigen::Vector2d& a,
+                        const Eigen::Vector2d& b, double extension);
 
 /// One control tick of input (odometry frame).
 struct SequencerInput {
@@ -309,21 +360,32 @@ class ExplorationSequencer {
   double heading_ = 0.0;  ///< heading of the current turn / leg [rad]
   Eigen::Vector2d leg_start_{0, 0};
   int open_probe_ = -1;  ///< a probe that found no wall
+  bool diagonal_round_ = false;         ///< the diagonal probes (diagonal_probes) are flying
+  Eigen::Vector2d follow_start_{0, 0};  ///< where the last wall follow began
+  bool retreat_from_follow_ = false;    ///< this retreat ends a wall follow
   tactile_fsm::Side side_ = tactile_fsm::Side::kRight;
   bool both_touched_ = false;
   tactile_fsm::WallSubState sub_ = tactile_fsm::WallSubState::kNone;
   std::vector<Eigen::Vector2d> follow_points_;
+  struct WallLine {
+    Eigen::Vector2d a, b;  ///< the touched span's ends on the fitted line
+  };
+  std::vector<WallLine> wall_lines_;  ///< at most 64 (the oldest dropped)
+  void add_wall_line();
   bool has_target_ = false;
   bool has_staging_ = false;
   bool aligned_ = false;  ///< probes aligned to the first wall
   Eigen::Vector2d staging_{0, 0};
   double approach_heading_ = 0.0;
   double open_heading_ = 0.0;  ///< heading of the probe that found no wall
-  bool exit_via_probe_ = false;
+  bool exit_via_probe_ = false;   ///< RETURN to the start, then out along the open probe
   bool line_from_probe_ = false;  ///< the next leg follows the open probe's line
-  Eigen::Vector2d open_origin_{0, 0};
-  Eigen::Vector2d return_to_{0, 0};  ///< RETURN goes here: the probe's origin (back along its line)  ///< where the open probe started
-  Eigen::Vector2d line_origin_{0, 0};  ///< the current forward leg's line passes here along heading_  ///< RETURN to the start, then out along the open probe
+  Eigen::Vector2d open_origin_{0, 0};  ///< where the open probe started
+  Eigen::Vector2d return_via_{0, 0};  ///< RETURN's first leg ends here (return_via_probe_line)
+  bool return_via_active_ = false;
+  void begin_return(const Eigen::Vector2d& pos, const Eigen::Vector2d& to, const char* reason, double t);
+  Eigen::Vector2d return_to_{0, 0};    ///< RETURN goes here: the probe's origin (back along its line)
+  Eigen::Vector2d line_origin_{0, 0};  ///< the current forward leg's line passes here along heading_
   Eigen::Vector2d target_{0, 0};
   double target_acq_ = 0.0, target_var_ = 0.0;
   Eigen::Vector2d exit_from_{0, 0};
