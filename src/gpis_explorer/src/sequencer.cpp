@@ -348,12 +348,22 @@ bool ExplorationSequencer::beyond_known_surface(const Eigen::Vector2d& pos) cons
   return true;
 }
 
+double ExplorationSequencer::retreat_lateral(const SequencerInput& in) const {
+  // Body-y speed back toward where the wall follow began (retreat_toward_follow_start).
+  if (!p_.retreat_toward_follow_start || !retreat_from_follow_) return 0.0;
+  const double off = (Eigen::Vector2d(in.x, in.y) - follow_start_).dot(Eigen::Vector2d(-std::sin(in.yaw), std::cos(in.yaw)));
+  return std::clamp(-off / p_.retreat_time_s, -p_.retreat_speed, p_.retreat_speed);
+}
+
 bool ExplorationSequencer::retreat_blocked(const SequencerInput& in) const {
   // The backward leg (retreat_speed for what is left of retreat_time_s plus a
   // margin) must not bring the centre closer than retreat_clearance to a known
   // surface point it is not already that close to.
   const Eigen::Vector2d pos(in.x, in.y), back(-std::cos(in.yaw), -std::sin(in.yaw));
-  const Eigen::Vector2d end = pos + back * (p_.retreat_speed * p_.retreat_time_s + 0.05);
+  const Eigen::Vector2d side(-std::sin(in.yaw), std::cos(in.yaw));
+  // ... and sideways as far as the retreat would move (retreat_toward_follow_start).
+  const Eigen::Vector2d end =
+      pos + back * (p_.retreat_speed * p_.retreat_time_s + 0.05) + side * (retreat_lateral(in) * p_.retreat_time_s);
   const Gpis& g = explorer_.gpis();
   for (std::size_t i = 0; i < g.size(); ++i) {
     if (g.label(i) != kSurfaceLabel) continue;
@@ -737,7 +747,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       }
       break;
     case Phase::kReturn: {
-      if (return_via_active_ && (return_via_ - pos).norm() < 0.02) return_via_active_ = false;
+      if (return_via_active_ && (return_via_ - pos).norm() < 0.03) return_via_active_ = false;  // as begin_return's threshold
       const Eigen::Vector2d d = (return_via_active_ ? return_via_ : return_to_) - pos;
       if (!return_via_active_ && d.norm() < 0.5 * p_.target_radius) {  // tighter: the next leg starts here
         ++probe_;
@@ -823,10 +833,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         retreat_held_ = true;
       } else {
         sp.vx = -p_.retreat_speed;
-        if (p_.retreat_toward_follow_start && retreat_from_follow_) {
-          const double off = (pos - follow_start_).dot(Eigen::Vector2d(-std::sin(in.yaw), std::cos(in.yaw)));
-          sp.vy = std::clamp(-off / p_.retreat_time_s, -p_.retreat_speed, p_.retreat_speed);
-        }
+        sp.vy = retreat_lateral(in);
       }
       if (in.t - entered_ >= p_.retreat_time_s) {
         if (p_.align_probes && probing_ && !aligned_ && previous_ != Phase::kReturn) align_to_wall(in);

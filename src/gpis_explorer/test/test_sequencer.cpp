@@ -53,6 +53,15 @@ TEST(SequencerParams, ValidateNamesField) {
   q = SequencerParams{};
   q.turn_rate = q.whisk_rate + 0.1;  // faster than the yaw the vehicle is flown at anywhere else
   expect_field(q, "turn_rate");
+  q.turn_rate = -0.1;
+  expect_field(q, "turn_rate");
+  q.turn_rate = NAN;
+  expect_field(q, "turn_rate");
+  q = SequencerParams{};
+  q.wall_extension = -0.5;
+  expect_field(q, "wall_extension");
+  q.wall_extension = INFINITY;
+  expect_field(q, "wall_extension");
 }
 
 TEST(Sequencer, OpenSpaceLandsWithStatus) {
@@ -276,7 +285,6 @@ TEST(Sequencer, AFullBudgetTakesTheWallsTouchedSince) {
     SequencerParams p;
     p.explorer.gpis.max_points = 20;
     p.replace_when_full = replace;
-    p.turn_rate = 2.0;
     ExplorationSequencer seq(p);
     const auto walls = gpis_test::room(3.0, 0.6, 0.4, 0.9);
     double t_full = NAN;
@@ -318,16 +326,18 @@ TEST(Sequencer, TurnsInPlaceAtTurnRate) {
     ExplorationSequencer seq(p);
     const auto walls = gpis_test::room(2.0, 0.8, 0.3);
     double max_turn = 0.0, last_yaw = NAN, turn_time = 0.0;
-    Phase last_phase = Phase::kHoverInit;
+    Phase last_phase = Phase::kHoverInit, phase_before = Phase::kHoverInit;
     gpis_test::fly(seq, walls, 0.0, 120.0, 1.0, 0.3,
                    [&](const ExplorationSequencer& s, const Eigen::Vector2d&, double yaw) {
-                     // yaw is the pose this tick's setpoint was computed from;
-                     // the rate shows in the next tick's yaw.
-                     if (last_phase == Phase::kTurn && std::isfinite(last_yaw)) {
+                     // yaw is the pose this tick's step started from; yaw -
+                     // last_yaw is the previous step's setpoint, which ran in
+                     // TURN throughout when that step began and ended in TURN.
+                     if (phase_before == Phase::kTurn && last_phase == Phase::kTurn && std::isfinite(last_yaw)) {
                        max_turn = std::max(max_turn, std::abs(yaw - last_yaw) / 0.02);
                        turn_time += 0.02;
                      }
                      last_yaw = yaw;
+                     phase_before = last_phase;
                      last_phase = s.phase();
                    });
     std::printf("turn_rate %.1f: max turn rate %.3f rad/s, %.1f s in TURN\n", rate, max_turn, turn_time);

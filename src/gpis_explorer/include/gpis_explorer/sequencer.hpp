@@ -83,7 +83,8 @@ struct SequencerParams {
   /// retreat_speed): back over the band the follow's slide swept, away from
   /// what the slide ran into. Straight back, the guard's side grazed the
   /// other wall of a corner the slide had ended beside (issue 17: 8 of 24
-  /// first guard touches on rooms 1000-1599, all side or rear-side). (choice)
+  /// first guard touches on rooms 1000-1599, all side or rear-side).
+  /// retreat_clearance checks the path with the sideways part. (choice)
   bool retreat_toward_follow_start = true;
   /// A probe with no contact after this distance found an opening [m] (choice).
   double probe_max_distance = 2.0;
@@ -94,7 +95,8 @@ struct SequencerParams {
   /// (as the whisk back of CHECK_AHEAD). 0 = the wall follower's omega_max
   /// (25 deg/s) at yaw_gain, the previous turn. Turning in place moves no
   /// part of the round guard; issue 17: in the rooms that time out, a third
-  /// of the flight was TURN. [rad/s] (choice, <= whisk_rate)
+  /// of the flight was TURN. [rad/s] (choice, <= whisk_rate: the yaw rate the
+  /// vehicle is flown at while whisking, also bounding it with whisking off)
   double turn_rate = 2.0;
   double target_radius = 0.10;          ///< target reached [m] (choice)
   /// Beyond a contact-free target, this much more contact-free flight = exit
@@ -115,9 +117,12 @@ struct SequencerParams {
   double side_clearance = 0.25;
   /// ... or when the line of a wall touched before, extended this far beyond
   /// the touched span on either end, crosses the sideways path within
-  /// side_clearance of the centre (at >= 45 deg to it). Each wall follow whose
-  /// contact points lie on a line (spread >= 5 cm along it, <= 2 cm across,
-  /// 2 sigma) gives one wall line (the last 64 are kept); a wall continues beyond where it was touched, and in
+  /// side_clearance of the centre (at >= 45 deg to it). Each wall follow (or
+  /// back-off after a whisk contact: its touched points) whose contact points
+  /// lie on a line (spread >= 5 cm along it, <= 2 cm across, 2 sigma) gives
+  /// one wall line (the last 64 are kept). A short span's direction is
+  /// uncertain (up to ~20 deg at 5 cm and 2 cm), so an extended line may stop
+  /// a slide it does not cross: a wall follow ends early, no collision; a wall continues beyond where it was touched, and in
   /// a room corner the wall met sideways is the line of a wall touched in its
   /// middle (issue 17: 6 of 14 first guard touches on rooms 1000-1299 were
   /// the frame's side meeting a corner's other wall in a wall follow). 0 = off
@@ -161,7 +166,8 @@ struct SequencerParams {
   /// and then along the line to its origin, instead of straight to the
   /// origin across space no leg swept (issue 17: 3 of 14 first guard touches
   /// on rooms 1000-1299 were a straight return meeting a pillar or a wall end
-  /// beside the probe's line). Offsets below 3 cm go straight.
+  /// beside the probe's line). Offsets below 3 cm go straight; the first leg
+  /// ends within 3 cm of the line.
   bool return_via_probe_line = true;
   /// A target whose leg ended in a contact is visited: contour points within
   /// this distance of it are not chosen again. Without it the drone re-flies
@@ -363,6 +369,7 @@ class ExplorationSequencer {
   bool diagonal_round_ = false;         ///< the diagonal probes (diagonal_probes) are flying
   Eigen::Vector2d follow_start_{0, 0};  ///< where the last wall follow began
   bool retreat_from_follow_ = false;    ///< this retreat ends a wall follow
+  double retreat_lateral(const SequencerInput& in) const;
   tactile_fsm::Side side_ = tactile_fsm::Side::kRight;
   bool both_touched_ = false;
   tactile_fsm::WallSubState sub_ = tactile_fsm::WallSubState::kNone;
