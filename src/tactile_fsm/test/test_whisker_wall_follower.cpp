@@ -1375,6 +1375,25 @@ AfterClearing contact_then_clear(WhiskerWallFollower& fsm, PointDrone& d, double
   return a;
 }
 
+// Into the first scan of the step and scan (|yaw| >= 0.3 rad), then the
+// depth stale for 0.3 s: a fail-safe hover cuts the scan. Returns the time.
+double scan_cut_by_failsafe(WhiskerWallFollower& fsm, const WallFollowerParams& p, PointDrone& d) {
+  double t = 0.0;
+  for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t));
+  while (std::fabs(d.yaw) < 0.3 && t < 10.0) {
+    d.move(fsm.step(input(t, d.x, d.y, d.yaw)));
+    t += kDt;
+  }
+  EXPECT_GE(std::fabs(d.yaw), 0.3);
+  for (int k = 0; k < 15; ++k, t += kDt) {
+    WallFollowerInput in = input(t, d.x, d.y, d.yaw);
+    in.depth_stamp = p.hover_init_s;
+    d.move(fsm.step(in));
+  }
+  EXPECT_EQ(fsm.state(), FsmState::kFailsafeHover);
+  return t;
+}
+
 }  // namespace
 
 // Only the first approach is whisked: after a contact and a clearing the
@@ -1738,21 +1757,8 @@ TEST(WhiskerWallFollower, StepAndScanEndsAtTheFirstContactAndSettlesOnReentry) {
   WallFollowerParams p = scan_params(0.08);
   p.realign_gain = 1.5;
   WhiskerWallFollower fsm(p);
-  double t = 0.0;
   PointDrone d;
-  for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t));
-  while (std::fabs(d.yaw) < 0.3 && t < 10.0) {  // into the first scan
-    d.move(fsm.step(input(t, d.x, d.y, d.yaw)));
-    t += kDt;
-  }
-  ASSERT_GE(std::fabs(d.yaw), 0.3);
-  // Depth stale for 0.3 s: fail-safe hover, then fresh again.
-  for (int k = 0; k < 15; ++k, t += kDt) {
-    WallFollowerInput in = input(t, d.x, d.y, d.yaw);
-    in.depth_stamp = p.hover_init_s;
-    d.move(fsm.step(in));
-  }
-  EXPECT_EQ(fsm.state(), FsmState::kFailsafeHover);
+  double t = scan_cut_by_failsafe(fsm, p, d);  // then fresh again
   // Back in FLY_FORWARD at ~0.3 rad off the course: no speed along the course
   // until the yaw is back within 0.05 rad.
   double along_while_off = 0.0;
@@ -1778,19 +1784,8 @@ TEST(WhiskerWallFollower, StepAndScanEndsAtTheFirstContactAndSettlesOnReentry) {
 TEST(WhiskerWallFollower, StepAndScanReentryOnTheCourseKeepsNoScanOffset) {
   WallFollowerParams p = scan_params(0.08);
   WhiskerWallFollower fsm(p);
-  double t = 0.0;
   PointDrone d;
-  for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t));
-  while (std::fabs(d.yaw) < 0.3 && t < 10.0) {  // into the first scan
-    d.move(fsm.step(input(t, d.x, d.y, d.yaw)));
-    t += kDt;
-  }
-  ASSERT_GE(std::fabs(d.yaw), 0.3);
-  for (int k = 0; k < 15; ++k, t += kDt) {
-    WallFollowerInput in = input(t, d.x, d.y, d.yaw);
-    in.depth_stamp = p.hover_init_s;
-    d.move(fsm.step(in));
-  }
+  const double t = scan_cut_by_failsafe(fsm, p, d);
   ASSERT_EQ(fsm.state(), FsmState::kFailsafeHover);
   d.yaw = 0.0;
   const WallFollowerOutput o = fsm.step(input(t, d.x, d.y, d.yaw));
