@@ -476,3 +476,40 @@ TEST(Sequencer, DiagonalProbesFindTheWallsOfARoomTurned45Degrees) {
     }
   }
 }
+
+// wall_extension in flight: the first probe (heading -y) meets a wall on the
+// line y = -0.35 and follows it (a wall line); the second probe (turned
+// orthogonal to it, heading +x) meets the wall x = 1 and slides right (-y)
+// toward a 20 cm jamb piece on that same line at the corner, which no whisker
+// can feel (the frame has no side whiskers). With the line extended the slide
+// stops before the jamb; without, the frame's side runs up to it.
+TEST(Sequencer, AWallLineEndsTheSlideIntoACornersOtherWall) {
+  for (const double extension : {0.0, 3.0}) {
+    SequencerParams p;
+    p.wall_extension = extension;
+    ExplorationSequencer seq(p);
+    const std::vector<gpis_test::Segment> jamb{{{0.8, -0.35}, {1.0, -0.35}}};
+    std::vector<gpis_test::Segment> walls{{{-1.0, -0.35}, {0.2, -0.35}}, {{1.0, -2.0}, {1.0, 2.0}}};
+    walls.insert(walls.end(), jamb.begin(), jamb.end());
+    int follows = 0;
+    double closest = 1e9;
+    Phase last = Phase::kHoverInit;
+    gpis_test::fly(seq, walls, -M_PI / 2, 70.0, 100.0, 0.0,
+                   [&](const ExplorationSequencer& s, const Eigen::Vector2d& pos, double) {
+                     if (s.phase() == Phase::kFollowWall && last != Phase::kFollowWall) ++follows;
+                     if (follows == 2 && (s.phase() == Phase::kFollowWall || s.phase() == Phase::kRetreat)) {
+                       closest = std::min(closest, gpis_test::wall_distance(jamb, pos));
+                     }
+                     last = s.phase();
+                   });
+    std::printf("wall_extension %.1f: follows %d, side stops %zu, closest to the jamb in the second follow %.3f m\n",
+                extension, follows, seq.side_stops(), closest);
+    ASSERT_GE(follows, 2);
+    if (extension > 0.0) {
+      EXPECT_GE(seq.side_stops(), 1u);
+      EXPECT_GT(closest, 0.15);
+    } else {
+      EXPECT_LT(closest, 0.09);  // the guard's radius is 8 cm
+    }
+  }
+}
