@@ -140,6 +140,11 @@ double ExplorationSequencer::yaw_rate_to(double heading, double yaw) const {
   return std::clamp(p_.yaw_gain * wrap(heading - yaw), -p_.wall.omega_max, p_.wall.omega_max);
 }
 
+double ExplorationSequencer::fast_yaw_rate(double err, double limit) {
+  whisking_ = true;  // may exceed omega_max: the tick's rate is bounded by whisk_rate instead
+  return std::clamp(p_.yaw_gain * 4.0 * err, -limit, limit);
+}
+
 bool ExplorationSequencer::fly_leg(const SequencerInput& in, bool contact, tactile_fsm::Setpoint* sp) {
   // Forward along heading_ on its line; a contact starts a wall follow, a
   // penalised corner 0.1 m ahead a retreat (000: never fly into a corner).
@@ -449,8 +454,7 @@ void ExplorationSequencer::check_ahead(const SequencerInput& in, tactile_fsm::Se
   }
   const double err = wrap(heading_ - in.yaw);
   if (check_stage_ == 0) {
-    sp->yaw_rate = std::clamp(p_.yaw_gain * 4.0 * err, -p_.whisk_rate, p_.whisk_rate);
-    whisking_ = true;  // the whisk back may exceed omega_max
+    sp->yaw_rate = fast_yaw_rate(err, p_.whisk_rate);  // the whisk back
     if (std::abs(err) < p_.yaw_tolerance) {
       check_stage_ = 1;
       check_t_ = in.t;
@@ -534,7 +538,7 @@ void ExplorationSequencer::begin_return(const Eigen::Vector2d& pos, const Eigen:
   return_to_ = to;
   const Eigen::Vector2d h(std::cos(heading_), std::sin(heading_));
   return_via_ = leg_start_ + h * (pos - leg_start_).dot(h);
-  return_via_active_ = p_.return_via_probe_line && (pos - return_via_).norm() > 0.03;
+  return_via_active_ = p_.return_via_probe_line && (pos - return_via_).norm() > kOnProbeLine;
   enter(Phase::kReturn, reason, t);
 }
 
@@ -710,12 +714,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       break;
     case Phase::kTurn: {
       const double err = wrap(heading_ - in.yaw);
-      if (p_.turn_rate > 0.0) {
-        sp.yaw_rate = std::clamp(p_.yaw_gain * 4.0 * err, -p_.turn_rate, p_.turn_rate);
-        whisking_ = true;  // past omega_max (bounded by whisk_rate below)
-      } else {
-        sp.yaw_rate = yaw_rate_to(heading_, in.yaw);
-      }
+      sp.yaw_rate = p_.turn_rate > 0.0 ? fast_yaw_rate(err, p_.turn_rate) : yaw_rate_to(heading_, in.yaw);
       if (std::abs(err) < p_.yaw_tolerance) {
         leg_start_ = pos;
         // The leg's line: from here along the heading, except the head-on leg
@@ -747,7 +746,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       }
       break;
     case Phase::kReturn: {
-      if (return_via_active_ && (return_via_ - pos).norm() < 0.03) return_via_active_ = false;  // as begin_return's threshold
+      if (return_via_active_ && (return_via_ - pos).norm() < kOnProbeLine) return_via_active_ = false;
       const Eigen::Vector2d d = (return_via_active_ ? return_via_ : return_to_) - pos;
       if (!return_via_active_ && d.norm() < 0.5 * p_.target_radius) {  // tighter: the next leg starts here
         ++probe_;

@@ -40,6 +40,15 @@ inline std::vector<Segment> room(double side, double exit, double yaw, double of
   return w;
 }
 
+/// The four walls of a square pillar of half side h centred at o.
+inline std::vector<Segment> square(const Eigen::Vector2d& o, double h) {
+  const Eigen::Vector2d q[4] = {o + Eigen::Vector2d(-h, -h), o + Eigen::Vector2d(h, -h), o + Eigen::Vector2d(h, h),
+                                o + Eigen::Vector2d(-h, h)};
+  std::vector<Segment> w;
+  for (int k = 0; k < 4; ++k) w.push_back({q[k], q[(k + 1) % 4]});
+  return w;
+}
+
 inline double ray(const std::vector<Segment>& walls, const Eigen::Vector2d& p, const Eigen::Vector2d& d) {
   double best = std::numeric_limits<double>::infinity();
   for (const auto& s : walls) {

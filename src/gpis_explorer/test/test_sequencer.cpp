@@ -125,11 +125,8 @@ TEST(Sequencer, RoomsItWasNotTunedOn) {
     ExplorationSequencer seq(p);
     auto walls = gpis_test::room(c.side, c.exit, c.yaw);
     if (c.pillar) {
-      const Eigen::Vector2d o(0.6, -0.5);
-      const double h = 0.1;
-      const Eigen::Vector2d q[4] = {o + Eigen::Vector2d(-h, -h), o + Eigen::Vector2d(h, -h), o + Eigen::Vector2d(h, h),
-                                    o + Eigen::Vector2d(-h, h)};
-      for (int k = 0; k < 4; ++k) walls.push_back({q[k], q[(k + 1) % 4]});
+      const auto pillar = gpis_test::square({0.6, -0.5}, 0.1);
+      walls.insert(walls.end(), pillar.begin(), pillar.end());
     }
     const auto r = gpis_test::fly(seq, walls, 0.0, 600.0, c.side / 2, c.yaw);
     if (r.exit_found && r.outside) ++found;
@@ -403,12 +400,7 @@ FirstReturn first_return(bool via_line, bool retreat_back) {
   p.retreat_toward_follow_start = retreat_back;
   ExplorationSequencer seq(p);
   std::vector<gpis_test::Segment> walls{{{1.0, -2.0}, {1.0, 2.0}}};
-  const Eigen::Vector2d o(0.55, -0.25);
-  const double h = 0.05;
-  const Eigen::Vector2d q[4] = {o + Eigen::Vector2d(-h, -h), o + Eigen::Vector2d(h, -h), o + Eigen::Vector2d(h, h),
-                                o + Eigen::Vector2d(-h, h)};
-  std::vector<gpis_test::Segment> pillar;
-  for (int k = 0; k < 4; ++k) pillar.push_back({q[k], q[(k + 1) % 4]});
+  const std::vector<gpis_test::Segment> pillar = gpis_test::square({0.55, -0.25}, 0.05);
   walls.insert(walls.end(), pillar.begin(), pillar.end());
   FirstReturn r;
   int returns = 0;

@@ -317,6 +317,10 @@ class ExplorationSequencer {
   void finish(Outcome o, const char* reason, double t);
   tactile_fsm::Setpoint hover() const;
   double yaw_rate_to(double heading, double yaw) const;
+  /// Yaw rate 4 * yaw_gain * err within +-limit (TURN at turn_rate, the whisk
+  /// back of CHECK_AHEAD at whisk_rate); marks the tick's rate as exceeding
+  /// omega_max.
+  double fast_yaw_rate(double err, double limit);
   void start_follow(const SequencerInput& in, bool probing);
   void commit_points(const SequencerInput& in);
   void refit_and_choose(const SequencerInput& in);
@@ -388,6 +392,9 @@ class ExplorationSequencer {
   bool exit_via_probe_ = false;   ///< RETURN to the start, then out along the open probe
   bool line_from_probe_ = false;  ///< the next leg follows the open probe's line
   Eigen::Vector2d open_origin_{0, 0};  ///< where the open probe started
+  /// RETURN's first leg ends within this of the probe's line; a smaller
+  /// offset goes straight (return_via_probe_line). [m]
+  static constexpr double kOnProbeLine = 0.03;
   Eigen::Vector2d return_via_{0, 0};  ///< RETURN's first leg ends here (return_via_probe_line)
   bool return_via_active_ = false;
   void begin_return(const Eigen::Vector2d& pos, const Eigen::Vector2d& to, const char* reason, double t);
