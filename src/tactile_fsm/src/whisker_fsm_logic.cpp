@@ -57,6 +57,12 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   m.set("resume_quiet_rms", 0.0);
   m.set("same_obstacle_distance", d.same_obstacle_distance);
   m.set("max_heading_offset", d.max_heading_offset);
+  // Turn anchor (issue 17, round 13): on in the whisker FSM node, off in the core.
+  // 10 deg, 10 deg, 2 deg/s: held-out block 27000-27299 857 -> 874 of 900 (README
+  // "Round 13").
+  m.set("turn_anchor_tolerance", 10.0 * M_PI / 180.0);
+  m.set("turn_anchor_theta", d.turn_anchor_theta);
+  m.set("turn_anchor_rate", 2.0 * M_PI / 180.0);
   // Pressed whisker (issue 17): on in the whisker FSM node, off in the core
   // (as hold_heading_trailing_lost). 900 Pa, no hold: tuning blocks, README.
   m.set("press_sum_pa", 900.0);
@@ -154,6 +160,9 @@ WhiskerFsmLogic::Params WhiskerFsmLogic::params_from(const ParamMap& m) {
   f.resume_quiet_rms = m.get_double("resume_quiet_rms");
   f.same_obstacle_distance = m.get_double("same_obstacle_distance");
   f.max_heading_offset = m.get_double("max_heading_offset");
+  f.turn_anchor_tolerance = m.get_double("turn_anchor_tolerance");
+  f.turn_anchor_theta = m.get_double("turn_anchor_theta");
+  f.turn_anchor_rate = m.get_double("turn_anchor_rate");
   f.press_sum_pa = m.get_double("press_sum_pa");
   f.press_hold_s = m.get_double("press_hold_s");
   f.press_rms_pa = m.get_double("press_rms_pa");

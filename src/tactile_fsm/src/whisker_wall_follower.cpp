@@ -90,6 +90,11 @@ void WallFollowerParams::validate() const {
   require(finite_nonneg(realign_gain), "realign_gain", "must be finite and >= 0", realign_gain);
   require(std::isfinite(max_heading_offset) && max_heading_offset >= 0.0 && max_heading_offset <= M_PI,
           "max_heading_offset", "must be in [0, pi]", max_heading_offset);
+  require(finite_nonneg(turn_anchor_tolerance) && turn_anchor_tolerance <= M_PI, "turn_anchor_tolerance",
+          "must be in [0, pi] (0 = off)", turn_anchor_tolerance);
+  require(std::isfinite(turn_anchor_theta) && turn_anchor_theta > 0.0 && turn_anchor_theta < M_PI / 2,
+          "turn_anchor_theta", "must be in (0, pi/2)", turn_anchor_theta);
+  require(finite_nonneg(turn_anchor_rate), "turn_anchor_rate", "must be finite and >= 0 (0 = fixed)", turn_anchor_rate);
   require(std::isfinite(wall_end_depth) && (wall_end_depth == 0.0 || wall_end_depth >= t_max), "wall_end_depth",
           "must be 0 (off) or finite and >= t_max", wall_end_depth);
   require(finite_nonneg(same_obstacle_distance), "same_obstacle_distance", "must be finite and >= 0",
@@ -258,7 +263,7 @@ void WhiskerWallFollower::reset() {
   motion_qx_l_ = motion_qy_l_ = motion_qx_r_ = motion_qy_r_ = NAN;
   onset_x_l_ = onset_y_l_ = onset_x_r_ = onset_y_r_ = NAN;
   motion_nx_ = motion_ny_ = NAN;
-  wall_heading_ = theta_ = NAN;
+  wall_heading_ = theta_ = anchor_ = NAN;
   origin_set_ = false;
   origin_x_ = origin_y_ = clear_x_ = clear_y_ = 0.0;
   after_clear_ = false;
@@ -583,6 +588,7 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
   if (std::isfinite(motion_b_r_) && r_valid) d_right = std::fmin(d_right, motion_b_r_ + p_.motion_depth_margin);
 
   if (state_ != FsmState::kWallFollowing) {
+    anchor_ = NAN;  // a new wall following reads its own anchor
     last_l_ = last_r_ = NAN;
     lost_far_l_ = lost_far_r_ = false;
   }
@@ -608,18 +614,46 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
     if (r_valid && std::isfinite(d_right)) last_r_ = d_right;
     prev_l_valid_ = l_valid;
     prev_r_valid_ = r_valid;
+    // A turn that a heading limit refuses becomes the translation the depths
+    // ask for.
+    auto translate_instead = [&] {
+      const double lo = std::fmin(l_valid ? d_left : INFINITY, r_valid ? d_right : INFINITY);
+      const double hi = std::fmax(l_valid ? d_left : -INFINITY, r_valid ? d_right : -INFINITY);
+      return (l_valid || r_valid) && lo < p_.t_min   ? WallSubState::kFlyBackward
+             : (l_valid || r_valid) && hi > p_.t_max ? WallSubState::kFlyForward
+                                                     : WallSubState::kFlySideways;
+    };
+    // True when `next` is a turn that goes on beyond `limit` from the heading `ref`.
+    auto turns_beyond = [&](double ref, double limit) {
+      const double off = std::remainder(in.yaw - ref, 2.0 * M_PI);
+      return (next == WallSubState::kTurnLeft && off >= limit) || (next == WallSubState::kTurnRight && off <= -limit);
+    };
     // Heading limit about the course heading (issue 17, README): no turn beyond
     // max_heading_offset; translate on the depths instead.
     if (p_.max_heading_offset > 0.0 && origin_set_ && std::isfinite(in.yaw) &&
-        (next == WallSubState::kTurnLeft || next == WallSubState::kTurnRight)) {
-      const double off = std::remainder(in.yaw - course_yaw_, 2.0 * M_PI);
-      if ((next == WallSubState::kTurnLeft && off >= p_.max_heading_offset) ||
-          (next == WallSubState::kTurnRight && off <= -p_.max_heading_offset)) {
-        const double lo = std::fmin(l_valid ? d_left : INFINITY, r_valid ? d_right : INFINITY);
-        const double hi = std::fmax(l_valid ? d_left : -INFINITY, r_valid ? d_right : -INFINITY);
-        next = (l_valid || r_valid) && lo < p_.t_min   ? WallSubState::kFlyBackward
-               : (l_valid || r_valid) && hi > p_.t_max ? WallSubState::kFlyForward
-                                                       : WallSubState::kFlySideways;
+        turns_beyond(course_yaw_, p_.max_heading_offset)) {
+      next = translate_instead();
+    }
+    // Turn anchor (issue 17, README "Round 13"): the wall heading read at the
+    // first tick both whiskers touched (before the tips slide), replaced by a
+    // clear angle (|theta| >= turn_anchor_theta) read while not turning and
+    // crept toward the heading read while not turning (a tip dragged round by
+    // the yaw reads an angle toward the turn); small angles turn the heading at
+    // most turn_anchor_tolerance beyond it.
+    if (p_.turn_anchor_tolerance > 0.0 && l_valid && r_valid && std::isfinite(wall_heading_) &&
+        std::isfinite(theta_)) {
+      const bool clear_angle = std::fabs(theta_) >= p_.turn_anchor_theta;
+      const bool turning = sub_ == WallSubState::kTurnLeft || sub_ == WallSubState::kTurnRight;
+      if (!std::isfinite(anchor_) || (clear_angle && !turning)) {
+        anchor_ = wall_heading_;
+      } else if (p_.turn_anchor_rate > 0.0 && !turning) {
+        // Not turning: the anchor follows the wall heading read, at most
+        // turn_anchor_rate (a wall that turns away slowly).
+        const double step = p_.turn_anchor_rate * dt;
+        anchor_ += std::clamp(std::remainder(wall_heading_ - anchor_, 2.0 * M_PI), -step, step);
+      }
+      if (!clear_angle && std::isfinite(in.yaw) && turns_beyond(anchor_, p_.turn_anchor_tolerance)) {
+        next = translate_instead();
       }
     }
     if (next != sub_ && state_ == state_before) reason_ = "sub-state rule (000 Fig. S4e)";

@@ -10,6 +10,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "tactile_fsm/whisker_wall_follower.hpp"
@@ -332,6 +333,91 @@ TEST(WhiskerWallFollower, HeadingLimitAboutTheCourse) {
   WallFollowerInput in = input(t, 1.0, 0.0, -46.0 * kDeg);
   set_depths(in, 0.10, 0.07);
   EXPECT_EQ(fsm.step(in).sub_state, WallSubState::kTurnRight);
+}
+
+// Issue 17, README "Round 13": the turn anchor. The first tick both whiskers
+// touch reads the wall heading (yaw 0, d_l = d_r = 80 mm: heading 0). Depths
+// then biased as on textile (d_l 86 mm, d_r 80 mm: theta = atan(0.006/0.05) =
+// 6.8 deg < turn_anchor_theta 10 deg) turn the drone right at yaw -5 deg
+// (within the 10 deg tolerance) but not at yaw -11 deg (beyond it): there it
+// flies sideways. A clear angle (d_l 100, d_r 70 mm: 31 deg) still turns. A
+// clear angle read while not turning (here on the tick the left whisker
+// touches again) moves the anchor to the wall heading it reads (-42 deg),
+// after which the small bias turns at -40 deg; one read in a turn does not
+// (the tips drag with the yaw). While not turning the anchor follows the
+// heading read at turn_anchor_rate (1 deg/s here): the bias held at -11 deg
+// turns again after 2 s, not with the anchor fixed (rate 0). Off: it turns.
+TEST(WhiskerWallFollower, TurnAnchorHoldsTheFirstWallHeading) {
+  WallFollowerParams p;
+  p.turn_anchor_tolerance = 10.0 * kDeg;
+  p.turn_anchor_theta = 10.0 * kDeg;
+  p.turn_anchor_rate = 0.0;
+  p.hold_heading_trailing_lost = true;  // as in the node: the trailing whisker lost holds the heading
+  struct Phase {
+    double yaw_deg, dl, dr, seconds;  // NaN depth: that whisker off the wall
+  };
+  // Hover, a first touch square at yaw 0 for 0.5 s, then the phases.
+  auto run = [](const WallFollowerParams& params, std::vector<Phase> phases) {
+    WhiskerWallFollower fsm(params);
+    double t = 0.0;
+    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t));
+    phases.insert(phases.begin(), Phase{0.0, 0.08, 0.08, 0.5});
+    WallSubState sub = WallSubState::kNone;
+    for (const auto& ph : phases) {
+      const int ticks = static_cast<int>(std::lround(ph.seconds / kDt));
+      for (int k = 0; k < ticks; ++k, t += kDt) {
+        WallFollowerInput in = input(t, 1.0, 0.0, ph.yaw_deg * kDeg);
+        set_depths(in, ph.dl, ph.dr);
+        in.left_valid = std::isfinite(ph.dl);
+        in.right_valid = std::isfinite(ph.dr);
+        sub = fsm.step(in).sub_state;
+        EXPECT_EQ(fsm.state(), FsmState::kWallFollowing);
+      }
+    }
+    return sub;
+  };
+  EXPECT_EQ(run(p, {{-5.0, 0.086, 0.080, 0.5}}), WallSubState::kTurnRight);
+  EXPECT_EQ(run(p, {{-11.0, 0.086, 0.080, 0.5}}), WallSubState::kFlySideways);
+  EXPECT_EQ(run(p, {{-11.0, 0.10, 0.07, 0.5}}), WallSubState::kTurnRight);
+  // A clear angle read while not turning moves the anchor; one read in a turn does not.
+  EXPECT_EQ(run(p, {{-11.0, NAN, 0.08, 0.1}, {-11.0, 0.10, 0.07, 0.5}, {-40.0, 0.086, 0.080, 0.5}}),
+            WallSubState::kTurnRight);
+  EXPECT_EQ(run(p, {{-11.0, 0.10, 0.07, 0.5}, {-40.0, 0.086, 0.080, 0.5}}), WallSubState::kFlySideways);
+  // Mirror: a left bias at +11 deg is held too; a turn back toward the anchor is not.
+  EXPECT_EQ(run(p, {{11.0, 0.080, 0.086, 0.5}}), WallSubState::kFlySideways);
+  EXPECT_EQ(run(p, {{11.0, 0.086, 0.080, 0.5}}), WallSubState::kTurnRight);
+  // Below T_min the refused turn backs off (the translation the depths ask for).
+  EXPECT_EQ(run(p, {{-11.0, 0.061, 0.055, 0.5}}), WallSubState::kFlyBackward);
+  // turn_anchor_rate: the anchor creeps toward the heading read (-17.8 deg) while not turning.
+  EXPECT_EQ(run(p, {{-11.0, 0.086, 0.080, 2.0}}), WallSubState::kFlySideways);
+  WallFollowerParams creep = p;
+  creep.turn_anchor_rate = 1.0 * kDeg;
+  EXPECT_EQ(run(creep, {{-11.0, 0.086, 0.080, 0.5}}), WallSubState::kFlySideways);
+  EXPECT_EQ(run(creep, {{-11.0, 0.086, 0.080, 2.0}}), WallSubState::kTurnRight);  // anchor past -1 deg after ~1 s
+  WallFollowerParams off = p;
+  off.turn_anchor_tolerance = 0.0;
+  EXPECT_EQ(run(off, {{-11.0, 0.086, 0.080, 0.5}}), WallSubState::kTurnRight);
+}
+
+TEST(WhiskerWallFollower, TurnAnchorParametersAreValidated) {
+  auto bad = [](double tol, double th) {
+    WallFollowerParams p;
+    p.turn_anchor_tolerance = tol;
+    p.turn_anchor_theta = th;
+    return p;
+  };
+  EXPECT_NO_THROW(bad(0.0, 0.1).validate());
+  EXPECT_NO_THROW(bad(0.2, 0.2).validate());
+  EXPECT_THROW(bad(-0.1, 0.2).validate(), std::invalid_argument);
+  EXPECT_THROW(bad(NAN, 0.2).validate(), std::invalid_argument);
+  EXPECT_THROW(bad(0.2, 0.0).validate(), std::invalid_argument);
+  EXPECT_THROW(bad(0.2, M_PI / 2).validate(), std::invalid_argument);
+  EXPECT_THROW(bad(0.2, NAN).validate(), std::invalid_argument);
+  WallFollowerParams p = bad(0.2, 0.2);
+  p.turn_anchor_rate = -0.1;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
+  p.turn_anchor_rate = INFINITY;
+  EXPECT_THROW(p.validate(), std::invalid_argument);
 }
 
 // Issue 17, README "Pressed whisker": both depths read 70 mm (in the 60-100 mm

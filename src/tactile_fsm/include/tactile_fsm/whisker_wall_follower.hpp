@@ -143,6 +143,25 @@ struct WallFollowerParams {
   /// most 25 deg plus the alignment overshoot (45 deg: 35/50 on block 2000,
   /// 60 deg: 33/50). 0 = off. [rad]
   double max_heading_offset = 45.0 * M_PI / 180.0;
+  /// Turn anchor (issue 17, README "Round 13"; our choice, not in 000): in one
+  /// wall following the heading turns at most turn_anchor_tolerance beyond an
+  /// anchor, unless |theta| >= turn_anchor_theta; a turn that would is replaced
+  /// by the translation the depths ask for (as max_heading_offset). The anchor
+  /// is the wall heading (yaw - theta, 000 eq. 21) read at the first tick both
+  /// whiskers touched, replaced by the one read whenever |theta| >=
+  /// turn_anchor_theta while not turning, and moved toward the one read at
+  /// most turn_anchor_rate while not turning. Readings in a turn never move it.
+  /// On a textile baffle (friction 0.9) the tips stick while the drone turns
+  /// in place: both depths read near 80 mm, biased 3-7 deg toward the turn
+  /// whatever the true angle, and the turn ran on to the 45 deg limit until
+  /// the guard met the baffle (a rigid / textile / glass course of three
+  /// 1.3 m baffles: 4 of 10 trials). The first touch is read before the tips
+  /// slide (3-4 deg from the truth). A wall turning away by more than the
+  /// tolerance is followed by clear angles (a corner's new wall) or at the
+  /// creep rate. turn_anchor_tolerance 0 = off.
+  double turn_anchor_tolerance = 0.0;              ///< [rad]
+  double turn_anchor_theta = 10.0 * M_PI / 180.0;  ///< [rad]
+  double turn_anchor_rate = 0.0;                   ///< [rad/s]
   /// Pressed past the depth model (issue 17, README "Pressed whisker"): a
   /// whisker pressed and sliding along a baffle is friction-limited, its input
   /// (sum of the three S_c, 000 eq. 5) stops growing below ~70 mm and the
@@ -457,6 +476,7 @@ class WhiskerWallFollower {
   double motion_nx_ = NAN, motion_ny_ = NAN;        ///< wall normal (world) of the current contact
   double wall_heading_ = NAN;  ///< filtered yaw - theta [rad]
   double theta_ = NAN;
+  double anchor_ = NAN;  ///< turn_anchor_tolerance: wall heading anchor of this wall following [rad]
   bool origin_set_ = false;
   double origin_x_ = 0.0, origin_y_ = 0.0;  ///< course start (end of hover)
   double course_yaw_ = 0.0;                   ///< heading at the course start [rad]
