@@ -8,7 +8,8 @@
 //
 // Enabled and passing (seeds 1-5 of each scenario): the three parallel
 // baffles (000 Fig. 4a-d), the tilted baffles (000 Fig. 4e-h), and the untuned
-// layouts two baffles, four baffles, wide spacing and baffles tilted by 30 deg:
+// layouts two baffles, four baffles, wide spacing, baffles tilted by 30 deg and
+// issue 17's rigid / textile / glass course (seeds 101-105):
 // every trial reaches the target with zero collisions. Darkness (000 Fig. 6): every trial sweeps the
 // rigid and the textile wall for the paper's 7 s without a collision. Seeds
 // 6-20 are measured in src/tactile_fsm/README.md ("SITL results"), not all at
@@ -18,6 +19,7 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <optional>
 #include <string>
 
 #include "sim_test_util.hpp"
@@ -34,9 +36,11 @@ nlohmann::json run_trials(const std::string& scenario, int trials) { return tact
 /// no trial far off (per-trial floors: in band >= 0.3, heading <= 8 deg; the
 /// lowest trials of seeds 1-5 are 0.35 (tilted 30 deg) and 0.39 (wide), of
 /// seeds 1-20 0.28-0.55 per layout, src/tactile_fsm/README.md).
-void expect_course_flown(const std::string& scenario, int trials, double min_mean_band, double max_mean_heading_deg) {
+void expect_course_flown(const std::string& scenario, int trials, double min_mean_band, double max_mean_heading_deg,
+                         double min_trial_band = 0.3, double max_trial_heading_deg = 8.0,
+                         std::optional<uint64_t> seed = std::nullopt) {
   SCOPED_TRACE(scenario);
-  const auto m = run_trials(scenario, trials);
+  const auto m = tactile_cli::test::run_scenario(scenario, trials, seed);
   EXPECT_EQ(m["success_count"].get<int>(), trials);
   for (const auto& r : m["per_trial"]) {
     SCOPED_TRACE("seed " + std::to_string(r["seed"].get<uint64_t>()));
@@ -46,9 +50,9 @@ void expect_course_flown(const std::string& scenario, int trials, double min_mea
     const std::string state = f["final_state"].get<std::string>();
     EXPECT_TRUE(state == "LANDING" || state == "LANDED") << state;
     ASSERT_TRUE(f["depth_in_band_fraction"].is_number());
-    EXPECT_GE(f["depth_in_band_fraction"].get<double>(), 0.3);
+    EXPECT_GE(f["depth_in_band_fraction"].get<double>(), min_trial_band);
     ASSERT_TRUE(f["mean_abs_heading_error_deg"].is_number());
-    EXPECT_LE(f["mean_abs_heading_error_deg"].get<double>(), 8.0);
+    EXPECT_LE(f["mean_abs_heading_error_deg"].get<double>(), max_trial_heading_deg);
   }
   const auto& st = m["statistics"];
   EXPECT_GE(st["fsm.depth_in_band_fraction"]["mean"].get<double>(), min_mean_band);
@@ -85,6 +89,17 @@ TEST(WhiskerFsmSitl, TiltedBafflesEveryTrialReachesTheTarget) {
 
 TEST(WhiskerFsmSitl, FourBafflesEveryTrialReachesTheTarget) {
   expect_course_flown("whisker_baffles_four_fsm.yaml", 5, 0.55, 5.0);  // measured 0.66, 3.3 deg
+}
+
+// Issue 17's rigid / textile / glass course (three staggered 1.3 m baffles),
+// seeds 101-105, the block its failures were diagnosed on (README "Round 13").
+// Without the turn anchor seeds 102 and 104 turn in place on the textile
+// baffle until the guard touches it (3/5; seeds 1-60: 56/60); with it 5/5
+// (seeds 1-60: 60/60). Measured 2026-11-27: band 0.48 on average (per trial
+// 0.30-0.64), heading error 5.4 deg (3.3-7.8): the per-trial floors are the
+// textile's (the depths of a sliding textile whisker read ~80 mm at any depth).
+TEST(WhiskerFsmSitl, MixedMaterialsEveryTrialReachesTheTarget) {
+  expect_course_flown("whisker_baffles_mixed_fsm.yaml", 5, 0.4, 7.0, 0.25, 9.0, 101);
 }
 
 namespace {
