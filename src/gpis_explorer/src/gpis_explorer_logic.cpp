@@ -68,6 +68,7 @@ ParamMap GpisExplorerLogic::default_parameters() {
   m.set("align_probes", s.align_probes);
   m.set("retreat_toward_follow_start", s.retreat_toward_follow_start);
   m.set("diagonal_probes", s.diagonal_probes);
+  m.set("corner_confirm_radius", s.corner_confirm_radius);
   m.set("line_gain", s.line_gain);
   m.set("return_via_probe_line", s.return_via_probe_line);
   m.set("visited_radius", s.visited_radius);
@@ -138,6 +139,7 @@ GpisExplorerLogic::Params GpisExplorerLogic::params_from(const ParamMap& m) {
   s.align_probes = m.get_bool("align_probes");
   s.retreat_toward_follow_start = m.get_bool("retreat_toward_follow_start");
   s.diagonal_probes = m.get_bool("diagonal_probes");
+  s.corner_confirm_radius = m.get_double("corner_confirm_radius");
   s.replace_when_full = m.get_bool("replace_when_full");
   s.line_gain = m.get_double("line_gain");
   s.return_via_probe_line = m.get_bool("return_via_probe_line");

@@ -83,6 +83,9 @@ void SequencerParams::validate() const {
   if (!(std::isfinite(min_target_distance) && min_target_distance >= 0.0)) fail("min_target_distance", "must be >= 0");
   if (!(std::isfinite(side_clearance) && side_clearance >= 0.0)) fail("side_clearance", "must be >= 0");
   if (!(std::isfinite(wall_extension) && wall_extension >= 0.0)) fail("wall_extension", "must be >= 0");
+  if (!(std::isfinite(corner_confirm_radius) && corner_confirm_radius >= 0.0)) {
+    fail("corner_confirm_radius", "must be >= 0");
+  }
   if (!(std::isfinite(approach_standoff) && approach_standoff >= 0.0)) fail("approach_standoff", "must be >= 0");
   if (!(std::isfinite(path_clearance) && path_clearance >= 0.0)) fail("path_clearance", "must be >= 0");
   if (!(std::isfinite(approach_clearance) && approach_clearance >= 0.0)) fail("approach_clearance", "must be >= 0");
@@ -170,7 +173,7 @@ bool ExplorationSequencer::fly_leg(const SequencerInput& in, bool contact, tacti
 }
 
 bool ExplorationSequencer::near_corner(const Eigen::Vector2d& q) const {
-  for (const auto& c : explorer_.last().corners) {
+  for (const auto& c : corners_) {
     if ((q - c).norm() < p_.explorer.corner_exclusion) return true;
   }
   return false;
@@ -294,7 +297,7 @@ double ExplorationSequencer::surface_clearance(const Eigen::Vector2d& a, const E
 bool ExplorationSequencer::corner_clear(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
   // Keep corner_exclusion from every corner centroid (000 eq. 45 region); from
   // a start already closer than that, do not get any closer.
-  for (const auto& c : explorer_.last().corners) {
+  for (const auto& c : corners_) {
     const double limit = std::min(p_.explorer.corner_exclusion, (a - c).norm() - 1e-3);
     if (segment_distance(a, b, c) < limit) return false;
   }
@@ -639,11 +642,31 @@ bool ExplorationSequencer::choose_target(const Eigen::Vector2d& from) {
 
 void ExplorationSequencer::refit_and_choose(const SequencerInput& in) {
   explorer_.update();  // GPIS fit is incremental; grid, contours, corners, acquisition (000 eq. 31-46)
+  corners_ = explorer_.last().corners;
   if (static_cast<int>(explorer_.updates()) >= p_.max_updates) {
     finish(Outcome::kUpdateLimit, "GPIS update limit", in.t);
     return;
   }
-  if (!choose_target({in.x, in.y})) {
+  bool chosen = choose_target({in.x, in.y});
+  if (!chosen && p_.corner_confirm_radius > 0.0) {
+    // No target left: set aside the corners no touched point confirms (an
+    // untouched gap the fit bends across) and choose again.
+    const Gpis& g = explorer_.gpis();
+    std::vector<Eigen::Vector2d> confirmed;
+    for (const auto& c : corners_) {
+      bool touched = false;
+      for (std::size_t i = 0; i < g.size() && !touched; ++i) {
+        touched = g.label(i) == kSurfaceLabel && (g.point(i) - c).norm() <= p_.corner_confirm_radius;
+      }
+      if (touched) confirmed.push_back(c);
+    }
+    if (confirmed.size() < corners_.size()) {
+      corners_ = std::move(confirmed);
+      chosen = choose_target({in.x, in.y});
+      if (chosen) ++unconfirmed_corner_targets_;
+    }
+  }
+  if (!chosen) {
     finish(Outcome::kNoTarget, "no reachable target", in.t);
     return;
   }
@@ -846,12 +869,14 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         if (open_probe_ >= 0 && explorer_.gpis().surface_count() > 0 && explorer_.updates() == 0) {
           // A probe flew 2 m without touching anything in a walled place: an opening.
           explorer_.update();
+          corners_ = explorer_.last().corners;
           exit_via_probe_ = true;
           begin_return({in.x, in.y}, open_origin_, "a probe found the opening: back to the start", in.t);
           break;
         }
         if (explorer_.gpis().surface_count() == 0) {
           explorer_.update();
+          corners_ = explorer_.last().corners;
           out.gpis_updated = true;
           finish(Outcome::kOpenSpace, "no contact in any probe direction", in.t);
           break;

@@ -62,6 +62,11 @@ TEST(SequencerParams, ValidateNamesField) {
   expect_field(q, "wall_extension");
   q.wall_extension = INFINITY;
   expect_field(q, "wall_extension");
+  q = SequencerParams{};
+  q.corner_confirm_radius = -0.1;
+  expect_field(q, "corner_confirm_radius");
+  q.corner_confirm_radius = NAN;
+  expect_field(q, "corner_confirm_radius");
 }
 
 TEST(Sequencer, OpenSpaceLandsWithStatus) {

@@ -128,6 +128,16 @@ struct SequencerParams {
   /// the frame's side meeting a corner's other wall in a wall follow). 0 = off
   /// (known points only). [m] (choice)
   double wall_extension = 3.0;
+  /// When no target is left, corner centroids (000 eq. 42-43) with no surface
+  /// training point within this radius are not taken for corners and the
+  /// choice is made again: such a "corner" is where the fit bends across a
+  /// gap nothing has touched, often an exit beside a room corner, whose
+  /// contour points the corner exclusion and the path rules otherwise refuse
+  /// (issue 17: `no_target` with both exits 0.2-0.3 m from a corner). Only
+  /// then, so the paper's corner penalty (eq. 45) rules every other choice.
+  /// 0.15 m: a corner the drone touched has points within ~0.1 m of the
+  /// centroid. 0 = off. [m] (choice)
+  double corner_confirm_radius = 0.15;
   // --- Collision avoidance of the sequencing (workspace rules; 000 gives the
   // corner penalty eq. 45 and "discourage entry into concave, high-risk
   // areas" but no path rule). The whiskers see only what is ahead within
@@ -301,6 +311,8 @@ class ExplorationSequencer {
   std::size_t side_stops() const { return side_stops_; }
   /// Targets approached head-on through a staging point / flown at directly.
   std::size_t staged_targets() const { return staged_targets_; }
+  /// Targets chosen with the unconfirmed corners set aside (corner_confirm_radius).
+  std::size_t unconfirmed_corner_targets() const { return unconfirmed_corner_targets_; }
   std::size_t direct_targets() const { return direct_targets_; }
   /// Legs stopped by a whisk contact; of these, walls ahead (wall follow) and
   /// wall ends in the corridor (retreat); whisk contacts beside the corridor (leg went on).
@@ -428,6 +440,10 @@ class ExplorationSequencer {
   std::size_t corner_aborts_ = 0;
   std::size_t side_stops_ = 0;
   std::size_t staged_targets_ = 0;
+  std::size_t unconfirmed_corner_targets_ = 0;
+  /// The corner centroids the path rules keep away from: the last update's,
+  /// or its confirmed ones after a choice that needed corner_confirm_radius.
+  std::vector<Eigen::Vector2d> corners_;
   std::size_t direct_targets_ = 0;
 };
 

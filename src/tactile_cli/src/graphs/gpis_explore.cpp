@@ -92,6 +92,7 @@ class GpisExploreGraph : public SimGraph {
     m["corner_aborts"] = seq.corner_aborts();
     m["side_stops"] = seq.side_stops();
     m["staged_targets"] = seq.staged_targets();
+    m["unconfirmed_corner_targets"] = seq.unconfirmed_corner_targets();
     m["whisk_contacts"] = seq.whisk_contacts();
     m["whisk_walls"] = seq.whisk_walls();
     m["whisk_jambs"] = seq.whisk_jambs();
