@@ -250,6 +250,19 @@ void ExplorationSequencer::add_wall_line() {
   wall_lines_.push_back({f.a, f.b});
 }
 
+std::vector<Eigen::Vector2d> confirmed_corners(const Gpis& g, const std::vector<Eigen::Vector2d>& corners,
+                                               double radius) {
+  std::vector<Eigen::Vector2d> out;
+  for (const auto& c : corners) {
+    bool touched = false;
+    for (std::size_t i = 0; i < g.size() && !touched; ++i) {
+      touched = g.label(i) == kSurfaceLabel && (g.point(i) - c).norm() <= radius;
+    }
+    if (touched) out.push_back(c);
+  }
+  return out;
+}
+
 std::size_t point_to_replace(const Gpis& g, const Eigen::Vector2d& q, double label) {
   double new_gap = std::numeric_limits<double>::infinity();
   double pair_gap = std::numeric_limits<double>::infinity();
@@ -650,16 +663,10 @@ void ExplorationSequencer::refit_and_choose(const SequencerInput& in) {
   bool chosen = choose_target({in.x, in.y});
   if (!chosen && p_.corner_confirm_radius > 0.0) {
     // No target left: set aside the corners no touched point confirms (an
-    // untouched gap the fit bends across) and choose again.
-    const Gpis& g = explorer_.gpis();
-    std::vector<Eigen::Vector2d> confirmed;
-    for (const auto& c : corners_) {
-      bool touched = false;
-      for (std::size_t i = 0; i < g.size() && !touched; ++i) {
-        touched = g.label(i) == kSurfaceLabel && (g.point(i) - c).norm() <= p_.corner_confirm_radius;
-      }
-      if (touched) confirmed.push_back(c);
-    }
+    // untouched gap the fit bends across) and choose again. The training
+    // points are a budget (replaced when full), so a corner touched long ago
+    // may have lost its points: it is then set aside too, for this choice.
+    std::vector<Eigen::Vector2d> confirmed = confirmed_corners(explorer_.gpis(), corners_, p_.corner_confirm_radius);
     if (confirmed.size() < corners_.size()) {
       corners_ = std::move(confirmed);
       chosen = choose_target({in.x, in.y});

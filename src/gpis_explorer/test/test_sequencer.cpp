@@ -69,6 +69,21 @@ TEST(SequencerParams, ValidateNamesField) {
   expect_field(q, "corner_confirm_radius");
 }
 
+// corner_confirm_radius (issue 17, rooms round 3): a corner centroid counts
+// only with a surface point (label 0) within the radius; interior points
+// (label -1) do not confirm it; the order is kept.
+TEST(Sequencer, ConfirmedCornersHaveATouchedPointNearby) {
+  gpis_explorer::Gpis g(gpis_explorer::GpisParams{});
+  ASSERT_EQ(g.add_point({1.0, 1.0}, gpis_explorer::kSurfaceLabel), gpis_explorer::AddStatus::kAdded);
+  ASSERT_EQ(g.add_point({-1.0, 1.0}, gpis_explorer::kInteriorLabel), gpis_explorer::AddStatus::kAdded);
+  const std::vector<Eigen::Vector2d> corners = {{1.1, 1.1}, {-1.0, 1.05}, {1.0, 1.2}, {0.0, 0.0}};
+  const auto kept = gpis_explorer::confirmed_corners(g, corners, 0.15);  // |(0.1, 0.1)| = 0.141 <= 0.15; 0.2 > 0.15
+  ASSERT_EQ(kept.size(), 1u);
+  EXPECT_EQ(kept[0], corners[0]);
+  EXPECT_EQ(gpis_explorer::confirmed_corners(g, corners, 0.2).size(), 2u);  // (1.0, 1.2) at 0.2: on the radius
+  EXPECT_TRUE(gpis_explorer::confirmed_corners(g, corners, 0.0).empty());
+}
+
 TEST(Sequencer, OpenSpaceLandsWithStatus) {
   SequencerParams p;
   ExplorationSequencer seq(p);

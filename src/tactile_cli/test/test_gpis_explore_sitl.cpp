@@ -106,9 +106,14 @@ TEST(GpisExploreSitl, UntunedLargeRoom) { expect_untuned_room("whisker_room_exit
 // left, the corners no touched point confirms: 103 flies out through an exit
 // chosen so (4/5; 101 is still `no_target`). Seeds 101-150: exit 42 -> 44 of 50.
 TEST(GpisExploreSitl, TwoExitsBesideCorners) {
-  expect_untuned_room("whisker_room_exit_gpis_two_exits.yaml");
-  const auto m = tactile_cli::test::run_scenario("whisker_room_exit_gpis_two_exits.yaml", 1, 103);  // one trial's metrics
-  const auto& g = m["gpis"];
-  EXPECT_TRUE(m["success"].get<bool>()) << g["outcome"];
-  EXPECT_GE(g["unconfirmed_corner_targets"].get<int>(), 1);
+  const auto m = run_trials("whisker_room_exit_gpis_two_exits.yaml", 5);
+  EXPECT_GE(m["success_count"].get<int>(), 4);
+  bool seen = false;
+  for (const auto& r : m["per_trial"]) {
+    if (r["seed"].get<uint64_t>() != 103) continue;
+    seen = true;
+    EXPECT_TRUE(r["success"].get<bool>()) << r["gpis"]["outcome"];
+    EXPECT_GE(r["gpis"]["unconfirmed_corner_targets"].get<int>(), 1);
+  }
+  EXPECT_TRUE(seen);
 }

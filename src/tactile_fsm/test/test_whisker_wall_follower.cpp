@@ -379,10 +379,15 @@ TEST(WhiskerWallFollower, TurnAnchorHoldsTheFirstWallHeading) {
   EXPECT_EQ(run(p, {{-5.0, 0.086, 0.080, 0.5}}), WallSubState::kTurnRight);
   EXPECT_EQ(run(p, {{-11.0, 0.086, 0.080, 0.5}}), WallSubState::kFlySideways);
   EXPECT_EQ(run(p, {{-11.0, 0.10, 0.07, 0.5}}), WallSubState::kTurnRight);
-  // A clear angle read while not turning moves the anchor; one read in a turn does not.
+  // A clear angle read while not turning moves the anchor (the left whisker
+  // touching again: the heading filter restarts on the raw -42 deg)...
   EXPECT_EQ(run(p, {{-11.0, NAN, 0.08, 0.1}, {-11.0, 0.10, 0.07, 0.5}, {-40.0, 0.086, 0.080, 0.5}}),
             WallSubState::kTurnRight);
-  EXPECT_EQ(run(p, {{-11.0, 0.10, 0.07, 0.5}, {-40.0, 0.086, 0.080, 0.5}}), WallSubState::kFlySideways);
+  // ... one read in a turn does not: at -5 deg the bias turns right on every
+  // tick (within the tolerance), the clear angle then arrives during that turn
+  // (it would move the anchor to -36 deg), and the bias at -40 deg is refused.
+  EXPECT_EQ(run(p, {{-5.0, 0.086, 0.080, 0.5}, {-5.0, 0.10, 0.07, 0.5}, {-40.0, 0.086, 0.080, 0.5}}),
+            WallSubState::kFlySideways);
   // Mirror: a left bias at +11 deg is held too; a turn back toward the anchor is not.
   EXPECT_EQ(run(p, {{11.0, 0.080, 0.086, 0.5}}), WallSubState::kFlySideways);
   EXPECT_EQ(run(p, {{11.0, 0.086, 0.080, 0.5}}), WallSubState::kTurnRight);
@@ -408,7 +413,9 @@ TEST(WhiskerWallFollower, TurnAnchorParametersAreValidated) {
   };
   EXPECT_NO_THROW(bad(0.0, 0.1).validate());
   EXPECT_NO_THROW(bad(0.2, 0.2).validate());
+  EXPECT_EQ(WallFollowerParams{}.turn_anchor_tolerance, 0.0);  // off in the core (the paper); on in the node
   EXPECT_THROW(bad(-0.1, 0.2).validate(), std::invalid_argument);
+  EXPECT_THROW(bad(M_PI + 0.1, 0.2).validate(), std::invalid_argument);
   EXPECT_THROW(bad(NAN, 0.2).validate(), std::invalid_argument);
   EXPECT_THROW(bad(0.2, 0.0).validate(), std::invalid_argument);
   EXPECT_THROW(bad(0.2, M_PI / 2).validate(), std::invalid_argument);

@@ -235,6 +235,11 @@ struct SequencerParams {
 /// happens when it is full. O(n^2).
 std::size_t point_to_replace(const Gpis& g, const Eigen::Vector2d& q, double label);
 
+/// corner_confirm_radius: the corner centroids with a surface training point
+/// (label 0) within `radius` of them, in their order. Our rule.
+std::vector<Eigen::Vector2d> confirmed_corners(const Gpis& g, const std::vector<Eigen::Vector2d>& corners,
+                                               double radius);
+
 /// Principal line of a set of points (a wall follow's contacts): the mean,
 /// the unit direction of the larger covariance eigenvalue, the 2-sigma spread
 /// along it and across it (thickness), and the span's ends on the line.

@@ -155,10 +155,13 @@ struct WallFollowerParams {
   /// in place: both depths read near 80 mm, biased 3-7 deg toward the turn
   /// whatever the true angle, and the turn ran on to the 45 deg limit until
   /// the guard met the baffle (a rigid / textile / glass course of three
-  /// 1.3 m baffles: 4 of 10 trials). The first touch is read before the tips
-  /// slide (3-4 deg from the truth). A wall turning away by more than the
-  /// tolerance is followed by clear angles (a corner's new wall) or at the
-  /// creep rate. turn_anchor_tolerance 0 = off.
+  /// 1.3 m baffles: 4 of 10 trials). The first two-whisker reading (one tick,
+  /// often during the approach's turn) comes before the tips have slid (3-4
+  /// deg from the truth in those trials). Made for straight baffles: a wall
+  /// that bends by more than 20 deg within one turn (a concave corner met
+  /// gradually) is aligned to at the creep rate (45 deg: ~12 s) unless a clear
+  /// angle is read outside a turn (a whisker touching again).
+  /// turn_anchor_tolerance 0 = off.
   double turn_anchor_tolerance = 0.0;              ///< [rad]
   double turn_anchor_theta = 10.0 * M_PI / 180.0;  ///< [rad]
   double turn_anchor_rate = 0.0;                   ///< [rad/s]
