@@ -26,6 +26,16 @@ double segment_distance(const Eigen::Vector2d& a, const Eigen::Vector2d& b, cons
   return (a + t * ab - c).norm();
 }
 
+/// Distance from the segment a-b to the nearest surface training point (label 0);
+/// infinity without one.
+double surface_distance(const Gpis& g, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    if (g.label(i) == kSurfaceLabel) best = std::min(best, segment_distance(a, b, g.point(i)));
+  }
+  return best;
+}
+
 constexpr std::size_t kMaxContacts = 200000;     ///< bound on the stored contact history
 constexpr std::size_t kMaxTrajectory = 200000;
 
@@ -254,11 +264,7 @@ std::vector<Eigen::Vector2d> confirmed_corners(const Gpis& g, const std::vector<
                                                double radius) {
   std::vector<Eigen::Vector2d> out;
   for (const auto& c : corners) {
-    bool touched = false;
-    for (std::size_t i = 0; i < g.size() && !touched; ++i) {
-      touched = g.label(i) == kSurfaceLabel && (g.point(i) - c).norm() <= radius;
-    }
-    if (touched) out.push_back(c);
+    if (surface_distance(g, c, c) <= radius) out.push_back(c);
   }
   return out;
 }
@@ -299,12 +305,7 @@ void ExplorationSequencer::add(const Eigen::Vector2d& q, double label) {
 }
 
 double ExplorationSequencer::surface_clearance(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
-  double best = std::numeric_limits<double>::infinity();
-  const Gpis& g = explorer_.gpis();
-  for (std::size_t i = 0; i < g.size(); ++i) {
-    if (g.label(i) == kSurfaceLabel) best = std::min(best, segment_distance(a, b, g.point(i)));
-  }
-  return best;
+  return surface_distance(explorer_.gpis(), a, b);
 }
 
 bool ExplorationSequencer::corner_clear(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
@@ -653,9 +654,13 @@ bool ExplorationSequencer::choose_target(const Eigen::Vector2d& from) {
   return false;
 }
 
-void ExplorationSequencer::refit_and_choose(const SequencerInput& in) {
+void ExplorationSequencer::update_map() {
   explorer_.update();  // GPIS fit is incremental; grid, contours, corners, acquisition (000 eq. 31-46)
   corners_ = explorer_.last().corners;
+}
+
+void ExplorationSequencer::refit_and_choose(const SequencerInput& in) {
+  update_map();
   if (static_cast<int>(explorer_.updates()) >= p_.max_updates) {
     finish(Outcome::kUpdateLimit, "GPIS update limit", in.t);
     return;
@@ -875,15 +880,13 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         probing_ = false;
         if (open_probe_ >= 0 && explorer_.gpis().surface_count() > 0 && explorer_.updates() == 0) {
           // A probe flew 2 m without touching anything in a walled place: an opening.
-          explorer_.update();
-          corners_ = explorer_.last().corners;
+          update_map();
           exit_via_probe_ = true;
           begin_return({in.x, in.y}, open_origin_, "a probe found the opening: back to the start", in.t);
           break;
         }
         if (explorer_.gpis().surface_count() == 0) {
-          explorer_.update();
-          corners_ = explorer_.last().corners;
+          update_map();
           out.gpis_updated = true;
           finish(Outcome::kOpenSpace, "no contact in any probe direction", in.t);
           break;

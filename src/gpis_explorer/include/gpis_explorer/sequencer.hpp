@@ -340,6 +340,8 @@ class ExplorationSequencer {
   double fast_yaw_rate(double err, double limit);
   void start_follow(const SequencerInput& in, bool probing);
   void commit_points(const SequencerInput& in);
+  /// GPIS update (000 eq. 31-46) and its corner centroids as corners_.
+  void update_map();
   void refit_and_choose(const SequencerInput& in);
   bool choose_target(const Eigen::Vector2d& from);
   /// Staging point for a head-on approach of candidate q, or false when no
