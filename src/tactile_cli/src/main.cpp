@@ -10,6 +10,7 @@
 #include "tactile_cli/evaluate.hpp"
 #include "tactile_cli/hardware.hpp"
 #include "tactile_cli/host.hpp"
+#include "tactile_cli/interrupt.hpp"
 #include "tactile_cli/parallel.hpp"
 
 #include "tactile_cli/scenario_family.hpp"
@@ -222,7 +223,13 @@ int main(int argc, char** argv) {
     if (*sim_cmd) {
       sim.config_dir = config_dir;
       if (*seed_opt) sim.seed = sim_seed;
+      const tactile_cli::InterruptScope signals;  // Ctrl-C: stop, write what was flown, exit 130
       const auto m = tactile_cli::run_sim(sim);
+      if (m["interrupted"].get<bool>()) {
+        std::fprintf(stderr, "tactile sim: interrupted (signal %d): partial outputs in %s (metrics.json: "
+                     "\"interrupted\": true)\n", tactile_cli::interrupt_signal(), sim.out_dir.c_str());
+        return tactile_cli::interrupted_exit_status();
+      }
       if (sim.trials == 1) {
         std::printf("tactile sim: %s seed %llu: %.1f s simulated in %.2f s (%.0fx real time), %zu collisions, %s\n",
                     m["scenario"].get<std::string>().c_str(), static_cast<unsigned long long>(m["seed"].get<uint64_t>()),
@@ -240,7 +247,14 @@ int main(int argc, char** argv) {
       std::printf("outputs in %s\n", sim.out_dir.c_str());
     } else if (*sweep_cmd) {
       sweep.config_dir = config_dir;
+      const tactile_cli::InterruptScope signals;  // Ctrl-C: no new environment, table/summary kept, exit 130
       const auto m = tactile_cli::run_sweep(sweep);
+      if (m["interrupted"].get<bool>()) {
+        std::fprintf(stderr, "tactile sweep: interrupted (signal %d): %d of %d environments flown -> %s "
+                     "(summary.md, table.md)\n", tactile_cli::interrupt_signal(), m["flown"].get<int>(),
+                     m["environments"].get<int>(), sweep.out_dir.c_str());
+        return tactile_cli::interrupted_exit_status();
+      }
       std::printf("tactile sweep: %s: %d / %d successes (%.1f %%), %zu collisions -> %s (summary.md, table.md)\n",
                   sweep.what.c_str(), m["successes"].get<int>(), m["flown"].get<int>(),
                   100.0 * m["success_rate"].get<double>(), m["collisions"].get<size_t>(), sweep.out_dir.c_str());

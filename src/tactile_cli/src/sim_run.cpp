@@ -14,6 +14,7 @@
 
 #include "tactile_cli/host.hpp"
 #include "tactile_cli/host_nodes.hpp"
+#include "tactile_cli/interrupt.hpp"
 #include "tactile_cli/parallel.hpp"
 #include "tactile_cli/sim_graph.hpp"
 #include "tactile_cli/topview.hpp"
@@ -148,9 +149,14 @@ nlohmann::json run_once(const Scenario& scenario, const SimOptions& options, uin
   }
 
   Progress progress{options.progress, label, scenario.duration_s};
-  host.executor().add_timer(tactile_common::from_seconds(0.1),
-                            [&progress](int64_t now) { progress.update(tactile_common::to_seconds(now)); });
+  // The progress tick also checks for Ctrl-C / SIGTERM (one timer, so the schedule of the
+  // graph's own timers is the same with or without a signal scope).
+  host.executor().add_timer(tactile_common::from_seconds(0.1), [&progress, &host](int64_t now) {
+    progress.update(tactile_common::to_seconds(now));
+    if (interrupt_requested()) host.executor().stop();
+  });
   host.executor().run_until(tactile_common::from_seconds(scenario.duration_s) + sim->period_ns());
+  const bool interrupted = interrupt_requested();
   progress.done();
   if (recorder) recorder->close();
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
@@ -164,6 +170,8 @@ nlohmann::json run_once(const Scenario& scenario, const SimOptions& options, uin
   m["arena_yaw_deg"] = (scenario.arena_yaw + arena_yaw) * 180.0 / M_PI;
   m["sim_time_s"] = sim_s;
   m["wall_time_s"] = wall_s;
+  // A signal stopped the flight before duration_s: the metrics describe it up to sim_time_s.
+  m["interrupted"] = interrupted;
   m["real_time_factor"] = wall_s > 0 ? sim_s / wall_s : 0.0;
   m["physics_rate_hz"] = scenario.physics_rate_hz;
   m["collisions"] = sim->collisions().size();
@@ -183,7 +191,7 @@ nlohmann::json run_once(const Scenario& scenario, const SimOptions& options, uin
   if (auto gm = graph->metrics(); !gm.is_null()) m[info.metrics_key] = gm;
   if (depth_eval) m["depth"] = depth_eval->metrics();
   m["graph"] = info.name;
-  m["success"] = reached && (allow_collisions || sim->collisions().empty());
+  m["success"] = !interrupted && reached && (allow_collisions || sim->collisions().empty());
   for (const auto& [k, v] : sim->fault_counts()) m["faults_injected"][k] = v;
   for (const auto& r : host.reports()) {
     for (const auto& [k, v] : r.counters) m["nodes"][r.name][k] = v;
@@ -270,7 +278,11 @@ nlohmann::json run_sim(const SimOptions& options) {
   const int workers = resolve_jobs(options.jobs, n);
   std::mutex progress_mu;
   size_t finished = 0;
-  const std::vector<nlohmann::json> runs = parallel_map(n, workers, [&](size_t k) {
+  // After Ctrl-C / SIGTERM no trial starts; the running ones stop within 0.1 s of simulated
+  // time and keep their directories (metrics marked interrupted); the aggregate is written
+  // over the trials that finished, marked interrupted.
+  const std::vector<nlohmann::json> all = parallel_map(n, workers, [&](size_t k) -> nlohmann::json {
+    if (interrupt_requested()) return nullptr;
     const uint64_t seed = seed0 + static_cast<uint64_t>(k);
     const std::string label = scenario.name + " trial " + std::to_string(k + 1) + "/" + std::to_string(options.trials);
     SimOptions trial = options;
@@ -286,9 +298,22 @@ nlohmann::json run_sim(const SimOptions& options) {
     }
     return m;
   });
+  std::vector<nlohmann::json> runs;
+  for (const auto& r : all) {
+    if (!r.is_null() && !r["interrupted"].get<bool>()) runs.push_back(r);
+  }
+  const bool interrupted = runs.size() < n;
+  if (runs.empty()) {
+    nlohmann::json agg = {{"scenario", scenario.name}, {"trials", options.trials}, {"trials_completed", 0},
+                          {"interrupted", true}};
+    write_text(fs::path(options.out_dir) / "metrics.json", agg.dump(2) + "\n");
+    return agg;
+  }
   nlohmann::json agg;
   agg["scenario"] = scenario.name;
   agg["trials"] = options.trials;
+  agg["trials_completed"] = runs.size();
+  agg["interrupted"] = interrupted;
   agg["seeds"] = nlohmann::json::array();
   int success = 0;
   double sim_total = 0.0;
@@ -308,6 +333,7 @@ nlohmann::json run_sim(const SimOptions& options) {
   nlohmann::json stats;
   aggregate(runs, "", runs.front(), stats);
   stats.erase("seed");
+  stats.erase("interrupted");
   for (const std::string& path : find_sim_graph(scenario.graph, scenario.source).summary_metrics) {
     if (!stats.contains(path)) continue;  // no trial reported it
     const std::string leaf = path.substr(path.rfind('.') + 1);

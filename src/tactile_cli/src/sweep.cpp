@@ -2,6 +2,7 @@
 
 #include <mutex>
 
+#include "tactile_cli/interrupt.hpp"
 #include "tactile_cli/parallel.hpp"
 
 #include <sys/utsname.h>
@@ -15,6 +16,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <sstream>
 
 #include "tactile_cli/scenario_family.hpp"
@@ -110,6 +112,7 @@ struct Row {
   bool success = false;
   size_t collisions = 0, guard_collisions = 0, body_collisions = 0;
   double sim_time_s = 0.0, wall_time_s = 0.0;
+  bool interrupted = false;       // stopped by a signal: discarded, not a row of the table
   json metrics = json::object();  // table metric path -> value
   std::string topview;            // failures/<name>.png (failures only)
 };
@@ -135,6 +138,13 @@ Row fly_one(const std::string& file, const SweepOptions& options, const fs::path
     so.write_bag = options.write_bags;
     so.write_png = true;
     const json m = run_sim(so);
+    if (m["interrupted"].get<bool>()) {
+      // Stopped part-way by Ctrl-C / SIGTERM: a partial flight is no result; its files go.
+      row.interrupted = true;
+      std::error_code ec;
+      fs::remove_all(dir, ec);
+      return row;
+    }
     row.success = m["success"].get<bool>();
     row.collisions = m["collisions"].get<size_t>();
     for (const auto& c : m["collision_events"]) {
@@ -199,7 +209,8 @@ Row fly_one(const std::string& file, const SweepOptions& options, const fs::path
 
 void write_outputs(const fs::path& out, const std::string& what, const SweepOptions& options,
                    const std::vector<std::string>& table_metrics, const std::vector<Row>& rows, int total,
-                   const std::string& started, double load_at_start, double wall_s, json& summary) {
+                   const std::string& started, double load_at_start, double wall_s, bool interrupted,
+                   json& summary) {
   // table.csv / table.md
   std::ostringstream csv, md;
   csv << "name,seed,state_estimate,outcome,success,collisions,guard_collisions,body_collisions";
@@ -240,6 +251,8 @@ void write_outputs(const fs::path& out, const std::string& what, const SweepOpti
   }
   summary["environments"] = total;
   summary["flown"] = rows.size();
+  // Ctrl-C / SIGTERM: the environments not flown (or stopped part-way) are not in the table.
+  summary["interrupted"] = interrupted;
   int successes = 0, collision_free = 0, errors = 0;
   size_t collisions = 0, guard = 0;
   std::map<std::string, std::pair<int, int>> by_estimate;  // n, successes
@@ -295,6 +308,7 @@ void write_outputs(const fs::path& out, const std::string& what, const SweepOpti
   }
   s << rows.size() << " of " << total << " environments flown; " << started << ", " << machine() << ", load "
     << load_at_start << " at start, " << options.jobs << " job(s), " << static_cast<long>(wall_s) << " s.\n\n";
+  if (interrupted) s << "**Interrupted** (Ctrl-C / SIGTERM): " << rows.size() << " of " << total << " flown.\n\n";
   char line[256];
   std::snprintf(line, sizeof line, "**%d / %zu successes (%.1f %%)**, %d collision-free, %zu collisions (%zu guard)",
                 successes, rows.size(), 100.0 * successes / n, collision_free, collisions, guard);
@@ -373,36 +387,41 @@ json run_sweep(const SweepOptions& options) {
   json summary;
   const int total = static_cast<int>(files.size());
   const int workers = resolve_jobs(options.jobs, files.size());
-  if (workers == 1) {
-    // One at a time: the table and summary are rewritten after each environment, so an
-    // interrupted sweep keeps what it flew.
-    for (const auto& file : files) {
-      rows.push_back(fly_one(file, options, out / "runs", out / "failures", table_metrics));
-      const auto& r = rows.back();
-      if (options.progress) {
-        std::fprintf(stderr, "[sweep] %zu/%d %s: %s (%.0f s)\n", rows.size(), total, r.name.c_str(),
-                     r.outcome.c_str(), r.wall_time_s);
-      }
-      const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-      write_outputs(out, options.what, options, table_metrics, rows, total, started, load0, wall_s, summary);
-    }
-    return summary;
-  }
-  // Several at once on the parallel runner (each environment owns its host, simulator and
-  // output folder); rows come back in file order, so the table equals a serial sweep's.
-  std::mutex progress_mutex;
+  const auto elapsed = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  };
+  // The table and summary are rewritten after every finished environment (in file order,
+  // so a finished sweep's table equals a serial one's), so a sweep that is killed keeps what
+  // it flew. After Ctrl-C / SIGTERM no environment starts, the running ones stop within
+  // 0.1 s of simulated time and are discarded, and the outputs are written marked interrupted.
+  std::vector<std::optional<Row>> slots(files.size());
+  std::mutex mutex;
   int finished = 0;
-  rows = parallel_map(files.size(), workers, [&](size_t i) {
-    Row r = fly_one(files[i], options, out / "runs", out / "failures", table_metrics);
+  const auto record = [&](size_t i, Row r) {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (r.interrupted) return;
+    ++finished;
     if (options.progress) {
-      std::lock_guard<std::mutex> lock(progress_mutex);
-      std::fprintf(stderr, "[sweep] %d/%d %s: %s (%.0f s)\n", ++finished, total, r.name.c_str(), r.outcome.c_str(),
+      std::fprintf(stderr, "[sweep] %d/%d %s: %s (%.0f s)\n", finished, total, r.name.c_str(), r.outcome.c_str(),
                    r.wall_time_s);
     }
-    return r;
+    slots[i] = std::move(r);
+    std::vector<Row> done;
+    for (const auto& s : slots) {
+      if (s) done.push_back(*s);
+    }
+    write_outputs(out, options.what, options, table_metrics, done, total, started, load0, elapsed(), false, summary);
+  };
+  parallel_for(files.size(), workers, [&](size_t i) {
+    if (interrupt_requested()) return;
+    record(i, fly_one(files[i], options, out / "runs", out / "failures", table_metrics));
   });
-  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  write_outputs(out, options.what, options, table_metrics, rows, total, started, load0, wall_s, summary);
+  for (const auto& s : slots) {
+    if (s) rows.push_back(*s);
+  }
+  const bool interrupted = rows.size() < files.size();
+  write_outputs(out, options.what, options, table_metrics, rows, total, started, load0, elapsed(), interrupted,
+                summary);
   return summary;
 }
 
