@@ -1,6 +1,7 @@
 // The `tactile` command: standalone host of the workspace's node logic.
 #include <CLI/CLI.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
@@ -35,6 +36,40 @@ void print_fpr(const nlohmann::json& m) {
               100.0 * m["fpr_bandpass"].get<double>(), 100.0 * m["fpr_tdoc"].get<double>(),
               100.0 * m["fpr_tdorc"].get<double>(), m["contact_detected"].get<bool>() ? "yes" : "no");
 }
+
+// Numbers on the command line are checked before they are converted: CLI11 reads "-1" into
+// a uint64_t as 2^64 - 1, and a Range check lets NaN through (every comparison is false).
+const CLI::Validator kWholeNumber(
+    [](std::string& s) -> std::string {
+      if (s.empty() || s.find_first_not_of("0123456789") != std::string::npos) {
+        return "expected a whole number >= 0, got '" + s + "'";
+      }
+      return {};
+    },
+    "UINT", "whole number");
+CLI::Validator finite_in(double lo, double hi) {
+  return CLI::Validator(
+      [lo, hi](std::string& s) -> std::string {
+        double v = 0.0;
+        try {
+          size_t pos = 0;
+          v = std::stod(s, &pos);
+          if (pos != s.size()) throw std::invalid_argument(s);
+        } catch (const std::exception&) {
+          return "expected a number, got '" + s + "'";
+        }
+        if (!std::isfinite(v) || v < lo || v > hi) {
+          return "must be a finite number in [" + CLI::detail::to_string(lo) + ", " + CLI::detail::to_string(hi) +
+                 "], got '" + s + "'";
+        }
+        return {};
+      },
+      "[" + CLI::detail::to_string(lo) + " - " + CLI::detail::to_string(hi) + "]");
+}
+// Longest wall-clock run of fly / bench: one day [s] (our choice).
+constexpr double kMaxWallDurationS = 86400.0;
+// Most trials of one `tactile sim` (each keeps its directory in memory and on disk).
+constexpr int kMaxTrials = 100000;
 
 // --storage, --bag-distro, --bag-compression of the commands that record bags.
 void add_bag_options(CLI::App* cmd, tactile_bag::WriterOptions& o) {
@@ -76,7 +111,7 @@ int main(int argc, char** argv) {
   auto* demo_cmd = app.add_subcommand(
       "demo", "whisker signal demo: simulate free flight and a contact, record bags, replay them");
   demo_cmd->add_option("--out", demo.out_dir, "output directory")->required();
-  demo_cmd->add_option("--seed", demo.seed, "seed of the simulated barometers")->capture_default_str();
+  demo_cmd->add_option("--seed", demo.seed, "seed of the simulated barometers")->check(kWholeNumber)->capture_default_str();
   demo_cmd->add_option("--hover", demo.hover_s, "free-flight duration after take-off [s]")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
@@ -88,9 +123,9 @@ int main(int argc, char** argv) {
   sim_cmd->add_option("scenario", sim.scenario, "scenario file")->required();
   sim_cmd->add_option("--out", sim.out_dir, "output directory (bag/, trajectory.csv, metrics.json, topview.png)")
       ->required();
-  auto* seed_opt = sim_cmd->add_option("--seed", sim_seed, "seed (default: the scenario's)");
+  auto* seed_opt = sim_cmd->add_option("--seed", sim_seed, "seed (default: the scenario's)")->check(kWholeNumber);
   sim_cmd->add_option("--trials", sim.trials, "number of seeded trials (seed, seed+1, ...)")
-      ->check(CLI::PositiveNumber)
+      ->check(CLI::Range(1, kMaxTrials))
       ->capture_default_str();
   sim_cmd->add_option("--jobs,-j", sim.jobs, "trials run at once on worker threads (0: all cores); outputs as a serial run")
       ->check(CLI::NonNegativeNumber)
@@ -104,7 +139,9 @@ int main(int argc, char** argv) {
   auto* fly_cmd = app.add_subcommand("fly", "whisker pipeline against a real or simulated Crazyflie (records a bag)");
   fly_cmd->add_option("--uri", fly.uri, "radio://0/80/2M/E7E7E7E7E7, usb://0, udp://127.0.0.1:19850 (default: crazyflie_bridge.yaml)");
   fly_cmd->add_option("--out", fly.out_dir, "output directory (bag/, metrics.json)")->required();
-  fly_cmd->add_option("--duration", fly.duration_s, "pipeline run time before the bridge lands [s]")->capture_default_str();
+  fly_cmd->add_option("--duration", fly.duration_s, "pipeline run time before the bridge lands [s]")
+      ->check(finite_in(0.0, kMaxWallDurationS))
+      ->capture_default_str();
   fly_cmd->add_option("--scenario", fly.scenario, "take node parameters and metrics.target from a scenario file");
   fly_cmd->add_option("--sim", fly.sim_scenario, "fly the simulated Crazyflie of this scenario (in-process UDP server)");
   fly_cmd->add_option("--sim-loss", fly.sim_loss, "injected UDP packet loss of the simulated Crazyflie [0, 1)");
@@ -115,7 +152,9 @@ int main(int argc, char** argv) {
   bench_cmd->add_option("--port", bench.left_port, "serial device of whisker 1 (text protocol)")->capture_default_str();
   bench_cmd->add_option("--port2", bench.right_port, "serial device of whisker 2 (CSV protocol)");
   bench_cmd->add_option("--out", bench.out_dir, "output directory (bag/, metrics.json)")->required();
-  bench_cmd->add_option("--duration", bench.duration_s, "[s]")->capture_default_str();
+  bench_cmd->add_option("--duration", bench.duration_s, "[s]")
+      ->check(finite_in(0.0, kMaxWallDurationS))
+      ->capture_default_str();
   add_bag_options(bench_cmd, bag_options);
   std::string scan_host = "127.0.0.1";
   auto* scan_cmd = app.add_subcommand("scan", "list Crazyradios, Crazyflies on USB and simulated Crazyflies on UDP");
@@ -127,7 +166,7 @@ int main(int argc, char** argv) {
                "estimation or Table II sweep localization -> metrics.json");
   stage_cmd->add_option("scenario", stage_scenario, "bench scenario file")->required();
   stage_cmd->add_option("--out", stage_out, "output directory (metrics.json)")->required();
-  auto* stage_seed_opt = stage_cmd->add_option("--seed", stage_seed, "seed (default: the scenario's)");
+  auto* stage_seed_opt = stage_cmd->add_option("--seed", stage_seed, "seed (default: the scenario's)")->check(kWholeNumber);
   tactile_cli::ExportOptions exp;
   auto* export_cmd = app.add_subcommand("export", "rebuild the XPLORER contact map from a bag and write it as PLY (001)");
   export_cmd->add_option("bag", exp.bag, "input rosbag2 directory")->required();
@@ -143,7 +182,7 @@ int main(int argc, char** argv) {
   evaluate_cmd->add_option("bag", evaluate.bag, "input rosbag2 directory")->required();
   evaluate_cmd->add_option("--scenario", evaluate.scenario, "the scenario file that was flown")->required();
   evaluate_cmd->add_option("--out", evaluate.out_dir, "output directory (metrics.json)")->required();
-  auto* evaluate_seed_opt = evaluate_cmd->add_option("--seed", evaluate_seed, "the flight's seed (default: the scenario's)");
+  auto* evaluate_seed_opt = evaluate_cmd->add_option("--seed", evaluate_seed, "the flight's seed (default: the scenario's)")->check(kWholeNumber);
 
   auto* scenarios_cmd = app.add_subcommand("scenarios", "procedural scenario families (issue 17): list, generate");
   scenarios_cmd->require_subcommand(1);
@@ -156,7 +195,7 @@ int main(int argc, char** argv) {
   scenarios_gen->add_option("family", gen_family, "family (tactile scenarios list)")->required();
   scenarios_gen->add_option("--count", gen_count, "environments (seeds S .. S+N-1)")->check(CLI::PositiveNumber)
       ->capture_default_str();
-  scenarios_gen->add_option("--seed", gen_seed, "first generator seed")->capture_default_str();
+  scenarios_gen->add_option("--seed", gen_seed, "first generator seed")->check(kWholeNumber)->capture_default_str();
   scenarios_gen->add_option("--out", gen_out, "output directory (<family>_<seed>.yaml, index.json)")->required();
 
   tactile_cli::SweepOptions sweep;
@@ -165,7 +204,7 @@ int main(int argc, char** argv) {
   sweep_cmd->add_option("what", sweep.what, "family name or directory of scenario files")->required();
   sweep_cmd->add_option("--count", sweep.count, "environments (family; with a directory: at most N, 0 = all)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
-  sweep_cmd->add_option("--seed", sweep.seed, "first generator seed (family)")->capture_default_str();
+  sweep_cmd->add_option("--seed", sweep.seed, "first generator seed (family)")->check(kWholeNumber)->capture_default_str();
   sweep_cmd->add_option("--out", sweep.out_dir, "output directory (table.csv/md, summary.json/md, runs/, failures/)")
       ->required();
   sweep_cmd->add_option("--jobs,-j", sweep.jobs, "environments flown at once on worker threads (0: all cores)")

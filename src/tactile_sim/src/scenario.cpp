@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 
@@ -71,6 +72,27 @@ class Node {
   double non_negative() const {
     const double v = number();
     if (v < 0) fail("must be >= 0, got " + node_.Scalar());
+    return v;
+  }
+  /// A whole number in [lo, hi], read exactly from its digits (a 64-bit seed is not rounded
+  /// through a double; "-1", "2.5" and "1e3" are refused, never cast).
+  uint64_t whole(uint64_t lo, uint64_t hi) const {
+    const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+    if (!node_.IsScalar()) fail("expected a whole number in " + range);
+    const std::string& s = node_.Scalar();
+    bool ok = !s.empty() && s.find_first_not_of("0123456789") == std::string::npos;
+    unsigned long long v = 0;
+    if (ok) {
+      try {
+        size_t pos = 0;
+        v = std::stoull(s, &pos);
+        ok = pos == s.size();
+      } catch (const std::exception&) {
+        ok = false;  // out of range of 64 bits
+      }
+    }
+    if (!ok) fail("expected a whole number in " + range + ", got '" + s + "'");
+    if (v < lo || v > hi) fail("must be in " + range + ", got " + s);
     return v;
   }
   std::string text() const {
@@ -199,11 +221,8 @@ FaultSpec parse_fault(const Node& n) {
   f.type = it->second;
   f.topic = n.at("topic").text();
   if (f.topic.empty() || f.topic.front() != '/') n.at("topic").fail("must be an absolute topic name");
-  if (n.has("channel")) {
-    const double c = n.at("channel").non_negative();
-    if (c != std::floor(c)) n.at("channel").fail("must be an integer");
-    f.channel = static_cast<int>(c);
-  }
+  // The channel's upper bound depends on the topic's message type: SimLogic checks it.
+  if (n.has("channel")) f.channel = static_cast<int>(n.at("channel").whole(0, kMaxFaultChannel));
   if (n.has("start_s")) f.start_s = n.at("start_s").non_negative();
   if (n.has("duration_s")) f.duration_s = n.at("duration_s").positive();
   if (n.has("probability")) {
@@ -220,6 +239,12 @@ FaultSpec parse_fault(const Node& n) {
 }
 
 std::string read_file(const std::string& path, const std::string& who) {
+  // An ifstream opens a directory and reads nothing, which then parsed as an empty map.
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) {
+    throw ScenarioError(who + ": '" + path + "' is a directory, not a file (a directory of scenarios is flown by "
+                              "`tactile sweep DIR`)");
+  }
   std::ifstream in(path);
   if (!in) throw ScenarioError(who + ": cannot open '" + path + "'");
   std::stringstream ss;
@@ -270,19 +295,23 @@ Scenario load_scenario_from_string(const std::string& yaml, const std::string& s
   s.name = top.at("name").text();
   if (top.has("description")) s.description = top.at("description").text();
   s.duration_s = top.at("duration_s").positive();
+  if (s.duration_s > kMaxDurationS) {
+    top.at("duration_s").fail("must be <= " + std::to_string(static_cast<int>(kMaxDurationS)) +
+                              " s (one simulated day), got " + top.at("duration_s").raw().Scalar());
+  }
   if (top.has("physics_rate_hz")) {
     s.physics_rate_hz = top.at("physics_rate_hz").positive();
     if (s.physics_rate_hz < 500.0) top.at("physics_rate_hz").fail("must be >= 500 Hz");
+    if (s.physics_rate_hz > kMaxPhysicsRateHz) {
+      top.at("physics_rate_hz").fail("must be <= " + std::to_string(static_cast<int>(kMaxPhysicsRateHz)) +
+                                     " Hz, got " + top.at("physics_rate_hz").raw().Scalar());
+    }
     const double per_500hz = s.physics_rate_hz / 500.0;
     if (std::abs(per_500hz - std::round(per_500hz)) > 1e-9) {
       top.at("physics_rate_hz").fail("must be a multiple of 500 Hz (every sensor rate divides it)");
     }
   }
-  if (top.has("seed")) {
-    const double seed = top.at("seed").non_negative();
-    if (seed != std::floor(seed)) top.at("seed").fail("must be an integer");
-    s.seed = static_cast<uint64_t>(seed);
-  }
+  if (top.has("seed")) s.seed = top.at("seed").whole(0, std::numeric_limits<uint64_t>::max());
 
   // Arena: inline or a file relative to the scenario.
   if (top.has("arena") == top.has("arena_file")) top.fail("needs exactly one of 'arena' or 'arena_file'");
@@ -393,7 +422,10 @@ Scenario load_scenario_from_string(const std::string& yaml, const std::string& s
   }
   if (top.has("metrics")) {
     const Node m = top.at("metrics");
-    m.require_map();
+    // The keys the graphs read (tactile_cli: sim_graph.cpp, graphs/, evaluate.cpp); a
+    // misspelt key (`alow_collisions`) is an error, never ignored.
+    m.allow_only({"target", "goal", "allow_collisions", "depth_evaluation", "box_size", "area_accuracy_of",
+                  "min_area_accuracy", "min_traversed_m"});
     for (const auto& kv : m.raw()) {
       const std::string key = kv.first.as<std::string>();
       s.metrics[key] = Node(kv.second, source, m.key_path(key)).param_value();

@@ -74,7 +74,7 @@ TEST(Scenario, FullSchema) {
       "  - {type: spike, topic: /whisker/left/pressure, channel: 2, magnitude: 300, probability: 0.01}\n"
       "  - {type: latency, topic: /odom, delay_s: 0.05}\n"
       "node_parameters:\n  whisker_fsm: {t_max: 0.105, follow_side: left}\n"
-      "metrics: {band_mm: [60, 100]}\n";
+      "metrics: {target: [60, 100]}\n";
   const auto s = load_scenario_from_string(yaml, "scn.yaml", ".");
   EXPECT_EQ(s.seed, 7u);
   EXPECT_DOUBLE_EQ(s.physics_rate_hz, 500.0);
@@ -99,7 +99,7 @@ TEST(Scenario, FullSchema) {
   EXPECT_EQ(s.faults[1].type, tactile_sim::FaultSpec::Type::kSpike);
   EXPECT_EQ(s.faults[1].channel, 2);
   EXPECT_DOUBLE_EQ(s.faults[2].delay_s, 0.05);
-  EXPECT_EQ(std::get<std::vector<double>>(s.metrics.at("band_mm")), (std::vector<double>{60, 100}));
+  EXPECT_EQ(std::get<std::vector<double>>(s.metrics.at("target")), (std::vector<double>{60, 100}));
   EXPECT_DOUBLE_EQ(std::get<double>(s.node_parameters.at("whisker_fsm").at("t_max")), 0.105);
   EXPECT_EQ(std::get<std::string>(s.node_parameters.at("whisker_fsm").at("follow_side")), "left");
 }
@@ -140,6 +140,26 @@ TEST(Scenario, MalformedFilesNameFileKeyAndReason) {
   expect_error(kMinimal + "graph: Whisker-FSM\n", "graph", "lower-case letters");
 }
 
+// Issue 32 item 6: keys and values that used to change results silently.
+TEST(Scenario, UncheckedKeysAndValuesAreErrors) {
+  // A misspelt metrics key was ignored (the run then counted collisions as failures).
+  expect_error(kMinimal + "metrics: {alow_collisions: true}\n", "metrics.alow_collisions", "unknown key");
+  // 1e12 s overflowed the nanosecond clock and simulated 0 s; 1e9 Hz hung.
+  expect_error(std::string(kMinimal).replace(kMinimal.find("duration_s: 5"), 13, "duration_s: 1e12"), "duration_s",
+               "must be <= 86400 s");
+  expect_error(kMinimal + "physics_rate_hz: 1e9\n", "physics_rate_hz", "must be <= 20000 Hz");
+  // Seeds are read exactly: 2^64-1 became 0 through a double.
+  EXPECT_EQ(load_scenario_from_string(kMinimal + "seed: 18446744073709551615\n", "scn.yaml", ".").seed,
+            18446744073709551615ull);
+  EXPECT_EQ(load_scenario_from_string(kMinimal + "seed: 9007199254740993\n", "scn.yaml", ".").seed,
+            9007199254740993ull);  // 2^53 + 1: not a double
+  expect_error(kMinimal + "seed: 18446744073709551616\n", "seed", "expected a whole number");
+  expect_error(kMinimal + "seed: -1\n", "seed", "expected a whole number");
+  expect_error(kMinimal + "seed: 2.5\n", "seed", "expected a whole number");
+  expect_error(kMinimal + "faults:\n  - {type: nan, topic: /x, channel: 1.5}\n", "faults[0].channel",
+               "expected a whole number");
+}
+
 TEST(Scenario, EveryLibraryScenarioLoads) {
   const std::filesystem::path dir = std::filesystem::path(TACTILE_CONFIG_DIR) / "scenarios";
   size_t n = 0;
@@ -152,4 +172,16 @@ TEST(Scenario, EveryLibraryScenarioLoads) {
     ++n;
   }
   EXPECT_GE(n, 10u);
+}
+
+TEST(Scenario, ADirectoryIsNotAScenarioFile) {
+  const auto dir = std::filesystem::temp_directory_path() / "tactile_scenario_dir_test";
+  std::filesystem::create_directories(dir);
+  try {
+    load_scenario(dir.string());
+    ADD_FAILURE() << "a directory loaded as a scenario";
+  } catch (const ScenarioError& e) {
+    EXPECT_NE(std::string(e.what()).find("is a directory, not a file"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove_all(dir);
 }

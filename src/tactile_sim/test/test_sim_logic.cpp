@@ -140,3 +140,26 @@ TEST(SimLogic, XplorerArmParametersFromTheScenario) {
   EXPECT_NE(construct_error("{arm_max_deflection_deg: 95}").find("arm_max_deflection"), std::string::npos);
   EXPECT_EQ(construct_error("{rigid_arms: false, arm_damping: 0.02, arm_inertia: 0.002, mass: 1.2}"), "");
 }
+
+// Issue 32 item 6: a fault on a channel its message does not have (channel 99 of a
+// WhiskerPressure) corrupted nothing while it counted every injection; now it is refused
+// when the simulator is built, naming the file, the fault, the type and its channels.
+TEST(SimLogic, FaultOnAMissingChannelIsRefused) {
+  const std::string base =
+      "name: f\nduration_s: 5\narena:\n  walls:\n    - points: [[1, -1], [1, 1]]\n"
+      "vehicle:\n  type: whisker_crazyflie\npilot:\n  - {hover: 1}\nfaults:\n";
+  const auto error = [&](const std::string& fault) -> std::string {
+    try {
+      SimLogic sim(tactile_sim::load_scenario_from_string(base + fault, "f.yaml", "."), 1);
+    } catch (const tactile_sim::ScenarioError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  const std::string e = error("  - {type: nan, topic: /whisker/left/pressure, channel: 99}\n");
+  EXPECT_NE(e.find("f.yaml: faults[0].channel"), std::string::npos) << e;
+  EXPECT_NE(e.find("channels 0-2, got 99"), std::string::npos) << e;
+  EXPECT_NE(error("  - {type: nan, topic: /imu, channel: 6}\n").find("channels 0-5"), std::string::npos);
+  EXPECT_EQ(error("  - {type: nan, topic: /whisker/left/pressure, channel: 2}\n"), "");
+  EXPECT_EQ(error("  - {type: nan, topic: /imu, channel: 5}\n"), "");
+}

@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <limits>
@@ -27,6 +28,22 @@ struct Reader {
       return n.as<double>();
     } catch (const YAML::Exception&) {
       throw std::runtime_error(file + ": " + path + ": must be a number");
+    }
+  }
+  /// Refuses a key the protocol does not read (`trails: 2` was ignored and the run used the
+  /// default trials): the file, the key path and the keys allowed.
+  void allow_only(const YAML::Node& n, const std::string& path, std::initializer_list<const char*> keys) const {
+    if (!n || n.IsNull()) return;
+    const std::string where = path.empty() ? "(top level)" : path;
+    if (!n.IsMap()) throw std::runtime_error(file + ": " + where + ": expected a map");
+    for (const auto& kv : n) {
+      const std::string k = kv.first.as<std::string>();
+      if (std::find_if(keys.begin(), keys.end(), [&](const char* a) { return k == a; }) == keys.end()) {
+        std::string list;
+        for (const char* a : keys) list += (list.empty() ? "" : ", ") + std::string(a);
+        throw std::runtime_error(file + ": " + (path.empty() ? k : path + "." + k) + ": unknown key (allowed: " +
+                                 list + ")");
+      }
     }
   }
   /// A whole number in [lo, hi] (a count or a seed): "2.5", "1e3", "-1" for a seed or
@@ -77,6 +94,11 @@ json run_bench_protocol(const std::string& scenario_path, std::optional<uint64_t
   } catch (const std::exception& e) {
     throw std::runtime_error(scenario_path + ": cannot read scenario: " + e.what());
   }
+  r.allow_only(r.root, "", {"name", "description", "protocol", "seed", "noise", "table1", "table2"});
+  r.allow_only(r.root["noise"], "noise", {"relative", "absolute", "bounded"});
+  r.allow_only(r.root["table1"], "table1", {"contacts_mm", "displacements_mm", "trials"});
+  r.allow_only(r.root["table2"], "table2", {"sweep_starts_mm", "steps", "step_mm", "fillet_radius_mm", "attack_deg",
+                                            "penetration_mm", "compare_possibilistic"});
   std::string protocol;
   try {
     protocol = r.root["protocol"] ? r.root["protocol"].as<std::string>() : "";

@@ -27,3 +27,29 @@ def test_stage_bad_scenario(tmp_path):
                        capture_output=True, text=True, timeout=60)
     assert p.returncode == 1
     assert "bad.yaml" in p.stderr and "protocol" in p.stderr
+
+
+def test_stage_unknown_key_is_an_error(tmp_path):
+    # `trails: 2` (for trials) was ignored and the run flew the default 20 trials.
+    bad = tmp_path / "typo.yaml"
+    bad.write_text("protocol: table1\ntable1:\n  trails: 2\n")
+    p = subprocess.run([TACTILE, "stage", str(bad), "--out", str(tmp_path / "o")],
+                       capture_output=True, text=True, timeout=60)
+    assert p.returncode == 1
+    assert "typo.yaml: table1.trails: unknown key" in p.stderr, p.stderr
+
+
+def test_numbers_on_the_command_line_are_checked(tmp_path):
+    scenario = os.path.join(CONFIG, "scenarios", "whisker_hover.yaml")
+    cases = [
+        (["sim", scenario, "--out", str(tmp_path / "a"), "--seed", "-1"], "--seed"),        # was 2^64 - 1
+        (["sim", scenario, "--out", str(tmp_path / "b"), "--trials", "2147483647"], "--trials"),  # was bad_alloc
+        (["bench", "--out", str(tmp_path / "c"), "--duration", "nan"], "--duration"),       # ran 0 s, exit 0
+        (["bench", "--out", str(tmp_path / "d"), "--duration", "inf"], "--duration"),
+        (["fly", "--out", str(tmp_path / "e"), "--duration", "nan"], "--duration"),
+        (["sim", CONFIG, "--out", str(tmp_path / "f")], "is a directory"),                 # said "expected a map"
+    ]
+    for args, expected in cases:
+        p = subprocess.run([TACTILE, *args, "--config", CONFIG], capture_output=True, text=True, timeout=60)
+        assert p.returncode != 0, (args, p.stdout)
+        assert expected in p.stderr, (args, p.stderr)

@@ -41,6 +41,14 @@ struct PilotStep {
   double timeout_s = std::numeric_limits<double>::infinity();  ///< with `until`: give up after
 };
 
+/// Bounds of a scenario's numbers (our choice: a run must neither hang nor overflow the
+/// simulator's int64 nanosecond clock): one simulated day, 20 kHz physics (the shipped
+/// scenarios use 1-2 kHz), and fault channel indices below 256 (SimLogic then checks the
+/// topic's own channel count).
+inline constexpr double kMaxDurationS = 86400.0;
+inline constexpr double kMaxPhysicsRateHz = 20000.0;
+inline constexpr uint64_t kMaxFaultChannel = 255;
+
 /// A fault injected on one topic (applied by the simulator node to its outputs).
 struct FaultSpec {
   enum class Type { kDropout, kNan, kOutOfRange, kStuck, kSpike, kLatency, kLoss };

@@ -744,6 +744,17 @@ SimLogic::SimLogic(const Scenario& scenario, uint64_t seed, double extra_arena_y
       throw ScenarioError(where + "faults are supported on sensor topics (WhiskerPressure, Imu, Range, "
                                   "OpticalFlow, ArmImuArray, Odometry), not on " + it->second);
     }
+    // A channel the message does not have would corrupt nothing while the fault counts
+    // its injections (FaultChannels in faults.hpp numbers the channels).
+    static const std::map<std::string, size_t> channels = {{kPressure, 3}, {kImuType, 6}, {kRangeType, 1},
+                                                           {kFlowType, 2}, {kArmType, 4},
+                                                           {"nav_msgs/msg/Odometry", 3}};
+    const size_t n = channels.at(it->second);
+    if (f.channel >= 0 && static_cast<size_t>(f.channel) >= n) {
+      throw ScenarioError(scenario.source + ": faults[" + std::to_string(i) + "].channel: " + it->second +
+                          " on " + f.topic + " has channels 0-" + std::to_string(n - 1) + ", got " +
+                          std::to_string(f.channel));
+    }
     by_topic[f.topic].push_back(f);
   }
   uint64_t index = 0;
