@@ -12,6 +12,7 @@
 #include "tactile_cli/hardware.hpp"
 #include "tactile_cli/host.hpp"
 #include "tactile_cli/interrupt.hpp"
+#include "tactile_cli/output_dir.hpp"
 #include "tactile_cli/parallel.hpp"
 
 #include "tactile_cli/scenario_family.hpp"
@@ -231,6 +232,7 @@ int main(int argc, char** argv) {
         }
       } else {
         const auto& family = tactile_cli::scenario_family(gen_family);
+        const tactile_cli::OutputDir out_dir(gen_out, "scenarios generate");
         const auto paths = tactile_cli::generate_family(family, gen_count, gen_seed, gen_out);
         std::printf("tactile scenarios: %zu %s environments (seeds %llu-%llu) -> %s (index.json)\n", paths.size(),
                     family.name.c_str(), static_cast<unsigned long long>(gen_seed),
@@ -245,6 +247,7 @@ int main(int argc, char** argv) {
 
   if (*stage_cmd) {  // needs no node parameter files
     try {
+      const tactile_cli::OutputDir out_dir(stage_out, "stage");
       const auto m = whisker_localization::run_bench_protocol_to(
           stage_scenario, stage_out, *stage_seed_opt ? std::optional<uint64_t>(stage_seed) : std::nullopt);
       std::printf("tactile stage: %s (%s, seed %llu) -> %s/metrics.json\n", m["scenario"].get<std::string>().c_str(),
@@ -263,6 +266,7 @@ int main(int argc, char** argv) {
       sim.config_dir = config_dir;
       if (*seed_opt) sim.seed = sim_seed;
       const tactile_cli::InterruptScope signals;  // Ctrl-C: stop, write what was flown, exit 130
+      const tactile_cli::OutputDir out_dir(sim.out_dir, "sim");
       const auto m = tactile_cli::run_sim(sim);
       if (m["interrupted"].get<bool>()) {
         std::fprintf(stderr, "tactile sim: interrupted (signal %d): partial outputs in %s (metrics.json: "
@@ -287,6 +291,7 @@ int main(int argc, char** argv) {
     } else if (*sweep_cmd) {
       sweep.config_dir = config_dir;
       const tactile_cli::InterruptScope signals;  // Ctrl-C: no new environment, table/summary kept, exit 130
+      const tactile_cli::OutputDir out_dir(sweep.out_dir, "sweep");
       const auto m = tactile_cli::run_sweep(sweep);
       if (m["interrupted"].get<bool>()) {
         std::fprintf(stderr, "tactile sweep: interrupted (signal %d): %d of %d environments flown -> %s "
@@ -302,6 +307,7 @@ int main(int argc, char** argv) {
         for (const auto& line : tactile_cli::run_scan(scan_host)) std::printf("%s\n", line.c_str());
       } else if (*fly_cmd) {
         fly.config_dir = config_dir;
+        const tactile_cli::OutputDir out_dir(fly.out_dir, "fly");
         const auto m = tactile_cli::run_fly(fly);
         std::printf("tactile fly: %s, %.1f s, bridge %s, %llu log samples, link packets sent %llu lost %llu -> %s\n",
                     m["uri"].get<std::string>().c_str(), m["wall_time_s"].get<double>(),
@@ -310,12 +316,14 @@ int main(int argc, char** argv) {
                     fly.out_dir.c_str());
       } else {
         bench.config_dir = config_dir;
+        const tactile_cli::OutputDir out_dir(bench.out_dir, "bench");
         const auto m = tactile_cli::run_bench(bench);
         std::printf("tactile bench: %.1f s, %llu messages -> %s\n", m["wall_time_s"].get<double>(),
                     m["bag_messages"].get<unsigned long long>(), bench.out_dir.c_str());
       }
     } else if (*evaluate_cmd) {
       evaluate.config_dir = config_dir;
+      const tactile_cli::OutputDir out_dir(evaluate.out_dir, "evaluate");
       if (*evaluate_seed_opt) evaluate.seed = evaluate_seed;
       const auto m = tactile_cli::run_evaluate(evaluate);
       std::printf("tactile evaluate: %s (%s, seed %llu) from %s: %zu collisions, %s -> %s/metrics.json\n",
@@ -332,12 +340,14 @@ int main(int argc, char** argv) {
                   m["metrics_file"].get<std::string>().c_str());
     } else if (*replay_cmd) {
       replay.config_dir = config_dir;
+      const tactile_cli::OutputDir out_dir(replay.out_dir, "replay");
       const auto m = tactile_cli::run_replay(replay);
       std::printf("tactile replay: %s -> %s (%.0f messages/s)\n", replay.bag.c_str(),
                   replay.out_dir.c_str(), m["messages_per_second"].get<double>());
       print_fpr(m);
     } else if (*demo_cmd) {
       demo.config_dir = config_dir;
+      const tactile_cli::OutputDir out_dir(demo.out_dir, "demo");
       const auto summary = tactile_cli::run_whisker_demo(demo);
       for (const auto& [name, m] : summary.items()) {
         std::printf("%s:\n", name.c_str());
