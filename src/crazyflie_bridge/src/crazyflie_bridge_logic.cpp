@@ -252,11 +252,14 @@ CrazyflieBridgeLogic::LogOutputs CrazyflieBridgeLogic::on_log_sample(const LogSa
   const double yaw = s.values[3] * kDegToRad;
   height_ = s.values[2];
   if (attitude_block_ >= 0) {
-    // The attitude sample of the same firmware tick (or at most one period
-    // away: the previous one when this tick's was lost).
+    // The latest attitude sample, less than two periods from this one in
+    // firmware time: the one of the same tick, or the previous one when that
+    // was lost. (The two blocks are started by separate requests, so on a
+    // real link their ticks are a phase 0 <= phi < period apart: the previous
+    // attitude sample is period + phi away.)
     const uint32_t d = (s.timestamp_ms - (attitude_ ? attitude_->timestamp_ms : 0)) & 0xFFFFFF;
     const int64_t dt_ms = d < 0x800000 ? static_cast<int64_t>(d) : static_cast<int64_t>(d) - 0x1000000;
-    if (!attitude_ || std::llabs(dt_ms) > params_.state_period_ms) {
+    if (!attitude_ || std::llabs(dt_ms) >= 2 * params_.state_period_ms) {
       ++stats_.odom_without_attitude;
       return out;
     }

@@ -340,7 +340,7 @@ TEST(BridgeLogic, OdometryAttitudeRatesAndCovariancesFromTheEstimate) {
   EXPECT_FLOAT_EQ(static_cast<float>(o2->pose.covariance[14]), 0.0025f);
 }
 
-TEST(BridgeLogic, OdometryNeedsAnAttitudeSampleWithinOnePeriod) {
+TEST(BridgeLogic, OdometryNeedsAnAttitudeSampleLessThanTwoPeriodsAway) {
   CrazyflieBridgeLogic l(CrazyflieBridgeLogic::Params{});  // state period 10 ms
   l.set_block_ids(1, 3);
   l.set_attitude_block_id(2);
@@ -350,6 +350,11 @@ TEST(BridgeLogic, OdometryNeedsAnAttitudeSampleWithinOnePeriod) {
   EXPECT_TRUE(l.on_log_sample(sample(3, st, 1010), 1011 * kMs).odom);   // this tick's lost: previous one
   EXPECT_FALSE(l.on_log_sample(sample(3, st, 1020), 1021 * kMs).odom);  // two lost: not published
   EXPECT_EQ(l.stats().odom_without_attitude, 2u);
+  // Blocks 7 ms out of phase: the previous attitude sample (17 ms) still pairs.
+  l.on_log_sample(sample(2, {double(0xC0000000u), 0, 0, 0}, 1023), 1024 * kMs);
+  EXPECT_TRUE(l.on_log_sample(sample(3, st, 1030), 1031 * kMs).odom);
+  EXPECT_TRUE(l.on_log_sample(sample(3, st, 1040), 1041 * kMs).odom);  // 1033 lost: 1023 is 17 ms back
+  EXPECT_FALSE(l.on_log_sample(sample(3, st, 1050), 1051 * kMs).odom);
 }
 
 // ---- Firmware generations: the packet the timer sends ----

@@ -88,7 +88,7 @@ class CrazyflieBridgeLogic {
     uint64_t attitude_samples = 0;       ///< attitude block samples used
     uint64_t log_samples_missed = 0;     ///< gaps in the per-block sequences (lost log packets)
     uint64_t log_clock_restarts = 0;     ///< firmware time went back (restart): sequences re-based
-    uint64_t odom_without_attitude = 0;  ///< state samples with no attitude sample within one period (not published)
+    uint64_t odom_without_attitude = 0;  ///< state samples with no attitude sample < 2 periods away (not published)
     uint64_t dropped_attitude_invalid = 0;  ///< attitude samples out of range (not used)
   };
 
@@ -110,8 +110,8 @@ class CrazyflieBridgeLogic {
   /// kalman.varX/Y/Z when `with_variances` (the firmware logs them).
   std::vector<std::string> attitude_block(bool with_variances) const;
   /// Its block id (same period as the state block). Once set, odometry is
-  /// published only with an attitude sample at most one period from the state
-  /// sample's firmware time; without it (the logic used without a link, as in
+  /// published only with an attitude sample less than two periods from the
+  /// state sample's firmware time; without it (the logic used without a link, as in
   /// unit tests) odometry carries yaw only.
   void set_attitude_block_id(uint8_t attitude_block_id);
   /// CRTP protocol version of the connected Crazyflie: selects the setpoint
