@@ -9,6 +9,13 @@
 //   commander watchdog (500 ms level, 2 s motors off) is the last line when
 //   the ground station itself dies.
 // Landing is latched: fresh setpoints do not resume flight once it began.
+// Packets are encoded for the connected firmware generation as cflib does
+// (commander::for_protocol: hover type 10, or legacy type 5 with the negated
+// yaw rate for protocol <= 8). Message sequence numbers and stamps come from
+// the firmware's log timestamps (LogClock: a lost log packet is a gap);
+// odometry carries the full attitude, body rates and covariances from a
+// second log block (AttitudeBlock). README: "Firmware generations",
+// "Odometry", "Sequence numbers and stamps".
 #pragma once
 
 #include <cstdint>
