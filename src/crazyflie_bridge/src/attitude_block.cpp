@@ -13,6 +13,11 @@ std::optional<AttitudeBlock::Sample> AttitudeBlock::decode(const std::vector<dou
   Sample s;
   s.timestamp_ms = timestamp_ms;
   s.q = quatz::decompress(static_cast<uint32_t>(v[0]));
+  // quatcompress only produces patterns whose three smaller components have
+  // squares summing to <= 3/4; others (not from a firmware) decode to a
+  // non-unit quaternion and are rejected.
+  const double n2 = s.q.x * s.q.x + s.q.y * s.q.y + s.q.z * s.q.z + s.q.w * s.q.w;
+  if (std::fabs(n2 - 1.0) > 1e-9) return std::nullopt;
   // stabilizer.c compressState(): rateRoll = gyro.x, ratePitch = -gyro.y,
   // rateYaw = gyro.z, each deg/s * (pi * 1000 / 180) -> mrad/s.
   s.rates[0] = v[1] * 1e-3;

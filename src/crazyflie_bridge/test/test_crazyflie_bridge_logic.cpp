@@ -355,6 +355,11 @@ TEST(BridgeLogic, OdometryNeedsAnAttitudeSampleLessThanTwoPeriodsAway) {
   EXPECT_TRUE(l.on_log_sample(sample(3, st, 1030), 1031 * kMs).odom);
   EXPECT_TRUE(l.on_log_sample(sample(3, st, 1040), 1041 * kMs).odom);  // 1033 lost: 1023 is 17 ms back
   EXPECT_FALSE(l.on_log_sample(sample(3, st, 1050), 1051 * kMs).odom);
+  // A pattern quatcompress never produces (three components at full 9-bit
+  // magnitude: squares sum to 1.5) is rejected, not used.
+  l.on_log_sample(sample(2, {double((3u << 30) | (511u << 20) | (511u << 10) | 511u), 0, 0, 0}, 1060), 1061 * kMs);
+  EXPECT_EQ(l.stats().dropped_attitude_invalid, 1u);
+  EXPECT_FALSE(l.on_log_sample(sample(3, st, 1060), 1061 * kMs).odom);
 }
 
 // ---- Firmware generations: the packet the timer sends ----

@@ -37,7 +37,8 @@ class AttitudeBlock {
 
   /// Decodes one sample of the layout (4 values, or 7 with the variances).
   /// Returns nullopt for a value that is not finite or out of its type's
-  /// range (counted by the caller).
+  /// range, a quaternion pattern quatcompress cannot produce (it would decode
+  /// to a non-unit quaternion) or a negative variance (counted by the caller).
   static std::optional<Sample> decode(const std::vector<double>& values, uint32_t timestamp_ms);
 };
 
