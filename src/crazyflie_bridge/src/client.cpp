@@ -147,7 +147,8 @@ void CrazyflieClient::connect() {
                       std::to_string(commander::kMinProtocolVersion) +
                       ", where cflib switches to the v2 TOC/log/param packets this client needs); update the firmware");
   }
-  // Firmware version (platform VERSION_GET_FIRMWARE, cflib platformservice.py):
+  // Firmware version (platform VERSION_GET_FIRMWARE, cflib platformservice.py;
+  // firmware platformservice.c versionCommandProcess(): [1, V_STAG text]):
   // informational, for the log and the metrics; a firmware that does not answer
   // it keeps an empty string (firmware_version_answered() false), it does not
   // fail the connection. Three tries, not opt_.retries: it is not needed to fly.
