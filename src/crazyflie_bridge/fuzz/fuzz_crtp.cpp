@@ -46,6 +46,17 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     try { toc::decode_info(pk); } catch (const CrtpError&) {}
     try { logp::decode_control_reply(pk); } catch (const CrtpError&) {}
     try { commander::decode(pk); } catch (const CrtpError&) {}
+    try { commander::decode_for_firmware(pk, 8); } catch (const CrtpError&) {}
+    try { commander::decode_for_firmware(pk, 10); } catch (const CrtpError&) {}
+    try { commander::for_protocol(pk, 8); } catch (const CrtpError&) {}
+    if (size >= 4) {
+      uint32_t comp = 0;
+      for (int i = 0; i < 4; ++i) comp |= static_cast<uint32_t>(data[i]) << (8 * i);
+      // Any 32 bits decode to finite components (non-unit for bit patterns
+      // quatcompress never produces; AttitudeBlock rejects those).
+      const auto q = quatz::decompress(comp);
+      if (!__builtin_isfinite(q.x + q.y + q.z + q.w)) __builtin_trap();
+    }
     try { param::decode_read_reply(pk, data[0] & 0x0F); } catch (const CrtpError&) {}
     try { param::decode_write(pk, data[0] & 0x0F); } catch (const CrtpError&) {}
     try { platform::decode_protocol_version(pk); } catch (const CrtpError&) {}

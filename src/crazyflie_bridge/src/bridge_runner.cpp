@@ -7,9 +7,16 @@ BridgeRunner::BridgeRunner(const CrazyflieBridgeLogic::Params& params, ClientOpt
     : link_(link ? std::move(link) : open_link(params.uri)), logic_(params) {
   client_ = std::make_unique<CrazyflieClient>(*link_, client_options);
   client_->connect();
+  logic_.set_protocol_version(client_->protocol_version());  // setpoint generation (cflib's threshold)
   const uint8_t w = client_->start_log_block(logic_.whisker_block(), static_cast<uint16_t>(params.whisker_period_ms));
+  // Attitude block before the state block: a lower id, so a firmware that
+  // sends the blocks due at one tick in id order delivers it first.
+  bool variances = true;
+  for (const auto& n : AttitudeBlock::variance_vars()) variances = variances && client_->log_item(n) != nullptr;
+  const uint8_t a = client_->start_log_block(logic_.attitude_block(variances), static_cast<uint16_t>(params.state_period_ms));
   const uint8_t s = client_->start_log_block(logic_.state_block(), static_cast<uint16_t>(params.state_period_ms));
   logic_.set_block_ids(w, s);
+  logic_.set_attitude_block_id(a);
 }
 
 int BridgeRunner::pump(std::chrono::milliseconds timeout, const std::function<int64_t()>& now_ns, const Sinks& sinks) {

@@ -11,8 +11,9 @@ namespace crazyflie_bridge {
 CrazyflieClient::CrazyflieClient(Link& link, ClientOptions options) : link_(link), opt_(std::move(options)) {}
 
 CrtpPacket CrazyflieClient::request(const CrtpPacket& pk, uint8_t port_no, uint8_t channel,
-                                    const std::vector<uint8_t>& prefix, const char* what) {
-  for (int attempt = 0; attempt <= opt_.retries; ++attempt) {
+                                    const std::vector<uint8_t>& prefix, const char* what, int retries) {
+  if (retries < 0) retries = opt_.retries;
+  for (int attempt = 0; attempt <= retries; ++attempt) {
     if (attempt > 0) ++stats_.resends;
     link_.send(pk);
     const auto deadline = std::chrono::steady_clock::now() + opt_.reply_timeout;
@@ -29,7 +30,7 @@ CrtpPacket CrazyflieClient::request(const CrtpPacket& pk, uint8_t port_no, uint8
     }
   }
   throw ClientError(std::string("no answer to ") + what + " from " + link_.uri() + " after " +
-                    std::to_string(opt_.retries + 1) + " tries of " + std::to_string(opt_.reply_timeout.count()) + " ms");
+                    std::to_string(retries + 1) + " tries of " + std::to_string(opt_.reply_timeout.count()) + " ms");
 }
 
 void CrazyflieClient::dispatch(const CrtpPacket& pk) {
@@ -138,9 +139,29 @@ void CrazyflieClient::connect() {
   protocol_version_ = platform::decode_protocol_version(request(platform::protocol_version_request(), port::kPlatform,
                                                                 platform::kChanVersion, {platform::kVersionGetProtocol},
                                                                 "protocol version"));
-  if (protocol_version_ < 4) {
-    throw ClientError("Crazyflie at " + link_.uri() + " speaks CRTP protocol " + std::to_string(protocol_version_) +
-                      " < 4: TOC/log v2 needed (update the firmware)");
+  if (protocol_version_ < commander::kMinProtocolVersion) {
+    // cflib (toc.py, log.py, param.py) speaks the v1 TOC/log/param packets to
+    // such firmware; this client has only the v2 ones, so no generation fits.
+    throw ClientError("Crazyflie at " + link_.uri() + " speaks CRTP protocol version " +
+                      std::to_string(protocol_version_) + ": not supported (the oldest supported is " +
+                      std::to_string(commander::kMinProtocolVersion) +
+                      ", where cflib switches to the v2 TOC/log/param packets this client needs); update the firmware");
+  }
+  // Firmware version (platform VERSION_GET_FIRMWARE, cflib platformservice.py;
+  // firmware platformservice.c versionCommandProcess(): [1, V_STAG text]):
+  // informational, for the log and the metrics; a firmware that does not answer
+  // it keeps an empty string (firmware_version_answered() false), it does not
+  // fail the connection. Three tries, not opt_.retries: it is not needed to fly.
+  try {
+    const auto fw = request(platform::firmware_version_request(), port::kPlatform, platform::kChanVersion,
+                            {platform::kVersionGetFirmware}, "firmware version", 2);
+    firmware_version_.assign(reinterpret_cast<const char*>(fw.data.data()) + 1, fw.size - 1);
+    const auto nul = firmware_version_.find('\0');
+    if (nul != std::string::npos) firmware_version_.resize(nul);
+    firmware_version_answered_ = true;
+  } catch (const ClientError&) {
+    firmware_version_.clear();
+    firmware_version_answered_ = false;
   }
   const auto reset = logp::decode_control_reply(
       request(logp::reset(), port::kLog, logp::kChanSettings, {logp::kCmdReset}, "log reset"));

@@ -125,7 +125,12 @@ void FirmwareEmulator::on_packet(const CrtpPacket& pk, uint32_t now_ms, std::vec
         }
         return;
       case port::kCommanderGeneric: {
-        const auto sp = commander::decode(pk);
+        // Decoded as the firmware generation of opt_.protocol_version would
+        // (commander::decode_for_firmware): a type it does not know becomes
+        // the all-zero setpoint, i.e. motors off.
+        const auto fs = commander::decode_for_firmware(pk, opt_.protocol_version);
+        if (fs.unknown_type) ++stats_.unknown_setpoint_types;
+        const auto& sp = fs.setpoint;
         if (sp.kind == commander::Setpoint::Kind::kOther) {
           ++stats_.unknown;
           return;

@@ -333,6 +333,53 @@ CrtpPacket notify_setpoint_stop(uint32_t remain_valid_ms) {
   return pk;
 }
 
+CrtpPacket hover_legacy(float vx, float vy, float yr, float z) { return four(kTypeHoverLegacy, vx, vy, -yr, z); }
+CrtpPacket velocity_world_legacy(float vx, float vy, float vz, float yr) {
+  return four(kTypeVelocityWorldLegacy, vx, vy, vz, -yr);
+}
+CrtpPacket hover_for_protocol(uint8_t version, float vx, float vy, float yr, float z) {
+  return legacy_setpoints(version) ? hover_legacy(vx, vy, yr, z) : hover(vx, vy, yr, z);
+}
+CrtpPacket for_protocol(const CrtpPacket& pk, uint8_t version) {
+  if (!legacy_setpoints(version) || pk.port != port::kCommanderGeneric || pk.channel != kChanSetpoint || pk.size < 1) {
+    return pk;
+  }
+  const uint8_t type = pk.data[0];
+  if (type != kTypeHover && type != kTypeVelocityWorld) return pk;
+  const Setpoint s = decode(pk);
+  return type == kTypeHover ? hover_legacy(s.a, s.b, s.c, s.d) : velocity_world_legacy(s.a, s.b, s.c, s.d);
+}
+
+FirmwareSetpoint decode_for_firmware(const CrtpPacket& pk, uint8_t version) {
+  FirmwareSetpoint out;
+  if (pk.port == port::kCommanderGeneric && pk.channel == kChanSetpoint) {
+    PayloadReader r(pk, "generic setpoint");
+    const uint8_t type = r.u8();
+    // Highest type in the firmware's packetDecoders[] table: positionType 7
+    // before PR 1456, manualType 11 after it (crtp_commander_generic.c).
+    const uint8_t last_type = legacy_setpoints(version) ? kTypePosition : 11;
+    if (type > last_type) {
+      out.unknown_type = true;
+      out.setpoint.type = type;
+      out.setpoint.kind = Setpoint::Kind::kStop;  // memset(setpoint, 0): motors off
+      return out;
+    }
+    if (type == kTypeVelocityWorldLegacy) {
+      // Both generations: legacyVelocityDecoder (velocityDecoder before PR 1456),
+      // attitudeRate.yaw = -yawrate.
+      out.setpoint.type = type;
+      out.setpoint.kind = Setpoint::Kind::kVelocityWorld;
+      out.setpoint.a = r.f32();
+      out.setpoint.b = r.f32();
+      out.setpoint.c = r.f32();
+      out.setpoint.d = -r.f32();
+      return out;
+    }
+  }
+  out.setpoint = decode(pk);  // 0, 5 (negated), 7, 8, 10, notify-stop; others kOther
+  return out;
+}
+
 Setpoint decode(const CrtpPacket& pk) {
   if (pk.port != port::kCommanderGeneric) throw CrtpError("generic setpoint: header: not port 7: " + pk.to_string());
   PayloadReader r(pk, "generic setpoint");
@@ -360,6 +407,49 @@ Setpoint decode(const CrtpPacket& pk) {
   return s;
 }
 }  // namespace commander
+
+// ---------------------------------------------------------------------------
+namespace quatz {
+namespace {
+constexpr uint32_t kMask = (1u << 9) - 1;  // 9-bit magnitudes
+constexpr double kSqrt1_2 = 0.70710678118654752440;
+}  // namespace
+uint32_t compress(const Quat& in) {
+  double q[4] = {in.x, in.y, in.z, in.w};
+  const double n = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  if (!std::isfinite(n) || n <= 0.0) throw CrtpError("quatcompress: quaternion is zero or not finite");
+  for (double& c : q) c /= n;
+  int largest = 0;
+  for (int i = 1; i < 4; ++i) {
+    if (std::fabs(q[i]) > std::fabs(q[largest])) largest = i;
+  }
+  const bool negate = q[largest] < 0;
+  uint32_t comp = static_cast<uint32_t>(largest);
+  for (int i = 0; i < 4; ++i) {
+    if (i == largest) continue;
+    const uint32_t negbit = static_cast<uint32_t>((q[i] < 0) != negate);
+    const uint32_t mag = static_cast<uint32_t>(kMask * (std::fabs(q[i]) / kSqrt1_2) + 0.5);
+    comp = (comp << 10) | (negbit << 9) | std::min(mag, kMask);
+  }
+  return comp;
+}
+Quat decompress(uint32_t comp) {
+  double q[4] = {0, 0, 0, 0};
+  const int largest = static_cast<int>(comp >> 30);
+  double sum_squares = 0;
+  for (int i = 3; i >= 0; --i) {
+    if (i == largest) continue;
+    const uint32_t mag = comp & kMask;
+    const uint32_t negbit = (comp >> 9) & 1u;
+    comp >>= 10;
+    q[i] = kSqrt1_2 * static_cast<double>(mag) / kMask;
+    if (negbit) q[i] = -q[i];
+    sum_squares += q[i] * q[i];
+  }
+  q[largest] = std::sqrt(std::max(0.0, 1.0 - sum_squares));
+  return Quat{q[0], q[1], q[2], q[3]};
+}
+}  // namespace quatz
 
 // ---------------------------------------------------------------------------
 namespace platform {

@@ -21,7 +21,16 @@ void rotate(const geometry_msgs::msg::Quaternion& q, double bx, double by, doubl
 }
 }  // namespace
 
-SimulatedCrazyflieFirmware::SimulatedCrazyflieFirmware(double loss_rate) {
+namespace {
+FirmwareEmulator::Options firmware_options(uint8_t protocol_version) {
+  FirmwareEmulator::Options o;
+  o.protocol_version = protocol_version;
+  return o;
+}
+}  // namespace
+
+SimulatedCrazyflieFirmware::SimulatedCrazyflieFirmware(double loss_rate, uint8_t protocol_version)
+    : fw_(firmware_options(protocol_version)) {
   using logp::Type;
   id_left_ = fw_.add_log_variable("Whisker", "Barometer1_1", Type::kFloat);
   fw_.add_log_variable("Whisker", "Barometer1_2", Type::kFloat);
@@ -36,6 +45,12 @@ SimulatedCrazyflieFirmware::SimulatedCrazyflieFirmware(double loss_rate) {
   id_truth_ = fw_.add_log_variable("sitl", "truthX", Type::kFloat);
   fw_.add_log_variable("sitl", "truthY", Type::kFloat);
   fw_.add_log_variable("sitl", "truthZ", Type::kFloat);
+  // Firmware stabilizer.c: LOG_GROUP_START(stateEstimateZ) ... quat (LOG_UINT32),
+  // rateRoll/ratePitch/rateYaw (LOG_INT16, mrad/s).
+  id_quat_ = fw_.add_log_variable("stateEstimateZ", "quat", Type::kUint32);
+  fw_.add_log_variable("stateEstimateZ", "rateRoll", Type::kInt16);
+  fw_.add_log_variable("stateEstimateZ", "ratePitch", Type::kInt16);
+  fw_.add_log_variable("stateEstimateZ", "rateYaw", Type::kInt16);
   fw_.add_param("deck", "bcWhisker", param::kUint8, 1, true);
   fw_.add_param("commander", "enHighLevel", param::kUint8, 0, false);
   p_stop_ = fw_.add_param("stabilizer", "stop", param::kUint8, 0, false);
@@ -56,6 +71,14 @@ void SimulatedCrazyflieFirmware::on_estimate(const nav_msgs::msg::Odometry& o) {
   rotate(pose.orientation, o.twist.twist.linear.x, o.twist.twist.linear.y, o.twist.twist.linear.z, vw);
   const double vals[7] = {pose.position.x, pose.position.y, pose.position.z, yaw_ * kRadToDeg, vw[0], vw[1], vw[2]};
   for (uint16_t i = 0; i < 7; ++i) fw_.set_log_value(static_cast<uint16_t>(id_state_ + i), vals[i]);
+  // stateEstimateZ as stabilizer.c compressState(): quatcompress(x, y, z, w) and
+  // the body rates in mrad/s, the pitch rate negated (the firmware's legacy
+  // pitch sign), converted to int16 by truncation as the C float->int16 cast.
+  const auto& q = pose.orientation;
+  fw_.set_log_value(id_quat_, quatz::compress({q.x, q.y, q.z, q.w}));
+  const auto& w = o.twist.twist.angular;
+  const double rates[3] = {w.x * 1000.0, -w.y * 1000.0, w.z * 1000.0};
+  for (uint16_t i = 0; i < 3; ++i) fw_.set_log_value(static_cast<uint16_t>(id_quat_ + 1 + i), std::trunc(rates[i]));
 }
 
 void SimulatedCrazyflieFirmware::on_truth(const nav_msgs::msg::Odometry& o) {

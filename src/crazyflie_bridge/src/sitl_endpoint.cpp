@@ -3,6 +3,7 @@
 #include <cmath>
 #include <thread>
 
+#include "tactile_common/geometry.hpp"
 #include "tactile_common/time.hpp"
 
 namespace crazyflie_bridge {
@@ -13,7 +14,7 @@ using Clock = std::chrono::steady_clock;
 SitlEndpoint::SitlEndpoint(const tactile_sim::Scenario& scenario, uint64_t seed, const SitlEndpointOptions& options)
     : opt_(options),
       sim_(std::make_unique<tactile_sim::SimLogic>(scenario, seed)),
-      fw_(options.loss_rate),
+      fw_(options.loss_rate, options.protocol_version),
       server_(options.port, options.bind_address),
       rng_(options.fault_seed) {
   if (!(opt_.speed > 0.0) || !std::isfinite(opt_.speed)) throw std::invalid_argument("SitlEndpointOptions.speed: must be > 0");
@@ -27,6 +28,10 @@ SitlEndpoint::~SitlEndpoint() = default;
 tactile_sim::Vec3 SitlEndpoint::truth_position() const {
   std::lock_guard<std::mutex> lock(truth_mutex_);
   return truth_;
+}
+double SitlEndpoint::truth_yaw() const {
+  std::lock_guard<std::mutex> lock(truth_mutex_);
+  return truth_yaw_;
 }
 
 bool SitlEndpoint::drop() {
@@ -68,6 +73,7 @@ void SitlEndpoint::step_physics() {
       std::lock_guard<std::mutex> lock(truth_mutex_);
       const auto& q = o.msg.pose.pose.position;
       truth_ = tactile_sim::Vec3(q.x, q.y, q.z);
+      truth_yaw_ = tactile_common::yaw_of(o.msg.pose.pose.orientation);
     }
   }
 }

@@ -20,6 +20,18 @@ int main() {
   print("velocity_world", commander::velocity_world(0.1f, -0.2f, 0.3f, 45.0f));
   print("position", commander::position(1.0f, 2.0f, 0.5f, 90.0f));
   print("stop", commander::stop());
+  // Legacy generation (cflib with get_protocol_version() <= 8).
+  print("hover_legacy", commander::hover_for_protocol(8, 0.5f, -0.25f, 30.0f, 0.4f));
+  print("hover_v9", commander::hover_for_protocol(9, 0.5f, -0.25f, 30.0f, 0.4f));
+  print("velocity_world_legacy", commander::for_protocol(commander::velocity_world(0.1f, -0.2f, 0.3f, 45.0f), 8));
+  // Compressed quaternions (x, y, z, w), as u32 little endian.
+  const quatz::Quat quats[] = {{0, 0, 0, 1}, {0, 0, 0.7071067811865476, 0.7071067811865476},
+                               {0, 0, -0.7071067811865476, 0.7071067811865476}, {0.5, 0, 0, 0.8660254037844386},
+                               {0.1, -0.2, 0.3, 0.9273618495495703}, {-0.6, 0.5, 0.4, -0.4795831523312719}};
+  for (size_t i = 0; i < sizeof quats / sizeof quats[0]; ++i) {
+    const uint32_t c = quatz::compress(quats[i]);
+    std::printf("quat%zu %02x %02x %02x %02x\n", i, c & 0xFF, (c >> 8) & 0xFF, (c >> 16) & 0xFF, c >> 24);
+  }
   print("notify_stop", commander::notify_setpoint_stop(250));
   print("log_create", logp::create_block_v2(1, {{3, logp::Type::kFloat, logp::Type::kFloat},
                                                 {258, logp::Type::kUint16, logp::Type::kUint16},

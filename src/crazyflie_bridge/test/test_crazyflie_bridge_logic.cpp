@@ -6,6 +6,7 @@
 
 #include "crazyflie_bridge/crazyflie_bridge_logic.hpp"
 #include "crazyflie_bridge/protocol.hpp"
+#include "tactile_common/geometry.hpp"
 #include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/time.hpp"
 
@@ -15,9 +16,10 @@ using Mode = CrazyflieBridgeLogic::Mode;
 namespace {
 constexpr int64_t kMs = 1000000;
 
-LogSample sample(uint8_t block, std::vector<double> v) {
+LogSample sample(uint8_t block, std::vector<double> v, uint32_t timestamp_ms = 0) {
   LogSample s;
   s.block_id = block;
+  s.timestamp_ms = timestamp_ms;
   s.values = std::move(v);
   return s;
 }
@@ -44,7 +46,7 @@ struct Rig {
   std::optional<CrtpPacket> tick(bool log, bool setpoint, double z = 0.4,
                                  tactile_msgs::msg::HoverSetpoint sp = hover(0.2, 0, 0, 0.4)) {
     t += 20 * kMs;
-    if (log) logic.on_log_sample(sample(2, {1, 2, z, 90, 0.1, 0.0}), t);
+    if (log) logic.on_log_sample(sample(2, {1, 2, z, 90, 0.1, 0.0}, static_cast<uint32_t>(t / kMs)), t);
     if (setpoint) logic.on_hover_setpoint(sp, t);
     return logic.on_timer(t);
   }
@@ -56,7 +58,7 @@ TEST(BridgeLogic, WhiskerSampleToPressureMessages) {
   p.pressure_scale = 100.0;  // e.g. a deck logging hPa
   CrazyflieBridgeLogic l(p);
   l.set_block_ids(1, 2);
-  auto out = l.on_log_sample(sample(1, {1013.1, 1013.2, 1013.3, 1000.4, 1000.5, 1000.6}), 5 * kMs);
+  auto out = l.on_log_sample(sample(1, {1013.1, 1013.2, 1013.3, 1000.4, 1000.5, 1000.6}, 5), 5 * kMs);
   ASSERT_TRUE(out.left && out.right);
   EXPECT_FALSE(out.odom);
   EXPECT_EQ(out.left->whisker_id, tactile_msgs::msg::WhiskerPressure::WHISKER_LEFT);
@@ -65,8 +67,9 @@ TEST(BridgeLogic, WhiskerSampleToPressureMessages) {
   EXPECT_DOUBLE_EQ(out.right->pressure[0], 100040.0);
   EXPECT_TRUE(std::isnan(out.left->temperature[0]));
   EXPECT_EQ(tactile_common::from_stamp(out.left->header.stamp), 5 * kMs);
-  out = l.on_log_sample(sample(1, {1, 2, 3, 4, 5, 6}), 25 * kMs);
+  out = l.on_log_sample(sample(1, {1, 2, 3, 4, 5, 6}, 25), 25 * kMs);
   EXPECT_EQ(out.left->sequence, 1u);
+  EXPECT_EQ(out.right->sequence, 1u);
   EXPECT_EQ(l.whisker_block(), (std::vector<std::string>{"Whisker.Barometer1_1", "Whisker.Barometer1_2",
                                                           "Whisker.Barometer1_3", "Whisker1.Barometer2_1",
                                                           "Whisker1.Barometer2_2", "Whisker1.Barometer2_3"}));
@@ -226,4 +229,166 @@ TEST(BridgeLogic, RepositoryConfigEqualsDefaults) {
                                                            CrazyflieBridgeLogic::kNodeName,
                                                            CrazyflieBridgeLogic::default_parameters());
   EXPECT_EQ(loaded.values(), CrazyflieBridgeLogic::default_parameters().values());
+}
+
+// ---- Link truth: sequence and stamps from the firmware clock ----
+
+TEST(BridgeLogic, SequenceFromFirmwareTimestampsShowsLostPackets) {
+  CrazyflieBridgeLogic l(CrazyflieBridgeLogic::Params{});  // whisker block 20 ms
+  l.set_block_ids(1, 2);
+  const std::vector<double> v{1, 2, 3, 4, 5, 6};
+  std::vector<uint32_t> seq;
+  // Firmware times 1000, 1020, (1040 lost), 1061 (1 ms jitter), 1080, then across
+  // the 24-bit wrap: 0xFFFFF0 + 20 k.
+  for (uint32_t ts : {1000u, 1020u, 1061u, 1080u}) seq.push_back(l.on_log_sample(sample(1, v, ts), (ts + 3) * kMs).left->sequence);
+  EXPECT_EQ(seq, (std::vector<uint32_t>{0, 1, 3, 4}));
+  EXPECT_EQ(l.stats().log_samples_missed, 1u);
+
+  CrazyflieBridgeLogic w(CrazyflieBridgeLogic::Params{});
+  w.set_block_ids(1, 2);
+  seq.clear();
+  const uint32_t t0 = 0xFFFFF0;
+  for (uint32_t k : {0u, 1u, 3u}) {
+    const uint32_t ts = (t0 + 20 * k) & 0xFFFFFF;  // 0xFFFFF0, 0x000004, 0x00002C
+    seq.push_back(w.on_log_sample(sample(1, v, ts), (int64_t{t0} + 20 * k + 2) * kMs).left->sequence);
+  }
+  EXPECT_EQ(seq, (std::vector<uint32_t>{0, 1, 3}));
+  EXPECT_EQ(w.stats().log_samples_missed, 1u);
+}
+
+TEST(BridgeLogic, StampsAreFirmwareTimeOnTheHostClock) {
+  CrazyflieBridgeLogic l(CrazyflieBridgeLogic::Params{});
+  l.set_block_ids(1, 2);
+  const std::vector<double> v{1, 2, 3, 4, 5, 6};
+  // Host clock = firmware clock + 50 s; one-way delays 9, 4, 12, 4 ms: after
+  // the 4-ms packet the offset is 50.004 s (the minimum receive - firmware).
+  const int64_t host = 50000 * kMs;
+  auto stamp = [&](uint32_t ts, int64_t delay_ms) {
+    const auto o = l.on_log_sample(sample(1, v, ts), host + (ts + delay_ms) * kMs);
+    return tactile_common::from_stamp(o.left->header.stamp);
+  };
+  EXPECT_EQ(stamp(1000, 9), host + 1009 * kMs);  // first: its own delay
+  EXPECT_EQ(stamp(1020, 4), host + 1024 * kMs);
+  // Late packet: still firmware time + 4 ms (+ the 200 ppm drift allowance: 4 us).
+  EXPECT_NEAR(static_cast<double>(stamp(1040, 12)), static_cast<double>(host + 1044 * kMs), 10e3);
+  EXPECT_EQ(stamp(1060, 4), host + 1064 * kMs);
+  EXPECT_NEAR(static_cast<double>(l.log_clock().offset_ns()), static_cast<double>(host + 4 * kMs), 1e3);
+}
+
+TEST(BridgeLogic, FirmwareRestartRebasesTheSequence) {
+  CrazyflieBridgeLogic l(CrazyflieBridgeLogic::Params{});
+  l.set_block_ids(1, 2);
+  const std::vector<double> v{1, 2, 3, 4, 5, 6};
+  l.on_log_sample(sample(1, v, 500000), 1 * kMs);
+  EXPECT_EQ(l.on_log_sample(sample(1, v, 500020), 21 * kMs).left->sequence, 1u);
+  EXPECT_EQ(l.on_log_sample(sample(1, v, 100), 40 * kMs).left->sequence, 0u);  // rebooted
+  EXPECT_EQ(l.stats().log_clock_restarts, 1u);
+}
+
+// ---- Odometry: full attitude, body rates, covariances ----
+
+namespace {
+struct Euler {
+  double roll, pitch, yaw;
+};
+quatz::Quat from_euler(const Euler& e) {  // Z-Y-X
+  const double cr = std::cos(e.roll / 2), sr = std::sin(e.roll / 2), cp = std::cos(e.pitch / 2),
+               sp = std::sin(e.pitch / 2), cy = std::cos(e.yaw / 2), sy = std::sin(e.yaw / 2);
+  return {sr * cp * cy - cr * sp * sy, cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy,
+          cr * cp * cy + sr * sp * sy};
+}
+double dot(const geometry_msgs::msg::Quaternion& a, const quatz::Quat& b) {
+  return a.x * b.x + a.y * b.y + a.z * b.z + a.w * b.w;
+}
+}  // namespace
+
+TEST(BridgeLogic, OdometryAttitudeRatesAndCovariancesFromTheEstimate) {
+  CrazyflieBridgeLogic::Params p;
+  CrazyflieBridgeLogic l(p);
+  l.set_block_ids(1, 3);
+  l.set_attitude_block_id(2);
+  EXPECT_EQ(l.attitude_block(false), AttitudeBlock::compressed_vars());
+  EXPECT_EQ(l.attitude_block(true).size(), 7u);
+  const Euler e{10 * M_PI / 180, -5 * M_PI / 180, 30 * M_PI / 180};
+  const auto q = from_euler(e);
+  // Firmware: quat compressed, rates in mrad/s with the pitch rate negated.
+  l.on_log_sample(sample(2, {double(quatz::compress(q)), 120, 340, -560}, 1000), 1001 * kMs);
+  const auto out = l.on_log_sample(sample(3, {1.0, 2.0, 0.4, 30.0, 0.3, 0.1}, 1000), 1001 * kMs);
+  ASSERT_TRUE(out.odom);
+  const auto& o = *out.odom;
+  // 9-bit components: within 0.2 deg of the true attitude; yaw exactly the float yaw.
+  EXPECT_GT(std::fabs(dot(o.pose.pose.orientation, q)), std::cos(0.2 * M_PI / 180 / 2));
+  EXPECT_NEAR(tactile_common::yaw_of(o.pose.pose.orientation), e.yaw, 1e-12);
+  EXPECT_DOUBLE_EQ(o.twist.twist.angular.x, 0.120);
+  EXPECT_DOUBLE_EQ(o.twist.twist.angular.y, -0.340);  // REP-103 pitch rate: firmware sign restored
+  EXPECT_DOUBLE_EQ(o.twist.twist.angular.z, -0.560);
+  EXPECT_DOUBLE_EQ(o.pose.covariance[0], p.position_variance);
+  EXPECT_DOUBLE_EQ(o.pose.covariance[14], p.position_variance);
+  EXPECT_DOUBLE_EQ(o.pose.covariance[21], p.orientation_variance);
+  EXPECT_DOUBLE_EQ(o.pose.covariance[35], p.orientation_variance);
+  EXPECT_DOUBLE_EQ(o.twist.covariance[7], p.linear_velocity_variance);
+  EXPECT_DOUBLE_EQ(o.twist.covariance[28], p.angular_velocity_variance);
+  EXPECT_DOUBLE_EQ(o.pose.covariance[1], 0.0);
+  EXPECT_EQ(tactile_common::from_stamp(o.header.stamp), 1001 * kMs);
+
+  // With kalman.varX/Y/Z in the block: the estimate's position variances.
+  l.on_log_sample(sample(2, {double(quatz::compress(q)), 0, 0, 0, 0.04, 0.09, 0.0025}, 1010), 1011 * kMs);
+  const auto o2 = l.on_log_sample(sample(3, {1.0, 2.0, 0.4, 30.0, 0.3, 0.1}, 1010), 1011 * kMs).odom;
+  ASSERT_TRUE(o2);
+  EXPECT_FLOAT_EQ(static_cast<float>(o2->pose.covariance[0]), 0.04f);
+  EXPECT_FLOAT_EQ(static_cast<float>(o2->pose.covariance[7]), 0.09f);
+  EXPECT_FLOAT_EQ(static_cast<float>(o2->pose.covariance[14]), 0.0025f);
+}
+
+TEST(BridgeLogic, OdometryNeedsAnAttitudeSampleLessThanTwoPeriodsAway) {
+  CrazyflieBridgeLogic l(CrazyflieBridgeLogic::Params{});  // state period 10 ms
+  l.set_block_ids(1, 3);
+  l.set_attitude_block_id(2);
+  const std::vector<double> st{1.0, 2.0, 0.4, 0.0, 0.0, 0.0};
+  EXPECT_FALSE(l.on_log_sample(sample(3, st, 1000), 1001 * kMs).odom);  // none yet
+  l.on_log_sample(sample(2, {double(0xC0000000u), 0, 0, 0}, 1000), 1001 * kMs);
+  EXPECT_TRUE(l.on_log_sample(sample(3, st, 1010), 1011 * kMs).odom);   // this tick's lost: previous one
+  EXPECT_FALSE(l.on_log_sample(sample(3, st, 1020), 1021 * kMs).odom);  // two lost: not published
+  EXPECT_EQ(l.stats().odom_without_attitude, 2u);
+  // Blocks 7 ms out of phase: the previous attitude sample (17 ms) still pairs.
+  l.on_log_sample(sample(2, {double(0xC0000000u), 0, 0, 0}, 1023), 1024 * kMs);
+  EXPECT_TRUE(l.on_log_sample(sample(3, st, 1030), 1031 * kMs).odom);
+  EXPECT_TRUE(l.on_log_sample(sample(3, st, 1040), 1041 * kMs).odom);  // 1033 lost: 1023 is 17 ms back
+  EXPECT_FALSE(l.on_log_sample(sample(3, st, 1050), 1051 * kMs).odom);
+  // A pattern quatcompress never produces (three components at full 9-bit
+  // magnitude: squares sum to 1.5) is rejected, not used.
+  l.on_log_sample(sample(2, {double((3u << 30) | (511u << 20) | (511u << 10) | 511u), 0, 0, 0}, 1060), 1061 * kMs);
+  EXPECT_EQ(l.stats().dropped_attitude_invalid, 1u);
+  EXPECT_FALSE(l.on_log_sample(sample(3, st, 1060), 1061 * kMs).odom);
+}
+
+// ---- Firmware generations: the packet the timer sends ----
+
+TEST(BridgeLogic, TimerSendsCflibsHoverPacketForTheProtocolVersion) {
+  for (int version : {4, 8, 9, 10}) {
+    Rig r;
+    r.logic.set_protocol_version(static_cast<uint8_t>(version));
+    r.tick(true, true, 0.4, hover(0.1, 0.0, 0.5, 0.4));
+    const auto pk = r.tick(true, true, 0.4, hover(0.1, 0.0, 0.5, 0.4));
+    ASSERT_TRUE(pk);
+    PayloadReader rd(*pk, "test");
+    const uint8_t type = rd.u8();
+    rd.f32();
+    rd.f32();
+    const float yaw_field = rd.f32();
+    const float yr = static_cast<float>(0.5 * 180 / M_PI);
+    if (version <= 8) {  // cflib commander.py: get_protocol_version() <= 8 -> TYPE_HOVER_LEGACY, -yawrate
+      EXPECT_EQ(type, commander::kTypeHoverLegacy) << version;
+      EXPECT_FLOAT_EQ(yaw_field, -yr) << version;
+    } else {
+      EXPECT_EQ(type, commander::kTypeHover) << version;
+      EXPECT_FLOAT_EQ(yaw_field, yr) << version;
+    }
+    // The stop and hover-in-place packets go the same way.
+    for (int i = 0; i < 20; ++i) r.tick(true, false);
+    EXPECT_EQ(r.logic.mode(), Mode::kHoverHold);
+    const auto hold = r.tick(true, false);
+    ASSERT_TRUE(hold);
+    EXPECT_EQ(hold->data[0], version <= 8 ? commander::kTypeHoverLegacy : commander::kTypeHover);
+  }
 }

@@ -351,3 +351,105 @@ TEST(Crtp, RandomInputNeverCrashes) {
   }
   EXPECT_GT(rejected, 0u);
 }
+
+// ---- Firmware generations (cflib commander.py: protocol <= 8 -> legacy) ----
+
+TEST(Crtp, HoverForProtocolFollowsCflibsThreshold) {
+  // cflib: pack('<Bffff', TYPE_HOVER_LEGACY=5, vx, vy, -yawrate, z) for <= 8,
+  // pack('<Bffff', TYPE_HOVER=10, vx, vy, yawrate, z) above.
+  for (int v = 4; v <= 12; ++v) {
+    const auto pk = commander::hover_for_protocol(static_cast<uint8_t>(v), 0.5f, -0.25f, 30.f, 0.4f);
+    PayloadReader r(pk, "test");
+    const uint8_t type = r.u8();
+    r.f32();
+    r.f32();
+    const float yaw = r.f32();
+    EXPECT_EQ(type, v <= 8 ? 5 : 10) << v;
+    EXPECT_FLOAT_EQ(yaw, v <= 8 ? -30.f : 30.f) << v;
+    EXPECT_EQ(commander::legacy_setpoints(static_cast<uint8_t>(v)), v <= 8);
+  }
+  // Byte vector: [0x70|0x0C, 5, 0.0f, 0.0f, -10.0f (0xC1200000), 0.5f]
+  EXPECT_EQ(commander::hover_for_protocol(8, 0.f, 0.f, 10.f, 0.5f).encode(),
+            (Bytes{0x7C, 0x05, 0, 0, 0, 0, 0, 0, 0, 0, 0x00, 0x00, 0x20, 0xC1, 0x00, 0x00, 0x00, 0x3F}));
+}
+
+TEST(Crtp, ForProtocolReencodesOnlyHoverAndVelocityWorld) {
+  const auto h = commander::hover(0.1f, 0.2f, 15.f, 0.3f);
+  EXPECT_EQ(commander::for_protocol(h, 10).encode(), h.encode());
+  EXPECT_EQ(commander::for_protocol(h, 8).encode(), commander::hover_legacy(0.1f, 0.2f, 15.f, 0.3f).encode());
+  const auto v = commander::velocity_world(0.1f, 0.2f, 0.3f, 15.f);
+  const auto vl = commander::for_protocol(v, 8);
+  EXPECT_EQ(vl.data[0], commander::kTypeVelocityWorldLegacy);
+  EXPECT_FLOAT_EQ(commander::decode_for_firmware(vl, 8).setpoint.d, 15.f);  // negated twice: CCW again
+  for (const auto& same : {commander::stop(), commander::position(1, 2, 3, 4), commander::notify_setpoint_stop(100)}) {
+    EXPECT_EQ(commander::for_protocol(same, 8).encode(), same.encode());
+  }
+}
+
+TEST(Crtp, FirmwareGenerationsDecodeWhatTheyKnowAndZeroTheRest) {
+  using K = commander::Setpoint::Kind;
+  // Legacy table ends at positionType 7: hover 10 and velocity-world 8 unknown.
+  for (uint8_t t : {uint8_t{8}, uint8_t{9}, uint8_t{10}, uint8_t{11}, uint8_t{200}}) {
+    CrtpPacket pk(port::kCommanderGeneric, 0);
+    pk.u8(t).f32(0).f32(0).f32(30).f32(0.4f);
+    const auto f = commander::decode_for_firmware(pk, 8);
+    EXPECT_TRUE(f.unknown_type) << int(t);
+    EXPECT_EQ(f.setpoint.kind, K::kStop) << int(t);
+    EXPECT_EQ(commander::decode_for_firmware(pk, 10).unknown_type, t > 11) << int(t);
+  }
+  const auto legacy = commander::decode_for_firmware(commander::hover_legacy(0, 0, 30, 0.4f), 8);
+  EXPECT_FALSE(legacy.unknown_type);
+  EXPECT_EQ(legacy.setpoint.kind, K::kHover);
+  EXPECT_FLOAT_EQ(legacy.setpoint.c, 30.f);
+  const auto cur = commander::decode_for_firmware(commander::hover(0, 0, 30, 0.4f), 9);
+  EXPECT_EQ(cur.setpoint.kind, K::kHover);
+  EXPECT_FLOAT_EQ(cur.setpoint.c, 30.f);
+  EXPECT_EQ(commander::decode_for_firmware(commander::stop(), 8).setpoint.kind, K::kStop);
+  EXPECT_FALSE(commander::decode_for_firmware(commander::stop(), 8).unknown_type);
+}
+
+// ---- Compressed quaternion (firmware quatcompress.h) ----
+
+TEST(Crtp, QuatDecompressHandValues) {
+  // Identity: largest w (index 3), the three others 0 -> 3 << 30.
+  auto q = quatz::decompress(0xC0000000u);
+  EXPECT_DOUBLE_EQ(q.x, 0);
+  EXPECT_DOUBLE_EQ(q.y, 0);
+  EXPECT_DOUBLE_EQ(q.z, 0);
+  EXPECT_DOUBLE_EQ(q.w, 1);
+  EXPECT_EQ(quatz::compress({0, 0, 0, 1}), 0xC0000000u);
+  // Yaw +90 deg (0, 0, s, s), s = 1/sqrt 2: |z| = |w|, the first largest is z
+  // (index 2); w = s -> magnitude 511, sign 0, in the last 10 bits.
+  const double s = std::sqrt(0.5);
+  EXPECT_EQ(quatz::compress({0, 0, s, s}), 0x800001FFu);
+  q = quatz::decompress(0x800001FFu);
+  EXPECT_NEAR(q.z, s, 1e-12);
+  EXPECT_NEAR(q.w, s, 1e-12);
+  // Yaw -90 deg (0, 0, -s, s): largest z < 0, so every other component's sign
+  // bit is "not negative XOR negate" = 1 (x and y with magnitude 0 too), and the
+  // decoded quaternion is the same rotation with z >= 0: (-0, -0, s, -s).
+  EXPECT_EQ(quatz::compress({0, 0, -s, s}), (2u << 30) | (0x200u << 20) | (0x200u << 10) | 0x3FFu);
+  q = quatz::decompress((2u << 30) | (0x200u << 20) | (0x200u << 10) | 0x3FFu);
+  EXPECT_NEAR(q.z, s, 1e-12);
+  EXPECT_NEAR(q.w, -s, 1e-12);
+  // Roll 60 deg (0.5, 0, 0, 0.866): largest w; x = 0.5 -> round(511 * 0.5 / s) = 361
+  // in bits 29..20 (x is the first of the three others).
+  EXPECT_EQ(quatz::compress({0.5, 0, 0, std::sqrt(0.75)}), (3u << 30) | (361u << 20));
+  q = quatz::decompress((3u << 30) | (361u << 20));
+  EXPECT_NEAR(q.x, s * 361 / 511, 1e-12);
+  EXPECT_NEAR(q.w, std::sqrt(1 - q.x * q.x), 1e-12);
+  EXPECT_THROW(quatz::compress({0, 0, 0, 0}), CrtpError);
+}
+
+TEST(Crtp, QuatCompressRoundTripWithinResolution) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> n(0, 1);
+  for (int i = 0; i < 10000; ++i) {
+    quatz::Quat q{n(rng), n(rng), n(rng), n(rng)};
+    const double norm = std::sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w);
+    q = {q.x / norm, q.y / norm, q.z / norm, q.w / norm};
+    const auto d = quatz::decompress(quatz::compress(q));
+    const double dot = std::fabs(q.x * d.x + q.y * d.y + q.z * d.z + q.w * d.w);
+    EXPECT_GT(dot, std::cos(0.25 * M_PI / 180 / 2));  // same rotation within 0.25 deg
+  }
+}

@@ -174,8 +174,9 @@ TEST(FirmwareClient, TocCacheByCrc) {
   c.connect();
   EXPECT_TRUE(c.log_toc_from_cache());
   EXPECT_EQ(c.log_toc()[1].full_name(), "stateEstimate.z");
-  // Cached: no TOC item requests, only version, reset, 2 infos (+ link source).
-  EXPECT_EQ(fw.stats().replies - before, 5u);
+  // Cached: no TOC item requests, only protocol and firmware version, reset,
+  // 2 infos (+ link source).
+  EXPECT_EQ(fw.stats().replies - before, 6u);
   // A different TOC (new CRC) is downloaded again.
   fw.add_log_variable("extra", "v", logp::Type::kFloat);
   EmulatorLink link2(fw);
@@ -184,6 +185,79 @@ TEST(FirmwareClient, TocCacheByCrc) {
   EXPECT_FALSE(c2.log_toc_from_cache());
   EXPECT_EQ(c2.log_toc().size(), 5u);
   std::filesystem::remove_all(dir);
+}
+
+TEST(FirmwareClient, ReadsProtocolAndFirmwareVersion) {
+  FirmwareEmulator::Options o;
+  o.protocol_version = 8;
+  o.firmware_version = "2024.2";
+  FirmwareEmulator fw(o);
+  fw.add_log_variable("stateEstimate", "z", logp::Type::kFloat);
+  EmulatorLink link(fw);
+  CrazyflieClient c(link);
+  c.connect();
+  EXPECT_EQ(c.protocol_version(), 8);
+  EXPECT_TRUE(c.firmware_version_answered());
+  EXPECT_EQ(c.firmware_version(), "2024.2");
+}
+
+TEST(FirmwareClient, RefusesProtocolBelowCflibsV2Minimum) {
+  // cflib toc.py/log.py/param.py use the v2 packets from protocol 4 on; below
+  // it no generation this client speaks fits: refused, naming the version.
+  for (uint8_t v : {uint8_t{0}, uint8_t{3}}) {
+    FirmwareEmulator::Options o;
+    o.protocol_version = v;
+    FirmwareEmulator fw(o);
+    fw.add_log_variable("stateEstimate", "z", logp::Type::kFloat);
+    EmulatorLink link(fw);
+    CrazyflieClient c(link);
+    try {
+      c.connect();
+      FAIL() << "protocol " << int(v) << " accepted";
+    } catch (const ClientError& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find("CRTP protocol version " + std::to_string(v) + ": not supported"), std::string::npos) << m;
+      EXPECT_NE(m.find("oldest supported is 4"), std::string::npos) << m;
+    }
+  }
+  FirmwareEmulator::Options o;
+  o.protocol_version = 4;  // the oldest accepted
+  FirmwareEmulator fw(o);
+  fw.add_log_variable("stateEstimate", "z", logp::Type::kFloat);
+  EmulatorLink link(fw);
+  CrazyflieClient c(link);
+  EXPECT_NO_THROW(c.connect());
+}
+
+TEST(FirmwareClient, EachGenerationDecodesItsOwnHoverAndStopsOnTheOther) {
+  using Mode = FirmwareEmulator::CommanderOutput::Mode;
+  std::vector<CrtpPacket> out;
+  // Legacy firmware (protocol 8): type 5 with the negated yaw rate is CCW 30 deg/s.
+  FirmwareEmulator::Options old_o;
+  old_o.protocol_version = 8;
+  FirmwareEmulator old_fw(old_o);
+  old_fw.on_packet(commander::hover_for_protocol(8, 0.f, 0.f, 30.f, 0.4f), 0, out);
+  auto c = old_fw.commander(10);
+  ASSERT_EQ(c.mode, Mode::kSetpoint);
+  EXPECT_FLOAT_EQ(c.setpoint.c, 30.f);
+  EXPECT_FLOAT_EQ(c.setpoint.d, 0.4f);
+  // The same firmware given type 10: no decoder -> all-zero setpoint = motors off.
+  old_fw.on_packet(commander::hover(0.f, 0.f, 30.f, 0.4f), 20, out);
+  EXPECT_EQ(old_fw.commander(30).mode, Mode::kShutdown);
+  EXPECT_EQ(old_fw.stats().unknown_setpoint_types, 1u);
+  // Current firmware (protocol 10): type 10 CCW as sent; legacy 5 still decoded.
+  FirmwareEmulator new_fw;
+  new_fw.on_packet(commander::hover_for_protocol(10, 0.f, 0.f, 30.f, 0.4f), 0, out);
+  c = new_fw.commander(10);
+  ASSERT_EQ(c.mode, Mode::kSetpoint);
+  EXPECT_EQ(c.setpoint.type, commander::kTypeHover);
+  EXPECT_FLOAT_EQ(c.setpoint.c, 30.f);
+  new_fw.on_packet(commander::hover_legacy(0.f, 0.f, 30.f, 0.4f), 20, out);
+  EXPECT_FLOAT_EQ(new_fw.commander(30).setpoint.c, 30.f);
+  CrtpPacket unknown(port::kCommanderGeneric, commander::kChanSetpoint, {12});
+  new_fw.on_packet(unknown, 40, out);
+  EXPECT_EQ(new_fw.commander(50).mode, Mode::kShutdown);
+  EXPECT_EQ(new_fw.stats().unknown_setpoint_types, 1u);
 }
 
 TEST(FirmwareClient, LogControlErrnos) {

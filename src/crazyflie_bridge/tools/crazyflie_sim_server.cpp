@@ -1,6 +1,7 @@
 // Simulated Crazyflie on UDP (see crazyflie_bridge/sitl_endpoint.hpp):
 //   crazyflie_sim_server SCENARIO [--port 19850] [--seed N] [--duration S]
 //                        [--speed X] [--loss P] [--spike-rate HZ] [--spike-latency S]
+//                        [--protocol-version N]
 // Prints "listening udp://127.0.0.1:PORT" once ready, then runs until the
 // duration elapsed or SIGINT/SIGTERM; prints the final truth position and
 // link counters on exit.
@@ -21,7 +22,9 @@ int main(int argc, char** argv) {
   if (argc < 2 || !std::strcmp(argv[1], "--help")) {
     std::fprintf(stderr,
                  "usage: crazyflie_sim_server SCENARIO [--port 19850] [--seed N] [--duration S] [--speed X]\n"
-                 "       [--loss P] [--spike-rate HZ] [--spike-latency S] [--bind ADDR]\n");
+                 "       [--loss P] [--spike-rate HZ] [--spike-latency S] [--bind ADDR]\n"
+                 "       [--protocol-version N]  (CRTP protocol reported; <= 8 emulates the legacy\n"
+                 "                                setpoint generation: hover type 5, negated yaw rate)\n");
     return argc < 2 ? 2 : 0;
   }
   try {
@@ -43,6 +46,11 @@ int main(int argc, char** argv) {
       else if (a == "--spike-rate") opt.spike_rate_hz = std::stod(next());
       else if (a == "--spike-latency") opt.spike_latency_s = std::stod(next());
       else if (a == "--bind") opt.bind_address = next();
+      else if (a == "--protocol-version") {
+        const int v = std::stoi(next());
+        if (v < 0 || v > 255) throw std::invalid_argument("--protocol-version: must be in [0, 255] (a u8), got " + std::to_string(v));
+        opt.protocol_version = static_cast<uint8_t>(v);
+      }
       else throw std::invalid_argument("unknown option " + a);
     }
     const auto scenario = tactile_sim::load_scenario(scenario_path);

@@ -40,6 +40,8 @@ TEST(CrtpGraph, CleanLinkGivesTheInProcessOutcome) {
   // for the 30 s flight; every setpoint the bridge sent reached the firmware.
   EXPECT_EQ(m["fsm"]["link_packets_lost"].get<uint64_t>(), 0u);
   EXPECT_EQ(m["fsm"]["link_log_missed"].get<uint64_t>(), 0u);
+  EXPECT_EQ(m["fsm"]["bridge_log_samples_missed"].get<uint64_t>(), 0u);
+  EXPECT_EQ(m["fsm"]["tdorc_samples_missing"].get<uint64_t>(), 0u);
   EXPECT_GE(m["fsm"]["link_packets_received"].get<uint64_t>(), 1500u + 3000u);
   EXPECT_EQ(m["fsm"]["bridge_stale_events"].get<uint64_t>(), 0u);
   EXPECT_GT(m["fsm"]["firmware_setpoints"].get<uint64_t>(), 1000u);
@@ -53,12 +55,21 @@ TEST(CrtpGraph, LossyLinkCountsLossAndIsReproducible) {
   const auto& f = a["fsm"];
   const auto dropped = f["link_log_dropped"].get<uint64_t>();
   const auto missed = f["link_log_missed"].get<uint64_t>();
-  // 30 % of the ~4500 log packets; the bridge's timestamp-gap count matches the
-  // injected drops except packets lost after a block's last received one.
-  EXPECT_GT(dropped, 1100u);
-  EXPECT_LT(dropped, 1600u);
+  // 30 % of the ~7500 log packets (whiskers 50 Hz, attitude and state 100 Hz,
+  // 30 s; ~4500 before the attitude block); the client's timestamp-gap count
+  // and the bridge logic's sequence gaps match the injected drops except
+  // packets lost before a block's first or after its last received sample.
+  EXPECT_GT(dropped, 1900u);
+  EXPECT_LT(dropped, 2600u);
   EXPECT_LE(missed, dropped);
   EXPECT_GE(missed + 10, dropped);
+  const auto seq_missed = f["bridge_log_samples_missed"].get<uint64_t>();
+  EXPECT_LE(seq_missed, dropped);
+  EXPECT_GE(seq_missed + 10, dropped);
+  // The lost whisker packets are sequence gaps that both tdorc_filters bridge
+  // (~30 % of 2 x 1500 samples; a gap longer than max_sample_gap_s resets instead).
+  EXPECT_GT(f["tdorc_samples_missing"].get<uint64_t>(), 600u);
+  EXPECT_GT(f["tdorc_gaps_bridged"].get<uint64_t>(), 300u);
   EXPECT_GT(f["link_resends"].get<uint64_t>(), 0u);  // connect survived lost requests
   // Lost setpoints: the firmware received about 70 % of what the bridge sent.
   const double ratio = static_cast<double>(f["firmware_setpoints"].get<uint64_t>()) /

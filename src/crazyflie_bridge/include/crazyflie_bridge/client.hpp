@@ -57,7 +57,14 @@ class CrazyflieClient {
 
   /// Connection setup; throws ClientError (no answer, bad TOC) or LinkError.
   void connect();
+  /// CRTP protocol version (platform service); selects the setpoint
+  /// generation (commander::legacy_setpoints). connect() refuses versions
+  /// below commander::kMinProtocolVersion with a ClientError naming it.
   uint8_t protocol_version() const { return protocol_version_; }
+  /// Firmware version text (platform VERSION_GET_FIRMWARE), empty when the
+  /// firmware did not answer (firmware_version_answered() false).
+  const std::string& firmware_version() const { return firmware_version_; }
+  bool firmware_version_answered() const { return firmware_version_answered_; }
   const std::vector<toc::Item>& log_toc() const { return log_toc_; }
   const std::vector<toc::Item>& param_toc() const { return param_toc_; }
   bool log_toc_from_cache() const { return log_toc_cached_; }
@@ -86,8 +93,9 @@ class CrazyflieClient {
  private:
   /// Sends `pk` and waits for a packet on (port, channel) whose payload starts
   /// with `prefix`.
+  /// retries < 0: opt_.retries.
   CrtpPacket request(const CrtpPacket& pk, uint8_t port_no, uint8_t channel, const std::vector<uint8_t>& prefix,
-                     const char* what);
+                     const char* what, int retries = -1);
   /// Routes a packet that no request is waiting for.
   void dispatch(const CrtpPacket& pk);
   std::vector<toc::Item> fetch_toc(uint8_t port_no, uint32_t& crc, bool& cached);
@@ -104,6 +112,8 @@ class CrazyflieClient {
   Link& link_;
   ClientOptions opt_;
   uint8_t protocol_version_ = 0;
+  std::string firmware_version_;
+  bool firmware_version_answered_ = false;
   std::vector<toc::Item> log_toc_, param_toc_;
   std::map<std::string, size_t> log_index_, param_index_;
   uint32_t log_crc_ = 0, param_crc_ = 0;

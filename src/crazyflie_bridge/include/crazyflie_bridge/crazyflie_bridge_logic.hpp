@@ -9,6 +9,13 @@
 //   commander watchdog (500 ms level, 2 s motors off) is the last line when
 //   the ground station itself dies.
 // Landing is latched: fresh setpoints do not resume flight once it began.
+// Packets are encoded for the connected firmware generation as cflib does
+// (commander::for_protocol: hover type 10, or legacy type 5 with the negated
+// yaw rate for protocol <= 8). Message sequence numbers and stamps come from
+// the firmware's log timestamps (LogClock: a lost log packet is a gap);
+// odometry carries the full attitude, body rates and covariances from a
+// second log block (AttitudeBlock). README: "Firmware generations",
+// "Odometry", "Sequence numbers and stamps".
 #pragma once
 
 #include <cstdint>
@@ -16,8 +23,10 @@
 #include <string>
 #include <vector>
 
+#include "crazyflie_bridge/attitude_block.hpp"
 #include "crazyflie_bridge/client.hpp"
 #include "crazyflie_bridge/crtp.hpp"
+#include "crazyflie_bridge/log_clock.hpp"
 #include "nav_msgs/msg/odometry.hpp"
 #include "tactile_common/parameters.hpp"
 #include "tactile_msgs/msg/hover_setpoint.hpp"
@@ -59,6 +68,14 @@ class CrazyflieBridgeLogic {
     double hover_hold_s = 1.0;       ///< hover in place this long before landing
     double land_speed = 0.25;        ///< [m/s]
     double land_height = 0.05;       ///< stop the motors below this height [m]
+    /// Odometry covariance diagonals where the firmware logs no variance
+    /// (position: unless kalman.varX/Y/Z are in the log TOC; the others always:
+    /// a log block has no room for them). Not measured: the order of
+    /// magnitude of the Kalman estimator's with the flow deck, see README.
+    double position_variance = 1e-3;          ///< [m^2]
+    double orientation_variance = 1e-3;       ///< [rad^2] roll, pitch, yaw
+    double linear_velocity_variance = 1e-3;   ///< [(m/s)^2]
+    double angular_velocity_variance = 1e-4;  ///< [(rad/s)^2]
     void validate() const;
   };
 
@@ -74,6 +91,12 @@ class CrazyflieBridgeLogic {
     uint64_t stale_events = 0;           ///< transitions into hover hold
     uint64_t landings = 0;
     uint64_t packets_out = 0;
+    // Link truth (LogClock, AttitudeBlock)
+    uint64_t attitude_samples = 0;       ///< attitude block samples used
+    uint64_t log_samples_missed = 0;     ///< gaps in the per-block sequences (lost log packets)
+    uint64_t log_clock_restarts = 0;     ///< firmware time went back (restart): sequences re-based
+    uint64_t odom_without_attitude = 0;  ///< state samples with no attitude sample < 2 periods away (not published)
+    uint64_t dropped_attitude_invalid = 0;  ///< attitude samples out of range (not used)
   };
 
   struct LogOutputs {
@@ -90,6 +113,20 @@ class CrazyflieBridgeLogic {
   const std::vector<std::string>& state_block() const { return params_.state_vars; }
   /// Tells the logic which block ids carry which layout.
   void set_block_ids(uint8_t whisker_block_id, uint8_t state_block_id);
+  /// Attitude block layout (AttitudeBlock): the compressed estimate, plus
+  /// kalman.varX/Y/Z when `with_variances` (the firmware logs them).
+  std::vector<std::string> attitude_block(bool with_variances) const;
+  /// Its block id (same period as the state block). Once set, odometry is
+  /// published only with an attitude sample less than two periods from the
+  /// state sample's firmware time; without it (the logic used without a link, as in
+  /// unit tests) odometry carries yaw only.
+  void set_attitude_block_id(uint8_t attitude_block_id);
+  /// CRTP protocol version of the connected Crazyflie: selects the setpoint
+  /// generation (commander::for_protocol). Defaults to the current generation
+  /// (type 10); BridgeRunner sets it from the client at connect.
+  void set_protocol_version(uint8_t version) { protocol_version_ = version; }
+  uint8_t protocol_version() const { return protocol_version_; }
+  const LogClock& log_clock() const { return clock_; }
 
   LogOutputs on_log_sample(const LogSample& sample, int64_t now_ns);
   void on_hover_setpoint(const tactile_msgs::msg::HoverSetpoint& msg, int64_t now_ns);
@@ -106,8 +143,10 @@ class CrazyflieBridgeLogic {
   Params params_;
   Stats stats_;
   Mode mode_ = Mode::kWaiting;
-  int whisker_block_ = -1, state_block_ = -1;
-  uint32_t sequence_[2] = {0, 0};
+  int whisker_block_ = -1, state_block_ = -1, attitude_block_ = -1;
+  LogClock clock_;
+  std::optional<AttitudeBlock::Sample> attitude_;
+  uint8_t protocol_version_ = 10;  ///< the emulator's default (> kLastLegacyProtocol: hover type 10)
   bool have_setpoint_ = false, have_log_ = false;
   int64_t setpoint_ns_ = 0, log_ns_ = 0, hold_start_ns_ = 0, last_timer_ns_ = 0;
   double height_ = 0.0;  ///< estimated height (state block z)

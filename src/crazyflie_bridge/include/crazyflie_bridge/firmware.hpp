@@ -21,7 +21,13 @@ namespace crazyflie_bridge {
 class FirmwareEmulator {
  public:
   struct Options {
-    uint8_t protocol_version = 10;  ///< > 8: cflib sends hover type 10 (CCW yaw rate)
+    /// CRTP protocol version reported to the client; it also selects the
+    /// firmware generation whose setpoint decoding is emulated
+    /// (commander::decode_for_firmware): <= 8 the legacy one (hover type 5 with
+    /// the negated yaw rate, no type 8/10: those stop the motors), else the
+    /// current one (hover type 10, CCW yaw rate). cflib, and this bridge,
+    /// refuse < 4 (commander::kMinProtocolVersion).
+    uint8_t protocol_version = 10;
     std::string firmware_version = "tactile-sitl";
     /// Firmware commander watchdog (commander.c): no setpoint for this long ->
     /// level out (hover in place here), then stop the motors.
@@ -35,6 +41,9 @@ class FirmwareEmulator {
     uint64_t setpoints = 0, param_reads = 0, param_writes = 0;
     uint64_t malformed = 0;       ///< truncated / invalid packets (dropped)
     uint64_t unknown = 0;         ///< ports/commands not emulated (dropped)
+    /// Setpoint types this firmware generation has no decoder for: taken as
+    /// the all-zero (stop) setpoint, as the firmware does.
+    uint64_t unknown_setpoint_types = 0;
     uint64_t log_errors = 0;      ///< log control commands answered with an errno
   };
   /// What the commander does at a given time.

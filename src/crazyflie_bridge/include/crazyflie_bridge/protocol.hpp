@@ -158,11 +158,26 @@ namespace commander {
 constexpr uint8_t kChanSetpoint = 0;
 constexpr uint8_t kChanMeta = 1;
 constexpr uint8_t kTypeStop = 0;
+constexpr uint8_t kTypeVelocityWorldLegacy = 1;  ///< yaw rate negated (protocol <= 8)
 constexpr uint8_t kTypeHoverLegacy = 5;  ///< yaw rate negated (protocol <= 8)
 constexpr uint8_t kTypePosition = 7;
 constexpr uint8_t kTypeVelocityWorld = 8;
 constexpr uint8_t kTypeHover = 10;
 constexpr uint8_t kMetaNotifySetpointStop = 0;
+
+// ---- Firmware generations (what cflib sends to which CRTP protocol version)
+/// cflib crazyflie/commander.py, send_hover_setpoint / send_velocity_world_setpoint /
+/// send_zdistance_setpoint: `if self._cf.platform.get_protocol_version() <= 8:` the
+/// legacy packet (hover type 5, velocity-world type 1) with `-yawrate`, else
+/// hover type 10 / velocity-world type 8 with `yawrate` (the types the firmware
+/// gained with the corrected yaw sign, bitcraze/crazyflie-firmware PR 1456).
+constexpr uint8_t kLastLegacyProtocol = 8;
+/// cflib crazyflie/toc.py (TocFetcher.start), log.py and param.py: `self._useV2 =
+/// get_protocol_version() >= 4`. Below that cflib falls back to the v1 TOC/log/param
+/// packets (8-bit ids), which this client does not speak: such a Crazyflie is refused.
+constexpr uint8_t kMinProtocolVersion = 4;
+/// True when cflib would send the legacy setpoints (type 5/1, negated yaw rate).
+constexpr bool legacy_setpoints(uint8_t protocol_version) { return protocol_version <= kLastLegacyProtocol; }
 
 /// Hover: vx, vy [m/s] body-yaw frame, yaw rate [deg/s] (CCW positive in type
 /// 10), height [m]: [10, f32 x4] (cflib send_hover_setpoint).
@@ -170,6 +185,19 @@ CrtpPacket hover(float vx, float vy, float yaw_rate_deg, float z);
 CrtpPacket velocity_world(float vx, float vy, float vz, float yaw_rate_deg);  ///< [8, f32 x4]
 CrtpPacket position(float x, float y, float z, float yaw_deg);                ///< [7, f32 x4]
 CrtpPacket stop();                                                             ///< [0]
+/// Legacy hover [5, vx, vy, -yaw_rate_deg, z]: yaw_rate_deg is CCW positive
+/// (as for hover()); the packet carries it negated like cflib does.
+CrtpPacket hover_legacy(float vx, float vy, float yaw_rate_deg, float z);
+/// Legacy velocity-world [1, vx, vy, vz, -yaw_rate_deg] (cflib, protocol <= 8).
+CrtpPacket velocity_world_legacy(float vx, float vy, float vz, float yaw_rate_deg);
+/// The hover setpoint cflib sends to a Crazyflie speaking `protocol_version`:
+/// type 10 above kLastLegacyProtocol, else type 5 with the yaw rate negated.
+CrtpPacket hover_for_protocol(uint8_t protocol_version, float vx, float vy, float yaw_rate_deg, float z);
+/// Re-encodes a setpoint built with the current-generation encoders (hover 10,
+/// velocity-world 8) for `protocol_version` as cflib would send it; any other
+/// packet (stop, position, notify-stop) is the same in both generations and is
+/// returned unchanged.
+CrtpPacket for_protocol(const CrtpPacket& pk, uint8_t protocol_version);
 CrtpPacket notify_setpoint_stop(uint32_t remain_valid_ms);                     ///< ch 1: [0, u32]
 
 struct Setpoint {
@@ -181,7 +209,47 @@ struct Setpoint {
 };
 /// Decodes port 7 packets (legacy hover 5 is converted to the type-10 sign).
 Setpoint decode(const CrtpPacket& pk);
+
+/// What a firmware speaking `protocol_version` makes of a setpoint packet
+/// (firmware side; yaw rates in the result are CCW positive, deg/s):
+///  - legacy generation (<= kLastLegacyProtocol): the type table ends at
+///    positionType 7 (hover is type 5 and velocity-world type 1, both decoded
+///    with `attitudeRate.yaw = -values->yawrate`);
+///  - current generation: types 0..11 (hover 10 and velocity-world 8 decoded
+///    with `+yawrate`; 5 and 1 kept as the legacy decoders).
+/// A type the generation does not know is NOT ignored by the firmware:
+/// crtp_commander_generic.c crtpCommanderGenericDecodeSetpoint() does
+/// `memset(setpoint, 0, sizeof(setpoint_t))` before looking the type up and
+/// calls no decoder for an unknown one, and crtp_commander.c commanderCrtpCB()
+/// then passes the all-zero setpoint to commanderSetSetpoint(): modes disabled,
+/// thrust 0 -- the stop setpoint (stopDecoder: "Keeps setpoint to 0: stops the
+/// motors and fall"). Such packets decode as Kind::kStop with unknown_type set.
+/// Types the firmware knows but this emulator does not model (2, 3, 4, 6, 9,
+/// 11) decode as Kind::kOther.
+struct FirmwareSetpoint {
+  Setpoint setpoint;
+  bool unknown_type = false;  ///< the generation has no decoder: zero setpoint (motors off)
+};
+FirmwareSetpoint decode_for_firmware(const CrtpPacket& pk, uint8_t protocol_version);
 }  // namespace commander
+
+// ----------------------------------------------------------------------------
+// Compressed quaternion (firmware src/utils/interface/quatcompress.h,
+// quatcompress()/quatdecompress(); the same algorithm as cflib
+// utils/encoding.py compress_quaternion/decompress_quaternion), logged as
+// stateEstimateZ.quat (uint32). Layout: bits 31..30 the index of the largest
+// |component| (order x, y, z, w); then, for the three other components in
+// index order, 10 bits each: a sign bit (set when the component's sign differs
+// from the largest one's) and a 9-bit magnitude |q_i| / (1/sqrt 2) * 511
+// (rounded). The largest component is recomputed as sqrt(1 - sum of squares)
+// and is always >= 0 (q and -q are the same rotation).
+namespace quatz {
+struct Quat {
+  double x = 0, y = 0, z = 0, w = 1;
+};
+uint32_t compress(const Quat& q);  ///< q is normalised first; throws CrtpError for a zero/non-finite q
+Quat decompress(uint32_t comp);
+}  // namespace quatz
 
 // ----------------------------------------------------------------------------
 // Platform (port 13) and link control (port 15)

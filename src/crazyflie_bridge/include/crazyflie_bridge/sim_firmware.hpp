@@ -6,7 +6,11 @@
 //
 // Log TOC: Whisker.Barometer1_1..3, Whisker1.Barometer2_1..3 [Pa, float],
 // stateEstimate.x/y/z [m], yaw [deg], vx/vy/vz [m/s world], pm.vbat [V],
-// sitl.truthX/Y/Z [m] (ground truth, simulator only).
+// sitl.truthX/Y/Z [m] (ground truth, simulator only), and the firmware's compressed
+// estimate stateEstimateZ.quat (uint32, quatcompress of the estimate's attitude)
+// and stateEstimateZ.rateRoll/ratePitch/rateYaw (int16, mrad/s, from the
+// estimate's body rates with the firmware's signs: stabilizer.c compressState()
+// logs rateRoll = gyro.x, ratePitch = -gyro.y, rateYaw = gyro.z).
 // Params: deck.bcWhisker (u8, RO, 1), commander.enHighLevel (u8),
 // stabilizer.stop (u8: 1 stops the motors), sitl.lossPct (u8: injected loss in
 // %, read by the transport through loss_percent()).
@@ -25,7 +29,9 @@ namespace crazyflie_bridge {
 
 class SimulatedCrazyflieFirmware {
  public:
-  explicit SimulatedCrazyflieFirmware(double loss_rate = 0.0);
+  /// protocol_version: FirmwareEmulator::Options::protocol_version (selects
+  /// the firmware generation whose setpoint decoding is emulated).
+  explicit SimulatedCrazyflieFirmware(double loss_rate = 0.0, uint8_t protocol_version = 10);
 
   FirmwareEmulator& emulator() { return fw_; }
   const FirmwareEmulator& emulator() const { return fw_; }
@@ -51,7 +57,7 @@ class SimulatedCrazyflieFirmware {
 
  private:
   FirmwareEmulator fw_;
-  uint16_t id_left_ = 0, id_right_ = 0, id_state_ = 0, id_truth_ = 0;
+  uint16_t id_left_ = 0, id_right_ = 0, id_state_ = 0, id_truth_ = 0, id_quat_ = 0;
   uint16_t p_stop_ = 0, p_loss_ = 0;
   double height_cmd_ = 0.0;
   double yaw_ = 0.0;  ///< estimated yaw [rad]

@@ -32,6 +32,9 @@ struct SitlEndpointOptions {
   std::string bind_address = "127.0.0.1";
   double speed = 1.0;                ///< simulated seconds per wall-clock second
   double loss_rate = 0.0;            ///< probability of dropping each datagram (both directions)
+  /// CRTP protocol version of the simulated firmware (its generation's
+  /// setpoint decoding; FirmwareEmulator::Options::protocol_version).
+  uint8_t protocol_version = 10;
   double spike_rate_hz = 0.0;        ///< latency spikes per second (Poisson)
   double spike_latency_s = 0.2;      ///< extra delay of every packet during a spike
   double spike_duration_s = 0.2;
@@ -66,6 +69,8 @@ class SitlEndpoint {
   /// Ground-truth position of the vehicle (for tests and metrics); safe to
   /// call from another thread while run() is going.
   tactile_sim::Vec3 truth_position() const;
+  /// Ground-truth yaw [rad] of the vehicle (thread-safe, as truth_position()).
+  double truth_yaw() const;
   /// Wall-clock (steady_clock) instant of simulated time 0: the start of
   /// run(); the epoch before run() starts. Thread-safe. At speed 1 a
   /// simulated time t happened at start_time() + t.
@@ -114,6 +119,7 @@ class SitlEndpoint {
   double height_cmd_ = 0.0;
   mutable std::mutex truth_mutex_;
   tactile_sim::Vec3 truth_ = tactile_sim::Vec3::Zero();
+  double truth_yaw_ = 0.0;
   std::atomic<double> loss_request_{-1.0};
   std::atomic<std::chrono::steady_clock::duration::rep> start_ticks_{0};
   std::vector<WhiskerTruthSample> whisker_truth_;

@@ -127,6 +127,58 @@ def test_cflib_connects_logs_params_and_flies(sim, tmp_path):
         assert abs(state[-1]['stateEstimate.z'] - state[-1]['sitl.truthZ']) < 0.1
 
 
+@pytest.mark.parametrize('protocol', [8, 10])
+def test_cflib_yaw_rate_turns_ccw_on_both_firmware_generations(protocol, tmp_path):
+    """cflib's own Commander picks the hover packet by protocol version
+    (<= 8: legacy type 5 with -yawrate); the simulated firmware of that
+    generation turns the drone CCW for a positive yaw rate either way. The
+    firmware's compressed attitude (stateEstimateZ.quat) decodes with cflib's
+    decompress_quaternion to the logged yaw."""
+    import math
+    import warnings
+    from cflib.utils.encoding import decompress_quaternion
+    port = free_udp_port()
+    p = subprocess.Popen([os.environ['CRAZYFLIE_SIM_SERVER'], SCENARIO, '--port', str(port), '--duration', '30',
+                          '--protocol-version', str(protocol)],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert p.stdout.readline().startswith('listening udp://127.0.0.1:%d' % port)
+        cflib.crtp.init_drivers()
+        cf = Crazyflie(rw_cache=str(tmp_path))
+        with SyncCrazyflie('udp://127.0.0.1:%d' % port, cf=cf) as scf:
+            assert scf.cf.platform.get_protocol_version() == protocol
+            lc = LogConfig(name='att', period_in_ms=20)
+            lc.add_variable('stateEstimate.yaw', 'float')
+            lc.add_variable('stateEstimateZ.quat', 'uint32_t')
+            lc.add_variable('sitl.truthZ', 'float')
+            state = []
+            lc.data_received_cb.add_callback(lambda ts, data, conf: state.append(dict(data)))
+            scf.cf.log.add_config(lc)
+            lc.start()
+            with warnings.catch_warnings():
+                warnings.simplefilter('ignore', DeprecationWarning)  # cflib warns on the legacy packet
+                for _ in range(75):  # take off to 0.4 m, 1.5 s
+                    scf.cf.commander.send_hover_setpoint(0.0, 0.0, 0.0, 0.4)
+                    time.sleep(0.02)
+                yaw0 = state[-1]['stateEstimate.yaw']
+                for _ in range(75):  # +40 deg/s (CCW) for 1.5 s
+                    scf.cf.commander.send_hover_setpoint(0.0, 0.0, 40.0, 0.4)
+                    time.sleep(0.02)
+            yaw1 = state[-1]['stateEstimate.yaw']
+            last = state[-1]
+            scf.cf.commander.send_stop_setpoint()
+            lc.stop()
+        assert last['sitl.truthZ'] > 0.3
+        turned = (yaw1 - yaw0 + 180.0) % 360.0 - 180.0
+        assert turned > 25.0, (protocol, yaw0, yaw1)  # ~60 deg commanded, CCW
+        x, y, z, w = decompress_quaternion(int(last['stateEstimateZ.quat']))
+        yaw_q = math.degrees(math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
+        assert abs((yaw_q - last['stateEstimate.yaw'] + 180.0) % 360.0 - 180.0) < 0.5
+    finally:
+        p.terminate()
+        p.communicate(timeout=10)
+
+
 def test_cflib_scan_finds_simulated_crazyflie():
     """cflib's UDP scan (null packet to 19850..19859) finds our server."""
     p = None

@@ -5,6 +5,7 @@ crtp_vectors helper (set by CMake)."""
 import os
 import struct
 import subprocess
+import warnings
 
 import pytest
 
@@ -16,16 +17,19 @@ from cflib.crtp.crtpstack import CRTPPacket  # noqa: E402
 
 
 class _Platform:
+    def __init__(self, version=10):
+        self.version = version
+
     def get_protocol_version(self):
-        return 10
+        return self.version
 
 
 class FakeCf:
     """Collects every packet cflib would send."""
 
-    def __init__(self):
+    def __init__(self, protocol_version=10):
         self.sent = []
-        self.platform = _Platform()
+        self.platform = _Platform(protocol_version)
         self.link = object()
         from cflib.utils.callbacks import Caller
         self.disconnected = Caller()
@@ -60,6 +64,37 @@ def test_commander_packets():
     names = ['hover', 'hover2', 'velocity_world', 'position', 'stop', 'notify_stop']
     for name, pk in zip(names, cf.sent):
         assert v[name] == pk, name
+
+
+def test_commander_packets_per_protocol_version():
+    """cflib picks the hover / velocity-world packet by protocol version
+    (commander.py: get_protocol_version() <= 8 -> legacy type, -yawrate)."""
+    v = ours()
+    for version, name in ((8, 'hover_legacy'), (9, 'hover_v9')):
+        cf = FakeCf(version)
+        with warnings.catch_warnings():
+            warnings.simplefilter('ignore', DeprecationWarning)
+            Commander(cf).send_hover_setpoint(0.5, -0.25, 30.0, 0.4)
+        assert v[name] == cf.sent[0], name
+    cf = FakeCf(8)
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore', DeprecationWarning)
+        Commander(cf).send_velocity_world_setpoint(0.1, -0.2, 0.3, 45.0)
+    assert v['velocity_world_legacy'] == cf.sent[0]
+
+
+def test_quaternion_compression_matches_cflib():
+    """Our quatcompress equals cflib's compress_quaternion (firmware quatcompress.h)."""
+    from cflib.utils.encoding import compress_quaternion, decompress_quaternion
+    v = ours()
+    quats = [(0, 0, 0, 1), (0, 0, 0.7071067811865476, 0.7071067811865476),
+             (0, 0, -0.7071067811865476, 0.7071067811865476), (0.5, 0, 0, 0.8660254037844386),
+             (0.1, -0.2, 0.3, 0.9273618495495703), (-0.6, 0.5, 0.4, -0.4795831523312719)]
+    for i, q in enumerate(quats):
+        comp = struct.unpack('<I', v['quat%d' % i])[0]
+        assert comp == compress_quaternion(q), (i, hex(comp), hex(compress_quaternion(q)))
+        d = decompress_quaternion(comp)
+        assert abs(abs(sum(a * b for a, b in zip(d, q))) - 1.0) < 1e-5, i
 
 
 def test_log_block_create_and_start():

@@ -126,6 +126,19 @@ class WhiskerFsmCrtpGraph : public SimGraph {
     m["bridge_stale_events"] = bs.stale_events;
     m["bridge_setpoints_clamped"] = bs.setpoints_clamped;
     m["firmware_setpoints"] = fw_->emulator().stats().setpoints;
+    // Link truth: the bridge's per-block sequence gaps, and what the two
+    // tdorc_filters made of them (missing samples bridged in the window).
+    m["bridge_log_samples_missed"] = bs.log_samples_missed;
+    uint64_t missing = 0, bridged = 0;
+    for (const auto& r : inner_.reports()) {
+      if (r.name.find("tdorc_filter") == std::string::npos) continue;
+      for (const auto& [k, v] : r.counters) {
+        if (k == "samples_missing") missing += v;
+        if (k == "gaps_bridged") bridged += v;
+      }
+    }
+    m["tdorc_samples_missing"] = missing;
+    m["tdorc_gaps_bridged"] = bridged;
     return m;
   }
 
