@@ -25,10 +25,10 @@ out="$here/build/fuzz"
 mkdir -p "$out/findings"
 export CC=clang CXX=clang++
 log="$out/build.log"
-if ! colcon build --packages-up-to whisker_driver tactile_msgs crazyflie_bridge tactile_bag --build-base "$out/build" \
+if ! colcon build --packages-up-to whisker_driver tactile_msgs crazyflie_bridge tactile_bag tactile_sim --build-base "$out/build" \
   --install-base "$out/install" --event-handlers console_cohesion+ summary- \
   --cmake-args -DBUILD_TESTING=OFF -DTACTILE_BUILD_BENCHMARKS=OFF -DTACTILE_FUZZ=ON \
-  -DWHISKER_DRIVER_FUZZ=ON -DTACTILE_MSGS_FUZZ=ON -DCRAZYFLIE_BRIDGE_FUZZ=ON -DTACTILE_BAG_FUZZ=ON \
+  -DWHISKER_DRIVER_FUZZ=ON -DTACTILE_MSGS_FUZZ=ON -DCRAZYFLIE_BRIDGE_FUZZ=ON -DTACTILE_BAG_FUZZ=ON -DTACTILE_SIM_FUZZ=ON \
   -DCMAKE_BUILD_TYPE=RelWithDebInfo >"$log" 2>&1; then
   grep -E "error|Error" "$log" | head -40 >&2
   echo "fuzz.sh: the clang build failed (full log: $log)" >&2
@@ -39,7 +39,7 @@ echo "== fuzz targets built with clang ($out/build)"
 
 status=0
 for h in whisker_driver/fuzz_frame_parser:512 tactile_msgs/fuzz_cdr:4096 crazyflie_bridge/fuzz_crtp:64 \
-         tactile_bag/fuzz_mcap:65536 tactile_bag/fuzz_sqlite:65536; do
+         tactile_bag/fuzz_mcap:65536 tactile_bag/fuzz_sqlite:65536 tactile_sim/fuzz_scenario:4096; do
   target="${h%%:*}"; len="${h##*:}"
   pkg="${target%%/*}"; name="${target##*/}"
   exe="$out/build/$pkg/$name"
