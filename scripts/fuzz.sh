@@ -1,6 +1,14 @@
 #!/usr/bin/env bash
-# Builds the libFuzzer harnesses with clang (ASan + UBSan) and runs each for
-# SECONDS (default 60). Not part of the tests. Installs clang if missing.
+# Builds the libFuzzer harnesses with clang (ASan + UBSan) and runs each for SECONDS
+# (default 60; 0 = build only). Installs clang if missing.
+#
+# Every harness's stored corpus (src/<pkg>/fuzz/corpus/<target>/: seeds and every past
+# finding) is also replayed by the normal test suite (test <target>_corpus, built with the
+# normal compiler: tactile_add_fuzzer in TactileCommon.cmake), so the harnesses compile in
+# every build. Here the fuzzer reads the stored corpus and writes what it discovers to
+# build/fuzz/corpus/<target>/; a crash, leak or OOM input is written to
+# build/fuzz/findings/ and makes the script fail: fix it, then copy the input into the
+# stored corpus as its regression test.
 # Usage: scripts/fuzz.sh [SECONDS]
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -14,25 +22,41 @@ scripts/setup.sh >/dev/null
 # shellcheck disable=SC1091
 source .venv/bin/activate
 out="$here/build/fuzz"
-mkdir -p "$out"
+mkdir -p "$out/findings"
 export CC=clang CXX=clang++
-colcon build --packages-up-to whisker_driver tactile_msgs crazyflie_bridge tactile_bag --build-base "$out/build" \
-  --install-base "$out/install" --event-handlers console_cohesion- summary- \
-  --cmake-args -DBUILD_TESTING=OFF -DTACTILE_BUILD_BENCHMARKS=OFF \
-  -DWHISKER_DRIVER_FUZZ=ON -DTACTILE_MSGS_FUZZ=ON -DCRAZYFLIE_BRIDGE_FUZZ=ON -DTACTILE_BAG_FUZZ=ON -DCMAKE_BUILD_TYPE=RelWithDebInfo >/dev/null
-for h in "$out/build/whisker_driver/fuzz_frame_parser:512" "$out/build/tactile_msgs/fuzz_cdr:4096" \
-         "$out/build/crazyflie_bridge/fuzz_crtp:64" "$out/build/tactile_bag/fuzz_mcap:65536"; do
-  exe="${h%%:*}"; len="${h##*:}"
-  corpus="$out/corpus/$(basename "$exe")"
-  mkdir -p "$corpus"
-  if [[ "$(basename "$exe")" == fuzz_mcap && -z "$(ls -A "$corpus")" ]]; then
-    # seed: small mcap files of every chunk compression
-    for c in "" zstd lz4; do
-      d="$(mktemp -d)"; rmdir "$d"
-      "$out/install/tactile_bag/bin/tactile_bag_tool" write-sample "$d" --storage mcap ${c:+--compression $c} >/dev/null
-      cp "$d"/*.mcap "$corpus/seed_${c:-none}.mcap"; rm -rf "$d"
-    done
+log="$out/build.log"
+if ! colcon build --packages-up-to whisker_driver tactile_msgs crazyflie_bridge tactile_bag tactile_sim --build-base "$out/build" \
+  --install-base "$out/install" --event-handlers console_cohesion+ summary- \
+  --cmake-args -DBUILD_TESTING=OFF -DTACTILE_BUILD_BENCHMARKS=OFF -DTACTILE_FUZZ=ON \
+  -DWHISKER_DRIVER_FUZZ=ON -DTACTILE_MSGS_FUZZ=ON -DCRAZYFLIE_BRIDGE_FUZZ=ON -DTACTILE_BAG_FUZZ=ON -DTACTILE_SIM_FUZZ=ON \
+  -DCMAKE_BUILD_TYPE=RelWithDebInfo >"$log" 2>&1; then
+  grep -E "error|Error" "$log" | head -40 >&2
+  echo "fuzz.sh: the clang build failed (full log: $log)" >&2
+  exit 1
+fi
+echo "== fuzz targets built with clang ($out/build)"
+[[ "$seconds" == 0 ]] && exit 0
+
+status=0
+for h in whisker_driver/fuzz_frame_parser:512 tactile_msgs/fuzz_cdr:4096 crazyflie_bridge/fuzz_crtp:64 \
+         tactile_bag/fuzz_mcap:65536 tactile_bag/fuzz_sqlite:65536 tactile_sim/fuzz_scenario:4096; do
+  target="${h%%:*}"; len="${h##*:}"
+  pkg="${target%%/*}"; name="${target##*/}"
+  exe="$out/build/$pkg/$name"
+  work="$out/corpus/$name"
+  mkdir -p "$work"
+  dirs=("$work")
+  [[ -d "src/$pkg/fuzz/corpus/$name" ]] && dirs+=("src/$pkg/fuzz/corpus/$name")
+  echo "== $name for ${seconds}s"
+  set +e
+  nice -n 10 "$exe" "${dirs[@]}" -max_total_time="$seconds" -max_len="$len" -rss_limit_mb=2048 \
+    -artifact_prefix="$out/findings/$name-" -print_final_stats=1 >"$out/$name.log" 2>&1
+  rc=$?
+  set -e
+  grep -E "^Done|stat::number_of_executed_units|ERROR|SUMMARY|Test unit written" "$out/$name.log" || true
+  if [[ $rc -ne 0 ]]; then
+    echo "fuzz.sh: $name found a failure (exit $rc; log $out/$name.log, input in $out/findings/)" >&2
+    status=1
   fi
-  echo "== $(basename "$exe") for ${seconds}s"
-  "$exe" "$corpus" -max_total_time="$seconds" -max_len="$len" -rss_limit_mb=2048 2>&1 | grep -E "^Done|ERROR|SUMMARY" || true
 done
+exit $status

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <fstream>
 #include <memory>
+#include <new>
 
 #include "tactile_bag/bag.hpp"
 
@@ -44,85 +45,122 @@ void compress(const std::string& format, const uint8_t* data, size_t size,
   }
 }
 
+uint64_t max_expansion(const std::string& format, uint64_t size) {
+  const uint64_t k = format == "lz4" ? kLz4MaxExpansion : kZstdMaxExpansion;
+  return size > UINT64_MAX / k ? UINT64_MAX : size * k;
+}
+
+namespace {
+
+std::string bytes(uint64_t n) { return std::to_string(n) + " bytes"; }
+
+// Grow `out` to hold at least `need` bytes (doubling, at most `limit`).
+void grow(std::vector<uint8_t>& out, size_t used, uint64_t limit) {
+  const uint64_t next = std::min<uint64_t>(limit, std::max<uint64_t>(used * 2, 64 * 1024));
+  out.resize(static_cast<size_t>(next));
+}
+
+}  // namespace
+
 void decompress(const std::string& format, const uint8_t* data, size_t size,
-                size_t expected_size, std::vector<uint8_t>& out, const std::string& where) {
-  if (format == "zstd") {
-    // Allocate only what the frame itself declares (never trust a container's size alone:
-    // a corrupt chunk could declare gigabytes).
-    const unsigned long long c = ZSTD_getFrameContentSize(data, size);
-    if (c == ZSTD_CONTENTSIZE_ERROR) throw BagError(where + ": not a zstd frame");
-    if (c != ZSTD_CONTENTSIZE_UNKNOWN) {
-      if (expected_size != 0 && c != expected_size) {
-        throw BagError(where + ": zstd frame declares " + std::to_string(c) + " bytes, expected " +
-                       std::to_string(expected_size));
-      }
-      if (c > (1ULL << 34)) throw BagError(where + ": zstd frame declares an implausible " + std::to_string(c) + " bytes");
-      out.resize(static_cast<size_t>(c));
-      const size_t n = ZSTD_decompress(out.data(), out.size(), data, size);
-      if (ZSTD_isError(n)) {
-        throw BagError(where + ": zstd decompression failed: " + ZSTD_getErrorName(n));
-      }
-      if (n != c) {
-        throw BagError(where + ": zstd data decompresses to " + std::to_string(n) +
-                       " bytes, expected " + std::to_string(c));
-      }
-      return;
-    }
-    // Size not in the frame (streamed): decompress in pieces, bounded by expected_size.
-    std::unique_ptr<ZSTD_DCtx, size_t (*)(ZSTD_DCtx*)> ctx(ZSTD_createDCtx(), ZSTD_freeDCtx);
-    out.clear();
-    ZSTD_inBuffer in{data, size, 0};
-    std::vector<uint8_t> buf(ZSTD_DStreamOutSize());
-    size_t rc = 1;
-    while (in.pos < in.size) {
-      ZSTD_outBuffer o{buf.data(), buf.size(), 0};
-      rc = ZSTD_decompressStream(ctx.get(), &o, &in);
-      if (ZSTD_isError(rc)) throw BagError(where + ": zstd decompression failed: " + ZSTD_getErrorName(rc));
-      out.insert(out.end(), buf.data(), buf.data() + o.pos);
-      if (expected_size != 0 && out.size() > expected_size) {
-        throw BagError(where + ": zstd data decompresses to more than the declared " +
-                       std::to_string(expected_size) + " bytes");
-      }
-      if (o.pos == 0 && rc != 0 && in.pos == in.size) break;
-    }
-    if (rc != 0) throw BagError(where + ": zstd data is truncated (frame not complete)");
-    if (expected_size != 0 && out.size() != expected_size) {
-      throw BagError(where + ": zstd data decompresses to " + std::to_string(out.size()) +
-                     " bytes, expected " + std::to_string(expected_size));
-    }
-  } else if (format == "lz4") {
-    LZ4F_dctx* raw = nullptr;
-    if (LZ4F_isError(LZ4F_createDecompressionContext(&raw, LZ4F_VERSION))) {
-      throw BagError(where + ": lz4: cannot create a decompression context");
-    }
-    std::unique_ptr<LZ4F_dctx, size_t (*)(LZ4F_dctx*)> ctx(raw, LZ4F_freeDecompressionContext);
-    // Grow from a size bounded by the input (doubling), never straight to a declared size.
-    out.resize(std::min<size_t>(expected_size > 0 ? expected_size : SIZE_MAX, size * 4 + 64));
-    size_t in_pos = 0, out_pos = 0, rc = 1;
-    while (in_pos < size && rc != 0) {
-      if (out_pos == out.size()) {
-        if (expected_size > 0 && out.size() >= expected_size) {
-          throw BagError(where + ": lz4 data decompresses to more than the declared " +
-                         std::to_string(expected_size) + " bytes");
-        }
-        out.resize(expected_size > 0 ? std::min(out.size() * 2, expected_size) : out.size() * 2);
-      }
-      size_t dst = out.size() - out_pos, src = size - in_pos;
-      rc = LZ4F_decompress(ctx.get(), out.data() + out_pos, &dst, data + in_pos, &src, nullptr);
-      if (LZ4F_isError(rc)) throw BagError(where + ": lz4 decompression failed: " + LZ4F_getErrorName(rc));
-      in_pos += src;
-      out_pos += dst;
-      if (src == 0 && dst == 0) break;
-    }
-    if (rc != 0) throw BagError(where + ": lz4 data is truncated (frame not complete)");
-    if (expected_size > 0 && out_pos != expected_size) {
-      throw BagError(where + ": lz4 data decompresses to " + std::to_string(out_pos) +
-                     " bytes, expected " + std::to_string(expected_size));
-    }
-    out.resize(out_pos);
-  } else {
+                uint64_t expected_size, uint64_t max_size, std::vector<uint8_t>& out,
+                const std::string& where) {
+  if (!supported(format)) {
     throw BagError(where + ": unknown compression '" + format + "' (supported: zstd, lz4)");
   }
+  const bool known = expected_size != kUnknownSize;
+  uint64_t declared = expected_size;  // what the container (or else the frame) declares
+  if (format == "zstd") {
+    const unsigned long long c = ZSTD_getFrameContentSize(data, size);
+    if (c == ZSTD_CONTENTSIZE_ERROR) throw BagError(where + ": not a zstd frame (bad frame header)");
+    if (c != ZSTD_CONTENTSIZE_UNKNOWN) {
+      if (known && c != expected_size) {
+        throw BagError(where + ": zstd frame header declares a content size of " + bytes(c) +
+                       " but the container declares " + bytes(expected_size) + " (file corrupt)");
+      }
+      declared = c;
+    }
+  }
+  // The bound of the output: the declared size, else the caps; a declaration over a cap is
+  // refused before anything is allocated.
+  const uint64_t expansion = max_expansion(format, size);
+  if (declared != kUnknownSize) {
+    if (declared > max_size) {
+      throw BagError(where + ": declared uncompressed size of " + bytes(declared) + " exceeds the cap of " +
+                     bytes(max_size) + " (file corrupt?)");
+    }
+    if (declared > expansion) {
+      throw BagError(where + ": declared uncompressed size of " + bytes(declared) + " cannot come from " +
+                     bytes(size) + " of " + format + " data (at most " + bytes(expansion) + "; file corrupt)");
+    }
+  }
+  const uint64_t limit = declared != kUnknownSize ? declared : std::min(max_size, expansion);
+  // One byte over the limit is room enough to see the data run past it.
+  const uint64_t room = limit + 1;
+  size_t used = 0;
+  try {
+    out.clear();
+    out.resize(static_cast<size_t>(std::min<uint64_t>(room, std::max<uint64_t>(uint64_t{4} * size, 64 * 1024))));
+    if (format == "zstd") {
+      std::unique_ptr<ZSTD_DCtx, size_t (*)(ZSTD_DCtx*)> ctx(ZSTD_createDCtx(), ZSTD_freeDCtx);
+      if (!ctx) throw BagError(where + ": zstd: cannot create a decompression context");
+      ZSTD_inBuffer in{data, size, 0};
+      size_t rc = 1;
+      while (in.pos < in.size || (rc != 0 && used == out.size())) {
+        if (used == out.size()) {
+          if (out.size() >= room) break;
+          grow(out, used, room);
+        }
+        ZSTD_outBuffer o{out.data(), out.size(), used};
+        const size_t before_in = in.pos;
+        rc = ZSTD_decompressStream(ctx.get(), &o, &in);
+        if (ZSTD_isError(rc)) throw BagError(where + ": zstd decompression failed: " + ZSTD_getErrorName(rc));
+        const bool progress = o.pos != used || in.pos != before_in;
+        used = o.pos;
+        if (!progress && used < out.size()) break;
+      }
+      if (used > limit) {
+        throw BagError(where + ": zstd data decompresses to more than the " +
+                       (declared != kUnknownSize ? "declared " : "cap of ") + bytes(limit) + " (file corrupt)");
+      }
+      if (rc != 0) throw BagError(where + ": zstd data is truncated (frame not complete)");
+    } else {
+      LZ4F_dctx* raw = nullptr;
+      if (LZ4F_isError(LZ4F_createDecompressionContext(&raw, LZ4F_VERSION))) {
+        throw BagError(where + ": lz4: cannot create a decompression context");
+      }
+      std::unique_ptr<LZ4F_dctx, size_t (*)(LZ4F_dctx*)> ctx(raw, LZ4F_freeDecompressionContext);
+      size_t in_pos = 0, rc = 1;
+      // Until the frame ends: input left, or output pending in the context (buffer full).
+      while (rc != 0 && (in_pos < size || used == out.size())) {
+        if (used == out.size()) {
+          if (out.size() >= room) break;
+          grow(out, used, room);
+        }
+        size_t dst = out.size() - used, src = size - in_pos;
+        rc = LZ4F_decompress(ctx.get(), out.data() + used, &dst, data + in_pos, &src, nullptr);
+        if (LZ4F_isError(rc)) throw BagError(where + ": lz4 decompression failed: " + LZ4F_getErrorName(rc));
+        in_pos += src;
+        used += dst;
+        if (src == 0 && dst == 0) break;
+      }
+      if (used > limit) {
+        throw BagError(where + ": lz4 data decompresses to more than the " +
+                       (declared != kUnknownSize ? "declared " : "cap of ") + bytes(limit) + " (file corrupt)");
+      }
+      if (rc != 0) throw BagError(where + ": lz4 data is truncated (frame not complete)");
+    }
+  } catch (const std::bad_alloc&) {
+    out.clear();
+    out.shrink_to_fit();
+    throw BagError(where + ": out of memory decompressing " + format + " data (" + bytes(used) +
+                   " produced so far, bound " + bytes(limit) + ")");
+  }
+  if (known && used != expected_size) {
+    throw BagError(where + ": " + format + " data decompresses to " + bytes(used) + ", but the container declares " +
+                   bytes(expected_size) + " (file corrupt)");
+  }
+  out.resize(used);
 }
 
 void decompress_zstd_file(const std::string& from_path, const std::string& to_path) {

@@ -98,9 +98,12 @@ class FileWriter {
   StringMap metadata_;
 };
 
-/// One MCAP file opened for reading (memory-mapped). Every fault is a BagError naming the
-/// file, the byte offset and the reason. A file without footer (a recording that was killed)
-/// is read up to its last complete record, and recovery_note() says what was lost.
+/// One MCAP file opened for reading (memory-mapped). A file without footer (a recording that
+/// was killed) is read up to its last complete record; a damaged chunk (CRC mismatch,
+/// undecodable, sizes that do not add up) is skipped and counted; damaged framing between
+/// chunks is skipped to the next chunk record that frames itself consistently. recovery_note()
+/// says what was lost. What cannot be read at all (bad magic, no header) is a BagError
+/// naming the file, the byte offset and the reason.
 class FileReader {
  public:
   struct Schema { uint16_t id = 0; std::string name, encoding, data; };
@@ -126,6 +129,15 @@ class FileReader {
   uint64_t start_time() const { return start_; }
   uint64_t end_time() const { return end_; }
   bool complete() const { return recovery_note_.empty(); }
+  /// Data lost: a truncated tail, damaged chunks skipped (CRC mismatch, undecodable,
+  /// inconsistent sizes), a damaged region skipped to the next chunk, a damaged summary.
+  bool damaged() const {
+    return bytes_lost_ > 0 || damage_events_ > 0 || !summary_note_.empty();
+  }
+  uint64_t chunks_skipped() const { return chunks_skipped_; }
+  uint64_t bytes_lost() const { return bytes_lost_; }
+  /// Message count of the summary's statistics record (0: none, or the summary is damaged).
+  uint64_t summary_message_count() const { return summary_messages_; }
   const std::string& recovery_note() const { return recovery_note_; }
   /// Metadata records by name (rosbag2 writes "rosbag2": serialized_metadata, ros_distro).
   const std::map<std::string, StringMap>& metadata() const { return metadata_; }
@@ -157,6 +169,12 @@ class FileReader {
     size_t pos = 0;
   };
   void scan();
+  void scan_record(uint8_t op, uint64_t pos, uint64_t len, const uint8_t* body, std::vector<Message>& loose,
+                   bool& stop);
+  void read_summary();
+  bool chunk_at(uint64_t q, uint64_t end) const;
+  uint64_t next_chunk(uint64_t from, uint64_t end) const;
+  void note_damage(const std::string& what);
   void parse_records(const uint8_t* p, uint64_t size, uint64_t base, bool in_chunk,
                      const std::string& where, std::vector<Message>* out);
   void load(size_t block, Cursor& c);
@@ -164,6 +182,9 @@ class FileReader {
   [[noreturn]] void fail(uint64_t offset, const std::string& what) const;
 
   std::string path_, profile_, recovery_note_;
+  uint64_t chunks_skipped_ = 0, bytes_lost_ = 0, damage_events_ = 0, summary_messages_ = 0;
+  std::vector<std::string> damage_notes_;  // the first three, for recovery_note()
+  std::string summary_note_;
   const uint8_t* data_ = nullptr;
   size_t size_ = 0;
   void* map_ = nullptr;

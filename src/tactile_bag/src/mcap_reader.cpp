@@ -186,6 +186,46 @@ void FileReader::parse_records(const uint8_t* p, uint64_t size, uint64_t base, b
   }
 }
 
+// A chunk record at `q` whose framing is self-consistent: its length fits before `end`,
+// its compression is one of the spec's names and its fields add up to exactly the record
+// length (the records field is last). The chunk CRC is checked when the chunk is loaded.
+bool FileReader::chunk_at(uint64_t q, uint64_t end) const {
+  if (end - q < 9 || data_[q] != kChunk) return false;
+  uint64_t len;
+  std::memcpy(&len, data_ + q + 1, 8);
+  constexpr uint64_t kFixed = 8 + 8 + 8 + 4 + 4 + 8;  // times, size, crc, string length, records length
+  if (len < kFixed || len > end - q - 9) return false;
+  const uint8_t* body = data_ + q + 9;
+  uint64_t t0, t1;
+  std::memcpy(&t0, body, 8);
+  std::memcpy(&t1, body + 8, 8);
+  uint32_t clen;
+  std::memcpy(&clen, body + 28, 4);
+  if (t0 > t1 || clen > 4 || kFixed + clen > len) return false;
+  const std::string comp(reinterpret_cast<const char*>(body + 32), clen);
+  if (!comp.empty() && !codec::supported(comp)) return false;
+  uint64_t rsize;
+  std::memcpy(&rsize, body + 32 + clen, 8);
+  return rsize == len - kFixed - clen;
+}
+
+// First offset in (from, end) where a self-consistent chunk record starts; `end` if none.
+uint64_t FileReader::next_chunk(uint64_t from, uint64_t end) const {
+  for (uint64_t q = from + 1; q + 9 <= end;) {
+    const void* hit = std::memchr(data_ + q, kChunk, static_cast<size_t>(end - q));
+    if (hit == nullptr) break;
+    q = static_cast<uint64_t>(static_cast<const uint8_t*>(hit) - data_);
+    if (chunk_at(q, end)) return q;
+    ++q;
+  }
+  return end;
+}
+
+void FileReader::note_damage(const std::string& what) {
+  ++damage_events_;
+  if (damage_notes_.size() < 3) damage_notes_.push_back(what);
+}
+
 void FileReader::scan() {
   const std::string& f = path_;
   if (size_ < 8 || std::memcmp(data_, kMagic, 8) != 0) {
@@ -200,121 +240,79 @@ void FileReader::scan() {
   if (size_ < 17 || data_[8] != kHeader) fail(8, "expected the header record (opcode 0x01) after the magic");
   uint64_t pos = 8;
   std::vector<Message> loose;
-  bool seen_data_end = false;
-  std::string note;
+  std::string note;  // how the data section ends early (no footer)
   while (pos < data_end) {
     if (data_end - pos < 9) {
       note = "file ends inside a record header at byte " + std::to_string(pos);
+      bytes_lost_ += data_end - pos;
       break;
     }
     const uint8_t op = data_[pos];
     uint64_t len;
     std::memcpy(&len, data_ + pos + 1, 8);
-    if (len > data_end - pos - 9) {
-      if (has_footer) {
-        fail(pos, "record (opcode " + std::to_string(op) + ") declares " + std::to_string(len) +
-                      " bytes but only " + std::to_string(data_end - pos - 9) + " remain before the footer");
+    if (op == 0 || len > data_end - pos - 9) {
+      // The framing is damaged here (a reserved opcode, or a length past the end): go on at
+      // the next chunk record that frames itself consistently, or treat the rest as lost.
+      const uint64_t next = next_chunk(pos, data_end);
+      const std::string why =
+          op == 0 ? std::string("record with the reserved opcode 0x00")
+                  : "record (opcode " + std::to_string(op) + ") declares " + std::to_string(len) + " bytes but only " +
+                        std::to_string(data_end - pos - 9) + " remain" + (has_footer ? " before the footer" : "");
+      if (next < data_end) {
+        note_damage(f + ": byte " + std::to_string(pos) + ": " + why + "; " + std::to_string(next - pos) + " bytes skipped to the chunk at byte " +
+                         std::to_string(next));
+        bytes_lost_ += next - pos;
+        pos = next;
+        continue;
       }
-      note = "file ends inside a record (opcode " + std::to_string(op) + ") at byte " +
-             std::to_string(pos) + " (" + std::to_string(data_end - pos) + " bytes lost)";
+      bytes_lost_ += data_end - pos;
+      if (!has_footer && op != 0) {
+        note = "file ends inside a record (opcode " + std::to_string(op) + ") at byte " + std::to_string(pos) +
+               " (" + std::to_string(data_end - pos) + " bytes lost)";
+      } else {
+        note_damage(f + ": byte " + std::to_string(pos) + ": " + why + "; the " + std::to_string(data_end - pos) + " bytes from there to " +
+                         (has_footer ? "the footer" : "the end") + " hold no readable chunk");
+      }
       break;
     }
     const uint8_t* body = data_ + pos + 9;
-    if (op == kHeader && pos == 8) {
-      Cur c{body, len, 0, pos + 9, this, "header record", f};
-      profile_ = c.str("profile");
-    } else if (op == kChunk) {
-      Cur c{body, len, 0, pos + 9, this, "chunk record", f};
-      Block b;
-      b.offset = pos;
-      b.start = c.get<uint64_t>("message_start_time");
-      b.end = c.get<uint64_t>("message_end_time");
-      b.uncompressed_size = c.get<uint64_t>("uncompressed_size");
-      b.crc = c.get<uint32_t>("uncompressed_crc");
-      b.compression = c.str("compression");
-      const uint64_t rsize = c.get<uint64_t>("records");
-      c.need(rsize, "records");
-      b.records = body + c.pos;
-      b.records_size = rsize;
-      if (!b.compression.empty() && !codec::supported(b.compression)) {
-        fail(pos, "chunk record: unknown compression '" + b.compression + "' (supported: none, zstd, lz4)");
-      }
-      if (b.compression.empty() && rsize != b.uncompressed_size) {
-        fail(pos, "chunk record: uncompressed chunk of " + std::to_string(rsize) +
-                      " bytes declares uncompressed_size " + std::to_string(b.uncompressed_size));
-      }
-      if (b.uncompressed_size > (uint64_t{1} << 34)) {
-        fail(pos, "chunk record: uncompressed_size " + std::to_string(b.uncompressed_size) + " is implausible (> 16 GiB)");
-      }
-      // Collect schemas, channels and counts now (the chunk is decoded again when read).
-      Cursor tmp;
-      blocks_.push_back(std::move(b));
-      load(blocks_.size() - 1, tmp);
-      Block& bb = blocks_.back();
-      if (!tmp.messages.empty()) {
-        bb.start = tmp.messages.front().log_time;
-        bb.end = bb.start;
-        for (const auto& m : tmp.messages) {
-          bb.end = std::max(bb.end, m.log_time);
-          ++counts_[m.channel_id];
-          if (total_ == 0 || m.log_time < start_) start_ = m.log_time;
-          if (total_ == 0 || m.log_time > end_) end_ = m.log_time;
-          ++total_;
-        }
-      } else {
-        blocks_.pop_back();
-      }
-    } else if (op == kDataEnd) {
-      seen_data_end = true;
-      if (len >= 4) {
-        uint32_t crc;
-        std::memcpy(&crc, body, 4);
-        if (crc != 0) {
-          const uint32_t got = codec::crc32(0, data_, pos);
-          if (got != crc) {
-            fail(pos, "data section CRC mismatch: stored " + std::to_string(crc) + ", computed " +
-                          std::to_string(got) + " (file corrupt)");
-          }
-        }
-      }
-      break;  // the summary follows
-    } else if (op == kFooter) {
-      fail(pos, "footer record in the data section");
-    } else {
-      std::vector<Message> msgs;
-      parse_records(data_ + pos, 9 + len, 0, false, f, &msgs);
-      for (const auto& m : msgs) {
-        loose.push_back(m);
-        ++counts_[m.channel_id];
-        if (total_ == 0 || m.log_time < start_) start_ = m.log_time;
-        if (total_ == 0 || m.log_time > end_) end_ = m.log_time;
-        ++total_;
-      }
+    bool stop = false;
+    try {
+      scan_record(op, pos, len, body, loose, stop);
+    } catch (const BagError& e) {
+      // The record frames itself (its length fits) but its content is damaged: skip it.
+      if (op == kChunk) ++chunks_skipped_;
+      note_damage(e.what());
     }
+    if (stop) break;
     pos += 9 + len;
   }
-  if (has_footer && !seen_data_end) {
-    // Valid too (the data end record is optional in old writers); nothing lost.
+  if (has_footer) read_summary();
+  std::string damage;
+  if (damage_events_ > 0) {
+    if (chunks_skipped_ > 0) damage = std::to_string(chunks_skipped_) + " damaged chunk(s) skipped";
+    if (damage_events_ > chunks_skipped_) {
+      damage += (damage.empty() ? "" : ", ") + std::to_string(damage_events_ - chunks_skipped_) +
+                " damaged region(s) skipped";
+    }
+    damage += " (";
+    for (size_t i = 0; i < damage_notes_.size(); ++i) damage += (i ? "; " : "") + damage_notes_[i];
+    damage += damage_events_ > damage_notes_.size() ? "; ...)" : ")";
+  }
+  std::string read = std::to_string(total_) + " messages read";
+  if (summary_messages_ > total_) {
+    read += " of the " + std::to_string(summary_messages_) + " the summary lists (" +
+            std::to_string(summary_messages_ - total_) + " lost)";
   }
   if (!has_footer) {
     recovery_note_ = "no mcap footer (recording not closed?)";
     if (!note.empty()) recovery_note_ += ": " + note;
-    recovery_note_ += "; " + std::to_string(total_) + " messages read from the complete records";
-  } else {
-    // Summary CRC (footer: summary_start, summary_offset_start, summary_crc).
-    const uint8_t* ft = data_ + size_ - 8 - 29;
-    uint64_t summary_start;
-    uint32_t summary_crc;
-    std::memcpy(&summary_start, ft + 9, 8);
-    std::memcpy(&summary_crc, ft + 25, 4);
-    if (summary_start != 0 && summary_crc != 0) {
-      if (summary_start > size_ - 8 - 29) fail(size_ - 37, "footer: summary_start beyond the footer");
-      const uint32_t got = codec::crc32(0, data_ + summary_start, size_ - 8 - 4 - summary_start);
-      if (got != summary_crc) {
-        fail(summary_start, "summary section CRC mismatch: stored " + std::to_string(summary_crc) +
-                                ", computed " + std::to_string(got) + " (file corrupt)");
-      }
-    }
+    if (!damage.empty()) recovery_note_ += "; " + damage;
+    recovery_note_ += "; " + read + " from the complete records";
+  } else if (!damage.empty() || !summary_note_.empty()) {
+    recovery_note_ = damage;
+    if (!summary_note_.empty()) recovery_note_ += (recovery_note_.empty() ? "" : "; ") + summary_note_;
+    recovery_note_ += "; " + read;
   }
   for (const auto& [id, ch] : channels_) {
     if (ch.schema_id != 0 && schemas_.count(ch.schema_id) == 0) {
@@ -337,6 +335,145 @@ void FileReader::scan() {
   ready_ = false;
 }
 
+// One top-level record of the data section (framing already checked). Throws BagError if
+// its content is damaged; sets `stop` at the data end record.
+void FileReader::scan_record(uint8_t op, uint64_t pos, uint64_t len, const uint8_t* body,
+                             std::vector<Message>& loose, bool& stop) {
+  const std::string& f = path_;
+  if (op == kHeader && pos == 8) {
+    Cur c{body, len, 0, pos + 9, this, "header record", f};
+    profile_ = c.str("profile");
+  } else if (op == kChunk) {
+    Cur c{body, len, 0, pos + 9, this, "chunk record", f};
+    Block b;
+    b.offset = pos;
+    b.start = c.get<uint64_t>("message_start_time");
+    b.end = c.get<uint64_t>("message_end_time");
+    b.uncompressed_size = c.get<uint64_t>("uncompressed_size");
+    b.crc = c.get<uint32_t>("uncompressed_crc");
+    b.compression = c.str("compression");
+    const uint64_t rsize = c.get<uint64_t>("records");
+    c.need(rsize, "records");
+    b.records = body + c.pos;
+    b.records_size = rsize;
+    if (!b.compression.empty() && !codec::supported(b.compression)) {
+      fail(pos, "chunk record: unknown compression '" + b.compression + "' (supported: none, zstd, lz4)");
+    }
+    if (b.compression.empty() && rsize != b.uncompressed_size) {
+      fail(pos, "chunk record: uncompressed chunk of " + std::to_string(rsize) +
+                    " bytes declares uncompressed_size " + std::to_string(b.uncompressed_size));
+    }
+    // uncompressed_size sizes the decompression: bounded by the cap and by what the
+    // compressed bytes can expand to (codec.hpp), before anything is allocated.
+    if (!b.compression.empty()) {
+      if (b.uncompressed_size > codec::kMaxDecompressedBytes) {
+        fail(pos, "chunk record: field 'uncompressed_size' = " + std::to_string(b.uncompressed_size) +
+                      " exceeds the cap of " + std::to_string(codec::kMaxDecompressedBytes) + " bytes per chunk");
+      }
+      if (b.uncompressed_size > codec::max_expansion(b.compression, rsize)) {
+        fail(pos, "chunk record: field 'uncompressed_size' = " + std::to_string(b.uncompressed_size) +
+                      " cannot come from " + std::to_string(rsize) + " bytes of " + b.compression + " data (at most " +
+                      std::to_string(codec::max_expansion(b.compression, rsize)) + ")");
+      }
+    }
+    // Collect schemas, channels and counts now (the chunk is decoded again when read). A
+    // chunk without CRC is parsed before anything vouches for it: its definitions are kept
+    // only if the whole chunk parses.
+    std::map<uint16_t, Schema> schemas_before;
+    std::map<uint16_t, Channel> channels_before;
+    const bool no_crc = b.crc == 0;
+    if (no_crc) {
+      schemas_before = schemas_;
+      channels_before = channels_;
+    }
+    Cursor tmp;
+    blocks_.push_back(std::move(b));
+    try {
+      load(blocks_.size() - 1, tmp);
+    } catch (...) {
+      blocks_.pop_back();
+      if (no_crc) {
+        schemas_.swap(schemas_before);
+        channels_.swap(channels_before);
+      }
+      throw;
+    }
+    Block& bb = blocks_.back();
+    if (!tmp.messages.empty()) {
+      bb.start = tmp.messages.front().log_time;
+      bb.end = bb.start;
+      for (const auto& m : tmp.messages) {
+        bb.end = std::max(bb.end, m.log_time);
+        ++counts_[m.channel_id];
+        if (total_ == 0 || m.log_time < start_) start_ = m.log_time;
+        if (total_ == 0 || m.log_time > end_) end_ = m.log_time;
+        ++total_;
+      }
+    } else {
+      blocks_.pop_back();
+    }
+  } else if (op == kDataEnd) {
+    stop = true;  // the summary follows
+    if (len >= 4) {
+      uint32_t crc;
+      std::memcpy(&crc, body, 4);
+      if (crc != 0) {
+        const uint32_t got = codec::crc32(0, data_, pos);
+        if (got != crc) {
+          // Every chunk was checked against its own CRC; what else lies in the data section
+          // (message indexes, records outside chunks) may be damaged.
+          note_damage(f + ": byte " + std::to_string(pos) + ": data section CRC mismatch: stored " + std::to_string(crc) + ", computed " +
+                           std::to_string(got) + " (chunks are checked by their own CRCs)");
+        }
+      }
+    }
+  } else if (op == kFooter) {
+    fail(pos, "footer record in the data section");
+  } else {
+    std::vector<Message> msgs;
+    parse_records(data_ + pos, 9 + len, 0, false, f, &msgs);
+    for (const auto& m : msgs) {
+      loose.push_back(m);
+      ++counts_[m.channel_id];
+      if (total_ == 0 || m.log_time < start_) start_ = m.log_time;
+      if (total_ == 0 || m.log_time > end_) end_ = m.log_time;
+      ++total_;
+    }
+  }
+}
+
+// Summary section (footer present): its CRC, and the message count of its statistics
+// record, which says how many messages a damaged file lost. The reader does not need the
+// summary otherwise (the data section is scanned), so a damaged one is a note, not an error.
+void FileReader::read_summary() {
+  const uint8_t* ft = data_ + size_ - 8 - 29;
+  uint64_t summary_start;
+  uint32_t summary_crc;
+  std::memcpy(&summary_start, ft + 9, 8);
+  std::memcpy(&summary_crc, ft + 25, 4);
+  const uint64_t footer = size_ - 8 - 29;
+  if (summary_start == 0) return;
+  if (summary_start < 8 || summary_start > footer) {
+    summary_note_ = "footer: summary_start " + std::to_string(summary_start) + " is outside the file (summary ignored)";
+    return;
+  }
+  if (summary_crc != 0) {
+    const uint32_t got = codec::crc32(0, data_ + summary_start, size_ - 8 - 4 - summary_start);
+    if (got != summary_crc) {
+      summary_note_ = "summary section CRC mismatch at byte " + std::to_string(summary_start) + ": stored " +
+                      std::to_string(summary_crc) + ", computed " + std::to_string(got) + " (summary ignored)";
+      return;
+    }
+  }
+  for (uint64_t q = summary_start; footer - q >= 9;) {
+    uint64_t len;
+    std::memcpy(&len, data_ + q + 1, 8);
+    if (len > footer - q - 9) break;
+    if (data_[q] == kStatistics && len >= 8) std::memcpy(&summary_messages_, data_ + q + 9, 8);
+    q += 9 + len;
+  }
+}
+
 void FileReader::load(size_t index, Cursor& c) {
   Block& b = blocks_[index];
   c.block = index;
@@ -349,7 +486,8 @@ void FileReader::load(size_t index, Cursor& c) {
     uint64_t rsize = b.records_size;
     const std::string where = path_ + ": chunk at byte " + std::to_string(b.offset);
     if (!b.compression.empty()) {
-      codec::decompress(b.compression, b.records, b.records_size, b.uncompressed_size, c.buffer, where);
+      codec::decompress(b.compression, b.records, b.records_size, b.uncompressed_size,
+                        codec::kMaxDecompressedBytes, c.buffer, where);
       rec = c.buffer.data();
       rsize = c.buffer.size();
     }

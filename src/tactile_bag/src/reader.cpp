@@ -24,6 +24,17 @@ namespace fs = std::filesystem;
 namespace tactile_bag {
 namespace {
 
+// metadata.yaml that is rosbag2 metadata but declares what this reader cannot honour (a newer
+// version, another storage, another compression): an error, never a fallback. Any other
+// fault of the file (not YAML, keys missing or mistyped) makes it unreadable, and the bag is
+// read from its data files as if it had none (README "Corrupt bags").
+struct UnsupportedMetadata : BagError {
+  using BagError::BagError;
+};
+
+/// metadata.yaml larger than this is not read (a recording of 1000 topics writes ~1 MB).
+constexpr uint64_t kMaxMetadataBytes = uint64_t{16} << 20;
+
 struct MetaTopic {
   TopicInfo info;
   uint64_t count = 0;
@@ -58,6 +69,13 @@ T need_as(const YAML::Node& node, const char* key, const std::string& file,
 }
 
 Metadata parse_metadata(const std::string& file, const std::string& dir) {
+  std::error_code size_ec;
+  const auto file_size = fs::file_size(file, size_ec);
+  if (size_ec) throw BagError(file + ": cannot read: " + size_ec.message());
+  if (file_size > kMaxMetadataBytes) {
+    throw BagError(file + ": " + std::to_string(file_size) + " bytes, more than the " +
+                   std::to_string(kMaxMetadataBytes) + " a metadata.yaml may have (not read)");
+  }
   YAML::Node root;
   try {
     root = YAML::LoadFile(file);
@@ -74,12 +92,12 @@ Metadata parse_metadata(const std::string& file, const std::string& dir) {
   Metadata m;
   m.version = need_as<int>(info, "version", file, top, "an integer");
   if (m.version < 1 || m.version > 9) {
-    throw BagError(file + ": key '" + top + ".version': unsupported version " +
+    throw UnsupportedMetadata(file + ": key '" + top + ".version': unsupported version " +
                    std::to_string(m.version) + " (this reader supports 1..9)");
   }
   const auto storage = need_as<std::string>(info, "storage_identifier", file, top, "a string");
   if (storage != "sqlite3" && storage != "mcap") {
-    throw BagError(file + ": key '" + top + ".storage_identifier': storage '" + storage +
+    throw UnsupportedMetadata(file + ": key '" + top + ".storage_identifier': storage '" + storage +
                    "' is not supported (sqlite3 and mcap are)");
   }
   m.storage = storage;
@@ -92,11 +110,11 @@ Metadata parse_metadata(const std::string& file, const std::string& dir) {
     }
     if (!mode.empty() && mode != "NONE") {
       if (mode != "FILE" && mode != "MESSAGE") {
-        throw BagError(file + ": key '" + top + ".compression_mode': unknown mode '" + mode +
+        throw UnsupportedMetadata(file + ": key '" + top + ".compression_mode': unknown mode '" + mode +
                        "' (FILE, MESSAGE or NONE)");
       }
       if (format != "zstd") {
-        throw BagError(file + ": key '" + top + ".compression_format': '" + format +
+        throw UnsupportedMetadata(file + ": key '" + top + ".compression_format': '" + format +
                        "' is not supported (rosbag2 compresses with zstd)");
       }
       m.compression_mode = mode;
@@ -246,6 +264,8 @@ void Reader::close() {
   metadata_version_ = 0;
   metadata_complete_ = false;
   recovery_note_.clear();
+  damaged_ = false;
+  chunks_skipped_ = 0;
   iter_ready_ = false;
 }
 
@@ -270,9 +290,22 @@ void Reader::open(const std::string& dir) {
   const std::string meta_path = (fs::path(dir) / "metadata.yaml").string();
   Metadata meta;
   bool have_meta = false;
+  std::string meta_unreadable;  // why metadata.yaml was not used (the bag is read without it)
   if (fs::exists(meta_path, ec)) {
-    meta = parse_metadata(meta_path, dir);
-    have_meta = true;
+    try {
+      meta = parse_metadata(meta_path, dir);
+      have_meta = true;
+    } catch (const UnsupportedMetadata&) {
+      throw;
+    } catch (const BagError& e) {
+      meta_unreadable = e.what();
+      meta = Metadata{};
+    } catch (const YAML::Exception& e) {
+      meta_unreadable = meta_path + ": " + e.what();
+      meta = Metadata{};
+    }
+  }
+  if (have_meta) {
     metadata_version_ = meta.version;
     storage_ = meta.storage;
     compression_format_ = meta.compression_format;
@@ -296,6 +329,9 @@ void Reader::open(const std::string& dir) {
       storage_ = "mcap";
     }
     if (found.empty()) {
+      if (!meta_unreadable.empty()) {
+        throw BagError(meta_unreadable + "; and no .db3 or .mcap file beside it to read instead");
+      }
       throw BagError(dir + ": no metadata.yaml and no .db3 file (nor .mcap): not a rosbag2 bag");
     }
     // Order split files by their numeric suffix (<name>_<n>.db3).
@@ -374,7 +410,10 @@ void Reader::open(const std::string& dir) {
 
   if (!have_meta) {
     metadata_complete_ = false;
-    recovery_note_ = "no metadata.yaml: topics and counts reconstructed from the database";
+    recovery_note_ = meta_unreadable.empty()
+                         ? "no metadata.yaml: topics and counts reconstructed from the database"
+                         : "metadata.yaml not used (" + meta_unreadable +
+                               "): topics and counts reconstructed from the data files";
   } else {
     metadata_complete_ = true;
     std::string note;
@@ -398,12 +437,24 @@ void Reader::open(const std::string& dir) {
       recovery_note_ = note + " (recording not closed?); using the database";
     }
   }
+  std::string damage;
   for (const auto& mf : mcap_files_) {
     if (!mf.reader->complete()) {
       metadata_complete_ = false;
       recovery_note_ += (recovery_note_.empty() ? "" : "; ") + mf.reader->path() + ": " +
                         mf.reader->recovery_note();
     }
+    if (mf.reader->damaged()) {
+      damaged_ = true;
+      chunks_skipped_ += mf.reader->chunks_skipped();
+      damage += (damage.empty() ? "" : "; ") + mf.reader->path() + ": " + mf.reader->recovery_note();
+    }
+  }
+  // An empty result from a damaged bag is an error, never "0 messages".
+  if (damaged_ && total_count_ == 0) {
+    const std::string what = dir + ": nothing recovered from the damaged bag: " + damage;
+    close();
+    throw BagError(what);
   }
   // sensor_msgs/Range in Humble's layout (no variance): by its definition where the bag
   // stores one, else by the bag's distro (Humble/Iron, or metadata older than Jazzy's).
@@ -474,6 +525,15 @@ void Reader::open_file(File& f, std::map<std::string, TopicInfo>& found,
     throw BagError(f.path + ": cannot open database: " + e);
   }
   sqlite3* db = f.db;
+  // No string or blob can be larger than the database (and its WAL): a record declaring a
+  // larger payload is refused by sqlite (SQLITE_TOOBIG) before it allocates for it.
+  {
+    std::error_code size_ec;
+    uint64_t bytes = fs::file_size(f.path, size_ec);
+    const uint64_t wal = fs::file_size(f.path + "-wal", size_ec);
+    if (!size_ec) bytes += wal;
+    sqlite3_limit(db, SQLITE_LIMIT_LENGTH, static_cast<int>(std::min<uint64_t>(bytes, INT32_MAX)));
+  }
   // Tables present (also the first real read: sqlite reports "file is not a database" here).
   std::set<std::string> tables;
   {
@@ -658,7 +718,8 @@ bool Reader::read_next_mcap(SerializedMessage& out) {
 
 void Reader::finish_message(SerializedMessage& out) {
   if (compression_mode_ == "MESSAGE") {
-    codec::decompress(compression_format_, out.data.data(), out.data.size(), 0, scratch_,
+    codec::decompress(compression_format_, out.data.data(), out.data.size(), codec::kUnknownSize,
+                      codec::kMaxDecompressedBytes, scratch_,
                       dir_ + ": message on '" + out.topic + "' at " + std::to_string(out.timestamp_ns) + " ns");
     out.data.swap(scratch_);
   }

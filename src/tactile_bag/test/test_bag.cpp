@@ -545,7 +545,9 @@ TEST(BagErrors, CorruptAndTruncatedDatabase) {
   expect_error([&] { Reader r(dir); }, {"sample_0.db3", "not a rosbag2 database", "topics"});
 }
 
-TEST(BagErrors, BadMetadata) {
+// metadata.yaml that declares what the reader cannot honour (a newer version, another
+// storage or compression) is an error naming the key.
+TEST(BagErrors, UnsupportedMetadata) {
   TempDir tmp;
   const std::string dir = write_sample_bag(tmp);
   const std::string meta = dir + "/metadata.yaml";
@@ -557,35 +559,70 @@ TEST(BagErrors, BadMetadata) {
     t.replace(pos, from.size(), to);
     write_file(meta, t);
   };
-
-  write_file(meta, "rosbag2_bagfile_information: [unclosed\n");
-  expect_error([&] { Reader r(dir); }, {"metadata.yaml", "not valid YAML"});
-  write_file(meta, "hello: 1\n");
-  expect_error([&] { Reader r(dir); }, {"metadata.yaml", "rosbag2_bagfile_information", "missing"});
-  with("version: 9", "versio: 9");
-  expect_error([&] { Reader r(dir); }, {"metadata.yaml", "rosbag2_bagfile_information.version", "missing"});
   with("version: 9", "version: 10");
   expect_error([&] { Reader r(dir); }, {"metadata.yaml", "version", "unsupported version 10"});
-  with("version: 9", "version: nine");
-  expect_error([&] { Reader r(dir); }, {"metadata.yaml", "version", "expected an integer"});
   with("storage_identifier: sqlite3", "storage_identifier: rosbag_v1");
   expect_error([&] { Reader r(dir); }, {"metadata.yaml", "storage_identifier", "rosbag_v1", "not supported"});
   with("storage_identifier: sqlite3", "storage_identifier: mcap");  // but names a .db3
   expect_error([&] { Reader r(dir); }, {"sample_0.db3", "byte 0", "not an mcap file"});
-  with("message_count: 15", "message_count: lots");
-  expect_error([&] { Reader r(dir); }, {"metadata.yaml", "message_count", "unsigned integer"});
-  with("reliability: reliable", "reliability: sometimes");
-  expect_error([&] { Reader r(dir); },
-               {"metadata.yaml", "topics_with_message_count[0].topic_metadata.offered_qos_profiles",
-                "reliability", "sometimes"});
   with("compression_mode: \"\"", "compression_mode: FILE");
   expect_error([&] { Reader r(dir); }, {"metadata.yaml", "compression_format", "not supported"});
-  // Oversized garbage: a large random file must be rejected, not crash.
+}
+
+// A garbage metadata.yaml beside an intact database is treated as a missing one: the bag is
+// read from the database, and the recovery note says why metadata.yaml was not used (issue
+// 32: it refused the whole bag, while a deleted metadata.yaml did not). Without a data file
+// it stays an error naming both.
+TEST(BagErrors, GarbageMetadataIsReadLikeAMissingOne) {
+  TempDir tmp;
+  const std::string dir = write_sample_bag(tmp);
+  const std::string meta = dir + "/metadata.yaml";
+  const std::string good = read_file(meta);
+  auto with = [&](const std::string& from, const std::string& to) {
+    std::string t = good;
+    const auto pos = t.find(from);
+    EXPECT_NE(pos, std::string::npos) << from;
+    t.replace(pos, from.size(), to);
+    write_file(meta, t);
+  };
+  auto expect_read = [&](const std::vector<std::string>& fragments) {
+    Reader r(dir);
+    EXPECT_EQ(r.message_count(), 15u);
+    EXPECT_FALSE(r.metadata_complete());
+    EXPECT_FALSE(r.damaged());
+    EXPECT_NE(r.recovery_note().find("metadata.yaml not used"), std::string::npos) << r.recovery_note();
+    for (const auto& f : fragments) EXPECT_NE(r.recovery_note().find(f), std::string::npos) << f << " in " << r.recovery_note();
+    SerializedMessage m;
+    uint64_t n = 0;
+    while (r.read_next(m)) ++n;
+    EXPECT_EQ(n, 15u);
+  };
+  write_file(meta, "rosbag2_bagfile_information: [unclosed\n");
+  expect_read({"metadata.yaml", "not valid YAML"});
+  write_file(meta, "hello: 1\n");
+  expect_read({"rosbag2_bagfile_information", "missing"});
+  with("version: 9", "versio: 9");
+  expect_read({"rosbag2_bagfile_information.version", "missing"});
+  with("version: 9", "version: nine");
+  expect_read({"version", "expected an integer"});
+  with("message_count: 15", "message_count: lots");
+  expect_read({"message_count", "unsigned integer"});
+  with("reliability: reliable", "reliability: sometimes");
+  expect_read({"topics_with_message_count[0].topic_metadata.offered_qos_profiles", "reliability", "sometimes"});
+  // Oversized random garbage.
   std::string junk(1 << 20, 'x');
   std::mt19937 gen(3);
   for (auto& c : junk) c = static_cast<char>(gen() % 95 + 32);
   write_file(meta, junk);
-  EXPECT_THROW(Reader r(dir), BagError);
+  expect_read({"metadata.yaml"});
+  // Binary garbage.
+  std::string bin(4096, '\0');
+  for (auto& c : bin) c = static_cast<char>(gen());
+  write_file(meta, bin);
+  expect_read({"metadata.yaml"});
+  // Without a data file beside it: an error naming both.
+  fs::remove(dir + "/sample_0.db3");
+  expect_error([&] { Reader r(dir); }, {"metadata.yaml", "no .db3 or .mcap file beside it"});
 }
 
 TEST(Bag, ReadsRos2HumbleStyleBag) {

@@ -219,12 +219,14 @@ def test_reader_faults_name_file_offset_and_reason(tmp_path):
     bad[body + 4:body + 8] = b'xxxx'  # compression "zstd" -> "xxxx"
     err = broken('compression', bytes(bad))
     assert f'byte {pos}' in err and "unknown compression 'xxxx'" in err
-    # truncated inside the chunk: a killed recording, read with a recovery note
+    # truncated inside its only chunk: nothing is recovered, which is an error (not an
+    # empty bag) naming the file, the offset and what was lost
     bag = tmp_path / 'cut'
     shutil.copytree(src, bag)
     (bag / path.name).write_bytes(data[:records + 10])
-    info = run_tool('info', bag).stdout
-    assert 'incomplete' in info and 'no mcap footer' in info and f'byte {pos}' in info
+    res = run_tool('info', bag, check=False)
+    assert res.returncode == 1
+    assert 'nothing recovered' in res.stderr and 'no mcap footer' in res.stderr and f'byte {pos}' in res.stderr
 
 
 ROSIDL_SCRIPT = r'''

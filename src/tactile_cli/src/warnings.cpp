@@ -1,5 +1,6 @@
 #include "tactile_cli/warnings.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <map>
 
@@ -42,6 +43,14 @@ void Warnings::add(const std::string& kind, uint64_t count, const std::string& m
 
 void Warnings::add_bag_metadata(const std::string& bag, const tactile_bag::Reader& reader) {
   if (reader.metadata_complete()) return;
+  // Data lost (damaged chunks skipped, a truncated tail): counted by the chunks skipped
+  // (1 for a tail); a damaged bag with nothing recovered never gets here (the Reader
+  // refuses it). Otherwise only metadata.yaml was missing, stale or unreadable.
+  if (reader.damaged()) {
+    add("bag_damaged", std::max<uint64_t>(reader.chunks_skipped(), 1),
+        bag + ": damaged bag, using what was recovered: " + reader.recovery_note());
+    return;
+  }
   add("metadata_rebuilt", 1, bag + ": " + reader.recovery_note());
 }
 

@@ -159,6 +159,37 @@ function(tactile_add_benchmark name)
   install(TARGETS ${name} RUNTIME DESTINATION lib/${PROJECT_NAME})
 endfunction()
 
+# tactile_add_fuzzer(<name> <sources>... CORPUS <dir> [LIBRARIES <libs>...]
+#                    [INCLUDES <dirs>...] [OPTION <cache variable>])
+# A libFuzzer harness (<sources> define LLVMFuzzerTestOneInput), kept from rotting:
+# - with BUILD_TESTING: <name>_replay, the harness linked with a plain main()
+#   (fuzz_replay_main.cpp beside this module) and built by the normal compiler in every
+#   build, run as the test <name>_corpus over every file in CORPUS: the stored seeds and
+#   every past finding, each a regression test (a crash or an escaping exception fails).
+# - with the cache variable OPTION (e.g. TACTILE_BAG_FUZZ) or TACTILE_FUZZ ON (clang, as
+#   scripts/fuzz.sh builds): <name>, the libFuzzer executable with ASan and UBSan.
+function(tactile_add_fuzzer name)
+  cmake_parse_arguments(ARG "" "CORPUS;OPTION" "LIBRARIES;INCLUDES" ${ARGN})
+  if(NOT ARG_CORPUS)
+    message(FATAL_ERROR "tactile_add_fuzzer(${name}): CORPUS <dir> is required")
+  endif()
+  if(BUILD_TESTING)
+    add_executable(${name}_replay ${ARG_UNPARSED_ARGUMENTS}
+      ${CMAKE_CURRENT_FUNCTION_LIST_DIR}/fuzz_replay_main.cpp)
+    target_include_directories(${name}_replay PRIVATE ${ARG_INCLUDES})
+    target_link_libraries(${name}_replay PRIVATE ${ARG_LIBRARIES})
+    add_test(NAME ${name}_corpus COMMAND ${name}_replay ${ARG_CORPUS})
+    set_tests_properties(${name}_corpus PROPERTIES TIMEOUT 120)
+  endif()
+  if(TACTILE_FUZZ OR (ARG_OPTION AND ${ARG_OPTION}))
+    add_executable(${name} ${ARG_UNPARSED_ARGUMENTS})
+    target_include_directories(${name} PRIVATE ${ARG_INCLUDES})
+    target_link_libraries(${name} PRIVATE ${ARG_LIBRARIES})
+    target_compile_options(${name} PRIVATE -fsanitize=fuzzer,address,undefined)
+    target_link_options(${name} PRIVATE -fsanitize=fuzzer,address,undefined)
+  endif()
+endfunction()
+
 # tactile_package_finish([DEPENDENCIES <find_package names>...] [CONFIG_EXTRAS <file.cmake>])
 # Exports the installed targets and writes the package config. DEPENDENCIES are
 # the packages the exported targets link to (find_dependency in the config).

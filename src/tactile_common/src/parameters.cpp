@@ -125,10 +125,17 @@ ParamValue yaml_value(const YAML::Node& n, const std::string& where) {
   throw ParamError(where + ": unsupported YAML node");
 }
 
+/// A map key as text: a key that is itself a map or list (YAML's `? [a, b]`) is a ParamError,
+/// not a yaml-cpp conversion exception escaping the loader (found by fuzz_scenario).
+std::string key_text(const YAML::Node& key, const std::string& where) {
+  if (!key.IsScalar()) throw ParamError(where + ": a key must be a plain name, not a map or list");
+  return key.Scalar();
+}
+
 void flatten(const YAML::Node& map, const std::string& prefix, const std::string& where,
              ParamMap& out) {
   for (const auto& kv : map) {
-    const std::string key = prefix + kv.first.as<std::string>();
+    const std::string key = prefix + key_text(kv.first, where + (prefix.empty() ? "" : "." + prefix.substr(0, prefix.size() - 1)));
     const std::string here = where + "." + key;
     if (kv.second.IsMap()) {
       flatten(kv.second, key + ".", where, out);
@@ -330,7 +337,7 @@ ParamMap load_node_parameters_from_string(const std::string& yaml, const std::st
   std::vector<std::tuple<int, size_t, std::string, YAML::Node>> sections;
   size_t order = 0;
   for (const auto& kv : root) {
-    const std::string name = kv.first.as<std::string>();
+    const std::string name = key_text(kv.first, source);
     ++order;
     if (!name_matches(fully_qualified(name), fqn)) continue;
     if (!kv.second.IsMap() || !kv.second["ros__parameters"]) {

@@ -29,6 +29,12 @@ class Node {
   std::string index_path(size_t i) const { return path_ + "[" + std::to_string(i) + "]"; }
 
   bool has(const std::string& key) const { return node_.IsMap() && node_[key]; }
+  /// A map key as text; a key that is itself a map or list (YAML's `? [a, b]`) is an error
+  /// here, not a yaml-cpp conversion exception escaping the loader.
+  std::string key_of(const YAML::Node& key) const {
+    if (!key.IsScalar()) fail("a key must be a plain name, not a " + std::string(key.IsMap() ? "map" : key.IsSequence() ? "list" : "null"));
+    return key.Scalar();
+  }
   Node at(const std::string& key) const {
     if (!has(key)) Node(node_, source_, key_path(key)).fail("missing");
     return Node(node_[key], source_, key_path(key));
@@ -40,7 +46,7 @@ class Node {
     require_map();
     std::set<std::string> allowed(keys.begin(), keys.end());
     for (const auto& kv : node_) {
-      const std::string k = kv.first.as<std::string>();
+      const std::string k = key_of(kv.first);
       if (!allowed.count(k)) {
         std::string list;
         for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
@@ -384,7 +390,7 @@ Scenario load_scenario_from_string(const std::string& yaml, const std::string& s
     const Node p = v.at("params");
     p.require_map();
     for (const auto& kv : p.raw()) {
-      const std::string key = kv.first.as<std::string>();
+      const std::string key = p.key_of(kv.first);
       s.vehicle_params[key] = Node(kv.second, source, p.key_path(key)).param_value();
     }
   }
@@ -411,11 +417,11 @@ Scenario load_scenario_from_string(const std::string& yaml, const std::string& s
     const Node np = top.at("node_parameters");
     np.require_map();
     for (const auto& node : np.raw()) {
-      const std::string name = node.first.as<std::string>();
+      const std::string name = np.key_of(node.first);
       const Node params(node.second, source, np.key_path(name));
       params.require_map();
       for (const auto& kv : params.raw()) {
-        const std::string key = kv.first.as<std::string>();
+        const std::string key = params.key_of(kv.first);
         s.node_parameters[name][key] = Node(kv.second, source, params.key_path(key)).param_value();
       }
     }
@@ -427,7 +433,7 @@ Scenario load_scenario_from_string(const std::string& yaml, const std::string& s
     m.allow_only({"target", "goal", "allow_collisions", "depth_evaluation", "box_size", "area_accuracy_of",
                   "min_area_accuracy", "min_traversed_m"});
     for (const auto& kv : m.raw()) {
-      const std::string key = kv.first.as<std::string>();
+      const std::string key = m.key_of(kv.first);
       s.metrics[key] = Node(kv.second, source, m.key_path(key)).param_value();
     }
   }

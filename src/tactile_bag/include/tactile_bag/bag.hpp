@@ -239,7 +239,15 @@ class Reader {
   /// with a variance of 0 ("unknown") appended, so they decode as the current type.
   const std::vector<std::string>& upgraded_range_topics() const { return upgraded_; }
   bool metadata_complete() const { return metadata_complete_; }
+  /// What was reconstructed or lost, with the file, byte offset and reason (empty when the
+  /// bag is complete).
   const std::string& recovery_note() const { return recovery_note_; }
+  /// Data was lost reading the bag (mcap: a truncated tail, damaged chunks skipped, a
+  /// damaged region skipped): the messages read are what could be recovered. A damaged bag
+  /// from which nothing is recovered is a BagError from open(), never an empty bag.
+  bool damaged() const { return damaged_; }
+  /// mcap chunks skipped as damaged (CRC mismatch, undecodable, inconsistent sizes).
+  uint64_t chunks_skipped() const { return chunks_skipped_; }
   const std::vector<std::string>& files() const { return db_paths_; }
 
   /// Restrict iteration to these topics (empty: all) and restart from the first message.
@@ -288,6 +296,8 @@ class Reader {
   int64_t start_ns_ = 0, end_ns_ = 0;
   int metadata_version_ = 0;
   bool metadata_complete_ = false;
+  bool damaged_ = false;
+  uint64_t chunks_skipped_ = 0;
   std::string recovery_note_;
   bool iter_ready_ = false;
 };

@@ -25,7 +25,9 @@ class Warnings {
 
   /// Adds one warning (count 0 is ignored).
   void add(const std::string& kind, uint64_t count, const std::string& message);
-  /// metadata.yaml missing or inconsistent: the reader rebuilt it from the database.
+  /// metadata.yaml missing, inconsistent or unreadable: the reader rebuilt it from the
+  /// database ("metadata_rebuilt"); or data was lost (damaged mcap chunks skipped, a
+  /// truncated tail: "bag_damaged", counted by the chunks skipped).
   void add_bag_metadata(const std::string& bag, const tactile_bag::Reader& reader);
   /// One warning per repair/drop counter of the host's nodes (whisker_driver:
   /// source errors, stamps repaired, duplicates, late samples, gaps, ...;

@@ -166,3 +166,81 @@ def test_rebuilt_metadata_and_corrupt_messages_are_said(demo, tmp_path):
     assert "no metadata.yaml" in m["warnings"][0]["message"]
     lines = [l for l in err.splitlines() if l.startswith("tactile replay: warning: ")]
     assert len(lines) == 2, err
+
+
+def _mcap_chunks(data):
+    """(begin, end) of the top-level chunk records of an mcap file (record framing walk)."""
+    spans, pos = [], 8
+    while pos + 9 <= len(data):
+        op, length = data[pos], struct.unpack_from("<Q", data, pos + 1)[0]
+        if op == 0x06:
+            spans.append((pos, pos + 9 + length))
+        if op == 0x0F:
+            break
+        pos += 9 + length
+    return spans
+
+
+def _rechunk(path, chunk_size):
+    """Rewrites an mcap file with the independent Python mcap writer in chunks of
+    chunk_size bytes (zstd), so that a damaged chunk leaves others intact."""
+    from mcap.reader import make_reader
+    from mcap.writer import Writer as McapWriter
+
+    out = path.with_suffix(".tmp")
+    with open(path, "rb") as f, open(out, "wb") as g:
+        reader = make_reader(f)
+        writer = McapWriter(g, chunk_size=chunk_size)
+        writer.start(profile="ros2", library="test")
+        schemas, channels = {}, {}
+        for schema, channel, message in reader.iter_messages(log_time_order=False):
+            if schema.id not in schemas:
+                schemas[schema.id] = writer.register_schema(schema.name, schema.encoding, schema.data)
+            if channel.id not in channels:
+                channels[channel.id] = writer.register_channel(channel.topic, channel.message_encoding,
+                                                               schemas[schema.id], channel.metadata)
+            writer.add_message(channels[channel.id], message.log_time, message.data, message.publish_time)
+        writer.finish()
+    out.replace(path)
+
+
+def _damaged_copy(demo, tmp_path, name, damage, chunk_size=None):
+    bag = tmp_path / name
+    shutil.copytree(demo / "free_flight" / "raw_bag", bag)
+    mcap = next(bag.glob("*.mcap"))
+    if chunk_size:
+        _rechunk(mcap, chunk_size)
+    data = bytearray(mcap.read_bytes())
+    spans = _mcap_chunks(data)
+    assert len(spans) >= (2 if chunk_size else 1), len(spans)
+    mcap.write_bytes(damage(data, spans))
+    return bag
+
+
+def test_damaged_chunk_is_skipped_counted_and_said(demo, tmp_path):
+    # Issue 32: one flipped bit in a chunk refused the whole bag. The chunk is skipped and
+    # the rest replayed, with one bag_damaged warning naming the chunk.
+    def flip(data, spans):
+        b, e = spans[1]
+        data[(b + e) // 2] ^= 0x10
+        return bytes(data)
+
+    bag = _damaged_copy(demo, tmp_path, "flipped", flip, chunk_size=64 * 1024)
+    m, err = replay(bag, tmp_path / "out")
+    kinds = {w["kind"]: w["count"] for w in m["warnings"]}
+    assert kinds.get("bag_damaged") == 1, m["warnings"]
+    msg = next(w["message"] for w in m["warnings"] if w["kind"] == "bag_damaged")
+    assert "1 damaged chunk(s) skipped" in msg and "lost" in msg
+    assert f"tactile replay: warning: {msg}" in err.splitlines()
+
+
+def test_bag_cut_inside_its_first_chunk_is_an_error(demo, tmp_path):
+    # Issue 32: such a bag replayed 0 messages with exit 0 and "FPR 0.00 %".
+    bag = _damaged_copy(demo, tmp_path, "cut", lambda data, spans: bytes(data[:(spans[0][0] + spans[0][1]) // 2]))
+    out = tmp_path / "out"
+    r = subprocess.run([TACTILE, "--config", CONFIG, "replay", str(bag), "--out", str(out), "--no-png"],
+                       capture_output=True, text=True)
+    assert r.returncode != 0
+    assert "nothing recovered" in r.stderr and "no mcap footer" in r.stderr, r.stderr
+    assert "FPR" not in r.stdout
+    assert not (out / "metrics.json").exists()

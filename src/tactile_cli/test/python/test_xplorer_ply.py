@@ -4,6 +4,7 @@ the map `tactile export BAG --ply` rebuilds from a recorded wall traversal
 open with the point count of metrics.json and bounds at the obstacle."""
 import json
 import os
+import struct
 import subprocess
 
 import numpy as np
@@ -57,6 +58,19 @@ def test_export_rebuilds_the_map_from_a_bag(tmp_path):
         # The summary with its (here empty) warnings beside the map.
         summary = json.loads(out.with_suffix(".metrics.json").read_text())
         assert summary["points"] == len(p) and summary["warnings"] == []
+    # Issue 32: a bag cut inside its first mcap chunk (nothing recovered) wrote a 0-point
+    # PLY with exit 0; it is an error now, and no PLY is written.
+    mcap = next((tmp_path / "bag").glob("*.mcap"))
+    data = mcap.read_bytes()
+    pos = 8
+    while data[pos] != 0x06:  # first chunk record
+        pos += 9 + struct.unpack_from("<Q", data, pos + 1)[0]
+    mcap.write_bytes(data[:pos + 100])
+    out = tmp_path / "cut.ply"
+    r = subprocess.run([TACTILE, "--config", CONFIG, "export", str(tmp_path / "bag"), "--ply", str(out)],
+                       capture_output=True, text=True)
+    assert r.returncode != 0 and "nothing recovered" in r.stderr, r.stderr
+    assert not out.exists()
 
 
 def test_export_names_the_missing_topic(tmp_path):

@@ -759,8 +759,11 @@ SimLogic::SimLogic(const Scenario& scenario, uint64_t seed, double extra_arena_y
   }
   uint64_t index = 0;
   for (auto& [topic, rules] : by_topic) {
+    // A named copy for the lambda: capturing a structured binding is C++20 (clang refuses
+    // it in C++17, which stopped scripts/fuzz.sh from building).
+    const std::string& name = topic;
     const std::string type =
-        std::find_if(topics.begin(), topics.end(), [&](const auto& t) { return t.first == topic; })->second;
+        std::find_if(topics.begin(), topics.end(), [&name](const auto& t) { return t.first == name; })->second;
     const uint64_t s = stream_seed(seed, kStreamFaults + index++);
     if (type == kPressure) faults_->add<tactile_msgs::msg::WhiskerPressure>(topic, rules, s);
     if (type == kImuType) faults_->add<sensor_msgs::msg::Imu>(topic, rules, s);
