@@ -133,15 +133,37 @@ std::optional<CrtpPacket> UdpServer::receive(std::chrono::microseconds timeout) 
   socklen_t len = sizeof from;
   const ssize_t n = ::recvfrom(fd_, buf, sizeof buf, 0, reinterpret_cast<sockaddr*>(&from), &len);
   if (n < 0) return std::nullopt;
-  std::memcpy(peer_, &from, std::min<size_t>(len, sizeof peer_));
-  peer_len_ = len;
-  has_peer_ = true;
+  const auto now = std::chrono::steady_clock::now();
+  const bool owned = has_peer_ && now - peer_heard_ <= std::chrono::milliseconds(kPeerIdleMs);
+  const bool same = has_peer_ && len == peer_len_ && std::memcmp(peer_, &from, len) == 0;
+  const bool null_packet = n == 1 && buf[0] == 0xFF;
+  if (!(owned && same)) {
+    if (null_packet) {
+      // A probe (cflib's scan, `tactile scan`): answered to its sender only, and it does
+      // not take the link (a scan before a flight must not hold it for kPeerIdleMs).
+      if (owned) ++foreign_;
+      const uint8_t answer = 0xFF;
+      ::sendto(fd_, &answer, 1, 0, reinterpret_cast<const sockaddr*>(&from), len);
+      return std::nullopt;
+    }
+    if (owned) {
+      // Another client while the link is owned: dropped and counted, never answered to
+      // the owner (a second client stole the owner's log packets before).
+      ++foreign_;
+      return std::nullopt;
+    }
+    std::memcpy(peer_, &from, std::min<size_t>(len, sizeof peer_));
+    peer_len_ = len;
+    has_peer_ = true;
+  }
+  peer_heard_ = now;
   if (n == 1 && buf[0] == 0xF3) {
     ++connects_;
     return std::nullopt;
   }
   if (n == 1 && buf[0] == 0xF4) {
     ++disconnects_;
+    has_peer_ = false;  // the link is free for the next client
     return std::nullopt;
   }
   auto pk = CrtpPacket::try_decode(buf, static_cast<size_t>(n));

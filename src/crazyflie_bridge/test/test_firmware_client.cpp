@@ -380,3 +380,66 @@ TEST(Links, MissingDevicesGiveClearErrors) {
     }
   }
 }
+
+// Issue 32 item 8: the simulated Crazyflie answered whoever sent the last datagram, so a
+// `tactile scan` during a flight took the flight's log packets. The link now serves the
+// client that owns it; a scan's null packet is answered to the scanner only.
+TEST(FirmwareClient, UdpServerServesOneClientAndAnswersScans) {
+  auto fw = make_firmware();
+  fw.set_log_value(1, 0.5);
+  UdpServer server(0);
+  std::atomic<bool> stop{false};
+  std::thread t([&] {
+    const auto t0 = std::chrono::steady_clock::now();
+    uint32_t last_tick = 0;
+    while (!stop) {
+      const auto now_ms = static_cast<uint32_t>(
+          std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - t0).count());
+      std::vector<CrtpPacket> out;
+      if (auto pk = server.receive(std::chrono::microseconds(1000))) fw.on_packet(*pk, now_ms, out);
+      if (now_ms != last_tick) fw.tick(now_ms, out), last_tick = now_ms;
+      for (auto& p : out) server.send(p);
+    }
+  });
+  const std::string uri = "udp://127.0.0.1:" + std::to_string(server.port());
+  {
+    UdpLink owner_link(parse_uri(uri + "?handshake=1"));
+    CrazyflieClient owner(owner_link);
+    owner.connect();
+    owner.start_log_block({"stateEstimate.z"}, 10);
+    ASSERT_TRUE(owner.poll(std::chrono::milliseconds(500)).has_value());
+
+    // A scan's probe during the flight is answered (to the scanner) ...
+    UdpLink other(parse_uri(uri));
+    const uint8_t probe = 0xFF;
+    other.send_raw(&probe, 1);
+    bool answered = false;
+    for (int i = 0; i < 20 && !answered; ++i) {
+      other.receive(std::chrono::milliseconds(10));
+      answered = other.statistics().null_received > 0 || other.statistics().packets_received > 0;
+    }
+    EXPECT_TRUE(answered);
+    // ... and its other packets are dropped: the owner's stream is unaffected, the other
+    // client receives none of the owner's log data.
+    other.send(CrtpPacket(5, 1, {0x05}));  // a log reset request from the second client
+    int owner_samples = 0;
+    const auto t1 = std::chrono::steady_clock::now();
+    while (std::chrono::steady_clock::now() - t1 < std::chrono::milliseconds(200)) {
+      if (owner.poll(std::chrono::milliseconds(20))) ++owner_samples;
+    }
+    EXPECT_GE(owner_samples, 8);  // 100 Hz for 0.2 s, generous for a loaded machine
+    uint64_t before = other.statistics().packets_received;
+    for (int i = 0; i < 10; ++i) other.receive(std::chrono::milliseconds(10));
+    EXPECT_EQ(other.statistics().packets_received, before);
+    EXPECT_EQ(server.foreign_datagrams(), 2u);  // the probe and the reset
+  }  // the owner says goodbye (0xF4): the link is free
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  {
+    UdpLink next(parse_uri(uri + "?handshake=1"));
+    CrazyflieClient c(next);
+    c.connect();  // the next client takes the link
+  }
+  stop = true;
+  t.join();
+  EXPECT_EQ(server.foreign_datagrams(), 2u);
+}

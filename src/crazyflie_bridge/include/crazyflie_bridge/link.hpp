@@ -82,19 +82,30 @@ class UdpLink : public Link {
 /// reported through peer_events() and not delivered as packets.
 class UdpServer {
  public:
+  /// A client that sent nothing for this long gives the link up to the next one [ms]
+  /// (our choice: 2.5 x the firmware's 2 s commander shutdown watchdog is well past any
+  /// flight; a client that says goodbye (0xF4) gives it up at once).
+  static constexpr int kPeerIdleMs = 5000;
+
   /// port 0 picks a free port (see port()). Throws LinkError (e.g. port busy).
   explicit UdpServer(uint16_t port, const std::string& bind_address = "127.0.0.1");
   ~UdpServer();
   UdpServer(const UdpServer&) = delete;
   UdpServer& operator=(const UdpServer&) = delete;
   uint16_t port() const { return port_; }
-  /// Waits up to timeout for one datagram; returns a packet or nothing.
+  /// Waits up to timeout for one datagram of the client that owns the link; returns a
+  /// packet or nothing. Like a Crazyflie's radio, the link serves one client: the first
+  /// sender of a handshake or CRTP packet owns it until it says goodbye (0xF4) or is idle
+  /// for kPeerIdleMs. A null packet (0xFF: cflib's scan, `tactile scan`) from anyone else
+  /// is answered to its sender and does not take the link; another sender's other
+  /// datagrams are dropped and counted (foreign_datagrams()).
   std::optional<CrtpPacket> receive(std::chrono::microseconds timeout);
-  /// Sends to the last peer (dropped and counted if none yet).
+  /// Sends to the client that owns the link (dropped and counted if none yet).
   void send(const CrtpPacket& pk);
   const LinkStatistics& statistics() const { return stats_; }
   uint64_t connects() const { return connects_; }
   uint64_t disconnects() const { return disconnects_; }
+  uint64_t foreign_datagrams() const { return foreign_; }
   bool has_peer() const { return has_peer_; }
 
  private:
@@ -103,7 +114,8 @@ class UdpServer {
   bool has_peer_ = false;
   unsigned char peer_[128] = {};
   unsigned peer_len_ = 0;
-  uint64_t connects_ = 0, disconnects_ = 0;
+  std::chrono::steady_clock::time_point peer_heard_{};
+  uint64_t connects_ = 0, disconnects_ = 0, foreign_ = 0;
   LinkStatistics stats_;
 };
 
