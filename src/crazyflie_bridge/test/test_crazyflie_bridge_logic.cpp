@@ -36,8 +36,15 @@ commander::Setpoint decode(const std::optional<CrtpPacket>& pk) {
   return commander::decode(*pk);
 }
 
+CrazyflieBridgeLogic::Params autostart_params() {
+  CrazyflieBridgeLogic::Params p;
+  p.autostart = true;  // the forwarding chain without an operator (lockstep SITL)
+  return p;
+}
+
+/// The old forwarding chain: autostart (forward from the first fresh setpoint).
 struct Rig {
-  CrazyflieBridgeLogic logic{CrazyflieBridgeLogic::Params{}};
+  CrazyflieBridgeLogic logic{autostart_params()};
   int64_t t = 0;
   Rig() { logic.set_block_ids(1, 2); }
   /// 20 ms tick: state sample at height z, optional setpoint, timer.
@@ -208,7 +215,7 @@ TEST(BridgeLogic, ParametersDefaultsAndValidation) {
 TEST(BridgeLogic, IntegerParametersAreCheckedBeforeTheyAreNarrowed) {
   const auto wrapped = tactile_common::wrapped_integers(CrazyflieBridgeLogic::default_parameters(),
                                                         [](const tactile_common::ParamMap& m) { CrazyflieBridgeLogic::params_from(m); });
-  EXPECT_EQ(wrapped.size(), 2u);  // whisker_period_ms, state_period_ms
+  EXPECT_EQ(wrapped.size(), 3u);  // whisker_period_ms, state_period_ms, status_period_ms
   for (const auto& [key, w] : wrapped) EXPECT_TRUE(w.rejected_as_given()) << key << ": " << w.error;
   auto m = CrazyflieBridgeLogic::default_parameters();
   m.set("state_period_ms", int64_t{65536 + 10});
