@@ -255,6 +255,7 @@ class CrazyflieBridgeLogic {
     int64_t start_ns = 0;
     double duration_s = 0;
   } ramp_;
+  bool ramp_done_ = false;  ///< the ramp's end point was sent (kTakingOff / kGoTo end on the next tick)
   double landing_speed_ = 0.0;   ///< kLanding descent [m/s]
   double landing_target_ = 0.0;  ///< kLanding floor of the commanded height [m]
   double hold_height_ = 0.0;  ///< kHovering / kHoverHold height [m]
