@@ -10,6 +10,10 @@
 #include <memory>
 #include <thread>
 
+#include <poll.h>
+#include <termios.h>
+#include <unistd.h>
+
 #include "crazyflie_bridge/bridge_runner.hpp"
 #include "crazyflie_bridge/sitl_endpoint.hpp"
 #include "tactile_cli/host.hpp"
@@ -48,6 +52,43 @@ struct SignalGuard {
   }
 };
 static_assert(std::atomic<int>::is_always_lock_free, "signal handler needs lock-free atomics");
+
+/// Keystroke teleop: stdin without line buffering and echo while it lives
+/// (signals stay on: Ctrl-C still lands). Inactive when stdin is no terminal.
+class RawStdin {
+ public:
+  explicit RawStdin(bool want) {
+    if (!want || !::isatty(STDIN_FILENO) || ::tcgetattr(STDIN_FILENO, &old_) != 0) return;
+    termios raw = old_;
+    raw.c_lflag &= static_cast<tcflag_t>(~(ICANON | ECHO));
+    raw.c_cc[VMIN] = 0;
+    raw.c_cc[VTIME] = 0;
+    active_ = ::tcsetattr(STDIN_FILENO, TCSANOW, &raw) == 0;
+  }
+  ~RawStdin() {
+    if (active_) ::tcsetattr(STDIN_FILENO, TCSANOW, &old_);
+  }
+  RawStdin(const RawStdin&) = delete;
+  RawStdin& operator=(const RawStdin&) = delete;
+  bool active() const { return active_; }
+  /// The keys typed since the last call (never waits).
+  std::string keys() {
+    std::string k;
+    if (!active_) return k;
+    pollfd p{STDIN_FILENO, POLLIN, 0};
+    char buf[64];
+    while (::poll(&p, 1, 0) > 0 && (p.revents & POLLIN)) {
+      const ssize_t n = ::read(STDIN_FILENO, buf, sizeof buf);
+      if (n <= 0) break;
+      k.append(buf, static_cast<size_t>(n));
+    }
+    return k;
+  }
+
+ private:
+  termios old_{};
+  bool active_ = false;
+};
 
 const char* signal_name(int sig) { return sig == SIGTERM ? "SIGTERM" : sig == SIGINT ? "SIGINT" : "signal"; }
 
@@ -149,6 +190,7 @@ nlohmann::json run_fly(const FlyOptions& o) {
     host.bus().add_tap(recorder.get());
   }
   SignalGuard guard;
+  RawStdin keyboard(o.teleop);
   const auto t_connect = Clock::now();
   crazyflie_bridge::BridgeRunner runner(bridge_params, co);
   const double connect_s = std::chrono::duration<double>(Clock::now() - t_connect).count();
@@ -161,6 +203,7 @@ nlohmann::json run_fly(const FlyOptions& o) {
                           : bridge_params.autostart ? "autostart: the behaviour flies as soon as it publishes\n"
                                                     : "no --takeoff: on the ground, recording sensors\n",
                 bridge_params.takeoff_height);
+    if (keyboard.active()) std::printf("keys: t take off, l land, space EMERGENCY STOP, a arm; Ctrl-C lands and quits\n");
     std::fflush(stdout);
   }
 
@@ -212,6 +255,7 @@ nlohmann::json run_fly(const FlyOptions& o) {
   int64_t last_print = 0;
   enum class Operator { kWaitLog, kArming, kTakingOff, kHandedOver, kDone } op = o.takeoff ? Operator::kWaitLog : Operator::kDone;
   int64_t arm_sent_ns = 0;
+  bool arm_on_takeoff = o.arm;
   std::string end_reason;
   bool takeoff_refused = false;
   std::exception_ptr failure;
@@ -237,11 +281,23 @@ nlohmann::json run_fly(const FlyOptions& o) {
       }
       if (pipeline_on) host.executor().run_until(now);
       // Operator sequence of --takeoff: (arm,) take off, hand over to the behaviour.
+      // Keystrokes (the same commands as the flags; an emergency stop at once).
+      for (const char key : keyboard.keys()) {
+        if (key == ' ') {
+          command("emergency_stop", runner.emergency_stop(now));
+        } else if (key == 'l') {
+          command("land", runner.land(0.0, bridge_params.land_duration_s, now));
+        } else if (key == 'a') {
+          command("arm", runner.arm(true, now));
+        } else if (key == 't' && pipeline_on && op == Operator::kDone && !airborne(runner.mode())) {
+          op = Operator::kWaitLog;  // the --takeoff sequence: (--arm,) take off, then hand over
+        }
+      }
       const auto st = runner.status(now);
       switch (op) {
         case Operator::kWaitLog:
           if (pipeline_on && std::isfinite(st.log_age_s) && st.log_age_s <= bridge_params.log_timeout_s) {
-            if (o.arm) {
+            if (arm_on_takeoff) {
               command("arm", runner.arm(true, now));
               arm_sent_ns = now;
               op = Operator::kArming;
@@ -253,7 +309,7 @@ nlohmann::json run_fly(const FlyOptions& o) {
           break;
         case Operator::kArming:
           // The supervisor reports the arming in its next status sample.
-          if (!o.arm || st.armed || st.supervisor_info < 0 || now - arm_sent_ns >= 1'000'000'000LL) {
+          if (!arm_on_takeoff || st.armed || st.supervisor_info < 0 || now - arm_sent_ns >= 1'000'000'000LL) {
             op = command("takeoff", runner.takeoff(bridge_params.takeoff_height, bridge_params.takeoff_duration_s, now))
                      ? Operator::kTakingOff
                      : Operator::kDone;

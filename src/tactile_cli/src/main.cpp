@@ -115,6 +115,9 @@ int main(int argc, char** argv) {
   fly_cmd->add_flag("--arm", fly.arm, "send the arming request before take-off (a Crazyflie that requires arming)");
   fly_cmd->add_flag("--autostart", fly.autostart,
                     "the behaviour flies as soon as the link is up, no take-off step (simulated Crazyflie tests)");
+  fly.teleop = true;
+  fly_cmd->add_flag("!--no-teleop", fly.teleop,
+                    "no keystrokes (default when stdin is a terminal: t take off, l land, space emergency stop, a arm)");
   fly_cmd->add_flag("!--no-bag", fly.write_bag, "do not record the bag");
   add_bag_options(fly_cmd, bag_options);
   tactile_cli::BenchOptions bench;

@@ -14,12 +14,15 @@
 // child `tactile fly` process.
 #include <gtest/gtest.h>
 
+#include <fcntl.h>
 #include <poll.h>
+#include <pty.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <vector>
 #include <fstream>
 
 #include <algorithm>
@@ -234,23 +237,48 @@ namespace {
 /// through a pipe so that a signal lands at a known mode.
 class FlyChild {
  public:
-  explicit FlyChild(const fs::path& out) : out_(out) {
-    int fds[2];
-    if (::pipe(fds) != 0) throw std::runtime_error("pipe");
-    pid_ = ::fork();
+  /// tty: the child's stdin and stdout are a pseudo-terminal (keystroke
+  /// teleop, no --takeoff); else stdout is a pipe, stdin /dev/null, --takeoff.
+  explicit FlyChild(const fs::path& out, bool tty = false) : out_(out) {
+    const std::string scenario = TACTILE_CONFIG_DIR "/scenarios/whisker_hover.yaml";
+    const std::string out_s = out.string();
+    // Pipe children take off by flag and need no keystrokes; tty children fly by keys.
+    std::vector<std::string> args{TACTILE_EXE, "--config", TACTILE_CONFIG_DIR, "fly", "--sim", scenario,
+                                  "--duration", "60", "--no-bag", "--out", out_s};
+    if (!tty) {
+      args.push_back("--takeoff");
+      args.push_back("--no-teleop");
+    }
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    if (tty) {
+      int master = -1;
+      pid_ = ::forkpty(&master, nullptr, nullptr, nullptr);
+      if (pid_ < 0) throw std::runtime_error("forkpty");
+      if (pid_ > 0) fd_ = master;
+    } else {
+      int fds[2];
+      if (::pipe(fds) != 0) throw std::runtime_error("pipe");
+      pid_ = ::fork();
+      if (pid_ == 0) {
+        ::dup2(fds[1], STDOUT_FILENO);
+        const int null_fd = ::open("/dev/null", O_RDONLY);
+        ::dup2(null_fd, STDIN_FILENO);
+        ::close(fds[0]);
+        ::close(fds[1]);
+      } else {
+        ::close(fds[1]);
+        fd_ = fds[0];
+      }
+    }
     if (pid_ == 0) {
-      ::dup2(fds[1], STDOUT_FILENO);
-      ::close(fds[0]);
-      ::close(fds[1]);
-      const std::string scenario = TACTILE_CONFIG_DIR "/scenarios/whisker_hover.yaml";
-      const std::string out_s = out.string();
-      ::execl(TACTILE_EXE, TACTILE_EXE, "--config", TACTILE_CONFIG_DIR, "fly", "--sim", scenario.c_str(), "--takeoff",
-              "--duration", "60", "--no-bag", "--out", out_s.c_str(), static_cast<char*>(nullptr));
+      ::execv(TACTILE_EXE, argv.data());
       ::_exit(127);
     }
-    ::close(fds[1]);
-    fd_ = fds[0];
   }
+  /// Types `keys` on the child's terminal (tty children).
+  void type(const std::string& keys) { (void)!::write(fd_, keys.data(), keys.size()); }
   ~FlyChild() {
     if (pid_ > 0 && !reaped_) {
       ::kill(pid_, SIGKILL);
@@ -363,6 +391,31 @@ TEST(FlySitl, SecondSignalDuringTheLandingStopsTheMotorsAtOnce) {
     EXPECT_EQ(m["emergency_stops"].get<uint64_t>(), 1u);
     EXPECT_TRUE(has_transition(m["mode_history"], "landing", "emergency", "emergency_stop")) << m["mode_history"].dump();
     EXPECT_FALSE(m["sitl"]["motors_on_at_end"].get<bool>());
+  }
+  fs::remove_all(out);
+}
+
+// Keystroke teleop on a terminal: t takes off and hands over, space stops the
+// motors at once; the run then ends, metrics say how.
+TEST(FlySitl, TeleopKeysTakeOffThenEmergencyStop) {
+  const fs::path out = fs::temp_directory_path() / ("tactile_fly_teleop_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  {
+    FlyChild child(out, true);
+    ASSERT_TRUE(child.wait_for("keys: t take off", 20.0)) << child.output();
+    ASSERT_TRUE(child.wait_for("t=", 5.0)) << child.output();  // streaming, on the ground
+    child.type("t");
+    ASSERT_TRUE(child.wait_for("-> forward", 20.0)) << child.output();
+    child.type(" ");
+    ASSERT_TRUE(child.wait_for("-> emergency", 5.0)) << child.output();
+    EXPECT_EQ(child.wait_exit(30.0), 0) << child.output();
+    const auto m = child.metrics();
+    EXPECT_EQ(m["end_reason"], "flight ended: emergency");
+    EXPECT_EQ(m["bridge_mode"], "emergency");
+    EXPECT_TRUE(has_transition(m["mode_history"], "forward", "emergency", "emergency_stop")) << m["mode_history"].dump();
+    EXPECT_GT(m["sitl"]["max_truth_z_m"].get<double>(), 0.3);
+    EXPECT_FALSE(m["sitl"]["motors_on_at_end"].get<bool>());
+    EXPECT_FALSE(m["shutdown"]["land_attempted"].get<bool>());
   }
   fs::remove_all(out);
 }

@@ -37,6 +37,10 @@ struct FlyOptions {
   bool autostart = false;
   bool write_bag = true;
   bool progress = true;
+  /// Keystrokes when stdin is a terminal: t take off (and hand over), l land,
+  /// space emergency stop, a arm. Off for library callers; the command turns
+  /// it on unless --no-teleop.
+  bool teleop = false;
 };
 /// Runs until the duration elapsed and the vehicle is on the ground (at most
 /// duration + 15 s), or SIGINT / SIGTERM: airborne, the bridge lands first
