@@ -280,7 +280,7 @@ nlohmann::json run_fly(const FlyOptions& o) {
         }
       }
       if (pipeline_on) host.executor().run_until(now);
-      // Operator sequence of --takeoff: (arm,) take off, hand over to the behaviour.
+      if (o.on_tick) o.on_tick(now, crazyflie_bridge::to_string(runner.mode()));
       // Keystrokes (the same commands as the flags; an emergency stop at once).
       for (const char key : keyboard.keys()) {
         if (key == ' ') {
@@ -293,6 +293,7 @@ nlohmann::json run_fly(const FlyOptions& o) {
           op = Operator::kWaitLog;  // the --takeoff sequence: (--arm,) take off, then hand over
         }
       }
+      // Operator sequence of --takeoff (or key t): (arm,) take off, hand over to the behaviour.
       const auto st = runner.status(now);
       switch (op) {
         case Operator::kWaitLog:

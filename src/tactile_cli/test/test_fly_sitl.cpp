@@ -419,3 +419,40 @@ TEST(FlySitl, TeleopKeysTakeOffThenEmergencyStop) {
   }
   fs::remove_all(out);
 }
+
+// An exception in the run loop while the behaviour flies takes the landing
+// path: land, stop, metrics.json written, then the exception reaches the caller.
+TEST(FlySitl, ExceptionMidFlightLandsThenRethrows) {
+  const fs::path out = fs::temp_directory_path() / ("tactile_fly_exception_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  tactile_cli::FlyOptions fo;
+  fo.sim_scenario = TACTILE_CONFIG_DIR "/scenarios/whisker_hover.yaml";
+  fo.out_dir = out.string();
+  fo.config_dir = TACTILE_CONFIG_DIR;
+  fo.duration_s = 60.0;
+  fo.takeoff = true;
+  fo.write_bag = false;
+  fo.progress = false;
+  int64_t forward_since = -1;
+  fo.on_tick = [&](int64_t now, const char* mode) {
+    if (std::string(mode) != "forward") return;
+    if (forward_since < 0) forward_since = now;
+    if (now - forward_since > 1'000'000'000LL) throw std::runtime_error("injected fault");
+  };
+  try {
+    tactile_cli::run_fly(fo);
+    ADD_FAILURE() << "the exception did not reach the caller";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "injected fault");
+  }
+  std::ifstream in(out / "metrics.json");
+  const auto m = nlohmann::json::parse(in);
+  EXPECT_EQ(m["end_reason"], "exception: injected fault");
+  EXPECT_TRUE(m["shutdown"]["landed"].get<bool>()) << m["shutdown"].dump();
+  EXPECT_EQ(m["bridge_mode"], "stopped");
+  EXPECT_TRUE(has_transition(m["mode_history"], "forward", "landing", "land")) << m["mode_history"].dump();
+  EXPECT_GT(m["sitl"]["max_truth_z_m"].get<double>(), 0.3);
+  EXPECT_LT(m["sitl"]["final_z_m"].get<double>(), 0.05);
+  EXPECT_FALSE(m["sitl"]["motors_on_at_end"].get<bool>());
+  fs::remove_all(out);
+}

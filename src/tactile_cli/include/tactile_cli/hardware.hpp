@@ -9,6 +9,8 @@
 //   scan   Crazyradios, Crazyflies on USB, simulated Crazyflies on UDP.
 #pragma once
 
+#include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -41,6 +43,9 @@ struct FlyOptions {
   /// space emergency stop, a arm. Off for library callers; the command turns
   /// it on unless --no-teleop.
   bool teleop = false;
+  /// Test seam: called every tick with the host time [ns] and the bridge's
+  /// mode (an exception thrown here takes the exception landing path).
+  std::function<void(int64_t, const char*)> on_tick;
 };
 /// Runs until the duration elapsed and the vehicle is on the ground (at most
 /// duration + 15 s), or SIGINT / SIGTERM: airborne, the bridge lands first
