@@ -1,11 +1,13 @@
 // Simulated Crazyflie on UDP (see crazyflie_bridge/sitl_endpoint.hpp):
 //   crazyflie_sim_server SCENARIO [--port 19850] [--seed N] [--duration S]
 //                        [--speed X] [--loss P] [--spike-rate HZ] [--spike-latency S]
-//                        [--protocol-version N]
+//                        [--protocol-version N] [--require-arming]  (motors off until an arming request, as a brushless Crazyflie)
 // Prints "listening udp://127.0.0.1:PORT" once ready, then runs until the
 // duration elapsed or SIGINT/SIGTERM; prints the final truth position and
 // link counters on exit.
 #include <atomic>
+#include <cmath>
+#include <limits>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -18,11 +20,42 @@ std::atomic<bool> g_stop{false};
 void on_signal(int) { g_stop = true; }
 }  // namespace
 
+namespace {
+
+/// A whole number in [lo, hi] written as digits only; anything else names the option.
+uint64_t whole(const std::string& option, const std::string& text, uint64_t lo, uint64_t hi) {
+  const std::string range = "[" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
+  if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos || text.size() > 19) {
+    throw std::invalid_argument(option + ": expected a whole number in " + range + ", got '" + text + "'");
+  }
+  const uint64_t v = std::stoull(text);
+  if (v < lo || v > hi) throw std::invalid_argument(option + ": must be in " + range + ", got " + text);
+  return v;
+}
+
+/// A finite number in [lo, hi].
+double number(const std::string& option, const std::string& text, double lo, double hi) {
+  double v = 0.0;
+  size_t pos = 0;
+  try {
+    v = std::stod(text, &pos);
+  } catch (const std::exception&) {
+    pos = 0;
+  }
+  if (pos == 0 || pos != text.size() || !std::isfinite(v) || v < lo || v > hi) {
+    throw std::invalid_argument(option + ": expected a finite number in [" + std::to_string(lo) + ", " +
+                                std::to_string(hi) + "], got '" + text + "'");
+  }
+  return v;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   if (argc < 2 || !std::strcmp(argv[1], "--help")) {
     std::fprintf(stderr,
                  "usage: crazyflie_sim_server SCENARIO [--port 19850] [--seed N] [--duration S] [--speed X]\n"
-                 "       [--loss P] [--spike-rate HZ] [--spike-latency S] [--bind ADDR]\n"
+                 "       [--loss P] [--spike-rate HZ] [--spike-latency S] [--bind ADDR] [--require-arming]\n"
                  "       [--protocol-version N]  (CRTP protocol reported; <= 8 emulates the legacy\n"
                  "                                setpoint generation: hover type 5, negated yaw rate)\n");
     return argc < 2 ? 2 : 0;
@@ -38,19 +71,18 @@ int main(int argc, char** argv) {
         if (i + 1 >= argc) throw std::invalid_argument(a + ": missing value");
         return argv[++i];
       };
-      if (a == "--port") opt.port = static_cast<uint16_t>(std::stoi(next()));
-      else if (a == "--seed") seed = std::stoll(next());
-      else if (a == "--duration") duration = std::stod(next());
-      else if (a == "--speed") opt.speed = std::stod(next());
-      else if (a == "--loss") opt.loss_rate = std::stod(next());
-      else if (a == "--spike-rate") opt.spike_rate_hz = std::stod(next());
-      else if (a == "--spike-latency") opt.spike_latency_s = std::stod(next());
+      // Every value is checked whole and in range (issue 32: --port 70000 listened on 4464,
+      // std::stoi("5x") read 5).
+      if (a == "--port") opt.port = static_cast<uint16_t>(whole(a, next(), 0, 65535));
+      else if (a == "--seed") seed = static_cast<int64_t>(whole(a, next(), 0, std::numeric_limits<int64_t>::max()));
+      else if (a == "--duration") duration = number(a, next(), 0.0, 86400.0);
+      else if (a == "--speed") opt.speed = number(a, next(), 1e-3, 1e3);
+      else if (a == "--loss") opt.loss_rate = number(a, next(), 0.0, 0.99);
+      else if (a == "--spike-rate") opt.spike_rate_hz = number(a, next(), 0.0, 1e3);
+      else if (a == "--spike-latency") opt.spike_latency_s = number(a, next(), 0.0, 10.0);
       else if (a == "--bind") opt.bind_address = next();
-      else if (a == "--protocol-version") {
-        const int v = std::stoi(next());
-        if (v < 0 || v > 255) throw std::invalid_argument("--protocol-version: must be in [0, 255] (a u8), got " + std::to_string(v));
-        opt.protocol_version = static_cast<uint8_t>(v);
-      }
+      else if (a == "--protocol-version") opt.protocol_version = static_cast<uint8_t>(whole(a, next(), 0, 255));
+      else if (a == "--require-arming") opt.require_arming = true;  // motors off until an arming request
       else throw std::invalid_argument("unknown option " + a);
     }
     const auto scenario = tactile_sim::load_scenario(scenario_path);
