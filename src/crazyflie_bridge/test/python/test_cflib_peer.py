@@ -255,3 +255,16 @@ def test_cflib_scan_finds_simulated_crazyflie():
     finally:
         p.terminate()
         p.communicate(timeout=10)
+
+
+@pytest.mark.parametrize('args, expected', [
+    (['--port', '70000'], '--port: must be in [0, 65535], got 70000'),  # listened on 4464 before
+    (['--port', '5x'], "--port: expected a whole number"),              # std::stoi read 5
+    (['--loss', 'nan'], '--loss: expected a finite number'),
+    (['--protocol-version', '-1'], '--protocol-version: expected a whole number'),
+])
+def test_sim_server_refuses_bad_option_values(args, expected):
+    p = subprocess.run([os.environ['CRAZYFLIE_SIM_SERVER'], SCENARIO, *args], capture_output=True, text=True,
+                       timeout=30)
+    assert p.returncode == 1
+    assert expected in p.stderr, p.stderr
