@@ -541,6 +541,15 @@ void FileReader::fill() {
       need = blocks_[next_block_].start <= tmin;
     }
     if (!need) return;
+    // Chunks whose time ranges overlap are held decompressed together: bounded like one chunk.
+    const Block& b = blocks_[next_block_];
+    uint64_t held = b.compression.empty() ? 0 : b.uncompressed_size;
+    for (const auto& c : active_) held += c->buffer.size();
+    if (!active_.empty() && held > memory_cap_) {
+      fail(b.offset, "chunk record: " + std::to_string(active_.size() + 1) +
+                         " chunks overlapping in time would hold " + std::to_string(held) +
+                         " bytes decompressed at once, more than the cap of " + std::to_string(memory_cap_));
+    }
     auto c = std::make_unique<Cursor>();
     load(next_block_++, *c);
     active_.push_back(std::move(c));

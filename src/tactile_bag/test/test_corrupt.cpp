@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "mcap.hpp"
 #include "tactile_bag/bag.hpp"
 
 namespace fs = std::filesystem;
@@ -460,5 +461,53 @@ TEST(CorruptBag, TruncatedSqliteIsReadWhereOnlyTheIndexWasCut) {
       EXPECT_NE(what.find(db + ": database is truncated: " + std::to_string(keep) + " bytes"), std::string::npos)
           << what;
     }
+  }
+}
+
+// Chunks whose time ranges overlap are decompressed and held together while merging; their
+// sum is bounded like one chunk (a crafted file of many overlapping, highly compressed
+// chunks would otherwise hold them all). Here the cap is lowered to 2.5 chunks' worth.
+TEST(BoundedMemory, OverlappingChunksHeldTogetherAreCapped) {
+  TempDir tmp;
+  const std::string dir = tmp.sub("overlap");
+  WriterOptions o;
+  o.storage = "mcap";
+  o.compression = "zstd";
+  o.flush_interval = std::chrono::milliseconds(0);
+  o.chunk_size = 1 << 20;
+  Writer w(o);
+  w.open(dir);
+  tactile_bag::TopicInfo t;
+  t.name = "/n";
+  t.type = "std_msgs/msg/String";
+  t.type_definition = "string data\n";
+  w.create_topic(t);
+  for (int k = 0; k < 4; ++k) {  // 4 chunks over the same time range
+    for (int i = 0; i < 20; ++i) w.write("/n", 1000 + i, std::vector<uint8_t>(40, static_cast<uint8_t>(k)));
+    w.flush();
+  }
+  const std::string file = w.db_path();
+  w.close();
+  auto read_all = [&](uint64_t cap) {
+    tactile_bag::mcap::FileReader r;
+    r.open(file);
+    if (cap != 0) r.set_memory_cap(cap);
+    tactile_bag::mcap::FileReader::Message m{};
+    uint64_t n = 0;
+    while (r.next(m)) ++n;
+    return n;
+  };
+  EXPECT_EQ(read_all(0), 80u);
+  const std::string bytes = read_file(file);
+  const auto spans = chunk_spans(bytes);
+  ASSERT_EQ(spans.size(), 4u);
+  uint64_t chunk;  // the first chunk's uncompressed_size (the others are as large)
+  std::memcpy(&chunk, bytes.data() + spans[0].begin + 9 + 16, 8);
+  EXPECT_EQ(read_all(4 * chunk), 80u);
+  try {
+    read_all(chunk * 5 / 2);
+    ADD_FAILURE() << "no error";
+  } catch (const BagError& e) {
+    EXPECT_NE(std::string(e.what()).find("chunks overlapping in time would hold"), std::string::npos) << e.what();
   }
 }
