@@ -101,7 +101,17 @@ void decompress(const std::string& format, const uint8_t* data, size_t size,
   try {
     out.clear();
     out.resize(static_cast<size_t>(std::min<uint64_t>(room, std::max<uint64_t>(uint64_t{4} * size, 64 * 1024))));
-    if (format == "zstd") {
+    if (format == "zstd" && declared != kUnknownSize && declared < out.size()) {
+      // Declared size within 4x the compressed bytes (the usual case, one buffer already
+      // big enough): decompress in one call, straight into it (no window buffer, no copy).
+      const size_t n = ZSTD_decompress(out.data(), out.size(), data, size);
+      if (ZSTD_isError(n)) throw BagError(where + ": zstd decompression failed: " + ZSTD_getErrorName(n));
+      used = n;
+      if (used > limit) {
+        throw BagError(where + ": zstd data decompresses to more than the declared " + bytes(limit) +
+                       " (file corrupt)");
+      }
+    } else if (format == "zstd") {
       std::unique_ptr<ZSTD_DCtx, size_t (*)(ZSTD_DCtx*)> ctx(ZSTD_createDCtx(), ZSTD_freeDCtx);
       if (!ctx) throw BagError(where + ": zstd: cannot create a decompression context");
       ZSTD_inBuffer in{data, size, 0};

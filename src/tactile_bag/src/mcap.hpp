@@ -142,6 +142,10 @@ class FileReader {
   /// Metadata records by name (rosbag2 writes "rosbag2": serialized_metadata, ros_distro).
   const std::map<std::string, StringMap>& metadata() const { return metadata_; }
 
+  /// Bytes of decompressed chunks held at once while iterating (chunks whose time ranges
+  /// overlap are merged); default codec::kMaxDecompressedBytes (1 GiB). More is a BagError.
+  void set_memory_cap(uint64_t bytes) { memory_cap_ = bytes; }
+
   /// Restrict iteration to these channel ids (empty: all) and restart.
   void set_channel_filter(const std::vector<uint16_t>& ids);
   void reset();
@@ -182,6 +186,7 @@ class FileReader {
   [[noreturn]] void fail(uint64_t offset, const std::string& what) const;
 
   std::string path_, profile_, recovery_note_;
+  uint64_t memory_cap_ = uint64_t{1} << 30;  // codec::kMaxDecompressedBytes
   uint64_t chunks_skipped_ = 0, bytes_lost_ = 0, damage_events_ = 0, summary_messages_ = 0;
   std::vector<std::string> damage_notes_;  // the first three, for recovery_note()
   std::string summary_note_;

@@ -259,8 +259,8 @@ void FileReader::scan() {
                   : "record (opcode " + std::to_string(op) + ") declares " + std::to_string(len) + " bytes but only " +
                         std::to_string(data_end - pos - 9) + " remain" + (has_footer ? " before the footer" : "");
       if (next < data_end) {
-        note_damage(f + ": byte " + std::to_string(pos) + ": " + why + "; " + std::to_string(next - pos) + " bytes skipped to the chunk at byte " +
-                         std::to_string(next));
+        note_damage(f + ": byte " + std::to_string(pos) + ": " + why + "; " + std::to_string(next - pos) +
+                    " bytes skipped to the chunk at byte " + std::to_string(next));
         bytes_lost_ += next - pos;
         pos = next;
         continue;
@@ -270,8 +270,8 @@ void FileReader::scan() {
         note = "file ends inside a record (opcode " + std::to_string(op) + ") at byte " + std::to_string(pos) +
                " (" + std::to_string(data_end - pos) + " bytes lost)";
       } else {
-        note_damage(f + ": byte " + std::to_string(pos) + ": " + why + "; the " + std::to_string(data_end - pos) + " bytes from there to " +
-                         (has_footer ? "the footer" : "the end") + " hold no readable chunk");
+        note_damage(f + ": byte " + std::to_string(pos) + ": " + why + "; the " + std::to_string(data_end - pos) +
+                    " bytes from there to " + (has_footer ? "the footer" : "the end") + " hold no readable chunk");
       }
       break;
     }
@@ -422,8 +422,9 @@ void FileReader::scan_record(uint8_t op, uint64_t pos, uint64_t len, const uint8
         if (got != crc) {
           // Every chunk was checked against its own CRC; what else lies in the data section
           // (message indexes, records outside chunks) may be damaged.
-          note_damage(f + ": byte " + std::to_string(pos) + ": data section CRC mismatch: stored " + std::to_string(crc) + ", computed " +
-                           std::to_string(got) + " (chunks are checked by their own CRCs)");
+          note_damage(f + ": byte " + std::to_string(pos) + ": data section CRC mismatch: stored " +
+                      std::to_string(crc) + ", computed " + std::to_string(got) +
+                      " (chunks are checked by their own CRCs)");
         }
       }
     }
@@ -540,6 +541,15 @@ void FileReader::fill() {
       need = blocks_[next_block_].start <= tmin;
     }
     if (!need) return;
+    // Chunks whose time ranges overlap are held decompressed together: bounded like one chunk.
+    const Block& b = blocks_[next_block_];
+    uint64_t held = b.compression.empty() ? 0 : b.uncompressed_size;
+    for (const auto& c : active_) held += c->buffer.size();
+    if (!active_.empty() && held > memory_cap_) {
+      fail(b.offset, "chunk record: " + std::to_string(active_.size() + 1) +
+                         " chunks overlapping in time would hold " + std::to_string(held) +
+                         " bytes decompressed at once, more than the cap of " + std::to_string(memory_cap_));
+    }
     auto c = std::make_unique<Cursor>();
     load(next_block_++, *c);
     active_.push_back(std::move(c));

@@ -179,8 +179,18 @@ uint32_t be32(const unsigned char* p) {
   return (uint32_t{p[0]} << 24) | (uint32_t{p[1]} << 16) | (uint32_t{p[2]} << 8) | uint32_t{p[3]};
 }
 
+// A database file shorter than its header declares (a cut copy, a disk that filled up).
+struct Truncation {
+  uint64_t size = 0, pages = 0, page_size = 0;
+  bool truncated() const { return size < pages * page_size; }
+  std::string what(const std::string& path) const {
+    return path + ": database is truncated: " + std::to_string(size) + " bytes, but its header declares " +
+           std::to_string(pages) + " pages of " + std::to_string(page_size) + " bytes";
+  }
+};
+
 // Checks sqlite would only report late (or as a generic error) on first access.
-void check_file_header(const std::string& path) {
+Truncation check_file_header(const std::string& path) {
   std::error_code ec;
   const auto size = fs::file_size(path, ec);
   if (ec) throw BagError(path + ": cannot read database file: " + ec.message());
@@ -195,11 +205,25 @@ void check_file_header(const std::string& path) {
   if (page_size == 1) page_size = 65536;
   const uint32_t pages = be32(&h[28]);
   const bool pages_valid = pages != 0 && be32(&h[24]) == be32(&h[92]);
-  if (pages_valid && size < page_size * pages) {
-    throw BagError(path + ": database is truncated: " + std::to_string(size) +
-                   " bytes, but its header declares " + std::to_string(pages) + " pages of " +
-                   std::to_string(page_size) + " bytes");
+  Truncation t;
+  if (pages_valid) t = Truncation{static_cast<uint64_t>(size), pages, page_size};
+  return t;
+}
+
+// The b-tree (table or index name) that owns page `pageno`, through sqlite's dbstat virtual
+// table; empty if sqlite cannot say (dbstat missing, or the walk meets a damaged page).
+std::string page_owner(sqlite3* db, uint64_t pageno) {
+  sqlite3_stmt* s = nullptr;
+  if (sqlite3_prepare_v2(db, "SELECT name FROM dbstat WHERE pageno = ?", -1, &s, nullptr) != SQLITE_OK) return "";
+  sqlite3_bind_int64(s, 1, static_cast<sqlite3_int64>(pageno));
+  std::string name;
+  int rc;
+  while ((rc = sqlite3_step(s)) == SQLITE_ROW) {
+    const auto* p = reinterpret_cast<const char*>(sqlite3_column_text(s, 0));
+    if (p != nullptr) name = p;
   }
+  sqlite3_finalize(s);
+  return rc == SQLITE_DONE ? name : "";
 }
 
 [[noreturn]] void sql_fail(sqlite3* db, const std::string& path, const std::string& what) {
@@ -450,6 +474,14 @@ void Reader::open(const std::string& dir) {
       damage += (damage.empty() ? "" : "; ") + mf.reader->path() + ": " + mf.reader->recovery_note();
     }
   }
+  for (const auto& f : files_) {
+    if (f.note.empty()) continue;
+    damaged_ = true;
+    metadata_complete_ = false;
+    recovery_note_ += (recovery_note_.empty() ? "" : "; ") + f.note + "; " +
+                      std::to_string(total_count_) + " messages read";
+    damage += (damage.empty() ? "" : "; ") + f.note;
+  }
   // An empty result from a damaged bag is an error, never "0 messages".
   if (damaged_ && total_count_ == 0) {
     const std::string what = dir + ": nothing recovered from the damaged bag: " + damage;
@@ -519,12 +551,29 @@ void Reader::open_mcap(std::map<std::string, TopicInfo>& found, std::map<std::st
 void Reader::open_file(File& f, std::map<std::string, TopicInfo>& found,
                        std::map<std::string, uint64_t>& counts, int64_t& tmin, int64_t& tmax,
                        bool& any) {
-  check_file_header(f.path);
+  const Truncation cut = check_file_header(f.path);
   if (sqlite3_open_v2(f.path.c_str(), &f.db, SQLITE_OPEN_READONLY, nullptr) != SQLITE_OK) {
     const std::string e = f.db != nullptr ? sqlite3_errmsg(f.db) : "out of memory";
     throw BagError(f.path + ": cannot open database: " + e);
   }
   sqlite3* db = f.db;
+  if (cut.truncated()) {
+    // sqlite reads the bytes of a page cut short as zeros: the page passes sqlite's checks
+    // with its tail zeroed, so a message stored there would come back altered. Read on only
+    // if the last page is cut short (no page missing entirely: sqlite refuses the schema
+    // then) and belongs to what the messages do not need (the timestamp index, built last
+    // by close(), or the metadata table); read the messages without the index.
+    const std::string base = cut.what(f.path);
+    if (cut.size / cut.page_size + 1 != cut.pages) throw BagError(base + " (whole pages missing)");
+    const std::string owner = page_owner(db, cut.pages);
+    if (owner.empty()) throw BagError(base + " (sqlite cannot tell what its last, partial page held)");
+    for (const char* needed : {"messages", "topics", "message_definitions", "schema", "sqlite_schema",
+                               "sqlite_master"}) {
+      if (owner == needed) throw BagError(base + " (its last, partial page belongs to '" + owner + "')");
+    }
+    f.note = base + "; its last, partial page belongs to '" + owner + "' only: messages read without the index";
+    f.not_indexed = true;
+  }
   // No string or blob can be larger than the database (and its WAL): a record declaring a
   // larger payload is refused by sqlite (SQLITE_TOOBIG) before it allocates for it.
   {
@@ -610,8 +659,10 @@ void Reader::open_file(File& f, std::map<std::string, TopicInfo>& found,
   {
     sqlite3_stmt* s = nullptr;
     if (sqlite3_prepare_v2(db,
-                           "SELECT topic_id, COUNT(*), MIN(timestamp), MAX(timestamp)"
-                           " FROM messages GROUP BY topic_id",
+                           f.not_indexed ? "SELECT topic_id, COUNT(*), MIN(timestamp), MAX(timestamp)"
+                                           " FROM messages NOT INDEXED GROUP BY topic_id"
+                                         : "SELECT topic_id, COUNT(*), MIN(timestamp), MAX(timestamp)"
+                                           " FROM messages GROUP BY topic_id",
                            -1, &s, nullptr) != SQLITE_OK) {
       sql_fail(db, f.path, "count messages");
     }
@@ -665,6 +716,7 @@ void Reader::prepare_iteration() {
     sqlite3_finalize(f.stmt);
     f.stmt = nullptr;
     std::string sql = "SELECT topic_id, timestamp, data, id FROM messages";
+    if (f.not_indexed) sql += " NOT INDEXED";
     if (!filter_.empty()) {
       std::string ids;
       for (const auto& [id, name] : f.topic_names) {

@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "mcap.hpp"
 #include "tactile_bag/bag.hpp"
 
 namespace fs = std::filesystem;
@@ -394,4 +395,119 @@ TEST(CorruptBag, GarbageMetadataBesideAnIntactMcapFile) {
   EXPECT_EQ(r.storage_identifier(), "mcap");
   EXPECT_FALSE(r.damaged());
   EXPECT_NE(r.recovery_note().find("metadata.yaml not used"), std::string::npos) << r.recovery_note();
+}
+
+// sqlite3 cut short (issue 32: 1 byte short refused the whole bag). sqlite reads the bytes
+// past the end as zeros, so the bag is read on only where what was cut held nothing the
+// messages need: here the timestamp index, which close() builds last.
+TEST(CorruptBag, TruncatedSqliteIsReadWhereOnlyTheIndexWasCut) {
+  TempDir tmp;
+  const std::string dir = tmp.sub("sq");
+  WriterOptions o;
+  o.storage = "sqlite3";
+  Writer w(o);
+  w.open(dir);
+  tactile_bag::TopicInfo t;
+  t.name = "/n";
+  t.type = "std_msgs/msg/String";
+  t.type_definition = "string data\n";
+  w.create_topic(t);
+  for (int i = 0; i < 100; ++i) {
+    std::vector<uint8_t> data(40, static_cast<uint8_t>(i));
+    std::memcpy(data.data(), &i, sizeof i);
+    w.write("/n", 1000 + i, data);
+  }
+  const std::string db = w.db_path();
+  w.close();
+  const std::string good = read_file(db);
+  const size_t page = 4096;
+  ASSERT_EQ(good.size() % page, 0u);
+  auto read_all = [&](size_t cut) {
+    write_file(db, good.substr(0, good.size() - cut));
+    Reader r(dir);
+    EXPECT_EQ(r.message_count(), 100u);
+    EXPECT_TRUE(r.damaged());
+    EXPECT_FALSE(r.metadata_complete());
+    EXPECT_NE(r.recovery_note().find("database is truncated: " + std::to_string(good.size() - cut) + " bytes"),
+              std::string::npos)
+        << r.recovery_note();
+    SerializedMessage m;
+    int i = 0;
+    while (r.read_next(m)) {
+      int v;
+      std::memcpy(&v, m.data.data(), sizeof v);
+      EXPECT_EQ(v, i);
+      EXPECT_EQ(m.timestamp_ns, 1000 + i);
+      std::vector<uint8_t> expected(40, static_cast<uint8_t>(i));
+      std::memcpy(expected.data(), &i, sizeof i);
+      EXPECT_EQ(m.data, expected);
+      ++i;
+    }
+    EXPECT_EQ(i, 100);
+    return r.recovery_note();
+  };
+  // 1 byte and 1000 bytes short: the last page (the index) is partial.
+  for (size_t cut : {size_t{1}, size_t{1000}}) {
+    EXPECT_NE(read_all(cut).find("its last, partial page belongs to 'timestamp_idx' only"), std::string::npos);
+  }
+  // Whole pages missing, or cut into the messages: an error naming the file and the sizes.
+  for (size_t keep : {good.size() - page, good.size() / 2 + 100}) {
+    write_file(db, good.substr(0, keep));
+    try {
+      Reader r(dir);
+      ADD_FAILURE() << "no error";
+    } catch (const BagError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(db + ": database is truncated: " + std::to_string(keep) + " bytes"), std::string::npos)
+          << what;
+    }
+  }
+}
+
+// Chunks whose time ranges overlap are decompressed and held together while merging; their
+// sum is bounded like one chunk (a crafted file of many overlapping, highly compressed
+// chunks would otherwise hold them all). Here the cap is lowered to 2.5 chunks' worth.
+TEST(BoundedMemory, OverlappingChunksHeldTogetherAreCapped) {
+  TempDir tmp;
+  const std::string dir = tmp.sub("overlap");
+  WriterOptions o;
+  o.storage = "mcap";
+  o.compression = "zstd";
+  o.flush_interval = std::chrono::milliseconds(0);
+  o.chunk_size = 1 << 20;
+  Writer w(o);
+  w.open(dir);
+  tactile_bag::TopicInfo t;
+  t.name = "/n";
+  t.type = "std_msgs/msg/String";
+  t.type_definition = "string data\n";
+  w.create_topic(t);
+  for (int k = 0; k < 4; ++k) {  // 4 chunks over the same time range
+    for (int i = 0; i < 20; ++i) w.write("/n", 1000 + i, std::vector<uint8_t>(40, static_cast<uint8_t>(k)));
+    w.flush();
+  }
+  const std::string file = w.db_path();
+  w.close();
+  auto read_all = [&](uint64_t cap) {
+    tactile_bag::mcap::FileReader r;
+    r.open(file);
+    if (cap != 0) r.set_memory_cap(cap);
+    tactile_bag::mcap::FileReader::Message m{};
+    uint64_t n = 0;
+    while (r.next(m)) ++n;
+    return n;
+  };
+  EXPECT_EQ(read_all(0), 80u);
+  const std::string bytes = read_file(file);
+  const auto spans = chunk_spans(bytes);
+  ASSERT_EQ(spans.size(), 4u);
+  uint64_t chunk;  // the first chunk's uncompressed_size (the others are as large)
+  std::memcpy(&chunk, bytes.data() + spans[0].begin + 9 + 16, 8);
+  EXPECT_EQ(read_all(4 * chunk), 80u);
+  try {
+    read_all(chunk * 5 / 2);
+    ADD_FAILURE() << "no error";
+  } catch (const BagError& e) {
+    EXPECT_NE(std::string(e.what()).find("chunks overlapping in time would hold"), std::string::npos) << e.what();
+  }
 }

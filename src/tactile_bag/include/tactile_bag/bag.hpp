@@ -266,6 +266,8 @@ class Reader {
     bool has_row = false;
     int64_t ts = 0;
     int64_t rowid = 0;
+    bool not_indexed = false;  ///< truncated: read the messages table without its index
+    std::string note;          ///< what was lost (truncation), for recovery_note()
   };
   void open_file(File& f, std::map<std::string, TopicInfo>& found,
                  std::map<std::string, uint64_t>& counts, int64_t& tmin, int64_t& tmax,
