@@ -259,7 +259,9 @@ TEST(Gpis, RemoveEqualsAFitWithoutThePoint) {
   q.max_points = 12;
   Gpis rest(q);
   for (std::size_t i = 0; i < 12; ++i) {
-    if (i != 4) ASSERT_EQ(rest.add_point(g.point(i), g.label(i)), AddStatus::kAdded);
+    if (i != 4) {
+      ASSERT_EQ(rest.add_point(g.point(i), g.label(i)), AddStatus::kAdded);
+    }
   }
   const Vector2d x5 = g.point(5);
   const std::size_t surfaces = g.surface_count();
