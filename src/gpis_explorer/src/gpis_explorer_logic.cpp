@@ -15,14 +15,17 @@ using tactile_common::ParamMap;
 
 void GpisExplorerLogic::Params::validate() const {
   sequencer.validate();
-  if (!(std::isfinite(max_input_age_s) && max_input_age_s > 0.0)) {
-    throw std::invalid_argument("GpisExplorerLogic.max_input_age_s: must be > 0");
+  // The staleness threshold and the fail-safe bound are the wall follower's
+  // (WallFollowerParams::validate() checks them finite and >= 0); a zero age
+  // would call every input stale.
+  if (!(sequencer.wall.max_input_age_s > 0.0)) {
+    throw std::invalid_argument("GpisExplorerLogic.max_input_age_s: must be > 0, got " +
+                                std::to_string(sequencer.wall.max_input_age_s));
   }
 }
 
 ParamMap GpisExplorerLogic::default_parameters() {
   const SequencerParams s;
-  const Params n;
   ParamMap m(kNodeName, "defaults");
   // GPIS (000 eq. 33-35; public onboard code values)
   m.set("gpis.beta", s.explorer.gpis.beta);
@@ -87,7 +90,10 @@ ParamMap GpisExplorerLogic::default_parameters() {
   m.set("max_updates", static_cast<int64_t>(s.max_updates));
   m.set("max_time_s", s.max_time_s);
   m.set("landing_duration_s", s.landing_duration_s);
-  m.set("max_input_age_s", n.max_input_age_s);
+  // Stale depth / odometry -> FAILSAFE_HOVER, landing after failsafe_land_after_s
+  // (the wall follower's keys, defaults and rule).
+  m.set("max_input_age_s", s.wall.max_input_age_s);
+  m.set("failsafe_land_after_s", s.wall.failsafe_land_after_s);
   return m;
 }
 
@@ -158,7 +164,8 @@ GpisExplorerLogic::Params GpisExplorerLogic::params_from(const ParamMap& m) {
   s.max_updates = m.get_int("max_updates", 1, 1000000);
   s.max_time_s = m.get_double("max_time_s");
   s.landing_duration_s = m.get_double("landing_duration_s");
-  p.max_input_age_s = m.get_double("max_input_age_s");
+  s.wall.max_input_age_s = m.get_double("max_input_age_s");
+  s.wall.failsafe_land_after_s = m.get_double("failsafe_land_after_s");
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {
@@ -181,6 +188,7 @@ void GpisExplorerLogic::on_depth(const tactile_msgs::msg::TactileDepth& msg) {
     return;
   }
   depth_ns_ = stamp;
+  depth_t_ = tactile_common::to_seconds(stamp);
   in_.contact_left = msg.contact_left;
   in_.contact_right = msg.contact_right;
   in_.depth_left = msg.contact_left ? msg.depth_left : NAN;
@@ -204,6 +212,7 @@ void GpisExplorerLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
     return;
   }
   odom_ns_ = stamp;
+  odom_t_ = tactile_common::to_seconds(stamp);
   in_.x = p.x;
   in_.y = p.y;
   in_.yaw = tactile_common::yaw_of(q);
@@ -249,11 +258,12 @@ tactile_msgs::msg::GpisMap GpisExplorerLogic::make_map(const GpisExplorer& ex, i
 GpisExplorerLogic::Outputs GpisExplorerLogic::on_timer(int64_t now_ns) {
   ++stats_.ticks;
   Outputs out;
-  const double age = params_.max_input_age_s;
+  // The wall follower's staleness rule and threshold (one definition).
+  const double age = params_.sequencer.wall.max_input_age_s;
   in_.t = tactile_common::to_seconds(now_ns);
-  in_.pose_valid = odom_ns_ != INT64_MIN && tactile_common::to_seconds(now_ns - odom_ns_) <= age;
-  in_.depth_valid = depth_ns_ != INT64_MIN && tactile_common::to_seconds(now_ns - depth_ns_) <= age;
-  if (!in_.pose_valid) ++stats_.stale_ticks;
+  in_.pose_valid = tactile_fsm::input_fresh(in_.t, odom_t_, age);
+  in_.depth_valid = tactile_fsm::input_fresh(in_.t, depth_t_, age);
+  if (!in_.pose_valid || !in_.depth_valid) ++stats_.stale_ticks;
   const SequencerOutput so = seq_.step(in_);
   auto& sp = out.setpoint;
   tactile_common::to_stamp(now_ns, sp.header.stamp);

@@ -53,6 +53,7 @@ const char* to_string(Phase p) {
     case Phase::kGoToTarget: return "GO_TO_TARGET";
     case Phase::kExitThrough: return "EXIT_THROUGH";
     case Phase::kCheckAhead: return "CHECK_AHEAD";
+    case Phase::kFailsafeHover: return "FAILSAFE_HOVER";
     case Phase::kLanding: return "LANDING";
     case Phase::kDone: return "DONE";
   }
@@ -67,6 +68,7 @@ const char* to_string(Outcome o) {
     case Outcome::kNoTarget: return "no_target";
     case Outcome::kUpdateLimit: return "update_limit";
     case Outcome::kTimeLimit: return "time_limit";
+    case Outcome::kInputsStale: return "inputs_stale";
   }
   return "unknown";
 }
@@ -130,11 +132,33 @@ void ExplorationSequencer::enter(Phase p, const char* reason, double t) {
   if (p == Phase::kRetreat) {
     retreat_held_ = false;
     retreat_from_follow_ = phase_ == Phase::kFollowWall;
+    retreat_from_return_ = phase_ == Phase::kReturn;
   }
   previous_ = phase_;
   phase_ = p;
   reason_ = reason;
   entered_ = t;
+  ++transitions_;
+}
+
+void ExplorationSequencer::enter_failsafe(const char* reason, double t) {
+  failsafe_from_ = phase_;
+  failsafe_from_entered_ = entered_;
+  ++failsafe_hovers_;
+  enter(Phase::kFailsafeHover, reason, t);
+}
+
+void ExplorationSequencer::resume_after_failsafe(double t) {
+  // Back to the interrupted phase as it was, its clocks moved on by the time
+  // held: a 2 s wall follow still follows for 2 s of fresh input, a check
+  // dwells its full time. Not enter(): the phase is resumed, not re-entered.
+  const double held = t - entered_;
+  previous_ = phase_;
+  phase_ = failsafe_from_;
+  reason_ = "inputs fresh again";
+  entered_ = failsafe_from_entered_ + held;
+  check_t_ += held;
+  check_started_ += held;
   ++transitions_;
 }
 
@@ -714,7 +738,44 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
     out.transitioned = transitions_ != tr;
     return out;
   }
-  if (!in.pose_valid) return out;  // no odometry: hover in place (counted by the node logic)
+  // Fail-safe (tactile_fsm's FAILSAFE_HOVER, same threshold and bound): a
+  // phase that moves needs fresh depth and odometry. With stale depth a leg
+  // would fly blind and a probe end as "no wall" (issue 33); with stale
+  // odometry every leg, turn and distance is wrong. Hover, record nothing,
+  // resume when both are fresh, land after failsafe_land_after_s. HOVER_INIT
+  // only hovers: checked at its end, as the wall follower does.
+  const bool fresh = in.pose_valid && in.depth_valid;
+  if (phase_ == Phase::kFailsafeHover) {
+    if (!fresh) {
+      if (in.pose_valid) {
+        const Eigen::Vector2d held_at(in.x, in.y);
+        if (have_last_pose_) {
+          travel_ += (held_at - last_pose_).norm();
+          leg_blind_ += (held_at - last_pose_).norm();
+        }
+        last_pose_ = held_at;
+        have_last_pose_ = true;
+      }
+      if (in.t - entered_ >= p_.wall.failsafe_land_after_s - 1e-9) {
+        finish(Outcome::kInputsStale, "inputs stale for failsafe_land_after_s", in.t);
+        out.setpoint.height = 0.0;  // landing from this tick (as the wall follower's FAILSAFE_LAND)
+        out.setpoint.land = true;
+      }
+      out.transitioned = transitions_ != tr;
+      return out;
+    }
+    // Moved while held (drift under a zero-velocity setpoint): not a
+    // contact-free part of the leg.
+    if (have_last_pose_) leg_blind_ += (Eigen::Vector2d(in.x, in.y) - last_pose_).norm();
+    resume_after_failsafe(in.t);
+  } else if (!fresh && (phase_ != Phase::kHoverInit || in.t - entered_ >= p_.wall.hover_init_s)) {
+    const bool init = phase_ == Phase::kHoverInit;
+    if (!in.depth_valid) enter_failsafe(init ? "tactile depth stale at end of hover" : "tactile depth stale", in.t);
+    else enter_failsafe(init ? "odometry stale at end of hover" : "odometry stale", in.t);
+    out.transitioned = true;
+    return out;
+  }
+  if (!in.pose_valid) return out;  // HOVER_INIT without odometry: hover in place (counted by the node logic)
   const Eigen::Vector2d pos(in.x, in.y);
   if (have_last_pose_) travel_ += (pos - last_pose_).norm();
   last_pose_ = pos;
@@ -760,6 +821,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         if (after_turn_ == Phase::kExitThrough && line_from_probe_) line_origin_ = open_origin_;
         line_from_probe_ = false;
         beside_added_ = false;
+        leg_blind_ = 0.0;
         enter(after_turn_, "aligned", in.t);
       }
       break;
@@ -770,8 +832,8 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       if (contact && (!whisking_ || whisk_blocked(in))) {
         if (whisking_) start_check(in);
         else start_follow(in, true);
-      } else if ((pos - leg_start_).norm() >= p_.probe_max_distance) {
-        add(pos, kInteriorLabel);  // free all the way
+      } else if ((pos - leg_start_).norm() - leg_blind_ >= p_.probe_max_distance) {
+        add(pos, kInteriorLabel);  // free all the way (flown with fresh depth)
         if (open_probe_ < 0) {
           open_probe_ = probe_;
           open_heading_ = heading_;
@@ -792,6 +854,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
           line_from_probe_ = true;
           heading_ = open_heading_;
           exit_from_ = pos;
+          leg_blind_ = 0.0;
           exit_distance_ = p_.probe_max_distance + p_.exit_confirm_distance;
           after_turn_ = Phase::kExitThrough;
           exit_whisk_ = false;  // along the open probe's line: its corridor was whisked
@@ -870,9 +933,9 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         sp.vy = retreat_lateral(in);
       }
       if (in.t - entered_ >= p_.retreat_time_s) {
-        if (p_.align_probes && probing_ && !aligned_ && previous_ != Phase::kReturn) align_to_wall(in);
-        if (previous_ != Phase::kReturn) commit_points(in);
-        if (probing_ && probe_ + 1 < p_.probe_directions && previous_ != Phase::kReturn) {
+        if (p_.align_probes && probing_ && !aligned_ && !retreat_from_return_) align_to_wall(in);
+        if (!retreat_from_return_) commit_points(in);
+        if (probing_ && probe_ + 1 < p_.probe_directions && !retreat_from_return_) {
           // Back to the start, then the next probe.
           begin_return({in.x, in.y}, leg_start_, "retreated: next probe", in.t);
           break;
@@ -912,6 +975,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       if ((target_ - pos).norm() < p_.target_radius || (target_ - pos).dot(dir) < 0.0) {
         add(target_, kInteriorLabel);
         exit_from_ = pos;
+        leg_blind_ = 0.0;
         exit_distance_ = p_.exit_confirm_distance;
         exit_whisk_ = true;  // beyond the target: unexplored
         enter(Phase::kExitThrough, "target reached without contact", in.t);
@@ -923,8 +987,9 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       if (contact && (!whisking_ || whisk_blocked(in))) {
         if (whisking_) start_check(in);
         else start_follow(in, false);
-      } else if ((pos - exit_from_).norm() >= exit_distance_ &&
-                 (beyond_known_surface(pos) || (pos - exit_from_).norm() >= exit_distance_ + p_.probe_max_distance)) {
+      } else if ((pos - exit_from_).norm() - leg_blind_ >= exit_distance_ &&
+                 (beyond_known_surface(pos) ||
+                  (pos - exit_from_).norm() - leg_blind_ >= exit_distance_ + p_.probe_max_distance)) {
         finish(Outcome::kExitFound, "flew through the opening", in.t);
         out.gpis_updated = true;  // publish the final target with exit_found
       }
@@ -932,6 +997,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
     case Phase::kCheckAhead:
       check_ahead(in, &sp);
       break;
+    case Phase::kFailsafeHover:  // handled above
     case Phase::kLanding:
     case Phase::kDone:
       break;

@@ -87,11 +87,14 @@ struct Run {
 /// Flies the sequencer in `walls` from the origin with heading yaw0.
 /// The closest approach to a wall is tracked while the drone is inside the
 /// room (room frame rotated by room_yaw, half side room_half).
-/// `on_step(seq, position, yaw)` is called after every step (optional).
+/// `on_step(seq, position, yaw)` is called after every step (optional);
+/// `edit_input(in)` may change the tick's input before the step (optional:
+/// stale inputs).
 inline Run fly(gpis_explorer::ExplorationSequencer& seq, const std::vector<Segment>& walls, double yaw0,
                double max_t = 400.0, double room_half = 1.0, double room_yaw = 0.0,
                const std::function<void(const gpis_explorer::ExplorationSequencer&, const Eigen::Vector2d&, double)>&
-                   on_step = {}) {
+                   on_step = {},
+               const std::function<void(gpis_explorer::SequencerInput&)>& edit_input = {}) {
   Run r;
   Eigen::Vector2d p(0, 0);
   double yaw = yaw0;
@@ -113,6 +116,7 @@ inline Run fly(gpis_explorer::ExplorationSequencer& seq, const std::vector<Segme
       (side == 0 ? in.depth_left : in.depth_right) = c ? d : NAN;
       (side == 0 ? in.point_left : in.point_right) = c ? Eigen::Vector2d(base + d * fx) : Eigen::Vector2d(NAN, NAN);
     }
+    if (edit_input) edit_input(in);
     const auto out = seq.step(in);
     if (on_step) on_step(seq, p, yaw);
     if (seq.phase() == gpis_explorer::Phase::kDone) break;

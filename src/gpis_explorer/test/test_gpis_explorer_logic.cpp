@@ -1,7 +1,10 @@
 // gpis_explorer node logic: parameters (defaults = repository config), input
 // validation counters, message outputs.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -128,6 +131,99 @@ TEST(GpisExplorerLogic, OpenSpacePublishesMapAndTarget) {
   EXPECT_EQ(maps, 1);
   EXPECT_TRUE(landed);
   EXPECT_EQ(logic.sequencer().outcome(), gpis_explorer::Outcome::kOpenSpace);
+}
+
+namespace {
+// Free flight of the node logic (setpoints integrated, no wall): odometry
+// every tick; depth (no contact) while depth_on(t). `on_tick(t, out)` sees
+// every output. Returns when the logic asks to land, or after max_t.
+template <class DepthOn, class OnTick>
+void fly_free(GpisExplorerLogic& logic, double max_t, DepthOn depth_on, OnTick on_tick) {
+  double x = 0, y = 0, yaw = 0;
+  for (int64_t k = 0;; ++k) {
+    const int64_t ns = k * GpisExplorerLogic::kTimerPeriodNs;
+    const double t = tactile_common::to_seconds(ns);
+    if (t >= max_t) return;
+    auto o = odom(ns, x, y);
+    o.pose.pose.orientation.z = std::sin(yaw / 2);
+    o.pose.pose.orientation.w = std::cos(yaw / 2);
+    logic.on_odometry(o);
+    if (depth_on(t)) {
+      tactile_msgs::msg::TactileDepth d;
+      tactile_common::to_stamp(ns, d.header.stamp);
+      logic.on_depth(d);
+    }
+    const auto out = logic.on_timer(ns);
+    on_tick(t, out);
+    x += 0.02 * (out.setpoint.vx * std::cos(yaw) - out.setpoint.vy * std::sin(yaw));
+    y += 0.02 * (out.setpoint.vx * std::sin(yaw) + out.setpoint.vy * std::cos(yaw));
+    yaw += 0.02 * out.setpoint.yaw_rate;
+    if (out.setpoint.land) return;
+  }
+}
+}  // namespace
+
+// Issue 33: odometry fresh, tactile depth stopped at t = 3 s in the first
+// probe. The whisker wall follower hovers 0.2 s later (max_input_age_s);
+// gpis_explorer flew its 2 m probe on blind and recorded it as "no wall".
+// Now: zero motion from the first tick after the threshold (3.2 s + one
+// tick), FAILSAFE_HOVER with the reason in the state message, no probe result,
+// landing after failsafe_land_after_s.
+TEST(GpisExplorerLogic, StaleDepthStopsTheProbeWithinTheThresholdAndOneTick) {
+  GpisExplorerLogic logic(GpisExplorerLogic::params_from(GpisExplorerLogic::default_parameters()));
+  const double last_depth = 3.0;
+  const double age = logic.params().sequencer.wall.max_input_age_s;
+  bool flew_before = false, moved_after = false, no_wall = false, landed = false;
+  double failsafe_at = NAN, land_at = NAN;
+  std::string failsafe_reason;
+  fly_free(
+      logic, 60.0, [&](double t) { return t <= last_depth + 1e-9; },
+      [&](double t, const GpisExplorerLogic::Outputs& out) {
+        const bool moving = out.setpoint.vx != 0.0 || out.setpoint.vy != 0.0 || out.setpoint.yaw_rate != 0.0;
+        if (t > 2.5 && t <= last_depth + age + 1e-9) flew_before = flew_before || moving;
+        if (t >= last_depth + age + 0.02 - 1e-9) moved_after = moved_after || moving;
+        if (out.state && out.state->state == "FAILSAFE_HOVER" && !std::isfinite(failsafe_at)) {
+          failsafe_at = t;
+          failsafe_reason = out.state->reason;
+        }
+        if (out.state && out.state->reason == "probe found no wall") no_wall = true;
+        if (out.setpoint.land && !std::isfinite(land_at)) land_at = t;
+        landed = landed || out.setpoint.land;
+      });
+  EXPECT_TRUE(flew_before);  // the probe was under way, and still is while the depth is within the threshold
+  EXPECT_FALSE(moved_after) << "moved with the tactile depth older than max_input_age_s";
+  EXPECT_NEAR(failsafe_at, last_depth + age + 0.02, 1e-6);
+  EXPECT_EQ(failsafe_reason, "tactile depth stale");
+  EXPECT_FALSE(no_wall) << "a probe flown blind was recorded as no wall";
+  EXPECT_EQ(logic.sequencer().explorer().gpis().size(), 0u);
+  EXPECT_TRUE(landed);
+  EXPECT_NEAR(land_at, failsafe_at + logic.params().sequencer.wall.failsafe_land_after_s, 1e-6);
+  EXPECT_EQ(std::string(gpis_explorer::to_string(logic.sequencer().outcome())), "inputs_stale");
+  EXPECT_GT(logic.stats().stale_ticks, 0u);
+}
+
+// Depth back after 1 s: the probe resumes ("inputs fresh again") and moves;
+// the two parameters are the wall follower's keys with its defaults.
+TEST(GpisExplorerLogic, StaleDepthResumesWhenFreshAgain) {
+  const auto defaults = GpisExplorerLogic::default_parameters();
+  EXPECT_EQ(defaults.get_double("max_input_age_s"), tactile_fsm::WallFollowerParams{}.max_input_age_s);
+  EXPECT_EQ(defaults.get_double("failsafe_land_after_s"), tactile_fsm::WallFollowerParams{}.failsafe_land_after_s);
+  GpisExplorerLogic logic(GpisExplorerLogic::params_from(defaults));
+  std::vector<std::string> reasons;
+  bool moved_after_resume = false, moved_while_held = false;
+  fly_free(
+      logic, 6.0, [](double t) { return t <= 3.0 + 1e-9 || t >= 4.0 - 1e-9; },
+      [&](double t, const GpisExplorerLogic::Outputs& out) {
+        const bool moving = out.setpoint.vx != 0.0 || out.setpoint.vy != 0.0 || out.setpoint.yaw_rate != 0.0;
+        if (out.state) reasons.push_back(out.state->state + ": " + out.state->reason);
+        if (t > 3.22 - 1e-9 && t < 4.0 - 1e-9) moved_while_held = moved_while_held || moving;
+        if (t >= 4.0 - 1e-9) moved_after_resume = moved_after_resume || moving;
+      });
+  EXPECT_FALSE(moved_while_held);
+  EXPECT_TRUE(moved_after_resume);
+  EXPECT_NE(std::find(reasons.begin(), reasons.end(), "FAILSAFE_HOVER: tactile depth stale"), reasons.end());
+  EXPECT_NE(std::find(reasons.begin(), reasons.end(), "PROBE: inputs fresh again"), reasons.end());
+  EXPECT_EQ(logic.sequencer().phase(), gpis_explorer::Phase::kProbe);
 }
 
 TEST(GpisPlot, WritesAPictureOfARoomUpdate) {

@@ -525,3 +525,189 @@ TEST(Sequencer, AWallLineEndsTheSlideIntoACornersOtherWall) {
     }
   }
 }
+
+// ---------------------------------------------------------------------------
+// Stale inputs (issue 33). The node logic calls depth / odometry fresh with
+// tactile_fsm::input_fresh and wall.max_input_age_s; here the sequencer gets
+// depth_valid / pose_valid false directly (what the node logic passes once
+// the last message is older than that). The wall follower goes to
+// FAILSAFE_HOVER in that case; the sequencer kept flying its probe blind and
+// recorded "no wall" 2 m further on.
+namespace {
+// Stale depth as the node logic passes it: not valid, and the last message said no contact.
+void make_depth_stale(gpis_explorer::SequencerInput& in) {
+  in.depth_valid = false;
+  in.contact_left = in.contact_right = false;
+  in.depth_left = in.depth_right = NAN;
+  in.point_left = in.point_right = Eigen::Vector2d(NAN, NAN);
+}
+const std::vector<gpis_test::Segment> kWallAhead(double x) { return {{{x, -2.0}, {x, 2.0}}}; }
+}  // namespace
+
+// Depth stale from t = 2.6 s (the first probe under way, 1 m short of a wall),
+// odometry fresh: the drone must not move from that tick on, must never
+// record the probe as "no wall" (an interior point 2 m on, through the wall),
+// and lands after failsafe_land_after_s (outcome inputs_stale). On the code
+// before the fail-safe the probe flew on blind, through the wall, and
+// returned with "probe found no wall".
+TEST(SequencerFailsafe, StaleDepthHoversInsteadOfFlyingTheProbeBlind) {
+  const SequencerParams p;
+  ExplorationSequencer seq(p);
+  const double stale_from = 2.6;
+  std::string phase_before;
+  Eigen::Vector2d held_at(NAN, NAN);
+  double held_yaw = NAN, max_moved = 0.0, landing_at = NAN;
+  bool saw_failsafe = false, no_wall = false;
+  std::string first_stale_state, first_stale_reason;
+  const auto r = gpis_test::fly(
+      seq, kWallAhead(1.0), 0.0, 30.0, 1.0, 0.0,
+      [&](const ExplorationSequencer& s, const Eigen::Vector2d& pos, double yaw) {
+        no_wall = no_wall || std::string(s.reason()) == "probe found no wall";
+        if (!held_at.allFinite() && !first_stale_state.empty()) {
+          held_at = pos;  // position after the first stale tick's setpoint is applied: compared below
+          held_yaw = yaw;
+        }
+        if (held_at.allFinite()) max_moved = std::max({max_moved, (pos - held_at).norm(), std::abs(yaw - held_yaw)});
+        if (s.phase() == Phase::kLanding && !std::isfinite(landing_at)) landing_at = s.phase_entered();
+        saw_failsafe = saw_failsafe || std::string(gpis_explorer::to_string(s.phase())) == "FAILSAFE_HOVER";
+      },
+      [&](gpis_explorer::SequencerInput& in) {
+        if (in.t < stale_from - 1e-9) {
+          phase_before = gpis_explorer::to_string(seq.phase());
+          return;
+        }
+        make_depth_stale(in);
+        if (first_stale_state.empty()) first_stale_state = "pending";
+      });
+  (void)r;
+  EXPECT_EQ(phase_before, "PROBE");
+  EXPECT_TRUE(saw_failsafe);
+  EXPECT_EQ(max_moved, 0.0) << "the drone moved with tactile depth stale";
+  EXPECT_FALSE(no_wall) << "a probe flown with stale depth was recorded as no wall";
+  EXPECT_EQ(seq.explorer().gpis().size(), 0u);
+  EXPECT_EQ(std::string(gpis_explorer::to_string(seq.outcome())), "inputs_stale");
+  EXPECT_EQ(seq.phase(), Phase::kDone);
+  // Landing after failsafe_land_after_s of stale depth (from the first stale tick).
+  EXPECT_NEAR(landing_at, stale_from + p.wall.failsafe_land_after_s, 0.021);
+}
+
+// The first stale tick itself: zero velocity and yaw rate at the flight
+// height, FAILSAFE_HOVER with the reason, for stale depth and for stale
+// odometry; fresh again -> the interrupted phase ("inputs fresh again").
+TEST(SequencerFailsafe, FirstStaleTickHoversAndNamesTheInput) {
+  for (const bool depth : {true, false}) {
+    SCOPED_TRACE(depth ? "stale depth" : "stale odometry");
+    const SequencerParams p;
+    ExplorationSequencer seq(p);
+    gpis_explorer::SequencerInput in;
+    in.pose_valid = in.depth_valid = true;
+    double x = 0.0;
+    gpis_explorer::SequencerOutput out;
+    for (in.t = 0.0; in.t < 2.6; in.t += 0.02) {  // hover, then the first probe
+      in.x = x;
+      out = seq.step(in);
+      x += 0.02 * out.setpoint.vx;
+    }
+    ASSERT_EQ(seq.phase(), Phase::kProbe);
+    ASSERT_GT(out.setpoint.vx, 0.0);
+    (depth ? in.depth_valid : in.pose_valid) = false;
+    out = seq.step(in);
+    EXPECT_EQ(seq.phase(), Phase::kFailsafeHover);
+    EXPECT_STREQ(seq.reason(), depth ? "tactile depth stale" : "odometry stale");
+    EXPECT_TRUE(out.transitioned);
+    EXPECT_EQ(out.setpoint.vx, 0.0);
+    EXPECT_EQ(out.setpoint.vy, 0.0);
+    EXPECT_EQ(out.setpoint.yaw_rate, 0.0);
+    EXPECT_EQ(out.setpoint.height, p.wall.flight_height);
+    EXPECT_FALSE(out.setpoint.land);
+    EXPECT_EQ(seq.failsafe_hovers(), 1u);
+    EXPECT_EQ(seq.failsafe_from(), Phase::kProbe);
+    in.t += 0.02;
+    out = seq.step(in);  // still stale: held, no transition
+    EXPECT_EQ(seq.phase(), Phase::kFailsafeHover);
+    EXPECT_FALSE(out.transitioned);
+    EXPECT_EQ(out.setpoint.vx, 0.0);
+    in.t += 0.02;
+    in.depth_valid = in.pose_valid = true;
+    out = seq.step(in);
+    EXPECT_EQ(seq.phase(), Phase::kProbe);
+    EXPECT_STREQ(seq.reason(), "inputs fresh again");
+    EXPECT_EQ(seq.previous_phase(), Phase::kFailsafeHover);
+    EXPECT_GT(out.setpoint.vx, 0.0);
+  }
+}
+
+// HOVER_INIT only hovers: stale inputs during it are no fail-safe; at its end
+// they are (as the wall follower), and the exploration starts once fresh.
+TEST(SequencerFailsafe, StaleAtTheEndOfTheHoverWaitsForFreshInputs) {
+  ExplorationSequencer seq{SequencerParams{}};
+  gpis_explorer::SequencerInput in;
+  in.pose_valid = true;
+  in.depth_valid = false;
+  for (in.t = 0.0; in.t < 1.9; in.t += 0.02) seq.step(in);
+  EXPECT_EQ(seq.phase(), Phase::kHoverInit);
+  for (; in.t < 2.1; in.t += 0.02) seq.step(in);
+  EXPECT_EQ(seq.phase(), Phase::kFailsafeHover);
+  EXPECT_STREQ(seq.reason(), "tactile depth stale at end of hover");
+  in.depth_valid = true;
+  seq.step(in);
+  EXPECT_EQ(seq.phase(), Phase::kTurn);  // resumed HOVER_INIT, done: the first probe's turn
+}
+
+// Stale for 1 s in the first probe, fresh again with the wall still 0.7 m
+// ahead: the probe resumes and meets the wall (a contact, never "no wall");
+// nothing moved while held.
+TEST(SequencerFailsafe, ProbeResumesAndMeetsTheWallWhenDepthIsFreshAgain) {
+  ExplorationSequencer seq{SequencerParams{}};
+  bool contact_phase = false, no_wall_first = false;
+  std::string resumed_reason;
+  Eigen::Vector2d held(NAN, NAN);
+  double moved = 0.0;
+  gpis_test::fly(
+      seq, kWallAhead(0.8), 0.0, 40.0, 1.0, 0.0,
+      [&](const ExplorationSequencer& s, const Eigen::Vector2d& pos, double) {
+        if (s.phase() == Phase::kFailsafeHover) {
+          if (!held.allFinite()) held = pos;
+          moved = std::max(moved, (pos - held).norm());
+        }
+        if (s.previous_phase() == Phase::kFailsafeHover && resumed_reason.empty()) resumed_reason = s.reason();
+        if (!contact_phase && std::string(s.reason()) == "probe found no wall") no_wall_first = true;
+        contact_phase = contact_phase || s.phase() == Phase::kFollowWall || s.phase() == Phase::kCheckAhead;
+      },
+      [&](gpis_explorer::SequencerInput& in) {
+        if (in.t >= 2.6 - 1e-9 && in.t < 3.6 - 1e-9) make_depth_stale(in);
+      });
+  EXPECT_EQ(seq.failsafe_hovers(), 1u);
+  EXPECT_EQ(moved, 0.0);
+  EXPECT_EQ(resumed_reason, "inputs fresh again");
+  EXPECT_TRUE(contact_phase);
+  EXPECT_FALSE(no_wall_first);
+  EXPECT_GT(seq.explorer().gpis().surface_count(), 0u);
+}
+
+// A phase's clock pauses while held: a wall follow interrupted for 0.5 s still
+// follows for follow_time_s of fresh input (not 1.5 s of it).
+TEST(SequencerFailsafe, WallFollowTimePausesWhileHeld) {
+  SequencerParams p;
+  p.whisk_amplitude = 0.0;  // straight probe: the first contact starts the wall follow
+  ExplorationSequencer seq(p);
+  double follow_from = NAN;
+  int follow_ticks = 0, episodes = 0;
+  Phase last = Phase::kHoverInit;
+  gpis_test::fly(
+      seq, kWallAhead(0.8), 0.0, 20.0, 1.0, 0.0,
+      [&](const ExplorationSequencer& s, const Eigen::Vector2d&, double) {
+        if (s.phase() == Phase::kFollowWall && last != Phase::kFollowWall && last != Phase::kFailsafeHover) ++episodes;
+        if (s.phase() == Phase::kFollowWall && episodes == 1) ++follow_ticks;
+        last = s.phase();
+      },
+      [&](gpis_explorer::SequencerInput& in) {
+        if (seq.phase() == Phase::kFollowWall && !std::isfinite(follow_from)) follow_from = in.t;
+        if (std::isfinite(follow_from) && in.t >= follow_from + 0.5 - 1e-9 && in.t < follow_from + 1.0 - 1e-9) {
+          make_depth_stale(in);
+        }
+      });
+  ASSERT_TRUE(std::isfinite(follow_from));
+  EXPECT_EQ(seq.failsafe_hovers(), 1u);
+  EXPECT_NEAR(follow_ticks * 0.02, p.follow_time_s, 0.05);
+}

@@ -58,9 +58,12 @@ tactile_common::ParamMap Host::load_parameters(const std::string& ns, const std:
                                                const tactile_common::ParamMap& defaults,
                                                const tactile_common::ParamMap& over) const {
   const std::string path = (std::filesystem::path(config_dir_) / parameter_file_name(node_name)).string();
-  tactile_common::ParamMap params = std::filesystem::exists(path)
-                                        ? tactile_common::load_node_parameters(path, resolve_topic(ns, node_name), defaults)
-                                        : defaults;
+  // Every node the host runs reads its file: a missing, empty, non-file or
+  // misnamed one is an error naming the file and the reason (issue 32: a
+  // missing tdorc_filter.yaml ran TDORC on its defaults and the three-baffle
+  // course ended in a collision with exit 0). No node has a file-less default.
+  tactile_common::ParamMap params =
+      tactile_common::load_node_parameters(path, resolve_topic(ns, node_name), defaults);
   tactile_common::ParamMap o(node_name, "overrides of " + node_name + " in the standalone host");
   for (const auto& [k, v] : over.values()) o.set(k, v);
   params.merge_from(o);

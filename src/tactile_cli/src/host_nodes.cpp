@@ -370,7 +370,8 @@ std::shared_ptr<tactile_fsm::WallEffectNavLogic> add_wall_effect_nav(Host& host,
     return NodeReport{std::string("/") + Logic::kNodeName,
                       {{"ticks", s.ticks},
                        {"dropped_nonfinite", s.dropped_nonfinite},
-                       {"ticks_without_odometry", s.ticks_without_odometry}}};
+                       {"ticks_without_odometry", s.ticks_without_odometry},
+                       {"ticks_wall_stale", s.ticks_wall_stale}}};
   });
   return logic;
 }

@@ -21,6 +21,7 @@
 
 #include "tactile_cli/scenario_family.hpp"
 #include "tactile_cli/sim_run.hpp"
+#include "tactile_common/parameters.hpp"
 #include "tactile_sim/scenario.hpp"
 
 namespace tactile_cli {
@@ -179,6 +180,11 @@ Row fly_one(const std::string& file, const SweepOptions& options, const fs::path
       }
       row.outcome = "failure: " + (why.empty() ? std::string("no success") : why);
     }
+  } catch (const tactile_common::ParamError&) {
+    // A node parameter file (missing, empty, not a file, no section for the
+    // node) or value is wrong for every environment alike: the sweep stops
+    // with that error (exit 1), not a table of N "error" rows and exit 0.
+    throw;
   } catch (const std::exception& e) {
     row.success = false;
     row.outcome = std::string("error: ") + e.what();

@@ -12,6 +12,11 @@
 #include "std_msgs/msg/float64.hpp"
 #include "tactile_cli/executor.hpp"
 #include "tactile_cli/host.hpp"
+#include "crazyflie_bridge/crazyflie_bridge_logic.hpp"
+#include "mapping_pcl/xplorer_map_logic.hpp"
+#include "tactile_cli/host_nodes.hpp"
+#include "tactile_fsm/xplorer_fsm_logic.hpp"
+#include "xplorer_force_est/xplorer_force_est_logic.hpp"
 
 using tactile_cli::Bus;
 using tactile_cli::Executor;
@@ -135,4 +140,36 @@ TEST(Host, LoadsTheWhiskerFsmFromTactileFsmYaml) {
   const auto p = host.load_parameters("", "whisker_fsm", defaults, tactile_common::ParamMap("", "none"));
   EXPECT_DOUBLE_EQ(p.get_double("v_max"), 0.123);
   fs::remove_all(dir);
+}
+
+// Issue 32: the host loads every node from its file and has no file-less
+// default (a missing, empty, directory or misnamed file is an error). So every
+// node logic the `tactile` commands run must find its file in the repository's
+// config/ with a section naming it, and its values must validate.
+namespace {
+template <class Logic>
+void expect_repository_file(const tactile_cli::Host& host, const std::string& ns) {
+  SCOPED_TRACE(Logic::kNodeName);
+  EXPECT_NO_THROW(Logic::params_from(host.load_parameters(ns, Logic::kNodeName, Logic::default_parameters(),
+                                                          tactile_common::ParamMap("", "none"))));
+}
+}  // namespace
+
+TEST(Host, EveryHostedNodeHasItsParameterFile) {
+  const tactile_cli::Host host(TACTILE_CONFIG_DIR);
+  expect_repository_file<whisker_driver::WhiskerDriverLogic>(host, "whisker/left");
+  expect_repository_file<whisker_driver::WhiskerDriverLogic>(host, "whisker/right");
+  expect_repository_file<tdorc_filter::TdorcFilterLogic>(host, "whisker/left");
+  expect_repository_file<tactile_depth::TactileDepthLogic>(host, "");
+  expect_repository_file<tactile_fsm::WhiskerFsmLogic>(host, "");
+  expect_repository_file<gpis_explorer::GpisExplorerLogic>(host, "");
+  expect_repository_file<whisker_localization::WhiskerLocalizationLogic>(host, "");
+  expect_repository_file<tactile_fsm::WallEffectNavLogic>(host, "");
+  expect_repository_file<wall_effect_ekf::WallEffectEkfLogic>(host, "");
+  expect_repository_file<wall_effect_ekf::IndiControlLogic>(host, "");
+  expect_repository_file<wall_effect_ekf::WallTrajectoryLogic>(host, "");
+  expect_repository_file<xplorer_force_est::XplorerForceEstLogic>(host, "");
+  expect_repository_file<tactile_fsm::XplorerFsmLogic>(host, "");
+  expect_repository_file<mapping_pcl::XplorerMapLogic>(host, "");
+  expect_repository_file<crazyflie_bridge::CrazyflieBridgeLogic>(host, "");
 }

@@ -15,6 +15,8 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
 
 #include "sim_test_util.hpp"
@@ -61,6 +63,8 @@ void expect_collision_free_exits(const std::string& scenario, int budget_points)
   for (const auto& r : m["per_trial"]) travel += r["gpis"]["travel_distance_m"].get<double>();
   EXPECT_NEAR(m["mean_travel_distance_m"].get<double>(), travel / 5.0, 1e-9);
   EXPECT_GE(m["mean_gpis_updates"].get<double>(), 1.0);
+  // Inputs never stale in these trials: the fail-safe never fires (issue 33).
+  for (const auto& r : m["per_trial"]) EXPECT_EQ(r["gpis"]["failsafe_hovers"].get<int>(), 0);
 }
 
 }  // namespace
@@ -116,4 +120,41 @@ TEST(GpisExploreSitl, TwoExitsBesideCorners) {
     EXPECT_GE(r["gpis"]["unconfirmed_corner_targets"].get<int>(), 1);
   }
   EXPECT_TRUE(seen);
+}
+
+// Issue 33: both whiskers' pressure drops out for 1 s (simulator fault) while
+// the odometry goes on, 4 s into the exploration (the first probe). TDORC
+// and tactile_depth stop, the depth goes stale, and gpis_explorer must hold
+// in FAILSAFE_HOVER (it used to fly the probe on blind), then resume and
+// still find and fly through the exit without touching a wall. Seeds 1-3.
+TEST(GpisExploreSitl, WhiskerDropoutHoldsThenResumes) {
+  const fs::path dir = fs::temp_directory_path() / ("tactile_gpis_dropout_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const fs::path scenarios = tactile_cli::test::config_dir() / "scenarios";
+  std::ifstream in(scenarios / "whisker_room_exit_gpis.yaml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string yaml = text.str();
+  const std::string arena = "arena_file: arenas/room_exit.yaml";
+  ASSERT_NE(yaml.find(arena), std::string::npos);
+  yaml.replace(yaml.find(arena), arena.size(), "arena_file: " + (scenarios / "arenas" / "room_exit.yaml").string());
+  yaml += "faults:\n"
+          "  - {type: dropout, topic: /whisker/left/pressure, start_s: 6.0, duration_s: 1.0}\n"
+          "  - {type: dropout, topic: /whisker/right/pressure, start_s: 6.0, duration_s: 1.0}\n";
+  std::ofstream(dir / "gpis_dropout.yaml") << yaml;
+  tactile_cli::SimOptions o;
+  o.scenario = (dir / "gpis_dropout.yaml").string();
+  o.out_dir = (dir / "out").string();
+  o.config_dir = tactile_cli::test::config_dir().string();
+  o.trials = 3;
+  o.progress = false;
+  o.write_bag = false;
+  o.write_png = false;
+  const nlohmann::json m = tactile_cli::run_sim(o);
+  fs::remove_all(dir);
+  for (const auto& r : m["per_trial"]) {
+    SCOPED_TRACE("seed " + std::to_string(r["seed"].get<uint64_t>()));
+    EXPECT_GE(r["gpis"]["failsafe_hovers"].get<int>(), 1);
+    EXPECT_TRUE(r["success"].get<bool>()) << r["gpis"]["outcome"] << " " << r["gpis"]["collision_phases"].dump();
+  }
 }

@@ -161,8 +161,13 @@ TEST(WhiskerReplay, MissingBagCorruptBagAndBadInputNameTheFile) {
 
 TEST(WhiskerReplay, BadConfigStopsWithFileKeyAndReason) {
   const fs::path dir = fresh_dir("badcfg");
+  // The repository's files (every node needs its file, issue 32) with a bad TDORC window.
   fs::create_directories(dir / "cfg");
-  std::ofstream(dir / "cfg" / "tdorc_filter.yaml") << "/**/tdorc_filter:\n  ros__parameters:\n    window: 1\n";
+  for (const auto& f : fs::directory_iterator(kConfig)) {
+    if (f.path().extension() == ".yaml") fs::copy_file(f.path(), dir / "cfg" / f.path().filename());
+  }
+  std::ofstream(dir / "cfg" / "tdorc_filter.yaml", std::ios::trunc)
+      << "/**/tdorc_filter:\n  ros__parameters:\n    window: 1\n";
   tactile_cli::record_sim_whisker_bag((dir / "raw").string(), kConfig, 1, 2.0, {}, {}, {});
   try {
     tactile_cli::run_replay({(dir / "raw").string(), (dir / "out").string(), (dir / "cfg").string(), false});

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <tuple>
@@ -323,9 +324,17 @@ ParamMap load_node_parameters_from_string(const std::string& yaml, const std::st
     throw ParamError(source + ": YAML syntax error at line " + std::to_string(e.mark.line + 1) +
                      ", column " + std::to_string(e.mark.column + 1) + ": " + e.msg);
   }
-  ParamMap result(fully_qualified(node_name).substr(fully_qualified(node_name).rfind('/') + 1), source);
+  const std::string fqn = fully_qualified(node_name);
+  const std::string base = fqn.substr(fqn.rfind('/') + 1);
+  ParamMap result(base, source);
   for (const auto& [k, v] : defaults.values()) result.set(k, v);
-  if (root.IsNull()) return result;
+  // A node's parameter file must say something about the node: an empty file
+  // (or one of comments only) or one without the node's section would
+  // otherwise run the node on its compiled defaults without a word (issue 32:
+  // a tdorc_filter.yaml emptied or with a misspelt section turned the
+  // three-baffle course from a success into a collision).
+  const std::string expected = "expected a '" + base + ":' (or '/**/" + base + ":') section with 'ros__parameters'";
+  if (root.IsNull()) throw ParamError(source + ": empty parameter file: " + expected);
   if (!root.IsMap()) throw ParamError(source + ": top level must be a map of node names");
 
   // Sections apply when their key matches the node's fully qualified name as
@@ -333,13 +342,16 @@ ParamMap load_node_parameters_from_string(const std::string& yaml, const std::st
   // matching one name token and '**' any number of tokens ("/**" = every
   // node, "/**/tdorc_filter" = tdorc_filter in any namespace). Less specific
   // sections are applied first, so an exact name wins over a wildcard.
-  const std::string fqn = fully_qualified(node_name);
   std::vector<std::tuple<int, size_t, std::string, YAML::Node>> sections;
   size_t order = 0;
+  bool named = false;  // a section for this node, not only the catch-all '/**'
+  std::string found;
   for (const auto& kv : root) {
     const std::string name = key_text(kv.first, source);
     ++order;
+    found += (found.empty() ? "" : ", ") + name;
     if (!name_matches(fully_qualified(name), fqn)) continue;
+    named = named || specificity(name) > 0;
     if (!kv.second.IsMap() || !kv.second["ros__parameters"]) {
       throw ParamError(source + ": " + name + ": expected a map with key 'ros__parameters'");
     }
@@ -348,7 +360,10 @@ ParamMap load_node_parameters_from_string(const std::string& yaml, const std::st
   std::sort(sections.begin(), sections.end(), [](const auto& a, const auto& b) {
     return std::tie(std::get<0>(a), std::get<1>(a)) < std::tie(std::get<0>(b), std::get<1>(b));
   });
-  const std::string base = fqn.substr(fqn.rfind('/') + 1);
+  if (!named) {
+    throw ParamError(source + ": no section for node " + fqn + ": " + expected + "; sections in the file: " +
+                     (found.empty() ? "none" : found));
+  }
   for (const auto& [spec, ord, name, params] : sections) {
     (void)ord;
     if (params.IsNull()) continue;
@@ -372,6 +387,17 @@ ParamMap load_node_parameters_from_string(const std::string& yaml, const std::st
 
 ParamMap load_node_parameters(const std::string& path, const std::string& node_name,
                               const ParamMap& defaults) {
+  // Missing, a directory (which std::ifstream opens and reads as empty) or
+  // another non-file: an error naming the path and the reason, never the defaults.
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (!std::filesystem::exists(status)) {
+    throw ParamError(path + ": parameter file of node " + fully_qualified(node_name) + " missing (no such file)");
+  }
+  if (!std::filesystem::is_regular_file(status)) {
+    throw ParamError(path + ": parameter file of node " + fully_qualified(node_name) + " is not a file (" +
+                     (std::filesystem::is_directory(status) ? "a directory" : "not a regular file") + ")");
+  }
   std::ifstream in(path);
   if (!in) throw ParamError(path + ": cannot open parameter file");
   std::stringstream ss;

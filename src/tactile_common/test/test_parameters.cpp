@@ -1,5 +1,9 @@
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
 #include <limits>
 
 #include "tactile_common/parameter_testing.hpp"
@@ -39,12 +43,29 @@ struct Stamp {
 
 }  // namespace
 
-TEST(Parameters, DefaultsWhenFileHasNoSection) {
-  auto p = load_node_parameters_from_string("other:\n  ros__parameters: {a: 1}\n", "x.yaml",
-                                            "tdorc_filter", defaults());
+// Issue 32: a file without the node's section (a misspelt or another node's
+// name) ran the node on its compiled defaults without a word; now it names
+// the file, the node, what was expected and the sections it found.
+TEST(Parameters, FileWithoutTheNodesSectionIsAnError) {
+  const auto msg = error_of("tdorc_filtr:\n  ros__parameters: {window: 50}\n");
+  EXPECT_NE(msg.find("config/x.yaml: no section for node /tdorc_filter"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("expected a 'tdorc_filter:' (or '/**/tdorc_filter:') section with 'ros__parameters'"),
+            std::string::npos) << msg;
+  EXPECT_NE(msg.find("sections in the file: tdorc_filtr"), std::string::npos) << msg;
+  // The catch-all section alone does not name the node: still an error.
+  EXPECT_NE(error_of("/**:\n  ros__parameters: {window: 50}\n").find("no section for node"), std::string::npos);
+  // A section that names the node with nothing in it keeps the defaults on purpose.
+  auto p = load_node_parameters_from_string("tdorc_filter:\n  ros__parameters:\n", "x.yaml", "tdorc_filter",
+                                            defaults());
   EXPECT_EQ(p.get_int("window", 0, 1000), 100);
-  EXPECT_DOUBLE_EQ(p.get_double("contact_threshold"), 20.0);
-  EXPECT_EQ(p.get_string("mode"), "tdorc");
+}
+
+TEST(Parameters, EmptyFileIsAnError) {
+  for (const char* yaml : {"", "\n  \n", "# only a comment\n"}) {
+    const auto msg = error_of(yaml);
+    EXPECT_NE(msg.find("config/x.yaml: empty parameter file: expected a 'tdorc_filter:'"), std::string::npos)
+        << "[" << yaml << "] " << msg;
+  }
 }
 
 TEST(Parameters, NodeSectionOverridesWildcardWhichOverridesDefaults) {
@@ -113,13 +134,43 @@ TEST(Parameters, MissingRosParametersKey) {
   EXPECT_NE(msg.find("expected a map with key 'ros__parameters'"), std::string::npos) << msg;
 }
 
-TEST(Parameters, MissingFile) {
+namespace {
+std::string file_error(const std::string& path) {
   try {
-    tactile_common::load_node_parameters("does/not/exist.yaml", "n", defaults());
-    FAIL();
+    tactile_common::load_node_parameters(path, "/whisker/left/tdorc_filter", defaults());
   } catch (const ParamError& e) {
-    EXPECT_NE(std::string(e.what()).find("does/not/exist.yaml: cannot open"), std::string::npos);
+    return e.what();
   }
+  return "";
+}
+}  // namespace
+
+TEST(Parameters, MissingFile) {
+  EXPECT_EQ(file_error("does/not/exist.yaml"),
+            "does/not/exist.yaml: parameter file of node /whisker/left/tdorc_filter missing (no such file)");
+}
+
+// Issue 32: std::ifstream opens a directory and reads it as empty, so a
+// directory named like a parameter file ran the node on its defaults.
+TEST(Parameters, DirectoryOrEmptyOrMisnamedFileIsAnError) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("tactile_params_" + std::to_string(::getpid()));
+  fs::create_directories(dir / "tdorc_filter.yaml");
+  EXPECT_EQ(file_error((dir / "tdorc_filter.yaml").string()),
+            (dir / "tdorc_filter.yaml").string() +
+                ": parameter file of node /whisker/left/tdorc_filter is not a file (a directory)");
+  std::ofstream(dir / "empty.yaml").flush();
+  EXPECT_NE(file_error((dir / "empty.yaml").string()).find((dir / "empty.yaml").string() + ": empty parameter file"),
+            std::string::npos);
+  std::ofstream(dir / "other.yaml") << "/**/tdorc_filtr:\n  ros__parameters:\n    window: 50\n";
+  EXPECT_NE(file_error((dir / "other.yaml").string()).find("no section for node /whisker/left/tdorc_filter"),
+            std::string::npos);
+  std::ofstream(dir / "good.yaml") << "/**/tdorc_filter:\n  ros__parameters:\n    window: 50\n";
+  EXPECT_EQ(tactile_common::load_node_parameters((dir / "good.yaml").string(), "/whisker/left/tdorc_filter",
+                                                 defaults())
+                .get_int("window", 0, 1000),
+            50);
+  fs::remove_all(dir);
 }
 
 TEST(Parameters, GetterOfUndeclaredKeyThrows) {
@@ -129,7 +180,8 @@ TEST(Parameters, GetterOfUndeclaredKeyThrows) {
 }
 
 TEST(Parameters, ErrorHelperFormatsLikeLoader) {
-  auto p = load_node_parameters_from_string("", "cfg.yaml", "tdorc_filter", defaults());
+  auto p = load_node_parameters_from_string("tdorc_filter:\n  ros__parameters: {}\n", "cfg.yaml", "tdorc_filter",
+                                            defaults());
   EXPECT_STREQ(p.error("window", "must be >= 2, got 1").what(),
                "cfg.yaml: tdorc_filter.ros__parameters.window: must be >= 2, got 1");
 }

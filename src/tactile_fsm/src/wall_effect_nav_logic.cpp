@@ -130,6 +130,7 @@ void WallEffectNavLogic::on_wall(const tactile_msgs::msg::WallEstimate& msg) {
   }
   wall_distance_ = msg.distance;
   wall_direction_ = msg.direction;
+  wall_ns_ = tactile_common::from_stamp(msg.header.stamp);
   have_wall_ = true;
 }
 
@@ -154,6 +155,46 @@ WallEffectNavLogic::Outputs WallEffectNavLogic::on_timer(int64_t now_ns) {
   if (!have_odom_ || now_ns - odom_ns_ > tactile_common::from_seconds(params_.max_input_age_s)) {
     ++stats_.ticks_without_odometry;
     return out;
+  }
+  // A wall estimate that stopped coming (the EKF's own inputs stale, the node
+  // gone): the navigator would steer by the last distance forever (wall
+  // following commands position + (d - d*) u every tick, so the drone keeps
+  // closing on the real wall). Hover where the drone is until it is fresh
+  // again, as the whisker behaviours do on stale depth (FAILSAFE_HOVER).
+  const bool wall_stale = have_wall_ && now_ns - wall_ns_ > tactile_common::from_seconds(params_.max_input_age_s);
+  if (wall_stale) {
+    ++stats_.ticks_wall_stale;
+    nav_msgs::msg::Odometry m;
+    tactile_common::to_stamp(now_ns, m.header.stamp);
+    m.header.frame_id = "map";
+    m.pose.pose.position.x = position_.x();
+    m.pose.pose.position.y = position_.y();
+    m.pose.pose.position.z = params_.nav.height;
+    m.pose.pose.orientation.z = std::sin(0.5 * params_.nav.yaw);
+    m.pose.pose.orientation.w = std::cos(0.5 * params_.nav.yaw);
+    out.setpoint = m;  // zero velocity
+    if (!wall_stale_ || now_ns - last_state_pub_ns_ >= 500'000'000) {
+      tactile_msgs::msg::FsmState s;
+      tactile_common::to_stamp(now_ns, s.header.stamp);
+      s.behaviour = params_.nav.behaviour == "vector_field" ? "wall_effect_vector_field" : "wall_effect_following";
+      s.state = "FAILSAFE_HOVER";
+      s.previous_state = to_string(nav_.state());
+      s.reason = "wall estimate stale";
+      if (!wall_stale_) state_since_ns_ = now_ns;
+      s.time_in_state = tactile_common::to_seconds(now_ns - state_since_ns_);
+      s.transitions = nav_.transitions();
+      out.state = s;
+      last_state_pub_ns_ = now_ns;
+    }
+    wall_stale_ = true;
+    return out;
+  }
+  const bool resumed = wall_stale_;
+  if (resumed) {
+    wall_stale_ = false;
+    previous_state_ = "FAILSAFE_HOVER";
+    reason_ = "wall estimate fresh again";
+    state_since_ns_ = now_ns;
   }
   NavInput in;
   in.t = tactile_common::to_seconds(now_ns);
@@ -184,7 +225,7 @@ WallEffectNavLogic::Outputs WallEffectNavLogic::on_timer(int64_t now_ns) {
     last_state_ = nav_.state();
     state_since_ns_ = now_ns;
   }
-  if (changed || last_state_pub_ns_ < 0 || now_ns - last_state_pub_ns_ >= 500'000'000) {
+  if (changed || resumed || last_state_pub_ns_ < 0 || now_ns - last_state_pub_ns_ >= 500'000'000) {
     tactile_msgs::msg::FsmState s;
     tactile_common::to_stamp(now_ns, s.header.stamp);
     s.behaviour = params_.nav.behaviour == "vector_field" ? "wall_effect_vector_field" : "wall_effect_following";

@@ -315,8 +315,8 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
   const double dt = std::max(0.0, t - last_t_);
   last_t_ = t;
 
-  const bool depth_fresh = std::isfinite(in.depth_stamp) && t - in.depth_stamp <= p_.max_input_age_s + kTimeEps;
-  const bool odom_fresh = std::isfinite(in.odom_stamp) && t - in.odom_stamp <= p_.max_input_age_s + kTimeEps;
+  const bool depth_fresh = input_fresh(t, in.depth_stamp, p_.max_input_age_s);
+  const bool odom_fresh = input_fresh(t, in.odom_stamp, p_.max_input_age_s);
   bool l_valid = depth_fresh && in.left_valid && std::isfinite(in.depth_left);
   bool r_valid = depth_fresh && in.right_valid && std::isfinite(in.depth_right);
   bool tdorc_l = in.tdorc_contact_left, tdorc_r = in.tdorc_contact_right;

@@ -7,8 +7,10 @@
 
 #include <cmath>
 #include <limits>
+#include <string>
 #include <vector>
 
+#include "tactile_common/time.hpp"
 #include "tactile_fsm/geo_goal.hpp"
 #include "tactile_fsm/wall_effect_nav_logic.hpp"
 #include "tactile_fsm/wall_effect_navigation.hpp"
@@ -253,4 +255,58 @@ TEST(WallEffectNavLogic, RepoConfigEqualsDefaults) {
     EXPECT_EQ(f.origin(key), file) << key << " not set in " << file;
     EXPECT_TRUE(value == f.values().at(key)) << key;
   }
+}
+
+// Issue 33 (stale inputs): the wall estimate stops (the EKF's thrust / IMU
+// went stale, or the node died) while odometry keeps coming. The navigator
+// steered by the last distance forever; now the logic hovers at the current
+// position (zero velocity) from the first tick the estimate is older than
+// max_input_age_s, says FAILSAFE_HOVER / "wall estimate stale", and resumes
+// when estimates come again.
+TEST(WallEffectNavLogic, StaleWallEstimateHoversAndResumes) {
+  WallEffectNavLogic logic(WallEffectNavLogic::params_from(WallEffectNavLogic::default_parameters()));
+  const double age = logic.params().max_input_age_s;
+  const int64_t last_wall_ns = 500'000'000, resume_ns = 1'000'000'000;
+  bool moved_when_stale = false, normal_before = true, saw_failsafe = false, resumed = false;
+  std::string failsafe_reason;
+  double x = -1.0;
+  for (int64_t ns = 0; ns <= 1'200'000'000; ns += WallEffectNavLogic::kTimerPeriodNs) {
+    nav_msgs::msg::Odometry o;
+    tactile_common::to_stamp(ns, o.header.stamp);
+    o.pose.pose.orientation.w = 1.0;
+    o.pose.pose.position.x = x;
+    logic.on_odometry(o);
+    if (ns <= last_wall_ns || ns >= resume_ns) {
+      tactile_msgs::msg::WallEstimate w;
+      tactile_common::to_stamp(ns, w.header.stamp);
+      w.distance = 0.6;  // a wall 0.6 m ahead: free flight toward the goal at the origin
+      w.direction = 0.0;
+      logic.on_wall(w);
+    }
+    const auto out = logic.on_timer(ns);
+    ASSERT_TRUE(out.setpoint.has_value());
+    const double v = std::hypot(out.setpoint->twist.twist.linear.x, out.setpoint->twist.twist.linear.y);
+    const bool stale = ns > last_wall_ns + tactile_common::from_seconds(age) && ns < resume_ns;
+    if (stale) {
+      moved_when_stale = moved_when_stale || v != 0.0 || out.setpoint->pose.pose.position.x != x;
+    } else if (ns <= last_wall_ns + tactile_common::from_seconds(age)) {
+      normal_before = normal_before && v > 0.0;
+    }
+    if (out.state && out.state->state == "FAILSAFE_HOVER" && !saw_failsafe) {
+      saw_failsafe = true;
+      failsafe_reason = out.state->reason;
+      EXPECT_EQ(ns, last_wall_ns + tactile_common::from_seconds(age) + WallEffectNavLogic::kTimerPeriodNs);
+    }
+    if (ns >= resume_ns && out.state && out.state->reason == "wall estimate fresh again") resumed = true;
+    if (ns >= resume_ns) {
+      EXPECT_GT(v, 0.0);
+    }
+    x += 0.01 * out.setpoint->twist.twist.linear.x;
+  }
+  EXPECT_TRUE(normal_before);
+  EXPECT_FALSE(moved_when_stale) << "steered by a wall estimate older than max_input_age_s";
+  EXPECT_TRUE(saw_failsafe);
+  EXPECT_EQ(failsafe_reason, "wall estimate stale");
+  EXPECT_TRUE(resumed);
+  EXPECT_GT(logic.stats().ticks_wall_stale, 0u);
 }

@@ -200,6 +200,13 @@ XplorerForceEstLogic::Outputs XplorerForceEstLogic::on_arm_imu(const tactile_msg
   }
   have_arm_stamp_ = true;
   last_arm_ns_ = t;
+  if (have_imu_stamp_ && t - last_imu_ns_ > tactile_common::from_seconds(params_.max_sample_gap_s)) {
+    // The IMU stopped: the wrench would be fresh-stamped but built on a stale
+    // attitude (world frame) and acceleration (CoM part, eq. 5). No wrench:
+    // the XPLORER FSM sees its input go stale and holds (issue 33).
+    ++stats_.dropped_imu_stale;
+    return out;
+  }
 
   std::array<double, 4> theta;
   theta.fill(std::numeric_limits<double>::quiet_NaN());

@@ -172,3 +172,38 @@ TEST(XplorerForceEstLogic, NanArmAngleFallsBackToTheArmImuAttitude) {
   EXPECT_EQ(logic.stats().arm_missing[0], 0u);
   EXPECT_NEAR(logic.estimate().theta[0], 0.03, 1e-9);
 }
+
+// Issue 33 (stale inputs): the flight-controller IMU stops while the arm IMUs
+// go on. Each arm set still produced a wrench, stamped fresh, from the last
+// attitude and acceleration, so the XPLORER FSM (which checks the wrench's
+// age) moved on it. Now an arm set more than max_sample_gap_s after the last
+// IMU sample publishes nothing (counted); the IMU back -> wrenches again.
+TEST(XplorerForceEstLogic, NoWrenchFromAStaleFlightControllerImu) {
+  XplorerForceEstLogic logic(XplorerForceEstLogic::params_from(XplorerForceEstLogic::default_parameters()));
+  const Params& p = logic.params().estimator;
+  const int64_t gap = tactile_common::from_seconds(logic.params().max_sample_gap_s);
+  const int64_t imu_stops = 1'000'000'000, imu_back = 2'000'000'000;
+  int published_stale = 0, published_fresh = 0, published_back = 0;
+  for (int k = 0; k < 150; ++k) {
+    const int64_t t0 = k * 20'000'000LL;
+    logic.on_thrust(thrust(p.mass * p.gravity / p.thrust_scale));
+    for (int j = 0; j < 10; ++j) {
+      const int64_t ti = t0 + j * 2'000'000LL;
+      if (ti < imu_stops || ti >= imu_back) logic.on_imu(imu(ti, Vec3(0, 0, p.gravity)));
+    }
+    const int64_t ta = t0 + 19'000'000LL;
+    const bool out = logic.on_arm_imu(arms(ta, {0.0, 0.0, 0.0, 0.0})).world.has_value();
+    const int64_t last_imu = ta < imu_stops ? ta : (ta < imu_back ? imu_stops - 2'000'000LL : ta);
+    if (ta - last_imu > gap) {
+      published_stale += out;
+    } else if (ta < imu_back) {
+      published_fresh += out;
+    } else {
+      published_back += out;
+    }
+  }
+  EXPECT_EQ(published_stale, 0) << "a wrench was published from a flight-controller IMU older than max_sample_gap_s";
+  EXPECT_GT(published_fresh, 70);  // up to 0.5 s after the IMU stopped: still published
+  EXPECT_EQ(published_back, 50);   // the IMU back: every arm set
+  EXPECT_EQ(logic.stats().dropped_imu_stale, static_cast<uint64_t>(150 - published_fresh - published_back));
+}

@@ -5,6 +5,7 @@
 #pragma once
 
 #include <climits>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -37,9 +38,11 @@ class GpisExplorerLogic {
   static constexpr int64_t kStatePeriodNs = 200000000;
 
   struct Params {
+    /// Input staleness: sequencer.wall.max_input_age_s and
+    /// sequencer.wall.failsafe_land_after_s (keys max_input_age_s,
+    /// failsafe_land_after_s), the wall follower's parameters and rule
+    /// (tactile_fsm::input_fresh): stale depth or odometry -> FAILSAFE_HOVER.
     SequencerParams sequencer;
-    /// Depth / odometry older than this is stale: hover [s] (as tactile_fsm).
-    double max_input_age_s = 0.2;
     void validate() const;
   };
 
@@ -49,7 +52,7 @@ class GpisExplorerLogic {
     uint64_t dropped_nonfinite = 0;     ///< NaN/inf in a used field (depth in contact, pose, zero quaternion)
     uint64_t dropped_out_of_order = 0;  ///< stamp older than the last accepted one of that input
     uint64_t ticks = 0;
-    uint64_t stale_ticks = 0;           ///< ticks with stale odometry (hovered)
+    uint64_t stale_ticks = 0;           ///< ticks with stale depth or odometry (hovered: FAILSAFE_HOVER once flying)
     uint64_t maps_published = 0;
   };
 
@@ -81,6 +84,8 @@ class GpisExplorerLogic {
   ExplorationSequencer seq_;
   Stats stats_;
   SequencerInput in_;
+  double depth_t_ = NAN;  ///< stamp of the last accepted depth [s]; NaN = none yet
+  double odom_t_ = NAN;   ///< ... odometry
   int64_t depth_ns_ = INT64_MIN;
   int64_t odom_ns_ = INT64_MIN;
   int64_t last_state_ns_ = INT64_MIN;

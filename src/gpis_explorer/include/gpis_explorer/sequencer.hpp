@@ -17,6 +17,13 @@
 // excluded (GpisExplorer), targets whose straight path passes a corner are
 // skipped, and approaching a corner centroid aborts the leg (retreat, refit).
 //
+// Every phase that moves needs fresh inputs: with the tactile depth or the
+// odometry stale (tactile_fsm::input_fresh, WallFollowerParams::max_input_age_s)
+// the sequencer enters FAILSAFE_HOVER (zero velocity, flight height) as the
+// whisker wall follower does, records nothing, resumes the interrupted phase
+// when both are fresh again, and lands (outcome inputs_stale) after
+// WallFollowerParams::failsafe_land_after_s.
+//
 // Core layer: no ROS, no messages. The wall-following sub-state rule is
 // tactile_fsm's (000 Fig. S4e) through its public wall_sub_state().
 #pragma once
@@ -44,6 +51,11 @@ enum class Phase : uint8_t {
   kGoToTarget,  ///< forward toward the GPIS target
   kExitThrough, ///< target reached without contact: keep going through the opening
   kCheckAhead,  ///< a whisk touched the corridor: stop, face the leg's heading: wall to follow, or back off?
+  /// Tactile depth or odometry stale: hover (zero velocity, flight height),
+  /// record nothing; inputs fresh again -> the interrupted phase (its timers
+  /// paused), stale for wall.failsafe_land_after_s -> LANDING (inputs_stale).
+  /// As tactile_fsm's FAILSAFE_HOVER / FAILSAFE_LAND.
+  kFailsafeHover,
   kLanding,     ///< land (exit flown through, open space, or gave up)
   kDone,        ///< terminal
 };
@@ -57,12 +69,16 @@ enum class Outcome : uint8_t {
   kNoTarget,       ///< GPIS gave no reachable target (status in last_update)
   kUpdateLimit,    ///< max_updates GPIS updates without an exit
   kTimeLimit,      ///< max_time_s without an exit
+  kInputsStale,    ///< depth or odometry stale for wall.failsafe_land_after_s (FAILSAFE_HOVER)
 };
 const char* to_string(Outcome o);
 
 struct SequencerParams {
   ExplorerParams explorer;
-  /// Wall-following band and speeds (000 Fig. S4e; tactile_fsm's defaults).
+  /// Wall-following band and speeds (000 Fig. S4e; tactile_fsm's defaults);
+  /// also the input staleness of every phase: wall.max_input_age_s (the node
+  /// logic's freshness of depth and odometry, tactile_fsm::input_fresh) and
+  /// wall.failsafe_land_after_s (FAILSAFE_HOVER -> LANDING), as the wall follower.
   tactile_fsm::WallFollowerParams wall;
   int probe_directions = 4;             ///< 000: "four orthogonal directions (90 deg apart)"
   /// No wall within probe_max_distance in any probe direction: probe once
@@ -258,12 +274,13 @@ LineFit fit_line(const std::vector<Eigen::Vector2d>& pts);
 double ray_to_wall_line(const Eigen::Vector2d& from, const Eigen::Vector2d& dir, const Eigen::Vector2d& a,
                         const Eigen::Vector2d& b, double extension);
 
-/// One control tick of input (odometry frame).
+/// One control tick of input (odometry frame). Fresh: tactile_fsm::input_fresh
+/// with wall.max_input_age_s (the node logic decides it from the stamps).
 struct SequencerInput {
   double t = 0.0;
   bool pose_valid = false;  ///< odometry fresh
   double x = 0.0, y = 0.0, yaw = 0.0;
-  bool depth_valid = false;  ///< tactile depth fresh
+  bool depth_valid = false;  ///< tactile depth fresh (stale: FAILSAFE_HOVER once flying)
   bool contact_left = false, contact_right = false;
   double depth_left = 0.0, depth_right = 0.0;  ///< [m], used while in contact
   /// Estimated contact points (odometry frame); NaN when unknown.
@@ -327,10 +344,17 @@ class ExplorationSequencer {
   std::size_t beside_contacts() const { return beside_contacts_; }
   /// Retreats held in place (a known surface point behind).
   std::size_t retreats_held() const { return retreats_held_; }
+  /// FAILSAFE_HOVER entries (stale depth or odometry) and the phase the last one interrupted.
+  std::size_t failsafe_hovers() const { return failsafe_hovers_; }
+  Phase failsafe_from() const { return failsafe_from_; }
   const SequencerParams& params() const { return p_; }
 
  private:
   void enter(Phase p, const char* reason, double t);
+  /// FAILSAFE_HOVER from the current phase; resume_after_failsafe() returns to
+  /// it with its timers shifted by the time held (the hover does not count).
+  void enter_failsafe(const char* reason, double t);
+  void resume_after_failsafe(double t);
   void finish(Outcome o, const char* reason, double t);
   tactile_fsm::Setpoint hover() const;
   double yaw_rate_to(double heading, double yaw) const;
@@ -392,6 +416,7 @@ class ExplorationSequencer {
   bool diagonal_round_ = false;         ///< the diagonal probes (diagonal_probes) are flying
   Eigen::Vector2d follow_start_{0, 0};  ///< where the last wall follow began
   bool retreat_from_follow_ = false;    ///< this retreat ends a wall follow
+  bool retreat_from_return_ = false;    ///< this (zero-length) retreat ends the probes: refit only
   double retreat_lateral(const SequencerInput& in) const;
   tactile_fsm::Side side_ = tactile_fsm::Side::kRight;
   bool both_touched_ = false;
@@ -452,6 +477,14 @@ class ExplorationSequencer {
   /// or its confirmed ones after a choice that needed corner_confirm_radius.
   std::vector<Eigen::Vector2d> corners_;
   std::size_t direct_targets_ = 0;
+  // FAILSAFE_HOVER: the interrupted phase and its entry time.
+  Phase failsafe_from_ = Phase::kHoverInit;
+  double failsafe_from_entered_ = 0.0;
+  std::size_t failsafe_hovers_ = 0;
+  /// Odometry path length while held in FAILSAFE_HOVER since the current leg
+  /// began (leg_start_ / exit_from_): a probe's "no wall" and an exit's
+  /// contact-free distance count only what was flown with fresh depth. [m]
+  double leg_blind_ = 0.0;
 };
 
 }  // namespace gpis_explorer

@@ -54,8 +54,9 @@ struct NodeReport {
 
 class Host {
  public:
-  /// @param config_dir directory holding <node>.yaml parameter files; a node
-  ///        without a file runs with its defaults.
+  /// @param config_dir directory holding <node>.yaml parameter files; every
+  ///        node loaded through load_parameters() needs its file (no default
+  ///        fallback: a missing, empty, non-file or misnamed file is an error).
   explicit Host(std::string config_dir);
 
   Bus& bus() { return bus_; }
@@ -65,7 +66,9 @@ class Host {
   /// Parameters of node `node_name` in namespace `ns`: defaults <-
   /// config/<parameter_file_name(node_name)> (sections matched against the fully qualified
   /// name, as ROS 2 does) <- overrides (like a launch file's per-node
-  /// parameter dict). Errors name the file, key and reason.
+  /// parameter dict). Errors name the file, key and reason; the file must
+  /// exist, be a regular file and have a section naming the node
+  /// (tactile_common::load_node_parameters).
   tactile_common::ParamMap load_parameters(const std::string& ns, const std::string& node_name,
                                            const tactile_common::ParamMap& defaults,
                                            const tactile_common::ParamMap& overrides) const;

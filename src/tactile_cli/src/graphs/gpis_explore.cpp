@@ -98,6 +98,7 @@ class GpisExploreGraph : public SimGraph {
     m["whisk_jambs"] = seq.whisk_jambs();
     m["beside_contacts"] = seq.beside_contacts();
     m["retreats_held"] = seq.retreats_held();
+    m["failsafe_hovers"] = seq.failsafe_hovers();  // stale depth / odometry (FAILSAFE_HOVER entries)
     m["direct_targets"] = seq.direct_targets();
     m["last_update_status"] = gpis_explorer::to_string(ex.last().status);
     // Exploration phase (and why it was entered) at each guard collision.

@@ -30,7 +30,8 @@ std::shared_ptr<xplorer_force_est::XplorerForceEstLogic> add_xplorer_force_est(
                   {"arm_bad_id", s.arm_bad_id},
                   {"arm_from_orientation", s.arm_from_orientation},
                   {"arm_out_of_range", s.arm_out_of_range},
-                  {"resets_on_gap", s.resets_on_gap}}};
+                  {"resets_on_gap", s.resets_on_gap},
+                  {"dropped_imu_stale", s.dropped_imu_stale}}};
     for (size_t i = 0; i < 4; ++i) r.counters.emplace_back("arm" + std::to_string(i) + "_missing", s.arm_missing[i]);
     return r;
   });

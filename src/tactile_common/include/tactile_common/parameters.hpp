@@ -148,13 +148,19 @@ T ParamMap::get_integer(const std::string& key, T lo, T hi) const {
 ///
 /// Less specific sections apply first, so an exact name overrides a wildcard.
 /// Starts from `defaults`; values in the file override them. Unknown keys,
-/// wrong types, YAML syntax errors and a missing file throw ParamError naming
-/// the file, the key and the reason. Nested maps are flattened with '.'
-/// ("kf.q"), as ROS 2 does.
+/// wrong types, YAML syntax errors, a missing file, a path that is not a
+/// regular file (a directory), an empty file (or comments only) and a file
+/// without a section naming the node (the catch-all '/**' alone does not)
+/// throw ParamError naming the file, the node or key and the reason: a node
+/// never runs on its compiled defaults because its file was lost or misnamed.
+/// A section naming the node with an empty 'ros__parameters' keeps the
+/// defaults on purpose. Nested maps are flattened with '.' ("kf.q"), as ROS 2
+/// does.
 ParamMap load_node_parameters(const std::string& path, const std::string& node_name,
                               const ParamMap& defaults);
 
-/// Same, from YAML text (for tests and embedded configs). `source` names it in errors.
+/// Same, from YAML text (for tests and embedded configs), with the same rules
+/// for an empty text and a missing section. `source` names it in errors.
 ParamMap load_node_parameters_from_string(const std::string& yaml, const std::string& source,
                                           const std::string& node_name, const ParamMap& defaults);
 

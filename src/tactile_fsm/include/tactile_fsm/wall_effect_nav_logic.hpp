@@ -34,7 +34,11 @@ class WallEffectNavLogic {
     std::array<double, 3> gps_origin{{0.0, 0.0, 0.0}};  ///< lat, lon [deg], alt [m]
     std::array<double, 3> gps_goal{{0.0, 0.0, 0.0}};
     double direction_deg = 0.0;
-    double max_input_age_s = 0.2;  ///< older odometry: hold position (no new setpoint)
+    /// Older odometry: hold position (no new setpoint). A wall estimate older
+    /// than this (the EKF stopped publishing after one) is stale too: hover
+    /// at the current position (FAILSAFE_HOVER in the state message) until it
+    /// is fresh again, instead of steering by the last distance. [s]
+    double max_input_age_s = 0.2;
     NavGoal goal() const;          ///< resolved goal (GPS -> ENU)
     void validate() const;
   };
@@ -43,6 +47,7 @@ class WallEffectNavLogic {
     uint64_t ticks = 0, walls = 0, odometry = 0;
     uint64_t dropped_nonfinite = 0;
     uint64_t ticks_without_odometry = 0;  ///< nothing published
+    uint64_t ticks_wall_stale = 0;        ///< wall estimate stale: hover setpoint at the current position
   };
 
   struct Outputs {
@@ -70,7 +75,8 @@ class WallEffectNavLogic {
   double wall_distance_ = 0.0, wall_direction_ = 0.0;
   Vec2 position_ = Vec2::Zero();
   double yaw_ = 0.0;
-  int64_t odom_ns_ = 0, state_since_ns_ = 0, last_state_pub_ns_ = -1;
+  int64_t odom_ns_ = 0, wall_ns_ = 0, state_since_ns_ = 0, last_state_pub_ns_ = -1;
+  bool wall_stale_ = false;  ///< FAILSAFE_HOVER: the last tick's wall estimate was stale
   NavState last_state_;
   std::string previous_state_, reason_ = "start";
 };

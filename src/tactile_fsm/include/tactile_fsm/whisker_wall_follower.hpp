@@ -403,6 +403,16 @@ WallSubState wall_sub_state(double d_l, bool l_valid, double d_r, bool r_valid, 
                             WallSubState current, const WallFollowerParams& p, double theta = NAN,
                             double last_l = NAN, double last_r = NAN);
 
+/// The staleness rule of the behaviours that fly on whisker depth and
+/// odometry (this wall follower, gpis_explorer's sequencer): an input stamped
+/// `stamp` (NaN = never received) is fresh at time t when it is at most
+/// max_age old (WallFollowerParams::max_input_age_s), 1 ns of tolerance for
+/// stamps converted from integer nanoseconds. A flying state with a stale
+/// input goes to its fail-safe hover.
+inline bool input_fresh(double t, double stamp, double max_age) {
+  return std::isfinite(stamp) && t - stamp <= max_age + 1e-9;
+}
+
 /// |(vx, vy)| <= v_max (scaled, direction kept), |yaw_rate| <= omega_max,
 /// non-finite values -> 0.
 Setpoint saturate(const Setpoint& s, const WallFollowerParams& p);

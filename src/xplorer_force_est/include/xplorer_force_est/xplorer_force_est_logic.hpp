@@ -32,7 +32,11 @@ class XplorerForceEstLogic {
     std::string world_frame = "map";
     std::string body_frame = "base_link";
     /// A stamp gap larger than this on the arm or IMU stream resets the
-    /// filters (choice: 0.5 s = 25 arm samples).
+    /// filters (choice: 0.5 s = 25 arm samples). An arm set more than this
+    /// after the last flight-controller IMU sample (the IMU stopped after it
+    /// had started) publishes no wrench: its world frame and CoM part would
+    /// come from a stale attitude and acceleration while its stamp is fresh,
+    /// and the XPLORER FSM would move on it.
     double max_sample_gap_s = 0.5;
     /// |arm_angle| above this is not a deflection (the arms stop at 30 deg,
     /// 001 Sec. II): treated as missing (choice: 0.8 rad).
@@ -54,6 +58,7 @@ class XplorerForceEstLogic {
     uint64_t arm_out_of_range = 0;       ///< |arm_angle| > max_arm_angle (treated as missing)
     std::array<uint64_t, 4> arm_missing{};  ///< per arm: absent or unusable in an ArmImuArray
     uint64_t resets_on_gap = 0;
+    uint64_t dropped_imu_stale = 0;      ///< arm set with the flight-controller IMU older than max_sample_gap_s: no wrench
   };
 
   struct Outputs {
