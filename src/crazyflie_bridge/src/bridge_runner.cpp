@@ -1,5 +1,9 @@
 #include "crazyflie_bridge/bridge_runner.hpp"
 
+#include <algorithm>
+#include <cmath>
+#include <thread>
+
 namespace crazyflie_bridge {
 
 BridgeRunner::BridgeRunner(const CrazyflieBridgeLogic::Params& params, ClientOptions client_options,
@@ -10,6 +14,30 @@ BridgeRunner::BridgeRunner(const CrazyflieBridgeLogic::Params& params, ClientOpt
   const uint8_t w = client_->start_log_block(logic_.whisker_block(), static_cast<uint16_t>(params.whisker_period_ms));
   const uint8_t s = client_->start_log_block(logic_.state_block(), static_cast<uint16_t>(params.state_period_ms));
   logic_.set_block_ids(w, s);
+  logic_.set_protocol_version(client_->protocol_version());
+  // Status block: what the firmware's TOC has of status_vars; a missing one is
+  // a warning, never a failed connect (battery / supervisor are for display
+  // and the low-battery guard, not for flying).
+  std::vector<std::string> have;
+  for (const auto& n : params.status_vars) {
+    if (client_->log_item(n)) {
+      have.push_back(n);
+    } else {
+      warnings_.push_back("crazyflie_bridge: status variable " + n + " is not in the firmware's log TOC: not logged");
+    }
+  }
+  if (!have.empty()) {
+    try {
+      const uint8_t st = client_->start_log_block(have, static_cast<uint16_t>(params.status_period_ms));
+      logic_.set_status_block(st, have);
+    } catch (const ClientError& e) {
+      warnings_.push_back(std::string("crazyflie_bridge: status log block not started: ") + e.what());
+    }
+  }
+}
+
+void BridgeRunner::flush_outbox() {
+  for (const auto& pk : logic_.take_outbox()) client_->send(pk);
 }
 
 int BridgeRunner::pump(std::chrono::milliseconds timeout, const std::function<int64_t()>& now_ns, const Sinks& sinks) {
@@ -47,7 +75,9 @@ void BridgeRunner::on_hover_setpoint(const tactile_msgs::msg::HoverSetpoint& msg
 
 bool BridgeRunner::on_timer(int64_t now_ns) {
   std::lock_guard<std::mutex> lock(mutex_);
+  flush_outbox();
   auto pk = logic_.on_timer(now_ns);
+  flush_outbox();
   if (!pk) return false;
   client_->send(*pk);
   if (state_pending_) {
@@ -58,6 +88,71 @@ bool BridgeRunner::on_timer(int64_t now_ns) {
     state_pending_ = false;
   }
   return true;
+}
+
+#define TACTILE_BRIDGE_COMMAND(call)   \
+  std::lock_guard<std::mutex> lock(mutex_); \
+  auto r = logic_.call;                     \
+  flush_outbox();                           \
+  return r;
+
+BridgeRunner::CommandResult BridgeRunner::arm(bool on, int64_t now_ns) { TACTILE_BRIDGE_COMMAND(arm(on, now_ns)) }
+BridgeRunner::CommandResult BridgeRunner::takeoff(double h, double d, int64_t now_ns) {
+  TACTILE_BRIDGE_COMMAND(takeoff(h, d, now_ns))
+}
+BridgeRunner::CommandResult BridgeRunner::land(double h, double d, int64_t now_ns) { TACTILE_BRIDGE_COMMAND(land(h, d, now_ns)) }
+BridgeRunner::CommandResult BridgeRunner::go_to(double x, double y, double z, double yaw, double d, bool rel, int64_t now_ns) {
+  TACTILE_BRIDGE_COMMAND(go_to(x, y, z, yaw, d, rel, now_ns))
+}
+BridgeRunner::CommandResult BridgeRunner::start_behaviour(int64_t now_ns) { TACTILE_BRIDGE_COMMAND(start_behaviour(now_ns)) }
+BridgeRunner::CommandResult BridgeRunner::notify_setpoints_stop(uint32_t ms, int64_t now_ns) {
+  TACTILE_BRIDGE_COMMAND(notify_setpoints_stop(ms, now_ns))
+}
+BridgeRunner::CommandResult BridgeRunner::emergency_stop(int64_t now_ns) { TACTILE_BRIDGE_COMMAND(emergency_stop(now_ns)) }
+#undef TACTILE_BRIDGE_COMMAND
+
+bool BridgeRunner::land_and_stop(std::chrono::milliseconds timeout, const std::function<int64_t()>& now_ns,
+                                 const Sinks& sinks) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  const CrazyflieBridgeLogic::Params& p = logic_.params();
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const Mode m = logic_.mode();
+    if (!logic_.airborne()) return m != Mode::kEmergency;  // on the ground already (kEmergency: it was not a landing)
+    if (m != Mode::kLanding) logic_.land(0.0, p.land_duration_s, now_ns());
+  }
+  const auto period = std::chrono::nanoseconds(static_cast<int64_t>(1e9 / p.setpoint_rate_hz));
+  auto next = std::chrono::steady_clock::now();
+  for (;;) {
+    if (mode() == Mode::kStopped) return true;
+    if (std::chrono::steady_clock::now() >= deadline) {
+      emergency_stop(now_ns());
+      on_timer(now_ns());  // the latched stop, once more
+      return false;
+    }
+    next += period;
+    const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(next - std::chrono::steady_clock::now());
+    pump(std::max(wait, std::chrono::milliseconds(0)), now_ns, sinks);
+    on_timer(now_ns());
+  }
+}
+
+BridgeRunner::Status BridgeRunner::status(int64_t now_ns) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Status st = logic_.status(now_ns);
+  const LinkStatistics ls = link_->statistics();
+  // ACK rate of a radio link (UDP / USB have no ACKs: unknown, NaN).
+  st.link_quality = ls.acks + ls.ack_missing > 0 ? ls.ack_rate() : NAN;
+  st.packets_lost = ls.ack_missing;
+  // RSSI: the firmware's radio.rssi log where logged, else the radio ACK's.
+  if (st.rssi_dbm < 0) st.rssi_dbm = ls.uplink_rssi;
+  st.log_blocks_missed = client_->stats().log_missed;
+  return st;
+}
+
+std::vector<CrazyflieBridgeLogic::Transition> BridgeRunner::history() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return logic_.history();
 }
 
 CrazyflieBridgeLogic::Mode BridgeRunner::mode() const {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 #include "crazyflie_bridge/protocol.hpp"
@@ -25,11 +26,15 @@ void positive(const char* field, double v) {
 
 const char* to_string(CrazyflieBridgeLogic::Mode m) {
   switch (m) {
-    case CrazyflieBridgeLogic::Mode::kWaiting: return "waiting";
+    case CrazyflieBridgeLogic::Mode::kGrounded: return "grounded";
+    case CrazyflieBridgeLogic::Mode::kTakingOff: return "taking_off";
+    case CrazyflieBridgeLogic::Mode::kHovering: return "hovering";
+    case CrazyflieBridgeLogic::Mode::kGoTo: return "go_to";
     case CrazyflieBridgeLogic::Mode::kForward: return "forward";
     case CrazyflieBridgeLogic::Mode::kHoverHold: return "hover_hold";
     case CrazyflieBridgeLogic::Mode::kLanding: return "landing";
     case CrazyflieBridgeLogic::Mode::kStopped: return "stopped";
+    case CrazyflieBridgeLogic::Mode::kEmergency: return "emergency";
   }
   return "?";
 }
@@ -63,6 +68,45 @@ void CrazyflieBridgeLogic::Params::validate() const {
   positive("hover_hold_s", hover_hold_s);
   positive("land_speed", land_speed);
   positive("land_height", land_height);
+  if (land_height >= max_height) {
+    throw std::invalid_argument("CrazyflieBridgeLogic.land_height: must be < max_height, got " + std::to_string(land_height));
+  }
+  if (!std::isfinite(takeoff_height) || takeoff_height <= land_height || takeoff_height > max_height ||
+      takeoff_height < min_height) {
+    throw std::invalid_argument("CrazyflieBridgeLogic.takeoff_height: must be in (land_height, max_height] and >= min_height, got " +
+                                std::to_string(takeoff_height));
+  }
+  positive("takeoff_duration_s", takeoff_duration_s);
+  positive("land_duration_s", land_duration_s);
+  positive("max_vertical_speed", max_vertical_speed);
+  if (takeoff_height / takeoff_duration_s > max_vertical_speed) {
+    throw std::invalid_argument("CrazyflieBridgeLogic.takeoff_duration_s: takeoff_height / takeoff_duration_s = " +
+                                std::to_string(takeoff_height / takeoff_duration_s) + " m/s exceeds max_vertical_speed " +
+                                std::to_string(max_vertical_speed));
+  }
+  if (max_height / land_duration_s > max_vertical_speed) {
+    throw std::invalid_argument("CrazyflieBridgeLogic.land_duration_s: a land from max_height would descend at " +
+                                std::to_string(max_height / land_duration_s) + " m/s > max_vertical_speed " +
+                                std::to_string(max_vertical_speed));
+  }
+  if (status_vars.size() > 6) {
+    throw std::invalid_argument("CrazyflieBridgeLogic.status_vars: at most 6 variables (one 26-byte log block), got " +
+                                std::to_string(status_vars.size()));
+  }
+  if (status_period_ms < 10 || status_period_ms > 65535) {
+    throw std::invalid_argument("CrazyflieBridgeLogic.status_period_ms: must be in [10, 65535] ms, got " +
+                                std::to_string(status_period_ms));
+  }
+  if (!std::isfinite(low_battery_v) || low_battery_v < 0.0 || low_battery_v > 5.0) {
+    throw std::invalid_argument("CrazyflieBridgeLogic.low_battery_v: must be in [0, 5] V (1-cell LiPo; 0 disables), got " +
+                                std::to_string(low_battery_v));
+  }
+  positive("low_battery_hold_s", low_battery_hold_s);
+  positive("shutdown_land_timeout_s", shutdown_land_timeout_s);
+  if (shutdown_land_timeout_s < land_duration_s) {
+    throw std::invalid_argument("CrazyflieBridgeLogic.shutdown_land_timeout_s: must be >= land_duration_s (" +
+                                std::to_string(land_duration_s) + " s), got " + std::to_string(shutdown_land_timeout_s));
+  }
 }
 
 ParamMap CrazyflieBridgeLogic::default_parameters() {
@@ -85,6 +129,16 @@ ParamMap CrazyflieBridgeLogic::default_parameters() {
   m.set("hover_hold_s", d.hover_hold_s);
   m.set("land_speed", d.land_speed);
   m.set("land_height", d.land_height);
+  m.set("autostart", d.autostart);
+  m.set("takeoff_height", d.takeoff_height);
+  m.set("takeoff_duration_s", d.takeoff_duration_s);
+  m.set("land_duration_s", d.land_duration_s);
+  m.set("max_vertical_speed", d.max_vertical_speed);
+  m.set("status_vars", d.status_vars);
+  m.set("status_period_ms", d.status_period_ms);
+  m.set("low_battery_v", d.low_battery_v);
+  m.set("low_battery_hold_s", d.low_battery_hold_s);
+  m.set("shutdown_land_timeout_s", d.shutdown_land_timeout_s);
   return m;
 }
 
@@ -107,6 +161,16 @@ CrazyflieBridgeLogic::Params CrazyflieBridgeLogic::params_from(const ParamMap& m
   p.hover_hold_s = m.get_double("hover_hold_s");
   p.land_speed = m.get_double("land_speed");
   p.land_height = m.get_double("land_height");
+  p.autostart = m.get_bool("autostart");
+  p.takeoff_height = m.get_double("takeoff_height");
+  p.takeoff_duration_s = m.get_double("takeoff_duration_s");
+  p.land_duration_s = m.get_double("land_duration_s");
+  p.max_vertical_speed = m.get_double("max_vertical_speed");
+  p.status_vars = m.get_string_array("status_vars");
+  p.status_period_ms = m.get_int64("status_period_ms", 10, 65535);
+  p.low_battery_v = m.get_double("low_battery_v");
+  p.low_battery_hold_s = m.get_double("low_battery_hold_s");
+  p.shutdown_land_timeout_s = m.get_double("shutdown_land_timeout_s");
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {
@@ -128,7 +192,13 @@ void CrazyflieBridgeLogic::set_block_ids(uint8_t whisker, uint8_t state) {
   state_block_ = state;
 }
 
+void CrazyflieBridgeLogic::set_status_block(uint8_t block_id, std::vector<std::string> names) {
+  status_block_ = block_id;
+  status_names_ = std::move(names);
+}
+
 CrazyflieBridgeLogic::LogOutputs CrazyflieBridgeLogic::on_log_sample(const LogSample& s, int64_t now_ns) {
+  if (status_block_ >= 0 && s.block_id == status_block_) return on_status_sample(s, now_ns);
   LogOutputs out;
   const bool whisker = s.block_id == whisker_block_ && s.values.size() == 6;
   const bool state = s.block_id == state_block_ && s.values.size() == 6;
@@ -176,6 +246,9 @@ CrazyflieBridgeLogic::LogOutputs CrazyflieBridgeLogic::on_log_sample(const LogSa
   o.twist.twist.linear.x = c * s.values[4] + sn * s.values[5];
   o.twist.twist.linear.y = -sn * s.values[4] + c * s.values[5];
   height_ = s.values[2];
+  x_ = s.values[0];
+  y_ = s.values[1];
+  yaw_ = yaw;
   out.odom = o;
   return out;
 }
@@ -204,64 +277,278 @@ void CrazyflieBridgeLogic::on_hover_setpoint(const tactile_msgs::msg::HoverSetpo
   setpoint_ns_ = now_ns;
 }
 
+CrazyflieBridgeLogic::LogOutputs CrazyflieBridgeLogic::on_status_sample(const LogSample& s, int64_t /*now_ns*/) {
+  if (s.values.size() != status_names_.size()) {
+    ++stats_.dropped_unknown_block;
+    return {};
+  }
+  for (double v : s.values) {
+    if (!std::isfinite(v)) {
+      ++stats_.dropped_nonfinite;
+      return {};
+    }
+  }
+  ++stats_.status_samples;
+  for (size_t i = 0; i < status_names_.size(); ++i) {
+    const std::string& n = status_names_[i];
+    const double v = s.values[i];
+    if (n == "pm.vbat") {
+      battery_v_ = v;
+    } else if (n == "pm.state") {
+      pm_state_ = static_cast<int>(v);
+    } else if (n == "supervisor.info") {
+      supervisor_info_ = static_cast<int>(v);
+    } else if (n == "radio.rssi") {
+      rssi_ = static_cast<int>(v);
+    }
+  }
+  return {};
+}
+
+bool CrazyflieBridgeLogic::log_fresh(int64_t now_ns) const {
+  return have_log_ && tactile_common::to_seconds(now_ns - log_ns_) <= params_.log_timeout_s;
+}
+bool CrazyflieBridgeLogic::setpoint_fresh(int64_t now_ns) const {
+  return have_setpoint_ && tactile_common::to_seconds(now_ns - setpoint_ns_) <= params_.setpoint_timeout_s;
+}
+
+bool CrazyflieBridgeLogic::airborne() const {
+  switch (mode_) {
+    case Mode::kTakingOff:
+    case Mode::kHovering:
+    case Mode::kGoTo:
+    case Mode::kForward:
+    case Mode::kHoverHold:
+    case Mode::kLanding:
+      return true;
+    case Mode::kGrounded:
+    case Mode::kStopped:
+    case Mode::kEmergency:
+      return false;
+  }
+  return false;
+}
+
+// ---------------------------------------------------------------------------
+// Transitions
+
+void CrazyflieBridgeLogic::transition(Mode to, const char* guard, std::string reason, int64_t now_ns) {
+  const Mode from = mode_;
+  mode_ = to;
+  ++stats_.transitions_total;
+  ++stats_.transitions[std::string(to_string(from)) + "->" + to_string(to) + ":" + guard];
+  if (history_.size() < kMaxHistory) history_.push_back({now_ns, from, to, guard, std::move(reason)});
+  enter(to, now_ns);
+}
+
+void CrazyflieBridgeLogic::enter(Mode to, int64_t now_ns) {
+  switch (to) {
+    case Mode::kGrounded:
+      emergency_latched_ = false;
+      break;
+    case Mode::kTakingOff:
+    case Mode::kGoTo:
+      break;  // the command set ramp_ before the transition
+    case Mode::kHovering:
+      // Hold the height last commanded, zero velocity.
+      hold_height_ = command_.height;
+      command_.vx = command_.vy = command_.yaw_rate = 0.0;
+      command_.land = false;
+      break;
+    case Mode::kForward:
+      handback_ns_ = -1;
+      break;
+    case Mode::kHoverHold:
+      hold_start_ns_ = now_ns;
+      ++stats_.stale_events;
+      command_.vx = command_.vy = command_.yaw_rate = 0.0;  // hover in place at the last height
+      break;
+    case Mode::kLanding:
+      ++stats_.landings;
+      command_.vx = command_.vy = command_.yaw_rate = 0.0;
+      command_.land = true;
+      break;
+    case Mode::kStopped:
+      stops_sent_ = 0;
+      break;
+    case Mode::kEmergency:
+      emergency_latched_ = true;
+      ++stats_.emergency_stops;
+      command_.vx = command_.vy = command_.yaw_rate = 0.0;
+      command_.height = 0.0;
+      command_.land = true;
+      // The first stop packet leaves at once (the caller sends the outbox),
+      // then one every tick.
+      outbox_.push_back(commander::stop());
+      break;
+  }
+}
+
+CrazyflieBridgeLogic::CommandResult CrazyflieBridgeLogic::refuse(std::string reason) {
+  ++stats_.commands_refused;
+  return {false, std::move(reason)};
+}
+CrazyflieBridgeLogic::CommandResult CrazyflieBridgeLogic::accept(std::string reason) {
+  ++stats_.commands_accepted;
+  return {true, std::move(reason)};
+}
+
+std::vector<CrtpPacket> CrazyflieBridgeLogic::take_outbox() {
+  std::vector<CrtpPacket> v(outbox_.begin(), outbox_.end());
+  outbox_.clear();
+  return v;
+}
+
+CrtpPacket CrazyflieBridgeLogic::hover_packet(double vx, double vy, double yaw_rate_rad, double height) const {
+  return commander::hover(static_cast<float>(vx), static_cast<float>(vy), static_cast<float>(yaw_rate_rad * kRadToDeg),
+                          static_cast<float>(height));
+}
+
+bool CrazyflieBridgeLogic::on_the_ground(int64_t now_ns) const {
+  if (supervisor_info_ >= 0 && (supervisor_info_ & kIsFlying)) return false;
+  return log_fresh(now_ns) && height_ <= params_.land_height;
+}
+
+bool CrazyflieBridgeLogic::low_battery(int64_t now_ns) {
+  const bool in_flight = mode_ == Mode::kTakingOff || mode_ == Mode::kHovering || mode_ == Mode::kGoTo ||
+                         mode_ == Mode::kForward || mode_ == Mode::kHoverHold;
+  if (!in_flight || !std::isfinite(battery_v_) || battery_v_ >= params_.low_battery_v) {
+    low_batt_since_ns_ = -1;
+    return false;
+  }
+  if (low_batt_since_ns_ < 0) low_batt_since_ns_ = now_ns;
+  return tactile_common::to_seconds(now_ns - low_batt_since_ns_) >= params_.low_battery_hold_s;
+}
+
+namespace {
+std::string fmt(double v, int digits = 2) {
+  char b[64];
+  std::snprintf(b, sizeof b, "%.*f", digits, v);
+  return b;
+}
+/// Ramp progress in [0, 1].
+double progress(int64_t start_ns, double duration_s, int64_t now_ns) {
+  if (duration_s <= 0.0) return 1.0;
+  return std::clamp(tactile_common::to_seconds(now_ns - start_ns) / duration_s, 0.0, 1.0);
+}
+}  // namespace
+
+// ---------------------------------------------------------------------------
+// Timer: guards first, then the mode's output.
+
 std::optional<CrtpPacket> CrazyflieBridgeLogic::on_timer(int64_t now_ns) {
   const double dt = last_timer_ns_ > 0 ? tactile_common::to_seconds(now_ns - last_timer_ns_) : 1.0 / params_.setpoint_rate_hz;
   last_timer_ns_ = now_ns;
-  const bool setpoint_fresh = have_setpoint_ && tactile_common::to_seconds(now_ns - setpoint_ns_) <= params_.setpoint_timeout_s;
-  const bool log_fresh = have_log_ && tactile_common::to_seconds(now_ns - log_ns_) <= params_.log_timeout_s;
+  const bool sp_fresh = setpoint_fresh(now_ns);
+  const bool lg_fresh = log_fresh(now_ns);
   switch (mode_) {
-    case Mode::kWaiting:
-      if (setpoint_fresh && log_fresh) mode_ = Mode::kForward;
+    case Mode::kGrounded:
+      if (params_.autostart && sp_fresh && lg_fresh) {
+        transition(Mode::kForward, "autostart", "autostart: setpoints and log data fresh", now_ns);
+      }
+      break;
+    case Mode::kTakingOff:
+      if (progress(ramp_.start_ns, ramp_.duration_s, now_ns) >= 1.0) {
+        command_.height = ramp_.z1;
+        transition(Mode::kHovering, "takeoff_done", "reached " + fmt(ramp_.z1) + " m", now_ns);
+      }
+      break;
+    case Mode::kGoTo:
+      if (progress(ramp_.start_ns, ramp_.duration_s, now_ns) >= 1.0) {
+        command_.height = ramp_.z1;
+        transition(Mode::kHovering, "goto_done", "reached (" + fmt(ramp_.x1) + ", " + fmt(ramp_.y1) + ", " + fmt(ramp_.z1) + ")",
+                   now_ns);
+      }
       break;
     case Mode::kForward:
-      if (!setpoint_fresh || !log_fresh) {
-        mode_ = Mode::kHoverHold;
-        hold_start_ns_ = now_ns;
-        ++stats_.stale_events;
-        command_.vx = command_.vy = command_.yaw_rate = 0.0;  // hover in place at the last height
+      if (handback_ns_ >= 0) {
+        if (now_ns >= handback_ns_) {
+          transition(Mode::kHovering, "notify_setpoints_stop", "hand-back: last setpoint's validity ran out", now_ns);
+        }
+      } else if (!sp_fresh || !lg_fresh) {
+        transition(Mode::kHoverHold, "stale", !sp_fresh ? "setpoints stale" : "log data stale", now_ns);
       }
       break;
     case Mode::kHoverHold:
-      if (setpoint_fresh && log_fresh) {
-        mode_ = Mode::kForward;
+      if (sp_fresh && lg_fresh) {
+        transition(Mode::kForward, "fresh_again", "setpoints and log data fresh again", now_ns);
       } else if (tactile_common::to_seconds(now_ns - hold_start_ns_) >= params_.hover_hold_s) {
-        mode_ = Mode::kLanding;
-        ++stats_.landings;
+        landing_speed_ = params_.land_speed;
+        landing_target_ = 0.0;
+        transition(Mode::kLanding, "hold_expired", "stale for hover_hold_s = " + fmt(params_.hover_hold_s) + " s", now_ns);
       }
       break;
-    case Mode::kLanding:
+    case Mode::kHovering:  // leaves only on a command (or low battery below)
+    case Mode::kLanding:   // touchdown is decided with the output below
     case Mode::kStopped:
+    case Mode::kEmergency:
       break;
   }
+  if (low_battery(now_ns)) {
+    ++stats_.low_battery_events;
+    landing_speed_ = params_.land_speed;
+    landing_target_ = 0.0;
+    transition(Mode::kLanding, "low_battery",
+               "battery " + fmt(battery_v_) + " V < low_battery_v " + fmt(params_.low_battery_v) + " V for " +
+                   fmt(params_.low_battery_hold_s) + " s",
+               now_ns);
+  }
+
   std::optional<CrtpPacket> pk;
   switch (mode_) {
-    case Mode::kWaiting:
-      return std::nullopt;  // nothing sent until the pipeline and the link are up
+    case Mode::kGrounded:
+      return std::nullopt;  // nothing is sent to the motors on the ground
+    case Mode::kTakingOff: {
+      const double f = progress(ramp_.start_ns, ramp_.duration_s, now_ns);
+      command_.vx = command_.vy = command_.yaw_rate = 0.0;
+      command_.land = false;
+      command_.height = ramp_.z0 + (ramp_.z1 - ramp_.z0) * f;
+      pk = hover_packet(0.0, 0.0, 0.0, command_.height);
+      break;
+    }
+    case Mode::kHovering:
+      command_.height = hold_height_;
+      pk = hover_packet(0.0, 0.0, 0.0, hold_height_);
+      break;
+    case Mode::kGoTo: {
+      const double f = progress(ramp_.start_ns, ramp_.duration_s, now_ns);
+      const double x = ramp_.x0 + (ramp_.x1 - ramp_.x0) * f;
+      const double y = ramp_.y0 + (ramp_.y1 - ramp_.y0) * f;
+      const double z = ramp_.z0 + (ramp_.z1 - ramp_.z0) * f;
+      const double yaw = ramp_.yaw0 + (ramp_.yaw1 - ramp_.yaw0) * f;
+      command_.vx = command_.vy = command_.yaw_rate = 0.0;
+      command_.height = z;
+      pk = commander::position(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z),
+                               static_cast<float>(yaw * kRadToDeg));
+      break;
+    }
     case Mode::kForward:
-      command_ = setpoint_;
-      if (setpoint_.land) {
-        mode_ = Mode::kLanding;
-        ++stats_.landings;
+      if (handback_ns_ < 0) command_ = setpoint_;  // during a hand-back the last setpoint stays valid
+      if (command_.land) {
         command_.height = height_;
+        landing_speed_ = params_.land_speed;
+        landing_target_ = 0.0;
+        transition(Mode::kLanding, "behaviour_land", "the behaviour asked to land", now_ns);
       } else {
-        pk = commander::hover(static_cast<float>(command_.vx), static_cast<float>(command_.vy),
-                              static_cast<float>(command_.yaw_rate * kRadToDeg), static_cast<float>(command_.height));
+        pk = hover_packet(command_.vx, command_.vy, command_.yaw_rate, command_.height);
         break;
       }
       [[fallthrough]];
     case Mode::kLanding:
       command_.vx = command_.vy = command_.yaw_rate = 0.0;
       command_.land = true;
-      command_.height = std::max(0.0, std::min(command_.height, height_ + 0.1) - params_.land_speed * dt);
-      if (command_.height <= params_.land_height || (log_fresh && height_ <= params_.land_height)) {
-        mode_ = Mode::kStopped;
+      command_.height = std::max(landing_target_, std::min(command_.height, height_ + 0.1) - landing_speed_ * dt);
+      if (command_.height <= params_.land_height || (lg_fresh && height_ <= params_.land_height)) {
+        transition(Mode::kStopped, "touchdown",
+                   command_.height <= params_.land_height ? "commanded height at land_height" : "measured height at land_height",
+                   now_ns);
         pk = commander::stop();
       } else {
-        pk = commander::hover(0.f, 0.f, 0.f, static_cast<float>(command_.height));
+        pk = hover_packet(0.0, 0.0, 0.0, command_.height);
       }
       break;
     case Mode::kHoverHold:
-      pk = commander::hover(0.f, 0.f, 0.f, static_cast<float>(command_.height));
+      pk = hover_packet(0.0, 0.0, 0.0, command_.height);
       break;
     case Mode::kStopped:
       // Stop is repeated a few times (a lost packet must not leave the motors
@@ -269,10 +556,197 @@ std::optional<CrtpPacket> CrazyflieBridgeLogic::on_timer(int64_t now_ns) {
       if (stops_sent_ >= kStopRepeats) return std::nullopt;
       pk = commander::stop();
       break;
+    case Mode::kEmergency:
+      pk = commander::stop();  // every tick until arm(true) on the ground
+      break;
   }
-  if (pk && commander::decode(*pk).kind == commander::Setpoint::Kind::kStop) ++stops_sent_;
+  if (pk && mode_ == Mode::kStopped && commander::decode(*pk).kind == commander::Setpoint::Kind::kStop) ++stops_sent_;
   ++stats_.packets_out;
   return pk;
+}
+
+// ---------------------------------------------------------------------------
+// Operator commands
+
+CrazyflieBridgeLogic::CommandResult CrazyflieBridgeLogic::arm(bool on, int64_t now_ns) {
+  const char* what = on ? "arm" : "disarm";
+  if (airborne()) {
+    return refuse(std::string(what) + " refused: airborne (mode " + to_string(mode_) + "); use land or emergency_stop");
+  }
+  if (on && mode_ == Mode::kEmergency && !on_the_ground(now_ns)) {
+    return refuse("arm refused: emergency latched and the vehicle is not confirmed on the ground (" +
+                  std::string(log_fresh(now_ns) ? "measured height " + fmt(height_) + " m > land_height" : "no fresh state estimate") +
+                  (supervisor_info_ >= 0 && (supervisor_info_ & kIsFlying) ? ", supervisor says flying" : "") + ")");
+  }
+  arm_requested_ = on;
+  outbox_.push_back(arming::request(on, protocol_version_));
+  std::string reason = std::string(what) + " request sent (" +
+                       (protocol_version_ >= arming::kSupervisorProtocolVersion ? "supervisor port" : "legacy platform port") + ")";
+  if (supervisor_info_ < 0) reason += "; firmware logs no supervisor.info: arming state cannot be confirmed";
+  if (on && mode_ == Mode::kEmergency) {
+    transition(Mode::kGrounded, "arm", "arm(true) on the ground clears the emergency latch", now_ns);
+    reason += "; emergency latch cleared";
+  }
+  return accept(reason);
+}
+
+CrazyflieBridgeLogic::CommandResult CrazyflieBridgeLogic::takeoff(double height_m, double duration_s, int64_t now_ns) {
+  if (mode_ != Mode::kGrounded && mode_ != Mode::kStopped) {
+    return refuse(std::string("takeoff refused: mode is ") + to_string(mode_) +
+                  (mode_ == Mode::kEmergency ? " (emergency latched: arm(true) on the ground first)" : ""));
+  }
+  if (!std::isfinite(height_m) || height_m <= params_.land_height || height_m > params_.max_height ||
+      height_m < params_.min_height) {
+    return refuse("takeoff refused: height " + fmt(height_m) + " m outside (land_height " + fmt(params_.land_height) +
+                  ", max_height " + fmt(params_.max_height) + "] m");
+  }
+  if (!std::isfinite(duration_s) || duration_s <= 0.0) return refuse("takeoff refused: duration " + fmt(duration_s) + " s must be > 0");
+  if (!log_fresh(now_ns)) return refuse("takeoff refused: no fresh state estimate (log data stale or never received)");
+  const double z0 = std::max(0.0, height_);
+  if ((height_m - z0) / duration_s > params_.max_vertical_speed) {
+    return refuse("takeoff refused: " + fmt(height_m - z0) + " m in " + fmt(duration_s) + " s exceeds max_vertical_speed " +
+                  fmt(params_.max_vertical_speed) + " m/s");
+  }
+  if (std::isfinite(battery_v_) && battery_v_ < params_.low_battery_v) {
+    return refuse("takeoff refused: battery " + fmt(battery_v_) + " V < low_battery_v " + fmt(params_.low_battery_v) + " V");
+  }
+  if (supervisor_info_ >= 0) {
+    if (supervisor_info_ & (kIsTumbled | kIsLocked)) {
+      return refuse("takeoff refused: supervisor.info " + std::to_string(supervisor_info_) +
+                    ((supervisor_info_ & kIsLocked) ? " (locked: restart the Crazyflie)" : " (tumbled)"));
+    }
+    if (!(supervisor_info_ & kIsArmed)) {
+      return refuse("takeoff refused: not armed (supervisor.info " + std::to_string(supervisor_info_) + "): call arm(true) first");
+    }
+  }
+  ramp_ = Ramp{};
+  ramp_.x0 = ramp_.x1 = x_;
+  ramp_.y0 = ramp_.y1 = y_;
+  ramp_.yaw0 = ramp_.yaw1 = yaw_;
+  ramp_.z0 = z0;
+  ramp_.z1 = height_m;
+  ramp_.start_ns = now_ns;
+  ramp_.duration_s = duration_s;
+  command_ = tactile_msgs::msg::HoverSetpoint{};
+  command_.height = z0;
+  const std::string r = "takeoff to " + fmt(height_m) + " m in " + fmt(duration_s) + " s";
+  transition(Mode::kTakingOff, "takeoff", r, now_ns);
+  return accept(r);
+}
+
+CrazyflieBridgeLogic::CommandResult CrazyflieBridgeLogic::land(double height_m, double duration_s, int64_t now_ns) {
+  if (!airborne()) return refuse(std::string("land refused: not airborne (mode ") + to_string(mode_) + ")");
+  if (mode_ == Mode::kLanding) return refuse("land refused: already landing");
+  if (!std::isfinite(height_m) || height_m < 0.0 || height_m > params_.land_height) {
+    return refuse("land refused: height " + fmt(height_m) + " m outside [0, land_height " + fmt(params_.land_height) +
+                  "] m (the motors stop at land_height)");
+  }
+  if (!std::isfinite(duration_s) || duration_s <= 0.0) return refuse("land refused: duration " + fmt(duration_s) + " s must be > 0");
+  const double z0 = std::min(command_.height, height_ + 0.1);
+  // Descent speed from the height to go and the duration, bounded: never
+  // faster than max_vertical_speed, never slower than land_speed / 4.
+  landing_speed_ = std::clamp(std::max(z0 - height_m, 0.0) / duration_s, params_.land_speed / 4, params_.max_vertical_speed);
+  landing_target_ = height_m;
+  const std::string r = "land to " + fmt(height_m) + " m in " + fmt(duration_s) + " s (" + fmt(landing_speed_) + " m/s)";
+  transition(Mode::kLanding, "land", r, now_ns);
+  return accept(r);
+}
+
+CrazyflieBridgeLogic::CommandResult CrazyflieBridgeLogic::go_to(double x, double y, double z, double yaw_rad, double duration_s,
+                                                                bool relative, int64_t now_ns) {
+  if (mode_ != Mode::kHovering && mode_ != Mode::kGoTo) {
+    return refuse(std::string("go_to refused: mode is ") + to_string(mode_) + " (allowed from hovering / go_to)");
+  }
+  if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z) || !std::isfinite(yaw_rad)) {
+    return refuse("go_to refused: non-finite goal");
+  }
+  if (!std::isfinite(duration_s) || duration_s <= 0.0) return refuse("go_to refused: duration " + fmt(duration_s) + " s must be > 0");
+  if (!log_fresh(now_ns)) return refuse("go_to refused: no fresh state estimate");
+  Ramp r;
+  r.x0 = x_;
+  r.y0 = y_;
+  r.z0 = command_.height;
+  r.yaw0 = yaw_;
+  r.x1 = relative ? x_ + x : x;
+  r.y1 = relative ? y_ + y : y;
+  r.z1 = relative ? command_.height + z : z;
+  r.yaw1 = relative ? yaw_ + yaw_rad : yaw_rad;
+  if (r.z1 <= params_.land_height || r.z1 > params_.max_height || r.z1 < params_.min_height) {
+    return refuse("go_to refused: z " + fmt(r.z1) + " m outside (land_height, max_height " + fmt(params_.max_height) + "] m");
+  }
+  const double horiz = std::hypot(r.x1 - r.x0, r.y1 - r.y0) / duration_s;
+  if (horiz > params_.max_velocity) {
+    return refuse("go_to refused: " + fmt(horiz) + " m/s horizontal exceeds max_velocity " + fmt(params_.max_velocity) +
+                  " m/s (longer duration)");
+  }
+  if (std::abs(r.z1 - r.z0) / duration_s > params_.max_vertical_speed) {
+    return refuse("go_to refused: vertical speed exceeds max_vertical_speed " + fmt(params_.max_vertical_speed) + " m/s");
+  }
+  if (std::abs(r.yaw1 - r.yaw0) / duration_s > params_.max_yaw_rate) {
+    return refuse("go_to refused: yaw rate exceeds max_yaw_rate " + fmt(params_.max_yaw_rate) + " rad/s");
+  }
+  r.start_ns = now_ns;
+  r.duration_s = duration_s;
+  ramp_ = r;
+  const std::string why = "go_to (" + fmt(r.x1) + ", " + fmt(r.y1) + ", " + fmt(r.z1) + ") yaw " + fmt(r.yaw1) + " rad in " +
+                          fmt(duration_s) + " s";
+  transition(Mode::kGoTo, "go_to", why, now_ns);
+  return accept(why);
+}
+
+CrazyflieBridgeLogic::CommandResult CrazyflieBridgeLogic::start_behaviour(int64_t now_ns) {
+  if (mode_ != Mode::kHovering) {
+    return refuse(std::string("start_behaviour refused: mode is ") + to_string(mode_) + " (allowed from hovering)");
+  }
+  if (!setpoint_fresh(now_ns)) {
+    return refuse(std::string("start_behaviour refused: no fresh ") + kSetpointTopic + " setpoint (" +
+                  (have_setpoint_ ? "last " + fmt(tactile_common::to_seconds(now_ns - setpoint_ns_)) + " s ago" : "none yet") + ")");
+  }
+  if (!log_fresh(now_ns)) return refuse("start_behaviour refused: log data stale");
+  transition(Mode::kForward, "start_behaviour", "hand-over to the behaviour", now_ns);
+  return accept("hand-over: forwarding the behaviour's setpoints");
+}
+
+CrazyflieBridgeLogic::CommandResult CrazyflieBridgeLogic::notify_setpoints_stop(uint32_t remain_valid_ms, int64_t now_ns) {
+  if (mode_ == Mode::kHoverHold) {
+    transition(Mode::kHovering, "notify_setpoints_stop", "hand-back while holding", now_ns);
+    return accept("hand-back: hovering");
+  }
+  if (mode_ != Mode::kForward) {
+    return refuse(std::string("notify_setpoints_stop refused: mode is ") + to_string(mode_) + " (allowed from forward)");
+  }
+  if (handback_ns_ >= 0) return refuse("notify_setpoints_stop refused: a hand-back is already pending");
+  // The last setpoint stays valid for remain_valid_ms (hover height and
+  // velocity held), bounded by the stale timeout's hover_hold_s.
+  const double remain_s = std::min(remain_valid_ms / 1000.0, params_.hover_hold_s);
+  handback_ns_ = now_ns + static_cast<int64_t>(remain_s * 1e9);
+  command_ = setpoint_;
+  command_.vx = command_.vy = command_.yaw_rate = 0.0;  // the held setpoint does not move the vehicle
+  return accept("hand-back in " + fmt(remain_s, 3) + " s");
+}
+
+CrazyflieBridgeLogic::CommandResult CrazyflieBridgeLogic::emergency_stop(int64_t now_ns) {
+  if (mode_ == Mode::kEmergency) {
+    outbox_.push_back(commander::stop());
+    return accept("emergency stop (already latched): stop sent again");
+  }
+  transition(Mode::kEmergency, "emergency_stop", std::string("operator emergency stop in ") + to_string(mode_), now_ns);
+  return accept("emergency stop: motors off, latched until arm(true) on the ground");
+}
+
+CrazyflieBridgeLogic::Status CrazyflieBridgeLogic::status(int64_t now_ns) const {
+  Status st;
+  st.mode = mode_;
+  st.armed = supervisor_info_ >= 0 ? (supervisor_info_ & kIsArmed) != 0 : arm_requested_;
+  st.emergency_latched = emergency_latched_;
+  st.battery_v = battery_v_;
+  st.pm_state = pm_state_;
+  st.supervisor_info = supervisor_info_;
+  st.rssi_dbm = rssi_;
+  st.setpoint_age_s = have_setpoint_ ? tactile_common::to_seconds(now_ns - setpoint_ns_) : NAN;
+  st.log_age_s = have_log_ ? tactile_common::to_seconds(now_ns - log_ns_) : NAN;
+  st.low_battery_events = stats_.low_battery_events;
+  return st;
 }
 
 }  // namespace crazyflie_bridge

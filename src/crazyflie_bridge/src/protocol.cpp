@@ -391,4 +391,23 @@ CrtpPacket count_request() { return CrtpPacket(port::kMem, kChanInfo, {kCmdInfoN
 CrtpPacket count_reply(uint8_t count) { return CrtpPacket(port::kMem, kChanInfo, {kCmdInfoNbr, count}); }
 }  // namespace mem
 
+namespace arming {
+CrtpPacket request(bool arm, uint8_t protocol_version) {
+  const uint8_t on = arm ? 1 : 0;
+  if (protocol_version >= kSupervisorProtocolVersion) {
+    return CrtpPacket(port::kSupervisor, kSupervisorChanCommand, {kCmdArmSystem, on});
+  }
+  return CrtpPacket(port::kPlatform, platform::kChanCommand, {kPlatformRequestArming, on});
+}
+bool decode_request(const CrtpPacket& pk, bool& arm) {
+  const bool supervisor = pk.port == port::kSupervisor && pk.channel == kSupervisorChanCommand && pk.size >= 2 &&
+                          pk.data[0] == kCmdArmSystem;
+  const bool legacy = pk.port == port::kPlatform && pk.channel == platform::kChanCommand && pk.size >= 2 &&
+                      pk.data[0] == kPlatformRequestArming;
+  if (!supervisor && !legacy) return false;
+  arm = pk.data[1] != 0;
+  return true;
+}
+}  // namespace arming
+
 }  // namespace crazyflie_bridge

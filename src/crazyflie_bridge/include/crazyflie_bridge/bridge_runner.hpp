@@ -2,6 +2,9 @@
 // Connects, starts the whisker and state log blocks, then
 //   pump()      receives log data and hands out the decoded messages,
 //   on_timer()  sends the logic's setpoint packet,
+//   arm() .. emergency_stop()  the operator commands (sent at once where they
+//               carry a packet: arming request, emergency stop),
+//   land_and_stop()  the blocking shutdown landing (Ctrl-C, SIGTERM, destruction),
 // with a mutex so that the rclcpp component (receive thread + timer) and the
 // `tactile fly` loop use it the same way. Times are the caller's clock [ns].
 #pragma once
@@ -10,6 +13,8 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <string>
+#include <vector>
 
 #include "crazyflie_bridge/client.hpp"
 #include "crazyflie_bridge/crazyflie_bridge_logic.hpp"
@@ -27,8 +32,14 @@ class BridgeRunner {
     double sum_s = 0, max_s = 0;  ///< state log sample received -> next setpoint sent
   };
 
-  /// Opens params.uri (or uses `link` if given), connects and starts both log
-  /// blocks. Throws UriError / LinkError / ClientError.
+  using Mode = CrazyflieBridgeLogic::Mode;
+  using CommandResult = CrazyflieBridgeLogic::CommandResult;
+  using Status = CrazyflieBridgeLogic::Status;
+
+  /// Opens params.uri (or uses `link` if given), connects and starts the
+  /// whisker, state and status log blocks (status variables the firmware's
+  /// TOC lacks are skipped: see warnings()). Throws UriError / LinkError /
+  /// ClientError.
   explicit BridgeRunner(const CrazyflieBridgeLogic::Params& params, ClientOptions client_options = {},
                         std::unique_ptr<Link> link = nullptr);
 
@@ -37,8 +48,33 @@ class BridgeRunner {
   static constexpr int kMaxSamplesPerPump = 1000;
   int pump(std::chrono::milliseconds timeout, const std::function<int64_t()>& now_ns, const Sinks& sinks);
   void on_hover_setpoint(const tactile_msgs::msg::HoverSetpoint& msg, int64_t now_ns);
-  /// Sends the logic's packet (if any); returns true if one was sent.
+  /// Sends the logic's packets (outbox, then the setpoint, if any); returns
+  /// true if a setpoint packet was sent.
   bool on_timer(int64_t now_ns);
+
+  // Operator commands: CrazyflieBridgeLogic's, mutex-guarded; packets they
+  // carry (arming request, the first emergency stop) are sent before return.
+  CommandResult arm(bool on, int64_t now_ns);
+  CommandResult takeoff(double height_m, double duration_s, int64_t now_ns);
+  CommandResult land(double height_m, double duration_s, int64_t now_ns);
+  CommandResult go_to(double x, double y, double z, double yaw_rad, double duration_s, bool relative, int64_t now_ns);
+  CommandResult start_behaviour(int64_t now_ns);
+  CommandResult notify_setpoints_stop(uint32_t remain_valid_ms, int64_t now_ns);
+  CommandResult emergency_stop(int64_t now_ns);
+
+  /// Blocking: land (if airborne), pump the link and send setpoints at
+  /// setpoint_rate_hz until kStopped; on timeout emergency-stop. Returns true
+  /// if it landed (or was on the ground already). Log messages received
+  /// meanwhile go to `sinks` (none by default).
+  bool land_and_stop(std::chrono::milliseconds timeout, const std::function<int64_t()>& now_ns,
+                     const Sinks& sinks = {});
+
+  /// The logic's status with the link fields (ACK rate, packets lost, log
+  /// blocks missed) filled in.
+  Status status(int64_t now_ns) const;
+  std::vector<CrazyflieBridgeLogic::Transition> history() const;
+  /// Connect-time warnings (e.g. a status variable the firmware lacks).
+  const std::vector<std::string>& warnings() const { return warnings_; }
 
   CrazyflieBridgeLogic::Mode mode() const;
   CrazyflieBridgeLogic::Stats logic_stats() const;
@@ -55,6 +91,9 @@ class BridgeRunner {
   std::chrono::steady_clock::time_point last_state_rx_{};
   bool state_pending_ = false;
   LatencyStats latency_;
+  std::vector<std::string> warnings_;
+  /// Sends what the logic queued (caller holds mutex_).
+  void flush_outbox();
 };
 
 }  // namespace crazyflie_bridge

@@ -1,17 +1,30 @@
 // Node logic of the Crazyflie bridge (no I/O, no rclcpp): decoded log samples
 // in -> WhiskerPressure (left/right) and Odometry out; HoverSetpoint in ->
 // CRTP generic-commander packets out on a fixed-rate timer, clamped to the
-// configured limits, with the safety chain
-//   fresh setpoints and log data -> forward the (clamped) setpoint
-//   setpoints stale or no log data -> hover in place (vx = vy = yaw rate = 0, last height)
-//   still stale after hover_hold_s -> land (height ramps down at land_speed)
-//   below land_height -> stop (motors off, sent 5 times), then nothing: the firmware's
-//   commander watchdog (500 ms level, 2 s motors off) is the last line when
-//   the ground station itself dies.
-// Landing is latched: fresh setpoints do not resume flight once it began.
+// configured limits; operator commands (arm, take-off, land, go-to, hand-over,
+// hand-back, emergency stop) drive an explicit state machine:
+//
+//   kGrounded --takeoff--> kTakingOff --takeoff_done--> kHovering
+//   kHovering --go_to--> kGoTo --goto_done--> kHovering
+//   kHovering --start_behaviour--> kForward --notify_setpoints_stop--> kHovering
+//   kForward --stale--> kHoverHold --fresh_again--> kForward
+//                                  --hold_expired--> kLanding
+//   any airborne --land / low_battery / behaviour_land--> kLanding --touchdown--> kStopped
+//   any --emergency_stop--> kEmergency --arm(true) on the ground--> kGrounded
+//   kGrounded --autostart (fresh setpoints and log)--> kForward   (autostart: true only)
+//
+// Nothing is sent to the motors in kGrounded. kStopped repeats the stop packet
+// a few times, then sends nothing: the firmware's commander watchdog (500 ms
+// level, 2 s motors off) is the last line when the ground station itself dies.
+// kEmergency sends the stop packet every tick until arm(true) on the ground.
+// Every transition is a named guard with a reason, counted in Stats and kept
+// in history(). Every refused command returns accepted=false and the reason.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
+#include <deque>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -59,10 +72,69 @@ class CrazyflieBridgeLogic {
     double hover_hold_s = 1.0;       ///< hover in place this long before landing
     double land_speed = 0.25;        ///< [m/s]
     double land_height = 0.05;       ///< stop the motors below this height [m]
+    /// Forward the behaviour as soon as setpoints and log are fresh, without an
+    /// operator take-off (the old behaviour; lockstep SITL graphs and tests).
+    bool autostart = false;
+    double takeoff_height = 0.4;           ///< default take-off target [m] (tactile fly --takeoff)
+    double takeoff_duration_s = 2.0;       ///< default take-off ramp [s]
+    double land_duration_s = 3.0;          ///< default land ramp [s] (service default, shutdown land)
+    /// Operator take-off / land ramps faster than this are refused [m/s].
+    double max_vertical_speed = 1.0;
+    /// Status log block (battery, supervisor, RSSI); variables a firmware TOC
+    /// does not have are skipped with a warning.
+    std::vector<std::string> status_vars{"pm.vbat", "pm.state", "supervisor.info", "radio.rssi"};
+    int64_t status_period_ms = 100;        ///< status block period [ms]
+    /// Below this battery voltage in flight for low_battery_hold_s -> land [V]
+    /// (1-cell LiPo; cflib/firmware pm: 3.2 V is the firmware's own low level).
+    double low_battery_v = 3.2;
+    double low_battery_hold_s = 2.0;       ///< [s] (rides through motor-load sags)
+    double shutdown_land_timeout_s = 10.0; ///< bound of the blocking land on Ctrl-C / SIGTERM [s]
     void validate() const;
   };
 
-  enum class Mode { kWaiting, kForward, kHoverHold, kLanding, kStopped };
+  /// Nothing is ever sent to the motors in kGrounded.
+  enum class Mode { kGrounded, kTakingOff, kHovering, kGoTo, kForward, kHoverHold, kLanding, kStopped, kEmergency };
+
+  struct CommandResult {
+    bool accepted = false;
+    std::string reason;  ///< why refused (or what was done)
+  };
+
+  /// One mode change: the guard that fired and why.
+  struct Transition {
+    int64_t t_ns = 0;
+    Mode from = Mode::kGrounded, to = Mode::kGrounded;
+    std::string guard;   ///< e.g. "takeoff", "stale", "low_battery"
+    std::string reason;  ///< human-readable detail
+  };
+  static constexpr size_t kMaxHistory = 1000;  ///< history() keeps the first 1000 transitions
+
+  /// Everything a ground station shows; NaN / -1 where unknown.
+  struct Status {
+    Mode mode = Mode::kGrounded;
+    bool armed = false;             ///< supervisor.info is-armed bit, else the last arm() request
+    bool emergency_latched = false;
+    double battery_v = NAN;         ///< pm.vbat
+    int pm_state = -1;              ///< pm.state (0 battery, 1 charging, 2 charged, 3 low power, 4 shutdown)
+    int supervisor_info = -1;       ///< supervisor.info bit field (SupervisorBit)
+    int rssi_dbm = -1;              ///< radio.rssi (firmware logs -dBm as a positive u8)
+    double link_quality = NAN;      ///< ACK rate [0, 1] (BridgeRunner fills the link fields)
+    uint64_t packets_lost = 0, log_blocks_missed = 0;
+    double setpoint_age_s = NAN, log_age_s = NAN;
+    uint64_t low_battery_events = 0;
+  };
+
+  /// supervisor.info bits (crazyflie-firmware src/modules/src/supervisor.c,
+  /// supervisorGetInfoField(); documented in the firmware's log TOC docs).
+  enum SupervisorBit : int {
+    kCanBeArmed = 1 << 0,
+    kIsArmed = 1 << 1,
+    kAutoArm = 1 << 2,
+    kCanFly = 1 << 3,
+    kIsFlying = 1 << 4,
+    kIsTumbled = 1 << 5,
+    kIsLocked = 1 << 6,
+  };
 
   struct Stats {
     uint64_t log_samples = 0;
@@ -74,6 +146,12 @@ class CrazyflieBridgeLogic {
     uint64_t stale_events = 0;           ///< transitions into hover hold
     uint64_t landings = 0;
     uint64_t packets_out = 0;
+    uint64_t low_battery_events = 0;     ///< landings for low battery
+    uint64_t emergency_stops = 0;
+    uint64_t commands_accepted = 0, commands_refused = 0;
+    uint64_t status_samples = 0;
+    uint64_t transitions_total = 0;
+    std::map<std::string, uint64_t> transitions;  ///< "from->to:guard" -> count
   };
 
   struct LogOutputs {
@@ -90,11 +168,45 @@ class CrazyflieBridgeLogic {
   const std::vector<std::string>& state_block() const { return params_.state_vars; }
   /// Tells the logic which block ids carry which layout.
   void set_block_ids(uint8_t whisker_block_id, uint8_t state_block_id);
+  /// The status block's id and the variables it carries (the subset of
+  /// status_vars the firmware's TOC has).
+  void set_status_block(uint8_t block_id, std::vector<std::string> names);
+  /// The firmware's CRTP protocol version (chooses the arming request's port:
+  /// cflib Supervisor.send_arming_request, supervisor port from version 12).
+  void set_protocol_version(uint8_t version) { protocol_version_ = version; }
 
   LogOutputs on_log_sample(const LogSample& sample, int64_t now_ns);
   void on_hover_setpoint(const tactile_msgs::msg::HoverSetpoint& msg, int64_t now_ns);
-  /// At setpoint_rate_hz: the packet to send now (none once stopped).
+  /// At setpoint_rate_hz: the packet to send now (none in kGrounded, none
+  /// once stopped).
   std::optional<CrtpPacket> on_timer(int64_t now_ns);
+
+  // Operator commands (operator surface). Each returns accepted and the reason.
+  /// Platform arming request (cflib PlatformService.send_arming_request);
+  /// arm(true) also clears the emergency latch, only on the ground.
+  CommandResult arm(bool on, int64_t now_ns);
+  /// Height ramps from the measured z to height_m over duration_s -> kHovering.
+  CommandResult takeoff(double height_m, double duration_s, int64_t now_ns);
+  /// From any airborne mode: height ramps down to height_m over duration_s,
+  /// then the motors stop (height_m <= land_height: to the floor).
+  CommandResult land(double height_m, double duration_s, int64_t now_ns);
+  /// From kHovering / kGoTo: position setpoints interpolated over duration_s.
+  CommandResult go_to(double x, double y, double z, double yaw_rad, double duration_s, bool relative, int64_t now_ns);
+  /// Hand-over: kHovering -> kForward.
+  CommandResult start_behaviour(int64_t now_ns);
+  /// Hand-back: kForward -> kHovering once the last setpoint's remain_valid_ms ran out.
+  CommandResult notify_setpoints_stop(uint32_t remain_valid_ms, int64_t now_ns);
+  /// Any mode -> kEmergency: stop packet now and every tick, latched until arm(true).
+  CommandResult emergency_stop(int64_t now_ns);
+
+  /// Packets to send now besides the timer's (arming requests, the immediate
+  /// emergency stop); the caller sends them in order and the queue empties.
+  std::vector<CrtpPacket> take_outbox();
+
+  /// Logic fields of the status; link fields are NaN / 0 (BridgeRunner fills them).
+  Status status(int64_t now_ns) const;
+  bool airborne() const;  ///< kTakingOff .. kLanding
+  const std::vector<Transition>& history() const { return history_; }
 
   Mode mode() const { return mode_; }
   const Stats& stats() const { return stats_; }
@@ -105,8 +217,46 @@ class CrazyflieBridgeLogic {
  private:
   Params params_;
   Stats stats_;
-  Mode mode_ = Mode::kWaiting;
-  int whisker_block_ = -1, state_block_ = -1;
+  /// Sets mode_, counts the transition and records it (the only place mode_ changes).
+  void transition(Mode to, const char* guard, std::string reason, int64_t now_ns);
+  /// Entry actions of each mode, run by transition().
+  void enter(Mode to, int64_t now_ns);
+  CommandResult refuse(std::string reason);
+  CommandResult accept(std::string reason);
+  /// The one place a hover setpoint becomes a CRTP packet (vx, vy body frame
+  /// [m/s], yaw rate [rad/s] CCW, height [m]).
+  CrtpPacket hover_packet(double vx, double vy, double yaw_rate_rad, double height) const;
+  LogOutputs on_status_sample(const LogSample& sample, int64_t now_ns);
+  bool log_fresh(int64_t now_ns) const;
+  bool setpoint_fresh(int64_t now_ns) const;
+  /// Guard of arm(true) in kEmergency: fresh estimate at or below land_height and
+  /// the supervisor (where logged) not reporting flight.
+  bool on_the_ground(int64_t now_ns) const;
+  /// Low-battery guard: true when the voltage has been below low_battery_v
+  /// for low_battery_hold_s while airborne.
+  bool low_battery(int64_t now_ns);
+
+  Mode mode_ = Mode::kGrounded;
+  std::vector<Transition> history_;
+  std::deque<CrtpPacket> outbox_;
+  int whisker_block_ = -1, state_block_ = -1, status_block_ = -1;
+  std::vector<std::string> status_names_;
+  double battery_v_ = NAN;
+  int pm_state_ = -1, supervisor_info_ = -1, rssi_ = -1;
+  bool arm_requested_ = false, emergency_latched_ = false;
+  int64_t low_batt_since_ns_ = -1;
+  // Ramps (take-off, land, go-to): from -> to over [start, start + duration].
+  struct Ramp {
+    double x0 = 0, y0 = 0, z0 = 0, yaw0 = 0, x1 = 0, y1 = 0, z1 = 0, yaw1 = 0;
+    int64_t start_ns = 0;
+    double duration_s = 0;
+  } ramp_;
+  double landing_speed_ = 0.0;   ///< kLanding descent [m/s]
+  double landing_target_ = 0.0;  ///< kLanding floor of the commanded height [m]
+  double hold_height_ = 0.0;  ///< kHovering / kHoverHold height [m]
+  double x_ = 0.0, y_ = 0.0, yaw_ = 0.0;  ///< state estimate [m, m, rad]
+  uint8_t protocol_version_ = 0;
+  int64_t handback_ns_ = -1;  ///< kForward -> kHovering at this time (notify_setpoints_stop)
   uint32_t sequence_[2] = {0, 0};
   bool have_setpoint_ = false, have_log_ = false;
   int64_t setpoint_ns_ = 0, log_ns_ = 0, hold_start_ns_ = 0, last_timer_ns_ = 0;

@@ -215,4 +215,21 @@ CrtpPacket count_request();             ///< [1]
 CrtpPacket count_reply(uint8_t count);  ///< [1, count]
 }  // namespace mem
 
+// ----------------------------------------------------------------------------
+// Arming (cflib crazyflie/supervisor.py Supervisor.send_arming_request):
+// CRTP protocol >= 12: supervisor port 9, channel 1 (SUPERVISOR_CH_COMMAND),
+// [CMD_ARM_SYSTEM = 0x01, do_arm]; older firmware: the legacy platform port 13,
+// channel 0 (PLATFORM_COMMAND), [PLATFORM_REQUEST_ARMING = 1, do_arm]
+// (cflib crazyflie/platformservice.py).
+namespace arming {
+constexpr uint8_t kSupervisorProtocolVersion = 12;  ///< cflib Supervisor._is_legacy_firmware: version < 12
+constexpr uint8_t kSupervisorChanCommand = 1;
+constexpr uint8_t kCmdArmSystem = 0x01;
+constexpr uint8_t kPlatformRequestArming = 1;
+/// The arming request cflib sends to a firmware of `protocol_version`.
+CrtpPacket request(bool arm, uint8_t protocol_version);
+/// Firmware side: is `pk` an arming request (either generation)? Sets `arm`.
+bool decode_request(const CrtpPacket& pk, bool& arm);
+}  // namespace arming
+
 }  // namespace crazyflie_bridge
