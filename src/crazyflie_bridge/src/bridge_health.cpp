@@ -107,7 +107,7 @@ std::vector<BridgeHealth::Check> BridgeHealth::evaluate(const Params& p, const C
     Check c{"link", Level::kOk, "", {}};
     if (!std::isfinite(s.link_quality)) {
       c.level = Level::kStale;
-      c.message = "link quality not known yet";
+      c.message = "no ACK statistics (UDP and USB links have no ACKs)";
     } else if (s.link_quality < p.link_quality_error) {
       c.level = Level::kError;
       c.message = "link quality " + fmt("%.2f", s.link_quality) + " < link_quality_error " + fmt("%.2f", p.link_quality_error);
@@ -118,7 +118,7 @@ std::vector<BridgeHealth::Check> BridgeHealth::evaluate(const Params& p, const C
       c.message = "link quality " + fmt("%.2f", s.link_quality);
     }
     c.values = {{"link_quality", fmt("%.3f", s.link_quality)},
-                {"rssi_dbm", std::to_string(s.rssi_dbm)},
+                {"rssi", std::to_string(s.rssi_dbm)},
                 {"packets_lost", std::to_string(s.packets_lost)}};
     out.push_back(std::move(c));
   }
@@ -190,7 +190,7 @@ tactile_msgs::msg::BridgeStatus BridgeHealth::to_msg(const CrazyflieBridgeLogic:
   m.battery_voltage = static_cast<float>(s.battery_v);
   m.pm_state = static_cast<int8_t>(s.pm_state);
   m.supervisor_info = static_cast<int32_t>(s.supervisor_info);
-  m.rssi_dbm = static_cast<int16_t>(s.rssi_dbm);
+  m.rssi = static_cast<int16_t>(s.rssi_dbm);
   m.link_quality = static_cast<float>(s.link_quality);
   m.packets_lost = s.packets_lost;
   m.log_blocks_missed = s.log_blocks_missed;

@@ -24,7 +24,7 @@ CrazyflieBridgeLogic::Status healthy() {
   s.battery_v = 3.9;
   s.pm_state = 0;
   s.supervisor_info = 2 | 8 | 16;
-  s.rssi_dbm = -45;
+  s.rssi_dbm = 45;  // radio.rssi: -dBm as a positive number
   s.link_quality = 1.0;
   s.packets_lost = 0;
   s.log_blocks_missed = 0;
@@ -57,7 +57,7 @@ TEST(BridgeHealth, HealthyFlightIsOkEverywhere) {
   EXPECT_EQ(checks[3].name, "flight");
   for (const auto& c : checks) EXPECT_EQ(c.level, Level::kOk) << c.name << ": " << c.message;
   EXPECT_EQ(value(check(checks, "flight"), "mode"), "forward");
-  EXPECT_EQ(value(check(checks, "link"), "rssi_dbm"), "-45");
+  EXPECT_EQ(value(check(checks, "link"), "rssi"), "45");
   EXPECT_EQ(value(check(checks, "battery"), "battery_voltage"), "3.900");
 }
 
@@ -143,7 +143,7 @@ TEST(BridgeHealth, StatusMessageCarriesEveryField) {
   EXPECT_FLOAT_EQ(m.battery_voltage, 3.9f);
   EXPECT_EQ(m.pm_state, -1);
   EXPECT_EQ(m.supervisor_info, -1);
-  EXPECT_EQ(m.rssi_dbm, -45);
+  EXPECT_EQ(m.rssi, 45);
   EXPECT_FLOAT_EQ(m.link_quality, 1.0f);
   EXPECT_EQ(m.packets_lost, 3u);
   EXPECT_EQ(m.log_blocks_missed, 4u);

@@ -127,14 +127,15 @@ public:
 private:
   int64_t now_ns() const {return get_clock()->now().nanoseconds();}
 
-  /// Logs a command's outcome; the crazyflie_interfaces responses cannot carry it.
+  /// Logs a command's outcome (the logic's reason names the command); the
+  /// crazyflie_interfaces responses cannot carry it.
   void report(const char * what, const CrazyflieBridgeLogic::CommandResult & r, const std::string & detail = "")
   {
     if (r.accepted) {
-      RCLCPP_INFO(get_logger(), "%s accepted%s%s; mode %s", what, detail.empty() ? "" : ": ", detail.c_str(),
-                  to_string(runner_.mode()));
+      RCLCPP_INFO(get_logger(), "%s%s%s accepted: %s; mode %s", what, detail.empty() ? "" : " ", detail.c_str(),
+                  r.reason.c_str(), to_string(runner_.mode()));
     } else {
-      RCLCPP_WARN(get_logger(), "%s refused: %s", what, r.reason.c_str());
+      RCLCPP_WARN(get_logger(), "%s", r.reason.c_str());
     }
   }
 
@@ -173,13 +174,13 @@ private:
       "emergency", [this](const Stop::Request::SharedPtr, Stop::Response::SharedPtr) {
         // No shutdown check: an emergency stop is always taken.
         std::lock_guard<std::mutex> lock(io_mutex_);
-        const int64_t t = now_ns();
-        const auto r = runner_.emergency_stop(t);
+        // BridgeRunner sends the first stop packet before it returns.
+        const auto r = runner_.emergency_stop(now_ns());
         if (r.accepted) {
-          runner_.on_timer(t);  // the stop packet now, not at the next tick
-          RCLCPP_ERROR(get_logger(), "EMERGENCY STOP: motors off, latched until arm (arm: true) on the ground");
+          RCLCPP_ERROR(get_logger(), "EMERGENCY STOP: motors off, latched until arm (arm: true) on the ground: %s",
+                       r.reason.c_str());
         } else {
-          RCLCPP_ERROR(get_logger(), "emergency stop refused: %s", r.reason.c_str());
+          RCLCPP_ERROR(get_logger(), "%s", r.reason.c_str());
         }
       });
     arm_srv_ = create_service<Arm>(
@@ -232,7 +233,7 @@ private:
     const auto t0 = std::chrono::steady_clock::now();
     bool landed = false;
     try {
-      landed = runner_.land_and_stop(timeout, [this]() {return now_ns();});
+      landed = runner_.land_and_stop(timeout, [this]() {return now_ns();}, sinks_);
     } catch (const std::exception & e) {
       RCLCPP_ERROR(get_logger(), "shutdown landing failed: %s", e.what());
     }
