@@ -14,7 +14,8 @@
 #   2. /opt/ros/<distro>/setup.bash where exactly one distro is installed;
 #   3. the ROS 2 Kilted toolchain built from PyPI wheels and source tarballs by
 #      ../shared/ros2/build_ros2.sh beside the workspace (cached in
-#      ~/.cache/ros2-kilted after its first ~3 min build).
+#      ~/.cache/ros2-kilted after its first ~3 min build), with its extras overlay
+#      (build_ros2_extras.sh) where that was built.
 # Without any of them it says so and exits 2.
 #
 # DDS traffic stays on this host (ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST), and each test
@@ -45,6 +46,14 @@ else
     bash "$here/../shared/ros2/build_ros2.sh" "$toolchain"
     # shellcheck disable=SC1091
     source "$toolchain/env.sh"
+    # Its extras overlay (../shared/ros2/build_ros2_extras.sh: diagnostic_updater, lifecycle,
+    # the ros2 service/topic/param verbs) where it was built: crazyflie_bridge then publishes
+    # /diagnostics, and its test runs.
+    if [[ -f "$toolchain/extras/env.sh" && -f "$toolchain/extras/.complete" ]]; then
+      echo "ros2_test: with the extras overlay in $toolchain/extras"
+      # shellcheck disable=SC1091
+      source "$toolchain/extras/env.sh"
+    fi
   else
     echo "ros2_test: no ROS 2 found: source a ROS 2 setup.bash (Humble, Jazzy or Kilted) first" >&2
     exit 2
