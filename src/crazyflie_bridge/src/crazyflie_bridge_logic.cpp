@@ -448,13 +448,13 @@ std::optional<CrtpPacket> CrazyflieBridgeLogic::on_timer(int64_t now_ns) {
       }
       break;
     case Mode::kTakingOff:
-      if (progress(ramp_.start_ns, ramp_.duration_s, now_ns) >= 1.0) {
+      if (ramp_done_) {  // the ramp's last setpoint was sent on the previous tick
         command_.height = ramp_.z1;
         transition(Mode::kHovering, "takeoff_done", "reached " + fmt(ramp_.z1) + " m", now_ns);
       }
       break;
     case Mode::kGoTo:
-      if (progress(ramp_.start_ns, ramp_.duration_s, now_ns) >= 1.0) {
+      if (ramp_done_) {
         command_.height = ramp_.z1;
         transition(Mode::kHovering, "goto_done", "reached (" + fmt(ramp_.x1) + ", " + fmt(ramp_.y1) + ", " + fmt(ramp_.z1) + ")",
                    now_ns);
@@ -503,6 +503,7 @@ std::optional<CrtpPacket> CrazyflieBridgeLogic::on_timer(int64_t now_ns) {
       command_.vx = command_.vy = command_.yaw_rate = 0.0;
       command_.land = false;
       command_.height = ramp_.z0 + (ramp_.z1 - ramp_.z0) * f;
+      ramp_done_ = f >= 1.0;
       pk = hover_packet(0.0, 0.0, 0.0, command_.height);
       break;
     }
@@ -518,6 +519,7 @@ std::optional<CrtpPacket> CrazyflieBridgeLogic::on_timer(int64_t now_ns) {
       const double yaw = ramp_.yaw0 + (ramp_.yaw1 - ramp_.yaw0) * f;
       command_.vx = command_.vy = command_.yaw_rate = 0.0;
       command_.height = z;
+      ramp_done_ = f >= 1.0;
       pk = commander::position(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z),
                                static_cast<float>(yaw * kRadToDeg));
       break;
@@ -627,6 +629,7 @@ CrazyflieBridgeLogic::CommandResult CrazyflieBridgeLogic::takeoff(double height_
   ramp_.z1 = height_m;
   ramp_.start_ns = now_ns;
   ramp_.duration_s = duration_s;
+  ramp_done_ = false;
   command_ = tactile_msgs::msg::HoverSetpoint{};
   command_.height = z0;
   const std::string r = "takeoff to " + fmt(height_m) + " m in " + fmt(duration_s) + " s";
@@ -688,6 +691,7 @@ CrazyflieBridgeLogic::CommandResult CrazyflieBridgeLogic::go_to(double x, double
   r.start_ns = now_ns;
   r.duration_s = duration_s;
   ramp_ = r;
+  ramp_done_ = false;
   const std::string why = "go_to (" + fmt(r.x1) + ", " + fmt(r.y1) + ", " + fmt(r.z1) + ") yaw " + fmt(r.yaw1) + " rad in " +
                           fmt(duration_s) + " s";
   transition(Mode::kGoTo, "go_to", why, now_ns);

@@ -16,7 +16,7 @@ uint32_t toc_crc(const std::vector<toc::Item>& items) {
 }  // namespace
 
 FirmwareEmulator::FirmwareEmulator() : FirmwareEmulator(Options{}) {}
-FirmwareEmulator::FirmwareEmulator(const Options& options) : opt_(options) {}
+FirmwareEmulator::FirmwareEmulator(const Options& options) : opt_(options), armed_(options.auto_arm) {}
 
 uint16_t FirmwareEmulator::add_log_variable(const std::string& group, const std::string& name, logp::Type type) {
   if (group.size() + name.size() + 2 > kCrtpMaxPayload - 4) throw std::invalid_argument("log variable name too long: " + group + "." + name);
@@ -80,6 +80,7 @@ void FirmwareEmulator::on_packet(const CrtpPacket& pk, uint32_t now_ms, std::vec
       reply(out, CrtpPacket::null_packet());  // keep-alive / cflib UDP scan probe
       return;
     }
+    if (on_arming(pk, out)) return;
     switch (pk.port) {
       case port::kLinkCtrl:
         if (pk.channel == platform::kLinkChanEcho) {
@@ -147,6 +148,37 @@ void FirmwareEmulator::on_packet(const CrtpPacket& pk, uint32_t now_ms, std::vec
   } catch (const CrtpError&) {
     ++stats_.malformed;
   }
+}
+
+bool FirmwareEmulator::on_arming(const CrtpPacket& pk, std::vector<CrtpPacket>& out) {
+  bool arm = false;
+  if (!arming::decode_request(pk, arm)) return false;
+  if (pk.port == port::kSupervisor && opt_.protocol_version < arming::kSupervisorProtocolVersion) {
+    ++stats_.unknown;  // no supervisor port before protocol 12
+    return true;
+  }
+  ++stats_.arming_requests;
+  armed_ = arm;
+  if (pk.port == port::kSupervisor) {
+    // Answer [cmd | 0x80, success, is_armed] (cflib Supervisor._supervisor_callback).
+    reply(out, CrtpPacket(port::kSupervisor, arming::kSupervisorChanCommand,
+                          {static_cast<uint8_t>(arming::kCmdArmSystem | 0x80), 1, static_cast<uint8_t>(armed_ ? 1 : 0)}));
+  }
+  return true;
+}
+
+bool FirmwareEmulator::motors_on(uint32_t now_ms) const {
+  const auto c = commander(now_ms);
+  return (c.mode == CommanderOutput::Mode::kSetpoint && c.setpoint.kind != commander::Setpoint::Kind::kStop) ||
+         c.mode == CommanderOutput::Mode::kStabilize;
+}
+
+uint16_t FirmwareEmulator::supervisor_info(uint32_t now_ms) const {
+  uint16_t v = 1u << 0;  // can be armed: the emulator has no pre-flight checks that fail
+  if (armed_) v |= 1u << 1 | 1u << 3;  // is armed, can fly
+  if (opt_.auto_arm) v |= 1u << 2;
+  if (motors_on(now_ms)) v |= 1u << 4;  // is flying
+  return v;
 }
 
 void FirmwareEmulator::on_toc(const CrtpPacket& pk, bool log, std::vector<CrtpPacket>& out) {
@@ -303,6 +335,10 @@ void FirmwareEmulator::tick(uint32_t now_ms, std::vector<CrtpPacket>& out) {
 FirmwareEmulator::CommanderOutput FirmwareEmulator::commander(uint32_t now_ms) const {
   CommanderOutput c;
   if (!setpoint_) return c;
+  if (!armed_) {
+    c.mode = CommanderOutput::Mode::kShutdown;  // the supervisor keeps the motors off
+    return c;
+  }
   const uint32_t ref = std::max(setpoint_ms_, setpoint_valid_until_ms_);
   const uint32_t age = now_ms >= ref ? now_ms - ref : 0;
   if (setpoint_->kind == commander::Setpoint::Kind::kStop) {

@@ -21,8 +21,25 @@ void rotate(const geometry_msgs::msg::Quaternion& q, double bx, double by, doubl
 }
 }  // namespace
 
-SimulatedCrazyflieFirmware::SimulatedCrazyflieFirmware(double loss_rate) {
+SimulatedCrazyflieFirmware::SimulatedCrazyflieFirmware(double loss_rate)
+    : SimulatedCrazyflieFirmware([loss_rate] {
+        Options o;
+        o.loss_rate = loss_rate;
+        return o;
+      }()) {}
+
+namespace {
+FirmwareEmulator::Options emulator_options(const SimulatedCrazyflieFirmware::Options& o) {
+  FirmwareEmulator::Options e;
+  e.auto_arm = !o.require_arming;
+  return e;
+}
+}  // namespace
+
+SimulatedCrazyflieFirmware::SimulatedCrazyflieFirmware(const Options& options)
+    : fw_(emulator_options(options)), opt_(options) {
   using logp::Type;
+  const double loss_rate = options.loss_rate;
   id_left_ = fw_.add_log_variable("Whisker", "Barometer1_1", Type::kFloat);
   fw_.add_log_variable("Whisker", "Barometer1_2", Type::kFloat);
   fw_.add_log_variable("Whisker", "Barometer1_3", Type::kFloat);
@@ -31,15 +48,28 @@ SimulatedCrazyflieFirmware::SimulatedCrazyflieFirmware(double loss_rate) {
   fw_.add_log_variable("Whisker1", "Barometer2_3", Type::kFloat);
   id_state_ = fw_.add_log_variable("stateEstimate", "x", Type::kFloat);
   for (const char* n : {"y", "z", "yaw", "vx", "vy", "vz"}) fw_.add_log_variable("stateEstimate", n, Type::kFloat);
-  const uint16_t vbat = fw_.add_log_variable("pm", "vbat", Type::kFloat);
-  fw_.set_log_value(vbat, 4.0);
+  id_vbat_ = fw_.add_log_variable("pm", "vbat", Type::kFloat);
+  fw_.set_log_value(id_vbat_, opt_.vbat_full);
   id_truth_ = fw_.add_log_variable("sitl", "truthX", Type::kFloat);
   fw_.add_log_variable("sitl", "truthY", Type::kFloat);
   fw_.add_log_variable("sitl", "truthZ", Type::kFloat);
+  if (opt_.status_log) {
+    // Types as the firmware logs them (pm.state int8, supervisor.info uint16,
+    // radio.rssi uint8).
+    id_pm_state_ = fw_.add_log_variable("pm", "state", Type::kInt8);
+    id_supervisor_ = fw_.add_log_variable("supervisor", "info", Type::kUint16);
+    id_rssi_ = fw_.add_log_variable("radio", "rssi", Type::kUint8);
+    fw_.set_log_value(static_cast<uint16_t>(id_rssi_), opt_.rssi_dbm);
+    fw_.set_log_value(static_cast<uint16_t>(id_supervisor_), fw_.supervisor_info(0));
+  }
   fw_.add_param("deck", "bcWhisker", param::kUint8, 1, true);
   fw_.add_param("commander", "enHighLevel", param::kUint8, 0, false);
   p_stop_ = fw_.add_param("stabilizer", "stop", param::kUint8, 0, false);
   p_loss_ = fw_.add_param("sitl", "lossPct", param::kUint8, std::round(loss_rate * 100.0), false);
+}
+
+double SimulatedCrazyflieFirmware::battery_voltage() const {
+  return std::isfinite(vbat_override_) ? vbat_override_ : opt_.vbat_full - opt_.vbat_drain_v_per_s * motors_on_s_;
 }
 
 double SimulatedCrazyflieFirmware::loss_rate() const { return std::clamp(fw_.param_value(p_loss_) / 100.0, 0.0, 0.99); }
@@ -68,8 +98,18 @@ SimulatedCrazyflieFirmware::Command SimulatedCrazyflieFirmware::command(int64_t 
   using Mode = FirmwareEmulator::CommanderOutput::Mode;
   using Kind = commander::Setpoint::Kind;
   Command out;
-  auto c = fw_.commander(static_cast<uint32_t>(now_ns / 1000000));
+  const auto now_ms = static_cast<uint32_t>(now_ns / 1000000);
+  auto c = fw_.commander(now_ms);
   if (fw_.param_value(p_stop_) != 0) c.mode = Mode::kShutdown;
+  // Status log: battery model, power state, supervisor.
+  if (fw_.motors_on(now_ms) && fw_.param_value(p_stop_) == 0) motors_on_s_ += dt;
+  const double vbat = battery_voltage();
+  fw_.set_log_value(id_vbat_, vbat);
+  if (id_pm_state_ >= 0) {
+    // pm.state: 0 battery, 3 low power below PM_BAT_LOW_VOLTAGE 3.2 V (pm_stm32f4.c).
+    fw_.set_log_value(static_cast<uint16_t>(id_pm_state_), vbat < 3.2 ? 3 : 0);
+    fw_.set_log_value(static_cast<uint16_t>(id_supervisor_), fw_.supervisor_info(now_ms));
+  }
   tactile_msgs::msg::HoverSetpoint hs;
   tactile_common::to_stamp(now_ns, hs.header.stamp);
   switch (c.mode) {

@@ -13,7 +13,12 @@ using Clock = std::chrono::steady_clock;
 SitlEndpoint::SitlEndpoint(const tactile_sim::Scenario& scenario, uint64_t seed, const SitlEndpointOptions& options)
     : opt_(options),
       sim_(std::make_unique<tactile_sim::SimLogic>(scenario, seed)),
-      fw_(options.loss_rate),
+      fw_([&options] {
+        SimulatedCrazyflieFirmware::Options f;
+        f.loss_rate = options.loss_rate;
+        f.require_arming = options.require_arming;
+        return f;
+      }()),
       server_(options.port, options.bind_address),
       rng_(options.fault_seed) {
   if (!(opt_.speed > 0.0) || !std::isfinite(opt_.speed)) throw std::invalid_argument("SitlEndpointOptions.speed: must be > 0");
@@ -73,7 +78,11 @@ void SitlEndpoint::step_physics() {
 }
 
 void SitlEndpoint::apply_commander() {
+  if (vbat_pending_.exchange(false)) fw_.set_battery_voltage(vbat_request_.load());
   const auto c = fw_.command(now_ns_, tactile_common::to_seconds(sim_->period_ns()));
+  const bool on = fw_.emulator().motors_on(static_cast<uint32_t>(now_ns_ / 1000000));
+  motors_on_ = on;
+  if (on && first_motors_on_ns_ < 0) first_motors_on_ns_ = now_ns_;
   if (c.hover) sim_->on_hover_setpoint(*c.hover);
   if (c.position) sim_->on_position_setpoint(*c.position);
 }

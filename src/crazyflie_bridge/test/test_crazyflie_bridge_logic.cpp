@@ -2,6 +2,7 @@
 // stale -> hover -> land -> stop chain, parameters.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "crazyflie_bridge/crazyflie_bridge_logic.hpp"
@@ -36,8 +37,15 @@ commander::Setpoint decode(const std::optional<CrtpPacket>& pk) {
   return commander::decode(*pk);
 }
 
+CrazyflieBridgeLogic::Params autostart_params() {
+  CrazyflieBridgeLogic::Params p;
+  p.autostart = true;  // the forwarding chain without an operator (lockstep SITL)
+  return p;
+}
+
+/// The old forwarding chain: autostart (forward from the first fresh setpoint).
 struct Rig {
-  CrazyflieBridgeLogic logic{CrazyflieBridgeLogic::Params{}};
+  CrazyflieBridgeLogic logic{autostart_params()};
   int64_t t = 0;
   Rig() { logic.set_block_ids(1, 2); }
   /// 20 ms tick: state sample at height z, optional setpoint, timer.
@@ -208,7 +216,7 @@ TEST(BridgeLogic, ParametersDefaultsAndValidation) {
 TEST(BridgeLogic, IntegerParametersAreCheckedBeforeTheyAreNarrowed) {
   const auto wrapped = tactile_common::wrapped_integers(CrazyflieBridgeLogic::default_parameters(),
                                                         [](const tactile_common::ParamMap& m) { CrazyflieBridgeLogic::params_from(m); });
-  EXPECT_EQ(wrapped.size(), 2u);  // whisker_period_ms, state_period_ms
+  EXPECT_EQ(wrapped.size(), 3u);  // whisker_period_ms, state_period_ms, status_period_ms
   for (const auto& [key, w] : wrapped) EXPECT_TRUE(w.rejected_as_given()) << key << ": " << w.error;
   auto m = CrazyflieBridgeLogic::default_parameters();
   m.set("state_period_ms", int64_t{65536 + 10});
@@ -226,4 +234,464 @@ TEST(BridgeLogic, RepositoryConfigEqualsDefaults) {
                                                            CrazyflieBridgeLogic::kNodeName,
                                                            CrazyflieBridgeLogic::default_parameters());
   EXPECT_EQ(loaded.values(), CrazyflieBridgeLogic::default_parameters().values());
+}
+
+// ---------------------------------------------------------------------------
+// Operator surface: the logic is put into each mode and every guard tested.
+
+namespace {
+
+/// Default parameters (autostart off); a vehicle whose measured height
+/// follows the commanded one (motors off: on the floor); status block 3.
+struct Op {
+  CrazyflieBridgeLogic logic;
+  int64_t t = 0;
+  double z = 0.0;
+  double x = 0.0;
+  bool follow = true;
+  std::vector<commander::Setpoint> sent;
+  explicit Op(CrazyflieBridgeLogic::Params p = {}) : logic(p) {
+    logic.set_block_ids(1, 2);
+    logic.set_status_block(3, {"pm.vbat", "pm.state", "supervisor.info"});
+  }
+  std::optional<CrtpPacket> tick(bool setpoint = false, tactile_msgs::msg::HoverSetpoint sp = hover(0.2, 0, 0, 0.4),
+                                 bool log = true) {
+    t += 20 * kMs;
+    if (log) logic.on_log_sample(sample(2, {x, 0, z, 0, 0, 0}), t);
+    if (setpoint) logic.on_hover_setpoint(sp, t);
+    auto pk = logic.on_timer(t);
+    if (pk) {
+      const auto s = commander::decode(*pk);
+      sent.push_back(s);
+      if (follow) {
+        if (s.kind == commander::Setpoint::Kind::kHover) z = s.d;
+        if (s.kind == commander::Setpoint::Kind::kPosition) {
+          x = s.a;
+          z = s.c;
+        }
+        if (s.kind == commander::Setpoint::Kind::kStop) z = 0.0;
+      }
+    }
+    return pk;
+  }
+  void status(double vbat, int supervisor) { logic.on_log_sample(sample(3, {vbat, 0, static_cast<double>(supervisor)}), t); }
+  template <class Pred>
+  int tick_until(Pred done, bool setpoint = false, int max = 1000) {
+    int n = 0;
+    while (!done()) {
+      tick(setpoint);
+      if (++n > max) {
+        ADD_FAILURE() << "still in " << to_string(logic.mode());
+        break;
+      }
+    }
+    return n;
+  }
+  /// Drives the logic into `m` the way an operator would.
+  void to(Mode m) {
+    for (int i = 0; i < 5; ++i) tick();
+    if (m == Mode::kGrounded) return;
+    if (m == Mode::kEmergency) {
+      ASSERT_TRUE(logic.emergency_stop(t).accepted);
+      return;
+    }
+    ASSERT_TRUE(logic.takeoff(0.4, 1.0, t).accepted);
+    tick();
+    if (m == Mode::kTakingOff) return;
+    tick_until([&] { return logic.mode() == Mode::kHovering; });
+    if (m == Mode::kHovering) return;
+    if (m == Mode::kGoTo) {
+      ASSERT_TRUE(logic.go_to(0.3, 0.0, 0.5, 0.0, 2.0, false, t).accepted);
+      tick();
+      return;
+    }
+    if (m == Mode::kLanding || m == Mode::kStopped) {
+      ASSERT_TRUE(logic.land(0.0, 2.0, t).accepted);
+      tick();
+      if (m == Mode::kStopped) tick_until([&] { return logic.mode() == Mode::kStopped; });
+      return;
+    }
+    tick(true);
+    ASSERT_TRUE(logic.start_behaviour(t).accepted);
+    tick(true);
+    if (m == Mode::kForward) return;
+    tick_until([&] { return logic.mode() == Mode::kHoverHold; });  // setpoints stop
+  }
+};
+
+const std::vector<Mode> kAllModes{Mode::kGrounded, Mode::kTakingOff, Mode::kHovering, Mode::kGoTo, Mode::kForward,
+                                  Mode::kHoverHold, Mode::kLanding, Mode::kStopped, Mode::kEmergency};
+const std::vector<Mode> kAirborne{Mode::kTakingOff, Mode::kHovering, Mode::kGoTo, Mode::kForward, Mode::kHoverHold};
+
+}  // namespace
+
+TEST(BridgeOperator, EachModeReachable) {
+  for (Mode m : kAllModes) {
+    Op op;
+    op.to(m);
+    EXPECT_EQ(op.logic.mode(), m) << to_string(m);
+  }
+}
+
+// Autostart off: fresh setpoints and log data do not start a flight; nothing
+// is sent (not even a stop) until take-off.
+TEST(BridgeOperator, GroundedSendsNothingUntilTakeoff) {
+  Op op;
+  for (int i = 0; i < 200; ++i) EXPECT_FALSE(op.tick(true)) << i;
+  EXPECT_EQ(op.logic.mode(), Mode::kGrounded);
+  EXPECT_EQ(op.logic.stats().packets_out, 0u);
+  EXPECT_TRUE(op.logic.take_outbox().empty());
+  EXPECT_EQ(op.logic.stats().transitions_total, 0u);
+}
+
+TEST(BridgeOperator, TakeoffRampsFromMeasuredHeightThenHovers) {
+  Op op;
+  op.z = 0.02;
+  for (int i = 0; i < 3; ++i) op.tick();
+  const auto r = op.logic.takeoff(0.5, 1.0, op.t);
+  ASSERT_TRUE(r.accepted) << r.reason;
+  EXPECT_EQ(op.logic.mode(), Mode::kTakingOff);
+  double last = 0.0;
+  int n = op.tick_until([&] { return op.logic.mode() == Mode::kHovering; });
+  EXPECT_NEAR(n * 0.02, 1.02, 0.03);  // the ramp's last setpoint, then hovering
+  for (const auto& s : op.sent) {
+    EXPECT_EQ(s.kind, commander::Setpoint::Kind::kHover);
+    EXPECT_EQ(s.a, 0.f);
+    EXPECT_EQ(s.b, 0.f);
+    EXPECT_EQ(s.c, 0.f);
+    EXPECT_GE(s.d, last - 1e-6);
+    last = s.d;
+  }
+  EXPECT_NEAR(op.sent.front().d, 0.02 + 0.48 * 0.02, 1e-3);  // first tick: 20 ms into the ramp from 0.02 m
+  EXPECT_FLOAT_EQ(op.sent.back().d, 0.5f);
+  const auto s = decode(op.tick(true));  // hovering: the behaviour's setpoints are not forwarded
+  EXPECT_EQ(s.a, 0.f);
+  EXPECT_FLOAT_EQ(s.d, 0.5f);
+  EXPECT_EQ(op.logic.stats().transitions.at("grounded->taking_off:takeoff"), 1u);
+  EXPECT_EQ(op.logic.stats().transitions.at("taking_off->hovering:takeoff_done"), 1u);
+}
+
+TEST(BridgeOperator, TakeoffGuards) {
+  {
+    Op op;  // no state estimate yet
+    const auto r = op.logic.takeoff(0.4, 2.0, 0);
+    EXPECT_FALSE(r.accepted);
+    EXPECT_NE(r.reason.find("no fresh state estimate"), std::string::npos) << r.reason;
+  }
+  Op op;
+  op.to(Mode::kGrounded);
+  auto refused = [&](double h, double d, const char* why) {
+    const auto r = op.logic.takeoff(h, d, op.t);
+    EXPECT_FALSE(r.accepted) << why;
+    EXPECT_NE(r.reason.find(why), std::string::npos) << r.reason;
+  };
+  refused(2.0, 3.0, "outside");           // > max_height
+  refused(0.03, 1.0, "outside");          // <= land_height
+  refused(NAN, 1.0, "outside");
+  refused(0.4, 0.0, "duration");
+  refused(1.2, 0.5, "max_vertical_speed");  // 2.4 m/s
+  op.status(3.1, 0x0F);
+  refused(0.4, 2.0, "battery 3.10 V");
+  op.status(3.9, 0x01);                   // can be armed, not armed (brushless, no arming request)
+  refused(0.4, 2.0, "not armed");
+  op.status(3.9, 0x0B | 0x20);            // armed but tumbled
+  refused(0.4, 2.0, "tumbled");
+  op.status(3.9, 0x0B);                   // armed, can fly
+  EXPECT_TRUE(op.logic.takeoff(0.4, 2.0, op.t).accepted);
+  const auto again = op.logic.takeoff(0.4, 2.0, op.t);
+  EXPECT_FALSE(again.accepted);
+  EXPECT_EQ(again.reason, "takeoff refused: mode is taking_off");
+  EXPECT_EQ(op.logic.stats().commands_refused, 9u);
+  EXPECT_EQ(op.logic.stats().commands_accepted, 1u);
+}
+
+TEST(BridgeOperator, HandOverForwardsThenHandBackHovers) {
+  Op op;
+  op.to(Mode::kHovering);
+  auto r = op.logic.start_behaviour(op.t);  // no setpoint yet
+  EXPECT_FALSE(r.accepted);
+  EXPECT_NE(r.reason.find("no fresh /cmd_hover setpoint"), std::string::npos) << r.reason;
+  op.tick(true, hover(0.3, 0.1, 0.2, 0.6));
+  ASSERT_TRUE(op.logic.start_behaviour(op.t).accepted);
+  auto s = decode(op.tick(true, hover(0.9, 0.1, 0.2, 0.6)));  // forwarded, clamped
+  EXPECT_EQ(op.logic.mode(), Mode::kForward);
+  EXPECT_FLOAT_EQ(s.a, 0.5f);
+  EXPECT_FLOAT_EQ(s.d, 0.6f);
+  // Hand-back: the last setpoint stays valid 100 ms (zero velocity), new ones are not forwarded.
+  r = op.logic.notify_setpoints_stop(100, op.t);
+  ASSERT_TRUE(r.accepted) << r.reason;
+  EXPECT_FALSE(op.logic.notify_setpoints_stop(100, op.t).accepted);  // already pending
+  for (int i = 0; i < 4; ++i) {
+    s = decode(op.tick(true, hover(0.2, 0, 0, 1.0)));
+    EXPECT_EQ(op.logic.mode(), Mode::kForward);
+    EXPECT_EQ(s.a, 0.f);
+    EXPECT_FLOAT_EQ(s.d, 0.6f);
+  }
+  s = decode(op.tick(true, hover(0.2, 0, 0, 1.0)));
+  EXPECT_EQ(op.logic.mode(), Mode::kHovering);
+  EXPECT_FLOAT_EQ(s.d, 0.6f);  // holds the height it was handed back at
+  EXPECT_EQ(s.a, 0.f);
+  EXPECT_EQ(op.logic.stats().transitions.at("forward->hovering:notify_setpoints_stop"), 1u);
+}
+
+TEST(BridgeOperator, StartBehaviourOnlyFromHovering) {
+  for (Mode m : kAllModes) {
+    if (m == Mode::kHovering) continue;
+    Op op;
+    op.to(m);
+    op.tick(true);
+    if (op.logic.mode() != m) continue;  // a mode that ends by itself after one tick
+    const auto r = op.logic.start_behaviour(op.t);
+    EXPECT_FALSE(r.accepted) << to_string(m);
+    EXPECT_NE(r.reason.find(std::string("mode is ") + to_string(m)), std::string::npos) << r.reason;
+  }
+}
+
+TEST(BridgeOperator, NotifySetpointsStopOnlyWhileForwarding) {
+  Op op;
+  op.to(Mode::kHovering);
+  EXPECT_FALSE(op.logic.notify_setpoints_stop(0, op.t).accepted);
+  Op hold;
+  hold.to(Mode::kHoverHold);
+  EXPECT_TRUE(hold.logic.notify_setpoints_stop(0, hold.t).accepted);
+  EXPECT_EQ(hold.logic.mode(), Mode::kHovering);
+}
+
+TEST(BridgeOperator, GoToSendsInterpolatedPositionSetpoints) {
+  Op op;
+  op.to(Mode::kHovering);
+  EXPECT_FALSE(op.logic.go_to(2.0, 0, 0.4, 0, 1.0, false, op.t).accepted);  // 2 m/s > max_velocity
+  EXPECT_FALSE(op.logic.go_to(0.5, 0, 1.6, 0, 5.0, false, op.t).accepted);  // above max_height
+  ASSERT_TRUE(op.logic.go_to(0.5, 0.0, 0.6, 0.2, 2.0, false, op.t).accepted);
+  EXPECT_EQ(op.logic.mode(), Mode::kGoTo);
+  for (int i = 0; i < 50; ++i) op.tick();
+  auto s = op.sent.back();
+  EXPECT_EQ(s.kind, commander::Setpoint::Kind::kPosition);
+  EXPECT_NEAR(s.a, 0.25, 0.01);  // halfway
+  EXPECT_NEAR(s.c, 0.5, 0.01);
+  EXPECT_NEAR(s.d, 0.1 * 180 / M_PI, 0.1);
+  op.tick_until([&] { return op.logic.mode() == Mode::kHovering; });
+  s = op.sent.back();
+  EXPECT_NEAR(op.x, 0.5, 1e-6);
+  // Relative: 0.1 m further from where it is.
+  ASSERT_TRUE(op.logic.go_to(0.1, 0.0, 0.0, 0.0, 1.0, true, op.t).accepted);
+  op.tick_until([&] { return op.logic.mode() == Mode::kHovering; });
+  EXPECT_NEAR(op.x, 0.6, 1e-5);
+  EXPECT_EQ(op.logic.stats().transitions.at("go_to->hovering:goto_done"), 2u);
+  Op ground;
+  ground.to(Mode::kGrounded);
+  EXPECT_FALSE(ground.logic.go_to(0.1, 0, 0.4, 0, 2.0, false, ground.t).accepted);
+}
+
+// land() from every airborne mode: descends, stops the motors, then sends nothing.
+TEST(BridgeOperator, LandFromEveryAirborneMode) {
+  for (Mode m : kAirborne) {
+    Op op;
+    op.to(m);
+    ASSERT_EQ(op.logic.mode(), m);
+    const auto r = op.logic.land(0.0, 1.0, op.t);
+    ASSERT_TRUE(r.accepted) << to_string(m) << ": " << r.reason;
+    EXPECT_EQ(op.logic.mode(), Mode::kLanding);
+    EXPECT_FALSE(op.logic.land(0.0, 1.0, op.t).accepted);  // already landing
+    op.sent.clear();
+    const int n = op.tick_until([&] { return op.logic.mode() == Mode::kStopped; }, true);
+    EXPECT_LT(n * 0.02, 1.5) << to_string(m);
+    ASSERT_FALSE(op.sent.empty());
+    EXPECT_EQ(op.sent.back().kind, commander::Setpoint::Kind::kStop);
+    for (size_t i = 0; i + 1 < op.sent.size(); ++i) EXPECT_EQ(op.sent[i].kind, commander::Setpoint::Kind::kHover);
+    for (int i = 0; i < 4; ++i) EXPECT_EQ(decode(op.tick(true)).kind, commander::Setpoint::Kind::kStop);
+    EXPECT_FALSE(op.tick(true)) << to_string(m);
+    EXPECT_EQ(op.logic.stats().transitions.at(std::string(to_string(m)) + "->landing:land"), 1u);
+    // Take-off is allowed again after the landing.
+    EXPECT_TRUE(op.logic.takeoff(0.4, 2.0, op.t).accepted) << to_string(m);
+  }
+}
+
+TEST(BridgeOperator, LandRefusedOnTheGroundAndBadArguments) {
+  for (Mode m : {Mode::kGrounded, Mode::kStopped, Mode::kEmergency}) {
+    Op op;
+    op.to(m);
+    const auto r = op.logic.land(0.0, 1.0, op.t);
+    EXPECT_FALSE(r.accepted) << to_string(m);
+    EXPECT_NE(r.reason.find("not airborne"), std::string::npos) << r.reason;
+  }
+  Op op;
+  op.to(Mode::kHovering);
+  EXPECT_FALSE(op.logic.land(0.3, 1.0, op.t).accepted);  // the motors stop at land_height: not mid-air
+  EXPECT_FALSE(op.logic.land(0.0, -1.0, op.t).accepted);
+}
+
+// emergency_stop() from every mode: a stop packet at once (outbox), one
+// every tick after, latched: take-off refused, fresh setpoints ignored,
+// arm(true) refused until the vehicle is on the ground.
+TEST(BridgeOperator, EmergencyFromEveryModeLatchedUntilArmedOnTheGround) {
+  for (Mode m : kAllModes) {
+    Op op;
+    op.to(m);
+    const auto r = op.logic.emergency_stop(op.t);
+    ASSERT_TRUE(r.accepted) << to_string(m);
+    EXPECT_EQ(op.logic.mode(), Mode::kEmergency);
+    const auto out = op.logic.take_outbox();
+    ASSERT_FALSE(out.empty()) << to_string(m);
+    EXPECT_EQ(commander::decode(out.back()).kind, commander::Setpoint::Kind::kStop);
+    op.follow = false;
+    op.z = 0.4;  // still falling
+    for (int i = 0; i < 60; ++i) EXPECT_EQ(decode(op.tick(true)).kind, commander::Setpoint::Kind::kStop) << to_string(m);
+    EXPECT_FALSE(op.logic.takeoff(0.4, 2.0, op.t).accepted);
+    EXPECT_FALSE(op.logic.start_behaviour(op.t).accepted);
+    auto a = op.logic.arm(true, op.t);
+    EXPECT_FALSE(a.accepted) << to_string(m);
+    EXPECT_NE(a.reason.find("not confirmed on the ground"), std::string::npos) << a.reason;
+    EXPECT_TRUE(op.logic.status(op.t).emergency_latched);
+    op.z = 0.0;
+    op.tick();
+    a = op.logic.arm(true, op.t);
+    ASSERT_TRUE(a.accepted) << a.reason;
+    EXPECT_EQ(op.logic.mode(), Mode::kGrounded);
+    EXPECT_FALSE(op.logic.status(op.t).emergency_latched);
+    EXPECT_FALSE(op.tick(true));  // grounded: nothing sent
+    EXPECT_TRUE(op.logic.takeoff(0.4, 2.0, op.t).accepted);
+  }
+}
+
+TEST(BridgeOperator, EmergencyNotClearedWhileTheSupervisorSaysFlying) {
+  Op op;
+  op.to(Mode::kHovering);
+  op.logic.emergency_stop(op.t);
+  op.follow = false;
+  op.z = 0.0;
+  op.tick();
+  op.status(3.9, 0x1B);  // is flying
+  EXPECT_FALSE(op.logic.arm(true, op.t).accepted);
+  op.status(3.9, 0x0B);
+  EXPECT_TRUE(op.logic.arm(true, op.t).accepted);
+}
+
+TEST(BridgeOperator, LowBatteryInFlightLands) {
+  Op op;
+  op.to(Mode::kForward);
+  op.status(3.1, 0x1B);  // below 3.2 V
+  const int64_t t0 = op.t;
+  while (tactile_common::to_seconds(op.t - t0) < 1.9) {
+    op.tick(true);
+    ASSERT_EQ(op.logic.mode(), Mode::kForward);
+  }
+  op.status(3.3, 0x1B);  // a sag that recovers resets the hold
+  op.tick(true);
+  op.status(3.1, 0x1B);
+  for (int i = 0; i < 90; ++i) op.tick(true);
+  EXPECT_EQ(op.logic.mode(), Mode::kForward);  // 1.8 s since the recovery
+  op.tick_until([&] { return op.logic.mode() != Mode::kForward; }, true);
+  EXPECT_EQ(op.logic.mode(), Mode::kLanding);
+  EXPECT_EQ(op.logic.stats().low_battery_events, 1u);
+  EXPECT_EQ(op.logic.status(op.t).low_battery_events, 1u);
+  EXPECT_EQ(op.logic.history().back().guard, "low_battery");
+  EXPECT_NE(op.logic.history().back().reason.find("battery 3.10 V"), std::string::npos);
+  op.tick_until([&] { return op.logic.mode() == Mode::kStopped; }, true);
+  EXPECT_EQ(op.logic.stats().low_battery_events, 1u);  // not counted again on the ground
+}
+
+TEST(BridgeOperator, LowBatteryLandsFromEveryFlyingMode) {
+  for (Mode m : kAirborne) {
+    CrazyflieBridgeLogic::Params p;
+    p.low_battery_hold_s = 0.1;
+    Op op(p);
+    op.to(m);
+    op.status(3.0, 0x1B);
+    op.tick_until([&] { return op.logic.stats().low_battery_events > 0; }, false, 20);
+    const auto& h = op.logic.history();
+    EXPECT_TRUE(std::any_of(h.begin(), h.end(), [&](const auto& tr) { return tr.guard == "low_battery" && tr.from == m; }))
+        << to_string(m);
+  }
+}
+
+TEST(BridgeOperator, ArmingRequestFollowsTheProtocolVersion) {
+  Op op;
+  op.to(Mode::kGrounded);
+  auto r = op.logic.arm(true, op.t);
+  ASSERT_TRUE(r.accepted) << r.reason;
+  EXPECT_NE(r.reason.find("cannot be confirmed"), std::string::npos) << r.reason;  // no supervisor.info yet
+  auto out = op.logic.take_outbox();
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].port, port::kPlatform);  // protocol 0 (unknown) -> legacy platform request
+  EXPECT_EQ(out[0].channel, 0);
+  EXPECT_EQ(out[0].size, 2);
+  EXPECT_EQ(out[0].data[0], 1);
+  EXPECT_EQ(out[0].data[1], 1);
+  op.logic.set_protocol_version(12);
+  op.status(3.9, 0x0B);
+  ASSERT_TRUE(op.logic.arm(false, op.t).accepted);
+  out = op.logic.take_outbox();
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].port, port::kSupervisor);
+  EXPECT_EQ(out[0].channel, 1);
+  EXPECT_EQ(out[0].data[0], 1);
+  EXPECT_EQ(out[0].data[1], 0);
+  op.to(Mode::kHovering);
+  r = op.logic.arm(false, op.t);
+  EXPECT_FALSE(r.accepted);
+  EXPECT_NE(r.reason.find("airborne"), std::string::npos) << r.reason;
+}
+
+TEST(BridgeOperator, StatusAndTransitionHistory) {
+  Op op;
+  auto st = op.logic.status(0);
+  EXPECT_TRUE(std::isnan(st.battery_v));
+  EXPECT_EQ(st.supervisor_info, -1);
+  EXPECT_EQ(st.pm_state, -1);
+  EXPECT_TRUE(std::isnan(st.log_age_s));
+  EXPECT_TRUE(std::isnan(st.setpoint_age_s));
+  op.to(Mode::kHovering);
+  op.status(3.87, 0x1B);
+  st = op.logic.status(op.t + 100 * kMs);
+  EXPECT_EQ(st.mode, Mode::kHovering);
+  EXPECT_DOUBLE_EQ(st.battery_v, 3.87);
+  EXPECT_EQ(st.supervisor_info, 0x1B);
+  EXPECT_TRUE(st.armed);
+  EXPECT_NEAR(st.log_age_s, 0.1, 1e-9);
+  EXPECT_EQ(op.logic.stats().status_samples, 1u);
+  const auto& h = op.logic.history();
+  ASSERT_EQ(h.size(), 2u);
+  EXPECT_EQ(h[0].from, Mode::kGrounded);
+  EXPECT_EQ(h[0].to, Mode::kTakingOff);
+  EXPECT_EQ(h[0].guard, "takeoff");
+  EXPECT_EQ(h[0].reason, "takeoff to 0.40 m in 1.00 s");
+  EXPECT_EQ(h[1].guard, "takeoff_done");
+  EXPECT_EQ(op.logic.stats().transitions_total, 2u);
+}
+
+TEST(BridgeOperator, AutostartOnlyFromGroundedAndOnlyWhenSet) {
+  Rig r;  // autostart: true
+  r.tick(true, true);
+  EXPECT_EQ(r.logic.mode(), Mode::kForward);
+  EXPECT_EQ(r.logic.history().front().guard, "autostart");
+  // After the landing it does not restart by itself.
+  auto land = hover(0, 0, 0, 0);
+  land.land = true;
+  r.tick(true, true, 0.4, land);
+  for (int i = 0; i < 100; ++i) r.tick(true, true, 0.0);
+  EXPECT_EQ(r.logic.mode(), Mode::kStopped);
+}
+
+TEST(BridgeOperator, NewParametersValidated) {
+  const auto m = CrazyflieBridgeLogic::default_parameters();
+  auto expect_bad = [&](const char* key, tactile_common::ParamValue v, const char* what) {
+    auto bad = m;
+    bad.set(key, v);
+    try {
+      CrazyflieBridgeLogic::params_from(bad);
+      ADD_FAILURE() << key;
+    } catch (const tactile_common::ParamError& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  expect_bad("takeoff_height", 2.0, "takeoff_height");
+  expect_bad("takeoff_duration_s", 0.1, "max_vertical_speed");
+  expect_bad("land_duration_s", 0.0, "land_duration_s");
+  expect_bad("low_battery_v", 7.0, "low_battery_v");
+  expect_bad("shutdown_land_timeout_s", 1.0, "shutdown_land_timeout_s");
+  expect_bad("status_vars", std::vector<std::string>{"a", "b", "c", "d", "e", "f", "g"}, "status_vars");
+  expect_bad("status_period_ms", int64_t{5}, "status_period_ms");
+  const auto p = CrazyflieBridgeLogic::params_from(m);
+  EXPECT_FALSE(p.autostart);
 }

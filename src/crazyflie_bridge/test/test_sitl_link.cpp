@@ -43,6 +43,7 @@ Flight fly(const SitlEndpointOptions& faults, double connect_timeout_ms) {
   try {
     CrazyflieBridgeLogic::Params p;
     p.uri = "udp://127.0.0.1:" + std::to_string(ep.port());
+    p.autostart = true;  // this "pipeline" flies without an operator
     ClientOptions co;
     co.reply_timeout = std::chrono::milliseconds(static_cast<int>(connect_timeout_ms));
     co.retries = 40;
@@ -109,7 +110,8 @@ TEST(SitlLink, CleanLinkHoverThenLandThenStop) {
   // Nothing dropped between the client and the sinks: each whisker sample
   // gives one left and one right message, each state sample one odometry.
   EXPECT_EQ(f.left, f.right);
-  EXPECT_EQ(f.left + f.odom, f.samples);
+  EXPECT_EQ(f.left + f.odom + f.logic.status_samples, f.samples);
+  EXPECT_GT(f.logic.status_samples, 20u);  // 10 Hz status block
   EXPECT_EQ(f.client.log_decode_errors, 0u);
   EXPECT_GT(f.odom, 100u);  // 50 Hz for > 3 s
   EXPECT_GE(f.logic.stale_events, 1u);
@@ -136,7 +138,7 @@ TEST(SitlLink, LossAndLatencySpikesNoCrashStillLands) {
   EXPECT_NE(std::find(f.modes.begin(), f.modes.end(), Mode::kLanding), f.modes.end());
   EXPECT_GT(f.z_max, 0.25);
   EXPECT_LT(f.z_end, 0.03);
-  // Every decoded sample reached a sink.
+  // Every decoded sample reached a sink (or the status).
   EXPECT_EQ(f.left, f.right);
-  EXPECT_EQ(f.left + f.odom, f.samples);
+  EXPECT_EQ(f.left + f.odom + f.logic.status_samples, f.samples);
 }

@@ -84,10 +84,13 @@ class CrazyflieBridgeLogic {
     /// does not have are skipped with a warning.
     std::vector<std::string> status_vars{"pm.vbat", "pm.state", "supervisor.info", "radio.rssi"};
     int64_t status_period_ms = 100;        ///< status block period [ms]
-    /// Below this battery voltage in flight for low_battery_hold_s -> land [V]
-    /// (1-cell LiPo; cflib/firmware pm: 3.2 V is the firmware's own low level).
+    /// Below this battery voltage in flight for low_battery_hold_s -> land [V].
+    /// 3.2 V: the firmware's own low level (pm_stm32f4.c PM_BAT_LOW_VOLTAGE,
+    /// lowPower after PM_BAT_LOW_TIMEOUT 5 s); 0 disables the guard.
     double low_battery_v = 3.2;
-    double low_battery_hold_s = 2.0;       ///< [s] (rides through motor-load sags)
+    /// [s] rides through short sags under motor load; shorter than the
+    /// firmware's 5 s so the bridge lands before the firmware's low-power state.
+    double low_battery_hold_s = 2.0;
     double shutdown_land_timeout_s = 10.0; ///< bound of the blocking land on Ctrl-C / SIGTERM [s]
     void validate() const;
   };
@@ -124,8 +127,9 @@ class CrazyflieBridgeLogic {
     uint64_t low_battery_events = 0;
   };
 
-  /// supervisor.info bits (crazyflie-firmware src/modules/src/supervisor.c,
-  /// supervisorGetInfoField(); documented in the firmware's log TOC docs).
+  /// supervisor.info bits: cflib crazyflie/supervisor.py BIT_CAN_BE_ARMED = 0
+  /// .. BIT_IS_LOCKED = 6 (the firmware's supervisor bit field, also the
+  /// supervisor.info log variable).
   enum SupervisorBit : int {
     kCanBeArmed = 1 << 0,
     kIsArmed = 1 << 1,
@@ -251,6 +255,7 @@ class CrazyflieBridgeLogic {
     int64_t start_ns = 0;
     double duration_s = 0;
   } ramp_;
+  bool ramp_done_ = false;  ///< the ramp's end point was sent (kTakingOff / kGoTo end on the next tick)
   double landing_speed_ = 0.0;   ///< kLanding descent [m/s]
   double landing_target_ = 0.0;  ///< kLanding floor of the commanded height [m]
   double hold_height_ = 0.0;  ///< kHovering / kHoverHold height [m]

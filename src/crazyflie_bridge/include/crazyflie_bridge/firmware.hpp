@@ -1,6 +1,6 @@
 // Firmware side of CRTP for a simulated Crazyflie: log TOC and log blocks,
 // param TOC and read/write, generic commander setpoints with the firmware's
-// commander watchdog, platform/link/mem answers the official client (cflib)
+// commander watchdog, a supervisor (arming, supervisor.info), platform/link/mem answers the official client (cflib)
 // needs to connect. Protocol only: the owner binds variables to a simulated
 // vehicle (crazyflie_bridge/sitl_endpoint.hpp) and feeds packets from a link.
 // Behaviour follows the Crazyflie firmware (log.c, param_logic.c,
@@ -29,6 +29,10 @@ class FirmwareEmulator {
     uint32_t watchdog_shutdown_ms = 2000;   ///< COMMANDER_WDT_TIMEOUT_SHUTDOWN
     size_t max_blocks = 16;                 ///< LOG_MAX_BLOCKS
     size_t max_ops = 128;                   ///< LOG_MAX_OPS
+    /// Supervisor: armed at start-up without a request, as a brushed
+    /// Crazyflie 2.x (the firmware's auto-arm; a brushless one requires an
+    /// arming request). false: motors stay off until an arming request.
+    bool auto_arm = true;
   };
   struct Stats {
     uint64_t packets_in = 0, replies = 0, log_packets = 0;
@@ -36,6 +40,7 @@ class FirmwareEmulator {
     uint64_t malformed = 0;       ///< truncated / invalid packets (dropped)
     uint64_t unknown = 0;         ///< ports/commands not emulated (dropped)
     uint64_t log_errors = 0;      ///< log control commands answered with an errno
+    uint64_t arming_requests = 0; ///< arm / disarm requests (either port)
   };
   /// What the commander does at a given time.
   struct CommanderOutput {
@@ -64,8 +69,21 @@ class FirmwareEmulator {
   void on_packet(const CrtpPacket& pk, uint32_t now_ms, std::vector<CrtpPacket>& out);
   /// Log data of the started blocks that are due at now_ms.
   void tick(uint32_t now_ms, std::vector<CrtpPacket>& out);
-  /// Commander state at now_ms (last setpoint + watchdog).
+  /// Commander state at now_ms (last setpoint + watchdog); motors off
+  /// (kShutdown, or kIdle before any setpoint) while not armed.
   CommanderOutput commander(uint32_t now_ms) const;
+
+  // Supervisor (firmware supervisor.c as cflib sees it): arming state from
+  // auto-arm or arming requests (supervisor port from protocol 12, the legacy
+  // platform request on any version), the supervisor.info bit field.
+  bool armed() const { return armed_; }
+  /// Motors spinning at now_ms: armed and the commander has a setpoint or is
+  /// levelling out (kSetpoint with anything but stop, kStabilize).
+  bool motors_on(uint32_t now_ms) const;
+  /// supervisor.info: bit 0 can be armed, 1 is armed, 2 auto-arm, 3 can fly,
+  /// 4 is flying (cflib crazyflie/supervisor.py BIT_*); tumbled / locked are
+  /// not emulated (0).
+  uint16_t supervisor_info(uint32_t now_ms) const;
 
   uint32_t log_toc_crc() const;
   uint32_t param_toc_crc() const;
@@ -93,6 +111,8 @@ class FirmwareEmulator {
   void on_log(const CrtpPacket& pk, uint32_t now_ms, std::vector<CrtpPacket>& out);
   void on_param(const CrtpPacket& pk, std::vector<CrtpPacket>& out);
   void on_toc(const CrtpPacket& pk, bool log, std::vector<CrtpPacket>& out);
+  /// Arming request on the supervisor port or the legacy platform port; false if `pk` is none.
+  bool on_arming(const CrtpPacket& pk, std::vector<CrtpPacket>& out);
   size_t ops_in_use() const;
   void reply(std::vector<CrtpPacket>& out, const CrtpPacket& pk);
 
@@ -104,6 +124,7 @@ class FirmwareEmulator {
   std::optional<commander::Setpoint> setpoint_;
   uint32_t setpoint_ms_ = 0;
   uint32_t setpoint_valid_until_ms_ = 0;  ///< notify-setpoint-stop keeps the last one valid this long
+  bool armed_ = true;
   Stats stats_;
 };
 

@@ -12,6 +12,7 @@
 #pragma once
 
 #include <atomic>
+#include <cmath>
 #include <cstdint>
 #include <deque>
 #include <memory>
@@ -39,6 +40,9 @@ struct SitlEndpointOptions {
   /// Keep the whiskers' ground truth for whisker_truth() (a run's evaluation;
   /// off for a server that runs indefinitely, where it would only grow).
   bool record_whisker_truth = false;
+  /// Motors off until an arming request (default: auto-arm, as a brushed
+  /// Crazyflie 2.x).
+  bool require_arming = false;
 };
 
 class SitlEndpoint {
@@ -86,6 +90,13 @@ class SitlEndpoint {
   /// Sets the injected loss rate (thread-safe; also settable over CRTP with
   /// the sitl.lossPct parameter).
   void set_loss_rate(double p) { loss_request_ = p; }
+  /// Sets pm.vbat (thread-safe; NaN: back to the battery model).
+  void set_battery_voltage(double v) { vbat_request_ = v; vbat_pending_ = true; }
+  /// The firmware's motors spin now (thread-safe): armed and a setpoint is
+  /// being followed or the commander watchdog is levelling out.
+  bool motors_on() const { return motors_on_; }
+  /// Simulated time [ns] the motors first came on, -1 if never (thread-safe).
+  int64_t first_motors_on_ns() const { return first_motors_on_ns_; }
 
  private:
   void step_physics();
@@ -115,6 +126,10 @@ class SitlEndpoint {
   mutable std::mutex truth_mutex_;
   tactile_sim::Vec3 truth_ = tactile_sim::Vec3::Zero();
   std::atomic<double> loss_request_{-1.0};
+  std::atomic<double> vbat_request_{NAN};
+  std::atomic<bool> vbat_pending_{false};
+  std::atomic<bool> motors_on_{false};
+  std::atomic<int64_t> first_motors_on_ns_{-1};
   std::atomic<std::chrono::steady_clock::duration::rep> start_ticks_{0};
   std::vector<WhiskerTruthSample> whisker_truth_;
   double param_loss_ = 0.0;  ///< last sitl.lossPct seen

@@ -8,7 +8,8 @@
 // as generic-commander packets and the firmware's commander (with its
 // watchdog) drives the simulator. Reproducible for a seed; compared with
 // whisker_fsm it adds the link: encoding, loss, the bridge's clamping and
-// stale -> hover -> land -> stop chain.
+// stale -> hover -> land -> stop chain. No operator: the bridge runs with
+// autostart (forwards the FSM from its first fresh setpoint).
 //
 // node_parameters: tdorc_filter, tactile_depth, whisker_fsm, crazyflie_bridge
 // (config/crazyflie_bridge.yaml keys), crtp_link {loss: 0..1, seed: N}.
@@ -52,7 +53,10 @@ class WhiskerFsmCrtpGraph : public SimGraph {
     // Firmware side, fed by the simulator's topics on the outer bus.
     Host& outer = ctx.host;
     outer_ = &outer;
-    fw_ = std::make_unique<crazyflie_bridge::SimulatedCrazyflieFirmware>(loss);
+    crazyflie_bridge::SimulatedCrazyflieFirmware::Options fo;
+    fo.loss_rate = loss;
+    fo.status_log = false;  // the TOC of the reference runs (see the bridge below)
+    fw_ = std::make_unique<crazyflie_bridge::SimulatedCrazyflieFirmware>(fo);
     for (const char* t : {"/whisker/left/pressure", "/whisker/right/pressure"}) {
       outer.bus().subscribe<tactile_msgs::msg::WhiskerPressure>(t, [this](const auto& m) { fw_->on_pressure(m); });
     }
@@ -74,9 +78,16 @@ class WhiskerFsmCrtpGraph : public SimGraph {
     const auto& fp = fsm_->params().fsm;
     eval_ = std::make_unique<WallFollowingEvaluation>(inner_, *ctx.whisker_truth, fp.t_min, fp.t_max, fp.whisker_spacing);
 
-    // The bridge (connects now, at simulated time 0).
+    // The bridge (connects now, at simulated time 0). The graph flies without
+    // an operator: autostart forwards the FSM as soon as its setpoints and the
+    // log are fresh; no status log block (its packets would change the seeded
+    // loss pattern: same numbers run for run as before the operator surface).
+    // A scenario's node_parameters.crazyflie_bridge may set either.
+    auto bridge_over = ctx.overrides("crazyflie_bridge");
+    if (!bridge_over.has("autostart")) bridge_over.set("autostart", true);
+    if (!bridge_over.has("status_vars")) bridge_over.set("status_vars", std::vector<std::string>{});
     const auto bp = CrazyflieBridgeLogic::params_from(inner_.load_parameters(
-        "", CrazyflieBridgeLogic::kNodeName, CrazyflieBridgeLogic::default_parameters(), ctx.overrides("crazyflie_bridge")));
+        "", CrazyflieBridgeLogic::kNodeName, CrazyflieBridgeLogic::default_parameters(), bridge_over));
     tick_ns_ = static_cast<int64_t>(1e9 / bp.setpoint_rate_hz);
     crazyflie_bridge::ClientOptions co;
     co.retries = 50;  // lost requests are resent at once (no simulated time passes)
