@@ -127,13 +127,12 @@ public:
 private:
   int64_t now_ns() const {return get_clock()->now().nanoseconds();}
 
-  /// Logs a command's outcome (the logic's reason names the command); the
-  /// crazyflie_interfaces responses cannot carry it.
-  void report(const char * what, const CrazyflieBridgeLogic::CommandResult & r, const std::string & detail = "")
+  /// Logs a command's outcome with the logic's reason (it names the command and its
+  /// values); the crazyflie_interfaces responses cannot carry it.
+  void report(const CrazyflieBridgeLogic::CommandResult & r)
   {
     if (r.accepted) {
-      RCLCPP_INFO(get_logger(), "%s%s%s accepted: %s; mode %s", what, detail.empty() ? "" : " ", detail.c_str(),
-                  r.reason.c_str(), to_string(runner_.mode()));
+      RCLCPP_INFO(get_logger(), "%s; mode %s", r.reason.c_str(), to_string(runner_.mode()));
     } else {
       RCLCPP_WARN(get_logger(), "%s", r.reason.c_str());
     }
@@ -149,26 +148,21 @@ private:
         const double d = seconds(req->duration) == 0.0 ? params_.takeoff_duration_s : seconds(req->duration);
         std::lock_guard<std::mutex> lock(io_mutex_);
         if (refuse_after_shutdown("takeoff")) {return;}
-        report("takeoff", runner_.takeoff(h, d, now_ns()),
-               "to " + std::to_string(h) + " m over " + std::to_string(d) + " s");
+        report(runner_.takeoff(h, d, now_ns()));
       });
     land_srv_ = create_service<Land>(
       "land", [this](const Land::Request::SharedPtr req, Land::Response::SharedPtr) {
         const double d = seconds(req->duration) == 0.0 ? params_.land_duration_s : seconds(req->duration);
         std::lock_guard<std::mutex> lock(io_mutex_);
         if (refuse_after_shutdown("land")) {return;}
-        report("land", runner_.land(static_cast<double>(req->height), d, now_ns()),
-               "to " + std::to_string(req->height) + " m over " + std::to_string(d) + " s");
+        report(runner_.land(static_cast<double>(req->height), d, now_ns()));
       });
     go_to_srv_ = create_service<GoTo>(
       "go_to", [this](const GoTo::Request::SharedPtr req, GoTo::Response::SharedPtr) {
         std::lock_guard<std::mutex> lock(io_mutex_);
         if (refuse_after_shutdown("go_to")) {return;}
-        report("go_to", runner_.go_to(req->goal.x, req->goal.y, req->goal.z, static_cast<double>(req->yaw),
-                                      seconds(req->duration), req->relative, now_ns()),
-               std::string(req->relative ? "by (" : "to (") + std::to_string(req->goal.x) + ", " +
-               std::to_string(req->goal.y) + ", " + std::to_string(req->goal.z) + ") m, yaw " +
-               std::to_string(req->yaw) + " rad over " + std::to_string(seconds(req->duration)) + " s");
+        report(runner_.go_to(req->goal.x, req->goal.y, req->goal.z, static_cast<double>(req->yaw),
+                             seconds(req->duration), req->relative, now_ns()));
       });
     emergency_srv_ = create_service<Stop>(
       "emergency", [this](const Stop::Request::SharedPtr, Stop::Response::SharedPtr) {
@@ -187,15 +181,14 @@ private:
       "arm", [this](const Arm::Request::SharedPtr req, Arm::Response::SharedPtr) {
         std::lock_guard<std::mutex> lock(io_mutex_);
         if (refuse_after_shutdown(req->arm ? "arm" : "disarm")) {return;}
-        report(req->arm ? "arm" : "disarm", runner_.arm(req->arm, now_ns()));
+        report(runner_.arm(req->arm, now_ns()));
       });
     notify_srv_ = create_service<NotifySetpointsStop>(
       "notify_setpoints_stop",
       [this](const NotifySetpointsStop::Request::SharedPtr req, NotifySetpointsStop::Response::SharedPtr) {
         std::lock_guard<std::mutex> lock(io_mutex_);
         if (refuse_after_shutdown("notify_setpoints_stop")) {return;}
-        report("notify_setpoints_stop", runner_.notify_setpoints_stop(req->remain_valid_millisecs, now_ns()),
-               "remain valid " + std::to_string(req->remain_valid_millisecs) + " ms");
+        report(runner_.notify_setpoints_stop(req->remain_valid_millisecs, now_ns()));
       });
     start_srv_ = create_service<StartBehaviour>(
       "start_behaviour",
@@ -207,7 +200,7 @@ private:
           return;
         }
         const auto r = runner_.start_behaviour(now_ns());
-        report("start_behaviour", r);
+        report(r);
         res->success = r.accepted;
         res->message = r.accepted ? std::string("mode ") + to_string(runner_.mode()) : r.reason;
       });
