@@ -179,16 +179,19 @@ def test_operator_first_flight(flight):
     res = bridge.call('start_behaviour')
     assert res.success, res.message
     x0 = bridge.x()
-    g.spin(4.0)
+    g.spin_until(lambda: bridge.x() - x0 > 0.3, 8.0,
+                 f'the behaviour flies forward 0.3 m (x from {x0:.2f} m; now {bridge.x():.2f} m)', launch)
     # (hover hold: a late FSM setpoint on a loaded machine, resumed within hover_hold_s)
     assert bridge.mode() in (BridgeStatus.MODE_FORWARD, BridgeStatus.MODE_HOVER_HOLD), bridge.status[-1].mode_name
-    assert bridge.x() - x0 > 0.3, f'the behaviour did not fly forward: x {x0:.2f} -> {bridge.x():.2f} m'
     assert abs(bridge.z() - HEIGHT) < HEIGHT_TOL
 
     # Land from forwarding: down and stopped.
     bridge.call('land', height=0.0, duration=2.0)
     g.spin_until(lambda: bridge.mode() == BridgeStatus.MODE_STOPPED, 15, 'stopped after land', launch)
-    assert bridge.z() < GROUND_Z + 0.05, f'z {bridge.z():.3f} m after landing'
+    # (touchdown is declared when the commanded height reaches land_height: the vehicle,
+    # a little behind its ramp, settles from there)
+    g.spin_until(lambda: bridge.z() < GROUND_Z + 0.05, 3.0, f'on the floor after landing (z {bridge.z():.3f} m)',
+                 launch)
     out = launch.output()
     assert 'land refused: not airborne (mode grounded)' in out, out[-3000:]
     assert 'takeoff to 0.40 m in 2.00 s; mode taking_off' in out, out[-3000:]
