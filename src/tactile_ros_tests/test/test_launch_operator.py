@@ -155,8 +155,9 @@ def test_operator_first_flight(flight):
     bridge.odom.clear()
     bridge.status.clear()
     g.spin(3.0)
-    assert bridge.odom and max(m.pose.pose.position.z for m in bridge.odom) < GROUND_Z, \
-        f'airborne before takeoff: max z {max(m.pose.pose.position.z for m in bridge.odom):.3f} m'
+    assert bridge.odom, 'no /odom on the ground'
+    max_z = max(m.pose.pose.position.z for m in bridge.odom)
+    assert max_z < GROUND_Z, f'airborne before takeoff: max z {max_z:.3f} m'
     assert {m.mode for m in bridge.status} == {BridgeStatus.MODE_GROUNDED}, \
         f'modes before takeoff: {sorted({m.mode_name for m in bridge.status})}'
     # status: its documented fields, at status_rate_hz (5 Hz, config/crazyflie_bridge_health.yaml)

@@ -171,8 +171,7 @@ private:
         // BridgeRunner sends the first stop packet before it returns.
         const auto r = runner_.emergency_stop(now_ns());
         if (r.accepted) {
-          RCLCPP_ERROR(get_logger(), "EMERGENCY STOP: motors off, latched until arm (arm: true) on the ground: %s",
-                       r.reason.c_str());
+          RCLCPP_ERROR(get_logger(), "EMERGENCY STOP (service): %s", r.reason.c_str());
         } else {
           RCLCPP_ERROR(get_logger(), "%s", r.reason.c_str());
         }
