@@ -117,15 +117,17 @@ case "${1:-}" in
   --no-e2e) export TACTILE_ROS_E2E=0; shift ;;
   --e2e) export TACTILE_ROS_E2E=1; shift ;;
 esac
-if (($# > 0)); then export PYTEST_ADDOPTS="-k $1"; fi
+# quoted: pytest splits PYTEST_ADDOPTS like a shell, and an expression has spaces ("a or b")
+if (($# > 0)); then export PYTEST_ADDOPTS="-k '$1'"; fi
 colcon --log-base log_ros test "${common[@]}" --packages-select tactile_ros_tests \
   --event-handlers console_cohesion+ summary+ --return-code-on-test-failure "${ctest_args[@]}" || status=$?
 summary="$(colcon test-result --test-result-base build_ros/tactile_ros_tests --verbose --all 2>&1)" || true
 echo "$summary" | grep -v '^build_ros/.*: [0-9]* tests, 0 errors, 0 failures' || true
 line="$(echo "$summary" | grep -E '^Summary: [0-9]+ tests' | tail -n 1)"
 total=$(echo "$line" | sed -E 's/Summary: ([0-9]+) tests.*/\1/')
-errors=$(echo "$line" | sed -E 's/.* ([0-9]+) errors.*/\1/')
-failures=$(echo "$line" | sed -E 's/.* ([0-9]+) failures.*/\1/')
+# colcon says "1 error" / "1 failure" in the singular
+errors=$(echo "$line" | sed -E 's/.* ([0-9]+) errors?.*/\1/')
+failures=$(echo "$line" | sed -E 's/.* ([0-9]+) failures?.*/\1/')
 skipped=$(echo "$line" | sed -E 's/.* ([0-9]+) skipped.*/\1/')
 if [[ -z "$total" || "$total" -eq 0 ]]; then
   echo "ROS 2 stage: no test results found" >&2
