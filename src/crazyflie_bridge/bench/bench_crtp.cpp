@@ -86,6 +86,7 @@ static void BM_EndToEndSitlLatency(benchmark::State& st) {
     std::thread sim([&] { ep.run(0.0, &stop); });
     CrazyflieBridgeLogic::Params p;
     p.uri = "udp://127.0.0.1:" + std::to_string(ep.port());
+    p.autostart = true;  // measures state-in -> setpoint-out: setpoints flow from the connect
     BridgeRunner r(p);
     const auto t0 = std::chrono::steady_clock::now();
     auto now_ns = [&] { return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now() - t0).count(); };

@@ -112,28 +112,33 @@ BridgeRunner::CommandResult BridgeRunner::emergency_stop(int64_t now_ns) { TACTI
 #undef TACTILE_BRIDGE_COMMAND
 
 bool BridgeRunner::land_and_stop(std::chrono::milliseconds timeout, const std::function<int64_t()>& now_ns,
-                                 const Sinks& sinks) {
+                                 const Sinks& sinks, const std::function<bool()>& abort) {
   const auto deadline = std::chrono::steady_clock::now() + timeout;
   const CrazyflieBridgeLogic::Params& p = logic_.params();
   {
     std::lock_guard<std::mutex> lock(mutex_);
     const Mode m = logic_.mode();
     if (!logic_.airborne()) return m != Mode::kEmergency;  // on the ground already (kEmergency: it was not a landing)
-    if (m != Mode::kLanding) logic_.land(0.0, p.land_duration_s, now_ns());
+    if (m != Mode::kLanding) {
+      logic_.land(0.0, p.land_duration_s, now_ns());
+      flush_outbox();
+    }
   }
   const auto period = std::chrono::nanoseconds(static_cast<int64_t>(1e9 / p.setpoint_rate_hz));
   auto next = std::chrono::steady_clock::now();
   for (;;) {
-    if (mode() == Mode::kStopped) return true;
-    if (std::chrono::steady_clock::now() >= deadline) {
-      emergency_stop(now_ns());
-      on_timer(now_ns());  // the latched stop, once more
+    if ((abort && abort()) || std::chrono::steady_clock::now() >= deadline) {
+      emergency_stop(now_ns());  // sends the stop packet now
+      on_timer(now_ns());        // and the latched one once more
       return false;
     }
     next += period;
     const auto wait = std::chrono::duration_cast<std::chrono::milliseconds>(next - std::chrono::steady_clock::now());
     pump(std::max(wait, std::chrono::milliseconds(0)), now_ns, sinks);
-    on_timer(now_ns());
+    const bool sent = on_timer(now_ns());
+    // Landed once the stop packet and its repeats are out (the logic sends
+    // nothing after them).
+    if (mode() == Mode::kStopped && !sent) return true;
   }
 }
 

@@ -142,3 +142,71 @@ TEST(SitlLink, LossAndLatencySpikesNoCrashStillLands) {
   EXPECT_EQ(f.left, f.right);
   EXPECT_EQ(f.left + f.odom + f.logic.status_samples, f.samples);
 }
+
+// The operator's flight over real UDP sockets against the simulated Crazyflie
+// (wall-clock physics): on the ground nothing reaches the motors although the
+// "behaviour" publishes; take-off, hand-over, then the blocking shutdown
+// landing (what Ctrl-C and the component's destructor use) lands and stops.
+TEST(SitlLink, OperatorTakeoffHandOverThenLandAndStop) {
+  const auto scenario = tactile_sim::load_scenario(TACTILE_CONFIG_DIR "/scenarios/whisker_hover.yaml");
+  SitlEndpointOptions opt;
+  opt.port = 0;
+  SitlEndpoint ep(scenario, 7, opt);
+  std::atomic<bool> stop{false};
+  std::thread sim([&] { ep.run(0.0, &stop); });
+  struct Join {
+    std::atomic<bool>& stop;
+    std::thread& t;
+    ~Join() {
+      stop = true;
+      t.join();
+    }
+  } join{stop, sim};
+  CrazyflieBridgeLogic::Params p;
+  p.uri = "udp://127.0.0.1:" + std::to_string(ep.port());
+  ClientOptions co;
+  co.reply_timeout = std::chrono::milliseconds(100);
+  co.retries = 40;
+  BridgeRunner r(p, co);
+  const auto t0 = Clock::now();
+  auto now_ns = [&] { return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t0).count(); };
+  auto run = [&](double seconds) {
+    const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+    auto next = Clock::now();
+    while (Clock::now() < end) {
+      next += std::chrono::milliseconds(20);
+      tactile_msgs::msg::HoverSetpoint sp;
+      sp.height = 0.4;
+      sp.vx = 0.1;
+      r.on_hover_setpoint(sp, now_ns());
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(next - Clock::now());
+      r.pump(std::max(left, std::chrono::milliseconds(0)), now_ns, {});
+      r.on_timer(now_ns());
+    }
+  };
+  run(1.5);
+  EXPECT_EQ(r.mode(), Mode::kGrounded);
+  EXPECT_EQ(ep.first_motors_on_ns(), -1);  // never spun
+  EXPECT_LT(ep.truth_position().z(), 0.005);
+  const auto st = r.status(now_ns());
+  EXPECT_EQ(st.supervisor_info & CrazyflieBridgeLogic::kIsArmed, CrazyflieBridgeLogic::kIsArmed);  // auto-arm
+  EXPECT_NEAR(st.battery_v, 4.1, 0.01);
+  EXPECT_EQ(st.rssi_dbm, 35);
+  ASSERT_TRUE(r.takeoff(0.4, 1.5, now_ns()).accepted);
+  run(2.0);
+  EXPECT_EQ(r.mode(), Mode::kHovering);
+  EXPECT_GT(ep.truth_position().z(), 0.3);
+  ASSERT_TRUE(r.start_behaviour(now_ns()).accepted);
+  run(1.0);
+  EXPECT_EQ(r.mode(), Mode::kForward);
+  EXPECT_TRUE(ep.motors_on());
+  EXPECT_TRUE(r.land_and_stop(std::chrono::milliseconds(8000), now_ns));
+  EXPECT_EQ(r.mode(), Mode::kStopped);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_FALSE(ep.motors_on());
+  EXPECT_LT(ep.truth_position().z(), 0.03);
+  const auto h = r.history();
+  ASSERT_GE(h.size(), 5u);
+  EXPECT_EQ(h[3].guard, "land");
+  EXPECT_EQ(h[4].guard, "touchdown");
+}

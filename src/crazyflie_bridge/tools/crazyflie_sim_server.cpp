@@ -1,6 +1,7 @@
 // Simulated Crazyflie on UDP (see crazyflie_bridge/sitl_endpoint.hpp):
 //   crazyflie_sim_server SCENARIO [--port 19850] [--seed N] [--duration S]
 //                        [--speed X] [--loss P] [--spike-rate HZ] [--spike-latency S]
+//                        [--require-arming]  (motors off until an arming request, as a brushless Crazyflie)
 // Prints "listening udp://127.0.0.1:PORT" once ready, then runs until the
 // duration elapsed or SIGINT/SIGTERM; prints the final truth position and
 // link counters on exit.
@@ -21,7 +22,7 @@ int main(int argc, char** argv) {
   if (argc < 2 || !std::strcmp(argv[1], "--help")) {
     std::fprintf(stderr,
                  "usage: crazyflie_sim_server SCENARIO [--port 19850] [--seed N] [--duration S] [--speed X]\n"
-                 "       [--loss P] [--spike-rate HZ] [--spike-latency S] [--bind ADDR]\n");
+                 "       [--loss P] [--spike-rate HZ] [--spike-latency S] [--bind ADDR] [--require-arming]\n");
     return argc < 2 ? 2 : 0;
   }
   try {
@@ -43,6 +44,7 @@ int main(int argc, char** argv) {
       else if (a == "--spike-rate") opt.spike_rate_hz = std::stod(next());
       else if (a == "--spike-latency") opt.spike_latency_s = std::stod(next());
       else if (a == "--bind") opt.bind_address = next();
+      else if (a == "--require-arming") opt.require_arming = true;  // motors off until an arming request
       else throw std::invalid_argument("unknown option " + a);
     }
     const auto scenario = tactile_sim::load_scenario(scenario_path);

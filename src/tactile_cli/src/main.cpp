@@ -107,6 +107,17 @@ int main(int argc, char** argv) {
   fly_cmd->add_option("--scenario", fly.scenario, "take node parameters and metrics.target from a scenario file");
   fly_cmd->add_option("--sim", fly.sim_scenario, "fly the simulated Crazyflie of this scenario (in-process UDP server)");
   fly_cmd->add_option("--sim-loss", fly.sim_loss, "injected UDP packet loss of the simulated Crazyflie [0, 1)");
+  fly_cmd->add_flag("--takeoff", fly.takeoff,
+                    "take off (crazyflie_bridge.yaml takeoff_height) and hand over to the behaviour; without it "
+                    "nothing flies: the link is checked and the sensors recorded");
+  fly_cmd->add_option("--takeoff-height", fly.takeoff_height, "take-off height [m] (default: crazyflie_bridge.yaml)")
+      ->check(CLI::Range(0.0, 3.0));
+  fly_cmd->add_flag("--arm", fly.arm, "send the arming request before take-off (a Crazyflie that requires arming)");
+  fly_cmd->add_flag("--autostart", fly.autostart,
+                    "the behaviour flies as soon as the link is up, no take-off step (simulated Crazyflie tests)");
+  fly.teleop = true;
+  fly_cmd->add_flag("!--no-teleop", fly.teleop,
+                    "no keystrokes (default when stdin is a terminal: t take off, l land, space emergency stop, a arm)");
   fly_cmd->add_flag("!--no-bag", fly.write_bag, "do not record the bag");
   add_bag_options(fly_cmd, bag_options);
   tactile_cli::BenchOptions bench;
@@ -250,8 +261,9 @@ int main(int argc, char** argv) {
       } else if (*fly_cmd) {
         fly.config_dir = config_dir;
         const auto m = tactile_cli::run_fly(fly);
-        std::printf("tactile fly: %s, %.1f s, bridge %s, %llu log samples, link packets sent %llu lost %llu -> %s\n",
+        std::printf("tactile fly: %s, %.1f s, ended: %s, bridge %s, %llu log samples, link packets sent %llu lost %llu -> %s\n",
                     m["uri"].get<std::string>().c_str(), m["wall_time_s"].get<double>(),
+                    m["end_reason"].get<std::string>().c_str(),
                     m["bridge_mode"].get<std::string>().c_str(), m["log_samples"].get<unsigned long long>(),
                     m["link_packets_sent"].get<unsigned long long>(), m["link_packets_lost"].get<unsigned long long>(),
                     fly.out_dir.c_str());

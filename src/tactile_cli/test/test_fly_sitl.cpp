@@ -9,8 +9,21 @@
 // wall-clock timing here (a loaded machine delays ticks); the trial-by-trial
 // identity with the in-process run is shown by the lockstep graph
 // whisker_fsm_crtp (test_crtp_graph.cpp). `tactile scan` finds the simulated
-// Crazyflie on the UDP scan ports.
+// Crazyflie on the UDP scan ports. These flights use autostart (no operator);
+// the operator's sequence (--takeoff, Ctrl-C lands) is tested below with a
+// child `tactile fly` process.
 #include <gtest/gtest.h>
+
+#include <fcntl.h>
+#include <poll.h>
+#include <pty.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <vector>
+#include <fstream>
 
 #include <algorithm>
 #include <atomic>
@@ -36,6 +49,7 @@ TEST(FlySitl, DarknessWallFollowingOverUdp) {
     fo.out_dir = (out / name).string();
     fo.config_dir = TACTILE_CONFIG_DIR;
     fo.duration_s = 15.0;  // contact at ~6.6 s, then the 7 s sweep
+    fo.autostart = true;   // compared with the in-process run: the FSM flies from its first tick
     fo.progress = false;
     return tactile_cli::run_fly(fo);
   };
@@ -122,7 +136,8 @@ TEST(FlySitl, DarknessWallFollowingOverUdp) {
   EXPECT_EQ(m["bag_messages"].get<uint64_t>(), published);
   EXPECT_EQ(m["published"]["/whisker/left/pressure"].get<uint64_t>(),
             m["published"]["/whisker/right/pressure"].get<uint64_t>());
-  EXPECT_EQ(m["published"]["/whisker/left/pressure"].get<uint64_t>() + m["published"]["/odom"].get<uint64_t>(),
+  EXPECT_EQ(m["published"]["/whisker/left/pressure"].get<uint64_t>() + m["published"]["/odom"].get<uint64_t>() +
+                m["status_samples"].get<uint64_t>(),  // the status block feeds the bridge's status, not a topic
             m["log_samples"].get<uint64_t>());
   EXPECT_TRUE(fs::exists(out / flight / "bag" / "metadata.yaml"));
   fs::remove_all(out);
@@ -161,6 +176,7 @@ TEST(FlySitl, LossyLinkCountsLossKeepsEveryMessageAndLands) {
   fo.config_dir = TACTILE_CONFIG_DIR;
   fo.duration_s = 3.0;
   fo.sim_loss = 0.3;
+  fo.autostart = true;  // the pipeline flies from the connect (no operator)
   fo.progress = false;
   const auto m = tactile_cli::run_fly(fo);
   EXPECT_EQ(m["bridge_mode"], "stopped");
@@ -177,8 +193,266 @@ TEST(FlySitl, LossyLinkCountsLossKeepsEveryMessageAndLands) {
   for (const auto& [topic, n] : m["published"].items()) published += n.get<uint64_t>();
   EXPECT_EQ(m["bag_messages"].get<uint64_t>(), published);
   // Every decoded sample became messages: 2 pressures per whisker sample, 1 odometry per state sample.
-  EXPECT_EQ(m["published"]["/whisker/left/pressure"].get<uint64_t>() + m["published"]["/odom"].get<uint64_t>(),
+  EXPECT_EQ(m["published"]["/whisker/left/pressure"].get<uint64_t>() + m["published"]["/odom"].get<uint64_t>() +
+                m["status_samples"].get<uint64_t>(),  // the status block feeds the bridge's status, not a topic
             m["log_samples"].get<uint64_t>());
   EXPECT_LT(m["sitl"]["final_z_m"].get<double>(), 0.15);
+  fs::remove_all(out);
+}
+
+// ---------------------------------------------------------------------------
+// The operator's sequence of `tactile fly`.
+
+// Without --takeoff nothing flies: the link is checked, the sensors are
+// recorded, the simulated motors never spin and the vehicle stays on the floor.
+TEST(FlySitl, WithoutTakeoffTheVehicleNeverLeavesTheFloor) {
+  const fs::path out = fs::temp_directory_path() / ("tactile_fly_ground_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  tactile_cli::FlyOptions fo;
+  fo.sim_scenario = TACTILE_CONFIG_DIR "/scenarios/whisker_hover.yaml";
+  fo.out_dir = out.string();
+  fo.config_dir = TACTILE_CONFIG_DIR;
+  fo.duration_s = 3.0;
+  fo.write_bag = false;
+  fo.progress = false;
+  const auto m = tactile_cli::run_fly(fo);
+  EXPECT_EQ(m["end_reason"], "duration");
+  EXPECT_EQ(m["bridge_mode"], "grounded");
+  EXPECT_EQ(m["setpoint_packets_out"].get<uint64_t>(), 0u);
+  EXPECT_EQ(m["sitl"]["firmware_setpoints"].get<uint64_t>(), 0u);
+  EXPECT_FALSE(m["sitl"]["motors_ever_on"].get<bool>());
+  EXPECT_LT(m["sitl"]["max_truth_z_m"].get<double>(), 0.005);
+  EXPECT_TRUE(m["mode_history"].empty());
+  // The sensors streamed and were published (whisker pressures, odometry, status).
+  EXPECT_GT(m["published"]["/odom"].get<uint64_t>(), 200u);
+  EXPECT_GT(m["published"]["/whisker/left/pressure"].get<uint64_t>(), 100u);
+  EXPECT_GT(m["status_samples"].get<uint64_t>(), 20u);
+  EXPECT_NEAR(m["status"]["battery_v"].get<double>(), 4.1, 0.01);
+  fs::remove_all(out);
+}
+
+namespace {
+
+/// A child `tactile fly --sim whisker_hover.yaml --takeoff`, its stdout read
+/// through a pipe so that a signal lands at a known mode.
+class FlyChild {
+ public:
+  /// tty: the child's stdin and stdout are a pseudo-terminal (keystroke
+  /// teleop, no --takeoff); else stdout is a pipe, stdin /dev/null, --takeoff.
+  explicit FlyChild(const fs::path& out, bool tty = false) : out_(out) {
+    const std::string scenario = TACTILE_CONFIG_DIR "/scenarios/whisker_hover.yaml";
+    const std::string out_s = out.string();
+    // Pipe children take off by flag and need no keystrokes; tty children fly by keys.
+    std::vector<std::string> args{TACTILE_EXE, "--config", TACTILE_CONFIG_DIR, "fly", "--sim", scenario,
+                                  "--duration", "60", "--no-bag", "--out", out_s};
+    if (!tty) {
+      args.push_back("--takeoff");
+      args.push_back("--no-teleop");
+    }
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    if (tty) {
+      int master = -1;
+      pid_ = ::forkpty(&master, nullptr, nullptr, nullptr);
+      if (pid_ < 0) throw std::runtime_error("forkpty");
+      if (pid_ > 0) fd_ = master;
+    } else {
+      int fds[2];
+      if (::pipe(fds) != 0) throw std::runtime_error("pipe");
+      pid_ = ::fork();
+      if (pid_ == 0) {
+        ::dup2(fds[1], STDOUT_FILENO);
+        const int null_fd = ::open("/dev/null", O_RDONLY);
+        ::dup2(null_fd, STDIN_FILENO);
+        ::close(fds[0]);
+        ::close(fds[1]);
+      } else {
+        ::close(fds[1]);
+        fd_ = fds[0];
+      }
+    }
+    if (pid_ == 0) {
+      ::execv(TACTILE_EXE, argv.data());
+      ::_exit(127);
+    }
+  }
+  /// Types `keys` on the child's terminal (tty children).
+  void type(const std::string& keys) { (void)!::write(fd_, keys.data(), keys.size()); }
+  ~FlyChild() {
+    if (pid_ > 0 && !reaped_) {
+      ::kill(pid_, SIGKILL);
+      ::waitpid(pid_, nullptr, 0);
+    }
+    if (fd_ >= 0) ::close(fd_);
+  }
+  /// Reads the child's stdout until `text` appears (true) or `timeout_s` passes.
+  bool wait_for(const std::string& text, double timeout_s) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    while (output_.find(text, scanned_) == std::string::npos) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(end - std::chrono::steady_clock::now());
+      if (left.count() <= 0) return false;
+      pollfd p{fd_, POLLIN, 0};
+      if (::poll(&p, 1, static_cast<int>(left.count())) <= 0) continue;
+      char buf[4096];
+      const ssize_t n = ::read(fd_, buf, sizeof buf);
+      if (n <= 0) return false;  // the child closed its stdout
+      output_.append(buf, static_cast<size_t>(n));
+    }
+    scanned_ = output_.find(text, scanned_) + text.size();
+    return true;
+  }
+  void signal(int sig) { ::kill(pid_, sig); }
+  /// Exit status after the child ends by itself (killed after `timeout_s`).
+  int wait_exit(double timeout_s) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    int status = 0;
+    while (::waitpid(pid_, &status, WNOHANG) == 0) {
+      if (std::chrono::steady_clock::now() > end) {
+        ::kill(pid_, SIGKILL);
+        ::waitpid(pid_, &status, 0);
+        reaped_ = true;
+        return -1;
+      }
+      char buf[4096];
+      pollfd p{fd_, POLLIN, 0};
+      if (::poll(&p, 1, 50) > 0 && ::read(fd_, buf, sizeof buf) > 0) continue;
+    }
+    reaped_ = true;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  }
+  nlohmann::json metrics() const {
+    std::ifstream in(out_ / "metrics.json");
+    return nlohmann::json::parse(in);
+  }
+  const std::string& output() const { return output_; }
+
+ private:
+  fs::path out_;
+  pid_t pid_ = -1;
+  int fd_ = -1;
+  bool reaped_ = false;
+  std::string output_;
+  size_t scanned_ = 0;
+};
+
+bool has_transition(const nlohmann::json& history, const std::string& from, const std::string& to, const std::string& guard) {
+  for (const auto& h : history) {
+    if (h["from"] == from && h["to"] == to && h["guard"] == guard) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+// Ctrl-C while the behaviour flies: the bridge lands first, then stops the
+// motors; the process exits normally and metrics.json says how it ended.
+TEST(FlySitl, SigintMidFlightLandsThenStopsTheMotors) {
+  const fs::path out = fs::temp_directory_path() / ("tactile_fly_sigint_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  {
+    FlyChild child(out);
+    ASSERT_TRUE(child.wait_for("-> forward", 20.0)) << child.output();
+    ASSERT_TRUE(child.wait_for("t=", 5.0));  // one more progress line: flying the behaviour
+    child.signal(SIGINT);
+    EXPECT_EQ(child.wait_exit(30.0), 0) << child.output();
+    const auto m = child.metrics();
+    EXPECT_EQ(m["end_reason"], "SIGINT");
+    EXPECT_TRUE(m["interrupted"].get<bool>());
+    EXPECT_TRUE(m["shutdown"]["land_attempted"].get<bool>());
+    EXPECT_TRUE(m["shutdown"]["landed"].get<bool>()) << m["shutdown"].dump();
+    EXPECT_EQ(m["bridge_mode"], "stopped");
+    EXPECT_TRUE(has_transition(m["mode_history"], "forward", "landing", "land")) << m["mode_history"].dump();
+    EXPECT_TRUE(has_transition(m["mode_history"], "landing", "stopped", "touchdown")) << m["mode_history"].dump();
+    EXPECT_EQ(m["emergency_stops"].get<uint64_t>(), 0u);
+    EXPECT_GT(m["sitl"]["max_truth_z_m"].get<double>(), 0.3);  // it was flying
+    EXPECT_LT(m["sitl"]["final_z_m"].get<double>(), 0.05);     // on the floor
+    EXPECT_FALSE(m["sitl"]["motors_on_at_end"].get<bool>());
+  }
+  fs::remove_all(out);
+}
+
+// SIGTERM starts the landing; a second signal during it stops the motors at once.
+TEST(FlySitl, SecondSignalDuringTheLandingStopsTheMotorsAtOnce) {
+  const fs::path out = fs::temp_directory_path() / ("tactile_fly_sigterm_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  {
+    FlyChild child(out);
+    ASSERT_TRUE(child.wait_for("-> forward", 20.0)) << child.output();
+    child.signal(SIGTERM);
+    ASSERT_TRUE(child.wait_for("SIGTERM: landing", 5.0)) << child.output();
+    child.signal(SIGINT);
+    EXPECT_EQ(child.wait_exit(30.0), 0) << child.output();
+    const auto m = child.metrics();
+    EXPECT_EQ(m["end_reason"], "SIGTERM");
+    EXPECT_FALSE(m["shutdown"]["landed"].get<bool>());
+    EXPECT_EQ(m["shutdown"]["emergency_reason"], "second signal");
+    EXPECT_EQ(m["bridge_mode"], "emergency");
+    EXPECT_EQ(m["emergency_stops"].get<uint64_t>(), 1u);
+    EXPECT_TRUE(has_transition(m["mode_history"], "landing", "emergency", "emergency_stop")) << m["mode_history"].dump();
+    EXPECT_FALSE(m["sitl"]["motors_on_at_end"].get<bool>());
+  }
+  fs::remove_all(out);
+}
+
+// Keystroke teleop on a terminal: t takes off and hands over, space stops the
+// motors at once; the run then ends, metrics say how.
+TEST(FlySitl, TeleopKeysTakeOffThenEmergencyStop) {
+  const fs::path out = fs::temp_directory_path() / ("tactile_fly_teleop_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  {
+    FlyChild child(out, true);
+    ASSERT_TRUE(child.wait_for("keys: t take off", 20.0)) << child.output();
+    ASSERT_TRUE(child.wait_for("t=", 5.0)) << child.output();  // streaming, on the ground
+    child.type("t");
+    ASSERT_TRUE(child.wait_for("-> forward", 20.0)) << child.output();
+    child.type(" ");
+    ASSERT_TRUE(child.wait_for("-> emergency", 5.0)) << child.output();
+    EXPECT_EQ(child.wait_exit(30.0), 0) << child.output();
+    const auto m = child.metrics();
+    EXPECT_EQ(m["end_reason"], "flight ended: emergency");
+    EXPECT_EQ(m["bridge_mode"], "emergency");
+    EXPECT_TRUE(has_transition(m["mode_history"], "forward", "emergency", "emergency_stop")) << m["mode_history"].dump();
+    EXPECT_GT(m["sitl"]["max_truth_z_m"].get<double>(), 0.3);
+    EXPECT_FALSE(m["sitl"]["motors_on_at_end"].get<bool>());
+    EXPECT_FALSE(m["shutdown"]["land_attempted"].get<bool>());
+  }
+  fs::remove_all(out);
+}
+
+// An exception in the run loop while the behaviour flies takes the landing
+// path: land, stop, metrics.json written, then the exception reaches the caller.
+TEST(FlySitl, ExceptionMidFlightLandsThenRethrows) {
+  const fs::path out = fs::temp_directory_path() / ("tactile_fly_exception_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  tactile_cli::FlyOptions fo;
+  fo.sim_scenario = TACTILE_CONFIG_DIR "/scenarios/whisker_hover.yaml";
+  fo.out_dir = out.string();
+  fo.config_dir = TACTILE_CONFIG_DIR;
+  fo.duration_s = 60.0;
+  fo.takeoff = true;
+  fo.write_bag = false;
+  fo.progress = false;
+  int64_t forward_since = -1;
+  fo.on_tick = [&](int64_t now, const char* mode) {
+    if (std::string(mode) != "forward") return;
+    if (forward_since < 0) forward_since = now;
+    if (now - forward_since > 1'000'000'000LL) throw std::runtime_error("injected fault");
+  };
+  try {
+    tactile_cli::run_fly(fo);
+    ADD_FAILURE() << "the exception did not reach the caller";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "injected fault");
+  }
+  std::ifstream in(out / "metrics.json");
+  const auto m = nlohmann::json::parse(in);
+  EXPECT_EQ(m["end_reason"], "exception: injected fault");
+  EXPECT_TRUE(m["shutdown"]["landed"].get<bool>()) << m["shutdown"].dump();
+  EXPECT_EQ(m["bridge_mode"], "stopped");
+  EXPECT_TRUE(has_transition(m["mode_history"], "forward", "landing", "land")) << m["mode_history"].dump();
+  EXPECT_GT(m["sitl"]["max_truth_z_m"].get<double>(), 0.3);
+  EXPECT_LT(m["sitl"]["final_z_m"].get<double>(), 0.05);
+  EXPECT_FALSE(m["sitl"]["motors_on_at_end"].get<bool>());
   fs::remove_all(out);
 }

@@ -63,11 +63,12 @@ class BridgeRunner {
   CommandResult emergency_stop(int64_t now_ns);
 
   /// Blocking: land (if airborne), pump the link and send setpoints at
-  /// setpoint_rate_hz until kStopped; on timeout emergency-stop. Returns true
-  /// if it landed (or was on the ground already). Log messages received
-  /// meanwhile go to `sinks` (none by default).
+  /// setpoint_rate_hz until kStopped and its stop packets are out; on timeout,
+  /// or as soon as `abort` returns true (e.g. a second Ctrl-C), emergency-stop.
+  /// Returns true if it landed (or was on the ground already, not in
+  /// kEmergency). Log messages received meanwhile go to `sinks` (none by default).
   bool land_and_stop(std::chrono::milliseconds timeout, const std::function<int64_t()>& now_ns,
-                     const Sinks& sinks = {});
+                     const Sinks& sinks = {}, const std::function<bool()>& abort = {});
 
   /// The logic's status with the link fields (ACK rate, packets lost, log
   /// blocks missed) filled in.

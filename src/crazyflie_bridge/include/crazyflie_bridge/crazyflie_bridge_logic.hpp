@@ -186,13 +186,14 @@ class CrazyflieBridgeLogic {
   std::optional<CrtpPacket> on_timer(int64_t now_ns);
 
   // Operator commands (operator surface). Each returns accepted and the reason.
-  /// Platform arming request (cflib PlatformService.send_arming_request);
-  /// arm(true) also clears the emergency latch, only on the ground.
+  /// Arming request as cflib's Supervisor.send_arming_request sends it for the
+  /// firmware's protocol version (queued in the outbox); arm(true) also clears
+  /// the emergency latch, only on the ground. Refused while airborne.
   CommandResult arm(bool on, int64_t now_ns);
   /// Height ramps from the measured z to height_m over duration_s -> kHovering.
   CommandResult takeoff(double height_m, double duration_s, int64_t now_ns);
-  /// From any airborne mode: height ramps down to height_m over duration_s,
-  /// then the motors stop (height_m <= land_height: to the floor).
+  /// From any airborne mode but kLanding: height ramps down to height_m
+  /// (in [0, land_height]) over duration_s, then the motors stop.
   CommandResult land(double height_m, double duration_s, int64_t now_ns);
   /// From kHovering / kGoTo: position setpoints interpolated over duration_s.
   CommandResult go_to(double x, double y, double z, double yaw_rad, double duration_s, bool relative, int64_t now_ns);

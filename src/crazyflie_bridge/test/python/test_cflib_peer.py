@@ -29,11 +29,16 @@ def free_udp_port():
     return port
 
 
+def start_server(*extra):
+    port = free_udp_port()
+    p = subprocess.Popen([os.environ['CRAZYFLIE_SIM_SERVER'], SCENARIO, '--port', str(port), '--duration', '60', *extra],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    return port, p
+
+
 @pytest.fixture
 def sim():
-    port = free_udp_port()
-    p = subprocess.Popen([os.environ['CRAZYFLIE_SIM_SERVER'], SCENARIO, '--port', str(port), '--duration', '60'],
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    port, p = start_server()
     line = p.stdout.readline()
     assert line.startswith('listening udp://127.0.0.1:%d' % port), line + p.stderr.read()
     yield 'udp://127.0.0.1:%d' % port
@@ -125,6 +130,57 @@ def test_cflib_connects_logs_params_and_flies(sim, tmp_path):
         # 0.2 m/s for 2 s = 0.4 m; the velocity loop needs a few tenths of a second to reach it.
         assert 0.2 < x_end - x_hover < 0.5, (x_hover, x_end)
         assert abs(state[-1]['stateEstimate.z'] - state[-1]['sitl.truthZ']) < 0.1
+
+
+@pytest.fixture
+def sim_requires_arming():
+    port, p = start_server('--require-arming')
+    line = p.stdout.readline()
+    assert line.startswith('listening udp://127.0.0.1:%d' % port), line + p.stderr.read()
+    yield 'udp://127.0.0.1:%d' % port
+    p.terminate()
+    out, err = p.communicate(timeout=10)
+    assert p.returncode == 0, err
+
+
+def test_cflib_arming_request_and_supervisor_info(sim_requires_arming, tmp_path):
+    """A simulated Crazyflie that requires arming (crazyflie_sim_server
+    --require-arming): cflib's hover setpoints do not start the motors until
+    cflib's own arming request (Supervisor.send_arming_request: the legacy
+    platform packet at protocol 10), and cflib decodes our supervisor.info as
+    the firmware's bit field."""
+    cflib.crtp.init_drivers()
+    cf = Crazyflie(rw_cache=str(tmp_path))
+    with SyncCrazyflie(sim_requires_arming, cf=cf) as scf:
+        lc = LogConfig(name='status', period_in_ms=20)
+        lc.add_variable('supervisor.info', 'uint16_t')
+        lc.add_variable('pm.vbat', 'float')
+        lc.add_variable('sitl.truthZ', 'float')
+        state = []
+        lc.data_received_cb.add_callback(lambda ts, data, conf: state.append(dict(data)))
+        scf.cf.log.add_config(lc)
+        lc.start()
+        time.sleep(0.3)
+        decode = scf.cf.supervisor.decode_bitfield
+        names = decode(state[-1]['supervisor.info'])
+        assert 'Can be armed' in names and 'Is armed' not in names and 'Is auto armed' not in names, names
+        assert 3.9 < state[-1]['pm.vbat'] < 4.2
+        for _ in range(50):  # 1 s of hover setpoints while not armed: motors stay off
+            scf.cf.commander.send_hover_setpoint(0.0, 0.0, 0.0, 0.4)
+            time.sleep(0.02)
+        assert state[-1]['sitl.truthZ'] < 0.01, state[-1]
+        with pytest.warns(UserWarning):  # cflib: protocol < 12 uses the legacy platform request
+            scf.cf.supervisor.send_arming_request(True)
+        time.sleep(0.2)
+        names = decode(state[-1]['supervisor.info'])
+        assert 'Is armed' in names and 'Can fly' in names, names
+        for _ in range(100):  # 2 s of hover setpoints, armed: it flies
+            scf.cf.commander.send_hover_setpoint(0.0, 0.0, 0.0, 0.4)
+            time.sleep(0.02)
+        assert state[-1]['sitl.truthZ'] > 0.3, state[-1]
+        assert 'Is flying' in decode(state[-1]['supervisor.info'])
+        scf.cf.commander.send_stop_setpoint()
+        lc.stop()
 
 
 def test_cflib_scan_finds_simulated_crazyflie():
