@@ -5,7 +5,11 @@ container as radio.launch.py with the bridge on udp://127.0.0.1:<port>.
     ros2 launch launch/sitl.launch.py scenario:=config/scenarios/whisker_darkness_rigid_fsm.yaml
 
 As radio.launch.py, nothing flies until `takeoff` (then `start_behaviour`) unless
-autostart:=true.
+autostart:=true. Ctrl-C reaches crazyflie_sim_server too, which ends at once: the bridge's
+shutdown landing then hears no vehicle and ends after shutdown_land_timeout_s with an
+emergency stop. To watch the shutdown landing, run the server on its own and
+radio.launch.py uri:=udp://127.0.0.1:<port> against it (tactile_ros_tests
+test_launch_operator.py does).
 
 Any cflib-based tool (cfclient, scripts) can connect to the same simulated Crazyflie
 instead: udp://127.0.0.1:19850. The standalone host does the whole flight without ROS:
