@@ -12,7 +12,10 @@ launch arguments override the serial device per whisker and the TDORC parameter 
 start (device missing, bad parameter) stops the launch with its message.
 
 Topics: /whisker/{left,right}/pressure (tactile_msgs/WhiskerPressure),
-        /whisker/{left,right}/signal   (tactile_msgs/WhiskerSignal).
+        /whisker/{left,right}/signal   (tactile_msgs/WhiskerSignal),
+        /diagnostics (diagnostic_msgs/DiagnosticArray, where diagnostic_updater is installed):
+        "whisker_driver: whisker deck /whisker/<side>" per driver (stall, frame errors,
+        device gone; thresholds in config/whisker_driver_health.yaml).
 """
 
 import importlib.util
@@ -42,6 +45,8 @@ def whisker_nodes(side, device, tdorc_params):
             namespace=namespace,
             parameters=launch_common.parameters(
                 os.path.join(CONFIG_DIR, 'whisker_driver.yaml'),
+                # /diagnostics thresholds (stall, frame errors, device gone)
+                os.path.join(CONFIG_DIR, 'whisker_driver_health.yaml'),
                 # Protocol, whisker_id and frame_id come from the file's
                 # /whisker/<side>/whisker_driver section.
                 {'source': 'serial', 'device': device},

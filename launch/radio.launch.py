@@ -5,6 +5,14 @@ container on wall-clock time.
 
     ros2 launch launch/radio.launch.py uri:=radio://0/80/2M/E7E7E7E7E7?safelink=1
 
+Nothing flies until the operator asks (autostart:=false, the default): the bridge connects,
+streams the sensors and stays on the ground; `takeoff`, then `start_behaviour` hands over to
+the whisker FSM; `land`, `emergency`, `arm`, `go_to`, `notify_setpoints_stop` as in
+crazyflie_bridge/README.md "Operator surface". autostart:=true forwards the FSM as soon as
+setpoints and log data are fresh (take-off on connect: the SITL tests). Ctrl-C lands first
+(within the bridge's shutdown_land_timeout_s), then stops the motors; the container is
+given that long plus a margin before launch escalates to SIGTERM.
+
 The bridge reads the whisker deck's log variables (Whisker.Barometer1_1..3,
 Whisker1.Barometer2_1..3) at 50 Hz and stateEstimate.x/y/z/yaw/vx/vy at 100 Hz in two
 log blocks (config/crazyflie_bridge.yaml) and
@@ -14,7 +22,7 @@ commander hover setpoints, clamped, with the stale-input chain hover -> land -> 
 
     tactile fly --uri radio://0/80/2M/E7E7E7E7E7 --out out/flight
 
-Parameters come from config/ (crazyflie_bridge.yaml, tdorc_filter.yaml,
+Parameters come from config/ (crazyflie_bridge.yaml, crazyflie_bridge_health.yaml, tdorc_filter.yaml,
 tactile_depth.yaml, tactile_fsm.yaml); `uri` overrides the bridge's. The FSM's first
 approach steps and scans by default (tactile_fsm README "Round 12"); against a single wall
 ahead set first_whisk_amplitude: 0 there for the paper's straight approach. The Crazyradio needs
@@ -30,6 +38,8 @@ from launch.actions import DeclareLaunchArgument
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import ComposableNodeContainer
 from launch_ros.descriptions import ComposableNode
+from launch_ros.parameter_descriptions import ParameterValue
+import yaml
 
 CONFIG_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config')
 
@@ -43,13 +53,34 @@ def config(name):
     return os.path.join(CONFIG_DIR, name + '.yaml')
 
 
+def autostart_argument():
+    return DeclareLaunchArgument(
+        'autostart', default_value='false', choices=['true', 'false'],
+        description='true: forward the behaviour as soon as setpoints and log data are fresh '
+                    '(take-off on connect); false: nothing flies until the takeoff service')
+
+
+def bridge_overrides(uri):
+    """The bridge's launch-argument overrides: uri and autostart."""
+    return {'uri': uri, 'autostart': ParameterValue(LaunchConfiguration('autostart'), value_type=bool)}
+
+
+def container_stop_timeout():
+    """Seconds `ros2 launch` waits after SIGINT before it sends SIGTERM to the container: the
+    bridge's shutdown landing is bounded by shutdown_land_timeout_s (config/crazyflie_bridge.yaml,
+    else the logic's default), plus 5 s for the rest of the graph to stop."""
+    with open(config('crazyflie_bridge')) as f:
+        params = (yaml.safe_load(f) or {}).get('crazyflie_bridge', {}).get('ros__parameters', {})
+    return str(float(params.get('shutdown_land_timeout_s', 10.0)) + 5.0)
+
+
 def pipeline_nodes(bridge_overrides):
     """The bridge and the whisker pipeline (also used by sitl.launch.py)."""
     intra = [{'use_intra_process_comms': True}]
     nodes = [ComposableNode(
         package='crazyflie_bridge', plugin='crazyflie_bridge::CrazyflieBridgeComponent',
         name='crazyflie_bridge', parameters=launch_common.parameters(
-            config('crazyflie_bridge'), bridge_overrides),
+            config('crazyflie_bridge'), config('crazyflie_bridge_health'), bridge_overrides),
         extra_arguments=intra)]
     for side in ('left', 'right'):
         nodes.append(ComposableNode(
@@ -69,11 +100,12 @@ def generate_launch_description():
     container = ComposableNodeContainer(
         name='radio_container', namespace='', package='rclcpp_components',
         executable='component_container',
-        composable_node_descriptions=pipeline_nodes({'uri': LaunchConfiguration('uri')}),
-        output='screen')
+        composable_node_descriptions=pipeline_nodes(bridge_overrides(LaunchConfiguration('uri'))),
+        output='screen', sigterm_timeout=container_stop_timeout())
     return LaunchDescription([
         DeclareLaunchArgument('uri', default_value='radio://0/80/2M/E7E7E7E7E7?safelink=1',
                               description='Crazyflie link URI (radio://, usb://, udp://)'),
+        autostart_argument(),
         container,
         launch_common.stop_on_load_failure(container),
     ])

@@ -4,6 +4,13 @@ container as radio.launch.py with the bridge on udp://127.0.0.1:<port>.
 
     ros2 launch launch/sitl.launch.py scenario:=config/scenarios/whisker_darkness_rigid_fsm.yaml
 
+As radio.launch.py, nothing flies until `takeoff` (then `start_behaviour`) unless
+autostart:=true. Ctrl-C reaches crazyflie_sim_server too, which ends at once: the bridge's
+shutdown landing then hears no vehicle and ends after shutdown_land_timeout_s with an
+emergency stop. To watch the shutdown landing, run the server on its own and
+radio.launch.py uri:=udp://127.0.0.1:<port> against it (tactile_ros_tests
+test_launch_operator.py does).
+
 Any cflib-based tool (cfclient, scripts) can connect to the same simulated Crazyflie
 instead: udp://127.0.0.1:19850. The standalone host does the whole flight without ROS:
 
@@ -44,14 +51,15 @@ def generate_launch_description():
     container = ComposableNodeContainer(
         name='sitl_bridge_container', namespace='', package='rclcpp_components',
         executable='component_container',
-        composable_node_descriptions=_radio.pipeline_nodes({'uri': uri}),
-        output='screen')
+        composable_node_descriptions=_radio.pipeline_nodes(_radio.bridge_overrides(uri)),
+        output='screen', sigterm_timeout=_radio.container_stop_timeout())
     return LaunchDescription([
         DeclareLaunchArgument('scenario', default_value=os.path.join(
             CONFIG_DIR, 'scenarios', 'whisker_darkness_rigid_fsm.yaml'),
             description='scenario of the simulated Crazyflie (arena, vehicle, estimate)'),
         DeclareLaunchArgument('port', default_value='19850', description='UDP port (19850 + N)'),
         DeclareLaunchArgument('seed', default_value='-1', description="noise seed (-1: the scenario's)"),
+        _radio.autostart_argument(),
         server,
         container,
         _radio.launch_common.stop_on_load_failure(container),

@@ -14,7 +14,8 @@
 #   2. /opt/ros/<distro>/setup.bash where exactly one distro is installed;
 #   3. the ROS 2 Kilted toolchain built from PyPI wheels and source tarballs by
 #      ../shared/ros2/build_ros2.sh beside the workspace (cached in
-#      ~/.cache/ros2-kilted after its first ~3 min build).
+#      ~/.cache/ros2-kilted after its first ~3 min build), with its extras overlay
+#      (build_ros2_extras.sh) where that was built.
 # Without any of them it says so and exits 2.
 #
 # DDS traffic stays on this host (ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST), and each test
@@ -45,6 +46,14 @@ else
     bash "$here/../shared/ros2/build_ros2.sh" "$toolchain"
     # shellcheck disable=SC1091
     source "$toolchain/env.sh"
+    # Its extras overlay (../shared/ros2/build_ros2_extras.sh: diagnostic_updater, lifecycle,
+    # the ros2 service/topic/param verbs) where it was built: crazyflie_bridge then publishes
+    # /diagnostics, and its test runs.
+    if [[ -f "$toolchain/extras/env.sh" && -f "$toolchain/extras/.complete" ]]; then
+      echo "ros2_test: with the extras overlay in $toolchain/extras"
+      # shellcheck disable=SC1091
+      source "$toolchain/extras/env.sh"
+    fi
   else
     echo "ros2_test: no ROS 2 found: source a ROS 2 setup.bash (Humble, Jazzy or Kilted) first" >&2
     exit 2
@@ -108,15 +117,17 @@ case "${1:-}" in
   --no-e2e) export TACTILE_ROS_E2E=0; shift ;;
   --e2e) export TACTILE_ROS_E2E=1; shift ;;
 esac
-if (($# > 0)); then export PYTEST_ADDOPTS="-k $1"; fi
+# quoted: pytest splits PYTEST_ADDOPTS like a shell, and an expression has spaces ("a or b")
+if (($# > 0)); then export PYTEST_ADDOPTS="-k '$1'"; fi
 colcon --log-base log_ros test "${common[@]}" --packages-select tactile_ros_tests \
   --event-handlers console_cohesion+ summary+ --return-code-on-test-failure "${ctest_args[@]}" || status=$?
 summary="$(colcon test-result --test-result-base build_ros/tactile_ros_tests --verbose --all 2>&1)" || true
 echo "$summary" | grep -v '^build_ros/.*: [0-9]* tests, 0 errors, 0 failures' || true
 line="$(echo "$summary" | grep -E '^Summary: [0-9]+ tests' | tail -n 1)"
 total=$(echo "$line" | sed -E 's/Summary: ([0-9]+) tests.*/\1/')
-errors=$(echo "$line" | sed -E 's/.* ([0-9]+) errors.*/\1/')
-failures=$(echo "$line" | sed -E 's/.* ([0-9]+) failures.*/\1/')
+# colcon says "1 error" / "1 failure" in the singular
+errors=$(echo "$line" | sed -E 's/.* ([0-9]+) errors?.*/\1/')
+failures=$(echo "$line" | sed -E 's/.* ([0-9]+) failures?.*/\1/')
 skipped=$(echo "$line" | sed -E 's/.* ([0-9]+) skipped.*/\1/')
 if [[ -z "$total" || "$total" -eq 0 ]]; then
   echo "ROS 2 stage: no test results found" >&2

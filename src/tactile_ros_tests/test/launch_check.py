@@ -199,6 +199,34 @@ class Graph:
                 self.node.destroy_subscription(sub)
         return out
 
+    def call(self, srv_type, name: str, request, timeout: float = 10.0):
+        """Calls service `name` of type `srv_type` with `request`; returns the response."""
+        client = self.node.create_client(srv_type, name)
+        try:
+            assert client.wait_for_service(timeout_sec=timeout), f'{name} not offered within {timeout} s'
+            future = client.call_async(request)
+            end = time.monotonic() + timeout
+            while not future.done() and time.monotonic() < end:
+                self.executor.spin_once(timeout_sec=0.05)
+            assert future.done(), f'{name} did not answer within {timeout} s'
+            return future.result()
+        finally:
+            self.node.destroy_client(client)
+
+    def spin_until(self, condition, timeout: float, what: str, launch: Launch | None = None):
+        """Spins until condition() is true; fails naming `what` (and the launch output)."""
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            if condition():
+                return
+            if launch is not None and not launch.running():
+                break
+            self.spin(0.05)
+        if condition():
+            return
+        out = f'; launch output:\n{launch.output()[-4000:]}' if launch is not None else ''
+        pytest.fail(f'{what}: not within {timeout} s{out}')
+
     def get_parameters(self, node: str, names: list[str], timeout: float = 10.0) -> dict:
         """Values of `names` from `node`'s rcl_interfaces/GetParameters service."""
         from rcl_interfaces.srv import GetParameters

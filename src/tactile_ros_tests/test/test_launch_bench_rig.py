@@ -51,6 +51,8 @@ class Deck:
         self.left_device = os.ttyname(self.left_slave)
         self.right_device = os.ttyname(self.right_slave)
         self.frames = 0
+        self.left_paused = threading.Event()    # whisker 1 sends nothing (a stalled deck)
+        self.right_garbage = threading.Event()  # whisker 2 sends a malformed line per frame
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, daemon=True)
         self._thread.start()
@@ -63,8 +65,11 @@ class Deck:
             text = ''.join(f'P{i + 1}:{p[i]:.2f}\n' for i in range(3)) + \
                 ''.join(f'T{i + 1}:{t[i]:.2f}\r\n' for i in range(3))
             csv = ','.join(f'{v:.2f}' for v in right_frame(k)) + '\n'
+            if self.right_garbage.is_set():
+                csv = 'x7,?,\n' + csv
             try:
-                os.write(self.left_master, text.encode())
+                if not self.left_paused.is_set():
+                    os.write(self.left_master, text.encode())
                 os.write(self.right_master, csv.encode())
             except OSError:
                 return
@@ -213,3 +218,50 @@ def test_bench_rig_missing_device_stops_the_launch_naming_it(tmp_path):
         out = launch.output()
     assert code not in (None, 0), f'launch exit {code}:\n{out[-3000:]}'
     assert str(missing) in out and 'does not exist' in out, out[-3000:]
+
+
+def test_bench_rig_diagnostics_stall_and_frame_errors(deck, tmp_path):
+    """/diagnostics of each driver (whisker_driver DriverHealth, 1 s period): OK while the deck
+    streams; whisker 1 silent -> its check ERROR "stalled" (the other stays OK); whisker 2
+    sending a malformed line per frame (half its lines) -> ERROR "frame errors"."""
+    try:
+        from diagnostic_msgs.msg import DiagnosticArray
+    except ImportError:
+        pytest.skip('diagnostic_msgs not installed: the drivers publish no /diagnostics '
+                    '(ROS 2 toolchain without its extras overlay)')
+    from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy
+    left, right = 'whisker_driver: whisker deck /whisker/left', 'whisker_driver: whisker deck /whisker/right'
+    with Launch('bench_rig.launch.py', [f'left_device:={deck.left_device}',
+                                        f'right_device:={deck.right_device}'],
+                tmp_path / 'launch.log') as launch, Graph() as g:
+        g.wait_for_nodes(NODES, launch)
+        latest = {}
+
+        def on_array(a):
+            for s in a.status:
+                latest[s.name] = s
+        g.node.create_subscription(DiagnosticArray, '/diagnostics', on_array, QoSProfile(
+            history=HistoryPolicy.KEEP_LAST, depth=100, reliability=ReliabilityPolicy.BEST_EFFORT))
+
+        def level(name):
+            s = latest.get(name)
+            return None if s is None else (s.level[0] if isinstance(s.level, bytes) else int(s.level))
+
+        def describe():
+            return {n: (level(n), s.message) for n, s in latest.items()}
+        g.spin_until(lambda: level(left) == 0 and level(right) == 0, 10,
+                     f'both drivers OK while streaming: {describe()}', launch)
+        assert latest[left].hardware_id == deck.left_device
+        assert {kv.key for kv in latest[left].values} >= {'samples_in_period', 'sample_age_s', 'device_errors',
+                                                          'dropped_lines', 'dropped_frames'}
+        deck.left_paused.set()
+        g.spin_until(lambda: level(left) == 2 and 'stalled' in latest[left].message, 6,
+                     f'left ERROR stalled: {describe()}', launch)
+        assert level(right) == 0, describe()
+        deck.left_paused.clear()
+        deck.right_garbage.set()
+        g.spin_until(lambda: level(right) == 2 and 'frame errors' in latest[right].message, 6,
+                     f'right ERROR frame errors: {describe()}', launch)
+        deck.right_garbage.clear()
+        g.spin_until(lambda: level(left) == 0 and level(right) == 0, 6,
+                     f'both OK again: {describe()}', launch)

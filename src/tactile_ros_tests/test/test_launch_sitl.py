@@ -1,7 +1,8 @@
 """launch/sitl.launch.py: crazyflie_sim_server (the simulated Crazyflie behind CRTP on UDP,
 wall-clock physics) and the radio.launch.py pipeline with the bridge on
 udp://127.0.0.1:<port>: the bridge's log blocks -> TDORC x2 -> tactile_depth -> whisker_fsm
--> hover setpoints back over CRTP."""
+-> hover setpoints back over CRTP. With autostart:=true (take-off on connect, as before the
+operator surface): the operator's sequence is test_launch_operator.py's."""
 
 from __future__ import annotations
 
@@ -19,6 +20,8 @@ RATE_TOPICS = {
     '/whisker/left/signal': ('tactile_msgs/msg/WhiskerSignal', 50.0, 'stamp'),
     '/whisker/right/signal': ('tactile_msgs/msg/WhiskerSignal', 50.0, 'stamp'),
     '/cmd_hover': ('tactile_msgs/msg/HoverSetpoint', 50.0, 'wall'),
+    # status_rate_hz (config/crazyflie_bridge_health.yaml)
+    '/status': ('tactile_msgs/msg/BridgeStatus', 5.0, 'stamp'),
 }
 EVENT_TOPICS = {'/whisker/depth': 'tactile_msgs/msg/TactileDepth',
                 '/fsm_state': 'tactile_msgs/msg/FsmState'}
@@ -26,9 +29,9 @@ EVENT_TOPICS = {'/whisker/depth': 'tactile_msgs/msg/TactileDepth',
 
 def test_sitl_bridge_over_udp(tmp_path):
     port = unique_port()
-    with Launch('sitl.launch.py', [f'port:={port}', 'seed:=5'], tmp_path / 'launch.log') as launch, \
+    with Launch('sitl.launch.py', [f'port:={port}', 'seed:=5', 'autostart:=true'], tmp_path / 'launch.log') as launch, \
             Graph() as g:
         check_graph(g, launch, NODES, RATE_TOPICS, EVENT_TOPICS)
-        bridge = g.get_parameters('/crazyflie_bridge', ['uri'])
+        bridge = g.get_parameters('/crazyflie_bridge', ['uri', 'autostart'])
     # The port argument reached the bridge (and the server: the bridge flies it, above).
-    assert bridge == {'uri': f'udp://127.0.0.1:{port}'}
+    assert bridge == {'uri': f'udp://127.0.0.1:{port}', 'autostart': True}

@@ -1,0 +1,213 @@
+#include "crazyflie_bridge/bridge_health.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+namespace crazyflie_bridge {
+
+using tactile_common::ParamMap;
+
+namespace {
+
+std::string fmt(const char* format, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, format, v);
+  return buf;
+}
+
+void finite_positive(const char* key, double v) {
+  if (!std::isfinite(v) || v <= 0.0) {
+    throw std::invalid_argument(std::string("BridgeHealth.") + key + ": must be finite and > 0, got " +
+                                std::to_string(v));
+  }
+}
+
+void ordered(const char* low_key, double low, const char* high_key, double high) {
+  if (!(low < high)) {
+    throw std::invalid_argument(std::string("BridgeHealth.") + low_key + " (" + std::to_string(low) +
+                                ") must be below " + high_key + " (" + std::to_string(high) + ")");
+  }
+}
+
+}  // namespace
+
+void BridgeHealth::Params::validate() const {
+  finite_positive("status_rate_hz", status_rate_hz);
+  finite_positive("diagnostics_period_s", diagnostics_period_s);
+  finite_positive("battery_warn_v", battery_warn_v);
+  finite_positive("battery_error_v", battery_error_v);
+  ordered("battery_error_v", battery_error_v, "battery_warn_v", battery_warn_v);
+  finite_positive("link_quality_warn", link_quality_warn);
+  finite_positive("link_quality_error", link_quality_error);
+  if (link_quality_warn > 1.0) {
+    throw std::invalid_argument("BridgeHealth.link_quality_warn: an ACK rate, must be <= 1, got " +
+                                std::to_string(link_quality_warn));
+  }
+  ordered("link_quality_error", link_quality_error, "link_quality_warn", link_quality_warn);
+  finite_positive("log_age_warn_s", log_age_warn_s);
+  finite_positive("log_age_error_s", log_age_error_s);
+  ordered("log_age_warn_s", log_age_warn_s, "log_age_error_s", log_age_error_s);
+}
+
+ParamMap BridgeHealth::default_parameters() {
+  const Params d;
+  ParamMap m(kNodeName, "defaults");
+  m.set("status_rate_hz", d.status_rate_hz);
+  m.set("diagnostics_period_s", d.diagnostics_period_s);
+  m.set("battery_warn_v", d.battery_warn_v);
+  m.set("battery_error_v", d.battery_error_v);
+  m.set("link_quality_warn", d.link_quality_warn);
+  m.set("link_quality_error", d.link_quality_error);
+  m.set("log_age_warn_s", d.log_age_warn_s);
+  m.set("log_age_error_s", d.log_age_error_s);
+  return m;
+}
+
+BridgeHealth::Params BridgeHealth::params_from(const ParamMap& m) {
+  Params p;
+  p.status_rate_hz = m.get_double("status_rate_hz");
+  p.diagnostics_period_s = m.get_double("diagnostics_period_s");
+  p.battery_warn_v = m.get_double("battery_warn_v");
+  p.battery_error_v = m.get_double("battery_error_v");
+  p.link_quality_warn = m.get_double("link_quality_warn");
+  p.link_quality_error = m.get_double("link_quality_error");
+  p.log_age_warn_s = m.get_double("log_age_warn_s");
+  p.log_age_error_s = m.get_double("log_age_error_s");
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    throw tactile_common::ParamError(m.source() + ": " + kNodeName + ": " + e.what());
+  }
+  return p;
+}
+
+std::vector<BridgeHealth::Check> BridgeHealth::evaluate(const Params& p, const CrazyflieBridgeLogic::Status& s) {
+  std::vector<Check> out;
+  {
+    Check c{"battery", Level::kOk, "", {}};
+    if (!std::isfinite(s.battery_v)) {
+      c.level = Level::kStale;
+      c.message = "battery voltage not known yet (no status log data)";
+    } else if (s.battery_v < p.battery_error_v) {
+      c.level = Level::kError;
+      c.message = "battery critical: " + fmt("%.2f", s.battery_v) + " V < battery_error_v " + fmt("%.2f", p.battery_error_v) + " V";
+    } else if (s.battery_v < p.battery_warn_v) {
+      c.level = Level::kWarn;
+      c.message = "battery low: " + fmt("%.2f", s.battery_v) + " V < battery_warn_v " + fmt("%.2f", p.battery_warn_v) + " V";
+    } else {
+      c.message = "battery " + fmt("%.2f", s.battery_v) + " V";
+    }
+    c.values = {{"battery_voltage", fmt("%.3f", s.battery_v)},
+                {"pm_state", std::to_string(s.pm_state)},
+                {"low_battery_events", std::to_string(s.low_battery_events)}};
+    out.push_back(std::move(c));
+  }
+  {
+    Check c{"link", Level::kOk, "", {}};
+    if (!std::isfinite(s.link_quality)) {
+      c.level = Level::kStale;
+      c.message = "no ACK statistics (UDP and USB links have no ACKs)";
+    } else if (s.link_quality < p.link_quality_error) {
+      c.level = Level::kError;
+      c.message = "link quality " + fmt("%.2f", s.link_quality) + " < link_quality_error " + fmt("%.2f", p.link_quality_error);
+    } else if (s.link_quality < p.link_quality_warn) {
+      c.level = Level::kWarn;
+      c.message = "link quality " + fmt("%.2f", s.link_quality) + " < link_quality_warn " + fmt("%.2f", p.link_quality_warn);
+    } else {
+      c.message = "link quality " + fmt("%.2f", s.link_quality);
+    }
+    c.values = {{"link_quality", fmt("%.3f", s.link_quality)},
+                {"rssi", std::to_string(s.rssi_dbm)},
+                {"packets_lost", std::to_string(s.packets_lost)}};
+    out.push_back(std::move(c));
+  }
+  {
+    Check c{"log stream", Level::kOk, "", {}};
+    if (!std::isfinite(s.log_age_s)) {
+      c.level = Level::kStale;
+      c.message = "no log data received yet";
+    } else if (s.log_age_s > p.log_age_error_s) {
+      c.level = Level::kError;
+      c.message = "log data stale: " + fmt("%.3f", s.log_age_s) + " s > log_age_error_s " + fmt("%.3f", p.log_age_error_s) + " s";
+    } else if (s.log_age_s > p.log_age_warn_s) {
+      c.level = Level::kWarn;
+      c.message = "log data late: " + fmt("%.3f", s.log_age_s) + " s > log_age_warn_s " + fmt("%.3f", p.log_age_warn_s) + " s";
+    } else {
+      c.message = "log data fresh";
+    }
+    c.values = {{"log_age_s", fmt("%.3f", s.log_age_s)},
+                {"log_blocks_missed", std::to_string(s.log_blocks_missed)},
+                {"setpoint_age_s", fmt("%.3f", s.setpoint_age_s)}};
+    out.push_back(std::move(c));
+  }
+  {
+    Check c{"flight", Level::kOk, std::string("mode ") + to_string(s.mode), {}};
+    if (s.emergency_latched || s.mode == CrazyflieBridgeLogic::Mode::kEmergency) {
+      c.level = Level::kError;
+      c.message = "emergency stop latched: motors off until arm";
+    } else if (s.mode == CrazyflieBridgeLogic::Mode::kHoverHold) {
+      c.level = Level::kWarn;
+      c.message = "hover hold: behaviour setpoints or log data stale";
+    } else if (s.low_battery_events > 0) {
+      c.level = Level::kWarn;
+      c.message += " (after " + std::to_string(s.low_battery_events) + " low-battery landing(s))";
+    }
+    c.values = {{"mode", to_string(s.mode)},
+                {"armed", s.armed ? "true" : "false"},
+                {"emergency_latched", s.emergency_latched ? "true" : "false"},
+                {"supervisor_info", std::to_string(s.supervisor_info)}};
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+uint8_t BridgeHealth::mode_code(CrazyflieBridgeLogic::Mode mode) {
+  using M = CrazyflieBridgeLogic::Mode;
+  using B = tactile_msgs::msg::BridgeStatus;
+  switch (mode) {
+    case M::kGrounded: return B::MODE_GROUNDED;
+    case M::kTakingOff: return B::MODE_TAKING_OFF;
+    case M::kHovering: return B::MODE_HOVERING;
+    case M::kGoTo: return B::MODE_GO_TO;
+    case M::kForward: return B::MODE_FORWARD;
+    case M::kHoverHold: return B::MODE_HOVER_HOLD;
+    case M::kLanding: return B::MODE_LANDING;
+    case M::kStopped: return B::MODE_STOPPED;
+    case M::kEmergency: return B::MODE_EMERGENCY;
+  }
+  throw std::logic_error("BridgeHealth::mode_code: unknown mode " + std::to_string(static_cast<int>(mode)));
+}
+
+tactile_msgs::msg::BridgeStatus BridgeHealth::to_msg(const CrazyflieBridgeLogic::Status& s, int64_t stamp_ns) {
+  tactile_msgs::msg::BridgeStatus m;
+  m.header.stamp.sec = static_cast<int32_t>(stamp_ns / 1000000000);
+  m.header.stamp.nanosec = static_cast<uint32_t>(stamp_ns % 1000000000);
+  m.mode = mode_code(s.mode);
+  m.mode_name = to_string(s.mode);
+  m.armed = s.armed;
+  m.emergency_latched = s.emergency_latched;
+  m.battery_voltage = static_cast<float>(s.battery_v);
+  m.pm_state = static_cast<int8_t>(s.pm_state);
+  m.supervisor_info = static_cast<int32_t>(s.supervisor_info);
+  m.rssi = static_cast<int16_t>(s.rssi_dbm);
+  m.link_quality = static_cast<float>(s.link_quality);
+  m.packets_lost = s.packets_lost;
+  m.log_blocks_missed = s.log_blocks_missed;
+  m.setpoint_age_s = static_cast<float>(s.setpoint_age_s);
+  m.log_age_s = static_cast<float>(s.log_age_s);
+  m.low_battery_events = s.low_battery_events;
+  return m;
+}
+
+const char* to_string(BridgeHealth::Level level) {
+  switch (level) {
+    case BridgeHealth::Level::kOk: return "OK";
+    case BridgeHealth::Level::kWarn: return "WARN";
+    case BridgeHealth::Level::kError: return "ERROR";
+    case BridgeHealth::Level::kStale: return "STALE";
+  }
+  return "?";
+}
+
+}  // namespace crazyflie_bridge
