@@ -12,16 +12,20 @@
 # The ROS 2 environment, in this order:
 #   1. the one already sourced (ROS_DISTRO set and `ros2` on PATH), e.g. /opt/ros/jazzy;
 #   2. /opt/ros/<distro>/setup.bash where exactly one distro is installed;
-#   3. the ROS 2 Kilted toolchain built from PyPI wheels and source tarballs by
-#      ../shared/ros2/build_ros2.sh beside the workspace (cached in
-#      ~/.cache/ros2-kilted after its first ~3 min build), with its extras overlay
-#      (build_ros2_extras.sh) where that was built.
+#   3. the ROS 2 toolchain of ROS2_DISTRO (kilted, the default, or jazzy) built from PyPI
+#      wheels and source tarballs by ../shared/ros2/build_ros2.sh beside the workspace, each
+#      distro in its own cache (~/.cache/ros2-<distro>, built once: ~3 min for Kilted, longer
+#      for Jazzy); for Kilted also its extras overlay (build_ros2_extras.sh: diagnostic_updater,
+#      rclcpp_lifecycle, tf2, the ros2 topic/param/service verbs; built once, ~10 min).
+#
+# Build and install trees are per distro: build_ros/, install_ros/, log_ros/ for Kilted,
+# build_ros_<distro>/ ... for another (ROS_DISTRO of the environment used).
 # Without any of them it says so and exits 2.
 #
 # DDS traffic stays on this host (ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST), and each test
 # run takes a ROS_DOMAIN_ID of its own (tactile_ros_tests/test/conftest.py).
 #
-# Prints the test results and one line "ros2: N passed, N failed, N skipped";
+# Prints the test results and one line "ros2 <distro>: N passed, N failed, N skipped";
 # exits non-zero when the build warns or fails, or any ROS test fails.
 set -eo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -41,18 +45,21 @@ else
     # shellcheck disable=SC1090
     source "${distros[0]}"
   elif [[ -x "$here/../shared/ros2/build_ros2.sh" || -f "$here/../shared/ros2/build_ros2.sh" ]]; then
-    toolchain="${TACTILE_ROS2_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/ros2-kilted}"
-    echo "ros2_test: ROS 2 Kilted toolchain in $toolchain (built once from ../shared/ros2)"
-    bash "$here/../shared/ros2/build_ros2.sh" "$toolchain"
-    # shellcheck disable=SC1091
-    source "$toolchain/env.sh"
-    # Its extras overlay (../shared/ros2/build_ros2_extras.sh: diagnostic_updater, lifecycle,
-    # the ros2 service/topic/param verbs) where it was built: crazyflie_bridge then publishes
-    # /diagnostics, and its test runs.
-    if [[ -f "$toolchain/extras/env.sh" && -f "$toolchain/extras/.complete" ]]; then
-      echo "ros2_test: with the extras overlay in $toolchain/extras"
+    want="${ROS2_DISTRO:-kilted}"
+    case "$want" in kilted|jazzy) ;; *) echo "ros2_test: ROS2_DISTRO=$want: ../shared/ros2 builds kilted or jazzy" >&2; exit 2 ;; esac
+    toolchain="${TACTILE_ROS2_DIR:-${XDG_CACHE_HOME:-$HOME/.cache}/ros2-$want}"
+    echo "ros2_test: ROS 2 ${want} toolchain in $toolchain (built once from ../shared/ros2)"
+    ROS2_DISTRO="$want" bash "$here/../shared/ros2/build_ros2.sh" "$toolchain"
+    if [[ "$want" == kilted ]]; then
+      # Its extras overlay (diagnostic_updater, rclcpp_lifecycle, tf2, the ros2 verbs; Kilted
+      # only): crazyflie_bridge and whisker_driver then publish /diagnostics, and their tests
+      # run. Built once; an up-to-date overlay returns at once.
+      nice -n 5 bash "$here/../shared/ros2/build_ros2_extras.sh" "$toolchain"
       # shellcheck disable=SC1091
       source "$toolchain/extras/env.sh"
+    else
+      # shellcheck disable=SC1091
+      source "$toolchain/env.sh"
     fi
   else
     echo "ros2_test: no ROS 2 found: source a ROS 2 setup.bash (Humble, Jazzy or Kilted) first" >&2
@@ -74,20 +81,25 @@ export MAKEFLAGS="${MAKEFLAGS:--j$(nproc)}"
 # Python type-support libraries, whose Python symbols stay undefined.
 launcher=()
 if command -v ccache >/dev/null 2>&1; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache); fi
-mkdir -p log_ros
-build_log="log_ros/build_output.txt"
-common=(--build-base build_ros --install-base install_ros)
+# One build tree per distro (Kilted keeps the plain names).
+suffix=""
+[[ "${ROS_DISTRO}" != kilted ]] && suffix="_${ROS_DISTRO}"
+build_base="build_ros${suffix}"; install_base="install_ros${suffix}"; log_base="log_ros${suffix}"
+tag="ros2 ${ROS_DISTRO}"
+mkdir -p "$log_base"
+build_log="$log_base/build_output.txt"
+common=(--build-base "$build_base" --install-base "$install_base")
 cmake_args=(-DCMAKE_BUILD_TYPE=Release -DTACTILE_BUILD_BENCHMARKS=OFF
   "-DCMAKE_SHARED_LINKER_FLAGS=-Wl,--as-needed" "-DCMAKE_EXE_LINKER_FLAGS=-Wl,--as-needed"
   "-DCMAKE_MODULE_LINKER_FLAGS=-Wl,--as-needed" "${launcher[@]}")
 set +e
 # The ROS-free layers' own tests run in scripts/test.sh; here only tactile_ros_tests builds its tests.
-colcon --log-base log_ros build "${common[@]}" --packages-skip tactile_ros_tests \
+colcon --log-base "$log_base" build "${common[@]}" --packages-skip tactile_ros_tests \
   --event-handlers console_cohesion+ summary+ \
   --cmake-args "${cmake_args[@]}" -DBUILD_TESTING=OFF 2>&1 | tee "$build_log"
 rc=${PIPESTATUS[0]}
 if ((rc == 0)); then
-  colcon --log-base log_ros build "${common[@]}" --packages-select tactile_ros_tests \
+  colcon --log-base "$log_base" build "${common[@]}" --packages-select tactile_ros_tests \
     --event-handlers console_cohesion+ summary+ \
     --cmake-args "${cmake_args[@]}" -DBUILD_TESTING=ON 2>&1 | tee -a "$build_log"
   rc=${PIPESTATUS[0]}
@@ -95,21 +107,21 @@ fi
 set -e
 if ((rc != 0)); then
   echo "ROS 2 stage: build failed (log: $build_log)" >&2
-  echo "ros2: 0 passed, 1 failed"
+  echo "${tag}: 0 passed, 1 failed"
   exit 1
 fi
 warnings="$(grep -E '(warning:|CMake Warning)' "$build_log" || true)"
 if [[ -n "$warnings" ]]; then
   echo "ROS 2 stage: the build has warnings (every package must build clean with ROS found):" >&2
   echo "$warnings" | head -50 >&2
-  echo "ros2: 0 passed, 1 failed"
+  echo "${tag}: 0 passed, 1 failed"
   exit 1
 fi
 
 # --- 3. the ROS tests -----------------------------------------------------------------------
 set +u
 # shellcheck disable=SC1091
-source install_ros/setup.bash
+source "$install_base/setup.bash"
 set -u
 status=0
 ctest_args=()
@@ -119,10 +131,10 @@ case "${1:-}" in
 esac
 # quoted: pytest splits PYTEST_ADDOPTS like a shell, and an expression has spaces ("a or b")
 if (($# > 0)); then export PYTEST_ADDOPTS="-k '$1'"; fi
-colcon --log-base log_ros test "${common[@]}" --packages-select tactile_ros_tests \
+colcon --log-base "$log_base" test "${common[@]}" --packages-select tactile_ros_tests \
   --event-handlers console_cohesion+ summary+ --return-code-on-test-failure "${ctest_args[@]}" || status=$?
-summary="$(colcon test-result --test-result-base build_ros/tactile_ros_tests --verbose --all 2>&1)" || true
-echo "$summary" | grep -v '^build_ros/.*: [0-9]* tests, 0 errors, 0 failures' || true
+summary="$(colcon test-result --test-result-base "$build_base/tactile_ros_tests" --verbose --all 2>&1)" || true
+echo "$summary" | grep -v "^$build_base/.*: [0-9]* tests, 0 errors, 0 failures" || true
 line="$(echo "$summary" | grep -E '^Summary: [0-9]+ tests' | tail -n 1)"
 total=$(echo "$line" | sed -E 's/Summary: ([0-9]+) tests.*/\1/')
 # colcon says "1 error" / "1 failure" in the singular
@@ -131,11 +143,11 @@ failures=$(echo "$line" | sed -E 's/.* ([0-9]+) failures?.*/\1/')
 skipped=$(echo "$line" | sed -E 's/.* ([0-9]+) skipped.*/\1/')
 if [[ -z "$total" || "$total" -eq 0 ]]; then
   echo "ROS 2 stage: no test results found" >&2
-  echo "ros2: 0 passed, 1 failed"
+  echo "${tag}: 0 passed, 1 failed"
   exit 1
 fi
 failed=$((errors + failures))
 passed=$((total - failed - skipped))
 if ((failed > 0)); then status=1; fi
-echo "ros2: ${passed} passed, ${failed} failed, ${skipped} skipped"
+echo "${tag}: ${passed} passed, ${failed} failed, ${skipped} skipped"
 exit "$status"
