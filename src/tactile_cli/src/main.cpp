@@ -114,7 +114,7 @@ int main(int argc, char** argv) {
   demo_cmd->add_option("--out", demo.out_dir, "output directory")->required();
   demo_cmd->add_option("--seed", demo.seed, "seed of the simulated barometers")->check(kWholeNumber)->capture_default_str();
   demo_cmd->add_option("--hover", demo.hover_s, "free-flight duration after take-off [s]")
-      ->check(CLI::PositiveNumber)
+      ->check(finite_in(0.1, 3600.0))
       ->capture_default_str();
   add_bag_options(demo_cmd, bag_options);
 
@@ -143,14 +143,18 @@ int main(int argc, char** argv) {
   fly_cmd->add_option("--duration", fly.duration_s, "pipeline run time before the bridge lands [s]")
       ->check(finite_in(0.0, kMaxWallDurationS))
       ->capture_default_str();
-  fly_cmd->add_option("--scenario", fly.scenario, "take node parameters and metrics.target from a scenario file");
-  fly_cmd->add_option("--sim", fly.sim_scenario, "fly the simulated Crazyflie of this scenario (in-process UDP server)");
-  fly_cmd->add_option("--sim-loss", fly.sim_loss, "injected UDP packet loss of the simulated Crazyflie [0, 1)");
+  auto* fly_scenario_opt =
+      fly_cmd->add_option("--scenario", fly.scenario, "take node parameters and metrics.target from a scenario file");
+  // --sim flies its own scenario's node parameters and target: a second scenario was ignored.
+  fly_cmd->add_option("--sim", fly.sim_scenario, "fly the simulated Crazyflie of this scenario (in-process UDP server)")
+      ->excludes(fly_scenario_opt);
+  fly_cmd->add_option("--sim-loss", fly.sim_loss, "injected UDP packet loss of the simulated Crazyflie [0, 1)")
+      ->check(finite_in(0.0, 0.99));
   fly_cmd->add_flag("--takeoff", fly.takeoff,
                     "take off (crazyflie_bridge.yaml takeoff_height) and hand over to the behaviour; without it "
                     "nothing flies: the link is checked and the sensors recorded");
   fly_cmd->add_option("--takeoff-height", fly.takeoff_height, "take-off height [m] (default: crazyflie_bridge.yaml)")
-      ->check(CLI::Range(0.0, 3.0));
+      ->check(finite_in(0.0, 3.0));
   fly_cmd->add_flag("--arm", fly.arm, "send the arming request before take-off (a Crazyflie that requires arming)");
   fly_cmd->add_flag("--autostart", fly.autostart,
                     "the behaviour flies as soon as the link is up, no take-off step (simulated Crazyflie tests)");

@@ -48,6 +48,9 @@ def test_numbers_on_the_command_line_are_checked(tmp_path):
         (["bench", "--out", str(tmp_path / "d"), "--duration", "inf"], "--duration"),
         (["fly", "--out", str(tmp_path / "e"), "--duration", "nan"], "--duration"),
         (["sim", CONFIG, "--out", str(tmp_path / "f")], "is a directory"),                 # said "expected a map"
+        (["fly", "--out", str(tmp_path / "g"), "--sim", scenario, "--scenario", scenario], "excludes"),  # ignored one
+        (["fly", "--out", str(tmp_path / "h"), "--sim-loss", "nan"], "--sim-loss"),
+        (["demo", "--out", str(tmp_path / "i"), "--hover", "inf"], "--hover"),
     ]
     for args, expected in cases:
         p = subprocess.run([TACTILE, *args, "--config", CONFIG], capture_output=True, text=True, timeout=60)
