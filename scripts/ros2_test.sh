@@ -80,7 +80,11 @@ export MAKEFLAGS="${MAKEFLAGS:--j$(nproc)}"
 # -Wl,--as-needed: a consumer of a message package's <pkg>_TARGETS would otherwise keep the
 # Python type-support libraries, whose Python symbols stay undefined.
 launcher=()
-if command -v ccache >/dev/null 2>&1; then launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache); fi
+if command -v ccache >/dev/null 2>&1; then
+  # Keyed relative to the workspace: another clone (CI after CI) hits the same cache.
+  export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$here}" CCACHE_NOHASHDIR=1
+  launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
+fi
 # One build tree per distro (Kilted keeps the plain names).
 suffix=""
 [[ "${ROS_DISTRO}" != kilted ]] && suffix="_${ROS_DISTRO}"
