@@ -41,7 +41,12 @@ IN_PROCESS_SEEDS = list(range(1, 21))
 DDS_SEEDS = [int(s) for s in os.environ.get('TACTILE_E2E_SEEDS', '1,2').split(',')]
 FACTOR = float(os.environ.get('TACTILE_E2E_FACTOR', '2.0'))
 # Margins around the in-process spread (README "End to end over DDS" for the reasoning).
-IN_BAND_MARGIN = 0.05
+# Depth in band: since the whisker FSM's issue-17 rounds the in-process seeds 1-30 reach no
+# lower than 0.633, while DDS realisations were measured at 0.538 (seed 2) and 0.541 (seed 1,
+# a CI rehearsal of 2026-11-29, which the former 0.05 failed; the same seed flew within the
+# spread on the rerun): the margin covers the measured DDS draws, and a pipeline that loses
+# the wall (depth in band ~0.1-0.3) still fails.
+IN_BAND_MARGIN = 0.12
 HEADING_MARGIN_DEG = 1.0
 TRUTH_TOPIC = '/ground_truth/whisker/left/contact'
 
