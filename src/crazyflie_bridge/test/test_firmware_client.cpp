@@ -298,23 +298,28 @@ TEST(FirmwareClient, CommanderWatchdog) {
   EXPECT_TRUE(out.empty());  // setpoints are not answered
 }
 
+namespace {
+/// The firmware emulator behind a UDP server on wall-clock milliseconds, until `stop`.
+void serve_over_udp(FirmwareEmulator& fw, UdpServer& server, const std::atomic<bool>& stop) {
+  const auto t0 = std::chrono::steady_clock::now();
+  uint32_t last_tick = 0;
+  while (!stop) {
+    const auto now_ms = static_cast<uint32_t>(
+        std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - t0).count());
+    std::vector<CrtpPacket> out;
+    if (auto pk = server.receive(std::chrono::microseconds(1000))) fw.on_packet(*pk, now_ms, out);
+    if (now_ms != last_tick) fw.tick(now_ms, out), last_tick = now_ms;
+    for (auto& p : out) server.send(p);
+  }
+}
+}  // namespace
+
 TEST(FirmwareClient, OverUdpSockets) {
   auto fw = make_firmware();
   fw.set_log_value(1, 0.5);
   UdpServer server(0);
   std::atomic<bool> stop{false};
-  std::thread t([&] {
-    const auto t0 = std::chrono::steady_clock::now();
-    uint32_t last_tick = 0;
-    while (!stop) {
-      const auto now_ms = static_cast<uint32_t>(
-          std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - t0).count());
-      std::vector<CrtpPacket> out;
-      if (auto pk = server.receive(std::chrono::microseconds(1000))) fw.on_packet(*pk, now_ms, out);
-      if (now_ms != last_tick) fw.tick(now_ms, out), last_tick = now_ms;
-      for (auto& p : out) server.send(p);
-    }
-  });
+  std::thread t([&] { serve_over_udp(fw, server, stop); });
   {
     UdpLink link(parse_uri("udp://127.0.0.1:" + std::to_string(server.port()) + "?handshake=1"));
     CrazyflieClient c(link);
@@ -389,18 +394,7 @@ TEST(FirmwareClient, UdpServerServesOneClientAndAnswersScans) {
   fw.set_log_value(1, 0.5);
   UdpServer server(0);
   std::atomic<bool> stop{false};
-  std::thread t([&] {
-    const auto t0 = std::chrono::steady_clock::now();
-    uint32_t last_tick = 0;
-    while (!stop) {
-      const auto now_ms = static_cast<uint32_t>(
-          std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - t0).count());
-      std::vector<CrtpPacket> out;
-      if (auto pk = server.receive(std::chrono::microseconds(1000))) fw.on_packet(*pk, now_ms, out);
-      if (now_ms != last_tick) fw.tick(now_ms, out), last_tick = now_ms;
-      for (auto& p : out) server.send(p);
-    }
-  });
+  std::thread t([&] { serve_over_udp(fw, server, stop); });
   const std::string uri = "udp://127.0.0.1:" + std::to_string(server.port());
   {
     UdpLink owner_link(parse_uri(uri + "?handshake=1"));
