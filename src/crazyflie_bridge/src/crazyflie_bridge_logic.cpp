@@ -105,6 +105,10 @@ void CrazyflieBridgeLogic::Params::validate() const {
   positive("hover_hold_s", hover_hold_s);
   positive("land_speed", land_speed);
   positive("land_height", land_height);
+  if (!std::isfinite(touchdown_timeout_s) || touchdown_timeout_s <= 0.0 || touchdown_timeout_s > 10.0) {
+    throw std::invalid_argument("CrazyflieBridgeLogic.touchdown_timeout_s: must be in (0, 10] s, got " +
+                                std::to_string(touchdown_timeout_s));
+  }
   positive("position_variance", position_variance);
   positive("orientation_variance", orientation_variance);
   positive("linear_velocity_variance", linear_velocity_variance);
@@ -170,6 +174,7 @@ ParamMap CrazyflieBridgeLogic::default_parameters() {
   m.set("hover_hold_s", d.hover_hold_s);
   m.set("land_speed", d.land_speed);
   m.set("land_height", d.land_height);
+  m.set("touchdown_timeout_s", d.touchdown_timeout_s);
   m.set("position_variance", d.position_variance);
   m.set("orientation_variance", d.orientation_variance);
   m.set("linear_velocity_variance", d.linear_velocity_variance);
@@ -206,6 +211,7 @@ CrazyflieBridgeLogic::Params CrazyflieBridgeLogic::params_from(const ParamMap& m
   p.hover_hold_s = m.get_double("hover_hold_s");
   p.land_speed = m.get_double("land_speed");
   p.land_height = m.get_double("land_height");
+  p.touchdown_timeout_s = m.get_double("touchdown_timeout_s");
   p.position_variance = m.get_double("position_variance");
   p.orientation_variance = m.get_double("orientation_variance");
   p.linear_velocity_variance = m.get_double("linear_velocity_variance");
@@ -466,6 +472,7 @@ void CrazyflieBridgeLogic::enter(Mode to, int64_t now_ns) {
       break;
     case Mode::kLanding:
       ++stats_.landings;
+      floor_since_ns_ = -1;
       command_.vx = command_.vy = command_.yaw_rate = 0.0;
       command_.land = true;
       break;
@@ -508,6 +515,20 @@ CrtpPacket CrazyflieBridgeLogic::hover_packet(double vx, double vy, double yaw_r
 bool CrazyflieBridgeLogic::on_the_ground(int64_t now_ns) const {
   if (supervisor_info_ >= 0 && (supervisor_info_ & kIsFlying)) return false;
   return log_fresh(now_ns) && height_ <= params_.land_height;
+}
+
+const char* CrazyflieBridgeLogic::touchdown(bool log_is_fresh, int64_t now_ns) const {
+  // The commanded height leads the measured one down the ramp (by up to 0.1 m plus the
+  // height controller's lag: 0.13 m in the SITL): stopping on the command alone dropped
+  // the vehicle the last ~0.1 m. The floor of the command stays landing_target_ (0 unless
+  // the land service asked for more), so the vehicle keeps descending meanwhile.
+  if (log_is_fresh && height_ <= params_.land_height) return "measured height at land_height";
+  if (floor_since_ns_ < 0) return nullptr;
+  if (!log_is_fresh) return "commanded height at land_height, no fresh log";
+  if (tactile_common::to_seconds(now_ns - floor_since_ns_) >= params_.touchdown_timeout_s) {
+    return "commanded height at land_height for touchdown_timeout_s, measured height still above";
+  }
+  return nullptr;
 }
 
 bool CrazyflieBridgeLogic::low_battery(int64_t now_ns) {
@@ -656,10 +677,9 @@ std::optional<CrtpPacket> CrazyflieBridgeLogic::on_timer(int64_t now_ns) {
       command_.vx = command_.vy = command_.yaw_rate = 0.0;
       command_.land = true;
       command_.height = std::max(landing_target_, std::min(command_.height, height_ + 0.1) - landing_speed_ * dt);
-      if (command_.height <= params_.land_height || (lg_fresh && height_ <= params_.land_height)) {
-        transition(Mode::kStopped, "touchdown",
-                   command_.height <= params_.land_height ? "commanded height at land_height" : "measured height at land_height",
-                   now_ns);
+      if (command_.height <= params_.land_height && floor_since_ns_ < 0) floor_since_ns_ = now_ns;
+      if (const char* why = touchdown(lg_fresh, now_ns)) {
+        transition(Mode::kStopped, "touchdown", why, now_ns);
         pk = commander::stop();
       } else {
         pk = hover_packet(0.0, 0.0, 0.0, command_.height);

@@ -672,6 +672,55 @@ TEST(BridgeOperator, LandFromEveryAirborneMode) {
   }
 }
 
+// Touchdown waits for the measured height. The vehicle below follows the commanded height
+// with a first-order lag of 0.5 s (0.1 m behind the 0.2 m/s ramp; the SITL's: 0.13 m): the motors stop only once it is at
+// land_height, not when the command gets there (before: stopped at a measured 0.18 m, a
+// drop). An estimate held above land_height (on an object) is stopped after
+// touchdown_timeout_s at the floor; with no fresh log the command decides, as before.
+TEST(BridgeOperator, TouchdownWaitsForTheMeasuredHeight) {
+  auto land_with = [](double tau, double stuck_at, bool log_after_floor) {
+    Op op;
+    op.to(Mode::kHovering);
+    op.follow = false;
+    op.z = 0.4;
+    EXPECT_TRUE(op.logic.land(0.0, 2.0, op.t).accepted);
+    double cmd = 0.4, z_at_stop = -1.0;
+    int ticks_at_floor = 0;
+    for (int i = 0; i < 500 && op.logic.mode() == Mode::kLanding; ++i) {
+      const bool log = log_after_floor || cmd > op.logic.params().land_height;
+      const auto pk = op.tick(false, hover(0.2, 0, 0, 0.4), log);
+      const auto s = commander::decode(*pk);
+      if (s.kind == commander::Setpoint::Kind::kHover) cmd = s.d;
+      if (s.kind == commander::Setpoint::Kind::kStop) z_at_stop = op.z;
+      if (cmd <= op.logic.params().land_height) ++ticks_at_floor;
+      op.z += (std::max(stuck_at, cmd) - op.z) * 0.02 / tau;  // the measured height trails the command
+    }
+    EXPECT_EQ(op.logic.mode(), Mode::kStopped);
+    return std::make_tuple(z_at_stop, ticks_at_floor, op.logic.history().back().reason);
+  };
+  {  // trailing: stops when the measured height reaches land_height
+    const auto [z, floor_ticks, why] = land_with(0.5, 0.0, true);
+    EXPECT_LE(z, 0.05 + 1e-9);
+    EXPECT_GT(floor_ticks, 10);  // the command sat at its floor while the vehicle came down
+    EXPECT_EQ(why, "measured height at land_height");
+  }
+  {  // held at 0.12 m: stopped after touchdown_timeout_s = 1 s at the floor
+    const auto [z, floor_ticks, why] = land_with(0.1, 0.12, true);
+    EXPECT_NEAR(z, 0.12, 1e-3);
+    EXPECT_NEAR(floor_ticks * 0.02, 1.0, 0.05);
+    EXPECT_NE(why.find("touchdown_timeout_s"), std::string::npos) << why;
+  }
+  {  // no log once the command is at the floor: stopped on the command
+    const auto [z, floor_ticks, why] = land_with(0.5, 0.0, false);
+    EXPECT_GT(z, 0.05);
+    EXPECT_LE(floor_ticks * 0.02, 0.25);  // log_timeout_s after the last sample
+    EXPECT_NE(why.find("no fresh log"), std::string::npos) << why;
+  }
+  auto bad = CrazyflieBridgeLogic::Params{};
+  bad.touchdown_timeout_s = 0.0;
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
 // Lost telemetry in the operator's modes (the link's downlink dead, uplink alive): a go-to
 // stops where it is at once, and after log_timeout_s + hover_hold_s of silence the vehicle
 // lands from taking off, hovering or the stopped go-to. Before, these modes held or flew

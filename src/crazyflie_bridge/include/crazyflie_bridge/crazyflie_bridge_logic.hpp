@@ -82,6 +82,12 @@ class CrazyflieBridgeLogic {
     double hover_hold_s = 1.0;       ///< hover in place this long before landing
     double land_speed = 0.25;        ///< [m/s]
     double land_height = 0.05;       ///< stop the motors below this height [m]
+    /// Touchdown waits for the measured height (fresh log) to reach land_height once the
+    /// commanded height has; a vehicle whose estimate stays above it (sitting on an
+    /// object, a biased range sensor) is stopped after this long at the floor [s].
+    /// 1 s: four times the lag of the measured height behind the 0.25 m/s ramp seen in
+    /// the SITL (0.13 m, about 0.5 s); choice.
+    double touchdown_timeout_s = 1.0;
     /// Odometry covariance diagonals where the firmware logs no variance
     /// (position: unless kalman.varX/Y/Z are in the log TOC; the others always:
     /// a log block has no room for them). Not measured: the order of
@@ -273,6 +279,10 @@ class CrazyflieBridgeLogic {
   /// Guard of arm(true) in kEmergency: fresh estimate at or below land_height and
   /// the supervisor (where logged) not reporting flight.
   bool on_the_ground(int64_t now_ns) const;
+  /// Touchdown guard of kLanding (its reason, nullptr while still descending): the
+  /// measured height at land_height (fresh log); or the commanded height at land_height
+  /// with no fresh log (nothing better to go by); or touchdown_timeout_s at the floor.
+  const char* touchdown(bool log_is_fresh, int64_t now_ns) const;
   /// Low-battery guard: true when the voltage has been below low_battery_v
   /// for low_battery_hold_s while airborne.
   bool low_battery(int64_t now_ns);
@@ -297,6 +307,7 @@ class CrazyflieBridgeLogic {
   bool ramp_done_ = false;  ///< the ramp's end point was sent (kTakingOff / kGoTo end on the next tick)
   double landing_speed_ = 0.0;   ///< kLanding descent [m/s]
   double landing_target_ = 0.0;  ///< kLanding floor of the commanded height [m]
+  int64_t floor_since_ns_ = -1;  ///< kLanding: when the commanded height reached land_height
   double hold_height_ = 0.0;  ///< kHovering / kHoverHold height [m]
   double x_ = 0.0, y_ = 0.0, yaw_ = 0.0;  ///< state estimate [m, m, rad]
   uint8_t protocol_version_ = 10;  ///< the emulator's default (> kLastLegacyProtocol: hover type 10)
