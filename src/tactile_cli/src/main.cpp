@@ -217,12 +217,11 @@ int main(int argc, char** argv) {
   tactile_cli::SweepOptions sweep;
   auto* sweep_cmd = app.add_subcommand(
       "sweep", "fly a scenario family (or a directory of scenarios) and write a table and a summary");
-  sweep_cmd->add_option("what", sweep.what, "family name or directory of scenario files")->required();
+  sweep_cmd->add_option("what", sweep.what, "family name or directory of scenario files");
   sweep_cmd->add_option("--count", sweep.count, "environments (family; with a directory: at most N, 0 = all)")
       ->check(CLI::NonNegativeNumber)->capture_default_str();
   sweep_cmd->add_option("--seed", sweep.seed, "first generator seed (family)")->check(kWholeNumber)->capture_default_str();
-  sweep_cmd->add_option("--out", sweep.out_dir, "output directory (table.csv/md, summary.json/md, runs/, failures/)")
-      ->required();
+  sweep_cmd->add_option("--out", sweep.out_dir, "output directory (table.csv/md, summary.json/md, runs/, failures/)");
   sweep_cmd->add_option("--jobs,-j", sweep.jobs, "environments flown at once on worker threads (0: all cores)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
@@ -231,6 +230,18 @@ int main(int argc, char** argv) {
   sweep_cmd->add_flag("--keep-success-files", sweep.keep_success_files,
                       "keep every file of successes too (trajectory.csv, maps; bags: --keep-bags)");
   sweep_cmd->add_flag("!--quiet", sweep.progress, "no line per environment");
+  std::string sweep_shard;
+  sweep_cmd->add_option("--shard", sweep_shard,
+                        "K/M: fly only shard K of M (environments i with i % M == K-1) and write shard.json "
+                        "for `tactile sweep merge` (one per cluster array task: scripts/slurm/)");
+  tactile_cli::SweepMergeOptions sweep_merge;
+  auto* sweep_merge_cmd = sweep_cmd->add_subcommand(
+      "merge", "build the table, summary, runs/ and failures/ of a sharded sweep from its shards' directories");
+  sweep_merge_cmd->add_option("--out", sweep_merge.out_dir, "output directory of the whole sweep")->required();
+  sweep_merge_cmd->add_option("shard_dirs", sweep_merge.shard_dirs, "the --out of every shard (K = 1..M)")
+      ->required()
+      ->check(CLI::ExistingDirectory);
+  sweep_cmd->require_subcommand(0, 1);
 
   CLI11_PARSE(app, argc, argv);
   if (!bag_options.compression.empty() && bag_options.storage != "mcap") {
@@ -303,7 +314,21 @@ int main(int argc, char** argv) {
                     m["real_time_factor"].get<double>());
       }
       std::printf("outputs in %s\n", sim.out_dir.c_str());
+    } else if (*sweep_cmd && *sweep_merge_cmd) {
+      const tactile_cli::OutputDir out_dir(sweep_merge.out_dir, "sweep merge");
+      const auto m = tactile_cli::merge_sweep(sweep_merge);
+      std::printf("tactile sweep merge: %s, %zu shards: %d / %d successes (%.1f %%), %zu collisions -> %s "
+                  "(summary.md, table.md)\n",
+                  m["what"].get<std::string>().c_str(), m["merged_shards"].size(), m["successes"].get<int>(),
+                  m["flown"].get<int>(), 100.0 * m["success_rate"].get<double>(), m["collisions"].get<size_t>(),
+                  sweep_merge.out_dir.c_str());
     } else if (*sweep_cmd) {
+      if (sweep.what.empty() || sweep.out_dir.empty()) {
+        std::fprintf(stderr, "tactile sweep: error: %s is required (tactile sweep FAMILY|DIR --out DIR, or "
+                     "tactile sweep merge --out DIR SHARD_DIR...)\n", sweep.what.empty() ? "FAMILY or DIR" : "--out");
+        return 1;
+      }
+      if (!sweep_shard.empty()) tactile_cli::parse_shard(sweep_shard, sweep.shard, sweep.shards);
       sweep.config_dir = config_dir;
       const tactile_cli::InterruptScope signals;  // Ctrl-C: no new environment, table/summary kept, exit 130
       const tactile_cli::OutputDir out_dir(sweep.out_dir, "sweep");

@@ -54,8 +54,17 @@ FamilyEnvironment generate_environment(const ScenarioFamily& family, uint64_t se
 }
 
 std::vector<std::string> generate_family(const ScenarioFamily& family, int count, uint64_t seed,
-                                         const std::string& out_dir) {
+                                         const std::string& out_dir, const std::vector<int>& which) {
   if (count < 1) throw std::invalid_argument("--count must be >= 1");
+  std::vector<int> ks = which;
+  if (ks.empty()) {
+    for (int k = 0; k < count; ++k) ks.push_back(k);
+  }
+  for (size_t i = 0; i < ks.size(); ++i) {
+    if (ks[i] < 0 || ks[i] >= count || (i > 0 && ks[i] <= ks[i - 1])) {
+      throw std::invalid_argument("generate_family: environment offsets must ascend within [0, count)");
+    }
+  }
   fs::create_directories(out_dir);
   std::vector<std::string> paths;
   nlohmann::json index;
@@ -64,7 +73,7 @@ std::vector<std::string> generate_family(const ScenarioFamily& family, int count
   index["seed"] = seed;
   index["count"] = count;
   index["environments"] = nlohmann::json::array();
-  for (int k = 0; k < count; ++k) {
+  for (const int k : ks) {
     const uint64_t s = seed + static_cast<uint64_t>(k);
     const FamilyEnvironment env = generate_environment(family, s);
     const fs::path path = fs::path(out_dir) / (env.name + ".yaml");

@@ -11,6 +11,8 @@
 #include <filesystem>
 #include <fstream>
 #include <set>
+#include <sstream>
+#include <tuple>
 
 #include "sim_test_util.hpp"
 #include "tactile_cli/scenario_family.hpp"
@@ -244,4 +246,174 @@ TEST(Sweep, WritesTableAndSummaryWithFailuresAndErrors) {
   EXPECT_TRUE(fs::exists(out / "runs" / "a_hover" / "trajectory.csv"));
   fs::remove_all(dir);
   fs::remove_all(out);
+}
+
+// Sharded sweeps (issue 36): the shards of a family sweep, merged, give the single-machine
+// sweep's table, summary, scenarios and runs, timings and provenance aside.
+namespace {
+
+std::string read_file(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+/// table.csv without its wall_time_s column (a timing).
+std::string table_without_wall_time(const fs::path& p) {
+  std::ifstream in(p);
+  std::string out, line, header;
+  std::getline(in, header);
+  size_t col = 0;
+  {
+    std::stringstream h(header);
+    std::string c;
+    for (size_t i = 0; std::getline(h, c, ','); ++i) {
+      if (c == "wall_time_s") col = i;
+    }
+  }
+  EXPECT_GT(col, 0u) << header;
+  out = header + "\n";
+  while (std::getline(in, line)) {
+    std::stringstream s(line);
+    std::string c;
+    for (size_t i = 0; std::getline(s, c, ','); ++i) {
+      if (i != col) out += c + ",";
+    }
+    out += "\n";
+  }
+  return out;
+}
+
+nlohmann::json summary_without_provenance(const fs::path& p) {
+  auto j = nlohmann::json::parse(read_file(p));
+  for (const char* k : {"date", "machine", "load_average_at_start", "jobs", "wall_time_s", "merged_shards", "shard"}) {
+    j.erase(k);
+  }
+  return j;
+}
+
+/// summary.md without its second paragraph (date, machine, load, jobs, wall time).
+std::string summary_md_without_provenance(const fs::path& p) {
+  const std::string s = read_file(p);
+  const size_t a = s.find("\n\n");
+  const size_t b = s.find("\n\n", a + 2);
+  if (a == std::string::npos || b == std::string::npos) return s;
+  const std::string second = s.substr(a + 2, b - a - 2);
+  return s.substr(0, a) + "|" + second.substr(0, second.find(';')) + "|" + s.substr(b);
+}
+
+tactile_cli::SweepOptions family_sweep(const fs::path& out, int count, uint64_t seed, int shard, int shards) {
+  tactile_cli::SweepOptions o;
+  o.what = "baffles_mocap";
+  o.count = count;
+  o.seed = seed;
+  o.out_dir = out.string();
+  o.config_dir = tactile_cli::test::config_dir().string();
+  o.write_bags = false;
+  o.progress = false;
+  o.jobs = 2;
+  o.shard = shard;
+  o.shards = shards;
+  return o;
+}
+
+std::set<std::string> entries(const fs::path& d) {
+  std::set<std::string> s;
+  if (!fs::is_directory(d)) return s;
+  for (const auto& e : fs::directory_iterator(d)) s.insert(e.path().filename().string());
+  return s;
+}
+
+}  // namespace
+
+TEST(ShardedSweep, ShardsMergeIntoTheSingleRun) {
+  const fs::path root = temp_dir("shards");
+  const auto single = tactile_cli::run_sweep(family_sweep(root / "single", 5, 3000, 0, 0));
+  ASSERT_EQ(single["flown"], 5);
+  // Shard 1 of 2 flies environments 0, 2, 4 (seeds 3000, 3002, 3004); shard 2 the others.
+  const auto s1 = tactile_cli::run_sweep(family_sweep(root / "s1", 5, 3000, 1, 2));
+  const auto s2 = tactile_cli::run_sweep(family_sweep(root / "s2", 5, 3000, 2, 2));
+  EXPECT_EQ(s1["environments"], 3);
+  EXPECT_EQ(s2["environments"], 2);
+  EXPECT_EQ(s1["shard"], "1/2");
+  EXPECT_EQ(entries(root / "s1" / "runs"),
+            (std::set<std::string>{"baffles_mocap_3000", "baffles_mocap_3002", "baffles_mocap_3004"}));
+  EXPECT_EQ(entries(root / "s2" / "scenarios"),
+            (std::set<std::string>{"baffles_mocap_3001.yaml", "baffles_mocap_3003.yaml", "index.json"}));
+  EXPECT_TRUE(fs::exists(root / "s1" / "shard.json"));
+  // The merge, shards given in any order.
+  tactile_cli::SweepMergeOptions m;
+  m.out_dir = (root / "merged").string();
+  m.shard_dirs = {(root / "s2").string(), (root / "s1").string()};
+  const auto merged = tactile_cli::merge_sweep(m);
+  EXPECT_EQ(merged["merged_shards"].size(), 2u);
+  const fs::path a = root / "single", b = root / "merged";
+  EXPECT_EQ(table_without_wall_time(a / "table.csv"), table_without_wall_time(b / "table.csv"));
+  EXPECT_EQ(read_file(a / "table.md"), read_file(b / "table.md"));
+  EXPECT_EQ(summary_without_provenance(a / "summary.json"), summary_without_provenance(b / "summary.json"));
+  EXPECT_EQ(summary_md_without_provenance(a / "summary.md"), summary_md_without_provenance(b / "summary.md"));
+  EXPECT_EQ(read_file(a / "scenarios" / "index.json"), read_file(b / "scenarios" / "index.json"));
+  EXPECT_EQ(entries(a / "scenarios"), entries(b / "scenarios"));
+  for (const auto& f : entries(a / "scenarios")) EXPECT_EQ(read_file(a / "scenarios" / f), read_file(b / "scenarios" / f)) << f;
+  EXPECT_EQ(entries(a / "runs"), entries(b / "runs"));
+  EXPECT_EQ(entries(a / "failures"), entries(b / "failures"));
+  for (const auto& r : entries(a / "runs")) EXPECT_EQ(entries(a / "runs" / r), entries(b / "runs" / r)) << r;
+  fs::remove_all(root);
+}
+
+TEST(ShardedSweep, MergeRefusesMissingRepeatedForeignAndIncompleteShards) {
+  const fs::path root = temp_dir("shard_errors");
+  tactile_cli::run_sweep(family_sweep(root / "s1", 3, 4000, 1, 2));
+  tactile_cli::run_sweep(family_sweep(root / "s2", 3, 4000, 2, 2));
+  tactile_cli::run_sweep(family_sweep(root / "other2", 3, 4100, 2, 2));  // another sweep's shard 2
+  const auto expect_refused = [&](std::vector<std::string> dirs, const std::string& what) {
+    tactile_cli::SweepMergeOptions m;
+    m.out_dir = (root / "merged").string();
+    for (const auto& d : dirs) m.shard_dirs.push_back((root / d).string());
+    try {
+      tactile_cli::merge_sweep(m);
+      ADD_FAILURE() << "merged: " << what;
+    } catch (const std::exception& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(root / "merged")) << what;  // nothing written
+  };
+  expect_refused({"s1"}, "shard(s) 2 of 2 not given");
+  expect_refused({"s1", "s1"}, "given twice");
+  expect_refused({"s1", "other2"}, "seed 4100 differs");
+  fs::create_directories(root / "empty");
+  expect_refused({"s1", "empty"}, "shard.json: cannot read");
+  // An interrupted shard, and one whose record is damaged.
+  fs::copy(root / "s2", root / "s2_interrupted", fs::copy_options::recursive);
+  auto rec = nlohmann::json::parse(read_file(root / "s2_interrupted" / "shard.json"));
+  rec["interrupted"] = true;
+  std::ofstream(root / "s2_interrupted" / "shard.json") << rec.dump();
+  expect_refused({"s1", "s2_interrupted"}, "is incomplete (1 of 1 environments flown, interrupted)");
+  fs::copy(root / "s2", root / "s2_damaged", fs::copy_options::recursive);
+  std::ofstream(root / "s2_damaged" / "shard.json") << read_file(root / "s2" / "shard.json").substr(0, 100);
+  expect_refused({"s1", "s2_damaged"}, (root / "s2_damaged" / "shard.json").string() + ": ");
+  for (const auto& [key, value, what] : std::vector<std::tuple<std::string, nlohmann::json, std::string>>{
+           {"environments_all", 1e18, "environments_all: wrong type (number)"},
+           {"environments_all", uint64_t{1} << 60, "expected a whole number in 1..10000000"},
+           {"shard", "2", "shard: wrong type (string)"},
+           {"shard", (uint64_t{1} << 32) + 1, "outside 1..2"},
+           {"rows", nlohmann::json::object(), "rows: wrong type (object)"}}) {
+    fs::remove_all(root / "s2_bad");
+    fs::copy(root / "s2", root / "s2_bad", fs::copy_options::recursive);
+    auto bad = nlohmann::json::parse(read_file(root / "s2" / "shard.json"));
+    bad[key] = value;
+    std::ofstream(root / "s2_bad" / "shard.json") << bad.dump();
+    expect_refused(key == "shard" || key == "rows" ? std::vector<std::string>{"s1", "s2_bad"}
+                                                   : std::vector<std::string>{"s2_bad", "s1"},
+                   what);
+  }
+  // More shards than environments, and bad K/M texts.
+  EXPECT_THROW(tactile_cli::run_sweep(family_sweep(root / "s9", 3, 4000, 1, 4)), std::invalid_argument);
+  int k = 0, n = 0;
+  for (const char* bad : {"0/2", "3/2", "1/0", "a/b", "2", "1/100001", "-1/2", "1/2/3", ""}) {
+    EXPECT_THROW(tactile_cli::parse_shard(bad, k, n), std::invalid_argument) << bad;
+  }
+  tactile_cli::parse_shard("2/3", k, n);
+  EXPECT_EQ(k, 2);
+  EXPECT_EQ(n, 3);
+  fs::remove_all(root);
 }

@@ -80,9 +80,11 @@ FamilyEnvironment generate_environment(const ScenarioFamily& family, uint64_t se
 
 /// Generates environments seed .. seed + count - 1 into out_dir as
 /// <name>.yaml plus index.json (family, seeds, drawn parameters, attempts);
-/// returns the written scenario paths in seed order.
+/// returns the written scenario paths in seed order. With `which` (offsets k in
+/// [0, count), ascending: a sweep shard's share), only environments seed + k of
+/// those k; index.json still says `count` and lists the ones written.
 std::vector<std::string> generate_family(const ScenarioFamily& family, int count, uint64_t seed,
-                                         const std::string& out_dir);
+                                         const std::string& out_dir, const std::vector<int>& which = {});
 
 // --- helpers for the families' validity rules ------------------------------
 
