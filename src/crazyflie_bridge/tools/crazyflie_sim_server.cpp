@@ -2,22 +2,29 @@
 //   crazyflie_sim_server SCENARIO [--port 19850] [--seed N] [--duration S]
 //                        [--speed X] [--loss P] [--spike-rate HZ] [--spike-latency S]
 //                        [--protocol-version N] [--require-arming]  (motors off until an arming request, as a brushless Crazyflie)
+//                        [--linger S]
 // Prints "listening udp://127.0.0.1:PORT" once ready, then runs until the
 // duration elapsed or SIGINT/SIGTERM; prints the final truth position and
-// link counters on exit.
+// link counters on exit. With --linger S, a signal that comes while the motors
+// run lets the vehicle land first: the server goes on until the motors have been
+// off for 0.5 s, or S seconds passed, or a second signal (a launch file's Ctrl-C
+// reaches the simulator and the bridge together; the bridge's shutdown landing
+// needs a vehicle to land).
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <string>
+#include <thread>
 
 #include "crazyflie_bridge/sitl_endpoint.hpp"
 
 namespace {
-std::atomic<bool> g_stop{false};
-void on_signal(int) { g_stop = true; }
+std::atomic<int> g_signals{0};
+void on_signal(int) { g_signals.fetch_add(1); }
 }  // namespace
 
 namespace {
@@ -57,7 +64,9 @@ int main(int argc, char** argv) {
                  "usage: crazyflie_sim_server SCENARIO [--port 19850] [--seed N] [--duration S] [--speed X]\n"
                  "       [--loss P] [--spike-rate HZ] [--spike-latency S] [--bind ADDR] [--require-arming]\n"
                  "       [--protocol-version N]  (CRTP protocol reported; <= 8 emulates the legacy\n"
-                 "                                setpoint generation: hover type 5, negated yaw rate)\n");
+                 "                                setpoint generation: hover type 5, negated yaw rate)\n"
+                 "       [--linger S]  (on SIGINT/SIGTERM with the motors on: run until they have been off\n"
+                 "                      0.5 s, at most S seconds; a second signal ends at once)\n");
     return argc < 2 ? 2 : 0;
   }
   try {
@@ -65,6 +74,7 @@ int main(int argc, char** argv) {
     crazyflie_bridge::SitlEndpointOptions opt;
     int64_t seed = -1;
     double duration = 0.0;
+    double linger_s = 0.0;
     for (int i = 2; i < argc; ++i) {
       const std::string a = argv[i];
       auto next = [&]() -> std::string {
@@ -83,6 +93,7 @@ int main(int argc, char** argv) {
       else if (a == "--bind") opt.bind_address = next();
       else if (a == "--protocol-version") opt.protocol_version = static_cast<uint8_t>(whole(a, next(), 0, 255));
       else if (a == "--require-arming") opt.require_arming = true;  // motors off until an arming request
+      else if (a == "--linger") linger_s = number(a, next(), 0.0, 600.0);
       else throw std::invalid_argument("unknown option " + a);
     }
     const auto scenario = tactile_sim::load_scenario(scenario_path);
@@ -91,7 +102,39 @@ int main(int argc, char** argv) {
     std::signal(SIGTERM, on_signal);
     std::printf("listening udp://%s:%u\n", opt.bind_address.c_str(), ep.port());
     std::fflush(stdout);
-    ep.run(duration, &g_stop);
+    // The simulation stops on the first signal, or, lingering, once the motors have been
+    // off 0.5 s after it (the vehicle landed), at most linger_s after it; on a second signal
+    // at once.
+    std::atomic<bool> stop{false};
+    std::atomic<bool> done{false};
+    std::thread watcher([&] {
+      using Clock = std::chrono::steady_clock;
+      Clock::time_point signalled{}, motors_off{};
+      bool lingering = false;
+      while (!done) {
+        const int n = g_signals.load();
+        const auto now = Clock::now();
+        if (n >= 2) break;
+        if (n == 1) {
+          if (!lingering) {
+            signalled = now;
+            lingering = linger_s > 0.0 && ep.motors_on();
+            if (!lingering) break;
+            std::printf("signal: lingering until the motors stop (at most %.1f s)\n", linger_s);
+            std::fflush(stdout);
+          }
+          if (ep.motors_on()) motors_off = Clock::time_point{};
+          else if (motors_off == Clock::time_point{}) motors_off = now;
+          if (motors_off != Clock::time_point{} && now - motors_off >= std::chrono::milliseconds(500)) break;
+          if (now - signalled >= std::chrono::duration<double>(linger_s)) break;
+        }
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      }
+      stop = true;
+    });
+    ep.run(duration, &stop);
+    done = true;
+    watcher.join();
     const auto p = ep.truth_position();
     const auto& fs = ep.firmware().stats();
     std::printf("done t=%.3f truth=%.4f,%.4f,%.4f packets_in=%llu log_packets=%llu setpoints=%llu dropped_in=%llu dropped_out=%llu\n",

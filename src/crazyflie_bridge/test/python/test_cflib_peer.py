@@ -5,6 +5,7 @@ param TOC, all params), receives the whisker barometers in a 50 Hz log block,
 reads and writes parameters, and its hover setpoints fly the simulated drone.
 CRAZYFLIE_SIM_SERVER and TACTILE_CONFIG_DIR are set by CMake."""
 import os
+import signal
 import socket
 import subprocess
 import threading
@@ -268,3 +269,69 @@ def test_sim_server_refuses_bad_option_values(args, expected):
                        timeout=30)
     assert p.returncode == 1
     assert expected in p.stderr, p.stderr
+
+
+@pytest.mark.parametrize('linger', [False, True])
+def test_sim_server_lingers_after_a_signal_until_the_motors_stop(linger, tmp_path):
+    """A launch file's Ctrl-C reaches the simulator and the bridge together. With --linger
+    the simulator keeps flying after SIGINT while the motors run, so the bridge's shutdown
+    landing has a vehicle to land, and ends 0.5 s after they stop; without, it ends at
+    once (the previous behaviour: the landing heard no vehicle)."""
+    port = free_udp_port()
+    extra = ['--linger', '10'] if linger else []
+    p = subprocess.Popen([os.environ['CRAZYFLIE_SIM_SERVER'], SCENARIO, '--port', str(port), '--duration', '30',
+                          *extra], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert p.stdout.readline().startswith('listening udp://127.0.0.1:%d' % port)
+        cflib.crtp.init_drivers()
+        cf = Crazyflie(rw_cache=str(tmp_path))
+        with SyncCrazyflie('udp://127.0.0.1:%d' % port, cf=cf) as scf:
+            for _ in range(50):  # motors on: take off towards 0.4 m
+                scf.cf.commander.send_hover_setpoint(0.0, 0.0, 0.0, 0.4)
+                time.sleep(0.02)
+            p.send_signal(signal.SIGINT)
+            for _ in range(50):  # 1 s more of flight after the signal
+                scf.cf.commander.send_hover_setpoint(0.0, 0.0, 0.0, 0.4)
+                time.sleep(0.02)
+            alive_after_1s = p.poll() is None
+            t_stop = time.monotonic()
+            scf.cf.commander.send_stop_setpoint()
+            try:
+                p.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                pass
+            ended_after = time.monotonic() - t_stop
+        out, err = p.communicate(timeout=10)
+        assert p.returncode == 0, err
+        assert alive_after_1s == linger, out
+        if linger:
+            assert 'lingering until the motors stop' in out, out
+            assert 0.4 < ended_after < 3.0, ended_after  # 0.5 s after the stop setpoint
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.communicate(timeout=10)
+
+
+def test_sim_server_second_signal_ends_the_linger_at_once(tmp_path):
+    port = free_udp_port()
+    p = subprocess.Popen([os.environ['CRAZYFLIE_SIM_SERVER'], SCENARIO, '--port', str(port), '--duration', '30',
+                          '--linger', '20'], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert p.stdout.readline().startswith('listening udp://127.0.0.1:%d' % port)
+        cflib.crtp.init_drivers()
+        cf = Crazyflie(rw_cache=str(tmp_path))
+        with SyncCrazyflie('udp://127.0.0.1:%d' % port, cf=cf) as scf:
+            for _ in range(50):
+                scf.cf.commander.send_hover_setpoint(0.0, 0.0, 0.0, 0.4)
+                time.sleep(0.02)
+            p.send_signal(signal.SIGINT)
+            time.sleep(0.3)
+            assert p.poll() is None
+            p.send_signal(signal.SIGTERM)
+            p.wait(timeout=2)
+        assert p.returncode == 0
+    finally:
+        if p.poll() is None:
+            p.kill()
+            p.communicate(timeout=10)
