@@ -45,8 +45,10 @@ void room_points(int n, Eigen::Matrix2Xd& X, Eigen::VectorXd& y) {
   }
 }
 
-ExplorerParams params_for(int points, int cells, bool grid_variance = true, int variance_cells = 0) {
+ExplorerParams params_for(int points, int cells, bool grid_variance = true, int variance_cells = 0,
+                          bool local = false) {
   ExplorerParams p = ExplorerParams::ground();
+  p.solver = local ? gpis_explorer::GpisSolver::kLocal : gpis_explorer::GpisSolver::kExact;
   p.grid_variance = grid_variance;
   p.variance_cells = static_cast<uint32_t>(variance_cells);
   p.gpis.max_points = static_cast<std::size_t>(points);
@@ -109,6 +111,63 @@ void BM_UpdateIncremental(benchmark::State& state) {
 }
 BENCHMARK(BM_UpdateIncremental)->Args({50, 10, 0})->Args({2000, 200, 40})->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_UpdateIncremental)->Args({10000, 400, 40})->Iterations(2)->Unit(benchmark::kMillisecond);
+
+// The local solver (local GPs over a quadtree with overlap blending, GPisMap;
+// README "Local solver"): from scratch and the update as flown (+5 points:
+// the local GPs they fall in take incremental Cholesky rows; the grid, the
+// variance map, curvature and variance at the contour points as above, the
+// grid recomputed only where a local GP changed). Args: points, grid nodes
+// per side, variance-map nodes per side. Counters: leaves, largest local GP.
+void BM_LocalUpdate(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const int cells = static_cast<int>(state.range(1));
+  Eigen::Matrix2Xd X;
+  Eigen::VectorXd y;
+  room_points(n, X, y);
+  GpisExplorer ex(params_for(n, cells, true, static_cast<int>(state.range(2)), true));
+  for (auto _ : state) {
+    ex.fit(X, y);
+    const auto& r = ex.update();
+    benchmark::DoNotOptimize(r.target);
+  }
+  state.counters["leaves"] = static_cast<double>(ex.local()->leaf_count());
+  state.counters["largest_local"] = static_cast<double>(ex.local()->largest_local());
+  state.SetLabel(gpis_explorer::Gpis::backend());
+}
+BENCHMARK(BM_LocalUpdate)->Args({2000, 200, 40})->Args({10000, 400, 40})->Iterations(2)->Unit(benchmark::kMillisecond);
+
+void BM_LocalUpdateIncremental(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0));
+  const int cells = static_cast<int>(state.range(1));
+  Eigen::Matrix2Xd X;
+  Eigen::VectorXd y;
+  room_points(n, X, y);
+  GpisExplorer ex(params_for(n, cells, true, static_cast<int>(state.range(2)), true));
+  // Successive batches of 5 of the last 50 points (4 surface, 1 interior, as a
+  // retreat adds them) on top of the previous update; rebuilt untimed when used up.
+  int next = n;
+  for (auto _ : state) {
+    if (next + 5 > n) {
+      state.PauseTiming();
+      ex.fit(X.leftCols(n - 50), y.head(n - 50));
+      ex.update();
+      next = n - 50;
+      state.ResumeTiming();
+    }
+    for (int i = next; i < next + 5; ++i) ex.add_point(X.col(i), y(i));
+    next += 5;
+    const auto& r = ex.update();
+    benchmark::DoNotOptimize(r.target);
+  }
+  state.counters["leaves"] = static_cast<double>(ex.local()->leaf_count());
+  state.counters["largest_local"] = static_cast<double>(ex.local()->largest_local());
+  state.SetLabel(gpis_explorer::Gpis::backend());
+}
+BENCHMARK(BM_LocalUpdateIncremental)
+    ->Args({2000, 200, 40})
+    ->Args({10000, 400, 40})
+    ->Iterations(5)
+    ->Unit(benchmark::kMillisecond);
 
 // Adding one point to a GPIS of n - 1 points: new factor row + alpha (O(n^2)).
 void BM_IncrementalAdd(benchmark::State& state) {
