@@ -244,7 +244,7 @@ def online(cpp, report, max_peer, show):
         c = counters.get(f"BM_LocalUpdate/{n}/{cells}/{vc}", {})
 
         def s_(t):
-            return f"{t:.2f} s" if t else "-"
+            return f"{t:.3f} s" if t else "-"
         summary.append(
             f"gpis online update, {n} points: {s_(lo_i)} (exact {s_(ex_i)}, numpy {s_(t_np_inc)}; from scratch"
             f" {s_(lo_s)}, exact {s_(ex_s)}, numpy {s_(t_np)}, sklearn {s_(t_sk)}; near the surface"

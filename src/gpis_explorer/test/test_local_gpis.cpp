@@ -137,12 +137,13 @@ TEST(LocalGpis, OneLeafIsTheExactGp) {
 }
 
 // The documented accuracy (README "Local solver"): on seeded rooms of 1000
-// and 2000 points (4 and 8 leaves of <= 256 points... the quadtree decides),
-// at the grid nodes within 5 cm of a surface point (where the contour and the
-// target are taken), the blended mean and variance against the exact GP.
+// and 2000 points (10-40 leaves), at the grid nodes within 5 cm of a surface
+// point (where the contour and the target are taken), the blended mean and
+// variance against the exact GP. With 8 label neighbours instead of 96 the
+// mean bound fails (max 0.077 at 2000 points).
 TEST(LocalGpis, MeanAndVarianceNearTheSurfaceWithinTheDocumentedBound) {
-  constexpr double kMeanMax = 0.1, kMeanAvg = 0.02;  // label units (surface 0, interior -1)
-  constexpr double kVarMax = 1e-3, kVarAvg = 1e-4;   // prior variance 1
+  constexpr double kMeanMax = 0.025, kMeanAvg = 0.005;  // label units (surface 0, interior -1)
+  constexpr double kVarMax = 2.5e-4, kVarAvg = 2.5e-5;  // prior variance 1
   for (int n : {1000, 2000}) {
     for (unsigned seed : {1u, 2u, 3u}) {
       Eigen::Matrix2Xd X;

@@ -19,7 +19,9 @@
 //    `label_neighbours` points of each label nearest to its centre (a leaf
 //    outside a wall holds only surface points, labels 0, whose GP is ~0
 //    everywhere and whose sign would be noise; the nearest interior points
-//    give it the side);
+//    give it the side; and the IMQ kernel is long range, so the points
+//    beyond the margin still shape the exact mean: 96 per label cut the
+//    near-surface mean error against the exact GP ~6x from 8 per label);
 //  - blending: weight w_j(x) = s(t_x) s(t_y), t = distance to the nearest side
 //    of the grown box / (2 overlap) clamped to [0, 1], s the C2 smoothstep
 //    6t^5 - 15t^4 + 10t^3; mean = sum w_j m_j / sum w_j, variance =
@@ -57,8 +59,10 @@ struct LocalGpisParams {
   /// points). Must be >= 2 overlap so a weight's ramps never meet.
   double min_leaf_size = 0.25;
   /// Points of each label nearest to a leaf's centre added to its local GP
-  /// (our choice, see above).
-  std::size_t label_neighbours = 8;
+  /// (our choice, see above: 8 -> 96 lowered the near-surface mean error at
+  /// 2000 points from 0.077 to 0.012, the 10,000-point update from 0.17 to
+  /// 0.24 s).
+  std::size_t label_neighbours = 96;
 
   /// Throws std::invalid_argument "LocalGpisParams.<field>: <reason>".
   void validate() const;
