@@ -3,13 +3,14 @@
 // gradient, Hessian, curvature) approximated by local GPs over a quadtree with
 // overlap blending, after GPisMap (B. Lee, C. Zhang, Z. Huang, D. D. Lee,
 // "Online Continuous Mapping using Gaussian Process Implicit Surfaces",
-// ICRA 2019, Sec. III-IV: the points are kept in a quadtree, each leaf holds
+// ICRA 2019: the points are kept in a quadtree, each leaf holds
 // a local GP over its points and those of a margin around it, a query is
 // answered by blending the predictions of the local GPs around it, and a new
 // point refits only the local GPs whose region it falls in).
 //
-// Here (our choices where GPisMap's observation model differs: it regresses a
-// signed distance with gradient observations, 000 regresses the labels):
+// GPisMap's observation model is not 000's (labels 0 / -1), so only the
+// partition, the margin, the blending and the incremental refit are taken
+// from it; the rest are our choices:
 //  - a leaf splits into four when more than `leaf_points` training points lie
 //    in its box and its side is at least 2 min_leaf_size; while all points fit
 //    in one leaf (every flight of the shipped rooms) the one local GP IS the
