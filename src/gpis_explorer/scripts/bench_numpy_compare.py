@@ -178,6 +178,7 @@ def main():
 
     gp.sklearn_gpr().fit(*gp.room_points(20))  # import and first-call costs outside the timings
     sk_scratch = {}
+    peers = {}  # the ground-scale peers measured below, reused by the local solver's rows
     if "--online" in sys.argv:
         online(cpp, report, max_peer, show)
         return
@@ -188,17 +189,22 @@ def main():
             continue
         t_np, t_sk = peer_scratch(n, cells, vc, gv) if n <= max_peer else (None, None)
         sk_scratch[(n, cells, vc, gv)] = t_sk
+        peers[("scratch", n)] = (t_np, t_sk) if gv and vc == 40 else peers.get(("scratch", n))
         what = "no variance map" if not gv else (f"{vc}x{vc} variance map" if vc else "variance on every node")
         show(f"update {n} pts, {cells}x{cells}, {what}", cpp.get(f"BM_Update/{n}/{cells}/{int(gv)}/{vc}"), t_np, t_sk)
     for n, cells, vc in [(50, 10, 0), (2000, 200, 40), (10000, 400, 40)]:
         if quick and n > 50:
             continue
         t_np = peer_incremental(n, cells, vc) if n <= max_peer else None
+        peers[("incremental", n)] = t_np
         t_sk = (sk_scratch.get((n, cells, vc, True)) or peer_scratch(n, cells, vc)[1]) if n <= max_peer else None
         show(f"+5 pts and update {n}, {cells}x{cells}" + (f", {vc}x{vc} map" if vc else ""),
              cpp.get(f"BM_UpdateIncremental/{n}/{cells}/{vc}"), t_np, t_sk)
     print("(sklearn has no incremental update: its '+5 pts' rows refit from scratch; '-': peer not run,"
           " --max-peer-points)")
+    if any(k.startswith("BM_LocalUpdate") for k in cpp):
+        print("\nthe local solver (README \"Local solver\") at ground scale, the peers above:")
+        online(cpp, report, max_peer, show, peers)
     helper = os.path.join(os.path.dirname(bench), "gpis_update_json")
     if os.path.exists(helper):
         print(f"\nagreement of one update with the peers (C++ backend: ", end="")
@@ -215,14 +221,19 @@ def main():
           f"{(50 * 5 + 50 * 50 + 2 * 100) * 8 / 1000:.1f} kB; paper 000 Fig. S6: 20.9 kB")
 
 
-def online(cpp, report, max_peer, show):
-    """Ground scale: the local solver next to the exact C++ solver and the peers."""
+def online(cpp, report, max_peer, show, peers=None):
+    """Ground scale: the local solver next to the exact C++ solver and the peers
+    (timed here, or taken from `peers` when the full comparison measured them)."""
     counters = {b["name"].split("/iterations")[0]: b for b in report["benchmarks"]}
     summary = []
     for n, cells, vc in [(2000, 200, 40), (10000, 400, 40)]:
         big = n <= max_peer
-        t_np, t_sk = peer_scratch(n, cells, vc) if big and n <= 2000 else (None, None)
-        if big and n > 2000:
+        if peers is not None:
+            t_np, t_sk = peers.get(("scratch", n)) or (None, None)
+            t_sk = t_sk if n <= 2000 else None
+        else:
+            t_np, t_sk = peer_scratch(n, cells, vc) if big and n <= 2000 else (None, None)
+        if peers is None and big and n > 2000:
             # scikit-learn's predict on the 400 x 400 grid holds the whole 160,000 x 10,000
             # kernel matrix (12.8 GB): not run at this size; numpy (blocked) alone.
             X, y = gp.room_points(n)
@@ -232,7 +243,10 @@ def online(cpp, report, max_peer, show):
                 g.fit(X, y)
                 g.update()
             t_np = cpu_time(numpy_run, min_time=0.0, max_reps=1)
-        t_np_inc = peer_incremental(n, cells, vc) if big else None
+        if peers is not None:
+            t_np_inc = peers.get(("incremental", n))
+        else:
+            t_np_inc = peer_incremental(n, cells, vc) if big else None
         ex_s = cpp.get(f"BM_Update/{n}/{cells}/1/{vc}")
         ex_i = cpp.get(f"BM_UpdateIncremental/{n}/{cells}/{vc}")
         lo_s = cpp.get(f"BM_LocalUpdate/{n}/{cells}/{vc}")
