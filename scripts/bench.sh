@@ -2,9 +2,19 @@
 # Runs every Google Benchmark target of the workspace (never part of the tests)
 # and writes one JSON file per benchmark into OUT_DIR (default: out/bench),
 # then the `tactile sim` figures of issue 18 (BENCH_SIM_ONLY=1: only those).
+#
+# `scripts/bench.sh gpis [OUT_DIR]`: only the GPIS at ground scale (issue 36): the
+# local solver's update (2000 and 10,000 points) next to the exact C++ solver, numpy/scipy
+# and scikit-learn, its error against the exact GP, one summary line per size
+# ("gpis online update, 10000 points: ..."); gpis_explorer README, "Local solver".
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$here"
+only=""
+if [[ "${1:-}" == gpis ]]; then
+  only=gpis
+  shift
+fi
 out="${1:-out/bench}"
 mkdir -p "$out"
 [[ -d install ]] || { echo "bench: build first (scripts/test.sh or colcon build)" >&2; exit 1; }
@@ -14,6 +24,20 @@ source install/setup.bash
 set -u
 # One BLAS thread: the GPIS benchmarks compare per-core CPU time with numpy (below).
 export OPENBLAS_NUM_THREADS="${OPENBLAS_NUM_THREADS:-1}"
+if [[ "$only" == gpis ]]; then
+  b=install/gpis_explorer/lib/gpis_explorer/bench_gpis
+  [[ -x "$b" ]] || { echo "bench: no $b (build gpis_explorer)" >&2; exit 1; }
+  py=python3
+  [[ -x .venv/bin/python ]] && py=.venv/bin/python
+  echo "== bench_gpis: exact and local solver at 2000 / 10000 points"
+  "$b" --benchmark_filter='BM_Update/(2000/200/1/40|10000/400/1/40)|BM_UpdateIncremental/(2000/200/40|10000/400/40)|BM_LocalUpdate' \
+    --benchmark_out="$out/bench_gpis_online.json" --benchmark_out_format=json
+  echo "== gpis_explorer at ground scale: local vs exact C++ vs numpy/scipy vs scikit-learn"
+  "$py" src/gpis_explorer/scripts/bench_numpy_compare.py "$b" --online --cpp-json "$out/bench_gpis_online.json" \
+    | tee "$out/gpis_online.txt"
+  echo "load: $(cut -d' ' -f1-3 /proc/loadavg) on $(nproc) cores; $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2-)"
+  exit 0
+fi
 for b in install/*/lib/*/bench_*; do
   [[ -x "$b" ]] || continue
   [[ "${BENCH_SIM_ONLY:-0}" == 1 ]] && break  # only the tactile sim figures below

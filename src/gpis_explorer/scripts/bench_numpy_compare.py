@@ -21,7 +21,14 @@ Then the agreement of one update (gpis_update_json, installed next to
 bench_gpis) with both peers: grid mean, contour variance, target; and the
 error single precision would make (why the C++ stays in double).
 
-Usage: bench_numpy_compare.py [path/to/bench_gpis] [--quick] [--cpp-json FILE]
+With --online (scripts/bench.sh gpis): only the ground-scale rows (2000
+points on 200 x 200 and 10000 on 400 x 400, 40 x 40 variance map), the local
+solver's rows (BM_LocalUpdate*, README "Local solver") next to the exact C++
+solver and the peers, and one summary line per size:
+  gpis online update, N points: T s (exact ..., numpy ...; from scratch ...;
+  max mean error ... near the surface)
+
+Usage: bench_numpy_compare.py [path/to/bench_gpis] [--quick] [--online] [--cpp-json FILE]
        [--max-peer-points N] (peers only up to N points; the C++ rows all)
 (--quick: onboard budget only; --cpp-json: take the C++ figures from that
 bench_gpis JSON instead of running it; scripts/bench.sh does both in one run)
@@ -171,6 +178,10 @@ def main():
 
     gp.sklearn_gpr().fit(*gp.room_points(20))  # import and first-call costs outside the timings
     sk_scratch = {}
+    peers = {}  # the ground-scale peers measured below, reused by the local solver's rows
+    if "--online" in sys.argv:
+        online(cpp, report, max_peer, show)
+        return
     cases = [(50, 10, 0, True), (2000, 200, 40, True), (2000, 200, 0, True), (2000, 200, 0, False),
              (10000, 400, 40, True)]
     for n, cells, vc, gv in cases:
@@ -178,17 +189,22 @@ def main():
             continue
         t_np, t_sk = peer_scratch(n, cells, vc, gv) if n <= max_peer else (None, None)
         sk_scratch[(n, cells, vc, gv)] = t_sk
+        peers[("scratch", n)] = (t_np, t_sk) if gv and vc == 40 else peers.get(("scratch", n))
         what = "no variance map" if not gv else (f"{vc}x{vc} variance map" if vc else "variance on every node")
         show(f"update {n} pts, {cells}x{cells}, {what}", cpp.get(f"BM_Update/{n}/{cells}/{int(gv)}/{vc}"), t_np, t_sk)
     for n, cells, vc in [(50, 10, 0), (2000, 200, 40), (10000, 400, 40)]:
         if quick and n > 50:
             continue
         t_np = peer_incremental(n, cells, vc) if n <= max_peer else None
+        peers[("incremental", n)] = t_np
         t_sk = (sk_scratch.get((n, cells, vc, True)) or peer_scratch(n, cells, vc)[1]) if n <= max_peer else None
         show(f"+5 pts and update {n}, {cells}x{cells}" + (f", {vc}x{vc} map" if vc else ""),
              cpp.get(f"BM_UpdateIncremental/{n}/{cells}/{vc}"), t_np, t_sk)
     print("(sklearn has no incremental update: its '+5 pts' rows refit from scratch; '-': peer not run,"
           " --max-peer-points)")
+    if any(k.startswith("BM_LocalUpdate") for k in cpp):
+        print("\nthe local solver (README \"Local solver\") at ground scale, the peers above:")
+        online(cpp, report, max_peer, show, peers)
     helper = os.path.join(os.path.dirname(bench), "gpis_update_json")
     if os.path.exists(helper):
         print(f"\nagreement of one update with the peers (C++ backend: ", end="")
@@ -203,6 +219,57 @@ def main():
                   f" contour variance {a['var_f32']:.1e}")
     print(f"onboard state (50 points, 10x10 grid, doubles): "
           f"{(50 * 5 + 50 * 50 + 2 * 100) * 8 / 1000:.1f} kB; paper 000 Fig. S6: 20.9 kB")
+
+
+def online(cpp, report, max_peer, show, peers=None):
+    """Ground scale: the local solver next to the exact C++ solver and the peers
+    (timed here, or taken from `peers` when the full comparison measured them)."""
+    counters = {b["name"].split("/iterations")[0]: b for b in report["benchmarks"]}
+    summary = []
+    for n, cells, vc in [(2000, 200, 40), (10000, 400, 40)]:
+        big = n <= max_peer
+        if peers is not None:
+            t_np, t_sk = peers.get(("scratch", n)) or (None, None)
+            t_sk = t_sk if n <= 2000 else None
+        else:
+            t_np, t_sk = peer_scratch(n, cells, vc) if big and n <= 2000 else (None, None)
+        if peers is None and big and n > 2000:
+            # scikit-learn's predict on the 400 x 400 grid holds the whole 160,000 x 10,000
+            # kernel matrix (12.8 GB): not run at this size; numpy (blocked) alone.
+            X, y = gp.room_points(n)
+
+            def numpy_run():
+                g = gp.NumpyGpis(cells, vc, capacity=n)
+                g.fit(X, y)
+                g.update()
+            t_np = cpu_time(numpy_run, min_time=0.0, max_reps=1)
+        if peers is not None:
+            t_np_inc = peers.get(("incremental", n))
+        else:
+            t_np_inc = peer_incremental(n, cells, vc) if big else None
+        ex_s = cpp.get(f"BM_Update/{n}/{cells}/1/{vc}")
+        ex_i = cpp.get(f"BM_UpdateIncremental/{n}/{cells}/{vc}")
+        lo_s = cpp.get(f"BM_LocalUpdate/{n}/{cells}/{vc}")
+        lo_i = cpp.get(f"BM_LocalUpdateIncremental/{n}/{cells}/{vc}")
+        show(f"exact, update {n} pts, {cells}x{cells}, {vc}x{vc} map", ex_s, t_np, t_sk)
+        show(f"local, update {n} pts, {cells}x{cells}, {vc}x{vc} map", lo_s, t_np, t_sk)
+        show(f"exact, +5 pts and update {n}, {cells}x{cells}", ex_i, t_np_inc, t_sk)
+        show(f"local, +5 pts and update {n}, {cells}x{cells}", lo_i, t_np_inc, t_sk)
+        c = counters.get(f"BM_LocalUpdate/{n}/{cells}/{vc}", {})
+
+        def s_(t):
+            return f"{t:.3f} s" if t else "-"
+        summary.append(
+            f"gpis online update, {n} points: {s_(lo_i)} (exact {s_(ex_i)}, numpy {s_(t_np_inc)}; from scratch"
+            f" {s_(lo_s)}, exact {s_(ex_s)}, numpy {s_(t_np)}, sklearn {s_(t_sk)}; near the surface"
+            f" ({int(c.get('near_nodes', 0))} nodes): max mean error {c.get('mean_err_max', float('nan')):.1e}"
+            f" (avg {c.get('mean_err_avg', float('nan')):.1e}), max variance error"
+            f" {c.get('var_err_max', float('nan')):.1e} (avg {c.get('var_err_avg', float('nan')):.1e});"
+            f" {int(c.get('leaves', 0))} leaves, largest local GP {int(c.get('largest_local', 0))} points)")
+    print("(numpy and sklearn are the exact GP; sklearn has no incremental update: its '+5 pts' rows refit;"
+          " '-': not run, --max-peer-points)")
+    for line in summary:
+        print(line)
 
 
 if __name__ == "__main__":

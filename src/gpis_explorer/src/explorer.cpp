@@ -26,6 +26,7 @@ ExplorerParams ExplorerParams::ground() {
 
 void ExplorerParams::validate() const {
   gpis.validate();
+  local.validate();
   if (!(std::isfinite(grid_size) && grid_size > 0.0)) fail("grid_size", "must be > 0, got " + std::to_string(grid_size));
   if (grid_cells < 2 || grid_cells > 5000) {
     fail("grid_cells", "must be in [2, 5000], got " + std::to_string(grid_cells));
@@ -45,6 +46,20 @@ void ExplorerParams::validate() const {
   if (!(std::isfinite(border_margin) && border_margin >= 0.0 && 2.0 * border_margin < grid_size)) {
     fail("border_margin", "must be >= 0 and < grid_size / 2, got " + std::to_string(border_margin));
   }
+}
+
+const char* to_string(GpisSolver s) {
+  switch (s) {
+    case GpisSolver::kExact: return "exact";
+    case GpisSolver::kLocal: return "local";
+  }
+  return "unknown";
+}
+
+GpisSolver solver_from_string(const std::string& s) {
+  if (s == "exact") return GpisSolver::kExact;
+  if (s == "local") return GpisSolver::kLocal;
+  throw std::invalid_argument("GPIS solver must be 'exact' or 'local', got '" + s + "'");
 }
 
 const char* to_string(UpdateStatus s) {
@@ -95,8 +110,16 @@ double corner_penalty(const Eigen::Vector2d& x, const std::vector<Eigen::Vector2
   return p;
 }
 
-GpisExplorer::GpisExplorer(const ExplorerParams& params) : p_(params), gpis_((params.validate(), params.gpis)) {
+GpisExplorer::GpisExplorer(const ExplorerParams& params)
+    : p_(params), gpis_((params.validate(), params.gpis), params.solver == GpisSolver::kExact) {
+  if (p_.solver == GpisSolver::kLocal) local_ = std::make_unique<LocalGpis>(p_.gpis, p_.local);
   centre_grid(0.0, 0.0);
+}
+
+double GpisExplorer::mean(const Eigen::Vector2d& x) const { return local_ ? local_->mean(x) : gpis_.mean(x); }
+
+Eigen::Vector2d GpisExplorer::gradient(const Eigen::Vector2d& x) const {
+  return local_ ? local_->gradient(x) : gpis_.gradient(x);
 }
 
 void GpisExplorer::centre_grid(double x, double y) { set_grid(GridSpec::centred(x, y, p_.grid_size, p_.grid_cells)); }
@@ -104,6 +127,7 @@ void GpisExplorer::centre_grid(double x, double y) { set_grid(GridSpec::centred(
 void GpisExplorer::set_grid(const GridSpec& grid) {
   grid.validate();
   grid_ = grid;
+  grid_fresh_ = false;
   nodes_ = grid_.nodes();
   mean_.assign(grid_.count(), 0.0);
   var_.assign(grid_.count(), gpis_.prior_variance());
@@ -163,6 +187,10 @@ void GpisExplorer::coarse_variance() {
     vrows_ = static_cast<std::size_t>(n);
     cvar = (gpis_.prior_variance() - V_.topRows(n).colwise().squaredNorm().array()).max(0.0).matrix().transpose();
   }
+  interpolate_variance(cvar);
+}
+
+void GpisExplorer::interpolate_variance(const Eigen::VectorXd& cvar) {
   // Bilinear interpolation onto the grid nodes (the picture only).
   const double fx = static_cast<double>(vw_ - 1) / (grid_.width - 1);
   const double fy = static_cast<double>(vh_ - 1) / (grid_.height - 1);
@@ -186,7 +214,9 @@ const UpdateResult& GpisExplorer::update() {
   ++updates_;
   UpdateResult& r = result_;
   r = UpdateResult{};
-  if (p_.grid_variance && !variance_cells_active()) {
+  if (local_) {
+    local_grid();  // the local GPs (LocalGpis), recomputed where they changed
+  } else if (p_.grid_variance && !variance_cells_active()) {
     gpis_.predict_batch(nodes_, mean_buf_, var_buf_);  // 000 eq. 34-35 on every grid node
     for (std::size_t k = 0; k < mean_.size(); ++k) {
       mean_[k] = mean_buf_(static_cast<Eigen::Index>(k));
@@ -225,7 +255,11 @@ const UpdateResult& GpisExplorer::update() {
     Eigen::Matrix2Xd Pm(2, static_cast<Eigen::Index>(P.size()));
     for (std::size_t i = 0; i < P.size(); ++i) Pm.col(static_cast<Eigen::Index>(i)) = P[i];
     Eigen::VectorXd kappa;
-    gpis_.curvature_batch(Pm, kappa);  // 000 eq. 40, one pass over the points
+    if (local_) {
+      local_->curvature_batch(Pm, kappa);  // 000 eq. 40 of the blended mean
+    } else {
+      gpis_.curvature_batch(Pm, kappa);  // 000 eq. 40, one pass over the points
+    }
     info.curvature.assign(kappa.data(), kappa.data() + kappa.size());
     auto corners = cluster_corners(P, info.curvature, info.contour.closed, p_.corner_curvature);
     r.corners.insert(r.corners.end(), corners.begin(), corners.end());
@@ -246,7 +280,11 @@ const UpdateResult& GpisExplorer::update() {
     for (const auto& q : info.contour.points) cp.col(col++) = q;
   }
   Eigen::VectorXd cmean, cvar;
-  gpis_.predict_batch(cp, cmean, cvar);  // sigma^2 at every contour point (000 eq. 35), one blocked solve
+  if (local_) {
+    local_->predict_batch(cp, cmean, cvar);  // blended sigma^2 of the local GPs at every contour point
+  } else {
+    gpis_.predict_batch(cp, cmean, cvar);  // sigma^2 at every contour point (000 eq. 35), one blocked solve
+  }
   col = 0;
   for (auto& info : r.contours) {
     const auto& P = info.contour.points;
@@ -271,7 +309,76 @@ const UpdateResult& GpisExplorer::update() {
   return r;
 }
 
+void GpisExplorer::local_grid() {
+  if (gpis_.empty()) {  // the prior (000 eq. 34-35 without points), as the exact solver
+    std::fill(mean_.begin(), mean_.end(), 0.0);
+    std::fill(var_.begin(), var_.end(), p_.grid_variance ? gpis_.prior_variance() : std::numeric_limits<double>::quiet_NaN());
+    local_->invalidate();
+    grid_fresh_ = false;
+    return;
+  }
+  const Eigen::Vector2d lo(grid_.origin_x, grid_.origin_y);
+  const Eigen::AlignedBox2d cover(lo, grid_.node(grid_.width - 1, grid_.height - 1));
+  const bool all = local_->sync(gpis_, cover) || !grid_fresh_;
+  const auto& dirty = local_->dirty_boxes();
+  // Grid nodes inside a changed local GP's box (one node of margin).
+  std::vector<Eigen::Index> idx;
+  if (all) {
+    idx.resize(grid_.count());
+    for (std::size_t k = 0; k < idx.size(); ++k) idx[k] = static_cast<Eigen::Index>(k);
+  } else {
+    std::vector<char> mark(grid_.count(), 0);
+    const double r = grid_.resolution;
+    for (const auto& b : dirty) {
+      const auto lo_i = static_cast<long>(std::floor((b.min().x() - grid_.origin_x) / r)) - 1;
+      const auto hi_i = static_cast<long>(std::ceil((b.max().x() - grid_.origin_x) / r)) + 1;
+      const auto lo_j = static_cast<long>(std::floor((b.min().y() - grid_.origin_y) / r)) - 1;
+      const auto hi_j = static_cast<long>(std::ceil((b.max().y() - grid_.origin_y) / r)) + 1;
+      for (long j = std::max(0L, lo_j); j <= std::min<long>(hi_j, grid_.height - 1); ++j) {
+        for (long i = std::max(0L, lo_i); i <= std::min<long>(hi_i, grid_.width - 1); ++i) {
+          mark[static_cast<std::size_t>(j) * grid_.width + static_cast<std::size_t>(i)] = 1;
+        }
+      }
+    }
+    for (std::size_t k = 0; k < mark.size(); ++k) {
+      if (mark[k]) idx.push_back(static_cast<Eigen::Index>(k));
+    }
+  }
+  Eigen::Matrix2Xd Q(2, static_cast<Eigen::Index>(idx.size()));
+  for (std::size_t k = 0; k < idx.size(); ++k) Q.col(static_cast<Eigen::Index>(k)) = nodes_.col(idx[k]);
+  local_->mean_batch(Q, mean_buf_);  // 000 eq. 34, blended
+  for (std::size_t k = 0; k < idx.size(); ++k) mean_[static_cast<std::size_t>(idx[k])] = mean_buf_(static_cast<Eigen::Index>(k));
+  if (!p_.grid_variance) {
+    std::fill(var_.begin(), var_.end(), std::numeric_limits<double>::quiet_NaN());
+  } else if (!variance_cells_active()) {
+    Eigen::VectorXd m;
+    local_->predict_batch(Q, m, var_buf_);  // 000 eq. 35, blended
+    for (std::size_t k = 0; k < idx.size(); ++k) var_[static_cast<std::size_t>(idx[k])] = var_buf_(static_cast<Eigen::Index>(k));
+  } else {
+    // The variance-map nodes inside a changed box, then the picture's interpolation.
+    const Eigen::Index m = vnodes_.cols();
+    if (all || cvar_.size() != static_cast<std::size_t>(m)) cvar_.assign(static_cast<std::size_t>(m), 0.0);
+    std::vector<Eigen::Index> vi;
+    const Eigen::Vector2d pad = Eigen::Vector2d::Constant(grid_.resolution);
+    for (Eigen::Index k = 0; k < m; ++k) {
+      bool in = all;
+      for (std::size_t b = 0; b < dirty.size() && !in; ++b) {
+        in = Eigen::AlignedBox2d(dirty[b].min() - pad, dirty[b].max() + pad).contains(vnodes_.col(k));
+      }
+      if (in) vi.push_back(k);
+    }
+    Eigen::Matrix2Xd V(2, static_cast<Eigen::Index>(vi.size()));
+    for (std::size_t k = 0; k < vi.size(); ++k) V.col(static_cast<Eigen::Index>(k)) = vnodes_.col(vi[k]);
+    Eigen::VectorXd vm, vv;
+    local_->predict_batch(V, vm, vv);
+    for (std::size_t k = 0; k < vi.size(); ++k) cvar_[static_cast<std::size_t>(vi[k])] = vv(static_cast<Eigen::Index>(k));
+    interpolate_variance(Eigen::Map<const Eigen::VectorXd>(cvar_.data(), m));
+  }
+  grid_fresh_ = true;
+}
+
 std::size_t GpisExplorer::state_bytes() const {
+  if (local_) return gpis_.state_bytes() + local_->state_bytes() + sizeof(double) * (2 * grid_.count() + cvar_.size());
   const std::size_t vmap =
       variance_cells_active() ? gpis_.params().max_points * static_cast<std::size_t>(vnodes_.cols()) : 0;
   return gpis_.state_bytes() + sizeof(double) * (2 * grid_.count() + vmap);

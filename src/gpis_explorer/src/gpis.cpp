@@ -109,7 +109,7 @@ const char* to_string(AddStatus s) {
   return "unknown";
 }
 
-Gpis::Gpis(const GpisParams& params) : p_(params) {
+Gpis::Gpis(const GpisParams& params, bool factorize) : p_(params), factorize_(factorize) {
   p_.validate();
   half_beta_ = p_.beta == 0.5;
   prior_var_ = std::pow(p_.c * p_.c, -p_.beta);  // k(x, x), 000 eq. 33 with r = 0
@@ -125,12 +125,13 @@ void Gpis::ensure_capacity(std::size_t n) {
   const auto m = static_cast<Eigen::Index>(n_);
   Eigen::Matrix2Xd X(2, c);
   Eigen::VectorXd y(c), alpha(c);
-  Eigen::MatrixXd L = Eigen::MatrixXd::Zero(c, c);
+  // A store of points only keeps no factor (0 x 0).
+  Eigen::MatrixXd L = factorize_ ? Eigen::MatrixXd::Zero(c, c) : Eigen::MatrixXd();
   if (m > 0) {
     X.leftCols(m) = X_.leftCols(m);
     y.head(m) = y_.head(m);
     alpha.head(m) = alpha_.head(m);
-    L.topLeftCorner(m, m) = L_.topLeftCorner(m, m);
+    if (factorize_) L.topLeftCorner(m, m) = L_.topLeftCorner(m, m);
   }
   X_.swap(X);
   y_.swap(y);
@@ -155,6 +156,13 @@ AddStatus Gpis::add_point(const Eigen::Vector2d& x, double label) {
   if (n_ >= p_.max_points) return AddStatus::kBudgetFull;
   ensure_capacity(n_ + 1);
   const auto n = static_cast<Eigen::Index>(n_);
+  if (!factorize_) {
+    X_.col(n) = x;
+    y_(n) = label;
+    ++n_;
+    if (label == kSurfaceLabel) ++surface_count_;
+    return AddStatus::kAdded;
+  }
   // New row of the factor: L_{n,0:n} = L^-1 k(X, x), L_nn = sqrt(k(x,x) + sigma^2 - |l|^2).
   Eigen::VectorXd::SegmentReturnType l = work_.head(n);
   for (Eigen::Index i = 0; i < n; ++i) l(i) = kernel(X_.col(i), x);
@@ -171,7 +179,14 @@ AddStatus Gpis::add_point(const Eigen::Vector2d& x, double label) {
   return AddStatus::kAdded;
 }
 
+void Gpis::require_factor(const char* what) const {
+  if (!factorize_) {
+    throw std::logic_error(std::string("Gpis::") + what + ": this Gpis stores points only (built with factorize = false)");
+  }
+}
+
 void Gpis::solve_alpha() {
+  if (!factorize_) return;
   const auto n = static_cast<Eigen::Index>(n_);
   alpha_.head(n) = y_.head(n);
   trsv_lower(L_.data(), L_.outerStride(), n, alpha_.data(), false);
@@ -221,7 +236,7 @@ void Gpis::pop_back() {
 
 void Gpis::refactorize() {
   const auto n = static_cast<Eigen::Index>(n_);
-  if (n == 0) return;
+  if (n == 0 || !factorize_) return;
   // K + sigma^2 I into the factor's storage (lower triangle, column by column),
   // zeros above the diagonal, then the Cholesky factorization in place.
   const double c2 = p_.c * p_.c;
@@ -262,19 +277,25 @@ void Gpis::clear() {
 }
 
 Eigen::Ref<const Eigen::MatrixXd> Gpis::cholesky() const {
+  require_factor("cholesky");
   const auto n = static_cast<Eigen::Index>(n_);
   return L_.topLeftCorner(n, n);
 }
 
-Eigen::Ref<const Eigen::VectorXd> Gpis::alpha() const { return alpha_.head(static_cast<Eigen::Index>(n_)); }
+Eigen::Ref<const Eigen::VectorXd> Gpis::alpha() const {
+  require_factor("alpha");
+  return alpha_.head(static_cast<Eigen::Index>(n_));
+}
 
 double Gpis::mean(const Eigen::Vector2d& x) const {
+  require_factor("mean");
   double m = 0.0;
   for (Eigen::Index i = 0; i < static_cast<Eigen::Index>(n_); ++i) m += kernel(X_.col(i), x) * alpha_(i);  // eq. 34
   return m;
 }
 
 void Gpis::predict(const Eigen::Vector2d& x, double* mean, double* variance) const {
+  require_factor("predict");
   const auto n = static_cast<Eigen::Index>(n_);
   double m = 0.0;
   auto v = work_.head(n);
@@ -290,6 +311,7 @@ void Gpis::predict(const Eigen::Vector2d& x, double* mean, double* variance) con
 }
 
 void Gpis::kernel_block(const Eigen::Ref<const Eigen::Matrix2Xd>& Q, Eigen::Ref<Eigen::MatrixXd> K) const {
+  require_factor("kernel_block");
   const auto n = static_cast<Eigen::Index>(n_);
   if (K.rows() != n || K.cols() != Q.cols()) {
     throw std::invalid_argument("Gpis::kernel_block: K is " + std::to_string(K.rows()) + " x " +
@@ -312,6 +334,7 @@ void Gpis::kernel_block(const Eigen::Ref<const Eigen::Matrix2Xd>& Q, Eigen::Ref<
 }
 
 void Gpis::solve_lower(Eigen::Ref<Eigen::MatrixXd> B) const {
+  require_factor("solve_lower");
   const auto n = static_cast<Eigen::Index>(n_);
   if (B.rows() != n) {
     throw std::invalid_argument("Gpis::solve_lower: B has " + std::to_string(B.rows()) + " rows, need " +
@@ -322,6 +345,7 @@ void Gpis::solve_lower(Eigen::Ref<Eigen::MatrixXd> B) const {
 
 void Gpis::predict_batch(const Eigen::Ref<const Eigen::Matrix2Xd>& Q, Eigen::VectorXd& mean,
                          Eigen::VectorXd& variance) const {
+  require_factor("predict_batch");
   const auto n = static_cast<Eigen::Index>(n_);
   const Eigen::Index m = Q.cols();
   mean.resize(m);
@@ -345,6 +369,7 @@ void Gpis::predict_batch(const Eigen::Ref<const Eigen::Matrix2Xd>& Q, Eigen::Vec
 }
 
 void Gpis::mean_batch(const Eigen::Ref<const Eigen::Matrix2Xd>& Q, Eigen::VectorXd& mean) const {
+  require_factor("mean_batch");
   const auto n = static_cast<Eigen::Index>(n_);
   mean.setZero(Q.cols());
   const double c2 = p_.c * p_.c;
@@ -369,6 +394,7 @@ void Gpis::mean_batch(const Eigen::Ref<const Eigen::Matrix2Xd>& Q, Eigen::Vector
 
 void Gpis::curvature_batch(const Eigen::Ref<const Eigen::Matrix2Xd>& Q, Eigen::VectorXd& kappa,
                            double min_gradient) const {
+  require_factor("curvature_batch");
   const Eigen::Index m = Q.cols();
   kappa.resize(m);
   if (!half_beta_) {
@@ -402,6 +428,7 @@ const char* Gpis::backend() {
 }
 
 void Gpis::derivatives(const Eigen::Vector2d& x, Eigen::Vector2d* gradient, Eigen::Matrix2d* hessian) const {
+  require_factor("derivatives");
   // k = s^-beta, s = c^2 + |d|^2, d = x - x_i:
   //   dk/dx   = -2 beta s^(-beta-1) d                                   (000 eq. 37)
   //   d2k/dx2 = -2 beta s^(-beta-1) I + 4 beta (beta+1) s^(-beta-2) d d^T (000 eq. 39)
@@ -453,6 +480,7 @@ double Gpis::curvature(const Eigen::Vector2d& x, double min_gradient) const {
 std::size_t Gpis::state_bytes() const {
   const std::size_t n = p_.max_points;
   // points (2 doubles), label, alpha and work (1 double each), dense factor n^2.
+  if (!factorize_) return sizeof(double) * (n * 2 + n);
   return sizeof(double) * (n * 2 + n + n + n + n * n);
 }
 

@@ -32,6 +32,12 @@ ParamMap GpisExplorerLogic::default_parameters() {
   m.set("gpis.c", s.explorer.gpis.c);
   m.set("gpis.noise", s.explorer.gpis.noise);
   m.set("gpis.max_points", static_cast<int64_t>(s.explorer.gpis.max_points));  // 000 Fig. S6: 50
+  // Solver: exact (000) or local GPs over a quadtree (GPisMap; README "Local solver")
+  m.set("gpis.solver", std::string(to_string(s.explorer.solver)));
+  m.set("gpis.leaf_points", static_cast<int64_t>(s.explorer.local.leaf_points));
+  m.set("gpis.overlap", s.explorer.local.overlap);
+  m.set("gpis.min_leaf_size", s.explorer.local.min_leaf_size);
+  m.set("gpis.label_neighbours", static_cast<int64_t>(s.explorer.local.label_neighbours));
   m.set("grid_size", s.explorer.grid_size);
   m.set("grid_cells", static_cast<int64_t>(s.explorer.grid_cells));  // 000: 10 x 10 onboard
   m.set("grid_variance", s.explorer.grid_variance);
@@ -104,6 +110,15 @@ GpisExplorerLogic::Params GpisExplorerLogic::params_from(const ParamMap& m) {
   s.explorer.gpis.c = m.get_double("gpis.c");
   s.explorer.gpis.noise = m.get_double("gpis.noise");
   s.explorer.gpis.max_points = m.get_size("gpis.max_points", 1, 100000);
+  try {
+    s.explorer.solver = solver_from_string(m.get_string("gpis.solver"));
+  } catch (const std::invalid_argument& e) {
+    throw m.error("gpis.solver", e.what());
+  }
+  s.explorer.local.leaf_points = m.get_size("gpis.leaf_points", 1, 100000);
+  s.explorer.local.overlap = m.get_double("gpis.overlap");
+  s.explorer.local.min_leaf_size = m.get_double("gpis.min_leaf_size");
+  s.explorer.local.label_neighbours = m.get_size("gpis.label_neighbours", 0, 100000);
   s.explorer.grid_size = m.get_double("grid_size");
   s.explorer.grid_cells = m.get_integer<uint32_t>("grid_cells", 2, 5000);
   s.explorer.grid_variance = m.get_bool("grid_variance");

@@ -346,7 +346,7 @@ bool ExplorationSequencer::staging_for(const Eigen::Vector2d& from, const Eigen:
                                        double* approach_heading) const {
   // Outward normal of the implicit surface at the target: the mean grows from
   // -1 (interior) to 0 (surface), so grad f (000 eq. 36) points out of the room.
-  const Gpis& g = explorer_.gpis();
+  const GpisExplorer& g = explorer_;  // the solver's mean and gradient (exact or local)
   const Eigen::Vector2d grad = g.gradient(q);
   if (!(grad.allFinite() && grad.norm() > 1e-9)) return false;
   const Eigen::Vector2d n = grad.normalized();

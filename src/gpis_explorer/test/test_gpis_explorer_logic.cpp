@@ -54,6 +54,28 @@ TEST(GpisExplorerLogic, BadParameterNamesKey) {
   m = GpisExplorerLogic::default_parameters();
   m.set("gpis.max_points", int64_t{-3});
   EXPECT_THROW(GpisExplorerLogic::params_from(m), tactile_common::ParamError);
+  // The solver (README "Local solver"): exact by default, local by name, nothing else.
+  EXPECT_EQ(GpisExplorerLogic::params_from(GpisExplorerLogic::default_parameters()).sequencer.explorer.solver,
+            gpis_explorer::GpisSolver::kExact);
+  m = GpisExplorerLogic::default_parameters();
+  m.set("gpis.solver", std::string("local"));
+  EXPECT_EQ(GpisExplorerLogic::params_from(m).sequencer.explorer.solver, gpis_explorer::GpisSolver::kLocal);
+  m.set("gpis.solver", std::string("sparse"));
+  try {
+    GpisExplorerLogic::params_from(m);
+    FAIL() << "gpis.solver 'sparse' accepted";
+  } catch (const tactile_common::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("gpis.solver"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("'sparse'"), std::string::npos) << e.what();
+  }
+  m = GpisExplorerLogic::default_parameters();
+  m.set("gpis.min_leaf_size", 0.1);  // < 2 overlap: validate()'s message
+  try {
+    GpisExplorerLogic::params_from(m);
+    FAIL() << "gpis.min_leaf_size 0.1 accepted";
+  } catch (const tactile_common::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("min_leaf_size: must be >= 2 overlap"), std::string::npos) << e.what();
+  }
 }
 
 // The integer parameters were clamped before they were checked (grid_cells,
@@ -64,7 +86,7 @@ TEST(GpisExplorerLogic, BadParameterNamesKey) {
 TEST(GpisExplorerLogic, IntegerParametersAreCheckedBeforeTheyAreNarrowed) {
   const auto wrapped = tactile_common::wrapped_integers(GpisExplorerLogic::default_parameters(),
                                                         [](const tactile_common::ParamMap& m) { GpisExplorerLogic::params_from(m); });
-  EXPECT_EQ(wrapped.size(), 7u);  // gpis.max_points ... max_updates
+  EXPECT_EQ(wrapped.size(), 9u);  // gpis.max_points, gpis.leaf_points, gpis.label_neighbours ... max_updates
   for (const auto& [key, w] : wrapped) EXPECT_TRUE(w.rejected_as_given()) << key << ": " << w.error;
   auto m = GpisExplorerLogic::default_parameters();
   m.set("variance_cells", int64_t{1});  // in [0, 5000], but not 0 or 2..5000: validate()'s message

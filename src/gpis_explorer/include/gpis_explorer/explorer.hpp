@@ -9,14 +9,26 @@
 #include <cstddef>
 #include <algorithm>
 #include <cstdint>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
 #include "gpis_explorer/contour.hpp"
 #include "gpis_explorer/gpis.hpp"
+#include "gpis_explorer/local_gpis.hpp"
 
 namespace gpis_explorer {
+
+/// Which GP computes the map (ExplorerParams::solver).
+enum class GpisSolver : uint8_t {
+  kExact,  ///< one GP over every point (000 eq. 33-40): the onboard budget and the reference
+  kLocal,  ///< local GPs over a quadtree, blended (local_gpis.hpp): ground-station scale
+};
+const char* to_string(GpisSolver s);
+/// "exact" / "local"; throws std::invalid_argument naming the value otherwise.
+GpisSolver solver_from_string(const std::string& s);
 
 struct ExplorerParams {
   GpisParams gpis;
@@ -52,6 +64,14 @@ struct ExplorerParams {
   /// memory max_points x k^2 doubles). The target uses the exact variance at
   /// the contour points either way (000 eq. 44-46). Workspace choice.
   uint32_t variance_cells = 0;
+  /// The GP behind the map: kExact (default; the paper's GPIS, O(n^2) per
+  /// added point, O(n m) per grid of m nodes) or kLocal (local GPs over a
+  /// quadtree with overlap blending after GPisMap, Lee et al. ICRA 2019;
+  /// parameters in `local`; an approximation whose error against the exact
+  /// GP is bounded in the README, "Local solver"). While every point fits in
+  /// one leaf (local.leaf_points) the local solver is the exact GP.
+  GpisSolver solver = GpisSolver::kExact;
+  LocalGpisParams local;
 
   /// The onboard budget of 000: 50 points, 10 x 10 grid over 4 m.
   static ExplorerParams onboard();
@@ -111,29 +131,42 @@ class GpisExplorer {
  public:
   explicit GpisExplorer(const ExplorerParams& params);
 
-  /// Adds a training point (incremental Cholesky update).
+  /// Adds a training point (incremental Cholesky update; local solver: the
+  /// point is stored, the local GPs take it at the next update()).
   AddStatus add_point(const Eigen::Vector2d& x, double label) { return gpis_.add_point(x, label); }
   /// Replaces the training set and factorizes once (Gpis::fit).
   std::size_t fit(const Eigen::Ref<const Eigen::Matrix2Xd>& X, const Eigen::Ref<const Eigen::VectorXd>& y) {
     vrows_ = 0;
+    if (local_) local_->invalidate();
     return gpis_.fit(X, y);
   }
   void pop_back() {
     gpis_.pop_back();
     vrows_ = std::min(vrows_, gpis_.size());
+    if (local_) local_->invalidate();
   }
   void remove(std::size_t i) {
     vrows_ = 0;
+    if (local_) local_->invalidate();
     gpis_.remove(i);
   }
   void refactorize() {
     vrows_ = 0;
+    if (local_) local_->invalidate();
     gpis_.refactorize();
   }
   void clear() {
     vrows_ = 0;
+    if (local_) local_->invalidate();
     gpis_.clear();
   }
+  /// Posterior mean and its gradient at x from the chosen solver (000 eq. 34,
+  /// 36-37); the local solver answers from the last update()'s local GPs
+  /// (NaN outside them).
+  double mean(const Eigen::Vector2d& x) const;
+  Eigen::Vector2d gradient(const Eigen::Vector2d& x) const;
+  /// The local solver (null for kExact).
+  const LocalGpis* local() const { return local_.get(); }
   /// Centres the prediction grid on (x, y) (grid_size, grid_cells unchanged).
   void centre_grid(double x, double y);
   void set_grid(const GridSpec& grid);
@@ -141,6 +174,8 @@ class GpisExplorer {
   /// Predicts the grid, extracts contours, curvature, corners and the target.
   const UpdateResult& update();
 
+  /// The training points; with the exact solver also the GP itself (with
+  /// the local solver a store of points only: Gpis::factorized() false).
   const Gpis& gpis() const { return gpis_; }
   const GridSpec& grid() const { return grid_; }
   const std::vector<double>& grid_mean() const { return mean_; }
@@ -161,6 +196,11 @@ class GpisExplorer {
   /// Extends (or recomputes) V = L^-1 k(X, vnodes_) to the current points and
   /// interpolates the coarse variance map onto var_.
   void coarse_variance();
+  /// The grid mean and variance from the local GPs, recomputed only where
+  /// the last LocalGpis::sync() changed a local GP.
+  void local_grid();
+  /// Bilinear interpolation of the variance-map values onto var_ (picture).
+  void interpolate_variance(const Eigen::VectorXd& cvar);
 
   ExplorerParams p_;
   Gpis gpis_;
@@ -174,6 +214,9 @@ class GpisExplorer {
   Eigen::VectorXd mean_buf_, var_buf_;
   UpdateResult result_;
   std::size_t updates_ = 0;
+  std::unique_ptr<LocalGpis> local_;  ///< kLocal only
+  bool grid_fresh_ = false;           ///< local: mean_/var_ hold the last update's values on this grid
+  std::vector<double> cvar_;          ///< local: variance on the variance-map nodes
 };
 
 }  // namespace gpis_explorer

@@ -60,7 +60,14 @@ const char* to_string(AddStatus s);
 
 class Gpis {
  public:
-  explicit Gpis(const GpisParams& params);
+  /// factorize = false: a store of the training points only (positions,
+  /// labels, the same duplicate / budget / finiteness checks), no factor and
+  /// no prediction (those throw std::logic_error). The explorer's local
+  /// solver (local_gpis.hpp) keeps its points in one, so a ground-station
+  /// budget never allocates the dense max_points^2 factor.
+  explicit Gpis(const GpisParams& params, bool factorize = true);
+  /// False for a store of points only (see the constructor).
+  bool factorized() const { return factorize_; }
 
   /// Adds one training point and extends the Cholesky factor by one row
   /// (O(n^2)); alpha is recomputed by two triangular solves (O(n^2)).
@@ -142,10 +149,13 @@ class Gpis {
   double imq(double s) const { return half_beta_ ? 1.0 / std::sqrt(s) : std::pow(s, -p_.beta); }
   void ensure_capacity(std::size_t n);
   void solve_alpha();
+  /// Throws std::logic_error naming `what` on a store of points only.
+  void require_factor(const char* what) const;
   /// Training coordinates as two contiguous arrays (kernel loops).
   void split_points(std::vector<double>& xs, std::vector<double>& ys) const;
 
   GpisParams p_;
+  bool factorize_ = true;
   double prior_var_ = 1.0;
   bool half_beta_ = true;
   std::size_t n_ = 0;
