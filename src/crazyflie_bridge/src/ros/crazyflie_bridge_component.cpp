@@ -34,6 +34,7 @@
 #include <mutex>
 #include <string>
 #include <type_traits>
+#include <utility>
 
 #include "crazyflie_bridge/bridge_health.hpp"
 #include "crazyflie_bridge/bridge_runner.hpp"
@@ -136,7 +137,6 @@ public:
   BridgeRosFace & operator=(const BridgeRosFace &) = delete;
 
   const CrazyflieBridgeLogic::Params & params() const {return params_;}
-  bool open_link() const {return runner_ != nullptr;}
 
   /// Opens params.uri: link, cflib's connection sequence (protocol and firmware version,
   /// TOCs), log blocks created, not started. Throws UriError / LinkError / ClientError /
