@@ -15,8 +15,8 @@ bench_rig.launch.py on pseudo terminals.
 - the whisker drivers: inactive with activate:=false (device open, nothing published), then
   active and publishing; a missing device leaves its driver unconfigured with its name.
 
-Where the components are plain nodes (no rclcpp_lifecycle: the Jazzy toolchain here) these
-tests are skipped; test_launch_radio.py, test_launch_operator.py and
+Where the ROS 2 installation has no rclcpp_lifecycle (the Jazzy toolchain here) these tests
+are skipped; test_launch_radio.py, test_launch_operator.py and
 test_launch_bench_rig.py cover that path."""
 
 from __future__ import annotations
@@ -47,10 +47,23 @@ def lifecycle_built(package: str) -> bool:
     return component_kind(package) == 'lifecycle'
 
 
+def rclcpp_lifecycle_installed() -> bool:
+    from ament_index_python.packages import get_package_share_directory, PackageNotFoundError
+    try:
+        get_package_share_directory('rclcpp_lifecycle')
+        return True
+    except PackageNotFoundError:
+        return False
+
+
 def needs_lifecycle(package: str):
-    if not lifecycle_built(package):
-        pytest.skip(f'{package} is built as a plain node here (no rclcpp_lifecycle in this ROS 2 '
-                    'installation): its launch tests cover that path')
+    """Skips where this ROS 2 installation has no rclcpp_lifecycle (the plain path: its own
+    launch tests cover it); where it has, `package` must have been built as a lifecycle node."""
+    if not rclcpp_lifecycle_installed():
+        pytest.skip('no rclcpp_lifecycle in this ROS 2 installation: the hardware nodes are plain '
+                    'nodes (test_launch_radio.py, test_launch_operator.py, test_launch_bench_rig.py)')
+    assert lifecycle_built(package), \
+        f'rclcpp_lifecycle is installed but {package} was built as a {component_kind(package)} node'
 
 
 def lifecycle(verb: str, node: str, *args: str, timeout: float = 30.0) -> str:
