@@ -5,7 +5,8 @@ lifecycle_common.py): radio.launch.py against the simulated Crazyflie over UDP
 bench_rig.launch.py on pseudo terminals.
 
 - activate:=false: the bridge goes unconfigured -> inactive (radio up: connected, nothing
-  streamed, nothing sent to the motors); `ros2 lifecycle set activate` -> active: it streams,
+  streamed, nothing sent to the motors); cleanup -> unconfigured (link closed), configure ->
+  inactive again (reconnected); `ros2 lifecycle set activate` -> active: it streams,
   and still nothing reaches the motors (the simulator counts zero setpoint packets) until
   takeoff;
 - configure against a URI where nothing answers fails with the bridge's error naming the URI
@@ -132,6 +133,13 @@ def test_lifecycle_radio_up_check_then_activate_nothing_flies(sim, tmp_path):
                      in launch.output(), 5, 'takeoff refused while inactive', launch)
         res = bridge.call('start_behaviour')
         assert not res.success and 'not active' in res.message, res.message
+        # the operator's cycle: cleanup closes the link (unconfigured), configure reconnects
+        assert lifecycle('set', BRIDGE, 'cleanup') == 'Transitioning successful'
+        assert lifecycle('get', BRIDGE).startswith('unconfigured [1]')
+        assert f'cleanup: link to udp://127.0.0.1:{sim.port} closed' in launch.output()
+        assert lifecycle('set', BRIDGE, 'configure') == 'Transitioning successful'
+        assert lifecycle('get', BRIDGE).startswith('inactive [2]')
+        assert launch.output().count(f'connected to udp://127.0.0.1:{sim.port}: CRTP protocol 10') == 2
 
         assert lifecycle('set', BRIDGE, 'activate') == 'Transitioning successful'
         assert lifecycle('get', BRIDGE).startswith('active [3]')
