@@ -43,27 +43,24 @@ BridgeRunner::BridgeRunner(const CrazyflieBridgeLogic::Params& params, ClientOpt
       warnings_.push_back(std::string("crazyflie_bridge: status log block not created: ") + e.what());
     }
   }
-  // Started in creation order (whisker, attitude, state), as before the split.
-  if (stream) start_streaming();
   if (status_block) {
-    if (stream) {
-      try {
-        client_->start_created_log_block(st);
-      } catch (const ClientError& e) {
-        warnings_.push_back(std::string("crazyflie_bridge: status log block not started: ") + e.what());
-        status_block = false;
-      }
-    }
-    if (status_block) {
-      logic_.set_status_block(st, have);
-      block_ids_.push_back(st);
-    }
+    logic_.set_status_block(st, have);
+    status_block_id_ = st;
   }
+  if (stream) start_streaming();
 }
 
 void BridgeRunner::start_streaming() {
   if (streaming_) return;
+  // In creation order (whisker, attitude, state, then status), as before the split.
   for (uint8_t id : block_ids_) client_->start_created_log_block(id);
+  if (status_block_id_) {
+    try {
+      client_->start_created_log_block(*status_block_id_);
+    } catch (const ClientError& e) {  // display and the low-battery guard only: never a failed connect
+      warnings_.push_back(std::string("crazyflie_bridge: status log block not started: ") + e.what());
+    }
+  }
   streaming_ = true;
 }
 
@@ -74,6 +71,13 @@ bool BridgeRunner::stop_streaming() {
   }
   if (!streaming_) return true;
   for (uint8_t id : block_ids_) client_->stop_log_block(id);
+  if (status_block_id_) {
+    try {
+      client_->stop_log_block(*status_block_id_);
+    } catch (const ClientError& e) {  // it may never have started
+      warnings_.push_back(std::string("crazyflie_bridge: status log block not stopped: ") + e.what());
+    }
+  }
   streaming_ = false;
   return true;
 }

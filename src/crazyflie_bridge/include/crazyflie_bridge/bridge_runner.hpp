@@ -13,6 +13,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -104,7 +105,8 @@ class BridgeRunner {
   bool state_pending_ = false;
   LatencyStats latency_;
   std::vector<std::string> warnings_;
-  std::vector<uint8_t> block_ids_;  ///< created at connect, in start order
+  std::vector<uint8_t> block_ids_;         ///< whisker, attitude, state: created at connect, in start order
+  std::optional<uint8_t> status_block_id_;  ///< optional: its failures are warnings
   bool streaming_ = false;
   /// Sends what the logic queued (caller holds mutex_).
   void flush_outbox();
