@@ -9,7 +9,12 @@ Whisker 1 (left) speaks the text protocol (P1:/P2:/P3:/T1:/T2:/T3: lines), whisk
 the standalone host reads (config/whisker_driver.yaml, config/tdorc_filter.yaml); the
 launch arguments override the serial device per whisker and the TDORC parameter file
 (tdorc_params:=my_tuning.yaml, to try another tuning on the bench). A node that cannot
-start (device missing, bad parameter) stops the launch with its message.
+start (bad parameter) stops the launch with its message. Where the ROS 2 installation has
+rclcpp_lifecycle the drivers are lifecycle nodes: the launch configures them (opens the
+serial devices) and activates each that reached `inactive` (activate:=false: configured
+only, for `ros2 lifecycle set /whisker/left/whisker_driver activate`); a device that cannot
+be opened is logged with its name and reason and leaves that driver `unconfigured`, the launch
+running (lifecycle_common.py). Without rclcpp_lifecycle a missing device stops the launch.
 
 Topics: /whisker/{left,right}/pressure (tactile_msgs/WhiskerPressure),
         /whisker/{left,right}/signal   (tactile_msgs/WhiskerSignal),
@@ -33,6 +38,11 @@ _common_spec = importlib.util.spec_from_file_location(
     'launch_common', os.path.join(os.path.dirname(os.path.abspath(__file__)), 'launch_common.py'))
 launch_common = importlib.util.module_from_spec(_common_spec)
 _common_spec.loader.exec_module(launch_common)
+_lifecycle_spec = importlib.util.spec_from_file_location(
+    'lifecycle_common', os.path.join(os.path.dirname(os.path.abspath(__file__)), 'lifecycle_common.py'))
+lifecycle_common = importlib.util.module_from_spec(_lifecycle_spec)
+_lifecycle_spec.loader.exec_module(lifecycle_common)
+DRIVERS = ['/whisker/left/whisker_driver', '/whisker/right/whisker_driver']
 
 
 def whisker_nodes(side, device, tdorc_params):
@@ -88,4 +98,5 @@ def generate_launch_description():
                               description='parameter file of both TDORC filters'),
         container,
         launch_common.stop_on_load_failure(container),
-    ])
+    ] + ([lifecycle_common.activate_argument(), lifecycle_common.manage_lifecycle(DRIVERS)]
+         if lifecycle_common.is_lifecycle('whisker_driver') else []))

@@ -5,6 +5,13 @@ container on wall-clock time.
 
     ros2 launch launch/radio.launch.py uri:=radio://0/80/2M/E7E7E7E7E7?safelink=1
 
+Where the ROS 2 installation has rclcpp_lifecycle the bridge is a lifecycle node: the launch
+configures it (connects: link, TOCs, log blocks) and, once it is `inactive`, activates it
+(streams); activate:=false leaves it inactive, the radio up, for the operator to check
+(`ros2 lifecycle get /crazyflie_bridge`, then `ros2 lifecycle set /crazyflie_bridge activate`).
+A failed connect leaves it `unconfigured` with its error and the launch running
+(lifecycle_common.py). Without rclcpp_lifecycle it connects when loaded.
+
 Nothing flies until the operator asks (autostart:=false, the default): the bridge connects,
 streams the sensors and stays on the ground; `takeoff`, then `start_behaviour` hands over to
 the whisker FSM; `land`, `emergency`, `arm`, `go_to`, `notify_setpoints_stop` as in
@@ -27,7 +34,8 @@ tactile_depth.yaml, tactile_fsm.yaml); `uri` overrides the bridge's. The FSM's f
 approach steps and scans by default (tactile_fsm README "Round 12"); against a single wall
 ahead set first_whisk_amplitude: 0 there for the paper's straight approach. The Crazyradio needs
 the Bitcraze udev rules (or run as root / pass the device into the container). Without a
-Crazyradio the bridge cannot start and the launch ends with its message ("no Crazyradio found").
+Crazyradio the bridge cannot connect: the plain node's load fails and the launch ends with its
+message ("no Crazyradio found"); the lifecycle node logs it and stays unconfigured.
 """
 
 import importlib.util
@@ -47,6 +55,10 @@ _common_spec = importlib.util.spec_from_file_location(
     'launch_common', os.path.join(os.path.dirname(os.path.abspath(__file__)), 'launch_common.py'))
 launch_common = importlib.util.module_from_spec(_common_spec)
 _common_spec.loader.exec_module(launch_common)
+_lifecycle_spec = importlib.util.spec_from_file_location(
+    'lifecycle_common', os.path.join(os.path.dirname(os.path.abspath(__file__)), 'lifecycle_common.py'))
+lifecycle_common = importlib.util.module_from_spec(_lifecycle_spec)
+_lifecycle_spec.loader.exec_module(lifecycle_common)
 
 
 def config(name):
@@ -72,6 +84,17 @@ def container_stop_timeout():
     with open(config('crazyflie_bridge')) as f:
         params = (yaml.safe_load(f) or {}).get('crazyflie_bridge', {}).get('ros__parameters', {})
     return str(float(params.get('shutdown_land_timeout_s', 10.0)) + 5.0)
+
+
+BRIDGE = '/crazyflie_bridge'
+
+
+def bridge_lifecycle():
+    """The `activate` argument and the configure -> activate sequence of the bridge where it
+    is a lifecycle node (lifecycle_common.py); nothing where it is a plain node."""
+    if not lifecycle_common.is_lifecycle('crazyflie_bridge'):
+        return []
+    return [lifecycle_common.activate_argument(), lifecycle_common.manage_lifecycle([BRIDGE])]
 
 
 def pipeline_nodes(bridge_overrides):
@@ -108,4 +131,4 @@ def generate_launch_description():
         autostart_argument(),
         container,
         launch_common.stop_on_load_failure(container),
-    ])
+    ] + bridge_lifecycle())

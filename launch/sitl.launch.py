@@ -5,7 +5,7 @@ container as radio.launch.py with the bridge on udp://127.0.0.1:<port>.
     ros2 launch launch/sitl.launch.py scenario:=config/scenarios/whisker_darkness_rigid_fsm.yaml
 
 As radio.launch.py, nothing flies until `takeoff` (then `start_behaviour`) unless
-autostart:=true. Ctrl-C reaches crazyflie_sim_server too, which ends at once: the bridge's
+autostart:=true; a lifecycle bridge is configured and activated (activate:=false: configured only). Ctrl-C reaches crazyflie_sim_server too, which ends at once: the bridge's
 shutdown landing then hears no vehicle and ends after shutdown_land_timeout_s with an
 emergency stop. To watch the shutdown landing, run the server on its own and
 radio.launch.py uri:=udp://127.0.0.1:<port> against it (tactile_ros_tests
@@ -63,4 +63,4 @@ def generate_launch_description():
         server,
         container,
         _radio.launch_common.stop_on_load_failure(container),
-    ])
+    ] + _radio.bridge_lifecycle())

@@ -7,20 +7,21 @@
 namespace crazyflie_bridge {
 
 BridgeRunner::BridgeRunner(const CrazyflieBridgeLogic::Params& params, ClientOptions client_options,
-                           std::unique_ptr<Link> link)
+                           std::unique_ptr<Link> link, bool stream)
     : link_(link ? std::move(link) : open_link(params.uri)), logic_(params) {
   client_ = std::make_unique<CrazyflieClient>(*link_, client_options);
   client_->connect();
   logic_.set_protocol_version(client_->protocol_version());  // setpoint generation (cflib's threshold)
-  const uint8_t w = client_->start_log_block(logic_.whisker_block(), static_cast<uint16_t>(params.whisker_period_ms));
+  const uint8_t w = client_->create_log_block(logic_.whisker_block(), static_cast<uint16_t>(params.whisker_period_ms));
   // Attitude block before the state block: a lower id, so a firmware that
   // sends the blocks due at one tick in id order delivers it first.
   bool variances = true;
   for (const auto& n : AttitudeBlock::variance_vars()) variances = variances && client_->log_item(n) != nullptr;
-  const uint8_t a = client_->start_log_block(logic_.attitude_block(variances), static_cast<uint16_t>(params.state_period_ms));
-  const uint8_t s = client_->start_log_block(logic_.state_block(), static_cast<uint16_t>(params.state_period_ms));
+  const uint8_t a = client_->create_log_block(logic_.attitude_block(variances), static_cast<uint16_t>(params.state_period_ms));
+  const uint8_t s = client_->create_log_block(logic_.state_block(), static_cast<uint16_t>(params.state_period_ms));
   logic_.set_block_ids(w, s);
   logic_.set_attitude_block_id(a);
+  block_ids_ = {w, a, s};
   // Status block: what the firmware's TOC has of status_vars; a missing one is
   // a warning, never a failed connect (battery / supervisor are for display
   // and the low-battery guard, not for flying).
@@ -32,14 +33,53 @@ BridgeRunner::BridgeRunner(const CrazyflieBridgeLogic::Params& params, ClientOpt
       warnings_.push_back("crazyflie_bridge: status variable " + n + " is not in the firmware's log TOC: not logged");
     }
   }
+  uint8_t st = 0;
+  bool status_block = false;
   if (!have.empty()) {
     try {
-      const uint8_t st = client_->start_log_block(have, static_cast<uint16_t>(params.status_period_ms));
-      logic_.set_status_block(st, have);
+      st = client_->create_log_block(have, static_cast<uint16_t>(params.status_period_ms));
+      status_block = true;
     } catch (const ClientError& e) {
+      warnings_.push_back(std::string("crazyflie_bridge: status log block not created: ") + e.what());
+    }
+  }
+  if (status_block) {
+    logic_.set_status_block(st, have);
+    status_block_id_ = st;
+  }
+  if (stream) start_streaming();
+}
+
+void BridgeRunner::start_streaming() {
+  if (streaming_) return;
+  // In creation order (whisker, attitude, state, then status), as before the split.
+  for (uint8_t id : block_ids_) client_->start_created_log_block(id);
+  if (status_block_id_) {
+    try {
+      client_->start_created_log_block(*status_block_id_);
+    } catch (const ClientError& e) {  // display and the low-battery guard only: never a failed connect
       warnings_.push_back(std::string("crazyflie_bridge: status log block not started: ") + e.what());
     }
   }
+  streaming_ = true;
+}
+
+bool BridgeRunner::stop_streaming() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (logic_.airborne()) return false;  // never blind a flying vehicle: land first
+  }
+  if (!streaming_) return true;
+  for (uint8_t id : block_ids_) client_->stop_log_block(id);
+  if (status_block_id_) {
+    try {
+      client_->stop_log_block(*status_block_id_);
+    } catch (const ClientError& e) {  // it may never have started
+      warnings_.push_back(std::string("crazyflie_bridge: status log block not stopped: ") + e.what());
+    }
+  }
+  streaming_ = false;
+  return true;
 }
 
 void BridgeRunner::flush_outbox() {

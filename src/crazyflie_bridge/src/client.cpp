@@ -186,6 +186,12 @@ const toc::Item* CrazyflieClient::param_item(const std::string& n) const {
 }
 
 uint8_t CrazyflieClient::start_log_block(const std::vector<std::string>& names, uint16_t period_ms) {
+  const uint8_t id = create_log_block(names, period_ms);
+  start_created_log_block(id);
+  return id;
+}
+
+uint8_t CrazyflieClient::create_log_block(const std::vector<std::string>& names, uint16_t period_ms) {
   Block b;
   std::vector<logp::BlockVariable> vars;
   size_t bytes = 0;
@@ -213,14 +219,23 @@ uint8_t CrazyflieClient::start_log_block(const std::vector<std::string>& names, 
   }
   b.period_ms = period_ms;
   blocks_[id] = b;
-  const auto rep = logp::decode_control_reply(request(logp::start_block_v2(id, period_ms), port::kLog,
-                                                      logp::kChanSettings, {logp::kCmdStartBlockV2, id}, "log block start"));
-  if (rep.status != 0) throw ClientError("starting log block " + std::to_string(id) + " failed: " + std::strerror(rep.status));
   return id;
 }
 
+void CrazyflieClient::start_created_log_block(uint8_t id) {
+  auto it = blocks_.find(id);
+  if (it == blocks_.end()) throw ClientError("starting log block " + std::to_string(id) + ": no such block was created");
+  it->second.have_last = false;  // a restart's pause is no loss (reset before its first packet can arrive)
+  const auto rep = logp::decode_control_reply(request(logp::start_block_v2(id, static_cast<uint16_t>(it->second.period_ms)),
+                                                      port::kLog, logp::kChanSettings, {logp::kCmdStartBlockV2, id},
+                                                      "log block start"));
+  if (rep.status != 0) throw ClientError("starting log block " + std::to_string(id) + " failed: " + std::strerror(rep.status));
+}
+
 void CrazyflieClient::stop_log_block(uint8_t id) {
-  request(logp::stop_block(id), port::kLog, logp::kChanSettings, {logp::kCmdStopBlock, id}, "log block stop");
+  const auto rep = logp::decode_control_reply(
+      request(logp::stop_block(id), port::kLog, logp::kChanSettings, {logp::kCmdStopBlock, id}, "log block stop"));
+  if (rep.status != 0) throw ClientError("stopping log block " + std::to_string(id) + " failed: " + std::strerror(rep.status));
 }
 
 double CrazyflieClient::read_param(const std::string& n) {

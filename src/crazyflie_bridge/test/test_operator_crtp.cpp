@@ -29,12 +29,13 @@ struct Crtp {
   bool motors_ever = false;
   int64_t motors_on_ms = 0;
 
-  explicit Crtp(SimulatedCrazyflieFirmware::Options fo = {}, CrazyflieBridgeLogic::Params p = {}) : fw(fo) {
+  explicit Crtp(SimulatedCrazyflieFirmware::Options fo = {}, CrazyflieBridgeLogic::Params p = {}, bool stream = true)
+      : fw(fo) {
     auto l = std::make_unique<LoopbackLink>(fw.emulator(), 0.0, 1);
     link = l.get();
     ClientOptions co;
     co.retries = 3;
-    runner = std::make_unique<BridgeRunner>(p, co, std::move(l));
+    runner = std::make_unique<BridgeRunner>(p, co, std::move(l), stream);
   }
   uint32_t ms() const { return static_cast<uint32_t>(t / kMs); }
   bool motors_on() const { return fw.emulator().motors_on(ms()); }
@@ -251,4 +252,46 @@ TEST(OperatorCrtp, MissingStatusVariablesWarnButConnect) {
   EXPECT_NEAR(st.battery_v, 4.1, 0.01);
   EXPECT_EQ(st.supervisor_info, -1);
   EXPECT_TRUE(c.runner->takeoff(0.4, 1.0, c.t).accepted);  // nothing to check: allowed
+}
+
+// The lifecycle component's split (crazyflie_bridge README "Lifecycle"): configure
+// connects and creates the log blocks, activate starts them, deactivate stops them
+// -- never while airborne.
+TEST(OperatorCrtp, LogBlocksStreamOnlyBetweenStartAndStopStreaming) {
+  Crtp c({}, {}, /*stream=*/false);
+  EXPECT_FALSE(c.runner->streaming());
+  c.run_s(1.0);
+  EXPECT_EQ(c.runner->client_stats().log_samples, 0u) << "created blocks must not stream before start_streaming";
+  EXPECT_FALSE(c.motors_ever);
+  c.runner->start_streaming();
+  EXPECT_TRUE(c.runner->streaming());
+  c.run_s(1.0);
+  const auto streamed = c.runner->client_stats().log_samples;
+  // whiskers 50 Hz + attitude 100 Hz + state 100 Hz + status 10 Hz over 1 s
+  EXPECT_GT(streamed, 200u);
+  EXPECT_FALSE(c.motors_ever) << "streaming alone must not start the motors";
+  EXPECT_EQ(c.runner->mode(), Mode::kGrounded);
+
+  // Airborne: refused, nothing stopped.
+  ASSERT_TRUE(c.runner->takeoff(0.4, 1.0, c.t).accepted);
+  c.run_s(0.1);
+  EXPECT_FALSE(c.runner->stop_streaming());
+  EXPECT_TRUE(c.runner->streaming());
+  ASSERT_TRUE(c.run_until([&] { return c.runner->mode() == Mode::kHovering; }, 2.0));
+  EXPECT_FALSE(c.runner->stop_streaming());
+  // Landed: stopped; no sample after the firmware's answer.
+  ASSERT_TRUE(c.runner->land(0.0, 1.0, c.t).accepted);
+  ASSERT_TRUE(c.run_until([&] { return c.runner->mode() == Mode::kStopped; }, 5.0));
+  ASSERT_TRUE(c.runner->stop_streaming());
+  EXPECT_FALSE(c.runner->streaming());
+  c.run_s(0.1);  // what was in flight
+  const auto at_stop = c.runner->client_stats().log_samples;
+  c.run_s(1.0);
+  EXPECT_EQ(c.runner->client_stats().log_samples, at_stop);
+  // Restarted: streams again, and the pause is not counted as lost packets.
+  const auto missed = c.runner->client_stats().log_missed;
+  c.runner->start_streaming();
+  c.run_s(1.0);
+  EXPECT_GT(c.runner->client_stats().log_samples, at_stop + 200u);
+  EXPECT_EQ(c.runner->client_stats().log_missed, missed);
 }

@@ -48,6 +48,10 @@ class Deck:
         self.right_master, self.right_slave = os.openpty()
         for fd in (self.left_slave, self.right_slave):
             tty.setraw(fd)  # no echo back into the master before the driver sets raw 8N1
+        for fd in (self.left_master, self.right_master):
+            # A deck whose reader is not reading (a lifecycle driver not active) drops the frame
+            # once the tty's buffer is full, as a UART would, instead of blocking the thread.
+            os.set_blocking(fd, False)
         self.left_device = os.ttyname(self.left_slave)
         self.right_device = os.ttyname(self.right_slave)
         self.frames = 0
@@ -69,14 +73,21 @@ class Deck:
                 csv = 'x7,?,\n' + csv
             try:
                 if not self.left_paused.is_set():
-                    os.write(self.left_master, text.encode())
-                os.write(self.right_master, csv.encode())
+                    self._write(self.left_master, text.encode())
+                self._write(self.right_master, csv.encode())
             except OSError:
                 return
             k += 1
             self.frames = k
             next_t += 1.0 / RATE_HZ
             time.sleep(max(0.0, next_t - time.monotonic()))
+
+    @staticmethod
+    def _write(fd, data: bytes):
+        try:
+            os.write(fd, data)
+        except BlockingIOError:
+            pass  # the buffer is full: nobody reads (the frame is dropped)
 
     def close(self):
         self._stop.set()
@@ -211,6 +222,10 @@ def test_bench_rig_bad_launch_argument_stops_the_launch_naming_the_argument(deck
 
 
 def test_bench_rig_missing_device_stops_the_launch_naming_it(tmp_path):
+    from test_launch_lifecycle import lifecycle_built
+    if lifecycle_built('whisker_driver'):
+        pytest.skip('lifecycle drivers stay unconfigured instead of stopping the launch: '
+                    'test_launch_lifecycle.py::test_lifecycle_bench_rig_missing_device_stays_unconfigured')
     missing = tmp_path / 'ttyACM_missing'
     with Launch('bench_rig.launch.py', [f'left_device:={missing}', f'right_device:={missing}'],
                 tmp_path / 'launch.log') as launch:

@@ -13,6 +13,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -36,12 +37,23 @@ class BridgeRunner {
   using CommandResult = CrazyflieBridgeLogic::CommandResult;
   using Status = CrazyflieBridgeLogic::Status;
 
-  /// Opens params.uri (or uses `link` if given), connects and starts the
-  /// whisker, state and status log blocks (status variables the firmware's
-  /// TOC lacks are skipped: see warnings()). Throws UriError / LinkError /
-  /// ClientError.
+  /// Opens params.uri (or uses `link` if given), connects and creates the
+  /// whisker, attitude, state and status log blocks (status variables the
+  /// firmware's TOC lacks are skipped: see warnings()), and starts them unless
+  /// `stream` is false (the lifecycle component: configure connects, activate
+  /// streams). Throws UriError / LinkError / ClientError.
   explicit BridgeRunner(const CrazyflieBridgeLogic::Params& params, ClientOptions client_options = {},
-                        std::unique_ptr<Link> link = nullptr);
+                        std::unique_ptr<Link> link = nullptr, bool stream = true);
+
+  /// Starts (again) the log blocks created at connect; a no-op when streaming.
+  /// Throws ClientError.
+  void start_streaming();
+  /// Stops the log blocks (nothing is received after the firmware's answer).
+  /// Refuses (returns false, nothing sent) while the logic is airborne
+  /// (taking off .. landing): land_and_stop() first, never blind a flying vehicle.
+  /// Throws ClientError on a failed stop request.
+  bool stop_streaming();
+  bool streaming() const { return streaming_; }
 
   /// Receives for at most `timeout` (then drains what already arrived),
   /// stamping messages with now_ns(); returns the number of log samples handled.
@@ -93,6 +105,9 @@ class BridgeRunner {
   bool state_pending_ = false;
   LatencyStats latency_;
   std::vector<std::string> warnings_;
+  std::vector<uint8_t> block_ids_;         ///< whisker, attitude, state: created at connect, in start order
+  std::optional<uint8_t> status_block_id_;  ///< optional: its failures are warnings
+  bool streaming_ = false;
   /// Sends what the logic queued (caller holds mutex_).
   void flush_outbox();
 };

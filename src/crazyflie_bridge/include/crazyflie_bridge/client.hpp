@@ -76,6 +76,13 @@ class CrazyflieClient {
   /// its id. Throws ClientError naming the unknown variable, a block over 26
   /// bytes or the firmware's errno.
   uint8_t start_log_block(const std::vector<std::string>& names, uint16_t period_ms);
+  /// start_log_block() in two steps: create the block (same errors), start it
+  /// later (and again after stop_log_block(): a restarted block's timestamp gap
+  /// is not counted as lost packets in Stats::log_missed).
+  uint8_t create_log_block(const std::vector<std::string>& names, uint16_t period_ms);
+  void start_created_log_block(uint8_t block_id);
+  /// Stops a started block (log v2 STOP_BLOCK); throws ClientError with the
+  /// firmware's errno.
   void stop_log_block(uint8_t block_id);
 
   /// Next log sample, waiting at most `timeout`.

@@ -58,12 +58,14 @@ class ParameterOrigins {
 
   /// `overrides`: the node's parameter overrides (all of them, from files, -p and
   /// NodeOptions), to tell a default from a given value.
-  ParameterOrigins(const rclcpp::Node& node, std::map<std::string, rclcpp::ParameterValue> overrides)
+  /// NodeT: rclcpp::Node or rclcpp_lifecycle::LifecycleNode (the same parameter interface).
+  template <class NodeT>
+  ParameterOrigins(const NodeT& node, std::map<std::string, rclcpp::ParameterValue> overrides)
   : fqn_(node.get_fully_qualified_name()), overrides_(std::move(overrides)) {
     if (node.has_parameter(kSourcesKey)) {
       const auto value = node.get_parameter(kSourcesKey).get_parameter_value();
       if (value.get_type() == rclcpp::ParameterType::PARAMETER_STRING_ARRAY) {
-        for (const auto& entry : value.get<std::vector<std::string>>()) launch_.push_back(parse_source(entry));
+        for (const auto& entry : value.template get<std::vector<std::string>>()) launch_.push_back(parse_source(entry));
       }
     }
     const auto& options = node.get_node_options();
@@ -190,7 +192,8 @@ class ParameterOrigins {
 
 /// Where a node's parameter values came from, for error messages that are not about one
 /// key: "ros parameters of <node> (<its parameter files>)".
-inline std::string parameter_source(const rclcpp::Node& node) {
+template <class NodeT = rclcpp::Node>
+std::string parameter_source(const NodeT& node) {
   const std::string files = ParameterOrigins(node, {}).files();
   return std::string("ros parameters of ") + node.get_fully_qualified_name() +
          (files.empty() ? std::string(" (launch or -p overrides)") : " (" + files + ")");
@@ -204,7 +207,9 @@ inline std::string parameter_source(const rclcpp::Node& node) {
 /// reason. A value of the wrong type names the type it has and the type it
 /// needs, e.g. "52.0e9" (a string to YAML 1.1, which the launch system's parser
 /// follows: write 52.0e+9).
-inline ParamMap declare_parameters(rclcpp::Node& node, const ParamMap& defaults) {
+/// NodeT: rclcpp::Node or rclcpp_lifecycle::LifecycleNode.
+template <class NodeT = rclcpp::Node>
+ParamMap declare_parameters(NodeT& node, const ParamMap& defaults) {
   if (!node.has_parameter(ParameterOrigins::kSourcesKey)) {
     rcl_interfaces::msg::ParameterDescriptor descriptor;
     descriptor.dynamic_typing = true;  // a launch file may pass it malformed: then it is ignored
