@@ -5,11 +5,11 @@ container as radio.launch.py with the bridge on udp://127.0.0.1:<port>.
     ros2 launch launch/sitl.launch.py scenario:=config/scenarios/whisker_darkness_rigid_fsm.yaml
 
 As radio.launch.py, nothing flies until `takeoff` (then `start_behaviour`) unless
-autostart:=true; a lifecycle bridge is configured and activated (activate:=false: configured only). Ctrl-C reaches crazyflie_sim_server too, which ends at once: the bridge's
-shutdown landing then hears no vehicle and ends after shutdown_land_timeout_s with an
-emergency stop. To watch the shutdown landing, run the server on its own and
-radio.launch.py uri:=udp://127.0.0.1:<port> against it (tactile_ros_tests
-test_launch_operator.py does).
+autostart:=true; a lifecycle bridge is configured and activated (activate:=false: configured only).
+Ctrl-C reaches crazyflie_sim_server and the bridge together: the server lingers
+(--linger) while the motors run, so the bridge's shutdown landing lands the simulated
+vehicle, and ends 0.5 s after the motors stopped (at most the container's stop timeout:
+shutdown_land_timeout_s + 5 s).
 
 Any cflib-based tool (cfclient, scripts) can connect to the same simulated Crazyflie
 instead: udp://127.0.0.1:19850. The standalone host does the whole flight without ROS:
@@ -45,8 +45,10 @@ def generate_launch_description():
     server = ExecuteProcess(
         cmd=[PathJoinSubstitution([FindPackagePrefix('crazyflie_bridge'), 'lib', 'crazyflie_bridge',
                                    'crazyflie_sim_server']),
-             LaunchConfiguration('scenario'), '--port', port, '--seed', LaunchConfiguration('seed')],
-        output='screen')
+             LaunchConfiguration('scenario'), '--port', port, '--seed', LaunchConfiguration('seed'),
+             '--linger', _radio.container_stop_timeout()],
+        # SIGTERM (which ends a linger at once) only after the linger's bound
+        output='screen', sigterm_timeout=str(float(_radio.container_stop_timeout()) + 2.0))
     uri = PythonExpression(["'udp://127.0.0.1:' + '", port, "'"])
     container = ComposableNodeContainer(
         name='sitl_bridge_container', namespace='', package='rclcpp_components',

@@ -7,9 +7,10 @@
 // duration elapsed or SIGINT/SIGTERM; prints the final truth position and
 // link counters on exit. With --linger S, a signal that comes while the motors
 // run lets the vehicle land first: the server goes on until the motors have been
-// off for 0.5 s, or S seconds passed, or a second signal (a launch file's Ctrl-C
-// reaches the simulator and the bridge together; the bridge's shutdown landing
-// needs a vehicle to land).
+// off for 0.5 s, or S seconds passed, or a second signal 1 s or more after the
+// first (a launch file's Ctrl-C reaches the simulator and the bridge together, the
+// simulator twice: from the terminal and forwarded by ros2 launch; the bridge's
+// shutdown landing needs a vehicle to land).
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -66,7 +67,8 @@ int main(int argc, char** argv) {
                  "       [--protocol-version N]  (CRTP protocol reported; <= 8 emulates the legacy\n"
                  "                                setpoint generation: hover type 5, negated yaw rate)\n"
                  "       [--linger S]  (on SIGINT/SIGTERM with the motors on: run until they have been off\n"
-                 "                      0.5 s, at most S seconds; a second signal ends at once)\n");
+                 "                      0.5 s, at most S seconds; a signal 1 s or more after the first\n"
+                 "                      ends at once)\n");
     return argc < 2 ? 2 : 0;
   }
   try {
@@ -110,19 +112,23 @@ int main(int argc, char** argv) {
     std::thread watcher([&] {
       using Clock = std::chrono::steady_clock;
       Clock::time_point signalled{}, motors_off{};
-      bool lingering = false;
+      int seen = 0;
       while (!done) {
         const int n = g_signals.load();
         const auto now = Clock::now();
-        if (n >= 2) break;
-        if (n == 1) {
-          if (!lingering) {
-            signalled = now;
-            lingering = linger_s > 0.0 && ep.motors_on();
-            if (!lingering) break;
-            std::printf("signal: lingering until the motors stop (at most %.1f s)\n", linger_s);
-            std::fflush(stdout);
-          }
+        if (n > seen && seen > 0) {
+          // A terminal's Ctrl-C reaches every process of the group and `ros2 launch`
+          // forwards it once more: signals within 1 s of the first are that same Ctrl-C.
+          if (now - signalled >= std::chrono::seconds(1)) break;
+        }
+        if (n > 0 && seen == 0) {
+          signalled = now;
+          if (!(linger_s > 0.0 && ep.motors_on())) break;
+          std::printf("signal: lingering until the motors stop (at most %.1f s)\n", linger_s);
+          std::fflush(stdout);
+        }
+        seen = n;
+        if (n > 0) {
           if (ep.motors_on()) motors_off = Clock::time_point{};
           else if (motors_off == Clock::time_point{}) motors_off = now;
           if (motors_off != Clock::time_point{} && now - motors_off >= std::chrono::milliseconds(500)) break;

@@ -6,6 +6,8 @@ operator surface): the operator's sequence is test_launch_operator.py's."""
 
 from __future__ import annotations
 
+import re
+
 from launch_check import Graph, Launch, check_graph, unique_port
 
 NODES = ['/sitl_bridge_container', '/crazyflie_bridge', '/whisker/left/tdorc_filter',
@@ -33,5 +35,16 @@ def test_sitl_bridge_over_udp(tmp_path):
             Graph() as g:
         check_graph(g, launch, NODES, RATE_TOPICS, EVENT_TOPICS)
         bridge = g.get_parameters('/crazyflie_bridge', ['uri', 'autostart'])
+        # Ctrl-C reaches the simulator and the bridge together: the simulator lingers
+        # while the motors run, so the bridge's shutdown landing lands it (before
+        # crazyflie_sim_server --linger it ended at once and the landing ended in an
+        # emergency stop, hearing no vehicle).
+        launch.stop()
+        out = launch.output()
     # The port argument reached the bridge (and the server: the bridge flies it, above).
     assert bridge == {'uri': f'udp://127.0.0.1:{port}', 'autostart': True}
+    assert 'lingering until the motors stop' in out, out[-3000:]
+    assert re.search(r'shutdown: landed and stopped in [\d.]+ s', out), out[-3000:]
+    done = re.search(r'done t=[\d.]+ truth=(-?[\d.]+),(-?[\d.]+),(-?[\d.]+)', out)
+    assert done, out[-3000:]
+    assert float(done.group(3)) < 0.05, done.group(0)  # on the floor, not dropped from the air

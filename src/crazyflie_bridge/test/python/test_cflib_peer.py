@@ -326,9 +326,11 @@ def test_sim_server_second_signal_ends_the_linger_at_once(tmp_path):
                 scf.cf.commander.send_hover_setpoint(0.0, 0.0, 0.0, 0.4)
                 time.sleep(0.02)
             p.send_signal(signal.SIGINT)
-            time.sleep(0.3)
+            time.sleep(0.1)
+            p.send_signal(signal.SIGINT)  # the same Ctrl-C, forwarded by ros2 launch: still lingering
+            time.sleep(1.2)
             assert p.poll() is None
-            p.send_signal(signal.SIGTERM)
+            p.send_signal(signal.SIGTERM)  # a second signal 1 s after the first
             p.wait(timeout=2)
         assert p.returncode == 0
     finally:
