@@ -16,7 +16,8 @@
 #      wheels and source tarballs by ../shared/ros2/build_ros2.sh beside the workspace, each
 #      distro in its own cache (~/.cache/ros2-<distro>, built once: ~3 min for Kilted, longer
 #      for Jazzy); for Kilted also its extras overlay (build_ros2_extras.sh: diagnostic_updater,
-#      rclcpp_lifecycle, tf2, the ros2 topic/param/service verbs; built once, ~10 min).
+#      rclcpp_lifecycle, tf2, the ros2 topic/param/service verbs; built once, ~10 min) and
+#      its rosbag2 overlay (build_rosbag2.sh: `ros2 bag`, rosbag2_py; built once, ~12 min).
 #
 # Build and install trees are per distro: build_ros/, install_ros/, log_ros/ for Kilted,
 # build_ros_<distro>/ ... for another (ROS_DISTRO of the environment used).
@@ -55,6 +56,16 @@ else
       # only): crazyflie_bridge and whisker_driver then publish /diagnostics, and their tests
       # run. Built once; an up-to-date overlay returns at once.
       nice -n 5 bash "$here/../shared/ros2/build_ros2_extras.sh" "$toolchain"
+      # The rosbag2 overlay (build_rosbag2.sh: rosbag2 0.32, `ros2 bag`, rosbag2_py; Kilted
+      # only): the peer tests of our bags against the real rosbag2 (test_rosbag2_peer.py).
+      # Built once (~12 min from nothing on 2 cores); an up-to-date overlay returns at once.
+      nice -n 10 bash "$here/../shared/ros2/build_rosbag2.sh" "$toolchain"
+      # Its env.sh sources the toolchain's, then the overlay; the extras' env.sh comes last
+      # (it keeps the active toolchain): the workspace builds against the extras, and the
+      # packages both overlays hold (rclcpp_action, pluginlib, tinyxml2_vendor) are the same
+      # versions.
+      # shellcheck disable=SC1091
+      source "$toolchain/rosbag2/env.sh"
       # shellcheck disable=SC1091
       source "$toolchain/extras/env.sh"
     else

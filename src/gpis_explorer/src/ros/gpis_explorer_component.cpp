@@ -8,6 +8,7 @@
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
 #include "tactile_common/ros_parameters.hpp"
+#include "tactile_common/ros_qos.hpp"
 
 namespace gpis_explorer {
 
@@ -20,10 +21,11 @@ class GpisExplorerComponent : public rclcpp::Node {
   {
     setpoint_ = create_publisher<tactile_msgs::msg::HoverSetpoint>(GpisExplorerLogic::kSetpointTopic, 10);
     state_ = create_publisher<tactile_msgs::msg::FsmState>(GpisExplorerLogic::kStateTopic, 10);
-    map_ = create_publisher<tactile_msgs::msg::GpisMap>(
-      GpisExplorerLogic::kMapTopic, rclcpp::QoS(1).transient_local());
-    target_ = create_publisher<tactile_msgs::msg::ExplorationTarget>(
-      GpisExplorerLogic::kTargetTopic, rclcpp::QoS(1).transient_local());
+    // Latched: a late subscriber (rviz, a recorder) gets the last map and target; never
+    // intra-process (tactile_common/ros_qos.hpp: Humble refuses the combination).
+    map_ = tactile_common::latched_publisher<tactile_msgs::msg::GpisMap>(*this, GpisExplorerLogic::kMapTopic);
+    target_ = tactile_common::latched_publisher<tactile_msgs::msg::ExplorationTarget>(
+      *this, GpisExplorerLogic::kTargetTopic);
     depth_ = create_subscription<tactile_msgs::msg::TactileDepth>(
       GpisExplorerLogic::kDepthTopic, rclcpp::SensorDataQoS(),
       [this](const tactile_msgs::msg::TactileDepth & msg) {logic_.on_depth(msg);});

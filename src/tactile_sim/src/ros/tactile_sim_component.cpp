@@ -59,6 +59,7 @@
 #include "rosgraph_msgs/msg/clock.hpp"
 #include "std_msgs/msg/bool.hpp"
 #include "tactile_common/ros_parameters.hpp"
+#include "tactile_common/ros_qos.hpp"
 #include "tactile_common/time.hpp"
 #include "tactile_sim/logic/sim_logic.hpp"
 
@@ -91,8 +92,9 @@ class TactileSimComponent : public rclcpp::Node {
       begin = end + 1;
     }
     clock_publisher_ = create_publisher<rosgraph_msgs::msg::Clock>("/clock", rclcpp::ClockQoS());
-    done_publisher_ = create_publisher<std_msgs::msg::Bool>(
-      kDoneTopic, rclcpp::QoS(1).reliable().transient_local());
+    // Latched (transient local), so a subscriber that joins later still gets it; never
+    // intra-process (tactile_common/ros_qos.hpp: Humble refuses the combination).
+    done_publisher_ = tactile_common::latched_publisher<std_msgs::msg::Bool>(*this, kDoneTopic);
     // Best effort matches reliable and best-effort publishers alike: the INDI
     // controller publishes its rotor thrusts best effort (SensorDataQoS), the FSMs reliable;
     // a reliable subscription would never match the former.
