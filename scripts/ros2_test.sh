@@ -4,7 +4,7 @@
 # build in build/ and install/ stays as it is -- and runs the ROS tests of the package
 # tactile_ros_tests (CDR bytes against rclcpp, launch files, flights over DDS).
 #
-# Usage: scripts/ros2_test.sh [--no-e2e] [pytest -k EXPR]
+# Usage: scripts/ros2_test.sh [--no-e2e] [[-k] EXPR]   (EXPR: a pytest -k expression)
 #   --no-e2e  leave out the SITL flights end to end over DDS (test_e2e_*.py, ~5 of the
 #             stage's minutes on 2 cores; also TACTILE_ROS_E2E=0). They run by default.
 #   --e2e     accepted for older callers: the flights run anyway.
@@ -144,6 +144,7 @@ case "${1:-}" in
   --no-e2e) export TACTILE_ROS_E2E=0; shift ;;
   --e2e) export TACTILE_ROS_E2E=1; shift ;;
 esac
+if [[ "${1:-}" == "-k" ]]; then shift; fi  # pytest's spelling, accepted too
 # quoted: pytest splits PYTEST_ADDOPTS like a shell, and an expression has spaces ("a or b")
 if (($# > 0)); then export PYTEST_ADDOPTS="-k '$1'"; fi
 colcon --log-base "$log_base" test "${common[@]}" --packages-select tactile_ros_tests \
