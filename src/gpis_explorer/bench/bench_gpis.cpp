@@ -12,40 +12,15 @@
 #include <benchmark/benchmark.h>
 
 #include "gpis_explorer/explorer.hpp"
+#include "../test/room_points.hpp"
 
 namespace {
 
 using gpis_explorer::ExplorerParams;
 using gpis_explorer::GpisExplorer;
 
-/// n training points of a rotated 2 m room: 80 % contacts on the walls with
-/// 1 cm noise (label 0), 20 % interior points (label -1). Fixed seed.
-void room_points(int n, Eigen::Matrix2Xd& X, Eigen::VectorXd& y) {
-  std::mt19937 rng(42);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::normal_distribution<double> noise(0.0, 0.01);
-  X.resize(2, n);
-  y.resize(n);
-  const double a = 0.3;
-  for (int i = 0; i < n; ++i) {
-    Eigen::Vector2d p;
-    if (i % 5 == 4) {
-      p = {0.7 * u(rng), 0.7 * u(rng)};
-      y(i) = -1.0;
-    } else {
-      const double t = u(rng);
-      switch (i % 4) {
-        case 0: p = {t, -1.0}; break;
-        case 1: p = {t, 1.0}; break;
-        case 2: p = {-1.0, t}; break;
-        default: p = {1.0, t}; break;
-      }
-      p += Eigen::Vector2d(noise(rng), noise(rng));
-      y(i) = 0.0;
-    }
-    X.col(i) = Eigen::Rotation2Dd(a) * p;
-  }
-}
+/// The fixed training points of every benchmark (seed 42, the room rotated 0.3 rad).
+void room_points(int n, Eigen::Matrix2Xd& X, Eigen::VectorXd& y) { gpis_explorer::test::room_points(n, 42, X, y); }
 
 ExplorerParams params_for(int points, int cells, bool grid_variance = true, int variance_cells = 0,
                           bool local = false) {

@@ -12,6 +12,7 @@
 
 #include "gpis_explorer/explorer.hpp"
 #include "gpis_explorer/local_gpis.hpp"
+#include "room_points.hpp"
 
 using gpis_explorer::ExplorerParams;
 using gpis_explorer::Gpis;
@@ -21,36 +22,9 @@ using gpis_explorer::GpisSolver;
 using gpis_explorer::LocalGpis;
 using gpis_explorer::LocalGpisParams;
 using Eigen::Vector2d;
+using gpis_explorer::test::room_points;
 
 namespace {
-
-/// n points of a rotated 2 m room (the construction of bench/bench_gpis.cpp):
-/// 80 % wall contacts with 1 cm noise (label 0), 20 % interior (label -1).
-void room_points(int n, unsigned seed, Eigen::Matrix2Xd& X, Eigen::VectorXd& y, double angle = 0.3) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  std::normal_distribution<double> noise(0.0, 0.01);
-  X.resize(2, n);
-  y.resize(n);
-  for (int i = 0; i < n; ++i) {
-    Vector2d p;
-    if (i % 5 == 4) {
-      p = {0.7 * u(rng), 0.7 * u(rng)};
-      y(i) = -1.0;
-    } else {
-      const double t = u(rng);
-      switch (i % 4) {
-        case 0: p = {t, -1.0}; break;
-        case 1: p = {t, 1.0}; break;
-        case 2: p = {-1.0, t}; break;
-        default: p = {1.0, t}; break;
-      }
-      p += Vector2d(noise(rng), noise(rng));
-      y(i) = 0.0;
-    }
-    X.col(i) = Eigen::Rotation2Dd(angle) * p;
-  }
-}
 
 Gpis store_of(const GpisParams& gp, const Eigen::Matrix2Xd& X, const Eigen::VectorXd& y) {
   Gpis s(gp, false);

@@ -106,6 +106,37 @@ macro(tactile_add_component target)
   install(TARGETS ${target} ARCHIVE DESTINATION lib LIBRARY DESTINATION lib RUNTIME DESTINATION bin)
 endmacro()
 
+# tactile_hardware_component_extras(<target> <DEFINE_PREFIX>): the optional ROS 2 parts of
+# a hardware component (crazyflie_bridge, whisker_driver), each where the ROS 2 installation
+# has it (the Kilted toolchain's extras overlay, any apt install):
+#   - diagnostic_updater: /diagnostics (<DEFINE_PREFIX>_HAVE_DIAGNOSTIC_UPDATER), else the
+#     component's status topic only;
+#   - rclcpp_lifecycle: a managed (lifecycle) node (<DEFINE_PREFIX>_LIFECYCLE), else the plain
+#     node; share/<package>/component_kind ("lifecycle" or "plain") tells the launch files
+#     which one was built.
+function(tactile_hardware_component_extras target prefix)
+  find_package(diagnostic_updater QUIET)
+  if(diagnostic_updater_FOUND)
+    message(STATUS "${PROJECT_NAME}: diagnostic_updater found: ${target} publishes /diagnostics")
+    target_link_libraries(${target} PUBLIC diagnostic_updater::diagnostic_updater)
+    target_compile_definitions(${target} PRIVATE ${prefix}_HAVE_DIAGNOSTIC_UPDATER)
+  else()
+    message(STATUS "${PROJECT_NAME}: diagnostic_updater not found: no /diagnostics (the status topic only)")
+  endif()
+  find_package(rclcpp_lifecycle QUIET)
+  if(rclcpp_lifecycle_FOUND)
+    message(STATUS "${PROJECT_NAME}: rclcpp_lifecycle found: ${target} is a lifecycle node")
+    target_link_libraries(${target} PUBLIC rclcpp_lifecycle::rclcpp_lifecycle)
+    target_compile_definitions(${target} PRIVATE ${prefix}_LIFECYCLE)
+    set(_kind lifecycle)
+  else()
+    message(STATUS "${PROJECT_NAME}: rclcpp_lifecycle not found: ${target} is a plain node")
+    set(_kind plain)
+  endif()
+  file(WRITE ${CMAKE_CURRENT_BINARY_DIR}/component_kind "${_kind}\n")
+  install(FILES ${CMAKE_CURRENT_BINARY_DIR}/component_kind DESTINATION share/${PROJECT_NAME})
+endfunction()
+
 # tactile_add_gtest(<name> <sources>... [LIBRARIES <libs>...] [TIMEOUT <s>])
 function(tactile_add_gtest name)
   if(NOT BUILD_TESTING)
