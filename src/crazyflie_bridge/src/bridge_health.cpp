@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "tactile_common/validation.hpp"
+
 namespace crazyflie_bridge {
 
 using tactile_common::ParamMap;
@@ -16,38 +18,26 @@ std::string fmt(const char* format, double v) {
   return buf;
 }
 
-void finite_positive(const char* key, double v) {
-  if (!std::isfinite(v) || v <= 0.0) {
-    throw std::invalid_argument(std::string("BridgeHealth.") + key + ": must be finite and > 0, got " +
-                                std::to_string(v));
-  }
-}
-
-void ordered(const char* low_key, double low, const char* high_key, double high) {
-  if (!(low < high)) {
-    throw std::invalid_argument(std::string("BridgeHealth.") + low_key + " (" + std::to_string(low) +
-                                ") must be below " + high_key + " (" + std::to_string(high) + ")");
-  }
-}
+constexpr const char* kType = "BridgeHealth";  // names the fields in validation errors
 
 }  // namespace
 
 void BridgeHealth::Params::validate() const {
-  finite_positive("status_rate_hz", status_rate_hz);
-  finite_positive("diagnostics_period_s", diagnostics_period_s);
-  finite_positive("battery_warn_v", battery_warn_v);
-  finite_positive("battery_error_v", battery_error_v);
-  ordered("battery_error_v", battery_error_v, "battery_warn_v", battery_warn_v);
-  finite_positive("link_quality_warn", link_quality_warn);
-  finite_positive("link_quality_error", link_quality_error);
+  tactile_common::require_finite_positive(kType, "status_rate_hz", status_rate_hz);
+  tactile_common::require_finite_positive(kType, "diagnostics_period_s", diagnostics_period_s);
+  tactile_common::require_finite_positive(kType, "battery_warn_v", battery_warn_v);
+  tactile_common::require_finite_positive(kType, "battery_error_v", battery_error_v);
+  tactile_common::require_below(kType, "battery_error_v", battery_error_v, "battery_warn_v", battery_warn_v);
+  tactile_common::require_finite_positive(kType, "link_quality_warn", link_quality_warn);
+  tactile_common::require_finite_positive(kType, "link_quality_error", link_quality_error);
   if (link_quality_warn > 1.0) {
     throw std::invalid_argument("BridgeHealth.link_quality_warn: an ACK rate, must be <= 1, got " +
                                 std::to_string(link_quality_warn));
   }
-  ordered("link_quality_error", link_quality_error, "link_quality_warn", link_quality_warn);
-  finite_positive("log_age_warn_s", log_age_warn_s);
-  finite_positive("log_age_error_s", log_age_error_s);
-  ordered("log_age_warn_s", log_age_warn_s, "log_age_error_s", log_age_error_s);
+  tactile_common::require_below(kType, "link_quality_error", link_quality_error, "link_quality_warn", link_quality_warn);
+  tactile_common::require_finite_positive(kType, "log_age_warn_s", log_age_warn_s);
+  tactile_common::require_finite_positive(kType, "log_age_error_s", log_age_error_s);
+  tactile_common::require_below(kType, "log_age_warn_s", log_age_warn_s, "log_age_error_s", log_age_error_s);
 }
 
 ParamMap BridgeHealth::default_parameters() {

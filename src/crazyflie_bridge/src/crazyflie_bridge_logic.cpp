@@ -8,6 +8,7 @@
 
 #include "crazyflie_bridge/protocol.hpp"
 #include "tactile_common/time.hpp"
+#include "tactile_common/validation.hpp"
 
 namespace crazyflie_bridge {
 
@@ -53,12 +54,8 @@ void fill_attitude(nav_msgs::msg::Odometry& o, const AttitudeBlock::Sample& a, d
   }
 }
 
-void positive(const char* field, double v) {
-  if (!std::isfinite(v) || v <= 0.0) {
-    throw std::invalid_argument(std::string("CrazyflieBridgeLogic.") + field + ": must be finite and > 0, got " +
-                                std::to_string(v));
-  }
-}
+constexpr const char* kType = "CrazyflieBridgeLogic";  // names the fields in validation errors
+
 }  // namespace
 
 const char* to_string(CrazyflieBridgeLogic::Mode m) {
@@ -85,34 +82,34 @@ void CrazyflieBridgeLogic::Params::validate() const {
     throw std::invalid_argument("CrazyflieBridgeLogic.state_vars: must name x, y, z, yaw, vx, vy (6), got " +
                                 std::to_string(state_vars.size()));
   }
-  positive("pressure_scale", pressure_scale);
+  tactile_common::require_finite_positive(kType, "pressure_scale", pressure_scale);
   if (whisker_period_ms < 1 || whisker_period_ms > 65535 || state_period_ms < 1 || state_period_ms > 65535) {
     throw std::invalid_argument("CrazyflieBridgeLogic.whisker/state_period_ms: must be in [1, 65535] ms (u16 period)");
   }
-  positive("setpoint_rate_hz", setpoint_rate_hz);
+  tactile_common::require_finite_positive(kType, "setpoint_rate_hz", setpoint_rate_hz);
   if (setpoint_rate_hz < 2.0) {
     throw std::invalid_argument("CrazyflieBridgeLogic.setpoint_rate_hz: must be >= 2 Hz (firmware commander watchdog 500 ms), got " +
                                 std::to_string(setpoint_rate_hz));
   }
-  positive("max_velocity", max_velocity);
-  positive("max_yaw_rate", max_yaw_rate);
-  positive("max_height", max_height);
+  tactile_common::require_finite_positive(kType, "max_velocity", max_velocity);
+  tactile_common::require_finite_positive(kType, "max_yaw_rate", max_yaw_rate);
+  tactile_common::require_finite_positive(kType, "max_height", max_height);
   if (!std::isfinite(min_height) || min_height < 0.0 || min_height >= max_height) {
     throw std::invalid_argument("CrazyflieBridgeLogic.min_height: must be in [0, max_height), got " + std::to_string(min_height));
   }
-  positive("setpoint_timeout_s", setpoint_timeout_s);
-  positive("log_timeout_s", log_timeout_s);
-  positive("hover_hold_s", hover_hold_s);
-  positive("land_speed", land_speed);
-  positive("land_height", land_height);
+  tactile_common::require_finite_positive(kType, "setpoint_timeout_s", setpoint_timeout_s);
+  tactile_common::require_finite_positive(kType, "log_timeout_s", log_timeout_s);
+  tactile_common::require_finite_positive(kType, "hover_hold_s", hover_hold_s);
+  tactile_common::require_finite_positive(kType, "land_speed", land_speed);
+  tactile_common::require_finite_positive(kType, "land_height", land_height);
   if (!std::isfinite(touchdown_timeout_s) || touchdown_timeout_s <= 0.0 || touchdown_timeout_s > 10.0) {
     throw std::invalid_argument("CrazyflieBridgeLogic.touchdown_timeout_s: must be in (0, 10] s, got " +
                                 std::to_string(touchdown_timeout_s));
   }
-  positive("position_variance", position_variance);
-  positive("orientation_variance", orientation_variance);
-  positive("linear_velocity_variance", linear_velocity_variance);
-  positive("angular_velocity_variance", angular_velocity_variance);
+  tactile_common::require_finite_positive(kType, "position_variance", position_variance);
+  tactile_common::require_finite_positive(kType, "orientation_variance", orientation_variance);
+  tactile_common::require_finite_positive(kType, "linear_velocity_variance", linear_velocity_variance);
+  tactile_common::require_finite_positive(kType, "angular_velocity_variance", angular_velocity_variance);
   if (land_height >= max_height) {
     throw std::invalid_argument("CrazyflieBridgeLogic.land_height: must be < max_height, got " + std::to_string(land_height));
   }
@@ -121,9 +118,9 @@ void CrazyflieBridgeLogic::Params::validate() const {
     throw std::invalid_argument("CrazyflieBridgeLogic.takeoff_height: must be in (land_height, max_height] and >= min_height, got " +
                                 std::to_string(takeoff_height));
   }
-  positive("takeoff_duration_s", takeoff_duration_s);
-  positive("land_duration_s", land_duration_s);
-  positive("max_vertical_speed", max_vertical_speed);
+  tactile_common::require_finite_positive(kType, "takeoff_duration_s", takeoff_duration_s);
+  tactile_common::require_finite_positive(kType, "land_duration_s", land_duration_s);
+  tactile_common::require_finite_positive(kType, "max_vertical_speed", max_vertical_speed);
   if (takeoff_height / takeoff_duration_s > max_vertical_speed) {
     throw std::invalid_argument("CrazyflieBridgeLogic.takeoff_duration_s: takeoff_height / takeoff_duration_s = " +
                                 std::to_string(takeoff_height / takeoff_duration_s) + " m/s exceeds max_vertical_speed " +
@@ -146,8 +143,8 @@ void CrazyflieBridgeLogic::Params::validate() const {
     throw std::invalid_argument("CrazyflieBridgeLogic.low_battery_v: must be in [0, 5] V (1-cell LiPo; 0 disables), got " +
                                 std::to_string(low_battery_v));
   }
-  positive("low_battery_hold_s", low_battery_hold_s);
-  positive("shutdown_land_timeout_s", shutdown_land_timeout_s);
+  tactile_common::require_finite_positive(kType, "low_battery_hold_s", low_battery_hold_s);
+  tactile_common::require_finite_positive(kType, "shutdown_land_timeout_s", shutdown_land_timeout_s);
   if (shutdown_land_timeout_s < land_duration_s) {
     throw std::invalid_argument("CrazyflieBridgeLogic.shutdown_land_timeout_s: must be >= land_duration_s (" +
                                 std::to_string(land_duration_s) + " s), got " + std::to_string(shutdown_land_timeout_s));

@@ -4,6 +4,8 @@
 #include <cstdio>
 #include <stdexcept>
 
+#include "tactile_common/validation.hpp"
+
 namespace whisker_driver {
 
 using tactile_common::ParamMap;
@@ -16,30 +18,18 @@ std::string fmt(const char* format, double v) {
   return buf;
 }
 
-void positive(const char* key, double v) {
-  if (!std::isfinite(v) || v <= 0.0) {
-    throw std::invalid_argument(std::string("DriverHealth.") + key + ": must be finite and > 0, got " +
-                                std::to_string(v));
-  }
-}
-
-void below(const char* low_key, double low, const char* high_key, double high) {
-  if (!(low < high)) {
-    throw std::invalid_argument(std::string("DriverHealth.") + low_key + " (" + std::to_string(low) +
-                                ") must be below " + high_key + " (" + std::to_string(high) + ")");
-  }
-}
+constexpr const char* kType = "DriverHealth";  // names the fields in validation errors
 
 }  // namespace
 
 void DriverHealth::Params::validate() const {
-  positive("diagnostics_period_s", diagnostics_period_s);
-  positive("stall_warn_s", stall_warn_s);
-  positive("stall_error_s", stall_error_s);
-  below("stall_warn_s", stall_warn_s, "stall_error_s", stall_error_s);
-  positive("frame_error_warn", frame_error_warn);
-  positive("frame_error_error", frame_error_error);
-  below("frame_error_warn", frame_error_warn, "frame_error_error", frame_error_error);
+  tactile_common::require_finite_positive(kType, "diagnostics_period_s", diagnostics_period_s);
+  tactile_common::require_finite_positive(kType, "stall_warn_s", stall_warn_s);
+  tactile_common::require_finite_positive(kType, "stall_error_s", stall_error_s);
+  tactile_common::require_below(kType, "stall_warn_s", stall_warn_s, "stall_error_s", stall_error_s);
+  tactile_common::require_finite_positive(kType, "frame_error_warn", frame_error_warn);
+  tactile_common::require_finite_positive(kType, "frame_error_error", frame_error_error);
+  tactile_common::require_below(kType, "frame_error_warn", frame_error_warn, "frame_error_error", frame_error_error);
   if (frame_error_error > 1.0) {
     throw std::invalid_argument("DriverHealth.frame_error_error: a fraction, must be <= 1, got " +
                                 std::to_string(frame_error_error));
