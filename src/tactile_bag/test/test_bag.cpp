@@ -13,6 +13,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "bag_test_files.hpp"
 #include "sample.hpp"
 #include "tactile_bag/bag.hpp"
 
@@ -22,26 +23,12 @@ using tactile_bag::Reader;
 using tactile_bag::SerializedMessage;
 using tactile_bag::TopicInfo;
 using tactile_bag::Writer;
+using tactile_bag::test::read_file;
+using tactile_bag::test::TempDir;
+using tactile_bag::test::write_file;
 
 namespace {
 
-class TempDir {
- public:
-  TempDir() {
-    std::random_device rd;
-    path_ = fs::temp_directory_path() /
-            ("tactile_bag_test_" + std::to_string(::getpid()) + "_" + std::to_string(rd()));
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string sub(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  fs::path path_;
-};
 
 std::vector<uint8_t> bytes(std::initializer_list<int> v) {
   std::vector<uint8_t> out;
@@ -87,13 +74,14 @@ std::string write_sample_bag(const TempDir& tmp, const std::string& name = "samp
   return dir;
 }
 
-void write_file(const std::string& path, const std::string& text) {
-  std::ofstream(path, std::ios::binary | std::ios::trunc) << text;
-}
-
-std::string read_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::string(std::istreambuf_iterator<char>(in), {});
+/// Writes `text` to `path` with its first `from` replaced by `to` (a test failure if
+/// `text` has no `from`).
+void write_replaced(const std::string& path, const std::string& text, const std::string& from, const std::string& to) {
+  std::string t = text;
+  const auto pos = t.find(from);
+  EXPECT_NE(pos, std::string::npos) << from;
+  t.replace(pos, from.size(), to);
+  write_file(path, t);
 }
 
 }  // namespace
@@ -552,13 +540,7 @@ TEST(BagErrors, UnsupportedMetadata) {
   const std::string dir = write_sample_bag(tmp);
   const std::string meta = dir + "/metadata.yaml";
   const std::string good = read_file(meta);
-  auto with = [&](const std::string& from, const std::string& to) {
-    std::string t = good;
-    const auto pos = t.find(from);
-    EXPECT_NE(pos, std::string::npos) << from;
-    t.replace(pos, from.size(), to);
-    write_file(meta, t);
-  };
+  auto with = [&](const std::string& from, const std::string& to) { write_replaced(meta, good, from, to); };
   with("version: 9", "version: 10");
   expect_error([&] { Reader r(dir); }, {"metadata.yaml", "version", "unsupported version 10"});
   with("storage_identifier: sqlite3", "storage_identifier: rosbag_v1");
@@ -578,13 +560,7 @@ TEST(BagErrors, GarbageMetadataIsReadLikeAMissingOne) {
   const std::string dir = write_sample_bag(tmp);
   const std::string meta = dir + "/metadata.yaml";
   const std::string good = read_file(meta);
-  auto with = [&](const std::string& from, const std::string& to) {
-    std::string t = good;
-    const auto pos = t.find(from);
-    EXPECT_NE(pos, std::string::npos) << from;
-    t.replace(pos, from.size(), to);
-    write_file(meta, t);
-  };
+  auto with = [&](const std::string& from, const std::string& to) { write_replaced(meta, good, from, to); };
   auto expect_read = [&](const std::vector<std::string>& fragments) {
     Reader r(dir);
     EXPECT_EQ(r.message_count(), 15u);

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "mcap.hpp"
+#include "bag_test_files.hpp"
 #include "tactile_bag/bag.hpp"
 
 namespace fs = std::filesystem;
@@ -25,36 +26,11 @@ using tactile_bag::Reader;
 using tactile_bag::SerializedMessage;
 using tactile_bag::Writer;
 using tactile_bag::WriterOptions;
+using tactile_bag::test::read_file;
+using tactile_bag::test::TempDir;
+using tactile_bag::test::write_file;
 
 namespace {
-
-class TempDir {
- public:
-  TempDir() {
-    std::random_device rd;
-    path_ = fs::temp_directory_path() /
-            ("tactile_bag_corrupt_" + std::to_string(::getpid()) + "_" + std::to_string(rd()));
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  std::string sub(const std::string& name) const { return (path_ / name).string(); }
-
- private:
-  fs::path path_;
-};
-
-std::string read_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-void write_file(const std::string& path, const std::string& bytes) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
 
 // ---- A hand-made mcap file (independent of our writer): little-endian records -------------
 
@@ -174,7 +150,7 @@ uint64_t vm_size() {
 // Every crafted input fails with an error naming the file, the byte offset and the field or
 // the reason, without allocating what the file declares.
 TEST(BoundedMemory, CraftedZstdDeclarationsFailWithAClearError) {
-  TempDir tmp;
+  TempDir tmp("corrupt");
   for (const auto& c : crafted_inputs()) {
     const std::string dir = bag_with_file(tmp, c.name, c.bytes);
     try {
@@ -193,7 +169,7 @@ TEST(BoundedMemory, CraftedZstdDeclarationsFailWithAClearError) {
 // 192 MiB: each must end in a BagError (exit 0), not std::bad_alloc or a kill. Before the
 // fix the 4 GB / 12 GiB / 600 MiB declarations were allocated and the child aborted.
 TEST(BoundedMemory, CraftedInputsFailCleanlyUnderAnAddressSpaceLimit) {
-  TempDir tmp;
+  TempDir tmp("corrupt");
   for (const auto& c : crafted_inputs()) {
     const std::string dir = bag_with_file(tmp, c.name, c.bytes);
     const pid_t pid = ::fork();
@@ -312,7 +288,7 @@ class CorruptMcap : public ::testing::TestWithParam<std::string> {};
 // one and in two chunks, a damaged chunk length, a zeroed region across a chunk boundary.
 TEST_P(CorruptMcap, RecoversEveryIntactChunk) {
   const std::string compression = GetParam();
-  TempDir tmp;
+  TempDir tmp("corrupt");
   const std::string good_dir = tmp.sub("good");
   const std::string good_file = write_matrix_bag(good_dir, compression);
   const std::string good = read_file(good_file);
@@ -386,7 +362,7 @@ INSTANTIATE_TEST_SUITE_P(Compression, CorruptMcap, ::testing::Values("", "zstd",
 
 // A garbage metadata.yaml beside an intact mcap file: read like a missing one, with the note.
 TEST(CorruptBag, GarbageMetadataBesideAnIntactMcapFile) {
-  TempDir tmp;
+  TempDir tmp("corrupt");
   const std::string dir = tmp.sub("g");
   write_matrix_bag(dir, "zstd");
   write_file(dir + "/metadata.yaml", std::string("\x01\x02 not: [yaml", 14));
@@ -401,7 +377,7 @@ TEST(CorruptBag, GarbageMetadataBesideAnIntactMcapFile) {
 // past the end as zeros, so the bag is read on only where what was cut held nothing the
 // messages need: here the timestamp index, which close() builds last.
 TEST(CorruptBag, TruncatedSqliteIsReadWhereOnlyTheIndexWasCut) {
-  TempDir tmp;
+  TempDir tmp("corrupt");
   const std::string dir = tmp.sub("sq");
   WriterOptions o;
   o.storage = "sqlite3";
@@ -468,7 +444,7 @@ TEST(CorruptBag, TruncatedSqliteIsReadWhereOnlyTheIndexWasCut) {
 // sum is bounded like one chunk (a crafted file of many overlapping, highly compressed
 // chunks would otherwise hold them all). Here the cap is lowered to 2.5 chunks' worth.
 TEST(BoundedMemory, OverlappingChunksHeldTogetherAreCapped) {
-  TempDir tmp;
+  TempDir tmp("corrupt");
   const std::string dir = tmp.sub("overlap");
   WriterOptions o;
   o.storage = "mcap";
