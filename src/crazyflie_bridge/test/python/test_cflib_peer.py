@@ -277,10 +277,7 @@ def test_sim_server_lingers_after_a_signal_until_the_motors_stop(linger, tmp_pat
     the simulator keeps flying after SIGINT while the motors run, so the bridge's shutdown
     landing has a vehicle to land, and ends 0.5 s after they stop; without, it ends at
     once (the previous behaviour: the landing heard no vehicle)."""
-    port = free_udp_port()
-    extra = ['--linger', '10'] if linger else []
-    p = subprocess.Popen([os.environ['CRAZYFLIE_SIM_SERVER'], SCENARIO, '--port', str(port), '--duration', '30',
-                          *extra], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    port, p = start_server(*(['--linger', '10'] if linger else []))
     try:
         assert p.stdout.readline().startswith('listening udp://127.0.0.1:%d' % port)
         cflib.crtp.init_drivers()
@@ -314,9 +311,7 @@ def test_sim_server_lingers_after_a_signal_until_the_motors_stop(linger, tmp_pat
 
 
 def test_sim_server_second_signal_ends_the_linger_at_once(tmp_path):
-    port = free_udp_port()
-    p = subprocess.Popen([os.environ['CRAZYFLIE_SIM_SERVER'], SCENARIO, '--port', str(port), '--duration', '30',
-                          '--linger', '20'], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    port, p = start_server('--linger', '20')
     try:
         assert p.stdout.readline().startswith('listening udp://127.0.0.1:%d' % port)
         cflib.crtp.init_drivers()
