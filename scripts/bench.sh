@@ -47,7 +47,7 @@ for b in install/*/lib/*/bench_*; do
 done
 
 # The GPIS update side by side with numpy/scipy and scikit-learn on the same
-# kernel and data (gpis_explorer README, "Benchmarks"): the C++ figures from
+# kernel and data (docs/gpis_explorer_results.md, "Benchmarks"): the C++ figures from
 # the JSON just written, the peers timed now, ratios and agreement printed.
 gpis_json="$out/bench_gpis.json"
 if [[ -f "$gpis_json" ]]; then

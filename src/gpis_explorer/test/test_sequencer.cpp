@@ -172,8 +172,8 @@ TEST(Sequencer, TargetsAreApproachedHeadOnFromAStagingPoint) {
     // points lie, and in this kinematic room (ideal ray whiskers, exit off
     // centre) the exit is then found for 5 of 13 room yaws (-3 to 3 rad)
     // against 8 of 13 without it, -1.9 among the lost ones. In the SITL rooms
-    // 1000-1599 it costs 4 exits of 600 and saves 10 guard touches (README
-    // "Procedural rooms"). This test checks the head-on legs.
+    // 1000-1599 it costs 4 exits of 600 and saves 10 guard touches
+    // (docs/gpis_explorer_results.md, "Procedural rooms"). This test checks the head-on legs.
     p.retreat_toward_follow_start = false;
     ExplorationSequencer seq(p);
     const auto walls = gpis_test::room(2.0, 0.6, yaw, 0.55);

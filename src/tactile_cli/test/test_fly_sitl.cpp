@@ -84,7 +84,7 @@ TEST(FlySitl, DarknessWallFollowingOverUdp) {
   }
   // Over the link the flight is a different realisation (wall-clock timing
   // of every tick), so the outcome is compared with the spread of in-process
-  // seeds, not with one trial. Measured (README "The bridge flies the SITL"):
+  // seeds, not with one trial. Measured (docs/crazyflie_bridge_results.md, "The bridge flies the SITL"):
   // in process, seeds 1-20, every first sweep >= 7 s, true depth in band over
   // its first 7 s 0.37-0.98; over UDP 53 of 58 runs swept >= 7 s (the others
   // 5.6-7.0 s, 3 of them with 2-3 flights on the 2 cores at once: the contact
