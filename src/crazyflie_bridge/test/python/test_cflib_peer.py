@@ -263,6 +263,8 @@ def test_cflib_scan_finds_simulated_crazyflie():
     (['--port', '5x'], "--port: expected a whole number"),              # std::stoi read 5
     (['--loss', 'nan'], '--loss: expected a finite number'),
     (['--protocol-version', '-1'], '--protocol-version: expected a whole number'),
+    (['--linger', 'nan'], '--linger: expected a finite number in [0.000000, 600.000000]'),
+    (['--linger', '601'], '--linger: expected a finite number'),
 ])
 def test_sim_server_refuses_bad_option_values(args, expected):
     p = subprocess.run([os.environ['CRAZYFLIE_SIM_SERVER'], SCENARIO, *args], capture_output=True, text=True,
