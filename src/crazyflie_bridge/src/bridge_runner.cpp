@@ -102,6 +102,10 @@ int BridgeRunner::pump(std::chrono::milliseconds timeout, const std::function<in
         last_state_rx_ = s->received;
         state_pending_ = true;
       }
+      if ((out.left || out.right) && !whisker_pending_) {  // the oldest whisker sample not yet answered
+        last_whisker_rx_ = s->received;
+        whisker_pending_ = true;
+      }
     }
     ++n;
     if (out.left && sinks.left) sinks.left(*out.left);
@@ -126,12 +130,14 @@ bool BridgeRunner::on_timer(int64_t now_ns) {
   flush_outbox();
   if (!pk) return false;
   client_->send(*pk);
+  const auto sent = std::chrono::steady_clock::now();
   if (state_pending_) {
-    const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_state_rx_).count();
-    ++latency_.count;
-    latency_.sum_s += dt;
-    latency_.max_s = std::max(latency_.max_s, dt);
+    latency_.add(std::chrono::duration<double>(sent - last_state_rx_).count());
     state_pending_ = false;
+  }
+  if (whisker_pending_) {
+    whisker_latency_.add(std::chrono::duration<double>(sent - last_whisker_rx_).count());
+    whisker_pending_ = false;
   }
   return true;
 }
@@ -225,6 +231,29 @@ CrazyflieClient::Stats BridgeRunner::client_stats() const {
 BridgeRunner::LatencyStats BridgeRunner::latency() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return latency_;
+}
+BridgeRunner::LatencyStats BridgeRunner::whisker_latency() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return whisker_latency_;
+}
+
+void BridgeRunner::LatencyStats::add(double s) {
+  ++count;
+  sum_s += s;
+  max_s = std::max(max_s, s);
+  const double b = std::floor(std::max(0.0, s) / kBinS);
+  ++bins[b >= static_cast<double>(kBins) ? kBins - 1 : static_cast<std::size_t>(b)];
+}
+
+double BridgeRunner::LatencyStats::quantile_s(double q) const {
+  if (count == 0) return 0.0;
+  const auto rank = static_cast<uint64_t>(std::ceil(std::clamp(q, 0.0, 1.0) * static_cast<double>(count)));
+  uint64_t seen = 0;
+  for (std::size_t i = 0; i < kBins; ++i) {
+    seen += bins[i];
+    if (seen >= std::max<uint64_t>(rank, 1)) return i + 1 == kBins ? max_s : static_cast<double>(i + 1) * kBinS;
+  }
+  return max_s;
 }
 
 }  // namespace crazyflie_bridge

@@ -449,8 +449,13 @@ nlohmann::json run_fly(const FlyOptions& o) {
   m["odom_without_attitude"] = ls.odom_without_attitude;  // state samples whose attitude sample was lost
   m["log_samples_missed"] = ls.log_samples_missed;        // gaps in the per-block firmware sequences
   m["dropped_nonfinite"] = ls.dropped_nonfinite;
-  m["latency_mean_ms"] = lat.count ? 1e3 * lat.sum_s / static_cast<double>(lat.count) : 0.0;
+  m["latency_mean_ms"] = 1e3 * lat.mean_s();
   m["latency_max_ms"] = 1e3 * lat.max_s;
+  // Whisker log sample received -> next setpoint sent: the pipeline's reaction time.
+  const auto wl = runner.whisker_latency();
+  m["whisker_latency"] = {{"samples", wl.count},           {"mean_ms", 1e3 * wl.mean_s()},
+                          {"p50_ms", 1e3 * wl.quantile_s(0.5)}, {"p99_ms", 1e3 * wl.quantile_s(0.99)},
+                          {"max_ms", 1e3 * wl.max_s}};
   m["bag_messages"] = recorder ? recorder->message_count() : 0;
   nlohmann::json published = nlohmann::json::object();
   for (const auto& [topic, n] : host.bus().published_counts()) published[topic] = n;

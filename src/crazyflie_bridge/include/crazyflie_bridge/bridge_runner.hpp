@@ -9,6 +9,7 @@
 // `tactile fly` loop use it the same way. Times are the caller's clock [ns].
 #pragma once
 
+#include <array>
 #include <chrono>
 #include <functional>
 #include <memory>
@@ -19,6 +20,7 @@
 
 #include "crazyflie_bridge/client.hpp"
 #include "crazyflie_bridge/crazyflie_bridge_logic.hpp"
+#include "tactile_common/event_tick.hpp"
 
 namespace crazyflie_bridge {
 
@@ -28,9 +30,20 @@ class BridgeRunner {
     std::function<void(const tactile_msgs::msg::WhiskerPressure&)> left, right;
     std::function<void(const nav_msgs::msg::Odometry&)> odom;
   };
+  /// Wall-clock latency of one kind of log sample: received (the client's receive time)
+  /// -> the next setpoint packet sent. Mean, max and quantiles from a fixed histogram
+  /// (kBinS bins up to kBins * kBinS; longer ones in the last bin): memory does not
+  /// grow with the flight.
   struct LatencyStats {
+    static constexpr double kBinS = 25e-6;
+    static constexpr std::size_t kBins = 4000;  ///< 100 ms
     uint64_t count = 0;
-    double sum_s = 0, max_s = 0;  ///< state log sample received -> next setpoint sent
+    double sum_s = 0, max_s = 0;
+    std::array<uint32_t, kBins> bins{};
+    void add(double s);
+    double mean_s() const { return count ? sum_s / static_cast<double>(count) : 0.0; }
+    /// Upper edge of the bin holding the q-quantile (0 < q <= 1) [s]; 0 without samples.
+    double quantile_s(double q) const;
   };
 
   using Mode = CrazyflieBridgeLogic::Mode;
@@ -93,7 +106,14 @@ class BridgeRunner {
   CrazyflieBridgeLogic::Stats logic_stats() const;
   LinkStatistics link_stats() const;
   CrazyflieClient::Stats client_stats() const;
+  /// State log sample received -> next setpoint sent.
   LatencyStats latency() const;
+  /// Whisker log sample received -> next setpoint sent: the pipeline's reaction time
+  /// (pressure in -> behaviour -> setpoint out) wherever the setpoints come from.
+  LatencyStats whisker_latency() const;
+  /// When setpoint packets were sent: on a setpoint's arrival (forward mode) or by the
+  /// setpoint_rate_hz timer's watchdog (every other mode, or no setpoint arriving).
+  tactile_common::EventTick::Stats tick_stats() const;
   const CrazyflieClient& client() const { return *client_; }
 
  private:
@@ -101,9 +121,9 @@ class BridgeRunner {
   std::unique_ptr<CrazyflieClient> client_;
   CrazyflieBridgeLogic logic_;
   mutable std::mutex mutex_;  ///< guards logic_ and the link's send side
-  std::chrono::steady_clock::time_point last_state_rx_{};
-  bool state_pending_ = false;
-  LatencyStats latency_;
+  std::chrono::steady_clock::time_point last_state_rx_{}, last_whisker_rx_{};
+  bool state_pending_ = false, whisker_pending_ = false;
+  LatencyStats latency_, whisker_latency_;
   std::vector<std::string> warnings_;
   std::vector<uint8_t> block_ids_;         ///< whisker, attitude, state: created at connect, in start order
   std::optional<uint8_t> status_block_id_;  ///< optional: its failures are warnings
