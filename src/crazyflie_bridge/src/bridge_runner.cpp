@@ -8,7 +8,9 @@ namespace crazyflie_bridge {
 
 BridgeRunner::BridgeRunner(const CrazyflieBridgeLogic::Params& params, ClientOptions client_options,
                            std::unique_ptr<Link> link, bool stream)
-    : link_(link ? std::move(link) : open_link(params.uri)), logic_(params) {
+    : link_(link ? std::move(link) : open_link(params.uri)),
+      logic_(params),
+      tick_(static_cast<int64_t>(std::llround(1e9 / params.setpoint_rate_hz))) {
   client_ = std::make_unique<CrazyflieClient>(*link_, client_options);
   client_->connect();
   logic_.set_protocol_version(client_->protocol_version());  // setpoint generation (cflib's threshold)
@@ -118,14 +120,27 @@ int BridgeRunner::pump(std::chrono::milliseconds timeout, const std::function<in
   return n;
 }
 
-void BridgeRunner::on_hover_setpoint(const tactile_msgs::msg::HoverSetpoint& msg, int64_t now_ns) {
+bool BridgeRunner::on_hover_setpoint(const tactile_msgs::msg::HoverSetpoint& msg, int64_t now_ns) {
   std::lock_guard<std::mutex> lock(mutex_);
   logic_.on_hover_setpoint(msg, now_ns);
+  // Only in forward mode is the behaviour's setpoint what goes out; every other mode
+  // (take-off, hover, go-to, landing, hold, stop) is paced by the watchdog.
+  if (logic_.mode() != Mode::kForward || !tick_.on_event(now_ns)) return false;
+  return step(now_ns);
 }
 
 bool BridgeRunner::on_timer(int64_t now_ns) {
   std::lock_guard<std::mutex> lock(mutex_);
+  if (!tick_.on_watchdog()) {
+    flush_outbox();
+    return false;
+  }
+  return step(now_ns);
+}
+
+bool BridgeRunner::step(int64_t now_ns) {
   flush_outbox();
+  const bool behaviour_flies = logic_.mode() == Mode::kForward;
   auto pk = logic_.on_timer(now_ns);
   flush_outbox();
   if (!pk) return false;
@@ -136,7 +151,8 @@ bool BridgeRunner::on_timer(int64_t now_ns) {
     state_pending_ = false;
   }
   if (whisker_pending_) {
-    whisker_latency_.add(std::chrono::duration<double>(sent - last_whisker_rx_).count());
+    // The pipeline's reaction time only where the packet is the behaviour's setpoint.
+    if (behaviour_flies) whisker_latency_.add(std::chrono::duration<double>(sent - last_whisker_rx_).count());
     whisker_pending_ = false;
   }
   return true;
@@ -235,6 +251,10 @@ BridgeRunner::LatencyStats BridgeRunner::latency() const {
 BridgeRunner::LatencyStats BridgeRunner::whisker_latency() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return whisker_latency_;
+}
+tactile_common::EventTick::Stats BridgeRunner::tick_stats() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return tick_.stats();
 }
 
 void BridgeRunner::LatencyStats::add(double s) {

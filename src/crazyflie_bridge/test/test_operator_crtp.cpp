@@ -295,3 +295,52 @@ TEST(OperatorCrtp, LogBlocksStreamOnlyBetweenStartAndStopStreaming) {
   EXPECT_GT(c.runner->client_stats().log_samples, at_stop + 200u);
   EXPECT_EQ(c.runner->client_stats().log_missed, missed);
 }
+
+// Event driven (issue 36): while the behaviour flies (forward mode) its setpoint leaves
+// on arrival, between the 20 ms ticks, and the watchdog adds nothing while setpoints
+// flow; in every other mode an arriving setpoint sends nothing (the operator's mode
+// is paced by the watchdog), and once the behaviour goes silent the watchdog sends
+// every period again (hover hold).
+TEST(OperatorCrtp, InForwardModeTheBehavioursSetpointLeavesOnArrivalAndTheWatchdogOnlyFillsGaps) {
+  Crtp c;
+  c.to(Mode::kHovering);
+  // Hovering: an arriving setpoint is not sent; the firmware keeps the operator's hover.
+  c.run_s(0.007);
+  uint64_t before = c.fw.emulator().stats().setpoints;
+  tactile_msgs::msg::HoverSetpoint sp;
+  sp.vx = 0.3;
+  sp.height = 0.45;
+  EXPECT_FALSE(c.runner->on_hover_setpoint(sp, c.t));
+  EXPECT_EQ(c.fw.emulator().stats().setpoints, before);
+
+  ASSERT_TRUE(c.runner->start_behaviour(c.t).accepted);
+  c.run_s(0.2);
+  ASSERT_EQ(c.runner->mode(), Mode::kForward);
+  // Off the 20 ms grid: the setpoint reaches the firmware before on_timer runs.
+  c.run_s(0.007);
+  ASSERT_NE(c.t % (20 * kMs), 0);
+  before = c.fw.emulator().stats().setpoints;
+  sp.vx = 0.25;
+  EXPECT_TRUE(c.runner->on_hover_setpoint(sp, c.t));
+  EXPECT_EQ(c.fw.emulator().stats().setpoints, before + 1);
+  const auto cmd = c.fw.emulator().commander(c.ms());
+  EXPECT_EQ(cmd.setpoint.kind, commander::Setpoint::Kind::kHover);
+  EXPECT_FLOAT_EQ(cmd.setpoint.a, 0.25f);
+
+  // Setpoints every 20 ms (Crtp::step): 50 packets a second, not 100 -- the watchdog
+  // stays quiet while they arrive.
+  c.run_s(0.013);  // back on the grid
+  before = c.fw.emulator().stats().setpoints;
+  const auto ticks = c.runner->tick_stats();
+  c.run_s(1.0);
+  EXPECT_EQ(c.fw.emulator().stats().setpoints - before, 50u);
+  EXPECT_EQ(c.runner->tick_stats().event_steps - ticks.event_steps, 50u);
+  EXPECT_EQ(c.runner->tick_stats().watchdog_steps - ticks.watchdog_steps, 0u);
+
+  // The behaviour goes silent: the watchdog steps every period (forward -> hover hold).
+  c.behaviour = false;
+  before = c.fw.emulator().stats().setpoints;
+  c.run_s(0.4);
+  EXPECT_EQ(c.runner->mode(), Mode::kHoverHold);
+  EXPECT_EQ(c.fw.emulator().stats().setpoints - before, 20u);
+}

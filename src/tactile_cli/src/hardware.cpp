@@ -159,7 +159,11 @@ nlohmann::json run_fly(const FlyOptions& o) {
       fsm_extra.set("target_y", t->y());
     }
   }
-  auto fsm = add_whisker_fsm(host, overrides("whisker_fsm", fsm_extra));
+  // The pipeline's clock: wall time since t0 (set when the link is up and the loop
+  // starts; no log data arrives before). The FSM steps on each depth's arrival on it.
+  Clock::time_point t0{};
+  auto now_ns = [&t0] { return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t0).count(); };
+  auto fsm = add_whisker_fsm(host, overrides("whisker_fsm", fsm_extra), now_ns);
   // Wall-following sweeps, as in the SITL evaluation; against the simulated
   // Crazyflie also the whiskers' true depth in band (filled after the run).
   WhiskerTruth truth;
@@ -207,8 +211,7 @@ nlohmann::json run_fly(const FlyOptions& o) {
     std::fflush(stdout);
   }
 
-  const auto t0 = Clock::now();
-  auto now_ns = [&] { return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - t0).count(); };
+  t0 = Clock::now();
   host.bus().subscribe<tactile_msgs::msg::HoverSetpoint>(
       CrazyflieBridgeLogic::kSetpointTopic,
       [&](const tactile_msgs::msg::HoverSetpoint& m) { runner.on_hover_setpoint(m, now_ns()); });

@@ -1,5 +1,9 @@
 #include "tactile_cli/host_nodes.hpp"
 
+#include <algorithm>
+#include <limits>
+
+#include "tactile_common/event_tick.hpp"
 #include "tactile_common/time.hpp"
 
 namespace tactile_cli {
@@ -105,13 +109,30 @@ std::shared_ptr<tactile_depth::TactileDepthLogic> add_tactile_depth(Host& host,
   return logic;
 }
 
-std::shared_ptr<tactile_fsm::WhiskerFsmLogic> add_whisker_fsm(Host& host, const tactile_common::ParamMap& over) {
+std::shared_ptr<tactile_fsm::WhiskerFsmLogic> add_whisker_fsm(Host& host, const tactile_common::ParamMap& over,
+                                                               std::function<int64_t()> arrival_clock) {
   using Logic = tactile_fsm::WhiskerFsmLogic;
   auto logic = add_logic<Logic>(host, "", over);
   Host* h = &host;
   Logic* l = logic.get();
+  // Steps never go back in time: a real-time host's executor may fire an overdue
+  // watchdog with its due time after a depth arrival stepped the FSM later.
+  auto last_ns = std::make_shared<int64_t>(std::numeric_limits<int64_t>::min());
+  auto step = [h, l, last_ns](int64_t t_ns) {
+    const int64_t now_ns = *last_ns = std::max(t_ns, *last_ns);
+    auto out = l->on_timer(now_ns);
+    h->bus().publish(Logic::kSetpointTopic, out.setpoint, now_ns);
+    if (out.state) h->bus().publish(Logic::kStateTopic, *out.state, now_ns);
+  };
+  // Event driven only with a real-time clock (see the header).
+  auto tick = arrival_clock ? std::make_shared<tactile_common::EventTick>(Logic::kTimerPeriodNs) : nullptr;
   host.bus().subscribe<tactile_msgs::msg::TactileDepth>(
-      Logic::kDepthTopic, [l](const tactile_msgs::msg::TactileDepth& m) { l->on_depth(m); });
+      Logic::kDepthTopic, [l, tick, step, arrival_clock](const tactile_msgs::msg::TactileDepth& m) {
+        l->on_depth(m);
+        if (!tick) return;
+        const int64_t now_ns = arrival_clock();
+        if (tick->on_event(now_ns)) step(now_ns);
+      });
   host.bus().subscribe<tactile_msgs::msg::WhiskerSignal>(
       Logic::kLeftSignalTopic, [l](const tactile_msgs::msg::WhiskerSignal& m) { l->on_left_signal(m); });
   host.bus().subscribe<tactile_msgs::msg::WhiskerSignal>(
@@ -120,19 +141,23 @@ std::shared_ptr<tactile_fsm::WhiskerFsmLogic> add_whisker_fsm(Host& host, const 
                                                 [l](const nav_msgs::msg::Odometry& m) { l->on_odometry(m); });
   host.executor().add_timer(
       Logic::kTimerPeriodNs,
-      [h, l](int64_t now_ns) {
-        auto out = l->on_timer(now_ns);
-        h->bus().publish(Logic::kSetpointTopic, out.setpoint, now_ns);
-        if (out.state) h->bus().publish(Logic::kStateTopic, *out.state, now_ns);
+      [tick, step](int64_t now_ns) {
+        if (!tick || tick->on_watchdog()) step(now_ns);
       },
       host.executor().now_ns());
-  host.add_reporter([l] {
+  host.add_reporter([l, tick] {
     const auto& s = l->stats();
-    return NodeReport{std::string("/") + Logic::kNodeName,
-                      {{"ticks", s.ticks},
-                       {"dropped_nonfinite", s.dropped_nonfinite},
-                       {"dropped_out_of_order", s.dropped_out_of_order},
-                       {"dropped_wrong_whisker", s.dropped_wrong_whisker}}};
+    NodeReport r{std::string("/") + Logic::kNodeName,
+                 {{"ticks", s.ticks},
+                  {"dropped_nonfinite", s.dropped_nonfinite},
+                  {"dropped_out_of_order", s.dropped_out_of_order},
+                  {"dropped_wrong_whisker", s.dropped_wrong_whisker}}};
+    if (tick) {  // event driven: why each tick ran
+      r.counters.emplace_back("ticks_on_depth", tick->stats().event_steps);
+      r.counters.emplace_back("ticks_on_watchdog", tick->stats().watchdog_steps);
+      r.counters.emplace_back("depth_held_back", tick->stats().skipped_events);
+    }
+    return r;
   });
   return logic;
 }

@@ -15,6 +15,7 @@
 #include "crazyflie_bridge/crazyflie_bridge_logic.hpp"
 #include "mapping_pcl/xplorer_map_logic.hpp"
 #include "tactile_cli/host_nodes.hpp"
+#include "tactile_common/time.hpp"
 #include "tactile_fsm/xplorer_fsm_logic.hpp"
 #include "xplorer_force_est/xplorer_force_est_logic.hpp"
 
@@ -172,4 +173,50 @@ TEST(Host, EveryHostedNodeHasItsParameterFile) {
   expect_repository_file<tactile_fsm::XplorerFsmLogic>(host, "");
   expect_repository_file<mapping_pcl::XplorerMapLogic>(host, "");
   expect_repository_file<crazyflie_bridge::CrazyflieBridgeLogic>(host, "");
+}
+
+// add_whisker_fsm with a real-time clock (tactile fly): the FSM steps when a depth
+// arrives, at the arrival clock's time, and its 50 Hz timer only steps it when depth
+// stops (tactile_common/event_tick.hpp). Without the clock (the simulated hosts) the
+// timer steps it every 20 ms and a depth arrival publishes nothing by itself.
+TEST(HostWhiskerFsm, StepsOnDepthArrivalWithARealTimeClockAndOnItsTimerWithout) {
+  using Logic = tactile_fsm::WhiskerFsmLogic;
+  constexpr int64_t kMs = 1'000'000;
+  for (const bool real_time : {true, false}) {
+    SCOPED_TRACE(real_time ? "arrival clock" : "simulated host");
+    tactile_cli::Host host(TACTILE_CONFIG_DIR);
+    int64_t clock_ns = 0;
+    std::function<int64_t()> arrival;
+    if (real_time) arrival = [&clock_ns] { return clock_ns; };
+    tactile_cli::add_whisker_fsm(host, tactile_common::ParamMap(), arrival);
+    std::vector<int64_t> setpoints;  // stamps
+    host.bus().subscribe<tactile_msgs::msg::HoverSetpoint>(Logic::kSetpointTopic, [&](const auto& m) {
+      setpoints.push_back(static_cast<int64_t>(m.header.stamp.sec) * 1'000'000'000 + m.header.stamp.nanosec);
+    });
+    host.executor().run_until(0);  // the timer's first call, at 0
+    ASSERT_EQ(setpoints.size(), 1u);
+    // Depth at 50 Hz, 7 ms after the timer's phase, for 0.2 s.
+    for (int k = 0; k < 10; ++k) {
+      clock_ns = k * 20 * kMs + 7 * kMs;
+      host.executor().run_until(clock_ns);
+      const size_t n = setpoints.size();
+      tactile_msgs::msg::TactileDepth d;
+      tactile_common::to_stamp(clock_ns, d.header.stamp);
+      host.bus().publish(Logic::kDepthTopic, d, clock_ns);
+      if (real_time) {
+        ASSERT_EQ(setpoints.size(), n + 1) << "depth " << k;  // at once
+        EXPECT_EQ(setpoints.back(), clock_ns);
+      } else {
+        EXPECT_EQ(setpoints.size(), n);
+      }
+    }
+    // Up to 0.187 s: event driven, one step per depth and the timer quiet after its first
+    // call (11); timer driven, the timer's calls at 0, 20, ..., 180 ms (10).
+    EXPECT_EQ(setpoints.size(), real_time ? 11u : 10u);
+    // Depth stops: the timer steps every 20 ms either way.
+    const size_t n = setpoints.size();
+    host.executor().run_until(400 * kMs);
+    EXPECT_GE(setpoints.size() - n, 10u);
+    EXPECT_LE(setpoints.size() - n, 11u);
+  }
 }

@@ -1,7 +1,12 @@
 // Host glue of the bridge: a Link + CrazyflieClient + CrazyflieBridgeLogic.
 // Connects, starts the whisker and state log blocks, then
 //   pump()      receives log data and hands out the decoded messages,
-//   on_timer()  sends the logic's setpoint packet,
+//   on_hover_setpoint()  takes the behaviour's setpoint and, in forward mode, sends
+//               it at once (event driven: the setpoint is the step's input),
+//   on_timer()  the setpoint_rate_hz watchdog: steps the logic and sends its packet
+//               when no setpoint stepped it since its previous call (every mode
+//               but forward, or the behaviour's setpoints stopped), see
+//               tactile_common/event_tick.hpp,
 //   arm() .. emergency_stop()  the operator commands (sent at once where they
 //               carry a packet: arming request, emergency stop),
 //   land_and_stop()  the blocking shutdown landing (Ctrl-C, SIGTERM, destruction),
@@ -72,9 +77,14 @@ class BridgeRunner {
   /// stamping messages with now_ns(); returns the number of log samples handled.
   static constexpr int kMaxSamplesPerPump = 1000;
   int pump(std::chrono::milliseconds timeout, const std::function<int64_t()>& now_ns, const Sinks& sinks);
-  void on_hover_setpoint(const tactile_msgs::msg::HoverSetpoint& msg, int64_t now_ns);
-  /// Sends the logic's packets (outbox, then the setpoint, if any); returns
-  /// true if a setpoint packet was sent.
+  /// Hands the setpoint to the logic; in forward mode (the behaviour flies) the logic
+  /// steps and its packet is sent now, unless another setpoint stepped it less than half
+  /// a setpoint period ago (then the watchdog sends it). Returns true if a setpoint
+  /// packet was sent.
+  bool on_hover_setpoint(const tactile_msgs::msg::HoverSetpoint& msg, int64_t now_ns);
+  /// The watchdog, called at setpoint_rate_hz: sends the logic's queued packets and, if
+  /// no setpoint stepped the logic since the previous call, steps it and sends its
+  /// setpoint packet (if any). Returns true if a setpoint packet was sent.
   bool on_timer(int64_t now_ns);
 
   // Operator commands: CrazyflieBridgeLogic's, mutex-guarded; packets they
@@ -108,8 +118,9 @@ class BridgeRunner {
   CrazyflieClient::Stats client_stats() const;
   /// State log sample received -> next setpoint sent.
   LatencyStats latency() const;
-  /// Whisker log sample received -> next setpoint sent: the pipeline's reaction time
-  /// (pressure in -> behaviour -> setpoint out) wherever the setpoints come from.
+  /// Whisker log sample received -> next setpoint sent, for the setpoints the behaviour
+  /// flies (forward mode): the pipeline's reaction time (pressure in -> TDORC -> depth ->
+  /// behaviour -> setpoint out).
   LatencyStats whisker_latency() const;
   /// When setpoint packets were sent: on a setpoint's arrival (forward mode) or by the
   /// setpoint_rate_hz timer's watchdog (every other mode, or no setpoint arriving).
@@ -128,8 +139,11 @@ class BridgeRunner {
   std::vector<uint8_t> block_ids_;         ///< whisker, attitude, state: created at connect, in start order
   std::optional<uint8_t> status_block_id_;  ///< optional: its failures are warnings
   bool streaming_ = false;
+  tactile_common::EventTick tick_;
   /// Sends what the logic queued (caller holds mutex_).
   void flush_outbox();
+  /// One step of the logic and its packets sent (caller holds mutex_); true if a setpoint was sent.
+  bool step(int64_t now_ns);
 };
 
 }  // namespace crazyflie_bridge

@@ -3,6 +3,7 @@
 // topics (the logic's constants), parameters (config/<node>.yaml + overrides).
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -36,8 +37,15 @@ std::shared_ptr<tactile_depth::TactileDepthLogic> add_tactile_depth(
     Host& host, const tactile_common::ParamMap& overrides,
     const std::string& output_topic = tactile_depth::TactileDepthLogic::kOutputTopic);
 
-/// whisker_fsm: /whisker/depth, /whisker/*/signal, /odom -> /cmd_hover, /fsm_state at 50 Hz.
-std::shared_ptr<tactile_fsm::WhiskerFsmLogic> add_whisker_fsm(Host& host, const tactile_common::ParamMap& overrides);
+/// whisker_fsm: /whisker/depth, /whisker/*/signal, /odom -> /cmd_hover, /fsm_state.
+///  - Without `arrival_clock` (the simulated hosts): a 50 Hz timer steps it. The
+///    simulator's timer fires first at each tick, so the step sees the depth of that
+///    tick's pressure: no timer phase in simulated time, and the order of a run is fixed.
+///  - With it (real-time hosts: `tactile fly`): event driven like the rclcpp component
+///    (tactile_common/event_tick.hpp): it steps when a TactileDepth arrives, at
+///    arrival_clock(), and the 50 Hz timer is the watchdog that steps it once depth stops.
+std::shared_ptr<tactile_fsm::WhiskerFsmLogic> add_whisker_fsm(Host& host, const tactile_common::ParamMap& overrides,
+                                                               std::function<int64_t()> arrival_clock = {});
 
 /// gpis_explorer: /whisker/depth, /odom -> /cmd_hover, /fsm_state at 50 Hz,
 /// /gpis/map and /gpis/target after every GPIS update.

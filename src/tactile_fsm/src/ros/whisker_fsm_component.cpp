@@ -1,5 +1,11 @@
 // rclcpp component of the whisker wall-following FSM: a mechanical adapter
 // around WhiskerFsmLogic (all behaviour lives there). ROS builds only.
+//
+// Event driven (tactile_common/event_tick.hpp): the FSM steps when a TactileDepth
+// arrives (the depth node publishes it on the pressure pair's arrival), so a pressure
+// sample reaches the setpoint without waiting for a timer's phase; a 50 Hz watchdog
+// timer steps it when depth stops, so the stale-depth fail-safe (max_input_age_s)
+// acts as it did with the timer-driven step.
 #include <chrono>
 #include <memory>
 #include <utility>
@@ -7,6 +13,7 @@
 #include "rclcpp/create_timer.hpp"
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
+#include "tactile_common/event_tick.hpp"
 #include "tactile_common/ros_parameters.hpp"
 #include "tactile_fsm/whisker_fsm_logic.hpp"
 
@@ -17,7 +24,8 @@ class WhiskerFsmComponent : public rclcpp::Node {
   explicit WhiskerFsmComponent(const rclcpp::NodeOptions & options)
   : Node(WhiskerFsmLogic::kNodeName, options),
     logic_(WhiskerFsmLogic::params_from(
-      tactile_common::declare_parameters(*this, WhiskerFsmLogic::default_parameters())))
+      tactile_common::declare_parameters(*this, WhiskerFsmLogic::default_parameters()))),
+    tick_(WhiskerFsmLogic::kTimerPeriodNs)
   {
     setpoint_pub_ = create_publisher<tactile_msgs::msg::HoverSetpoint>(
       WhiskerFsmLogic::kSetpointTopic, rclcpp::QoS(10));
@@ -25,7 +33,11 @@ class WhiskerFsmComponent : public rclcpp::Node {
       WhiskerFsmLogic::kStateTopic, rclcpp::QoS(10).reliable());
     depth_sub_ = create_subscription<tactile_msgs::msg::TactileDepth>(
       WhiskerFsmLogic::kDepthTopic, rclcpp::SensorDataQoS(),
-      [this](const tactile_msgs::msg::TactileDepth & msg) {logic_.on_depth(msg);});
+      [this](const tactile_msgs::msg::TactileDepth & msg) {
+        logic_.on_depth(msg);
+        const int64_t now_ns = now().nanoseconds();
+        if (tick_.on_event(now_ns)) {step(now_ns);}
+      });
     left_sub_ = create_subscription<tactile_msgs::msg::WhiskerSignal>(
       WhiskerFsmLogic::kLeftSignalTopic, rclcpp::SensorDataQoS(),
       [this](const tactile_msgs::msg::WhiskerSignal & msg) {logic_.on_left_signal(msg);});
@@ -35,24 +47,29 @@ class WhiskerFsmComponent : public rclcpp::Node {
     odom_sub_ = create_subscription<nav_msgs::msg::Odometry>(
       WhiskerFsmLogic::kOdomTopic, rclcpp::SensorDataQoS(),
       [this](const nav_msgs::msg::Odometry & msg) {logic_.on_odometry(msg);});
-    // Wall timer at 50 Hz; the tick time is the node clock (sim time when use_sim_time).
-    // On the node clock: simulated time under use_sim_time (the SITL launches, any
-    // real_time_factor), system time otherwise.
+    // The watchdog at 50 Hz on the node clock: simulated time under use_sim_time (the
+    // SITL launches, any real_time_factor), system time otherwise.
     timer_ = rclcpp::create_timer(this, get_clock(),
       std::chrono::nanoseconds(WhiskerFsmLogic::kTimerPeriodNs),
       [this]() {
-        auto out = logic_.on_timer(now().nanoseconds());
-        setpoint_pub_->publish(
-          std::make_unique<tactile_msgs::msg::HoverSetpoint>(std::move(out.setpoint)));
-        if (out.state) {
-          state_pub_->publish(
-            std::make_unique<tactile_msgs::msg::FsmState>(std::move(*out.state)));
-        }
+        if (tick_.on_watchdog()) {step(now().nanoseconds());}
       });
   }
 
  private:
+  void step(int64_t now_ns)
+  {
+    auto out = logic_.on_timer(now_ns);
+    setpoint_pub_->publish(
+      std::make_unique<tactile_msgs::msg::HoverSetpoint>(std::move(out.setpoint)));
+    if (out.state) {
+      state_pub_->publish(
+        std::make_unique<tactile_msgs::msg::FsmState>(std::move(*out.state)));
+    }
+  }
+
   WhiskerFsmLogic logic_;
+  tactile_common::EventTick tick_;
   rclcpp::Publisher<tactile_msgs::msg::HoverSetpoint>::SharedPtr setpoint_pub_;
   rclcpp::Publisher<tactile_msgs::msg::FsmState>::SharedPtr state_pub_;
   rclcpp::Subscription<tactile_msgs::msg::TactileDepth>::SharedPtr depth_sub_;
