@@ -190,6 +190,13 @@ int main(int argc, char** argv) {
   export_cmd->add_flag("--binary", exp.binary, "binary little endian instead of ASCII");
   export_cmd->add_option("--metrics", exp.metrics,
                          "summary JSON with its warnings (default: the PLY's name with .metrics.json)");
+  std::string export_time = "header";
+  export_cmd
+      ->add_option("--time", export_time,
+                   "replay clock: header (the messages' stamps, in stamp order) or receive (the bag's timestamps, in "
+                   "bag order)")
+      ->check(CLI::IsMember({"header", "receive"}))
+      ->capture_default_str();
 
   tactile_cli::EvaluateOptions evaluate;
   uint64_t evaluate_seed = 0;
@@ -374,6 +381,8 @@ int main(int argc, char** argv) {
                   evaluate.out_dir.c_str());
     } else if (*export_cmd) {
       exp.config_dir = config_dir;
+      exp.time = export_time == "receive" ? tactile_cli::ExportOptions::Time::kReceive
+                                          : tactile_cli::ExportOptions::Time::kHeader;
       const auto m = tactile_cli::run_export(exp);
       std::printf("tactile export: %s -> %s (%llu points, %.3f x %.3f m; summary %s)\n", exp.bag.c_str(),
                   exp.ply.c_str(), static_cast<unsigned long long>(m["points"].get<uint64_t>()),

@@ -1,6 +1,10 @@
 #include "tactile_cli/xplorer_export.hpp"
 
+#include <algorithm>
 #include <filesystem>
+#include <functional>
+#include <limits>
+#include <queue>
 #include <fstream>
 #include <stdexcept>
 
@@ -29,9 +33,17 @@ nlohmann::json run_export(const ExportOptions& o) {
                              XplorerForceEstLogic::kThrustTopic + ")");
   }
   Host host(o.config_dir);
-  host.executor().set_time(reader.start_time_ns());  // timers start at the bag's first message
-  auto map = add_xplorer_mapping(host, overrides({{"publish_rate_hz", 0.0}}));
+  // The nodes start (their timers' phase) at the replay clock's first time: the bag's
+  // first timestamp, or at the stamps the first stamp; started before the first message
+  // is delivered (or at the end if none decoded), so a bad parameter file still stops the
+  // export before anything is written.
+  std::shared_ptr<MapLogic> map;
   std::shared_ptr<XplorerForceEstLogic> force;
+  auto start_nodes = [&](int64_t t0) {
+    host.executor().set_time(t0);
+    map = add_xplorer_mapping(host, overrides({{"publish_rate_hz", 0.0}}));
+    if (!have_wrench) force = add_xplorer_force_est(host, {});
+  };
   std::vector<std::string> topics = {MapLogic::kOdometryTopic};
   if (reader.find_topic(MapLogic::kFsmStateTopic)) topics.push_back(MapLogic::kFsmStateTopic);
   if (have_wrench) {
@@ -39,7 +51,6 @@ nlohmann::json run_export(const ExportOptions& o) {
     // The arm angles place the slabs at the deflected outline (mapping edge_from_arms).
     if (reader.find_topic(MapLogic::kArmImuTopic)) topics.push_back(MapLogic::kArmImuTopic);
   } else {
-    force = add_xplorer_force_est(host, {});
     topics.insert(topics.end(), {XplorerForceEstLogic::kArmImuTopic, XplorerForceEstLogic::kImuTopic,
                                  XplorerForceEstLogic::kThrustTopic});
   }
@@ -48,32 +59,77 @@ nlohmann::json run_export(const ExportOptions& o) {
   uint64_t used = 0;
   uint64_t undecodable = 0;
   std::string first_error;
+  // Messages decoded and waiting for their replay time (ExportOptions::Time): ordered by
+  // (time, read order); only a window of bag time is held, so memory is bounded by the
+  // topics' rates, not by the bag.
+  struct Pending {
+    int64_t t;
+    uint64_t order;
+    std::function<void(int64_t)> publish;
+    bool operator>(const Pending& o) const { return t != o.t ? t > o.t : order > o.order; }
+  };
+  std::priority_queue<Pending, std::vector<Pending>, std::greater<>> pending;
+  uint64_t read_order = 0, late = 0;
+  int64_t replayed_ns = std::numeric_limits<int64_t>::min();
+  auto replay_until = [&](int64_t t_ns) {
+    while (!pending.empty() && pending.top().t <= t_ns) {
+      if (!map) start_nodes(o.time == ExportOptions::Time::kReceive ? reader.start_time_ns() : pending.top().t);
+      const int64_t t = std::max(pending.top().t, replayed_ns);
+      host.executor().run_until(t);  // mapping timer ticks up to this message
+      replayed_ns = t;
+      const auto publish = pending.top().publish;
+      pending.pop();
+      publish(t);
+      ++used;
+    }
+  };
+  auto hold = [&](const auto& msg, const std::string& topic) {
+    int64_t t = m.timestamp_ns;
+    if (o.time == ExportOptions::Time::kHeader) {
+      const int64_t stamp = tactile_common::from_stamp(msg.header.stamp);
+      if (stamp < replayed_ns) {
+        ++late;
+        t = replayed_ns;
+      } else {
+        t = stamp;
+      }
+    }
+    pending.push(Pending{t, read_order++, [&host, topic, msg](int64_t now) { host.bus().publish(topic, msg, now); }});
+  };
   while (reader.read_next(m)) {
-    host.executor().run_until(m.timestamp_ns);  // mapping timer ticks up to this message
-    const int64_t now = m.timestamp_ns;
     try {
       if (m.topic == MapLogic::kOdometryTopic) {
-        host.bus().publish(m.topic, tactile_bag::decode<nav_msgs::msg::Odometry>(m), now);
+        hold(tactile_bag::decode<nav_msgs::msg::Odometry>(m), m.topic);
       } else if (m.topic == MapLogic::kFsmStateTopic) {
-        host.bus().publish(m.topic, tactile_bag::decode<tactile_msgs::msg::FsmState>(m), now);
+        hold(tactile_bag::decode<tactile_msgs::msg::FsmState>(m), m.topic);
       } else if (m.topic == MapLogic::kWrenchBodyTopic) {
-        host.bus().publish(m.topic, tactile_bag::decode<geometry_msgs::msg::WrenchStamped>(m), now);
+        hold(tactile_bag::decode<geometry_msgs::msg::WrenchStamped>(m), m.topic);
       } else if (m.topic == XplorerForceEstLogic::kArmImuTopic) {
-        host.bus().publish(m.topic, tactile_bag::decode<tactile_msgs::msg::ArmImuArray>(m), now);
+        hold(tactile_bag::decode<tactile_msgs::msg::ArmImuArray>(m), m.topic);
       } else if (m.topic == XplorerForceEstLogic::kImuTopic) {
-        host.bus().publish(m.topic, tactile_bag::decode<sensor_msgs::msg::Imu>(m), now);
+        hold(tactile_bag::decode<sensor_msgs::msg::Imu>(m), m.topic);
       } else if (m.topic == XplorerForceEstLogic::kThrustTopic) {
-        host.bus().publish(m.topic, tactile_bag::decode<tactile_msgs::msg::ThrustCommand>(m), now);
+        hold(tactile_bag::decode<tactile_msgs::msg::ThrustCommand>(m), m.topic);
       }
     } catch (const tactile_bag::BagError& e) {
       // A corrupt message is dropped, counted and said (the map keeps the rest).
       if (undecodable++ == 0) first_error = e.what();
       continue;
     }
-    ++used;
+    // In bag order (receive): everything read so far; at the stamps: what is a window older
+    // than the bag's time, which no later message's stamp should precede.
+    replay_until(o.time == ExportOptions::Time::kReceive ? m.timestamp_ns
+                                                        : m.timestamp_ns - ExportOptions::kReorderWindowNs);
   }
+  replay_until(std::numeric_limits<int64_t>::max());
+  if (!map) start_nodes(reader.start_time_ns());  // nothing decoded: an empty map, said below
   warnings.add("corrupt_messages_dropped", undecodable,
                std::to_string(undecodable) + " message(s) that did not decode dropped (first: " + first_error + ")");
+  warnings.add("late_stamps_replayed_at_the_current_time", late,
+               std::to_string(late) + " message(s) stamped before what was already replayed (more than " +
+                   std::to_string(ExportOptions::kReorderWindowNs / 1'000'000) +
+                   " ms behind the bag's time): replayed at the current time");
+
   warnings.add_node_counters(host.reports());
   const auto r = map->finalize();
   mapping_pcl::PlyInfo info;
@@ -87,6 +143,7 @@ nlohmann::json run_export(const ExportOptions& o) {
   s["format"] = o.binary ? "binary_little_endian" : "ascii";
   s["wrench_source"] = have_wrench ? MapLogic::kWrenchBodyTopic : "xplorer_force_est (re-run)";
   s["messages"] = used;
+  s["time"] = o.time == ExportOptions::Time::kHeader ? "header" : "receive";
   s["slabs"] = map->mapper().stats().slabs;
   s["points"] = r.points;
   s["map_length_m"] = r.length;

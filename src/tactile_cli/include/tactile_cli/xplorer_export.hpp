@@ -5,6 +5,7 @@
 // the thrust command. Needs /odom.
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -19,6 +20,20 @@ struct ExportOptions {
   /// Where the summary goes as JSON (with its `warnings`): --metrics, default
   /// <ply without .ply>.metrics.json beside the map.
   std::string metrics;
+  /// The clock the messages are replayed on (--time):
+  ///  - kHeader (default): each message's header stamp, in stamp order. The data's own
+  ///    time: a `ros2 bag record` stores receive times, which lag the stamps by the
+  ///    recorder's delay (1-6 ms on /clock in SITL) and can swap messages of different
+  ///    topics; replayed at the stamps the map is the one the live mapper built.
+  ///    Messages are held in a reorder window of kReorderWindowNs of bag time; equal
+  ///    stamps keep the bag's order; one whose stamp is older than what was already
+  ///    replayed (more than the window late, or unset in a wall-clock bag) is replayed at
+  ///    the newest time replayed so far, counted as a warning.
+  ///  - kReceive: the bag's timestamps, in bag order (this workspace's own bags store
+  ///    the publish time, equal to the stamps).
+  enum class Time { kHeader, kReceive };
+  Time time = Time::kHeader;
+  static constexpr int64_t kReorderWindowNs = 500'000'000;
 };
 
 /// Returns a summary (messages used, source of the wrench, points, map
