@@ -21,7 +21,7 @@ RATE_TOPICS = {
     '/odom': ('nav_msgs/msg/Odometry', 100.0, 'stamp'),
     '/whisker/left/signal': ('tactile_msgs/msg/WhiskerSignal', 50.0, 'stamp'),
     '/whisker/right/signal': ('tactile_msgs/msg/WhiskerSignal', 50.0, 'stamp'),
-    '/cmd_hover': ('tactile_msgs/msg/HoverSetpoint', 50.0, 'wall'),
+    '/cmd_hover': ('tactile_msgs/msg/HoverSetpoint', 50.0, 'stamp'),  # the FSM steps on each depth (50 Hz)
     # status_rate_hz (config/crazyflie_bridge_health.yaml)
     '/status': ('tactile_msgs/msg/BridgeStatus', 5.0, 'stamp'),
 }

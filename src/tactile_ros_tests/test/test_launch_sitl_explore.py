@@ -13,7 +13,7 @@ RATE_TOPICS = {
     '/whisker/right/signal': ('tactile_msgs/msg/WhiskerSignal', 50.0, 'stamp'),
     '/whisker/depth': ('tactile_msgs/msg/TactileDepth', 50.0, 'stamp'),
     '/odom': ('nav_msgs/msg/Odometry', 100.0, 'stamp'),
-    '/cmd_hover': ('tactile_msgs/msg/HoverSetpoint', 50.0, 'wall'),  # 50 Hz timer
+    '/cmd_hover': ('tactile_msgs/msg/HoverSetpoint', 50.0, 'stamp'),  # 50 Hz timer, simulated time
 }
 # After every GPIS update / on transitions (gpis_explorer README).
 EVENT_TOPICS = {'/gpis/map': 'tactile_msgs/msg/GpisMap',

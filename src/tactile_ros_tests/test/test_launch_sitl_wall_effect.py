@@ -14,8 +14,8 @@ RATE_TOPICS = {
     '/odom': ('nav_msgs/msg/Odometry', 100.0, 'stamp'),
     '/ground_truth/wall': ('tactile_msgs/msg/WallEstimate', 100.0, 'stamp'),
     # EKF and wall following on their 100 Hz timers (004: 100 Hz ground station).
-    '/wall_effect/estimate': ('tactile_msgs/msg/WallEstimate', 100.0, 'wall'),
-    '/wall_effect/setpoint': ('nav_msgs/msg/Odometry', 100.0, 'wall'),
+    '/wall_effect/estimate': ('tactile_msgs/msg/WallEstimate', 100.0, 'stamp'),
+    '/wall_effect/setpoint': ('nav_msgs/msg/Odometry', 100.0, 'stamp'),
 }
 EVENT_TOPICS = {'/cmd_rotor_thrust': 'tactile_msgs/msg/ThrustCommand',
                 '/thrust_command': 'tactile_msgs/msg/ThrustCommand'}

@@ -25,7 +25,7 @@ RATE_TOPICS = {
     '/whisker/left/signal': ('tactile_msgs/msg/WhiskerSignal', 50.0, 'stamp'),
     '/whisker/right/signal': ('tactile_msgs/msg/WhiskerSignal', 50.0, 'stamp'),
     '/whisker/depth': ('tactile_msgs/msg/TactileDepth', 50.0, 'stamp'),
-    '/cmd_hover': ('tactile_msgs/msg/HoverSetpoint', 50.0, 'wall'),
+    '/cmd_hover': ('tactile_msgs/msg/HoverSetpoint', 50.0, 'stamp'),  # on each depth (50 Hz), simulated time
 }
 EVENT_TOPICS = {'/clock': 'rosgraph_msgs/msg/Clock', '/fsm_state': 'tactile_msgs/msg/FsmState'}
 

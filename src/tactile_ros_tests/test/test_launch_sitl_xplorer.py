@@ -16,7 +16,7 @@ RATE_TOPICS = {
     # One force estimate per arm-IMU sample (xplorer_force_est README).
     '/xplorer/wrench': ('geometry_msgs/msg/WrenchStamped', 50.0, 'stamp'),
     '/xplorer/wrench_body': ('geometry_msgs/msg/WrenchStamped', 50.0, 'stamp'),
-    '/cmd_position': ('geometry_msgs/msg/PoseStamped', 50.0, 'wall'),  # 50 Hz FSM timer
+    '/cmd_position': ('geometry_msgs/msg/PoseStamped', 50.0, 'stamp'),  # 50 Hz FSM timer, simulated time
 }
 EVENT_TOPICS = {'/xplorer/fsm_state': 'tactile_msgs/msg/FsmState',
                 '/xplorer/map': 'sensor_msgs/msg/PointCloud2'}  # 1 Hz, once there are contacts

@@ -15,8 +15,9 @@ that reason, where it has none (the Jazzy toolchain).
    run, replayed by `tactile replay`: its metrics equal those of `tactile sim` of the same
    scenario and seed over the same span of simulated time, within the tolerances below;
    and of a SITL XPLORER graph, exported by `tactile export`: at the header stamps (its
-   default), the map the graph's own mapper wrote in that run (with `--time receive`, at
-   rosbag2's receive times: a known difference, non-strict xfail).
+   default) the same map as the recording's header-stamped copy, and at the stamps or at
+   rosbag2's receive times, within the live graph's own run-to-run spread of the map its
+   mapper wrote in that run.
 3. `ros2 bag convert` of our bags, mcap -> sqlite3 (message zstd), sqlite3 -> mcap
    (file zstd), zstd chunks -> sqlite3, replayed by `tactile replay` with the original's
    metrics exactly.
@@ -61,12 +62,17 @@ GRAPHS = {
 }
 SIM_SECONDS = 1.5
 # The player publishes with the QoS our bags record (reliable, volatile) and its default
-# keep-last depth, at PLAY_RATE times the recorded pace.
+# keep-last depth, at PLAY_RATE times the recorded pace. A reliable keep-last writer drops
+# its oldest unacknowledged samples when a reader falls that far behind: on a loaded
+# 2-core runner the rclpy probe lost 20 of 751 /imu (500 Hz) and 1 of 151 /ground_truth/odom
+# at rate 1.0 (2026-11-29). Hence half speed, and one more play of the bag when a run only
+# lost messages (fewer on some topics, none extra, every one decoded): the exact count is
+# then required of the second play.
 # (`--qos-profile-overrides-path` cannot be used with this toolchain: ros2bag hands
 # rosbag2_py an rclpy QoS profile, and the two pybind11 modules, built against different
 # pybind11 releases, do not share the type: "Unable to cast Python instance of type
 # rmw_qos_profile_t".)
-PLAY_RATE = 1.0
+PLAY_RATE = 0.5
 # Where a log line of rosbag2 says something is wrong (its INFO lines are fine).
 BAD_STDERR = re.compile(r'\b(WARN|WARNING|ERROR|FATAL)\b|Exception|Traceback|Failed|failed', re.I)
 
@@ -198,16 +204,9 @@ def play_and_count(bag: Path, types: dict[str, str], expected: dict[str, int], t
         # Started paused, resumed once every subscription has matched the player's writer
         # (the subscription-matched event): a new process's DDS participant takes a while
         # to be discovered, and what it publishes before its writers matched is lost.
-        # Every topic played reliable with its whole history kept: the player otherwise
-        # offers the QoS the bag recorded (best effort for the sensor topics), and a loaded
-        # CI runner then loses a message now and then (seen: 150 of 151 /ground_truth/odom,
-        # 731 of 751 /imu), which says nothing about the bag. The count must be exact.
-        overrides = tmp / 'play_qos_overrides.yaml'
-        overrides.write_text(''.join(
-            f'{t}:\n  reliability: reliable\n  history: keep_all\n  durability: volatile\n' for t in types))
         play = subprocess.Popen(
             ['ros2', 'bag', 'play', str(bag), '--disable-keyboard-controls', '--progress-bar-update-rate', '0',
-             '--start-paused', '--rate', str(PLAY_RATE), '--qos-profile-overrides-path', str(overrides)],
+             '--start-paused', '--rate', str(PLAY_RATE)],
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
         try:
             g.spin_until(lambda: play.poll() is not None or all(n > 0 for n in matched.values()),
@@ -246,6 +245,10 @@ def test_ros2_bag_info_and_play_of_our_bag(case, our_bags, tmp_path):
     humble_layout = case.endswith(('-humble', '-iron'))
     received, undecoded, play_err, rc = play_and_count(bag, types, expected, tmp_path, humble_layout)
     assert rc == 0, f'{case}: ros2 bag play exit {rc}:\n{play_err}'
+    if received != expected and not undecoded and all(received[t] <= n for t, n in expected.items()):
+        print(f'{case}: first play lost messages on a loaded runner ({received}); playing again')
+        received, undecoded, play_err, rc = play_and_count(bag, types, expected, tmp_path, humble_layout)
+        assert rc == 0, f'{case}: ros2 bag play exit {rc}:\n{play_err}'
     assert received == expected, f'{case}: received {received}, bag {expected}'
     assert not undecoded, f'{case}: messages that do not deserialize: ' + \
         '; '.join(f'{t}: {len(v)} ({v[0]})' for t, v in undecoded.items())
@@ -519,10 +522,16 @@ XPLORER_TOPICS = {'/odom': 'nav_msgs/msg/Odometry', '/xplorer/wrench_body': 'geo
                   '/arm_imu': 'tactile_msgs/msg/ArmImuArray', '/xplorer/fsm_state': 'tactile_msgs/msg/FsmState'}
 XPLORER_SECONDS = 10.0  # the wall traversal follows the wall from ~5 s: ~8000 map points by 10 s
 # The graph's own mapper (xplorer_mapping, ply_file, written at shutdown) and `tactile
-# export` of the recording map the same flight: extents within 1 cm; point counts within
-# 6 % (measured: the export has 4.5 % more points than the live map at the same extents).
+# export` of the recording map the same flight. The live graph is not deterministic: whether
+# the mapper stamps one more slab as contact ends depends on the DDS timing of the run, and
+# its map's extent along the wall was 0.286 m in five runs and 0.323 m in a sixth
+# (2026-11-29, the same scenario; the exports at receive times gave 0.286 or 0.324 m),
+# while the exports of one recording are deterministic.
+# Hence: the export at the stamps equals the export of the header-stamped copy point for
+# point, and every export is within the live graph's spread of its map (extent 5 cm,
+# points 6 %: measured, the export has up to 4.5 % more or 4.1 % fewer points).
 POINT_TOLERANCE = 0.06
-EXTENT_TOLERANCE_M = 0.01
+EXTENT_TOLERANCE_M = 0.05
 
 
 def ply_points(path: Path):
@@ -585,7 +594,8 @@ def assert_same_map(exported, live, what):
 
 def test_ros2_bag_record_of_sitl_xplorer_is_exported(xplorer_recording):
     """The recording (info clean, every topic) exports without warnings; at its header
-    stamps (the default) it gives the graph's own map, as its header-stamped copy does."""
+    stamps (the default) exactly as its header-stamped copy, and, at the stamps or at the
+    recorder's receive times, within the live graph's spread of the graph's own map."""
     _, per_topic, stderr = bag_info(xplorer_recording['bag'])
     assert not bad_lines(stderr), stderr
     assert set(per_topic) == set(XPLORER_TOPICS) and all(per_topic.values()), per_topic
@@ -593,15 +603,11 @@ def test_ros2_bag_record_of_sitl_xplorer_is_exported(xplorer_recording):
         assert xplorer_recording[name + '_summary']['warnings'] == [], xplorer_recording[name + '_summary']
         assert xplorer_recording[name + '_summary']['wrench_source'] == '/xplorer/wrench_body'
     assert xplorer_recording['export_summary']['time'] == 'header'
+    assert xplorer_recording['export_receive_summary']['time'] == 'receive'
+    stamped, copy = xplorer_recording['export'], xplorer_recording['export_header_stamped']
+    assert stamped == copy, (f'export at the stamps: {len(stamped)} points, of the header-stamped copy '
+                             f'{len(copy)}; first difference at point '
+                             f'{next((i for i, (a, b) in enumerate(zip(stamped, copy)) if a != b), min(len(stamped), len(copy)))}')
     assert_same_map(xplorer_recording['export'], xplorer_recording['live'], 'rosbag2 recording at its stamps')
-    assert_same_map(xplorer_recording['export_header_stamped'], xplorer_recording['live'], 'header-stamped copy')
-
-
-@pytest.mark.xfail(strict=False, reason=(
-    '`tactile export --time receive` replays at the bag\'s timestamps; `ros2 bag record '
-    '--use-sim-time` stores receive times on its /clock, ~1 ms behind the header stamps (up to '
-    '6 ms), and in 4 of 5 runs (2026-11-29) the mapper then extended the map along the wall: '
-    '0.324 m vs the graph\'s 0.286 m. Hence the default --time header (test above). Not strict: '
-    'it depends on the recorder\'s /clock lag in the run'))
-def test_ros2_bag_record_of_sitl_xplorer_exports_the_graphs_map_at_receive_times(xplorer_recording):
-    assert_same_map(xplorer_recording['export_receive'], xplorer_recording['live'], 'rosbag2 recording at receive times')
+    assert_same_map(xplorer_recording['export_receive'], xplorer_recording['live'],
+                    'rosbag2 recording at receive times')
