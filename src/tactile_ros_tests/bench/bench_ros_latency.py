@@ -12,8 +12,13 @@ and receives /whisker/depth and /cmd_hover.
   latency pressure -> depth: receipt of /whisker/depth - its stamp (the pressure pair's
       send time). Event driven: DDS in, TDORC, two signal hops, depth, DDS out.
   latency pressure -> setpoint: receipt of /cmd_hover - send time of the newest pressure
-      pair sent before the FSM tick that produced it (its stamp). Includes the phase of the
-      FSM's 50 Hz timer (0-20 ms, mean ~10 ms): the FSM acts on the latest depth each tick.
+      pair sent before the FSM tick that produced it (its stamp), each pair counted once
+      (at the first setpoint after it). The FSM steps on each depth's arrival (event
+      driven, a 50 Hz watchdog when depth stops); a timer-driven FSM adds its timer's
+      phase (0-20 ms, mean ~10 ms).
+  latency pressure -> FSM step: the setpoint's stamp (the FSM's clock when it stepped, the
+      same wall clock here) - the same pair's send time: the pipeline up to the decision,
+      without the DDS hop of /cmd_hover back to this script.
   CPU: user+system time of the container process(es) over the window (/proc/<pid>/stat),
       in % of one core; per node in the one-container-per-node variant.
 
@@ -132,13 +137,15 @@ def run_variant(label: str, intra: bool, separate: bool, seconds: float, warmup:
             for s in ('left', 'right')]
     odom_pub = node.create_publisher(Odometry, '/odom', qos_profile_sensor_data)
     sent = []  # send times [ns], also the stamps
-    depth_lat, setpoint_lat = [], []
+    depth_lat, setpoint_lat, step_lat = [], [], []
     lock = threading.Lock()
     recording = threading.Event()
 
     def on_depth(m):
         if recording.is_set():
             depth_lat.append(time.time_ns() - (m.header.stamp.sec * 10**9 + m.header.stamp.nanosec))
+
+    answered = set()  # send times of the pressure pairs a setpoint already answered
 
     def on_setpoint(m):
         if not recording.is_set():
@@ -147,8 +154,13 @@ def run_variant(label: str, intra: bool, separate: bool, seconds: float, warmup:
         tick = m.header.stamp.sec * 10**9 + m.header.stamp.nanosec
         with lock:
             before = [s for s in sent[-10:] if s <= tick]
-        if before:
+        # Each pair counts once, at the first setpoint of a tick after it: a later tick
+        # with no newer pair (the event-driven FSM's watchdog, or a second tick of a timer
+        # faster than the pairs) answers nothing new.
+        if before and before[-1] not in answered:
+            answered.add(before[-1])
             setpoint_lat.append(now - before[-1])
+            step_lat.append(tick - before[-1])
 
     node.create_subscription(TactileDepth, '/whisker/depth', on_depth, qos_profile_sensor_data)
     node.create_subscription(HoverSetpoint, '/cmd_hover', on_setpoint, 10)
@@ -238,6 +250,7 @@ def run_variant(label: str, intra: bool, separate: bool, seconds: float, warmup:
     return {'variant': label, 'intra_process': intra, 'one_container_per_node': separate,
             'seconds': dt, 'load_1min_at_start': load0,
             'pressure_to_depth': stats(depth_lat), 'pressure_to_setpoint': stats(setpoint_lat),
+            'pressure_to_fsm_step': stats(step_lat),
             'cpu_percent_of_one_core': cpu, 'cpu_percent_total': sum(cpu.values())}
 
 
@@ -255,11 +268,12 @@ def main(argv=None) -> int:
         intra, separate = variants[name]
         r = run_variant(name, intra, separate, a.seconds, a.warmup)
         results.append(r)
-        d, s = r['pressure_to_depth'], r['pressure_to_setpoint']
+        d, s, k = r['pressure_to_depth'], r['pressure_to_setpoint'], r['pressure_to_fsm_step']
         print(f"{name:9s} depth: mean {d.get('mean_ms', float('nan')):.2f} p50 {d.get('p50_ms', float('nan')):.2f} "
               f"p99 {d.get('p99_ms', float('nan')):.2f} ms (n={d['n']}); setpoint: mean "
               f"{s.get('mean_ms', float('nan')):.2f} p50 {s.get('p50_ms', float('nan')):.2f} "
-              f"p99 {s.get('p99_ms', float('nan')):.2f} ms (n={s['n']}); CPU "
+              f"p99 {s.get('p99_ms', float('nan')):.2f} ms (n={s['n']}); FSM step: p50 "
+              f"{k.get('p50_ms', float('nan')):.2f} p99 {k.get('p99_ms', float('nan')):.2f} ms; CPU "
               + ', '.join(f'{k} {v:.1f}%' for k, v in r['cpu_percent_of_one_core'].items())
               + f"; load {r['load_1min_at_start']:.1f}", flush=True)
     if a.json:
