@@ -1,6 +1,7 @@
 // rclcpp side of the parameter bridge: declares every parameter a node logic
-// reads (with the logic's defaults) on an rclcpp::Node and returns the values
-// as a ParamMap. Header-only and included only by rclcpp components, so the
+// reads (with the logic's defaults and descriptors) on an rclcpp::Node and returns
+// the values as a ParamMap; NodeParameters adds the on-set callback that applies a
+// live key through the logic or refuses the set with the reason. Header-only and included only by rclcpp components, so the
 // ROS-free build never sees rclcpp.
 #pragma once
 
@@ -205,15 +206,6 @@ std::string parameter_source(const NodeT& node) {
          (files.empty() ? std::string(" (launch or -p overrides)") : " (" + files + ")");
 }
 
-/// Declares every parameter of `defaults` on `node` and returns the values the
-/// node was started with (launch file / --params-file overrides included).
-/// Every key remembers where its value came from (ParameterOrigins), so any
-/// ParamError about it — a wrong type here, an invalid value in the node
-/// logic — names the node, the file (or launch override), the key and the
-/// reason. A value of the wrong type names the type it has and the type it
-/// needs, e.g. "52.0e9" (a string to YAML 1.1, which the launch system's parser
-/// follows: write 52.0e+9).
-/// NodeT: rclcpp::Node or rclcpp_lifecycle::LifecycleNode.
 /// The descriptor `ros2 param describe` shows for `key`: its ParamInfo's description and
 /// unit, its range as a FloatingPointRange / IntegerRange (closed hull; an open end and the
 /// live/read-only rule in additional_constraints), read_only unless `live`.
@@ -270,6 +262,15 @@ inline std::string range_reason(const ParamInfo* info, const rclcpp::ParameterVa
   return "must be in " + info->range->text() + ", got " + given.str();
 }
 
+/// Declares every parameter of `defaults` on `node` and returns the values the
+/// node was started with (launch file / --params-file overrides included).
+/// Every key remembers where its value came from (ParameterOrigins), so any
+/// ParamError about it — a wrong type here, an invalid value in the node
+/// logic — names the node, the file (or launch override), the key and the
+/// reason. A value of the wrong type names the type it has and the type it
+/// needs, e.g. "52.0e9" (a string to YAML 1.1, which the launch system's parser
+/// follows: write 52.0e+9).
+/// NodeT: rclcpp::Node or rclcpp_lifecycle::LifecycleNode.
 /// The keys of `defaults` a node applies while running are those whose ParamInfo is live,
 /// and only when `live_keys` is true (NodeParameters with an apply function); every other
 /// key is declared read-only.
