@@ -1,4 +1,4 @@
-// Test helpers for the parameters of a node logic (header-only, no test framework):
+// Test utilities for the parameters of a node logic (header-only, no test framework):
 // each integer parameter set to a value an int would wrap; each described range probed
 // just outside its ends.
 #pragma once
