@@ -41,17 +41,43 @@ void BridgeHealth::Params::validate() const {
 }
 
 ParamMap BridgeHealth::default_parameters() {
+  using tactile_common::closed;
+  using tactile_common::ParamRange;
+  using tactile_common::positive;
   const Params d;
   ParamMap m(kNodeName, "defaults");
-  m.set("status_rate_hz", d.status_rate_hz);
-  m.set("diagnostics_period_s", d.diagnostics_period_s);
-  m.set("battery_warn_v", d.battery_warn_v);
-  m.set("battery_error_v", d.battery_error_v);
-  m.set("link_quality_warn", d.link_quality_warn);
-  m.set("link_quality_error", d.link_quality_error);
-  m.set("log_age_warn_s", d.log_age_warn_s);
-  m.set("log_age_error_s", d.log_age_error_s);
+  // The parameter spec of the health thresholds (README "Parameters"): value, description,
+  // unit, the range validate() accepts (the warn/error order is checked there), and live:
+  // the six thresholds are compared per evaluation, so they apply while running; the two
+  // rates set up timers at start.
+  m.set("status_rate_hz", d.status_rate_hz, {"rate of the `status` topic", "Hz", positive(), false});
+  m.set("diagnostics_period_s", d.diagnostics_period_s,
+        {"/diagnostics period (diagnostic_updater's default 1 s)", "s", positive(), false});
+  m.set("battery_warn_v", d.battery_warn_v,
+        {"battery WARN below this (crazyflie-firmware pm.h PM_BAT_LOW_VOLTAGE 3.2 V); above battery_error_v", "V",
+         positive(), true});
+  m.set("battery_error_v", d.battery_error_v,
+        {"battery ERROR below this (crazyflie-firmware pm.h PM_BAT_CRITICAL_LOW_VOLTAGE 3.0 V)", "V", positive(),
+         true});
+  m.set("link_quality_warn", d.link_quality_warn,
+        {"link WARN below this ACK rate (our choice, README)", "", ParamRange{0.0, 1.0, true, false}, true});
+  m.set("link_quality_error", d.link_quality_error,
+        {"link ERROR below this ACK rate; below link_quality_warn", "", positive(), true});
+  m.set("log_age_warn_s", d.log_age_warn_s,
+        {"log stream WARN when the newest log packet is older (5 log periods); below log_age_error_s", "s",
+         positive(), true});
+  m.set("log_age_error_s", d.log_age_error_s,
+        {"log stream ERROR when it is older (the bridge's log_timeout_s default, where it holds hover)", "s",
+         positive(), true});
   return m;
+}
+
+BridgeHealth::Params BridgeHealth::live_update(const Params& current, const Params& next) {
+  next.validate();
+  if (next.status_rate_hz != current.status_rate_hz || next.diagnostics_period_s != current.diagnostics_period_s) {
+    throw std::invalid_argument("BridgeHealth.live_update: status_rate_hz and diagnostics_period_s are read at start");
+  }
+  return next;
 }
 
 BridgeHealth::Params BridgeHealth::params_from(const ParamMap& m) {

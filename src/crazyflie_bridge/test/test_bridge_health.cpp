@@ -5,8 +5,10 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "crazyflie_bridge/bridge_health.hpp"
+#include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/parameters.hpp"
 
 namespace crazyflie_bridge {
@@ -201,6 +203,39 @@ TEST(BridgeHealth, RepositoryConfigIsTheDefaults) {
   EXPECT_EQ(p.link_quality_error, d.link_quality_error);
   EXPECT_EQ(p.log_age_warn_s, d.log_age_warn_s);
   EXPECT_EQ(p.log_age_error_s, d.log_age_error_s);
+}
+
+// The parameter spec: every key described, no described range wider than validate()'s,
+// the six thresholds live and the two rates read at start.
+TEST(BridgeHealth, EveryParameterIsDescribedAndTheThresholdsAreLive) {
+  const tactile_common::ParamMap d = BridgeHealth::default_parameters();
+  EXPECT_TRUE(tactile_common::undescribed(d).empty());
+  for (const auto& leak :
+       tactile_common::range_leaks(d, [](const tactile_common::ParamMap& m) { BridgeHealth::params_from(m); })) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
+  }
+  std::vector<std::string> live;
+  for (const auto& [key, info] : d.infos()) {
+    if (info.live) live.push_back(key);
+  }
+  EXPECT_EQ(live, (std::vector<std::string>{"battery_error_v", "battery_warn_v", "link_quality_error",
+                                            "link_quality_warn", "log_age_error_s", "log_age_warn_s"}));
+}
+
+// A new threshold changes the next evaluation; a rate change or an invalid order is refused.
+TEST(BridgeHealth, LiveUpdateAppliesThresholdsAndRefusesRatesAndInvalidValues) {
+  const BridgeHealth::Params current;
+  BridgeHealth::Params next = current;
+  next.battery_warn_v = 4.0;  // 3.9 V is now low
+  const auto applied = BridgeHealth::live_update(current, next);
+  EXPECT_EQ(check(BridgeHealth::evaluate(applied, healthy()), "battery").level, Level::kWarn);
+  EXPECT_EQ(check(BridgeHealth::evaluate(current, healthy()), "battery").level, Level::kOk);
+  next = current;
+  next.status_rate_hz = 10.0;
+  EXPECT_THROW(BridgeHealth::live_update(current, next), std::invalid_argument);
+  next = current;
+  next.battery_error_v = 3.5;  // above battery_warn_v 3.2
+  EXPECT_THROW(BridgeHealth::live_update(current, next), std::invalid_argument);
 }
 
 }  // namespace

@@ -213,6 +213,18 @@ TEST(BridgeLogic, ParametersDefaultsAndValidation) {
   EXPECT_THROW(CrazyflieBridgeLogic::params_from(bad), tactile_common::ParamError);
 }
 
+// The flight parameters' spec: every key described, no described range wider than what
+// params_from()/validate() accept, none live.
+TEST(BridgeLogic, EveryParameterIsDescribedWithTheRangeValidateAcceptsAndNoneIsLive) {
+  const tactile_common::ParamMap d = CrazyflieBridgeLogic::default_parameters();
+  EXPECT_TRUE(tactile_common::undescribed(d).empty());
+  for (const auto& leak : tactile_common::range_leaks(
+           d, [](const tactile_common::ParamMap& m) { CrazyflieBridgeLogic::params_from(m); })) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
+  }
+  for (const auto& [key, info] : d.infos()) EXPECT_FALSE(info.live) << key;
+}
+
 // The log periods are u16 on the link (start_block_v2): every integer
 // parameter set to its default + 2^32 (65536 + 20 would be 20 as a u16 too) is
 // rejected with its key and the value as given, not a message for both keys.

@@ -202,6 +202,38 @@ ParamMap::ParamMap(std::string node, std::string source)
 
 void ParamMap::set(const std::string& key, ParamValue value) { values_[key] = std::move(value); }
 
+void ParamMap::set(const std::string& key, ParamValue value, ParamInfo info) {
+  if (info.range && !(info.range->lo <= info.range->hi)) {
+    throw std::logic_error("ParamMap::set(\"" + key + "\"): empty range " + info.range->text());
+  }
+  values_[key] = std::move(value);
+  info_[key] = std::move(info);
+}
+
+const ParamInfo* ParamMap::info(const std::string& key) const {
+  const auto it = info_.find(key);
+  return it == info_.end() ? nullptr : &it->second;
+}
+
+namespace {
+
+std::string bound_text(double v) {
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  std::ostringstream out;
+  out << v;
+  return out.str();
+}
+
+}  // namespace
+
+std::string ParamRange::text() const {
+  return std::string(open_lo ? "(" : "[") + bound_text(lo) + ", " + bound_text(hi) + (open_hi ? ")" : "]");
+}
+
+bool ParamRange::contains(double v) const {
+  return (open_lo ? v > lo : v >= lo) && (open_hi ? v < hi : v <= hi);
+}
+
 bool ParamMap::has(const std::string& key) const { return values_.count(key) != 0; }
 
 const std::string& ParamMap::origin(const std::string& key) const {

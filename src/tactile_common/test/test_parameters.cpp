@@ -5,6 +5,8 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <string>
+#include <vector>
 
 #include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/parameters.hpp"
@@ -367,4 +369,47 @@ TEST(IntegerParameters, WrappedIntegersTellAnUncheckedNarrowingFromACheckedRead)
   const auto after = tactile_common::wrapped_integers(d, checked);
   EXPECT_EQ(after.at("window").error, "defaults: n.ros__parameters.window: must be in [1, 100], got 4294967306");
   EXPECT_TRUE(after.at("window").rejected_as_given());
+}
+
+// ParamInfo: kept beside the value (and through a copy, as load_node_parameters copies the
+// defaults); ranges print as validate() messages do and exclude open ends.
+TEST(ParamInfo, RangesPrintAndContainAsDescribed) {
+  using tactile_common::ParamRange;
+  EXPECT_EQ(tactile_common::closed(2, 100000).text(), "[2, 100000]");
+  EXPECT_EQ(tactile_common::positive().text(), "(0, inf)");
+  EXPECT_EQ(tactile_common::at_least(0.5).text(), "[0.5, inf)");
+  EXPECT_EQ((ParamRange{0.0, 1.0, false, true}).text(), "[0, 1)");
+  EXPECT_FALSE(tactile_common::positive().contains(0.0));
+  EXPECT_TRUE(tactile_common::positive().contains(1e-300));
+  EXPECT_FALSE(tactile_common::positive().contains(std::numeric_limits<double>::infinity()));
+  EXPECT_FALSE(tactile_common::positive().contains(std::numeric_limits<double>::quiet_NaN()));
+  EXPECT_TRUE(tactile_common::closed(2, 5).contains(5));
+  EXPECT_FALSE((ParamRange{0.0, 1.0, false, true}).contains(1.0));
+
+  tactile_common::ParamMap m("n", "defaults");
+  m.set("gain", 1.0, {"controller gain", "1/s", tactile_common::positive(), true});
+  m.set("frame", std::string("base"));
+  const tactile_common::ParamMap copy = m;
+  ASSERT_NE(copy.info("gain"), nullptr);
+  EXPECT_EQ(copy.info("gain")->unit, "1/s");
+  EXPECT_TRUE(copy.info("gain")->live);
+  EXPECT_EQ(copy.info("frame"), nullptr);
+  EXPECT_EQ(tactile_common::undescribed(copy), std::vector<std::string>{"frame"});
+  EXPECT_THROW(m.set("bad", 1.0, {"empty", "", tactile_common::closed(2, 1), false}), std::logic_error);
+}
+
+// range_leaks finds a described range narrower than what params_from accepts:
+// a value just outside it that params_from takes.
+TEST(ParamInfo, RangeLeaksFindsADescribedRangeNarrowerThanTheCheck) {
+  tactile_common::ParamMap d("n", "defaults");
+  d.set("window", int64_t{5}, {"samples", "samples", tactile_common::closed(2, 10), false});
+  d.set("gain", 1.0, {"gain", "", tactile_common::positive(), false});
+  const auto checked = [](const tactile_common::ParamMap& m) {
+    m.get_int("window", 1, 10);  // takes 1: the description's 2 is too narrow
+    if (!(m.get_double("gain") > 0.0)) throw m.error("gain", "must be > 0");
+  };
+  const auto leaks = tactile_common::range_leaks(d, checked);
+  ASSERT_EQ(leaks.size(), 1u);
+  EXPECT_EQ(leaks[0].key, "window");
+  EXPECT_EQ(leaks[0].value, 1.0);
 }

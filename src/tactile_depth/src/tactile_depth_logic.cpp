@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -53,23 +54,64 @@ void TactileDepthLogic::Params::validate() const {
 }
 
 ParamMap TactileDepthLogic::default_parameters() {
+  using tactile_common::closed;
+  using tactile_common::ParamRange;
+  using tactile_common::positive;
   const tactile_depth::Params d;
+  const double kInf = std::numeric_limits<double>::infinity();
+  const double kSlip = TactileDepthEstimator::kMaxSlipWindow;
   ParamMap m(kNodeName, "defaults");
-  m.set("model_file", std::string("default_model.json"));
-  m.set("estimator", std::string(to_string(d.model)));
-  m.set("kf.q_mm2", d.q_mm2);                        // 000 eq. 27, onboard Q = 0.01 mm^2
-  m.set("kf.r_mm2", d.r_mm2);                        // 000 eq. 28, onboard R = 1 mm^2
-  m.set("kf.p0_mm2", d.p0_mm2);                      // onboard P0 = 50 mm^2
-  m.set("kf.slip_fraction", d.slip_fraction);        // issue 17 slip gate (README "Slip gate"); 0 = off
-  m.set("kf.slip_window_samples", static_cast<int64_t>(d.slip_window_samples));
-  m.set("kf.slip_r_mm2", d.slip_r_mm2);
-  m.set("kf.slip_max_samples", static_cast<int64_t>(d.slip_max_samples));
-  m.set("kf.saturation_sum_pa", d.saturation_sum_pa);  // issue 17 (README "Saturated contact"); 0 = off
-  m.set("kf.saturation_r_mm2", d.saturation_r_mm2);
-  m.set("whisker_spacing", d.whisker_spacing);       // 000 eq. 22, s = 0.05 m
-  m.set("whisker_base_x", d.whisker_base_x);
-  m.set("max_input_age_s", Params{}.max_input_age_s);
+  // The node's parameter spec (README "Parameters"): value, description (from the Params
+  // comments), unit, the range params_from()/validate() accept, live or read at start.
+  // Live: max_input_age_s (a staleness threshold compared per message). The estimator's
+  // noise and gates set up its Kalman filters at start.
+  m.set("model_file", std::string("default_model.json"),
+        {"MLP model file (JSON; a bare name is looked up in share/tactile_depth/models)", "", {}, false});
+  m.set("estimator", std::string(to_string(d.model)),
+        {"depth estimator: mlp, kf_simplified or kf_full (000 eq. 23-28)", "", {}, false});
+  m.set("kf.q_mm2", d.q_mm2, {"Q, process noise of one 50 Hz step (000 eq. 27; onboard 0.01)", "mm^2", positive(), false});
+  m.set("kf.r_mm2", d.r_mm2, {"R, measurement noise of the MLP depth (000 eq. 28; onboard 1)", "mm^2", positive(), false});
+  m.set("kf.p0_mm2", d.p0_mm2, {"P0, variance at initialisation (onboard 50)", "mm^2", positive(), false});
+  m.set("kf.slip_fraction", d.slip_fraction,
+        {"slip gate (issue 17, README \"Slip gate\"): input sum below this fraction of its recent maximum "
+         "is updated with slip_r_mm2; 0: off", "", ParamRange{0.0, 1.0, false, true}, false});
+  m.set("kf.slip_window_samples", static_cast<int64_t>(d.slip_window_samples),
+        {"ticks over which that maximum is taken", "samples", closed(1, kSlip), false});
+  m.set("kf.slip_r_mm2", d.slip_r_mm2, {"R of a slipping whisker's update", "mm^2", positive(), false});
+  m.set("kf.slip_max_samples", static_cast<int64_t>(d.slip_max_samples),
+        {"a whisker is gated for at most this many consecutive ticks; 0: no limit", "samples", closed(0, kSlip), false});
+  m.set("kf.saturation_sum_pa", d.saturation_sum_pa,
+        {"saturated contact (issue 17, README \"Saturated contact\"): both input sums at or above this keep "
+         "the wall angle and use saturation_r_mm2; 0: off", "Pa", ParamRange{0.0, kInf, false, true}, false});
+  m.set("kf.saturation_r_mm2", d.saturation_r_mm2, {"R of a saturated update", "mm^2", positive(), false});
+  m.set("whisker_spacing", d.whisker_spacing,
+        {"s, lateral distance between the two whisker bases (000 eq. 22: 0.05 m)", "m", positive(), false});
+  m.set("whisker_base_x", d.whisker_base_x,
+        {"x of the whisker bases in the body frame (our choice, as the simulator's whiskered Crazyflie); finite",
+         "m", {}, false});
+  m.set("max_input_age_s", Params{}.max_input_age_s,
+        {"a whisker sample waits at most this long for its partner; older odometry is stale (our choice: "
+         "5 samples at 50 Hz)", "s", positive(), true});
   return m;
+}
+
+void TactileDepthLogic::set_params(const Params& params) {
+  params.validate();
+  // Only the live key (max_input_age_s) may differ: the estimator's Kalman filters and
+  // the model were set up at start.
+  Params expected = params_;
+  expected.max_input_age_s = params.max_input_age_s;
+  const auto& a = expected.estimator;
+  const auto& b = params.estimator;
+  if (a.model != b.model || a.q_mm2 != b.q_mm2 || a.r_mm2 != b.r_mm2 || a.p0_mm2 != b.p0_mm2 ||
+      a.slip_fraction != b.slip_fraction || a.slip_window_samples != b.slip_window_samples ||
+      a.slip_r_mm2 != b.slip_r_mm2 || a.slip_max_samples != b.slip_max_samples ||
+      a.saturation_sum_pa != b.saturation_sum_pa || a.saturation_r_mm2 != b.saturation_r_mm2 ||
+      a.whisker_spacing != b.whisker_spacing || a.whisker_base_x != b.whisker_base_x ||
+      expected.model_file != params.model_file) {
+    throw std::invalid_argument("TactileDepthLogic.set_params: only max_input_age_s may change while running");
+  }
+  params_.max_input_age_s = params.max_input_age_s;
 }
 
 std::string TactileDepthLogic::resolve_model_file(const std::string& name) {

@@ -5,8 +5,11 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <string>
 #include <unistd.h>
+#include <vector>
 
+#include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/time.hpp"
 #include "tactile_depth/tactile_depth_logic.hpp"
 #include "test_models.hpp"
@@ -314,4 +317,51 @@ TEST(TactileDepthLogic, ShippedDefaultModelFollowsTheContract) {
   EXPECT_EQ(f.left.layers().back().out, 1);
   EXPECT_TRUE(std::isfinite(f.right.predict({{30.0, 5.0, -3.0}})));
   EXPECT_EQ(f.input_signal, tactile_depth::InputSignal::kCalibrated);  // README "Input signal"
+}
+
+// The parameter spec: every key described, no described range wider than what
+// params_from()/validate() accept, and max_input_age_s the only live key.
+TEST(TactileDepthLogic, EveryParameterIsDescribedWithTheRangeValidateAccepts) {
+  namespace fs = std::filesystem;
+  const fs::path model = fs::temp_directory_path() / ("tactile_depth_spec_" + std::to_string(::getpid()) + ".json");
+  std::ofstream(model) << test_models::model_json(test_models::linear_mlp(), test_models::linear_mlp());
+  tactile_common::ParamMap d = TactileDepthLogic::default_parameters();
+  EXPECT_TRUE(tactile_common::undescribed(d).empty());
+  d.set("model_file", model.string());
+  ASSERT_NO_THROW(TactileDepthLogic::params_from(d));  // else every probe below is refused for the file
+  for (const auto& leak :
+       tactile_common::range_leaks(d, [](const tactile_common::ParamMap& m) { TactileDepthLogic::params_from(m); })) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
+  }
+  std::vector<std::string> live;
+  for (const auto& [key, info] : d.infos()) {
+    if (info.live) live.push_back(key);
+  }
+  EXPECT_EQ(live, std::vector<std::string>{"max_input_age_s"});
+  fs::remove(model);
+}
+
+// max_input_age_s applies from the next message: odometry 0.2 s old is stale at 0.1 s,
+// fresh at 0.5 s. Any other change is refused and nothing changes.
+TEST(TactileDepthLogic, LiveMaxInputAgeAppliesFromTheNextMessage) {
+  TactileDepthLogic logic(params(), linear_models());
+  logic.on_odometry(odom(0, 0, 0, 0));
+  auto p = logic.params();
+  p.max_input_age_s = 0.5;
+  logic.set_params(p);
+  EXPECT_EQ(logic.params().max_input_age_s, 0.5);
+  logic.on_left_signal(signal(0, 200 * kMs, 80));
+  auto out = logic.on_right_signal(signal(1, 200 * kMs, 80));
+  ASSERT_TRUE(out);
+  EXPECT_TRUE(out->filter_initialized);
+  EXPECT_EQ(logic.stats().ticks_without_odometry, 0u);
+
+  auto q = logic.params();
+  q.max_input_age_s = 0.2;
+  q.estimator.r_mm2 = 2.0;  // the Kalman filters were set up at start
+  EXPECT_THROW(logic.set_params(q), std::invalid_argument);
+  q = logic.params();
+  q.max_input_age_s = -1.0;
+  EXPECT_THROW(logic.set_params(q), std::invalid_argument);
+  EXPECT_EQ(logic.params().max_input_age_s, 0.5);
 }

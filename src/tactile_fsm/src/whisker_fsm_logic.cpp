@@ -26,107 +26,178 @@ void WhiskerFsmLogic::Params::validate() const {
 ParamMap WhiskerFsmLogic::default_parameters() {
   const WallFollowerParams d;
   const Params n;
+  using tactile_common::at_least;
+  using tactile_common::closed;
+  using tactile_common::ParamRange;
+  using tactile_common::positive;
   ParamMap m(kNodeName, "defaults");
-  m.set("v_max", d.v_max);                        // 000 Results: V_max = 20 cm/s
-  m.set("omega_max", d.omega_max);                // 000 Fig. S4e omega_max; 25 deg/s
-  m.set("t_min", d.t_min);                        // 000 Fig. 4c: band 60-100 mm
-  m.set("t_max", d.t_max);
-  m.set("whisker_spacing", d.whisker_spacing);    // 000 eq. 21, s
-  m.set("hover_init_s", d.hover_init_s);          // 000 Methods "Hovering"
-  m.set("flight_height", d.flight_height);
-  m.set("align_enter", d.align_enter);
-  m.set("align_exit", d.align_exit);
-  m.set("depth_filter_tau_s", d.depth_filter_tau_s);
-  m.set("follow_side", std::string(to_string(d.follow_side)));
-  m.set("side_toward_target", d.side_toward_target);
-  m.set("side_deadband", d.side_deadband);
-  m.set("clear_confirm_s", d.clear_confirm_s);
-  m.set("clear_margin", d.clear_margin);
-  m.set("realign_gain", d.realign_gain);
+  // The node's parameter spec (README "Parameters"): value, description (from the
+  // WallFollowerParams comments), unit and the range validate() accepts alone (the
+  // relations -- t_max > t_min, align_exit <= align_enter, wall_end_depth 0 or >= t_max,
+  // first_whisk_speed <= v_max -- are validate()'s). Every key is read at start: the FSM's
+  // rules are tuned as a set and its state (band, anchors, whisk phase) is built from
+  // them, so none is changed in flight (ros2 param set: read-only).
+  m.set("v_max", d.v_max,
+        {"V_max, forward speed (000 Results: 20 cm/s)", "m/s", positive(), false});
+  m.set("omega_max", d.omega_max,
+        {"omega_max, wall-following turn rate (000 Fig. S4e; 25 deg/s our value)", "rad/s", positive(), false});
+  m.set("t_min", d.t_min,
+        {"T_min, near edge of the depth band (000 Fig. 4c: 60 mm)", "m", positive(), false});
+  m.set("t_max", d.t_max,
+        {"T_max, far edge of the depth band (000 Fig. 4c: 100 mm); > t_min", "m", {}, false});
+  m.set("whisker_spacing", d.whisker_spacing,
+        {"s, lateral distance of the whisker bases (000 eq. 21)", "m", positive(), false});
+  m.set("hover_init_s", d.hover_init_s,
+        {"hover for TDORC initialisation (000 Methods \"Hovering\")", "s", at_least(0.0), false});
+  m.set("flight_height", d.flight_height,
+        {"height setpoint", "m", positive(), false});
+  m.set("align_enter", d.align_enter,
+        {"start aligning the heading when the wall angle exceeds this", "rad", ParamRange{0.0, M_PI / 2, true, true}, false});
+  m.set("align_exit", d.align_exit,
+        {"stop aligning below this; <= align_enter", "rad", closed(0.0, M_PI / 2), false});
+  m.set("depth_filter_tau_s", d.depth_filter_tau_s,
+        {"first-order low-pass of the depths and the wall normal; 0: off", "s", at_least(0.0), false});
+  m.set("follow_side", std::string(to_string(d.follow_side)),
+        {"default wall-following side: right or left (000 sweeps right)", "", {}, false});
+  m.set("side_toward_target", d.side_toward_target,
+        {"follow toward the target's lateral offset when it exceeds side_deadband", "", {}, false});
+  m.set("side_deadband", d.side_deadband,
+        {"lateral target offset below which follow_side is kept", "m", at_least(0.0), false});
+  m.set("clear_confirm_s", d.clear_confirm_s,
+        {"both whiskers off the wall this long = obstacle cleared", "s", at_least(0.0), false});
+  m.set("clear_margin", d.clear_margin,
+        {"extra side-step after a clearing, so the frame passes the edge", "m", at_least(0.0), false});
+  m.set("realign_gain", d.realign_gain,
+        {"heading realignment to the course outside wall following; 0: off", "1/s", at_least(0.0), false});
   // On in the whisker FSM node (issue 17); the core default stays off so the other
   // users of wall_sub_state() (gpis_explorer's wall follows) keep their rule.
-  m.set("hold_heading_trailing_lost", true);
+  m.set("hold_heading_trailing_lost", true,
+        {"trailing whisker lost after both touched: hold the heading (issue 17)", "", {}, false});
   // One depth left beyond wall_end_depth after both touched = the wall ends
   // (issue 17, round 7): on in the whisker FSM node, off in the core. 105 mm:
   // tuning blocks 413 -> 415 of 450 (tied with 110 / 115 mm), seen blocks
   // 5000-8000 1068 -> 1088 of 1200 (README "Round 7").
-  m.set("wall_end_depth", 0.105);
+  m.set("wall_end_depth", 0.105,
+        {"one depth beyond this after both touched = the wall ends (issue 17, round 7); 0 or >= t_max", "m", {}, false});
   // A whisker lost out of reach, not off an end (issue 17, round 11).
-  m.set("lost_far_depth", 0.0);
+  m.set("lost_far_depth", 0.0,
+        {"a whisker lost out of reach, not off an end (issue 17, round 11); 0: off", "m", at_least(0.0), false});
   // The side-step's margin from where the sums went quiet (issue 17, round 11).
-  m.set("resume_quiet_rms", 0.0);
-  m.set("same_obstacle_distance", d.same_obstacle_distance);
-  m.set("max_heading_offset", d.max_heading_offset);
+  m.set("resume_quiet_rms", 0.0,
+        {"side-step margin counted from where the sums went quiet (issue 17, round 11); 0: off", "Pa", at_least(0.0), false});
+  m.set("same_obstacle_distance", d.same_obstacle_distance,
+        {"a contact this close after a clearing is the same obstacle: keep the side; 0: off", "m", at_least(0.0), false});
+  m.set("max_heading_offset", d.max_heading_offset,
+        {"wall following never turns further than this from the course heading; 0: off", "rad", closed(0.0, M_PI), false});
   // Turn anchor (issue 17, round 13): on in the whisker FSM node, off in the core.
   // 10 deg, 10 deg, 2 deg/s: held-out block 27000-27299 857 -> 874 of 900 (README
   // "Round 13").
-  m.set("turn_anchor_tolerance", 10.0 * M_PI / 180.0);
-  m.set("turn_anchor_theta", d.turn_anchor_theta);
-  m.set("turn_anchor_rate", 2.0 * M_PI / 180.0);
+  m.set("turn_anchor_tolerance", 10.0 * M_PI / 180.0,
+        {"turn at most this beyond the anchored wall heading (issue 17, round 13); 0: off", "rad", closed(0.0, M_PI), false});
+  m.set("turn_anchor_theta", d.turn_anchor_theta,
+        {"a wall angle at least this replaces the anchor", "rad", ParamRange{0.0, M_PI / 2, true, true}, false});
+  m.set("turn_anchor_rate", 2.0 * M_PI / 180.0,
+        {"the anchor follows the read wall heading at most this fast; 0: fixed", "rad/s", at_least(0.0), false});
   // Pressed whisker (issue 17): on in the whisker FSM node, off in the core
   // (as hold_heading_trailing_lost). 900 Pa, no hold: tuning blocks, README.
-  m.set("press_sum_pa", 900.0);
-  m.set("press_hold_s", 0.0);
+  m.set("press_sum_pa", 900.0,
+        {"a whisker whose S_c sum reached this is pressed: depth taken <= press_depth (issue 17); 0: off", "Pa", at_least(0.0), false});
+  m.set("press_hold_s", 0.0,
+        {"how long a press counts", "s", at_least(0.0), false});
   // Pressed by the stick-slip amplitude (issue 17, round 6): off. 450 Pa, best on
   // the tuning blocks (413 -> 419 of 450), lost on the fresh held-out block
   // 12000-12099 (273 -> 270 of 300; README "Round 6").
-  m.set("press_rms_pa", 0.0);
-  m.set("press_depth", d.press_depth);
+  m.set("press_rms_pa", 0.0,
+        {"pressed by the stick-slip amplitude (issue 17, round 6); 0: off", "Pa", at_least(0.0), false});
+  m.set("press_depth", d.press_depth,
+        {"depth a pressed whisker is taken at, at most", "m", positive(), false});
   // Depth bounded by the drone's own motion since the contact's onset (issue 17,
   // round 8; our choice): off. 0.04 m/s: tuning blocks 415 -> 417 of 450, seen
   // blocks 1088 -> 1081 of 1200, imu_tof loses (README "Round 8"); not kept.
-  m.set("motion_depth_relax", 0.0);
-  m.set("motion_depth_margin", d.motion_depth_margin);
-  m.set("motion_depth_baseline", d.motion_depth_baseline);
-  m.set("whisker_base_x", d.whisker_base_x);
+  m.set("motion_depth_relax", 0.0,
+        {"depth bounded by the drone's own motion may rise this fast (issue 17, round 8); 0: off", "m/s", at_least(0.0), false});
+  m.set("motion_depth_margin", d.motion_depth_margin,
+        {"margin over that motion bound", "m", at_least(0.0), false});
+  m.set("motion_depth_baseline", d.motion_depth_baseline,
+        {"contact points this far apart define the wall normal; 0: never", "m", at_least(0.0), false});
+  m.set("whisker_base_x", d.whisker_base_x,
+        {"x of the whisker bases ahead of the odometry origin (000 frame, tactile_sim); finite", "m", {}, false});
   // Phantom hold gated by odometry (issue 17, round 4): on in the whisker FSM
   // node, off in the core. 6.5 Pa over 25 samples, 0.03 m, latched: tuning
   // blocks, README "Round 4".
-  m.set("phantom_quiet_rms", 6.5);
-  m.set("phantom_quiet_samples", static_cast<int64_t>(n.phantom_quiet_samples));
-  m.set("phantom_travel", 0.03);
+  m.set("phantom_quiet_rms", 6.5,
+        {"a whisker in contact whose S_c sum stays quieter than this while the drone moves is a phantom (issue 17, round 4); 0: off", "Pa", at_least(0.0), false});
+  m.set("phantom_quiet_samples", static_cast<int64_t>(n.phantom_quiet_samples),
+        {"signals over which that RMS is taken", "samples", closed(2, 10000), false});
+  m.set("phantom_travel", 0.03,
+        {"drone travel with a quiet sum that makes a phantom", "m", at_least(0.0), false});
   // Latched, with a side-step of up to 2 m while the phantom is held: chosen on the tuning
   // blocks (279 of 300), switched on after the fresh held-out block 10000-10099 (README).
-  m.set("phantom_resume_max", 2.0);
-  m.set("phantom_latch", true);
+  m.set("phantom_resume_max", 2.0,
+        {"keep side-stepping while a phantom is held, up to this far from the clearing", "m", at_least(0.0), false});
+  m.set("phantom_latch", true,
+        {"a phantom stays one until its contact ends or its sum moves again (issue 17, round 4)", "", {}, false});
   // Active whisking (issue 17, round 5): off (whisk_amplitude 0). The values
   // best on the tuning blocks (0.23 rad every 0.7 s, up to 3 rad/s, only after
   // a clearing, paused while a whisker's sum moves, 13 Pa) gave 413 -> 424 of
   // 450 there but 268 -> 269 of 300 on the fresh held-out block 11000-11099 and
   // more collisions in the darkness rigid course (README "Round 5").
-  m.set("whisk_amplitude", 0.0);
-  m.set("whisk_period_s", 0.7);
-  m.set("whisk_rate_max", 3.0);
-  m.set("whisk_after_clear_only", true);
-  m.set("whisk_pause_rms", 13.0);
+  m.set("whisk_amplitude", 0.0,
+        {"active whisking amplitude in FLY_FORWARD (issue 17, round 5); 0: off", "rad", closed(0.0, M_PI / 2), false});
+  m.set("whisk_period_s", 0.7,
+        {"whisking period", "s", positive(), false});
+  m.set("whisk_rate_max", 3.0,
+        {"whisking yaw-rate limit", "rad/s", positive(), false});
+  m.set("whisk_after_clear_only", true,
+        {"whisk only in a FLY_FORWARD that follows a clearing", "", {}, false});
+  m.set("whisk_pause_rms", 13.0,
+        {"pause the whisk while a whisker's S_c sum moves more than this; 0: never", "Pa", at_least(0.0), false});
   // Yaw offset after a clearing (issue 17, README "Round 9"): 14 deg (0.2443 rad) with
   // the release at 13 Pa: tuning blocks 415 -> 433 of 450, seen blocks 1088 -> 1123 of
   // 1200, the shipped courses pass on seeds 1-20. 20 deg wins as much but fails the
   // shipped wide-spacing (heading error 11-14 deg > 8) and tilted-30 (a guard touch in
   // every trial) courses. Core struct: off.
-  m.set("clear_yaw_offset", 0.2443);
-  m.set("clear_yaw_in_resume", false);
-  m.set("clear_yaw_release_rms", 13.0);
+  m.set("clear_yaw_offset", 0.2443,
+        {"yaw offset after a clearing, away from the side-step side (issue 17, round 9); 0: off", "rad", closed(0.0, M_PI / 4), false});
+  m.set("clear_yaw_in_resume", false,
+        {"also hold that offset during the side-step", "", {}, false});
+  m.set("clear_yaw_release_rms", 13.0,
+        {"back to the track's heading once a whisker's sum moves more than this; 0: never", "Pa", at_least(0.0), false});
   // The first approach (issue 17, README "Round 12"): step and scan with the
   // round 10 amplitude and end rule; held out 600 courses per estimate: mocap
   // 93.0 -> 95.8 %, flow deck 92.8 -> 96.7 %, imu_tof 94.0 -> 95.2 %; the shipped
   // courses pass on seeds 1-30. The darkness scenarios turn it off (000 Fig. 6's
   // straight approach). Core struct: off.
-  m.set("first_whisk_amplitude", 0.44);
-  m.set("first_whisk_period_s", 0.7);
-  m.set("first_whisk_speed", 0.0);
-  m.set("first_whisk_pause_to_course", false);
-  m.set("first_whisk_wall_rate", 0.0);
-  m.set("first_scan_step", 0.08);
-  m.set("first_scan_rate", 2.0);
-  m.set("end_contact_lateral", 0.045);
-  m.set("target_radius", d.target_radius);
-  m.set("land_past_target", d.land_past_target);
-  m.set("landing_duration_s", d.landing_duration_s);
-  m.set("max_input_age_s", d.max_input_age_s);
-  m.set("failsafe_land_after_s", d.failsafe_land_after_s);
-  m.set("target_x", n.target_x);
-  m.set("target_y", n.target_y);
+  m.set("first_whisk_amplitude", 0.44,
+        {"whisking on the first approach (issue 17, round 10/12); 0: off", "rad", closed(0.0, M_PI / 2), false});
+  m.set("first_whisk_period_s", 0.7,
+        {"first-approach whisking period", "s", positive(), false});
+  m.set("first_whisk_speed", 0.0,
+        {"first-approach speed; 0: v_max; <= v_max", "m/s", at_least(0.0), false});
+  m.set("first_whisk_pause_to_course", false,
+        {"while a sum moves, the first-approach whisk turns back to the course", "", {}, false});
+  m.set("first_whisk_wall_rate", 0.0,
+        {"turn back to the course at this rate on a wall ahead in the first-approach whisk; 0: off", "rad/s", at_least(0.0), false});
+  m.set("first_scan_step", 0.08,
+        {"step-and-scan step on the first approach (issue 17, round 12); 0 or >= 0.02", "m", at_least(0.0), false});
+  m.set("first_scan_rate", 2.0,
+        {"scan yaw rate; <= whisk_rate_max (checked when first_scan_step > 0)", "rad/s", {}, false});
+  m.set("end_contact_lateral", 0.045,
+        {"a one-whisker first touch this far beside the axis is a baffle's end (issue 17, round 10); 0: off", "m", at_least(0.0), false});
+  m.set("target_radius", d.target_radius,
+        {"land within this distance of the target", "m", positive(), false});
+  m.set("land_past_target", d.land_past_target,
+        {"also land once past the target along the course", "", {}, false});
+  m.set("landing_duration_s", d.landing_duration_s,
+        {"LANDING -> LANDED after this", "s", at_least(0.0), false});
+  m.set("max_input_age_s", d.max_input_age_s,
+        {"depth / odometry older than this is stale (10 ticks at 50 Hz)", "s", positive(), false});
+  m.set("failsafe_land_after_s", d.failsafe_land_after_s,
+        {"FAILSAFE_HOVER -> FAILSAFE_LAND after this", "s", at_least(0.0), false});
+  m.set("target_x", n.target_x,
+        {"target x in the odometry frame; finite", "m", {}, false});
+  m.set("target_y", n.target_y,
+        {"target y in the odometry frame; finite", "m", {}, false});
   return m;
 }
 

@@ -8,6 +8,7 @@
 #include <variant>
 #include <vector>
 
+#include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/parameters.hpp"
 #include "tactile_common/time.hpp"
 #include "tactile_fsm/whisker_fsm_logic.hpp"
@@ -108,6 +109,19 @@ TEST(WhiskerFsmLogic, RepositoryConfigMatchesDefaults) {
   EXPECT_TRUE(p.fsm.phantom_latch);                          // round 4b
   EXPECT_EQ(p.fsm.press_rms_pa, 0.0);                        // round 6: not kept
   EXPECT_DOUBLE_EQ(p.fsm.wall_end_depth, 0.105);             // round 7
+}
+
+// The parameter spec: every key described, no described range wider than what
+// params_from()/validate() accept, and no key live (the FSM's rules are read at start).
+TEST(WhiskerFsmLogic, EveryParameterIsDescribedWithTheRangeValidateAccepts) {
+  const tactile_common::ParamMap d = WhiskerFsmLogic::default_parameters();
+  EXPECT_TRUE(tactile_common::undescribed(d).empty());
+  for (const auto& leak :
+       tactile_common::range_leaks(d, [](const tactile_common::ParamMap& m) { WhiskerFsmLogic::params_from(m); })) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
+  }
+  for (const auto& [key, info] : d.infos()) EXPECT_FALSE(info.live) << key;
+  EXPECT_EQ(d.info("t_min")->unit, "m");
 }
 
 TEST(WhiskerFsmLogic, ParameterErrorsNameTheKey) {

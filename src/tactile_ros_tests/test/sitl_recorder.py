@@ -10,8 +10,8 @@ when the simulator publishes /sim/done (std_msgs/Bool, transient local) or at a 
 
     python sitl_recorder.py --out bag --scenario-graph whisker_fsm --timeout 120
 
-Topics per graph: GRAPH_TOPICS. Sensor topics are published best effort (SensorDataQoS):
-the subscriptions are best effort with a deep queue, and a sample lost anyway shows as a
+Topics per graph: GRAPH_TOPICS. Sensor topics are published reliable (REP 2003); the
+subscriptions are best effort with a deep queue, as every sensor subscriber's (SensorDataQoS), and a sample lost anyway shows as a
 lower count in the evaluated metrics' "topics" than in `tactile sim`'s.
 """
 

@@ -269,3 +269,35 @@ def test_operator_emergency_and_shutdown_landing(flight):
     assert code is not None
     z = server.truth_z(server.stop())
     assert z < GROUND_Z, f'simulated truth z {z:.3f} m after the shutdown landing'
+
+
+def set_bridge_parameter(g: Graph, name: str, value: float):
+    """SetParameters on /crazyflie_bridge (what `ros2 param set` calls); the result."""
+    from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
+    from rcl_interfaces.srv import SetParameters
+    request = SetParameters.Request(parameters=[Parameter(
+        name=name, value=ParameterValue(type=ParameterType.PARAMETER_DOUBLE, double_value=value))])
+    return g.call(SetParameters, '/crazyflie_bridge/set_parameters', request).results[0]
+
+
+def test_operator_health_thresholds_are_live_flight_parameters_read_only(flight):
+    """The bridge's health thresholds apply while it runs (the next /diagnostics uses them),
+    through BridgeHealth's validation; its flight parameters are refused as read-only."""
+    server, launch, g, bridge = flight
+    voltage = bridge.status[-1].battery_voltage
+    assert 3.3 < voltage < 4.8, f'simulated battery {voltage} V'
+    r = set_bridge_parameter(g, 'battery_warn_v', 4.9)
+    assert r.successful, r.reason
+    assert g.get_parameters('/crazyflie_bridge', ['battery_warn_v']) == {'battery_warn_v': 4.9}
+    if has_diagnostics():
+        WARN = 1
+        checks = diagnostic_levels(bridge, g, launch, {'crazyflie_bridge: battery': WARN}, 'battery_warn_v 4.9 V')
+        assert 'battery_warn_v 4.90 V' in checks['crazyflie_bridge: battery'].message
+    # Refused by validate() (error above warn): its reason, and nothing changes.
+    r = set_bridge_parameter(g, 'battery_error_v', 5.0)
+    assert not r.successful and 'battery_error_v' in r.reason and 'battery_warn_v' in r.reason, r.reason
+    assert g.get_parameters('/crazyflie_bridge', ['battery_error_v']) == {'battery_error_v': 3.0}
+    # A flight parameter: read at configure, refused.
+    r = set_bridge_parameter(g, 'max_velocity', 0.3)
+    assert not r.successful and 'read-only' in r.reason, r.reason
+    assert launch.running(), launch.output()[-3000:]

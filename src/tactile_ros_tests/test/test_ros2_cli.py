@@ -64,13 +64,14 @@ def test_ros2_verbs_see_the_sitl_whisker_graph(tmp_path):
                 tmp_path / 'launch.log') as launch, Graph() as g:
         check_graph(g, launch, ['/tactile_depth', '/whisker_fsm'], {}, {'/fsm_state': 'tactile_msgs/msg/FsmState'})
 
-        # One publisher of the depth, tactile_depth's, with the sensor-data QoS it documents.
+        # One publisher of the depth, tactile_depth's, reliable (REP 2003: drivers and estimators
+        # publish reliable, subscribers take SensorDataQoS).
         info = ros2('topic', 'info', '-v', '/whisker/depth', '--no-daemon')
         assert 'Type: tactile_msgs/msg/TactileDepth' in info, info
         assert 'Publisher count: 1' in info, info
         pub = info.split('Subscription count')[0]
         assert re.search(r'Node name: tactile_depth', pub), info
-        assert 'Reliability: BEST_EFFORT' in pub, info   # rclcpp::SensorDataQoS
+        assert 'Reliability: RELIABLE' in pub, info   # tactile_common::data_publisher
         # The FSM's state is reliable (a bag or RViz must not miss a transition).
         state = ros2('topic', 'info', '-v', '/fsm_state', '--no-daemon')
         assert 'Reliability: RELIABLE' in state.split('Subscription count')[0], state

@@ -172,4 +172,134 @@ TEST_F(RosParameters, LaunchValueWithoutSourcesIsAnOverride) {
                             "probe.ros__parameters.frame_id: is a integer (3), expected a string");
 }
 
+// --- NodeParameters: descriptors and the on-set callback (`ros2 param set`) ----------------
+
+/// The probe's spec: gain live in (0, 10], window read at start in [1, 100], frame_id undescribed.
+ParamMap described() {
+  ParamMap d("probe", "defaults");
+  d.set("gain", 1.0, {"controller gain (our choice)", "1/s", tactile_common::ParamRange{0.0, 10.0, true, false}, true});
+  d.set("window", int64_t{5}, {"samples averaged", "samples", tactile_common::closed(1, 100), false});
+  d.set("frame_id", std::string("base"));
+  return d;
+}
+
+/// What the probe's logic would do with new values: params_from + validate (gain < 5 while
+/// window > 50, say) and keep them.
+struct ProbeLogic {
+  double gain = 0.0;
+  int applied = 0;
+  void apply(const ParamMap& m) {
+    const double g = m.get_double("gain");
+    if (g >= 5.0 && m.get_int("window", 1, 100) > 4) throw m.error("gain", "must be < 5 with window > 4, got 7");
+    gain = g;
+    ++applied;
+  }
+};
+
+rcl_interfaces::msg::SetParametersResult set(rclcpp::Node& node, const rclcpp::Parameter& p) {
+  return node.set_parameters({p}).at(0);
+}
+
+TEST_F(RosParameters, DescriptorsCarryDescriptionUnitRangeAndReadOnly) {
+  rclcpp::Node node("probe", options({}));
+  ProbeLogic logic;
+  tactile_common::NodeParameters params(node, described(), [&](const ParamMap& m) { logic.apply(m); });
+  const auto gain = node.describe_parameter("gain");
+  EXPECT_EQ(gain.description, "controller gain (our choice) [1/s]");
+  ASSERT_EQ(gain.floating_point_range.size(), 1u);
+  EXPECT_EQ(gain.floating_point_range[0].from_value, 0.0);
+  EXPECT_EQ(gain.floating_point_range[0].to_value, 10.0);
+  EXPECT_FALSE(gain.read_only);
+  EXPECT_EQ(gain.additional_constraints,
+            "range (0, 10]; live: a new value is applied while running, after the node's validation");
+  const auto window = node.describe_parameter("window");
+  ASSERT_EQ(window.integer_range.size(), 1u);
+  EXPECT_EQ(window.integer_range[0].from_value, 1);
+  EXPECT_EQ(window.integer_range[0].to_value, 100);
+  EXPECT_TRUE(window.read_only);
+  EXPECT_EQ(window.additional_constraints, "range [1, 100]; read at start: restart the node to change it");
+  EXPECT_TRUE(node.describe_parameter("frame_id").read_only);
+  EXPECT_EQ(params.live_keys(), std::vector<std::string>{"gain"});
+}
+
+TEST_F(RosParameters, ALiveKeyIsAppliedThroughTheLogicOrRefusedWithItsReason) {
+  rclcpp::Node node("probe", options({}));
+  ProbeLogic logic;
+  tactile_common::NodeParameters params(node, described(), [&](const ParamMap& m) { logic.apply(m); });
+  // Applied: the logic has it, the node reports it.
+  auto r = set(node, rclcpp::Parameter("gain", 2.5));
+  EXPECT_TRUE(r.successful) << r.reason;
+  EXPECT_EQ(logic.gain, 2.5);
+  EXPECT_EQ(node.get_parameter("gain").as_double(), 2.5);
+  EXPECT_EQ(params.values().get_double("gain"), 2.5);
+  // An integer for a double key (`ros2 param set ... gain 3`) is widened for the logic, as
+  // from a file; rclcpp keeps the value as given (an on-set callback cannot change it).
+  r = set(node, rclcpp::Parameter("gain", int64_t{3}));
+  EXPECT_TRUE(r.successful) << r.reason;
+  EXPECT_EQ(logic.gain, 3.0);
+  EXPECT_EQ(node.get_parameter("gain").as_int(), 3);
+  EXPECT_EQ(params.values().get_double("gain"), 3.0);
+  // Its range is checked by the callback (rclcpp checks a double range on doubles only).
+  r = set(node, rclcpp::Parameter("gain", int64_t{11}));
+  EXPECT_FALSE(r.successful);
+  EXPECT_EQ(r.reason, "gain: must be in (0, 10], got 11");
+  // Outside the described range: refused with the range, before the logic sees it --
+  // by rclcpp outside the descriptor's closed range, by the callback at an open end.
+  r = set(node, rclcpp::Parameter("gain", 11.0));
+  EXPECT_FALSE(r.successful);
+  EXPECT_NE(r.reason.find("gain"), std::string::npos) << r.reason;
+  EXPECT_NE(r.reason.find("range"), std::string::npos) << r.reason;
+  r = set(node, rclcpp::Parameter("gain", 0.0));
+  EXPECT_FALSE(r.successful);
+  EXPECT_EQ(r.reason, "gain: must be in (0, 10], got 0");
+  // Refused by the logic's validation: its reason, naming the node and key; nothing changes.
+  r = set(node, rclcpp::Parameter("gain", 7.0));
+  EXPECT_FALSE(r.successful);
+  EXPECT_EQ(r.reason, "ros parameters of /probe (set while running): probe.ros__parameters.gain: "
+                      "must be < 5 with window > 4, got 7");
+  // A wrong type.
+  r = set(node, rclcpp::Parameter("gain", "high"));
+  EXPECT_FALSE(r.successful);
+  EXPECT_EQ(r.reason, "gain: is a string (high), expected a double");
+  EXPECT_EQ(logic.gain, 3.0);
+  EXPECT_EQ(logic.applied, 2);
+  EXPECT_EQ(node.get_parameter("gain").as_int(), 3);
+}
+
+TEST_F(RosParameters, EveryOtherKeyIsRefusedAsReadOnly) {
+  rclcpp::Node node("probe", options({}));
+  ProbeLogic logic;
+  tactile_common::NodeParameters params(node, described(), [&](const ParamMap& m) { logic.apply(m); });
+  for (const auto& p : {rclcpp::Parameter("window", int64_t{7}), rclcpp::Parameter("frame_id", "tool"),
+                        rclcpp::Parameter(tactile_common::ParameterOrigins::kSourcesKey, std::vector<std::string>{})}) {
+    const auto r = set(node, p);
+    EXPECT_FALSE(r.successful) << p.get_name();
+    EXPECT_NE(r.reason.find("read-only"), std::string::npos) << r.reason;
+  }
+  EXPECT_EQ(node.get_parameter("window").as_int(), 5);
+  EXPECT_EQ(logic.applied, 0);
+  // Without an apply function no key is live: gain is read-only too.
+  rclcpp::Node other("probe2", options({}));
+  tactile_common::NodeParameters fixed(other, described());
+  EXPECT_TRUE(other.describe_parameter("gain").read_only);
+  EXPECT_FALSE(set(other, rclcpp::Parameter("gain", 2.0)).successful);
+  EXPECT_TRUE(fixed.live_keys().empty());
+  // A parameter the node declares itself, not from the logic's defaults, is left to rclcpp
+  // and its own descriptor (as use_sim_time and qos_overrides.* are).
+  other.declare_parameter("own", 1.0);
+  EXPECT_TRUE(set(other, rclcpp::Parameter("own", 2.0)).successful);
+}
+
+TEST_F(RosParameters, AFileValueOutsideTheDescribedRangeNamesTheFileKeyAndRange) {
+  const std::string file = write_file("probe.yaml", "/**:\n  ros__parameters:\n    window: 0\n");
+  rclcpp::Node node("probe", "/bench", options({"--ros-args", "--params-file", file}));
+  try {
+    tactile_common::NodeParameters params(node, described());
+    FAIL() << "window 0 accepted";
+  } catch (const ParamError& e) {
+    EXPECT_EQ(std::string(e.what()), "ros parameters of /bench/probe from " + file +
+                                         ": probe.ros__parameters.window: must be in [1, 100], got 0");
+  }
+}
+
 }  // namespace

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/time.hpp"
 #include "tactile_sim/logic/sim_logic.hpp"
 #include "tactile_sim/scenario.hpp"
@@ -44,6 +45,20 @@ TEST(SimLogic, FromParametersNamesTheBadParameter) {
   p.set("seed", int64_t{9});
   p.set("scenario", std::string("no/such/scenario.yaml"));
   EXPECT_THROW(SimLogic::from_parameters(p), tactile_sim::ScenarioError);
+}
+
+// The parameter spec: both keys described, the seed's range no wider than from_parameters
+// takes, none live (the world is built from them).
+TEST(SimLogic, EveryParameterIsDescribedAndNoneIsLive) {
+  auto d = SimLogic::default_parameters();
+  EXPECT_TRUE(tactile_common::undescribed(d).empty());
+  d.set("scenario", kSweep);  // else every probe is refused for the missing scenario
+  ASSERT_NO_THROW(SimLogic::from_parameters(d));
+  for (const auto& leak :
+       tactile_common::range_leaks(d, [](const tactile_common::ParamMap& m) { SimLogic::from_parameters(m); })) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
+  }
+  for (const auto& [key, info] : d.infos()) EXPECT_FALSE(info.live) << key;
 }
 
 TEST(SimLogic, SensorRatesDivideThePhysicsRate) {

@@ -91,6 +91,16 @@ void Params::validate() const {
   }
 }
 
+bool operator==(const Params& a, const Params& b) {
+  return a.mode == b.mode && a.window == b.window && a.contact_threshold == b.contact_threshold &&
+         a.absolute_threshold == b.absolute_threshold && a.learn_delay == b.learn_delay &&
+         a.contact_hold == b.contact_hold && a.max_contact_hold == b.max_contact_hold &&
+         a.hold_release_fraction == b.hold_release_fraction && a.hold_release_samples == b.hold_release_samples &&
+         a.hold_release_drop == b.hold_release_drop && a.hold_level_samples == b.hold_level_samples &&
+         a.max_drift_slope == b.max_drift_slope && a.hold_quiet_rms == b.hold_quiet_rms &&
+         a.hold_quiet_samples == b.hold_quiet_samples && a.bandpass_b == b.bandpass_b && a.bandpass_a == b.bandpass_a;
+}
+
 // ---------------------------------------------------------------- BandpassBiquad
 
 BandpassBiquad::BandpassBiquad(const std::array<double, 3>& b, const std::array<double, 3>& a) : b_(b), a_(a) {}
@@ -323,6 +333,14 @@ TdorcWhisker::TdorcWhisker(const Params& params)
     : params_(validated(params)),
       channels_{{TdorcChannel(params), TdorcChannel(params), TdorcChannel(params)}},
       quiet_sq_(params.hold_quiet_rms > 0.0 ? static_cast<std::size_t>(params.hold_quiet_samples) : 1, 0.0) {}
+
+void TdorcWhisker::set_contact_threshold(double contact_threshold) {
+  Params next = params_;
+  next.contact_threshold = contact_threshold;
+  next.validate();
+  params_ = next;
+  for (auto& c : channels_) c.set_contact_threshold(contact_threshold);
+}
 
 void TdorcWhisker::reset() {
   for (auto& c : channels_) c.reset();

@@ -1,6 +1,7 @@
 #include "tdorc_filter/tdorc_filter_logic.hpp"
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -10,6 +11,7 @@
 namespace tdorc_filter {
 
 using tactile_common::ParamMap;
+using tactile_common::ParamRange;
 
 void TdorcFilterLogic::Params::validate() const {
   tdorc.validate();
@@ -26,30 +28,70 @@ void TdorcFilterLogic::Params::validate() const {
 }
 
 ParamMap TdorcFilterLogic::default_parameters() {
+  using tactile_common::at_least;
+  using tactile_common::closed;
+  using tactile_common::ParamInfo;
+  using tactile_common::positive;
   const tdorc_filter::Params d;
-  ParamMap m(kNodeName, "defaults");
-  m.set("mode", std::string(to_string(d.mode)));
-  m.set("window", static_cast<int64_t>(d.window));                 // 000 eq. 6-7, n = 100
-  m.set("contact_threshold", d.contact_threshold);                 // 000 Results, T_c = 20
-  m.set("absolute_threshold", d.absolute_threshold);
-  m.set("learn_delay", static_cast<int64_t>(d.learn_delay));       // workspace extension (README)
-  m.set("contact_hold", d.contact_hold);                           // workspace extension (README)
-  m.set("max_contact_hold", static_cast<int64_t>(d.max_contact_hold));
-  m.set("hold_release_fraction", d.hold_release_fraction);         // workspace extension (README)
-  m.set("hold_release_samples", static_cast<int64_t>(d.hold_release_samples));  // workspace extension (README)
-  m.set("hold_release_drop", d.hold_release_drop);                 // workspace extension (README)
-  m.set("hold_level_samples", static_cast<int64_t>(d.hold_level_samples));  // workspace extension (README)
-  m.set("max_drift_slope", d.max_drift_slope);                     // workspace extension (README)
-  m.set("hold_quiet_rms", d.hold_quiet_rms);                       // workspace extension (README, issue 17)
-  m.set("hold_quiet_samples", static_cast<int64_t>(d.hold_quiet_samples));  // workspace extension (README, issue 17)
-  m.set("bandpass_b", std::vector<double>(d.bandpass_b.begin(), d.bandpass_b.end()));  // 000 eq. 9-11
-  m.set("bandpass_a", std::vector<double>(d.bandpass_a.begin(), d.bandpass_a.end()));  // 000 eq. 9-11
   const Params n;
-  m.set("max_sample_gap_s", n.max_sample_gap_s);                  // workspace choice (README "Time")
-  m.set("sample_period_s", n.clock.nominal_period_s);              // 000: whisker deck at 50 Hz
-  m.set("stamp_tolerance_s", n.clock.tolerance_s);                 // workspace choice (README "Time")
-  m.set("max_late_samples", n.clock.max_late_samples);             // workspace choice (README "Time")
-  m.set("clock_step_samples", n.clock.step_samples);               // workspace choice (README "Time")
+  ParamMap m(kNodeName, "defaults");
+  // The node's parameter spec: value, description (from the Params comments), unit, the
+  // range params_from()/validate() accept, and whether it is applied while running
+  // (README "Parameters"). Only contact_threshold is live: a threshold on S_p, read per
+  // sample; everything else shapes the drift window and the filter state.
+  m.set("mode", std::string(to_string(d.mode)),
+        {"compensation: tdorc (re-fit the drift on free-flight samples, 000 eq. 8), tdoc (fit once), "
+         "bandpass (band-pass only)", "", {}, false});
+  m.set("window", static_cast<int64_t>(d.window),
+        {"n, samples in the least-squares drift window (000 Methods, n = 100)", "samples", closed(2, 100000), false});
+  m.set("contact_threshold", d.contact_threshold,
+        {"T_c, contact threshold on the band-passed S_p (000 Results: 20); >= 0 with absolute_threshold",
+         "Pa", {}, true});
+  m.set("absolute_threshold", d.absolute_threshold,
+        {"false: contact when S_p > T_c (the paper's rule); true: when |S_p| > T_c", "", {}, false});
+  m.set("learn_delay", static_cast<int64_t>(d.learn_delay),
+        {"a free sample enters the drift window only after this many further free samples "
+         "(workspace extension, README); 0: eq. 8 as written", "samples", closed(0, 10000), false});
+  m.set("contact_hold", d.contact_hold,
+        {"hold a contact while any channel's S_c exceeds T_c (workspace extension, README)", "", {}, false});
+  m.set("max_contact_hold", static_cast<int64_t>(d.max_contact_hold),
+        {"limit of a held contact (1000 = 20 s at 50 Hz)", "samples", closed(1, 100000000), false});
+  m.set("hold_release_fraction", d.hold_release_fraction,
+        {"a held contact ends when no channel's S_c is above this fraction of its peak in the contact; 0: off",
+         "", ParamRange{0.0, 1.0, false, true}, false});
+  m.set("hold_release_samples", static_cast<int64_t>(d.hold_release_samples),
+        {"consecutive samples below the hold condition that end a held contact", "samples", closed(1, 10000), false});
+  m.set("hold_release_drop", d.hold_release_drop,
+        {"a held contact ends when the whisker's S_c falls below this fraction of its recent level; 0: off",
+         "", ParamRange{0.0, 1.0, false, true}, false});
+  m.set("hold_level_samples", static_cast<int64_t>(d.hold_level_samples),
+        {"time constant of that recent level (25 = 0.5 s at 50 Hz)", "samples", closed(1, 100000), false});
+  m.set("max_drift_slope", d.max_drift_slope,
+        {"largest drift slope a re-fit may have (workspace extension, README); 0: off", "Pa/sample",
+         ParamRange{0.0, std::numeric_limits<double>::infinity(), false, true}, false});
+  m.set("hold_quiet_rms", d.hold_quiet_rms,
+        {"a held contact ends when the RMS of S_c's sample-to-sample changes is below this (issue 17); 0: off",
+         "Pa", ParamRange{0.0, std::numeric_limits<double>::infinity(), false, true}, false});
+  m.set("hold_quiet_samples", static_cast<int64_t>(d.hold_quiet_samples),
+        {"samples over which that RMS is taken (25 = 0.5 s at 50 Hz)", "samples", closed(2, 10000), false});
+  m.set("bandpass_b", std::vector<double>(d.bandpass_b.begin(), d.bandpass_b.end()),
+        {"band-pass numerator b0, b1, b2 (000 eq. 9-11: first-order Butterworth 0.05-1 Hz at 50 Hz)", "", {}, false});
+  m.set("bandpass_a", std::vector<double>(d.bandpass_a.begin(), d.bandpass_a.end()),
+        {"band-pass denominator a0 = 1, a1, a2 (000 eq. 9-11); poles inside the unit circle", "", {}, false});
+  m.set("max_sample_gap_s", n.max_sample_gap_s,
+        {"a gap up to this is bridged (drift extrapolated), a longer one resets the filter (README \"Time\")", "s",
+         positive(), false});
+  m.set("sample_period_s", n.clock.nominal_period_s,
+        {"nominal sample period of the whisker deck (000: 50 Hz)", "s", ParamRange{0.0, 10.0, true, false}, false});
+  m.set("stamp_tolerance_s", n.clock.tolerance_s,
+        {"how far a stamp may disagree with sequence and receive time before it is repaired (README \"Time\")",
+         "s", ParamRange{0.0, 60.0, true, false}, false});
+  m.set("max_late_samples", n.clock.max_late_samples,
+        {"a sequence further back than this is a restart, not a late sample (README \"Time\")", "samples",
+         closed(1, 1000000), false});
+  m.set("clock_step_samples", n.clock.step_samples,
+        {"consecutive samples with one stamp offset taken as a new time base (README \"Time\")", "samples",
+         closed(2, 1000000), false});
   return m;
 }
 
@@ -108,6 +150,23 @@ TdorcFilterLogic::Params TdorcFilterLogic::params_from(const ParamMap& m) {
 TdorcFilterLogic::TdorcFilterLogic(const Params& params)
     : params_(params), whisker_(params.tdorc), clock_(params.clock) {
   params_.validate();
+}
+
+void TdorcFilterLogic::set_params(const Params& params) {
+  params.validate();
+  // Only the live keys may differ (default_parameters(): contact_threshold); the node's
+  // parameter callback never passes another change, and a caller that does is refused.
+  tdorc_filter::Params expected = params_.tdorc;
+  expected.contact_threshold = params.tdorc.contact_threshold;
+  const auto& c = params.clock;
+  const auto& o = params_.clock;
+  if (expected != params.tdorc || params.max_sample_gap_s != params_.max_sample_gap_s ||
+      c.nominal_period_s != o.nominal_period_s || c.tolerance_s != o.tolerance_s ||
+      c.max_late_samples != o.max_late_samples || c.step_samples != o.step_samples) {
+    throw std::invalid_argument("TdorcFilterLogic.set_params: only contact_threshold may change while running");
+  }
+  params_ = params;
+  whisker_.set_contact_threshold(params.tdorc.contact_threshold);
 }
 
 std::optional<tactile_msgs::msg::WhiskerSignal> TdorcFilterLogic::on_pressure(

@@ -161,6 +161,67 @@ TEST(TdorcFilterLogic, IntegerParametersAreCheckedBeforeTheyAreNarrowed) {
   for (const auto& [key, w] : wrapped) EXPECT_TRUE(w.rejected_as_given()) << key << ": " << w.error;
 }
 
+// The parameter spec: every key described, and no described range wider than what
+// params_from()/validate() accept (ros2 param describe shows what the node takes).
+TEST(TdorcFilterLogic, EveryParameterIsDescribedWithTheRangeValidateAccepts) {
+  const ParamMap d = TdorcFilterLogic::default_parameters();
+  EXPECT_TRUE(tactile_common::undescribed(d).empty());
+  for (const auto& leak : tactile_common::range_leaks(d, [](const ParamMap& m) { TdorcFilterLogic::params_from(m); })) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
+  }
+  ASSERT_NE(d.info("window"), nullptr);
+  EXPECT_EQ(d.info("window")->range->text(), "[2, 100000]");
+  EXPECT_EQ(d.info("contact_threshold")->unit, "Pa");
+  std::vector<std::string> live;
+  for (const auto& [key, info] : d.infos()) {
+    if (info.live) live.push_back(key);
+  }
+  EXPECT_EQ(live, std::vector<std::string>{"contact_threshold"});
+}
+
+// contact_threshold applies from the next sample on, the drift window kept: the +400 Pa
+// sample of FillsEverySignalField (S_p = 22.56) is a contact at T_c = 20, none at 25.
+TEST(TdorcFilterLogic, LiveContactThresholdAppliesFromTheNextSample) {
+  ParamMap m = TdorcFilterLogic::default_parameters();
+  TdorcFilterLogic logic(TdorcFilterLogic::params_from(m));
+  for (int k = 0; k <= 100; ++k) ASSERT_TRUE(logic.on_pressure(pressure(k)));
+  m.set("contact_threshold", 25.0);
+  logic.set_params(TdorcFilterLogic::params_from(m));
+  EXPECT_EQ(logic.params().tdorc.contact_threshold, 25.0);
+  EXPECT_EQ(logic.whisker().params().contact_threshold, 25.0);
+  const auto s = logic.on_pressure(pressure(101, WhiskerPressure::WHISKER_LEFT, 400.0));
+  ASSERT_TRUE(s);
+  EXPECT_NEAR(s->compensated[1], 22.56, 1e-6);  // same filter state
+  EXPECT_FALSE(s->contact);
+  EXPECT_EQ(s->window_fill, 100u);
+}
+
+// Every other field is read at start: a change of one is refused and nothing changes.
+TEST(TdorcFilterLogic, SetParamsRefusesAChangeOfAKeyThatIsNotLive) {
+  ParamMap m = TdorcFilterLogic::default_parameters();
+  TdorcFilterLogic logic(TdorcFilterLogic::params_from(m));
+  for (const auto& [key, value] : std::vector<std::pair<std::string, tactile_common::ParamValue>>{
+           {"window", int64_t{50}}, {"max_sample_gap_s", 1.0}, {"sample_period_s", 0.01}, {"mode", std::string("tdoc")}}) {
+    ParamMap changed = m;
+    changed.set("contact_threshold", 30.0);
+    changed.set(key, value);
+    try {
+      logic.set_params(TdorcFilterLogic::params_from(changed));
+      ADD_FAILURE() << key << " changed while running";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("only contact_threshold may change"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(logic.params().tdorc.contact_threshold, 20.0) << key;
+  }
+  // An invalid live value is refused by validate(): absolute_threshold needs T_c >= 0.
+  m.set("absolute_threshold", true);
+  TdorcFilterLogic absolute(TdorcFilterLogic::params_from(m));
+  auto p = absolute.params();
+  p.tdorc.contact_threshold = -1.0;
+  EXPECT_THROW(absolute.set_params(p), std::invalid_argument);
+  EXPECT_EQ(absolute.whisker().params().contact_threshold, 20.0);
+}
+
 TEST(TdorcFilterLogic, FillsEverySignalField) {
   TdorcFilterLogic logic(TdorcFilterLogic::params_from(TdorcFilterLogic::default_parameters()));
   std::optional<WhiskerSignal> s;

@@ -53,21 +53,42 @@ void WhiskerDriverParams::validate() const {
 tactile_common::ParamMap WhiskerDriverLogic::default_parameters() {
   const Params d;
   tactile_common::ParamMap m(kNodeName, "defaults");
-  m.set("source", d.source);
-  m.set("device", d.device);
-  m.set("baud", d.baud);
-  m.set("protocol", d.protocol);
-  m.set("whisker_id", d.whisker_id);
-  m.set("frame_id", d.frame_id);
-  m.set("rate_hz", d.rate_hz);
-  m.set("sim_seed", d.sim_seed);
-  m.set("sim_takeoff_s", d.sim_takeoff_s);
-  m.set("sim_hover_s", d.sim_hover_s);
-  m.set("sim_contact_start_s", d.sim_contact_start_s);
-  m.set("sim_contact_duration_s", d.sim_contact_duration_s);
-  m.set("sim_contact_peak_nm", d.sim_contact_peak_nm);
-  m.set("bag_path", d.bag_path);
-  m.set("bag_topic", d.bag_topic);
+  using tactile_common::at_least;
+  using tactile_common::closed;
+  using tactile_common::ParamRange;
+  // The driver's spec (README): value, description, unit, the range validate() accepts
+  // alone. None is live: the source (device, protocol, bag, synthetic whisker) is opened at
+  // configure; `ros2 param set` refuses every key (read-only).
+  m.set("source", d.source,
+        {"where samples come from: serial (the whisker deck), sim (a synthetic whisker) or bag", "", {}, false});
+  m.set("device", d.device,
+        {"serial device of the whisker deck (source serial)", "", {}, false});
+  m.set("baud", d.baud,
+        {"UART baud rate of the whisker deck (000 hardware)", "baud", closed(1, std::numeric_limits<int>::max()), false});
+  m.set("protocol", d.protocol,
+        {"line format: text (whisker 1) or csv (whisker 2)", "", {}, false});
+  m.set("whisker_id", d.whisker_id,
+        {"WhiskerPressure whisker_id: 0 left, 1 right", "", closed(0, 1), false});
+  m.set("frame_id", d.frame_id,
+        {"header frame of the pressures", "", {}, false});
+  m.set("rate_hz", d.rate_hz,
+        {"sample rate (000: 50 Hz)", "Hz", ParamRange{0.0, 1000.0, true, false}, false});
+  m.set("sim_seed", d.sim_seed,
+        {"seed of the synthetic whisker (source sim)", "", {}, false});
+  m.set("sim_takeoff_s", d.sim_takeoff_s,
+        {"synthetic take-off time", "s", at_least(0.0), false});
+  m.set("sim_hover_s", d.sim_hover_s,
+        {"synthetic hover duration", "s", at_least(0.0), false});
+  m.set("sim_contact_start_s", d.sim_contact_start_s,
+        {"synthetic contacts: start times (>= 0)", "s", {}, false});
+  m.set("sim_contact_duration_s", d.sim_contact_duration_s,
+        {"synthetic contacts: durations (>= 0), one per start", "s", {}, false});
+  m.set("sim_contact_peak_nm", d.sim_contact_peak_nm,
+        {"synthetic contacts: peak base moments (>= 0), one per start", "N m", {}, false});
+  m.set("bag_path", d.bag_path,
+        {"bag to replay (source bag)", "", {}, false});
+  m.set("bag_topic", d.bag_topic,
+        {"WhiskerPressure topic in that bag", "", {}, false});
   return m;
 }
 

@@ -5,6 +5,7 @@
 #include <limits>
 #include <string>
 
+#include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/parameters.hpp"
 #include "whisker_driver/driver_health.hpp"
 
@@ -111,6 +112,18 @@ TEST(DriverHealth, RepositoryConfigIsTheDefaults) {
   EXPECT_EQ(p.stall_error_s, d.stall_error_s);
   EXPECT_EQ(p.frame_error_warn, d.frame_error_warn);
   EXPECT_EQ(p.frame_error_error, d.frame_error_error);
+}
+
+// The parameter spec: every key described, no described range wider than what
+// params_from()/validate() accept, none live (read at configure).
+TEST(DriverHealth, EveryParameterIsDescribedWithTheRangeValidateAcceptsAndNoneIsLive) {
+  const tactile_common::ParamMap d = DriverHealth::default_parameters();
+  EXPECT_TRUE(tactile_common::undescribed(d).empty());
+  for (const auto& leak :
+       tactile_common::range_leaks(d, [](const tactile_common::ParamMap& m) { DriverHealth::params_from(m); })) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
+  }
+  for (const auto& [key, info] : d.infos()) EXPECT_FALSE(info.live) << key;
 }
 
 }  // namespace

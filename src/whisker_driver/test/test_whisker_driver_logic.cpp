@@ -79,6 +79,18 @@ TEST(WhiskerDriverLogic, BadParametersNameTheKey) {
   EXPECT_THROW(WhiskerDriverLogic::params_from(m), tactile_common::ParamError);
 }
 
+// The parameter spec: every key described, no described range wider than what
+// params_from()/validate() accept, none live (read at configure).
+TEST(WhiskerDriverLogic, EveryParameterIsDescribedWithTheRangeValidateAcceptsAndNoneIsLive) {
+  const tactile_common::ParamMap d = WhiskerDriverLogic::default_parameters();
+  EXPECT_TRUE(tactile_common::undescribed(d).empty());
+  for (const auto& leak :
+       tactile_common::range_leaks(d, [](const tactile_common::ParamMap& m) { WhiskerDriverLogic::params_from(m); })) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
+  }
+  for (const auto& [key, info] : d.infos()) EXPECT_FALSE(info.live) << key;
+}
+
 // baud was read as int64 and checked only > 0, then narrowed to int for the
 // serial port: 2^32 + 115200 opened the port at 115200. Now every integer
 // parameter set to its default + 2^32 is rejected with its key and the value

@@ -59,6 +59,10 @@ class BridgeHealth {
 
   static tactile_common::ParamMap default_parameters();
   static Params params_from(const tactile_common::ParamMap& map);
+  /// The thresholds while running (`ros2 param set`): `next` if it validates and only the
+  /// live keys of default_parameters() differ from `current` (the six thresholds; the two
+  /// rates drive timers made at start); std::invalid_argument otherwise.
+  static Params live_update(const Params& current, const Params& next);
 
   /// The four checks, in the order above.
   static std::vector<Check> evaluate(const Params& params, const CrazyflieBridgeLogic::Status& status);

@@ -41,6 +41,7 @@
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
 #include "tactile_common/ros_parameters.hpp"
+#include "tactile_common/ros_qos.hpp"
 #include "tactile_msgs/msg/bridge_status.hpp"
 #include "tactile_msgs/srv/arm.hpp"
 #include "tactile_msgs/srv/go_to.hpp"
@@ -79,17 +80,18 @@ public:
   /// No link yet: open().
   explicit BridgeRosFace(NodeT & node)
   : node_(node),
-    params_(CrazyflieBridgeLogic::params_from(
-      tactile_common::declare_parameters(node, CrazyflieBridgeLogic::default_parameters()))),
-    health_(BridgeHealth::params_from(
-      tactile_common::declare_parameters(node, BridgeHealth::default_parameters())))
+    // The flight parameters are read-only; the health thresholds are live (BridgeHealth::
+    // default_parameters()): a new threshold applies from the next status / diagnostics.
+    parameters_(node, {CrazyflieBridgeLogic::default_parameters(), BridgeHealth::default_parameters()},
+                [this](const tactile_common::ParamMap & values) {
+                  health_ = BridgeHealth::live_update(health_, BridgeHealth::params_from(values));
+                }),
+    params_(CrazyflieBridgeLogic::params_from(parameters_.values())),
+    health_(BridgeHealth::params_from(parameters_.values()))
   {
-    left_pub_ = node_.template create_publisher<tactile_msgs::msg::WhiskerPressure>(
-      CrazyflieBridgeLogic::kLeftPressureTopic, rclcpp::SensorDataQoS());
-    right_pub_ = node_.template create_publisher<tactile_msgs::msg::WhiskerPressure>(
-      CrazyflieBridgeLogic::kRightPressureTopic, rclcpp::SensorDataQoS());
-    odom_pub_ = node_.template create_publisher<nav_msgs::msg::Odometry>(
-      CrazyflieBridgeLogic::kOdomTopic, rclcpp::SensorDataQoS());
+    left_pub_ = tactile_common::data_publisher<tactile_msgs::msg::WhiskerPressure>(node_, CrazyflieBridgeLogic::kLeftPressureTopic);
+    right_pub_ = tactile_common::data_publisher<tactile_msgs::msg::WhiskerPressure>(node_, CrazyflieBridgeLogic::kRightPressureTopic);
+    odom_pub_ = tactile_common::data_publisher<nav_msgs::msg::Odometry>(node_, CrazyflieBridgeLogic::kOdomTopic);
     status_pub_ = node_.template create_publisher<tactile_msgs::msg::BridgeStatus>(BridgeHealth::kStatusTopic, 10);
     setpoint_sub_ = node_.template create_subscription<tactile_msgs::msg::HoverSetpoint>(
       CrazyflieBridgeLogic::kSetpointTopic, rclcpp::QoS(10),
@@ -383,6 +385,9 @@ private:
       std::string(), rclcpp::QoS(1)));
 
   NodeT & node_;
+  /// Declared first: its values configure the bridge; its on-set callback applies the live
+  /// health thresholds and refuses every other key.
+  tactile_common::NodeParameters parameters_;
   CrazyflieBridgeLogic::Params params_;
   BridgeHealth::Params health_;
   std::unique_ptr<BridgeRunner> runner_;  ///< the open link (configured)

@@ -16,11 +16,11 @@ class GpisExplorerComponent : public rclcpp::Node {
  public:
   explicit GpisExplorerComponent(const rclcpp::NodeOptions & options)
   : Node(GpisExplorerLogic::kNodeName, options),
-    logic_(GpisExplorerLogic::params_from(
-      tactile_common::declare_parameters(*this, GpisExplorerLogic::default_parameters())))
+    parameters_(*this, GpisExplorerLogic::default_parameters()),  // every key read-only
+    logic_(GpisExplorerLogic::params_from(parameters_.values()))
   {
-    setpoint_ = create_publisher<tactile_msgs::msg::HoverSetpoint>(GpisExplorerLogic::kSetpointTopic, 10);
-    state_ = create_publisher<tactile_msgs::msg::FsmState>(GpisExplorerLogic::kStateTopic, 10);
+    setpoint_ = tactile_common::data_publisher<tactile_msgs::msg::HoverSetpoint>(*this, GpisExplorerLogic::kSetpointTopic);
+    state_ = tactile_common::data_publisher<tactile_msgs::msg::FsmState>(*this, GpisExplorerLogic::kStateTopic);
     // Latched: a late subscriber (rviz, a recorder) gets the last map and target; never
     // intra-process (tactile_common/ros_qos.hpp: Humble refuses the combination).
     map_ = tactile_common::latched_publisher<tactile_msgs::msg::GpisMap>(*this, GpisExplorerLogic::kMapTopic);
@@ -45,6 +45,8 @@ class GpisExplorerComponent : public rclcpp::Node {
   }
 
  private:
+  /// Declared before logic_: its values configure it; its on-set callback applies or refuses `ros2 param set`.
+  tactile_common::NodeParameters parameters_;
   GpisExplorerLogic logic_;
   rclcpp::Publisher<tactile_msgs::msg::HoverSetpoint>::SharedPtr setpoint_;
   rclcpp::Publisher<tactile_msgs::msg::FsmState>::SharedPtr state_;

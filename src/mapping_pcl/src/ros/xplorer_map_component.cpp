@@ -8,6 +8,7 @@
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
 #include "tactile_common/ros_parameters.hpp"
+#include "tactile_common/ros_qos.hpp"
 
 namespace mapping_pcl {
 
@@ -15,10 +16,10 @@ class XplorerMapComponent : public rclcpp::Node {
  public:
   explicit XplorerMapComponent(const rclcpp::NodeOptions & options)
   : Node(XplorerMapLogic::kNodeName, options),
-    logic_(XplorerMapLogic::params_from(
-      tactile_common::declare_parameters(*this, XplorerMapLogic::default_parameters())))
+    parameters_(*this, XplorerMapLogic::default_parameters()),  // every key read-only
+    logic_(XplorerMapLogic::params_from(parameters_.values()))
   {
-    cloud_pub_ = create_publisher<sensor_msgs::msg::PointCloud2>(XplorerMapLogic::kCloudTopic, rclcpp::QoS(1));
+    cloud_pub_ = tactile_common::latched_publisher<sensor_msgs::msg::PointCloud2>(*this, XplorerMapLogic::kCloudTopic);
     wrench_sub_ = create_subscription<geometry_msgs::msg::WrenchStamped>(
       XplorerMapLogic::kWrenchBodyTopic, rclcpp::SensorDataQoS(),
       [this](const geometry_msgs::msg::WrenchStamped & msg) {logic_.on_wrench_body(msg);});
@@ -47,6 +48,8 @@ class XplorerMapComponent : public rclcpp::Node {
   }
 
  private:
+  /// Declared before logic_: its values configure it; its on-set callback applies or refuses `ros2 param set`.
+  tactile_common::NodeParameters parameters_;
   XplorerMapLogic logic_;
   rclcpp::Publisher<sensor_msgs::msg::PointCloud2>::SharedPtr cloud_pub_;
   rclcpp::Subscription<geometry_msgs::msg::WrenchStamped>::SharedPtr wrench_sub_;

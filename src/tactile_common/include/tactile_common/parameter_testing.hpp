@@ -1,11 +1,15 @@
-// Test helper for the integer parameters of a node logic (header-only, no
-// test framework): each integer parameter set to a value an int would wrap.
+// Test utilities for the parameters of a node logic (header-only, no test framework):
+// each integer parameter set to a value an int would wrap; each described range probed
+// just outside its ends.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <string>
 #include <variant>
+#include <vector>
 
 #include "tactile_common/parameters.hpp"
 
@@ -45,6 +49,57 @@ std::map<std::string, WrappedInteger> wrapped_integers(const ParamMap& defaults,
       w.error = e.what();
     }
     out.emplace(key, std::move(w));
+  }
+  return out;
+}
+
+/// A value just outside a described range that params_from() accepted.
+struct RangeLeak {
+  std::string key;
+  double value = 0.0;
+};
+
+/// For every key of `defaults` whose ParamInfo has a range, alone: sets it just outside
+/// each finite end (an open end itself; a closed end minus/plus one for an integer, the
+/// next double for a double) and calls `params_from(map)`. Returns the values it accepted:
+/// none when the described range is no wider than what params_from()/validate() take
+/// (a ROS tool then never shows a range the node refuses inside).
+template <typename ParamsFrom>
+std::vector<RangeLeak> range_leaks(const ParamMap& defaults, ParamsFrom params_from) {
+  std::vector<RangeLeak> out;
+  for (const auto& [key, info] : defaults.infos()) {
+    if (!info.range) continue;
+    const ParamValue& value = defaults.values().at(key);
+    const bool integer = std::holds_alternative<int64_t>(value);
+    if (!integer && !std::holds_alternative<double>(value)) continue;
+    const ParamRange& r = *info.range;
+    std::vector<double> probes;
+    const double inf = std::numeric_limits<double>::infinity();
+    if (std::isfinite(r.lo)) probes.push_back(r.open_lo ? r.lo : integer ? r.lo - 1 : std::nextafter(r.lo, -inf));
+    if (std::isfinite(r.hi)) probes.push_back(r.open_hi ? r.hi : integer ? r.hi + 1 : std::nextafter(r.hi, inf));
+    for (const double v : probes) {
+      ParamMap m = defaults;
+      if (integer) {
+        m.set(key, static_cast<int64_t>(v));
+      } else {
+        m.set(key, v);
+      }
+      try {
+        params_from(m);
+        out.push_back({key, v});
+      } catch (const ParamError&) {
+      }
+    }
+  }
+  return out;
+}
+
+/// The keys of `defaults` without a ParamInfo (or with an empty description).
+inline std::vector<std::string> undescribed(const ParamMap& defaults) {
+  std::vector<std::string> out;
+  for (const auto& [key, value] : defaults.values()) {
+    const ParamInfo* info = defaults.info(key);
+    if (info == nullptr || info->description.empty()) out.push_back(key);
   }
   return out;
 }

@@ -6,7 +6,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -29,6 +31,40 @@ class ParamError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// A numeric range of a parameter, as its node logic's params_from()/validate() check it.
+/// Closed unless an end is marked open ("> 0" is {0, inf, open_lo}). A ROS parameter
+/// descriptor states the closed hull [lo, hi] (rcl_interfaces ranges are inclusive) and
+/// names an open end in its additional_constraints; validate() rejects the end itself.
+struct ParamRange {
+  double lo = -std::numeric_limits<double>::infinity();
+  double hi = std::numeric_limits<double>::infinity();
+  bool open_lo = false;
+  bool open_hi = false;
+  /// "[2, 100000]", "(0, inf)", "[0, 1]".
+  std::string text() const;
+  /// Whether `v` lies in the range (open ends excluded).
+  bool contains(double v) const;
+};
+
+/// [lo, hi]; (lo, inf); [lo, inf).
+inline ParamRange closed(double lo, double hi) { return {lo, hi, false, false}; }
+inline ParamRange positive() { return {0.0, std::numeric_limits<double>::infinity(), true, true}; }
+inline ParamRange at_least(double lo) { return {lo, std::numeric_limits<double>::infinity(), false, true}; }
+
+/// What a key means, for people and ROS tools (`ros2 param describe`): the one place
+/// per node is its logic's default_parameters(), next to the default value.
+struct ParamInfo {
+  /// What the key does (from the Params struct comment), with its source (paper, README).
+  std::string description;
+  /// SI unit or count ("Pa", "s", "m", "mm^2", "samples", "V"); "" when dimensionless.
+  std::string unit;
+  /// The range params_from()/validate() accept, where they check one.
+  std::optional<ParamRange> range;
+  /// true: the node applies a new value while running (`ros2 param set`) through
+  /// params_from() + validate(); false: read at start only (read-only in ROS).
+  bool live = false;
+};
+
 /// The parameters of one node. Every key a node reads is declared in its
 /// default_parameters(); getters check the type and name the source on error.
 class ParamMap {
@@ -42,6 +78,11 @@ class ParamMap {
   const std::string& source() const { return source_; }
 
   void set(const std::string& key, ParamValue value);
+  /// The value and its description (see ParamInfo).
+  void set(const std::string& key, ParamValue value, ParamInfo info);
+  /// The description of `key`, nullptr if it has none.
+  const ParamInfo* info(const std::string& key) const;
+  const std::map<std::string, ParamInfo>& infos() const { return info_; }
   bool has(const std::string& key) const;
   const std::map<std::string, ParamValue>& values() const { return values_; }
 
@@ -112,6 +153,7 @@ class ParamMap {
   std::string source_ = "defaults";
   std::map<std::string, ParamValue> values_;
   std::map<std::string, std::string> origin_;  ///< keys set by merge_from
+  std::map<std::string, ParamInfo> info_;      ///< descriptions, from default_parameters()
 };
 
 template <typename T>

@@ -1,10 +1,17 @@
 // rclcpp side of the parameter bridge: declares every parameter a node logic
-// reads (with the logic's defaults) on an rclcpp::Node and returns the values
-// as a ParamMap. Header-only and included only by rclcpp components, so the
+// reads (with the logic's defaults and descriptors) on an rclcpp::Node and returns
+// the values as a ParamMap; NodeParameters adds the on-set callback that applies a
+// live key through the logic or refuses the set with the reason. Header-only and included only by rclcpp components, so the
 // ROS-free build never sees rclcpp.
 #pragma once
 
+#include <cmath>
+#include <cstdint>
+#include <functional>
+#include <initializer_list>
 #include <map>
+#include <sstream>
+#include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -199,6 +206,62 @@ std::string parameter_source(const NodeT& node) {
          (files.empty() ? std::string(" (launch or -p overrides)") : " (" + files + ")");
 }
 
+/// The descriptor `ros2 param describe` shows for `key`: its ParamInfo's description and
+/// unit, its range as a FloatingPointRange / IntegerRange (closed hull; an open end and the
+/// live/read-only rule in additional_constraints), read_only unless `live`.
+/// dynamic_typing stays on: a YAML integer for a double key is widened, and a value of a
+/// wrong type is refused with a message that names the key (declare_parameters, and the
+/// on-set callback of NodeParameters).
+inline rcl_interfaces::msg::ParameterDescriptor parameter_descriptor(const std::string& key, const ParamValue& value,
+                                                                     const ParamInfo* info, bool live) {
+  rcl_interfaces::msg::ParameterDescriptor d;
+  d.name = key;
+  d.dynamic_typing = true;
+  d.read_only = !live;
+  std::string constraints;
+  if (info != nullptr) {
+    d.description = info->description + (info->unit.empty() ? std::string() : " [" + info->unit + "]");
+    if (info->range) {
+      const ParamRange& r = *info->range;
+      if (std::holds_alternative<double>(value)) {
+        rcl_interfaces::msg::FloatingPointRange range;
+        range.from_value = r.lo;
+        range.to_value = r.hi;
+        range.step = 0.0;
+        d.floating_point_range.push_back(range);
+      } else if (std::holds_alternative<int64_t>(value)) {
+        rcl_interfaces::msg::IntegerRange range;
+        // Integer ranges of the workspace are closed and finite (get_int(key, lo, hi));
+        // an unbounded end is the int64 limit.
+        const auto to_int = [](double v, int64_t unbounded) {
+          return std::isfinite(v) && std::fabs(v) < 9.2e18 ? static_cast<int64_t>(v) : unbounded;
+        };
+        range.from_value = to_int(std::ceil(r.lo), INT64_MIN);
+        range.to_value = to_int(std::floor(r.hi), INT64_MAX);
+        range.step = 1;
+        d.integer_range.push_back(range);
+      }
+      constraints = "range " + r.text() + "; ";
+    }
+  }
+  constraints += live ? "live: a new value is applied while running, after the node's validation"
+                      : "read at start: restart the node to change it";
+  d.additional_constraints = constraints;
+  return d;
+}
+
+/// The reason a value outside its descriptor's range is refused ("must be in [2, 100000], got 1").
+inline std::string range_reason(const ParamInfo* info, const rclcpp::ParameterValue& value) {
+  if (info == nullptr || !info->range) return "out of its descriptor's range";
+  std::ostringstream given;  // 0.05, not rclcpp's 0.050000
+  if (value.get_type() == rclcpp::ParameterType::PARAMETER_DOUBLE) {
+    given << value.get<double>();
+  } else {
+    given << rclcpp::to_string(value);
+  }
+  return "must be in " + info->range->text() + ", got " + given.str();
+}
+
 /// Declares every parameter of `defaults` on `node` and returns the values the
 /// node was started with (launch file / --params-file overrides included).
 /// Every key remembers where its value came from (ParameterOrigins), so any
@@ -208,12 +271,16 @@ std::string parameter_source(const NodeT& node) {
 /// needs, e.g. "52.0e9" (a string to YAML 1.1, which the launch system's parser
 /// follows: write 52.0e+9).
 /// NodeT: rclcpp::Node or rclcpp_lifecycle::LifecycleNode.
+/// The keys of `defaults` a node applies while running are those whose ParamInfo is live,
+/// and only when `live_keys` is true (NodeParameters with an apply function); every other
+/// key is declared read-only.
 template <class NodeT = rclcpp::Node>
-ParamMap declare_parameters(NodeT& node, const ParamMap& defaults) {
+ParamMap declare_parameters(NodeT& node, const ParamMap& defaults, bool live_keys = false) {
   if (!node.has_parameter(ParameterOrigins::kSourcesKey)) {
     rcl_interfaces::msg::ParameterDescriptor descriptor;
     descriptor.dynamic_typing = true;  // a launch file may pass it malformed: then it is ignored
     descriptor.description = "where the parameter values come from (launch files set it)";
+    descriptor.read_only = true;  // read at start, as every key that is not live
     node.declare_parameter(ParameterOrigins::kSourcesKey, rclcpp::ParameterValue(std::vector<std::string>{}),
                            descriptor);
   }
@@ -226,12 +293,16 @@ ParamMap declare_parameters(NodeT& node, const ParamMap& defaults) {
   for (const auto& [key, value] : defaults.values()) {
     const rclcpp::ParameterValue fallback = to_ros(value);
     rclcpp::ParameterValue given;
+    const ParamInfo* info = defaults.info(key);
     try {
-      rcl_interfaces::msg::ParameterDescriptor descriptor;
-      descriptor.dynamic_typing = true;  // checked below with a message that names the key
-      given = node.declare_parameter(key, fallback, descriptor);
+      // Types are checked below with a message that names the key.
+      given = node.declare_parameter(key, fallback,
+                                     parameter_descriptor(key, value, info, live_keys && info && info->live));
     } catch (const rclcpp::exceptions::InvalidParameterValueException& e) {
-      throw error(key, e.what());
+      // Outside the descriptor's range: the range and the value as given, like validate().
+      const auto overrides = node.get_node_parameters_interface()->get_parameter_overrides();
+      const auto it = overrides.find(key);
+      throw error(key, it == overrides.end() ? std::string(e.what()) : range_reason(info, it->second));
     }
     const bool widened = fallback.get_type() == rclcpp::ParameterType::PARAMETER_DOUBLE &&
                          given.get_type() == rclcpp::ParameterType::PARAMETER_INTEGER;
@@ -255,5 +326,133 @@ ParamMap declare_parameters(NodeT& node, const ParamMap& defaults) {
   for (const auto& [origin, given] : given_by_origin) params.merge_from(given);
   return params;
 }
+
+/// The parameters of a node (one or more node logics' default_parameters()), declared with
+/// their descriptors, and the node's on-set callback, so that `ros2 param set` is never
+/// accepted and ignored:
+///  - a key whose ParamInfo is live (and the node gave an apply function): the new value is
+///    type-checked, then `apply` gets the node's current values with it (apply builds the
+///    logic's Params with params_from(), which validates, and hands them to the logic);
+///    a ParamError or std::invalid_argument from it refuses the value with its reason and
+///    nothing changes;
+///  - every other key of these maps is read-only (its descriptor says so, and rclcpp refuses
+///    the set: "parameter '<key>' cannot be set because it is read-only"); the callback
+///    refuses it too, naming the key, should the descriptor be changed;
+///  - keys that are not the node logic's (use_sim_time, qos_overrides.*) are left to rclcpp.
+/// The callback runs in the node's default callback group, as its subscriptions and timers
+/// do unless a component puts them elsewhere: the logic is not read concurrently.
+/// Holds the callback's handle: a member of the component, declared before the logic it
+/// configures, never moved.
+class NodeParameters {
+ public:
+  /// Receives the node's values with the new ones; throws ParamError (params_from) or
+  /// std::invalid_argument (the logic's own refusal) to refuse them.
+  using Apply = std::function<void(const ParamMap&)>;
+
+  template <class NodeT>
+  NodeParameters(NodeT& node, const ParamMap& defaults, Apply apply = nullptr)
+  : NodeParameters(node, std::initializer_list<ParamMap>{defaults}, std::move(apply)) {}
+
+  /// Several node logics on one node (the bridge and its health thresholds): their keys
+  /// must differ.
+  template <class NodeT>
+  NodeParameters(NodeT& node, std::initializer_list<ParamMap> defaults, Apply apply = nullptr)
+  : defaults_(combined(node.get_name(), defaults)), apply_(std::move(apply)) {
+    values_ = declare_parameters(node, defaults_, static_cast<bool>(apply_));
+    node_name_ = node.get_fully_qualified_name();
+    handle_ = node.add_on_set_parameters_callback(
+      [this](const std::vector<rclcpp::Parameter>& parameters) { return on_set(parameters); });
+  }
+  NodeParameters(const NodeParameters&) = delete;
+  NodeParameters& operator=(const NodeParameters&) = delete;
+
+  /// The node's current values (at start: as declare_parameters returned them).
+  const ParamMap& values() const { return values_; }
+  /// The keys applied while running.
+  std::vector<std::string> live_keys() const {
+    std::vector<std::string> keys;
+    if (!apply_) return keys;
+    for (const auto& [key, info] : defaults_.infos()) {
+      if (info.live) keys.push_back(key);
+    }
+    return keys;
+  }
+
+ private:
+  static ParamMap combined(const std::string& node, std::initializer_list<ParamMap> maps) {
+    ParamMap all(node, "defaults");
+    for (const auto& m : maps) {
+      for (const auto& [key, value] : m.values()) {
+        if (all.has(key)) throw std::logic_error("NodeParameters: key " + key + " of node " + node + " declared twice");
+        if (const ParamInfo* info = m.info(key)) {
+          all.set(key, value, *info);
+        } else {
+          all.set(key, value);
+        }
+      }
+    }
+    return all;
+  }
+
+  rcl_interfaces::msg::SetParametersResult on_set(const std::vector<rclcpp::Parameter>& parameters) {
+    rcl_interfaces::msg::SetParametersResult result;
+    result.successful = false;
+    ParamMap changed(values_.node(), "ros parameters of " + node_name_ + " (set while running)");
+    for (const auto& p : parameters) {
+      const std::string& key = p.get_name();
+      if (key == ParameterOrigins::kSourcesKey) {
+        result.reason = "read-only: " + key + " is read at start; restart the node";
+        return result;
+      }
+      if (!defaults_.has(key)) continue;  // rclcpp's own (use_sim_time, qos_overrides.*)
+      const ParamInfo* info = defaults_.info(key);
+      if (!apply_ || info == nullptr || !info->live) {
+        result.reason = "read-only: " + key + " is read at start; restart the node";
+        return result;
+      }
+      const ParamValue& fallback = defaults_.values().at(key);
+      const rclcpp::ParameterValue& given = p.get_parameter_value();
+      const bool widened = std::holds_alternative<double>(fallback) &&
+                           given.get_type() == rclcpp::ParameterType::PARAMETER_INTEGER;
+      if (!widened && given.get_type() != to_ros(fallback).get_type()) {
+        result.reason = key + ": is a " + rclcpp::to_string(given.get_type()) + " (" + rclcpp::to_string(given) +
+                        "), expected a " + rclcpp::to_string(to_ros(fallback).get_type());
+        return result;
+      }
+      if (info->range && (given.get_type() == rclcpp::ParameterType::PARAMETER_DOUBLE ||
+                          given.get_type() == rclcpp::ParameterType::PARAMETER_INTEGER)) {
+        const double v = given.get_type() == rclcpp::ParameterType::PARAMETER_DOUBLE
+                             ? given.get<double>()
+                             : static_cast<double>(given.get<int64_t>());
+        if (!info->range->contains(v)) {
+          result.reason = key + ": " + range_reason(info, given);
+          return result;
+        }
+      }
+      changed.set(key, widened ? ParamValue(static_cast<double>(given.get<int64_t>())) : from_ros(given, key));
+    }
+    if (changed.values().empty()) {
+      result.successful = true;
+      return result;
+    }
+    ParamMap next = values_;
+    try {
+      next.merge_from(changed);
+      apply_(next);
+    } catch (const std::exception& e) {  // ParamError (params_from) or the logic's refusal
+      result.reason = e.what();
+      return result;
+    }
+    values_ = std::move(next);
+    result.successful = true;
+    return result;
+  }
+
+  ParamMap defaults_;
+  Apply apply_;
+  ParamMap values_;
+  std::string node_name_;
+  rclcpp::node_interfaces::OnSetParametersCallbackHandle::SharedPtr handle_;
+};
 
 }  // namespace tactile_common

@@ -1,6 +1,24 @@
 // QoS rules of the rclcpp components. Header-only and included only by rclcpp
 // components, so the ROS-free build never sees rclcpp.
 //
+// REP 2003 (sensor data and map QoS): a driver publishes sensor data with the default
+// profile -- reliable, volatile -- and a subscriber takes rclcpp::SensorDataQoS (best
+// effort, which matches a reliable publisher), so RViz, Foxglove, Nav2 and `ros2 bag`,
+// which subscribe reliable by default, get every topic, and our own subscribers never
+// wait for a retransmission. So every data output of the workspace (the drivers', the
+// simulator's, the estimators' and the controllers' setpoints) is created with
+// publisher_qos() (rclcpp::QoS(10): keep last 10, reliable, volatile); rclcpp's
+// SystemDefaultsQoS would leave history and depth to the RMW, and intra-process delivery
+// refuses anything but an explicit keep-last depth > 0. Maps (/gpis/map, the XPLORER
+// contact cloud) are latched: reliable + transient local, latched_publisher() below.
+//
+// Each of these publishers takes overridable_publisher_options(): rclcpp's
+// QosOverridingOptions with the default policies (history, depth, reliability), so a user
+// re-tunes a topic at start without a rebuild, e.g. in a parameter file
+//   qos_overrides./whisker/depth.publisher.reliability: best_effort
+// (read-only parameters of the node, read when the publisher is created). Durability is
+// not overridable: a transient-local publisher under intra-process would throw on Humble.
+//
 // Latched topics (a late subscriber gets the last message: /sim/done, /gpis/map,
 // /gpis/target) are transient local. The launch files compose every graph in one
 // container with use_intra_process_comms: true, and ROS 2 Humble's rclcpp refuses
@@ -22,9 +40,27 @@
 
 namespace tactile_common {
 
-// Options of a latched publisher: intra-process off (see above).
-inline rclcpp::PublisherOptions latched_publisher_options() {
+/// The QoS of every data publisher (REP 2003, see above): keep last 10, reliable, volatile.
+inline rclcpp::QoS publisher_qos() { return rclcpp::QoS(10).reliable().durability_volatile(); }
+
+/// Publisher options that let a user override history, depth and reliability through the
+/// node's `qos_overrides.<topic>.publisher.<policy>` parameters (rclcpp QosOverridingOptions).
+inline rclcpp::PublisherOptions overridable_publisher_options() {
   rclcpp::PublisherOptions options;
+  options.qos_overriding_options = rclcpp::QosOverridingOptions::with_default_policies();
+  return options;
+}
+
+/// A data publisher (sensor data, estimates, setpoints): publisher_qos(), overridable.
+/// NodeT: rclcpp::Node or rclcpp_lifecycle::LifecycleNode.
+template <class MessageT, class NodeT>
+auto data_publisher(NodeT& node, const std::string& topic) {
+  return node.template create_publisher<MessageT>(topic, publisher_qos(), overridable_publisher_options());
+}
+
+// Options of a latched publisher: intra-process off (see above), QoS overridable.
+inline rclcpp::PublisherOptions latched_publisher_options() {
+  rclcpp::PublisherOptions options = overridable_publisher_options();
   options.use_intra_process_comm = rclcpp::IntraProcessSetting::Disable;
   return options;
 }

@@ -72,6 +72,10 @@ class TactileDepthLogic {
   void on_odometry(const nav_msgs::msg::Odometry& msg);
 
   const Stats& stats() const { return stats_; }
+  /// New parameters while running (`ros2 param set`): only the live keys of
+  /// default_parameters() may differ (max_input_age_s, from the next message on).
+  /// Throws std::invalid_argument if they do not validate or another field differs.
+  void set_params(const Params& params);
   const Params& params() const { return params_; }
   const TactileDepthEstimator& estimator() const { return estimator_; }
   const SensorModelFile& models() const { return models_; }

@@ -6,6 +6,7 @@
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
 #include "tactile_common/ros_parameters.hpp"
+#include "tactile_common/ros_qos.hpp"
 #include "tactile_depth/tactile_depth_logic.hpp"
 
 namespace tactile_depth {
@@ -14,11 +15,13 @@ class TactileDepthComponent : public rclcpp::Node {
  public:
   explicit TactileDepthComponent(const rclcpp::NodeOptions & options)
   : Node(TactileDepthLogic::kNodeName, options),
-    logic_(TactileDepthLogic::params_from(
-      tactile_common::declare_parameters(*this, TactileDepthLogic::default_parameters())))
+    parameters_(*this, TactileDepthLogic::default_parameters(),
+                [this](const tactile_common::ParamMap & values) {
+                  logic_.set_params(TactileDepthLogic::params_from(values));
+                }),
+    logic_(TactileDepthLogic::params_from(parameters_.values()))
   {
-    publisher_ = create_publisher<tactile_msgs::msg::TactileDepth>(
-      TactileDepthLogic::kOutputTopic, rclcpp::SensorDataQoS());
+    publisher_ = tactile_common::data_publisher<tactile_msgs::msg::TactileDepth>(*this, TactileDepthLogic::kOutputTopic);
     left_ = create_subscription<tactile_msgs::msg::WhiskerSignal>(
       TactileDepthLogic::kLeftSignalTopic, rclcpp::SensorDataQoS(),
       [this](const tactile_msgs::msg::WhiskerSignal & msg) {
@@ -41,6 +44,8 @@ class TactileDepthComponent : public rclcpp::Node {
   }
 
  private:
+  /// Declared before logic_: its values configure it; its on-set callback applies or refuses `ros2 param set`.
+  tactile_common::NodeParameters parameters_;
   TactileDepthLogic logic_;
   rclcpp::Publisher<tactile_msgs::msg::TactileDepth>::SharedPtr publisher_;
   rclcpp::Subscription<tactile_msgs::msg::WhiskerSignal>::SharedPtr left_;

@@ -7,6 +7,7 @@
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
 #include "tactile_common/ros_parameters.hpp"
+#include "tactile_common/ros_qos.hpp"
 #include "tactile_fsm/wall_effect_nav_logic.hpp"
 
 namespace tactile_fsm {
@@ -15,11 +16,11 @@ class WallEffectNavComponent : public rclcpp::Node {
  public:
   explicit WallEffectNavComponent(const rclcpp::NodeOptions & options)
   : Node(WallEffectNavLogic::kNodeName, options),
-    logic_(WallEffectNavLogic::params_from(
-      tactile_common::declare_parameters(*this, WallEffectNavLogic::default_parameters())))
+    parameters_(*this, WallEffectNavLogic::default_parameters()),  // every key read-only
+    logic_(WallEffectNavLogic::params_from(parameters_.values()))
   {
-    setpoint_ = create_publisher<nav_msgs::msg::Odometry>(WallEffectNavLogic::kSetpointTopic, 10);
-    state_ = create_publisher<tactile_msgs::msg::FsmState>(WallEffectNavLogic::kStateTopic, 10);
+    setpoint_ = tactile_common::data_publisher<nav_msgs::msg::Odometry>(*this, WallEffectNavLogic::kSetpointTopic);
+    state_ = tactile_common::data_publisher<tactile_msgs::msg::FsmState>(*this, WallEffectNavLogic::kStateTopic);
     wall_ = create_subscription<tactile_msgs::msg::WallEstimate>(
       WallEffectNavLogic::kWallTopic, rclcpp::SensorDataQoS(),
       [this](const tactile_msgs::msg::WallEstimate & msg) {logic_.on_wall(msg);});
@@ -38,6 +39,8 @@ class WallEffectNavComponent : public rclcpp::Node {
   }
 
  private:
+  /// Declared before logic_: its values configure it; its on-set callback applies or refuses `ros2 param set`.
+  tactile_common::NodeParameters parameters_;
   WallEffectNavLogic logic_;
   rclcpp::Publisher<nav_msgs::msg::Odometry>::SharedPtr setpoint_;
   rclcpp::Publisher<tactile_msgs::msg::FsmState>::SharedPtr state_;

@@ -15,6 +15,7 @@
 #include "rclcpp_components/register_node_macro.hpp"
 #include "tactile_common/event_tick.hpp"
 #include "tactile_common/ros_parameters.hpp"
+#include "tactile_common/ros_qos.hpp"
 #include "tactile_fsm/whisker_fsm_logic.hpp"
 
 namespace tactile_fsm {
@@ -23,14 +24,12 @@ class WhiskerFsmComponent : public rclcpp::Node {
  public:
   explicit WhiskerFsmComponent(const rclcpp::NodeOptions & options)
   : Node(WhiskerFsmLogic::kNodeName, options),
-    logic_(WhiskerFsmLogic::params_from(
-      tactile_common::declare_parameters(*this, WhiskerFsmLogic::default_parameters()))),
+    parameters_(*this, WhiskerFsmLogic::default_parameters()),  // every key read-only
+    logic_(WhiskerFsmLogic::params_from(parameters_.values())),
     tick_(WhiskerFsmLogic::kTimerPeriodNs)
   {
-    setpoint_pub_ = create_publisher<tactile_msgs::msg::HoverSetpoint>(
-      WhiskerFsmLogic::kSetpointTopic, rclcpp::QoS(10));
-    state_pub_ = create_publisher<tactile_msgs::msg::FsmState>(
-      WhiskerFsmLogic::kStateTopic, rclcpp::QoS(10).reliable());
+    setpoint_pub_ = tactile_common::data_publisher<tactile_msgs::msg::HoverSetpoint>(*this, WhiskerFsmLogic::kSetpointTopic);
+    state_pub_ = tactile_common::data_publisher<tactile_msgs::msg::FsmState>(*this, WhiskerFsmLogic::kStateTopic);
     depth_sub_ = create_subscription<tactile_msgs::msg::TactileDepth>(
       WhiskerFsmLogic::kDepthTopic, rclcpp::SensorDataQoS(),
       [this](const tactile_msgs::msg::TactileDepth & msg) {
@@ -68,6 +67,8 @@ class WhiskerFsmComponent : public rclcpp::Node {
     }
   }
 
+  /// Declared before logic_: its values configure it; its on-set callback applies or refuses `ros2 param set`.
+  tactile_common::NodeParameters parameters_;
   WhiskerFsmLogic logic_;
   tactile_common::EventTick tick_;
   rclcpp::Publisher<tactile_msgs::msg::HoverSetpoint>::SharedPtr setpoint_pub_;

@@ -7,6 +7,7 @@
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
 #include "tactile_common/ros_parameters.hpp"
+#include "tactile_common/ros_qos.hpp"
 #include "tactile_fsm/xplorer_fsm_logic.hpp"
 
 namespace tactile_fsm {
@@ -15,11 +16,11 @@ class XplorerFsmComponent : public rclcpp::Node {
  public:
   explicit XplorerFsmComponent(const rclcpp::NodeOptions & options)
   : Node(XplorerFsmLogic::kNodeName, options),
-    logic_(XplorerFsmLogic::params_from(
-      tactile_common::declare_parameters(*this, XplorerFsmLogic::default_parameters())))
+    parameters_(*this, XplorerFsmLogic::default_parameters()),  // every key read-only
+    logic_(XplorerFsmLogic::params_from(parameters_.values()))
   {
-    setpoint_pub_ = create_publisher<geometry_msgs::msg::PoseStamped>(XplorerFsmLogic::kSetpointTopic, 10);
-    state_pub_ = create_publisher<tactile_msgs::msg::FsmState>(XplorerFsmLogic::kStateTopic, 10);
+    setpoint_pub_ = tactile_common::data_publisher<geometry_msgs::msg::PoseStamped>(*this, XplorerFsmLogic::kSetpointTopic);
+    state_pub_ = tactile_common::data_publisher<tactile_msgs::msg::FsmState>(*this, XplorerFsmLogic::kStateTopic);
     wrench_sub_ = create_subscription<geometry_msgs::msg::WrenchStamped>(
       XplorerFsmLogic::kWrenchTopic, rclcpp::SensorDataQoS(),
       [this](const geometry_msgs::msg::WrenchStamped & msg) {logic_.on_wrench(msg);});
@@ -36,6 +37,8 @@ class XplorerFsmComponent : public rclcpp::Node {
   }
 
  private:
+  /// Declared before logic_: its values configure it; its on-set callback applies or refuses `ros2 param set`.
+  tactile_common::NodeParameters parameters_;
   XplorerFsmLogic logic_;
   rclcpp::Publisher<geometry_msgs::msg::PoseStamped>::SharedPtr setpoint_pub_;
   rclcpp::Publisher<tactile_msgs::msg::FsmState>::SharedPtr state_pub_;

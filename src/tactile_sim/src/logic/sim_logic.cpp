@@ -778,8 +778,12 @@ SimLogic::~SimLogic() = default;
 
 tactile_common::ParamMap SimLogic::default_parameters() {
   tactile_common::ParamMap p(kNodeName, "defaults");
-  p.set("scenario", std::string(""));
-  p.set("seed", int64_t{-1});
+  // Read at start (the world is built from them): read-only under ROS.
+  p.set("scenario", std::string(""),
+        {"scenario file to simulate (config/scenarios/*.yaml); required", "", {}, false});
+  p.set("seed", int64_t{-1},
+        {"random seed of the run; -1: the scenario's own seed", "",
+         tactile_common::at_least(-1), false});
   return p;
 }
 

@@ -71,17 +71,31 @@ class TactileSimComponent : public rclcpp::Node {
 
   explicit TactileSimComponent(const rclcpp::NodeOptions & options)
   : Node(SimLogic::kNodeName, options),
-    logic_(SimLogic::from_parameters(
-      tactile_common::declare_parameters(*this, SimLogic::default_parameters())))
+    parameters_(*this, SimLogic::default_parameters()),  // every key read-only
+    logic_(SimLogic::from_parameters(parameters_.values()))
   {
-    real_time_factor_ = declare_parameter<double>("real_time_factor", 1.0);
+    // The host's own parameters (not the simulation's): read at start, read-only like the
+    // logic's (tactile_common::NodeParameters), so `ros2 param set` refuses them.
+    const auto read_only = [](const char * description) {
+        rcl_interfaces::msg::ParameterDescriptor d;
+        d.description = description;
+        d.read_only = true;
+        d.additional_constraints = "read at start: restart the node to change it";
+        return d;
+      };
+    real_time_factor_ = declare_parameter<double>(
+      "real_time_factor", 1.0,
+      read_only("simulated seconds per wall-clock second, in (0, 1000]"));
     if (!(real_time_factor_ > 0.0) || real_time_factor_ > 1000.0) {
       throw std::invalid_argument(
         tactile_common::parameter_source(*this) + ": real_time_factor: must be in (0, 1000], got " +
         std::to_string(real_time_factor_));
     }
-    wait_for_publisher_ = declare_parameter<std::string>("wait_for_publisher", "");
-    const auto subscribers = declare_parameter<std::string>("wait_for_subscribers", "");
+    wait_for_publisher_ = declare_parameter<std::string>(
+      "wait_for_publisher", "", read_only("the clock starts once this topic has a publisher (\"\": at once)"));
+    const auto subscribers = declare_parameter<std::string>(
+      "wait_for_subscribers", "",
+      read_only("comma-separated topics the clock waits for a subscriber of (\"\": none)"));
     for (size_t begin = 0; begin < subscribers.size(); ) {
       size_t end = subscribers.find(',', begin);
       if (end == std::string::npos) {end = subscribers.size();}
@@ -135,7 +149,7 @@ class TactileSimComponent : public rclcpp::Node {
       auto it = publishers.find(m.topic);
       if (it == publishers.end()) {
         const std::string topic(m.topic);
-        it = publishers.emplace(topic, create_publisher<T>(topic, rclcpp::SensorDataQoS())).first;
+        it = publishers.emplace(topic, tactile_common::data_publisher<T>(*this, topic)).first;
       }
       it->second->publish(m.msg);
     }
@@ -148,7 +162,7 @@ class TactileSimComponent : public rclcpp::Node {
     for (const auto & m : messages) {
       const std::string topic(m.topic);
       if (publishers.find(topic) == publishers.end()) {
-        publishers.emplace(topic, create_publisher<T>(topic, rclcpp::SensorDataQoS()));
+        publishers.emplace(topic, tactile_common::data_publisher<T>(*this, topic));
       }
       publisher_bases_[topic] = publishers.at(topic);
     }
@@ -294,6 +308,8 @@ class TactileSimComponent : public rclcpp::Node {
   template<class T>
   using Publishers = std::map<std::string, typename rclcpp::Publisher<T>::SharedPtr, std::less<>>;
 
+  /// Declared before logic_: its values configure it; its on-set callback applies or refuses `ros2 param set`.
+  tactile_common::NodeParameters parameters_;
   std::unique_ptr<SimLogic> logic_;
   SimLogic::Outputs outputs_;
   int64_t now_ns_ = 0;

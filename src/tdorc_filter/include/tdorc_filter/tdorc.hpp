@@ -123,6 +123,10 @@ struct Params {
   void validate() const;
 };
 
+/// Field-by-field equality (a node logic refuses a live change that touches other fields).
+bool operator==(const Params& a, const Params& b);
+inline bool operator!=(const Params& a, const Params& b) { return !(a == b); }
+
 /// Band-pass biquad in transposed direct form II (000 eq. 9-11):
 ///   S_p = b0*S_c + z0                 (9)
 ///   z0' = b1*S_c - a1*S_p + z1        (10)
@@ -246,6 +250,8 @@ class TdorcChannel {
   /// Both steps for a channel used on its own (its own contact decides).
   ChannelOutput update(int64_t sample_index, double value);
   void reset();
+  /// T_c for the next samples (a live parameter: read per sample, no state depends on it).
+  void set_contact_threshold(double contact_threshold) { params_.contact_threshold = contact_threshold; }
   bool ready() const { return ready_; }
   /// Fits so far (0 before the first window is full; TDOC stays at 1).
   uint64_t fit_count() const { return fit_count_; }
@@ -305,6 +311,10 @@ class TdorcWhisker {
     if (n > 0) next_index_ += n;
   }
   void reset();
+  /// T_c for the next samples, of all three channels (a live parameter: S_p and the hold
+  /// conditions compare with it per sample; windows, fits and filter state stay).
+  /// Throws std::invalid_argument if Params::validate() refuses it.
+  void set_contact_threshold(double contact_threshold);
   const Params& params() const { return params_; }
   const TdorcChannel& channel(int i) const { return channels_[static_cast<std::size_t>(i)]; }
   int64_t samples() const { return next_index_; }

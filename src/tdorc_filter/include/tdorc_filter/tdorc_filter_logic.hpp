@@ -63,6 +63,13 @@ class TdorcFilterLogic {
 
   explicit TdorcFilterLogic(const Params& params);
 
+  /// New parameters while running (`ros2 param set`): only the live keys of
+  /// default_parameters() may differ from the current ones (contact_threshold, applied
+  /// from the next sample on; the drift window and filter state stay). Throws
+  /// std::invalid_argument naming the field if they do not validate or another field
+  /// differs; nothing changes then.
+  void set_params(const Params& params);
+
   /// One raw sample received at receive_ns (the node's clock; nullopt: not
   /// known, the sequence alone checks the stamp). Returns the signal (with
   /// the stamp SampleClock trusts), or nothing if the sample was dropped

@@ -6,6 +6,7 @@
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
 #include "tactile_common/ros_parameters.hpp"
+#include "tactile_common/ros_qos.hpp"
 #include "tdorc_filter/tdorc_filter_logic.hpp"
 
 // Publishers take unique_ptr: with use_intra_process_comms the message then moves
@@ -16,11 +17,13 @@ class TdorcFilterComponent : public rclcpp::Node {
  public:
   explicit TdorcFilterComponent(const rclcpp::NodeOptions & options)
   : Node(TdorcFilterLogic::kNodeName, options),
-    logic_(TdorcFilterLogic::params_from(
-      tactile_common::declare_parameters(*this, TdorcFilterLogic::default_parameters())))
+    parameters_(*this, TdorcFilterLogic::default_parameters(),
+                [this](const tactile_common::ParamMap & values) {
+                  logic_.set_params(TdorcFilterLogic::params_from(values));
+                }),
+    logic_(TdorcFilterLogic::params_from(parameters_.values()))
   {
-    publisher_ = create_publisher<tactile_msgs::msg::WhiskerSignal>(
-      TdorcFilterLogic::kOutputTopic, rclcpp::SensorDataQoS());
+    publisher_ = tactile_common::data_publisher<tactile_msgs::msg::WhiskerSignal>(*this, TdorcFilterLogic::kOutputTopic);
     subscription_ = create_subscription<tactile_msgs::msg::WhiskerPressure>(
       TdorcFilterLogic::kInputTopic, rclcpp::SensorDataQoS(),
       [this](const tactile_msgs::msg::WhiskerPressure & msg) {
@@ -33,6 +36,8 @@ class TdorcFilterComponent : public rclcpp::Node {
   }
 
  private:
+  /// Declared before logic_: its values configure it; its on-set callback applies or refuses `ros2 param set`.
+  tactile_common::NodeParameters parameters_;
   TdorcFilterLogic logic_;
   rclcpp::Publisher<tactile_msgs::msg::WhiskerSignal>::SharedPtr publisher_;
   rclcpp::Subscription<tactile_msgs::msg::WhiskerPressure>::SharedPtr subscription_;

@@ -7,6 +7,7 @@
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
 #include "tactile_common/ros_parameters.hpp"
+#include "tactile_common/ros_qos.hpp"
 #include "wall_effect_ekf/indi_control_logic.hpp"
 
 namespace wall_effect_ekf {
@@ -15,11 +16,10 @@ class IndiControlComponent : public rclcpp::Node {
  public:
   explicit IndiControlComponent(const rclcpp::NodeOptions & options)
   : Node(IndiControlLogic::kNodeName, options),
-    logic_(IndiControlLogic::params_from(
-      tactile_common::declare_parameters(*this, IndiControlLogic::default_parameters())))
+    parameters_(*this, IndiControlLogic::default_parameters()),  // every key read-only
+    logic_(IndiControlLogic::params_from(parameters_.values()))
   {
-    publisher_ = create_publisher<tactile_msgs::msg::ThrustCommand>(
-      IndiControlLogic::kOutputTopic, rclcpp::SensorDataQoS());
+    publisher_ = tactile_common::data_publisher<tactile_msgs::msg::ThrustCommand>(*this, IndiControlLogic::kOutputTopic);
     setpoint_ = create_subscription<nav_msgs::msg::Odometry>(
       IndiControlLogic::kSetpointTopic, 10,
       [this](const nav_msgs::msg::Odometry & msg) {logic_.on_setpoint(msg);});
@@ -44,6 +44,8 @@ class IndiControlComponent : public rclcpp::Node {
   }
 
  private:
+  /// Declared before logic_: its values configure it; its on-set callback applies or refuses `ros2 param set`.
+  tactile_common::NodeParameters parameters_;
   IndiControlLogic logic_;
   rclcpp::Publisher<tactile_msgs::msg::ThrustCommand>::SharedPtr publisher_;
   rclcpp::Subscription<nav_msgs::msg::Odometry>::SharedPtr setpoint_;

@@ -7,6 +7,7 @@
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
 #include "tactile_common/ros_parameters.hpp"
+#include "tactile_common/ros_qos.hpp"
 #include "wall_effect_ekf/wall_effect_ekf_logic.hpp"
 
 namespace wall_effect_ekf {
@@ -15,11 +16,10 @@ class WallEffectEkfComponent : public rclcpp::Node {
  public:
   explicit WallEffectEkfComponent(const rclcpp::NodeOptions & options)
   : Node(WallEffectEkfLogic::kNodeName, options),
-    logic_(WallEffectEkfLogic::params_from(
-      tactile_common::declare_parameters(*this, WallEffectEkfLogic::default_parameters())))
+    parameters_(*this, WallEffectEkfLogic::default_parameters()),  // every key read-only
+    logic_(WallEffectEkfLogic::params_from(parameters_.values()))
   {
-    publisher_ = create_publisher<tactile_msgs::msg::WallEstimate>(
-      WallEffectEkfLogic::kOutputTopic, rclcpp::SensorDataQoS());
+    publisher_ = tactile_common::data_publisher<tactile_msgs::msg::WallEstimate>(*this, WallEffectEkfLogic::kOutputTopic);
     imu_ = create_subscription<sensor_msgs::msg::Imu>(
       WallEffectEkfLogic::kImuTopic, rclcpp::SensorDataQoS(),
       [this](const sensor_msgs::msg::Imu & msg) {logic_.on_imu(msg);});
@@ -44,6 +44,8 @@ class WallEffectEkfComponent : public rclcpp::Node {
   }
 
  private:
+  /// Declared before logic_: its values configure it; its on-set callback applies or refuses `ros2 param set`.
+  tactile_common::NodeParameters parameters_;
   WallEffectEkfLogic logic_;
   rclcpp::Publisher<tactile_msgs::msg::WallEstimate>::SharedPtr publisher_;
   rclcpp::Subscription<sensor_msgs::msg::Imu>::SharedPtr imu_;

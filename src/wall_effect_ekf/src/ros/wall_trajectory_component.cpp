@@ -7,6 +7,7 @@
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
 #include "tactile_common/ros_parameters.hpp"
+#include "tactile_common/ros_qos.hpp"
 #include "wall_effect_ekf/wall_trajectory.hpp"
 
 namespace wall_effect_ekf {
@@ -15,10 +16,10 @@ class WallTrajectoryComponent : public rclcpp::Node {
  public:
   explicit WallTrajectoryComponent(const rclcpp::NodeOptions & options)
   : Node(WallTrajectoryLogic::kNodeName, options),
-    logic_(WallTrajectoryLogic::params_from(
-      tactile_common::declare_parameters(*this, WallTrajectoryLogic::default_parameters())))
+    parameters_(*this, WallTrajectoryLogic::default_parameters()),  // every key read-only
+    logic_(WallTrajectoryLogic::params_from(parameters_.values()))
   {
-    publisher_ = create_publisher<nav_msgs::msg::Odometry>(WallTrajectoryLogic::kOutputTopic, 10);
+    publisher_ = tactile_common::data_publisher<nav_msgs::msg::Odometry>(*this, WallTrajectoryLogic::kOutputTopic);
     // On the node clock: simulated time under use_sim_time (the SITL launches, any
     // real_time_factor), system time otherwise.
     timer_ = rclcpp::create_timer(this, get_clock(),
@@ -27,6 +28,8 @@ class WallTrajectoryComponent : public rclcpp::Node {
   }
 
  private:
+  /// Declared before logic_: its values configure it; its on-set callback applies or refuses `ros2 param set`.
+  tactile_common::NodeParameters parameters_;
   WallTrajectoryLogic logic_;
   rclcpp::Publisher<nav_msgs::msg::Odometry>::SharedPtr publisher_;
   rclcpp::TimerBase::SharedPtr timer_;

@@ -20,6 +20,7 @@
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
 #include "tactile_common/ros_parameters.hpp"
+#include "tactile_common/ros_qos.hpp"
 #include "whisker_driver/driver_health.hpp"
 #include "whisker_driver/whisker_driver_logic.hpp"
 #ifdef WHISKER_DRIVER_HAVE_DIAGNOSTIC_UPDATER
@@ -41,13 +42,11 @@ public:
   /// the publisher and diagnostics. No device yet: open().
   explicit DriverRosFace(NodeT & node)
   : node_(node),
-    params_(WhiskerDriverLogic::params_from(
-      tactile_common::declare_parameters(node, WhiskerDriverLogic::default_parameters()))),
-    health_(DriverHealth::params_from(
-      tactile_common::declare_parameters(node, DriverHealth::default_parameters())))
+    parameters_(node, {WhiskerDriverLogic::default_parameters(), DriverHealth::default_parameters()}),
+    params_(WhiskerDriverLogic::params_from(parameters_.values())),  // every key read-only
+    health_(DriverHealth::params_from(parameters_.values()))
   {
-    publisher_ = node_.template create_publisher<tactile_msgs::msg::WhiskerPressure>(
-      WhiskerDriverLogic::kOutputTopic, rclcpp::SensorDataQoS());
+    publisher_ = tactile_common::data_publisher<tactile_msgs::msg::WhiskerPressure>(node_, WhiskerDriverLogic::kOutputTopic);
 #ifdef WHISKER_DRIVER_HAVE_DIAGNOSTIC_UPDATER
     updater_ = std::make_unique<diagnostic_updater::Updater>(&node_, health_.params().diagnostics_period_s);
     updater_->setHardwareID(device_name());
@@ -123,6 +122,8 @@ private:
       std::string(), rclcpp::QoS(1)));
 
   NodeT & node_;
+  /// Declared first: its values configure the driver; `ros2 param set` is refused (read-only).
+  tactile_common::NodeParameters parameters_;
   WhiskerDriverLogic::Params params_;
   DriverHealth health_;
   std::unique_ptr<WhiskerDriverLogic> logic_;  ///< the open source (configured)

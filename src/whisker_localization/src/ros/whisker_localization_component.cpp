@@ -5,6 +5,7 @@
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
 #include "tactile_common/ros_parameters.hpp"
+#include "tactile_common/ros_qos.hpp"
 #include "whisker_localization/whisker_localization_logic.hpp"
 
 namespace whisker_localization {
@@ -13,13 +14,11 @@ class WhiskerLocalizationComponent : public rclcpp::Node {
  public:
   explicit WhiskerLocalizationComponent(const rclcpp::NodeOptions & options)
   : Node(WhiskerLocalizationLogic::kNodeName, options),
-    logic_(WhiskerLocalizationLogic::params_from(
-      tactile_common::declare_parameters(*this, WhiskerLocalizationLogic::default_parameters())))
+    parameters_(*this, WhiskerLocalizationLogic::default_parameters()),  // every key read-only
+    logic_(WhiskerLocalizationLogic::params_from(parameters_.values()))
   {
-    result_pub_ = create_publisher<tactile_msgs::msg::LocalizationResult>(
-      WhiskerLocalizationLogic::kResultTopic, rclcpp::QoS(10));
-    pose_set_pub_ = create_publisher<geometry_msgs::msg::PoseArray>(
-      WhiskerLocalizationLogic::kPoseSetTopic, rclcpp::QoS(10));
+    result_pub_ = tactile_common::data_publisher<tactile_msgs::msg::LocalizationResult>(*this, WhiskerLocalizationLogic::kResultTopic);
+    pose_set_pub_ = tactile_common::data_publisher<geometry_msgs::msg::PoseArray>(*this, WhiskerLocalizationLogic::kPoseSetTopic);
     odom_sub_ = create_subscription<nav_msgs::msg::Odometry>(
       WhiskerLocalizationLogic::kOdomTopic, rclcpp::SensorDataQoS(),
       [this](const nav_msgs::msg::Odometry & msg) {logic_.on_odometry(msg);});
@@ -37,6 +36,8 @@ class WhiskerLocalizationComponent : public rclcpp::Node {
   }
 
  private:
+  /// Declared before logic_: its values configure it; its on-set callback applies or refuses `ros2 param set`.
+  tactile_common::NodeParameters parameters_;
   WhiskerLocalizationLogic logic_;
   rclcpp::Publisher<tactile_msgs::msg::LocalizationResult>::SharedPtr result_pub_;
   rclcpp::Publisher<geometry_msgs::msg::PoseArray>::SharedPtr pose_set_pub_;

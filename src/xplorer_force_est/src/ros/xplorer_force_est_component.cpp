@@ -5,6 +5,7 @@
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
 #include "tactile_common/ros_parameters.hpp"
+#include "tactile_common/ros_qos.hpp"
 #include "xplorer_force_est/xplorer_force_est_logic.hpp"
 
 namespace xplorer_force_est {
@@ -13,13 +14,11 @@ class XplorerForceEstComponent : public rclcpp::Node {
  public:
   explicit XplorerForceEstComponent(const rclcpp::NodeOptions & options)
   : Node(XplorerForceEstLogic::kNodeName, options),
-    logic_(XplorerForceEstLogic::params_from(
-      tactile_common::declare_parameters(*this, XplorerForceEstLogic::default_parameters())))
+    parameters_(*this, XplorerForceEstLogic::default_parameters()),  // every key read-only
+    logic_(XplorerForceEstLogic::params_from(parameters_.values()))
   {
-    world_pub_ = create_publisher<geometry_msgs::msg::WrenchStamped>(
-      XplorerForceEstLogic::kWrenchWorldTopic, rclcpp::SensorDataQoS());
-    body_pub_ = create_publisher<geometry_msgs::msg::WrenchStamped>(
-      XplorerForceEstLogic::kWrenchBodyTopic, rclcpp::SensorDataQoS());
+    world_pub_ = tactile_common::data_publisher<geometry_msgs::msg::WrenchStamped>(*this, XplorerForceEstLogic::kWrenchWorldTopic);
+    body_pub_ = tactile_common::data_publisher<geometry_msgs::msg::WrenchStamped>(*this, XplorerForceEstLogic::kWrenchBodyTopic);
     arm_sub_ = create_subscription<tactile_msgs::msg::ArmImuArray>(
       XplorerForceEstLogic::kArmImuTopic, rclcpp::SensorDataQoS(),
       [this](const tactile_msgs::msg::ArmImuArray & msg) {
@@ -36,6 +35,8 @@ class XplorerForceEstComponent : public rclcpp::Node {
   }
 
  private:
+  /// Declared before logic_: its values configure it; its on-set callback applies or refuses `ros2 param set`.
+  tactile_common::NodeParameters parameters_;
   XplorerForceEstLogic logic_;
   rclcpp::Publisher<geometry_msgs::msg::WrenchStamped>::SharedPtr world_pub_;
   rclcpp::Publisher<geometry_msgs::msg::WrenchStamped>::SharedPtr body_pub_;
