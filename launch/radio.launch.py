@@ -120,11 +120,11 @@ def pipeline_nodes(bridge_overrides):
     return nodes
 
 
-def radio_container(uri, namespace=None):
-    """One Crazyflie: the container (bridge on `uri` + the whisker pipeline) in `namespace`
-    (else the launch argument namespace), and its load-failure watch."""
+def radio_container(uri, namespace=None, name='radio_container'):
+    """One Crazyflie: the container `name` (bridge on `uri` + the whisker pipeline) in
+    `namespace` (else the launch argument namespace), and its load-failure watch."""
     container = ComposableNodeContainer(
-        name='radio_container', namespace='', package='rclcpp_components',
+        name=name, namespace='', package='rclcpp_components',
         executable='component_container',
         composable_node_descriptions=pipeline_nodes(bridge_overrides(uri)),
         output='screen', sigterm_timeout=container_stop_timeout())
@@ -161,6 +161,7 @@ def generate_launch_description():
                                           'and pipeline per enabled robot, in its namespace, on its '
                                           'uri (uri and namespace are then not used)'),
         autostart_argument(),
-        OpaqueFunction(function=robots_or_one),
     ] + ([lifecycle_common.activate_argument()] if lifecycle_common.is_lifecycle('crazyflie_bridge')
-         else []))
+         else []) + [
+        OpaqueFunction(function=robots_or_one),  # after every argument it reads
+    ])

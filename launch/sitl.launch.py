@@ -58,4 +58,4 @@ def generate_launch_description():
         _radio.launch_common.namespace_argument(),
         _radio.autostart_argument(),
         server,
-    ] + _radio.radio_container(uri) + _radio.bridge_lifecycle())
+    ] + _radio.radio_container(uri, name='sitl_bridge_container') + _radio.bridge_lifecycle())
