@@ -16,8 +16,9 @@ only, for `ros2 lifecycle set /whisker/left/whisker_driver activate`); a device 
 be opened is logged with its name and reason and leaves that driver `unconfigured`, the launch
 running (lifecycle_common.py). Without rclcpp_lifecycle a missing device stops the launch.
 
-Topics: /whisker/{left,right}/pressure (tactile_msgs/WhiskerPressure),
-        /whisker/{left,right}/signal   (tactile_msgs/WhiskerSignal),
+Topics (relative: under namespace:=NS they are /NS/whisker/...):
+        whisker/{left,right}/pressure (tactile_msgs/WhiskerPressure),
+        whisker/{left,right}/signal   (tactile_msgs/WhiskerSignal),
         /diagnostics (diagnostic_msgs/DiagnosticArray, where diagnostic_updater is installed):
         "whisker_driver: whisker deck /whisker/<side>" per driver (stall, frame errors,
         device gone; thresholds in config/whisker_driver_health.yaml).
@@ -32,8 +33,6 @@ from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import ComposableNodeContainer
 from launch_ros.descriptions import ComposableNode
 
-CONFIG_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config')
-
 _common_spec = importlib.util.spec_from_file_location(
     'launch_common', os.path.join(os.path.dirname(os.path.abspath(__file__)), 'launch_common.py'))
 launch_common = importlib.util.module_from_spec(_common_spec)
@@ -42,7 +41,7 @@ _lifecycle_spec = importlib.util.spec_from_file_location(
     'lifecycle_common', os.path.join(os.path.dirname(os.path.abspath(__file__)), 'lifecycle_common.py'))
 lifecycle_common = importlib.util.module_from_spec(_lifecycle_spec)
 _lifecycle_spec.loader.exec_module(lifecycle_common)
-DRIVERS = ['/whisker/left/whisker_driver', '/whisker/right/whisker_driver']
+DRIVERS = ['whisker/left/whisker_driver', 'whisker/right/whisker_driver']  # in the namespace
 
 
 def whisker_nodes(side, device, tdorc_params):
@@ -54,11 +53,11 @@ def whisker_nodes(side, device, tdorc_params):
             name='whisker_driver',
             namespace=namespace,
             parameters=launch_common.parameters(
-                os.path.join(CONFIG_DIR, 'whisker_driver.yaml'),
+                launch_common.config('whisker_driver'),
                 # /diagnostics thresholds (stall, frame errors, device gone)
-                os.path.join(CONFIG_DIR, 'whisker_driver_health.yaml'),
+                launch_common.config('whisker_driver_health'),
                 # Protocol, whisker_id and frame_id come from the file's
-                # /whisker/<side>/whisker_driver section.
+                # /**/whisker/<side>/whisker_driver section.
                 {'source': 'serial', 'device': device},
             ),
             extra_arguments=[{'use_intra_process_comms': True}],
@@ -90,13 +89,14 @@ def generate_launch_description():
         output='screen',
     )
     return LaunchDescription([
+        launch_common.namespace_argument(),
         DeclareLaunchArgument('left_device', default_value='/dev/ttyUSB0',
                               description='serial device of whisker 1 (text protocol)'),
         DeclareLaunchArgument('right_device', default_value='/dev/ttyUSB1',
                               description='serial device of whisker 2 (CSV protocol)'),
-        DeclareLaunchArgument('tdorc_params', default_value=os.path.join(CONFIG_DIR, 'tdorc_filter.yaml'),
+        DeclareLaunchArgument('tdorc_params', default_value=launch_common.config('tdorc_filter'),
                               description='parameter file of both TDORC filters'),
-        container,
+        launch_common.in_namespace([container]),
         launch_common.stop_on_load_failure(container),
     ] + ([lifecycle_common.activate_argument(), lifecycle_common.manage_lifecycle(DRIVERS)]
          if lifecycle_common.is_lifecycle('whisker_driver') else []))

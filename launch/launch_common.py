@@ -1,6 +1,19 @@
 """Shared by the launch files of this directory (loaded by path, as they are):
-a composable node that cannot start stops the whole launch, and its parameter error
-names the file (or the launch argument) the bad value came from.
+where the parameter files are (CONFIG_DIR), the vehicle's namespace (namespace:=), the
+simulator of the sitl_* launches, and: a composable node that cannot start stops the whole
+launch, and its parameter error names the file (or the launch argument) the bad value came
+from.
+
+Config: config/ is the directory beside this one, in the source tree (launch/ and config/
+of the workspace, `ros2 launch launch/<file>`) and where the package tactile_bringup
+installed both (share/tactile_bringup/launch and .../config, `ros2 launch tactile_bringup
+<file>` from any directory). It is looked up here only; the launch files use config().
+
+Namespace: every launch file takes namespace:= (default empty: the root, the names the
+launch files always had). Every topic of the nodes is relative, so under namespace:=cf1 the
+whisker FSM subscribes /cf1/whisker/depth and publishes /cf1/cmd_hover. The sitl_* launches
+also remap each node's /clock to /<namespace>/clock: two simulators on one domain keep
+their own simulated time.
 
 The component container only logs a failed load (a bad parameter, a missing Crazyradio,
 a serial device that is not there) and keeps running the rest of the graph, which then
@@ -10,13 +23,69 @@ the component's own message (it names the node, the parameter or device and the 
 
 import os
 
-from launch.actions import RegisterEventHandler
+from launch.actions import DeclareLaunchArgument, GroupAction, OpaqueFunction, RegisterEventHandler
 from launch.event_handlers import OnProcessIO
 from launch.substitution import Substitution
 from launch.substitutions import LaunchConfiguration, PythonExpression, TextSubstitution
 from launch_ros.parameter_descriptions import ParameterValue
 
 LOAD_FAILURE = 'Component constructor threw an exception'
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def _config_dir():
+    path = os.path.normpath(os.path.join(HERE, '..', 'config'))
+    if not os.path.isdir(path):
+        raise FileNotFoundError(
+            f'{path}: no config/ beside {HERE} (the source tree has launch/ and config/ side by '
+            'side, and so does share/tactile_bringup where the package tactile_bringup installs them)')
+    return path
+
+
+CONFIG_DIR = _config_dir()
+
+
+def config(name):
+    """config/<name>.yaml: a node's parameter file."""
+    return os.path.join(CONFIG_DIR, name + '.yaml')
+
+
+def scenario(name):
+    """config/scenarios/<name>.yaml: a simulator scenario."""
+    return os.path.join(CONFIG_DIR, 'scenarios', name + '.yaml')
+
+
+def namespace_argument():
+    return DeclareLaunchArgument(
+        'namespace', default_value='',
+        description='ROS namespace of every node and topic of this launch, e.g. cf1: '
+                    '/cf1/odom, /cf1/whisker_fsm (empty: the root)')
+
+
+def namespace_of(context, value=None):
+    """The namespace (no leading or trailing '/'; '' at the root) of `value`, else of the
+    launch argument `namespace`."""
+    from launch.substitutions import LaunchConfiguration
+    ns = value if value is not None else LaunchConfiguration('namespace').perform(context)
+    return ns.strip().strip('/')
+
+
+def in_namespace(actions, clock=False, namespace=None):
+    """`actions` (containers and their nodes) under `namespace`, else the launch argument
+    namespace (namespace_argument()); with clock=True every node's /clock is remapped to
+    /<namespace>/clock (the sitl_* launches: each simulator publishes its vehicle's time).
+    At the root nothing is pushed or remapped."""
+    def build(context):
+        from launch_ros.actions import PushRosNamespace, SetRemap
+        ns = namespace_of(context, namespace)
+        scoped = []
+        if ns:
+            scoped.append(PushRosNamespace(ns))
+            if clock:
+                scoped.append(SetRemap(src='/clock', dst=f'/{ns}/clock'))
+        return [GroupAction(scoped + list(actions))]
+    return OpaqueFunction(function=build)
 
 
 class NodeFailedToStart(RuntimeError):
@@ -96,12 +165,36 @@ def parameters(*entries):
     return list(entries) + ([{PARAMETER_SOURCES: sources}] if sources else [])
 
 
-def simulator_node(wait_for_publisher, extra_arguments):
-    """The SITL's simulator component of the sitl_* launch files (arguments scenario, seed,
-    real_time_factor, wait_for_subscribers). It starts the world once `wait_for_publisher`
-    (the graph's controller output, loaded last) has a publisher, and holds t = 0 until the
-    topics of wait_for_subscribers have a subscriber in another process (a recorder;
-    comma-separated, '' starts at once)."""
+SIM_TIME = {'use_sim_time': True}
+INTRA = [{'use_intra_process_comms': True}]
+
+
+def sitl_arguments(default_scenario):
+    """The launch arguments of every sitl_* launch file: scenario (default
+    config/scenarios/<default_scenario>.yaml), seed, real_time_factor, wait_for_subscribers
+    and namespace."""
+    from launch.actions import DeclareLaunchArgument as Arg
+    return [
+        Arg('scenario', default_value=scenario(default_scenario),
+            description='scenario file of the simulator'),
+        Arg('seed', default_value='-1', description="noise seed (-1: the scenario's)"),
+        Arg('real_time_factor', default_value='1.0',
+            description='simulated seconds per wall-clock second (1.0: real time; the '
+                        'simulator publishes sim/done at the end)'),
+        Arg('wait_for_subscribers', default_value='',
+            description="the simulator's topics (comma-separated; relative ones in the "
+                        'namespace) that must have a subscriber in another process before '
+                        'the world starts, e.g. a recorder'),
+        namespace_argument(),
+    ]
+
+
+def simulator_node(wait_for_publisher):
+    """The simulator component of every sitl_* launch file (their arguments sitl_arguments()).
+    It starts the world once `wait_for_publisher` (a topic of the graph's node loaded last,
+    relative: in the namespace) has a publisher, and holds t = 0 until the topics of
+    wait_for_subscribers have a subscriber in another process (a recorder; comma-separated,
+    '' starts at once)."""
     from launch_ros.descriptions import ComposableNode
     return ComposableNode(
         package='tactile_sim', plugin='tactile_sim::TactileSimComponent', name='tactile_sim',
@@ -113,4 +206,109 @@ def simulator_node(wait_for_publisher, extra_arguments):
              'wait_for_publisher': wait_for_publisher,
              'wait_for_subscribers': ParameterValue(
                  LaunchConfiguration('wait_for_subscribers'), value_type=str)}),
-        extra_arguments=extra_arguments)
+        extra_arguments=INTRA)
+
+
+def sitl_container(name, nodes):
+    """The container of a sitl_* launch: `nodes` (the simulator first) in one process, in
+    the launch argument namespace with /clock remapped into it, and a failed load stops the
+    launch."""
+    from launch_ros.actions import ComposableNodeContainer
+    container = ComposableNodeContainer(
+        name=name, namespace='', package='rclcpp_components', executable='component_container',
+        composable_node_descriptions=nodes, output='screen')
+    return [in_namespace([container], clock=True), stop_on_load_failure(container)]
+
+
+class RobotsFileError(ValueError):
+    pass
+
+
+class Robot:
+    """One enabled robot of a robots file (load_robots)."""
+
+    def __init__(self, name, uri, namespace, initial_position):
+        self.name = name
+        self.uri = uri
+        self.namespace = namespace
+        self.initial_position = initial_position
+
+    def __repr__(self):
+        return (f'Robot({self.name!r}, uri={self.uri!r}, namespace={self.namespace!r}, '
+                f'initial_position={self.initial_position!r})')
+
+
+ROBOT_KEYS = ('enabled', 'uri', 'namespace', 'initial_position', 'type')
+URI_SCHEMES = ('radio://', 'usb://', 'udp://')
+
+
+def _namespace_ok(ns):
+    import re
+    return re.fullmatch(r'[A-Za-z_][A-Za-z0-9_]*(/[A-Za-z_][A-Za-z0-9_]*)*', ns) is not None
+
+
+def load_robots(path):
+    """The enabled robots of a robots file in the style of Crazyswarm2's crazyflies.yaml:
+
+        robots:
+          cf1:                          # the robot's name
+            enabled: true               # false: listed, not started
+            uri: radio://0/80/2M/E7E7E7E7E7
+            namespace: cf1              # optional: the name (Crazyswarm2's convention)
+            initial_position: [0.0, 0.0, 0.0]   # m, world frame, where it stands at take-off
+            type: whisker_crazyflie     # optional, informative
+
+    Every error names the file, the robot and the key. Namespaces and URIs of the enabled
+    robots are unique; at least one robot is enabled."""
+    import math
+    import yaml
+    try:
+        with open(path) as f:
+            doc = yaml.safe_load(f)
+    except OSError as e:
+        raise RobotsFileError(f'{path}: cannot read the robots file: {e.strerror}') from None
+    except yaml.YAMLError as e:
+        raise RobotsFileError(f'{path}: not YAML: {e}') from None
+    if not isinstance(doc, dict) or not isinstance(doc.get('robots'), dict) or not doc['robots']:
+        raise RobotsFileError(f"{path}: expected a map 'robots' of robot name -> "
+                              '{enabled, uri, namespace, initial_position}')
+    robots, namespaces, uris = [], {}, {}
+    for name, entry in doc['robots'].items():
+        where = f'{path}: robots.{name}'
+        if not isinstance(entry, dict):
+            raise RobotsFileError(f'{where}: expected a map with enabled, uri, initial_position')
+        unknown = sorted(set(entry) - set(ROBOT_KEYS))
+        if unknown:
+            raise RobotsFileError(f'{where}: unknown key {unknown[0]} (keys: {", ".join(ROBOT_KEYS)})')
+        for key in ('enabled', 'uri', 'initial_position'):
+            if key not in entry:
+                raise RobotsFileError(f'{where}.{key}: missing')
+        if not isinstance(entry['enabled'], bool):
+            raise RobotsFileError(f'{where}.enabled: expected true or false, got {entry["enabled"]!r}')
+        uri = entry['uri']
+        if not isinstance(uri, str) or not uri.startswith(URI_SCHEMES):
+            raise RobotsFileError(f'{where}.uri: expected a Crazyflie URI ({", ".join(URI_SCHEMES)}), '
+                                  f'got {uri!r}')
+        namespace = entry.get('namespace', name)
+        if not isinstance(namespace, str) or not _namespace_ok(namespace.strip('/')):
+            raise RobotsFileError(f'{where}.namespace: expected a ROS namespace (letters, digits, '
+                                  f"'_', tokens separated by '/'), got {namespace!r}")
+        namespace = namespace.strip('/')
+        position = entry['initial_position']
+        if (not isinstance(position, list) or len(position) != 3 or
+                not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+                        for v in position)):
+            raise RobotsFileError(f'{where}.initial_position: expected [x, y, z] in m (3 finite '
+                                  f'numbers), got {position!r}')
+        if not entry['enabled']:
+            continue
+        if namespace in namespaces:
+            raise RobotsFileError(f'{where}.namespace: {namespace} is also robot {namespaces[namespace]}\'s')
+        if uri in uris:
+            raise RobotsFileError(f'{where}.uri: {uri} is also robot {uris[uri]}\'s')
+        namespaces[namespace] = name
+        uris[uri] = name
+        robots.append(Robot(str(name), uri, namespace, [float(v) for v in position]))
+    if not robots:
+        raise RobotsFileError(f'{path}: no robot is enabled')
+    return robots

@@ -10,6 +10,7 @@ them configured for the operator to check first:
 
     ros2 lifecycle get /crazyflie_bridge          # inactive: the radio is up
     ros2 lifecycle set /crazyflie_bridge activate # streams (nothing flies until takeoff)
+    ros2 lifecycle get /cf1/crazyflie_bridge      # under namespace:=cf1 or a robots file
 
 A failed configure (no Crazyradio, nothing answering at the URI, a missing serial device) is
 logged by the node with the device and the reason, and it stays `unconfigured`; the launch
@@ -116,14 +117,25 @@ def _manage(context, node_names, activate, logger):
             logger.error(f'{fqn}: activate failed (its error above): it stays inactive')
 
 
+def resolve_node_name(name, namespace):
+    """A node name of `node_names` as fully qualified: a relative one is in `namespace`."""
+    if name.startswith('/'):
+        return name
+    ns = namespace.strip().strip('/')
+    return '/' + (ns + '/' if ns else '') + name
+
+
 def manage_lifecycle(node_names):
-    """The action to add to a launch description: configures each fully qualified node of
-    `node_names` once its lifecycle services are up, then activates it if it reached
-    `inactive` and the launch argument `activate` is true (activate_argument())."""
+    """The action to add to a launch description: configures each node of `node_names` (fully
+    qualified, or relative: in the launch argument `namespace`, the root without one) once its
+    lifecycle services are up, then activates it if it reached `inactive` and the launch
+    argument `activate` is true (activate_argument())."""
     def start(context):
         logger = launch.logging.get_logger('lifecycle')
         activate = LaunchConfiguration('activate').perform(context) == 'true'
+        namespace = context.launch_configurations.get('namespace', '')
+        names = [resolve_node_name(n, namespace) for n in node_names]
         context.add_completion_future(context.asyncio_loop.run_in_executor(
-            None, _manage, context, list(node_names), activate, logger))
+            None, _manage, context, names, activate, logger))
         return None
     return OpaqueFunction(function=start)

@@ -42,14 +42,12 @@ import importlib.util
 import os
 
 from launch import LaunchDescription
-from launch.actions import DeclareLaunchArgument
+from launch.actions import DeclareLaunchArgument, OpaqueFunction
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import ComposableNodeContainer
 from launch_ros.descriptions import ComposableNode
 from launch_ros.parameter_descriptions import ParameterValue
 import yaml
-
-CONFIG_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config')
 
 _common_spec = importlib.util.spec_from_file_location(
     'launch_common', os.path.join(os.path.dirname(os.path.abspath(__file__)), 'launch_common.py'))
@@ -61,8 +59,7 @@ lifecycle_common = importlib.util.module_from_spec(_lifecycle_spec)
 _lifecycle_spec.loader.exec_module(lifecycle_common)
 
 
-def config(name):
-    return os.path.join(CONFIG_DIR, name + '.yaml')
+config = launch_common.config
 
 
 def autostart_argument():
@@ -82,19 +79,23 @@ def container_stop_timeout():
     bridge's shutdown landing is bounded by shutdown_land_timeout_s (config/crazyflie_bridge.yaml,
     else the logic's default), plus 5 s for the rest of the graph to stop."""
     with open(config('crazyflie_bridge')) as f:
-        params = (yaml.safe_load(f) or {}).get('crazyflie_bridge', {}).get('ros__parameters', {})
+        sections = yaml.safe_load(f) or {}
+    params = {}
+    for key in ('/**/crazyflie_bridge', 'crazyflie_bridge', '/crazyflie_bridge'):
+        params.update((sections.get(key) or {}).get('ros__parameters', {}))
     return str(float(params.get('shutdown_land_timeout_s', 10.0)) + 5.0)
 
 
-BRIDGE = '/crazyflie_bridge'
+BRIDGE = 'crazyflie_bridge'  # in the launch's namespace (lifecycle_common.manage_lifecycle)
 
 
-def bridge_lifecycle():
-    """The `activate` argument and the configure -> activate sequence of the bridge where it
-    is a lifecycle node (lifecycle_common.py); nothing where it is a plain node."""
+def bridge_lifecycle(bridges=(BRIDGE,)):
+    """The `activate` argument and the configure -> activate sequence of the bridges (relative:
+    in the launch argument namespace; or fully qualified) where the bridge is a lifecycle node
+    (lifecycle_common.py); nothing where it is a plain node."""
     if not lifecycle_common.is_lifecycle('crazyflie_bridge'):
         return []
-    return [lifecycle_common.activate_argument(), lifecycle_common.manage_lifecycle([BRIDGE])]
+    return [lifecycle_common.activate_argument(), lifecycle_common.manage_lifecycle(list(bridges))]
 
 
 def pipeline_nodes(bridge_overrides):
@@ -119,16 +120,48 @@ def pipeline_nodes(bridge_overrides):
     return nodes
 
 
-def generate_launch_description():
+def radio_container(uri, namespace=None, name='radio_container'):
+    """One Crazyflie: the container `name` (bridge on `uri` + the whisker pipeline) in
+    `namespace` (else the launch argument namespace), and its load-failure watch."""
     container = ComposableNodeContainer(
-        name='radio_container', namespace='', package='rclcpp_components',
+        name=name, namespace='', package='rclcpp_components',
         executable='component_container',
-        composable_node_descriptions=pipeline_nodes(bridge_overrides(LaunchConfiguration('uri'))),
+        composable_node_descriptions=pipeline_nodes(bridge_overrides(uri)),
         output='screen', sigterm_timeout=container_stop_timeout())
+    return [launch_common.in_namespace([container], namespace=namespace),
+            launch_common.stop_on_load_failure(container)]
+
+
+def robots_or_one(context):
+    """With robots:=FILE one container per enabled robot of the file, each in its namespace
+    (launch_common.load_robots); else one on the launch arguments uri and namespace."""
+    path = LaunchConfiguration('robots').perform(context)
+    if not path:
+        return radio_container(LaunchConfiguration('uri')) + manage_bridges([BRIDGE])
+    robots = launch_common.load_robots(path)
+    actions = []
+    for robot in robots:
+        actions += radio_container(robot.uri, namespace=robot.namespace)
+    return actions + manage_bridges(['/' + r.namespace + '/' + BRIDGE for r in robots])
+
+
+def manage_bridges(bridges):
+    if not lifecycle_common.is_lifecycle('crazyflie_bridge'):
+        return []
+    return [lifecycle_common.manage_lifecycle(bridges)]
+
+
+def generate_launch_description():
     return LaunchDescription([
         DeclareLaunchArgument('uri', default_value='radio://0/80/2M/E7E7E7E7E7?safelink=1',
-                              description='Crazyflie link URI (radio://, usb://, udp://)'),
+                              description='Crazyflie link URI (radio://, usb://, udp://); not with robots'),
+        launch_common.namespace_argument(),
+        DeclareLaunchArgument('robots', default_value='',
+                              description='robots file (config/crazyflies.yaml style): one bridge '
+                                          'and pipeline per enabled robot, in its namespace, on its '
+                                          'uri (uri and namespace are then not used)'),
         autostart_argument(),
-        container,
-        launch_common.stop_on_load_failure(container),
-    ] + bridge_lifecycle())
+    ] + ([lifecycle_common.activate_argument()] if lifecycle_common.is_lifecycle('crazyflie_bridge')
+         else []) + [
+        OpaqueFunction(function=robots_or_one),  # after every argument it reads
+    ])

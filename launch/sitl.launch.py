@@ -3,6 +3,7 @@ drone behind the firmware side of CRTP on UDP, wall-clock physics) plus the same
 container as radio.launch.py with the bridge on udp://127.0.0.1:<port>.
 
     ros2 launch launch/sitl.launch.py scenario:=config/scenarios/whisker_darkness_rigid_fsm.yaml
+    ros2 launch tactile_bringup sitl.launch.py namespace:=cf1 port:=19851
 
 As radio.launch.py, nothing flies until `takeoff` (then `start_behaviour`) unless
 autostart:=true; a lifecycle bridge is configured and activated (activate:=false: configured only).
@@ -29,11 +30,9 @@ import os
 from launch import LaunchDescription
 from launch.actions import DeclareLaunchArgument, ExecuteProcess
 from launch.substitutions import LaunchConfiguration, PathJoinSubstitution, PythonExpression
-from launch_ros.actions import ComposableNodeContainer
 from launch_ros.substitutions import FindPackagePrefix
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-CONFIG_DIR = os.path.join(HERE, '..', 'config')
 
 _spec = importlib.util.spec_from_file_location('radio_launch', os.path.join(HERE, 'radio.launch.py'))
 _radio = importlib.util.module_from_spec(_spec)
@@ -50,19 +49,13 @@ def generate_launch_description():
         # SIGTERM (which ends a linger at once) only after the linger's bound
         output='screen', sigterm_timeout=str(float(_radio.container_stop_timeout()) + 2.0))
     uri = PythonExpression(["'udp://127.0.0.1:' + '", port, "'"])
-    container = ComposableNodeContainer(
-        name='sitl_bridge_container', namespace='', package='rclcpp_components',
-        executable='component_container',
-        composable_node_descriptions=_radio.pipeline_nodes(_radio.bridge_overrides(uri)),
-        output='screen', sigterm_timeout=_radio.container_stop_timeout())
     return LaunchDescription([
-        DeclareLaunchArgument('scenario', default_value=os.path.join(
-            CONFIG_DIR, 'scenarios', 'whisker_darkness_rigid_fsm.yaml'),
+        DeclareLaunchArgument('scenario', default_value=_radio.launch_common.scenario(
+            'whisker_darkness_rigid_fsm'),
             description='scenario of the simulated Crazyflie (arena, vehicle, estimate)'),
         DeclareLaunchArgument('port', default_value='19850', description='UDP port (19850 + N)'),
         DeclareLaunchArgument('seed', default_value='-1', description="noise seed (-1: the scenario's)"),
+        _radio.launch_common.namespace_argument(),
         _radio.autostart_argument(),
         server,
-        container,
-        _radio.launch_common.stop_on_load_failure(container),
-    ] + _radio.bridge_lifecycle())
+    ] + _radio.radio_container(uri, name='sitl_bridge_container') + _radio.bridge_lifecycle())

@@ -1,26 +1,30 @@
-"""Whisker preimage localization (paper 002) as a ROS 2 composable node.
+"""Whisker preimage localization (paper 002) with ROS 2: the whisker stage simulator
+(tactile_sim, vehicle whisker_stage: the linear stage with the whisker and the pin of 002's
+bench) -> whisker_localization, composed in one container on simulated time.
 
-The node subscribes to the whisker's base moment (geometry_msgs/WrenchStamped,
-torque.z = M(0)) and the base odometry, and publishes the localization result
-(tactile_msgs/LocalizationResult) and the pose set (geometry_msgs/PoseArray).
-Parameters come from config/whisker_localization.yaml. There is no ROS node of
-the linear-stage simulator yet: feed the node from a bag or a stage driver. The
-bench protocols (Table I / II) run without ROS through `whisker_loc_sitl`.
+    ros2 launch tactile_bringup sitl_localization.launch.py [possibilistic:=true]
+    ros2 launch launch/sitl_localization.launch.py scenario:=config/scenarios/whisker_stage_table2.yaml
+    ros2 launch launch/sitl_localization.launch.py simulator:=false   # fed from a bag or a stage driver
 
-    ros2 launch launch/sitl_localization.launch.py [params:=path/to.yaml] [possibilistic:=true]
+whisker_localization subscribes to the whisker's base moment (whisker/base_wrench,
+geometry_msgs/WrenchStamped, torque.z = M(0)) and the base odometry (odom), and publishes
+the localization result (whisker/localization, tactile_msgs/LocalizationResult) and the
+pose set (whisker/pose_set, geometry_msgs/PoseArray). The simulated stage holds its
+initial pose until a position setpoint arrives on cmd_position (geometry_msgs/PoseStamped,
+the stage's base pose in the world): the bench protocols of 002 (Table I / II) run without
+ROS through `tactile sim config/scenarios/whisker_stage_table1.yaml`, whose host graph
+scripts the stage. Parameters come from config/whisker_localization.yaml (params:= another
+file); the scenario, seed, real_time_factor, wait_for_subscribers and namespace are
+the arguments of every sitl_* launch (launch_common.sitl_arguments).
 """
 import importlib.util
 import os
 
 from launch import LaunchDescription
-from launch.actions import DeclareLaunchArgument
+from launch.actions import DeclareLaunchArgument, OpaqueFunction
 from launch.substitutions import LaunchConfiguration
-from launch_ros.actions import ComposableNodeContainer
 from launch_ros.descriptions import ComposableNode
 from launch_ros.parameter_descriptions import ParameterValue
-
-HERE = os.path.dirname(os.path.abspath(__file__))
-DEFAULT_PARAMS = os.path.join(HERE, "..", "config", "whisker_localization.yaml")
 
 _common_spec = importlib.util.spec_from_file_location(
     'launch_common', os.path.join(os.path.dirname(os.path.abspath(__file__)), 'launch_common.py'))
@@ -28,29 +32,31 @@ launch_common = importlib.util.module_from_spec(_common_spec)
 _common_spec.loader.exec_module(launch_common)
 
 
+def nodes(context):
+    simulator = LaunchConfiguration('simulator').perform(context) == 'true'
+    localization = ComposableNode(
+        package='whisker_localization',
+        plugin='whisker_localization::WhiskerLocalizationComponent',
+        name='whisker_localization',
+        parameters=launch_common.parameters(
+            LaunchConfiguration('params'),
+            {'possibilistic': ParameterValue(LaunchConfiguration('possibilistic'), value_type=bool)},
+            *([launch_common.SIM_TIME] if simulator else [])),
+        extra_arguments=launch_common.INTRA)
+    # The localization publishes its outputs from construction: the world starts once it is loaded.
+    graph = [launch_common.simulator_node('whisker/localization')] if simulator else []
+    return launch_common.sitl_container('whisker_localization_container', graph + [localization])
+
+
 def generate_launch_description():
-    params = LaunchConfiguration("params")
-    possibilistic = LaunchConfiguration("possibilistic")
-    return LaunchDescription([
-        DeclareLaunchArgument("params", default_value=DEFAULT_PARAMS,
-                              description="whisker_localization parameter file"),
-        DeclareLaunchArgument("possibilistic", default_value="false",
-                              description="bounded-error preimages (002 eq. 23-25)"),
-        ComposableNodeContainer(
-            name="whisker_localization_container",
-            namespace="",
-            package="rclcpp_components",
-            executable="component_container",
-            composable_node_descriptions=[
-                ComposableNode(
-                    package="whisker_localization",
-                    plugin="whisker_localization::WhiskerLocalizationComponent",
-                    name="whisker_localization",
-                    parameters=launch_common.parameters(
-                        params, {"possibilistic": ParameterValue(possibilistic, value_type=bool)}),
-                ),
-            ],
-            output="screen",
-        ),
-        launch_common.stop_on_load_failure(),
+    return LaunchDescription(launch_common.sitl_arguments('whisker_stage_table1') + [
+        DeclareLaunchArgument('params', default_value=launch_common.config('whisker_localization'),
+                              description='whisker_localization parameter file'),
+        DeclareLaunchArgument('possibilistic', default_value='false',
+                              description='bounded-error preimages (002 eq. 23-25)'),
+        DeclareLaunchArgument('simulator', default_value='true', choices=['true', 'false'],
+                              description='true: the whisker stage simulator feeds the node (simulated '
+                                          'time); false: the node alone on wall-clock time, fed by '
+                                          'a bag or a stage driver'),
+        OpaqueFunction(function=nodes),
     ])

@@ -13,7 +13,8 @@ The standalone host runs the same graphs without ROS (`graph: wall_effect_nav` /
 
 Parameters come from the files in config/ (the ones `tactile sim` reads); a scenario's
 node_parameters are the host's per-node overrides and are not applied here: pass them as
-launch parameters or edit the config files. The simulator publishes /clock.
+launch parameters or edit the config files. The simulator publishes /clock
+(/<namespace>/clock under namespace:=).
 """
 
 import importlib.util
@@ -22,10 +23,7 @@ import os
 from launch import LaunchDescription
 from launch.actions import DeclareLaunchArgument, OpaqueFunction
 from launch.substitutions import LaunchConfiguration
-from launch_ros.actions import ComposableNodeContainer
 from launch_ros.descriptions import ComposableNode
-
-CONFIG_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config')
 
 _common_spec = importlib.util.spec_from_file_location(
     'launch_common', os.path.join(os.path.dirname(os.path.abspath(__file__)), 'launch_common.py'))
@@ -33,16 +31,15 @@ launch_common = importlib.util.module_from_spec(_common_spec)
 _common_spec.loader.exec_module(launch_common)
 
 
-def config(name):
-    return os.path.join(CONFIG_DIR, name + '.yaml')
+config = launch_common.config
 
 
 def nodes(context):
-    sim_time = {'use_sim_time': True}
-    intra = [{'use_intra_process_comms': True}]
+    sim_time = launch_common.SIM_TIME
+    intra = launch_common.INTRA
     behaviour = LaunchConfiguration('behaviour').perform(context)
     out = [
-        launch_common.simulator_node('/wall_effect/setpoint', intra),
+        launch_common.simulator_node('wall_effect/setpoint'),
         ComposableNode(
             package='wall_effect_ekf', plugin='wall_effect_ekf::WallEffectEkfComponent',
             name='wall_effect_ekf', parameters=launch_common.parameters(
@@ -66,28 +63,13 @@ def nodes(context):
             name='wall_effect_nav', parameters=launch_common.parameters(
                 config('wall_effect_nav'), sim_time),
             extra_arguments=intra))
-    return [ComposableNodeContainer(
-        name='sitl_wall_effect_container', namespace='', package='rclcpp_components',
-        executable='component_container', composable_node_descriptions=out, output='screen')]
+    return launch_common.sitl_container('sitl_wall_effect_container', out)
 
 
 def generate_launch_description():
-    return LaunchDescription([
-        DeclareLaunchArgument('scenario', default_value=os.path.join(
-            CONFIG_DIR, 'scenarios', 'ducted_track_0.yaml'),
-            description='scenario file of the simulator'),
-        DeclareLaunchArgument('seed', default_value='-1',
-                              description="noise seed (-1: the scenario's)"),
-        DeclareLaunchArgument('real_time_factor', default_value='1.0',
-                              description='simulated seconds per wall-clock second (1.0: real '
-                                          'time; the simulator publishes /sim/done at the end)'),
-        DeclareLaunchArgument('wait_for_subscribers', default_value='',
-                              description="the simulator's topics (comma-separated) that must "
-                                          'have a subscriber in another process before the '
-                                          'world starts, e.g. a recorder'),
+    return LaunchDescription(launch_common.sitl_arguments('ducted_track_0') + [
         DeclareLaunchArgument('behaviour', default_value='navigation',
                               description="'navigation' (wall_effect_nav) or 'trajectory' "
                                           "(004 estimation-flight script)"),
         OpaqueFunction(function=nodes),
-        launch_common.stop_on_load_failure(),
     ])

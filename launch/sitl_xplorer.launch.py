@@ -4,6 +4,7 @@ back to the simulator, and the contact mapper, composed in one container on simu
 time.
 
     ros2 launch launch/sitl_xplorer.launch.py scenario:=config/scenarios/xplorer_box_traversal.yaml mission:=explore
+    ros2 launch tactile_bringup sitl_xplorer.launch.py namespace:=x1
 
 The standalone host runs the same graph without ROS:
 
@@ -20,10 +21,7 @@ import os
 from launch import LaunchDescription
 from launch.actions import DeclareLaunchArgument
 from launch.substitutions import LaunchConfiguration
-from launch_ros.actions import ComposableNodeContainer
 from launch_ros.descriptions import ComposableNode
-
-CONFIG_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config')
 
 _common_spec = importlib.util.spec_from_file_location(
     'launch_common', os.path.join(os.path.dirname(os.path.abspath(__file__)), 'launch_common.py'))
@@ -31,15 +29,14 @@ launch_common = importlib.util.module_from_spec(_common_spec)
 _common_spec.loader.exec_module(launch_common)
 
 
-def config(name):
-    return os.path.join(CONFIG_DIR, name + '.yaml')
+config = launch_common.config
 
 
 def generate_launch_description():
-    sim_time = {'use_sim_time': True}
-    intra = [{'use_intra_process_comms': True}]
+    sim_time = launch_common.SIM_TIME
+    intra = launch_common.INTRA
     nodes = [
-        launch_common.simulator_node('/cmd_position', intra),
+        launch_common.simulator_node('cmd_position'),
         ComposableNode(
             package='xplorer_force_est', plugin='xplorer_force_est::XplorerForceEstComponent',
             name='xplorer_force_est', parameters=launch_common.parameters(
@@ -58,26 +55,9 @@ def generate_launch_description():
                 {'ply_file': LaunchConfiguration('ply_file')}),
             extra_arguments=intra),
     ]
-    return LaunchDescription([
-        DeclareLaunchArgument('scenario', default_value=os.path.join(
-            CONFIG_DIR, 'scenarios', 'xplorer_box_traversal.yaml'),
-            description='scenario file of the simulator'),
-        DeclareLaunchArgument('seed', default_value='-1',
-                              description="noise seed (-1: the scenario's)"),
-        DeclareLaunchArgument('real_time_factor', default_value='1.0',
-                              description='simulated seconds per wall-clock second (1.0: real '
-                                          'time; the simulator publishes /sim/done at the end)'),
-        DeclareLaunchArgument('wait_for_subscribers', default_value='',
-                              description="the simulator's topics (comma-separated) that must "
-                                          'have a subscriber in another process before the '
-                                          'world starts, e.g. a recorder'),
+    return LaunchDescription(launch_common.sitl_arguments('xplorer_box_traversal') + [
         DeclareLaunchArgument('mission', default_value='explore',
                               description='explore | static_wrench | ricochet | waypoint'),
         DeclareLaunchArgument('ply_file', default_value='xplorer_map.ply',
                               description='contact map written at shutdown (ASCII PLY, frame map)'),
-        ComposableNodeContainer(
-            name='sitl_xplorer_container', namespace='', package='rclcpp_components',
-            executable='component_container', composable_node_descriptions=nodes,
-            output='screen'),
-        launch_common.stop_on_load_failure(),
-    ])
+    ] + launch_common.sitl_container('sitl_xplorer_container', nodes))

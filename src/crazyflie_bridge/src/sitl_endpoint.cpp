@@ -72,9 +72,9 @@ void SitlEndpoint::step_physics() {
     }
   }
   for (const auto& o : out_.odometry) {
-    if (o.topic == "/odom") {
+    if (o.topic == "odom") {
       fw_.on_estimate(o.msg);
-    } else if (o.topic == "/ground_truth/odom") {
+    } else if (o.topic == "ground_truth/odom") {
       fw_.on_truth(o.msg);
       std::lock_guard<std::mutex> lock(truth_mutex_);
       const auto& q = o.msg.pose.pose.position;

@@ -43,8 +43,8 @@ using tactile_msgs::msg::FsmState;
 using tactile_msgs::msg::WhiskerGroundTruth;
 
 constexpr uint64_t kStreamTrialYaw = 30;  // tactile_sim stream id of the trial's arena rotation (as sim_run.cpp)
-constexpr const char* kCollisionsTopic = "/collisions";
-constexpr const char* kTruthTopics[2] = {"/ground_truth/whisker/left/contact", "/ground_truth/whisker/right/contact"};
+constexpr const char* kCollisionsTopic = "collisions";
+constexpr const char* kTruthTopics[2] = {"ground_truth/whisker/left/contact", "ground_truth/whisker/right/contact"};
 
 /// The trial's random arena rotation, as `tactile sim` draws it from the seed.
 double trial_arena_yaw(const tactile_sim::Scenario& s, uint64_t seed) {
@@ -53,8 +53,15 @@ double trial_arena_yaw(const tactile_sim::Scenario& s, uint64_t seed) {
   return std::uniform_real_distribution<double>(s.randomize_arena_yaw->first, s.randomize_arena_yaw->second)(rng);
 }
 
-void require_topic(const tactile_bag::Reader& in, const std::string& bag, const std::string& topic,
+/// The bag's topic of a node logic topic name (relative): the host records at the root
+/// namespace (executor.hpp root_topic), as did the bags recorded before.
+const tactile_bag::TopicInfo* find_topic(const tactile_bag::Reader& in, const std::string& name) {
+  return in.find_topic(root_topic(name));
+}
+
+void require_topic(const tactile_bag::Reader& in, const std::string& bag, const std::string& name,
                    const std::string& type, const std::string& why) {
+  const std::string topic = root_topic(name);
   const tactile_bag::TopicInfo* t = in.find_topic(topic);
   if (!t) throw std::runtime_error(bag + ": no topic " + topic + " (" + why + ")");
   if (t->type != type) throw std::runtime_error(bag + ": topic " + topic + " has type " + t->type + ", expected " + type);
@@ -102,7 +109,7 @@ class BagReplay {
 
   template <class T>
   BagReplay& topic(const std::string& name) {
-    decoders_[name] = [this](const tactile_bag::SerializedMessage& msg) {
+    decoders_[root_topic(name)] = [this](const tactile_bag::SerializedMessage& msg) {
       host_.bus().publish(msg.topic, tactile_bag::decode<T>(msg), msg.timestamp_ns);
     };
     return *this;
@@ -148,7 +155,7 @@ nlohmann::json evaluate_whisker_fsm(const tactile_sim::Scenario& s, const Evalua
   }
   require_topic(in, o.bag, Logic::kStateTopic, tactile_msgs::cdr::MessageTraits<FsmState>::type_name,
                 "the FSM states: wall-following episodes and the target");
-  const bool have_collisions = in.find_topic(kCollisionsTopic) != nullptr;
+  const bool have_collisions = find_topic(in, kCollisionsTopic) != nullptr;
   if (have_collisions) {
     require_topic(in, o.bag, kCollisionsTopic, tactile_msgs::cdr::MessageTraits<CollisionEvent>::type_name,
                   "collision events");
@@ -205,8 +212,8 @@ nlohmann::json evaluate_xplorer(const tactile_sim::Scenario& s, const EvaluateOp
                 "the pose the contact map is built in");
   require_topic(in, o.bag, FsmLogic::kStateTopic, tactile_msgs::cdr::MessageTraits<FsmState>::type_name,
                 "the FSM states: loop closure");
-  const bool have_arms = in.find_topic(MapLogic::kArmImuTopic) != nullptr;
-  const bool have_collisions = in.find_topic(kCollisionsTopic) != nullptr;
+  const bool have_arms = find_topic(in, MapLogic::kArmImuTopic) != nullptr;
+  const bool have_collisions = find_topic(in, kCollisionsTopic) != nullptr;
 
   const double arena_yaw = trial_arena_yaw(s, seed);
   const tactile_sim::SimLogic world(s, seed, arena_yaw);  // the arena's floor, as the graph
@@ -295,7 +302,7 @@ nlohmann::json evaluate_wall_effect(const tactile_sim::Scenario& s, const Evalua
   require_topic(in, o.bag, Ekf::kOutputTopic, wall_type, "the EKF's estimate");
   require_topic(in, o.bag, kTruthOdom, odom_type, "the pose the tracking errors are taken of");
   require_topic(in, o.bag, Traj::kOutputTopic, odom_type, "the setpoint script");
-  const bool have_collisions = in.find_topic(kCollisionsTopic) != nullptr;
+  const bool have_collisions = find_topic(in, kCollisionsTopic) != nullptr;
 
   const double arena_yaw = trial_arena_yaw(s, seed);
   Host host(o.config_dir);

@@ -20,17 +20,25 @@ namespace tactile_cli {
 nlohmann::json run_export(const ExportOptions& o) {
   using xplorer_force_est::XplorerForceEstLogic;
   using MapLogic = mapping_pcl::XplorerMapLogic;
+  // The bag's topic names: the host records at the root namespace (executor.hpp root_topic).
+  const std::string odom_topic = root_topic(MapLogic::kOdometryTopic);
+  const std::string wrench_topic = root_topic(MapLogic::kWrenchBodyTopic);
+  const std::string state_topic = root_topic(MapLogic::kFsmStateTopic);
+  const std::string map_arm_topic = root_topic(MapLogic::kArmImuTopic);
+  const std::string arm_topic = root_topic(XplorerForceEstLogic::kArmImuTopic);
+  const std::string imu_topic = root_topic(XplorerForceEstLogic::kImuTopic);
+  const std::string thrust_topic = root_topic(XplorerForceEstLogic::kThrustTopic);
   tactile_bag::Reader reader(o.bag);
   Warnings warnings;
   warnings.add_bag_metadata(o.bag, reader);
-  const bool have_odom = reader.find_topic(MapLogic::kOdometryTopic) != nullptr;
-  if (!have_odom) throw std::runtime_error(o.bag + ": no " + std::string(MapLogic::kOdometryTopic) + " topic (the map needs the pose)");
-  const bool have_wrench = reader.find_topic(MapLogic::kWrenchBodyTopic) != nullptr;
-  if (!have_wrench && (!reader.find_topic(XplorerForceEstLogic::kArmImuTopic) || !reader.find_topic(XplorerForceEstLogic::kImuTopic) ||
-                       !reader.find_topic(XplorerForceEstLogic::kThrustTopic))) {
-    throw std::runtime_error(o.bag + ": neither " + std::string(MapLogic::kWrenchBodyTopic) + " nor the force-estimator inputs (" +
-                             XplorerForceEstLogic::kArmImuTopic + ", " + XplorerForceEstLogic::kImuTopic + ", " +
-                             XplorerForceEstLogic::kThrustTopic + ")");
+  const bool have_odom = reader.find_topic(odom_topic) != nullptr;
+  if (!have_odom) throw std::runtime_error(o.bag + ": no " + std::string(odom_topic) + " topic (the map needs the pose)");
+  const bool have_wrench = reader.find_topic(wrench_topic) != nullptr;
+  if (!have_wrench && (!reader.find_topic(arm_topic) || !reader.find_topic(imu_topic) ||
+                       !reader.find_topic(thrust_topic))) {
+    throw std::runtime_error(o.bag + ": neither " + std::string(wrench_topic) + " nor the force-estimator inputs (" +
+                             arm_topic + ", " + imu_topic + ", " +
+                             thrust_topic + ")");
   }
   Host host(o.config_dir);
   // The nodes start (their timers' phase) at the replay clock's first time: the bag's
@@ -44,15 +52,14 @@ nlohmann::json run_export(const ExportOptions& o) {
     map = add_xplorer_mapping(host, overrides({{"publish_rate_hz", 0.0}}));
     if (!have_wrench) force = add_xplorer_force_est(host, {});
   };
-  std::vector<std::string> topics = {MapLogic::kOdometryTopic};
-  if (reader.find_topic(MapLogic::kFsmStateTopic)) topics.push_back(MapLogic::kFsmStateTopic);
+  std::vector<std::string> topics = {odom_topic};
+  if (reader.find_topic(state_topic)) topics.push_back(state_topic);
   if (have_wrench) {
-    topics.push_back(MapLogic::kWrenchBodyTopic);
+    topics.push_back(wrench_topic);
     // The arm angles place the slabs at the deflected outline (mapping edge_from_arms).
-    if (reader.find_topic(MapLogic::kArmImuTopic)) topics.push_back(MapLogic::kArmImuTopic);
+    if (reader.find_topic(map_arm_topic)) topics.push_back(map_arm_topic);
   } else {
-    topics.insert(topics.end(), {XplorerForceEstLogic::kArmImuTopic, XplorerForceEstLogic::kImuTopic,
-                                 XplorerForceEstLogic::kThrustTopic});
+    topics.insert(topics.end(), {arm_topic, imu_topic, thrust_topic});
   }
   reader.set_topic_filter(topics);
   tactile_bag::SerializedMessage m;
@@ -98,17 +105,17 @@ nlohmann::json run_export(const ExportOptions& o) {
   };
   while (reader.read_next(m)) {
     try {
-      if (m.topic == MapLogic::kOdometryTopic) {
+      if (m.topic == odom_topic) {
         hold(tactile_bag::decode<nav_msgs::msg::Odometry>(m), m.topic);
-      } else if (m.topic == MapLogic::kFsmStateTopic) {
+      } else if (m.topic == state_topic) {
         hold(tactile_bag::decode<tactile_msgs::msg::FsmState>(m), m.topic);
-      } else if (m.topic == MapLogic::kWrenchBodyTopic) {
+      } else if (m.topic == wrench_topic) {
         hold(tactile_bag::decode<geometry_msgs::msg::WrenchStamped>(m), m.topic);
-      } else if (m.topic == XplorerForceEstLogic::kArmImuTopic) {
+      } else if (m.topic == arm_topic) {
         hold(tactile_bag::decode<tactile_msgs::msg::ArmImuArray>(m), m.topic);
-      } else if (m.topic == XplorerForceEstLogic::kImuTopic) {
+      } else if (m.topic == imu_topic) {
         hold(tactile_bag::decode<sensor_msgs::msg::Imu>(m), m.topic);
-      } else if (m.topic == XplorerForceEstLogic::kThrustTopic) {
+      } else if (m.topic == thrust_topic) {
         hold(tactile_bag::decode<tactile_msgs::msg::ThrustCommand>(m), m.topic);
       }
     } catch (const tactile_bag::BagError& e) {
@@ -129,7 +136,6 @@ nlohmann::json run_export(const ExportOptions& o) {
                std::to_string(late) + " message(s) stamped before what was already replayed (more than " +
                    std::to_string(ExportOptions::kReorderWindowNs / 1'000'000) +
                    " ms behind the bag's time): replayed at the current time");
-
   warnings.add_node_counters(host.reports());
   const auto r = map->finalize();
   mapping_pcl::PlyInfo info;
@@ -141,7 +147,7 @@ nlohmann::json run_export(const ExportOptions& o) {
   s["bag"] = o.bag;
   s["ply"] = o.ply;
   s["format"] = o.binary ? "binary_little_endian" : "ascii";
-  s["wrench_source"] = have_wrench ? MapLogic::kWrenchBodyTopic : "xplorer_force_est (re-run)";
+  s["wrench_source"] = have_wrench ? wrench_topic : "xplorer_force_est (re-run)";
   s["messages"] = used;
   s["time"] = o.time == ExportOptions::Time::kHeader ? "header" : "receive";
   s["slabs"] = map->mapper().stats().slabs;

@@ -100,6 +100,32 @@ TEST(Bus, DeliversInSubscriptionOrderAndTapsSerialize) {
   EXPECT_EQ(bus.published_counts().at("/x"), 1u);
 }
 
+// The node logic's topic names are relative (a ROS namespace moves them); the host runs one
+// vehicle at the root, where a relative name and its absolute one are the same topic, and
+// bags (old and new) carry the absolute name: a node subscribed to "odom" gets the "/odom"
+// a bag replays, and the recorder names what "odom" publishes "/odom".
+TEST(Bus, RelativeNamesResolveAtTheRoot) {
+  Bus bus;
+  CountingTap tap;
+  bus.add_tap(&tap);
+  int relative = 0;
+  int absolute = 0;
+  bus.subscribe<std_msgs::msg::Float64>("odom", [&](const std_msgs::msg::Float64&) { ++relative; });
+  bus.subscribe<std_msgs::msg::Float64>("/odom", [&](const std_msgs::msg::Float64&) { ++absolute; });
+  bus.publish("/odom", std_msgs::msg::Float64{}, 1);  // as a replayed bag
+  bus.publish("odom", std_msgs::msg::Float64{}, 2);   // as the node logic
+  EXPECT_EQ(relative, 2);
+  EXPECT_EQ(absolute, 2);
+  ASSERT_EQ(tap.seen.size(), 2u);
+  EXPECT_EQ(tap.seen[1], "/odom std_msgs/msg/Float64 2 12");
+  EXPECT_EQ(bus.published_counts(), (std::map<std::string, uint64_t>{{"/odom", 2}}));
+  EXPECT_EQ(tactile_cli::root_topic("whisker/left/pressure"), "/whisker/left/pressure");
+  EXPECT_EQ(tactile_cli::root_topic("/odom"), "/odom");
+  // One topic, one type, whichever spelling comes second.
+  EXPECT_THROW(bus.subscribe<std_msgs::msg::Header>("/odom", [](const std_msgs::msg::Header&) {}),
+               std::logic_error);
+}
+
 TEST(Bus, OneTopicOneType) {
   Bus bus;
   bus.subscribe<std_msgs::msg::Float64>("/x", [](const std_msgs::msg::Float64&) {});

@@ -199,7 +199,7 @@ TEST(Sim, MalformedScenarioStopsWithFileKeyAndReason) {
   EXPECT_NE(msg.find("self-intersect"), std::string::npos) << msg;
   msg = error_of(head + "arena:\n  walls:\n    - points: [[1, -1], [1, 1]]\nfaults:\n  - {type: loss, topic: /nope}\n");
   EXPECT_NE(msg.find("faults[0].topic"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("publishes no '/nope'"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("publishes no 'nope'"), std::string::npos) << msg;
   msg = error_of("name: b\nduration_s: 2\nvehicle: {type: xplorer, params: {mas: 1}}\ngraph: none\n"
                  "arena:\n  walls:\n    - points: [[1, -1], [1, 1]]\n");
   EXPECT_NE(msg.find("vehicle.params.mas"), std::string::npos) << msg;

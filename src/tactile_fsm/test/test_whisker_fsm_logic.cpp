@@ -77,12 +77,12 @@ TEST(WhiskerFsmLogic, DefaultsAndTopics) {
   EXPECT_EQ(p.fsm.follow_side, tactile_fsm::Side::kRight);
   EXPECT_DOUBLE_EQ(p.target_x, 3.6);
   EXPECT_STREQ(WhiskerFsmLogic::kNodeName, "whisker_fsm");
-  EXPECT_STREQ(WhiskerFsmLogic::kDepthTopic, "/whisker/depth");
-  EXPECT_STREQ(WhiskerFsmLogic::kLeftSignalTopic, "/whisker/left/signal");
-  EXPECT_STREQ(WhiskerFsmLogic::kRightSignalTopic, "/whisker/right/signal");
-  EXPECT_STREQ(WhiskerFsmLogic::kOdomTopic, "/odom");
-  EXPECT_STREQ(WhiskerFsmLogic::kSetpointTopic, "/cmd_hover");
-  EXPECT_STREQ(WhiskerFsmLogic::kStateTopic, "/fsm_state");
+  EXPECT_STREQ(WhiskerFsmLogic::kDepthTopic, "whisker/depth");
+  EXPECT_STREQ(WhiskerFsmLogic::kLeftSignalTopic, "whisker/left/signal");
+  EXPECT_STREQ(WhiskerFsmLogic::kRightSignalTopic, "whisker/right/signal");
+  EXPECT_STREQ(WhiskerFsmLogic::kOdomTopic, "odom");
+  EXPECT_STREQ(WhiskerFsmLogic::kSetpointTopic, "cmd_hover");
+  EXPECT_STREQ(WhiskerFsmLogic::kStateTopic, "fsm_state");
   EXPECT_EQ(WhiskerFsmLogic::kTimerPeriodNs, 20000000);
 }
 

@@ -40,15 +40,18 @@ def message_class(type_name: str):
 
 class Launch:
     """`ros2 launch launch/<file> args...` in its own process group, output to a log file;
-    stop() interrupts the group (as Ctrl-C does) and kills it if it does not end."""
+    stop() interrupts the group (as Ctrl-C does) and kills it if it does not end. With
+    `package`, `ros2 launch <package> <file>` (the installed file) in the directory `cwd`."""
 
-    def __init__(self, launch_file: str, args=(), log_path: Path | None = None):
+    def __init__(self, launch_file: str, args=(), log_path: Path | None = None,
+                 package: str | None = None, cwd: Path | None = None):
         self.log_path = Path(log_path) if log_path else Path(f'/tmp/{launch_file}.{os.getpid()}.log')
         self._log = open(self.log_path, 'w')
+        where = [package, launch_file] if package else [str(LAUNCH_DIR / launch_file)]
         self.proc = subprocess.Popen(
-            ['ros2', 'launch', str(LAUNCH_DIR / launch_file), *map(str, args)],
+            ['ros2', 'launch', *where, *map(str, args)],
             stdout=self._log, stderr=subprocess.STDOUT, start_new_session=True,
-            env=os.environ.copy())
+            env=os.environ.copy(), cwd=cwd)
 
     def output(self) -> str:
         if not self._log.closed:

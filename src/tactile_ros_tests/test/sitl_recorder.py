@@ -93,9 +93,11 @@ def message_class(type_name: str):
 
 class Recorder:
     """Subscribes to `topics` ({topic: (type, reliable)}) and writes a bag at `out`
-    until /sim/done or stop()."""
+    until /sim/done or stop(). With `namespace` ('cf1') it records one vehicle of several:
+    /cf1/<topic> until /cf1/sim/done, written under <topic> (the root names `tactile
+    evaluate` reads, as in a bag of `tactile sim`)."""
 
-    def __init__(self, out: Path, topics: dict):
+    def __init__(self, out: Path, topics: dict, namespace: str = ''):
         import rclpy
         from rclpy.executors import SingleThreadedExecutor
         from rclpy.qos import (DurabilityPolicy, HistoryPolicy, QoSProfile,
@@ -120,18 +122,19 @@ class Recorder:
         self._context = rclpy.Context()
         rclpy.init(context=self._context)
         self._node = rclpy.create_node('sitl_recorder', context=self._context)
+        prefix = '/' + namespace.strip('/') if namespace.strip('/') else ''
         for topic, (typ, reliable) in topics.items():
             qos = QoSProfile(
                 history=HistoryPolicy.KEEP_LAST, depth=1000,
                 reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
                 durability=DurabilityPolicy.VOLATILE)
             self._node.create_subscription(
-                message_class(typ), topic, lambda data, t=topic: self._on_message(t, data), qos,
-                raw=True)
+                message_class(typ), prefix + topic, lambda data, t=topic: self._on_message(t, data),
+                qos, raw=True)
         done_qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1,
                               reliability=ReliabilityPolicy.RELIABLE,
                               durability=DurabilityPolicy.TRANSIENT_LOCAL)
-        self._node.create_subscription(Bool, DONE_TOPIC, self._on_done, done_qos)
+        self._node.create_subscription(Bool, prefix + DONE_TOPIC, self._on_done, done_qos)
         self._executor = SingleThreadedExecutor(context=self._context)
         self._executor.add_node(self._node)
         self._stop = threading.Event()

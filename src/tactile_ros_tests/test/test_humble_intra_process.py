@@ -39,7 +39,7 @@ PROBE_PLUGIN = 'tactile_ros_tests::IntraProcessQosProbe'
 # once running (the simulator creates its sensor publishers on its first step), the
 # component plugins it loads, its latched publishers {topic: node}, and a volatile topic of
 # a component in the container that must read intra-process (None: the container runs
-# without intra-process, sitl_localization).
+# without intra-process).
 CASES = {
     'sitl_whisker': dict(
         launch='sitl_whisker.launch.py', args=['seed:=7'], container='/sitl_whisker_container',
@@ -94,8 +94,9 @@ CASES = {
         latched={}, intra=('/whisker/left/pressure', '/whisker/left/whisker_driver')),
     'sitl_localization': dict(
         launch='sitl_localization.launch.py', args=[], container='/whisker_localization_container',
-        nodes=['/whisker_localization'], ready='/whisker/localization',
-        plugins={'whisker_localization::WhiskerLocalizationComponent'}, latched={}, intra=None),
+        nodes=['/tactile_sim', '/whisker_localization'], ready='/whisker/localization',
+        plugins={'tactile_sim::TactileSimComponent', 'whisker_localization::WhiskerLocalizationComponent'},
+        latched={'/sim/done': '/tactile_sim'}, intra=('/whisker/localization', '/whisker_localization')),
 }
 
 

@@ -1,6 +1,11 @@
-"""launch/sitl_localization.launch.py: whisker_localization (paper 002) alone in a
-container. The test is its stage driver: it publishes the base odometry and the base
-moment (no contact) at 20 Hz and reads one result and one pose set per accepted sample."""
+"""launch/sitl_localization.launch.py: whisker_localization (paper 002).
+
+- with simulator:=false the node is alone in its container and the test is its stage
+  driver: it publishes the base odometry and the base moment (no contact) at 20 Hz and
+  reads one result and one pose set per accepted sample;
+- by default the launch starts the whisker stage simulator (tactile_sim) with it, on
+  simulated time: the test moves the stage onto the pin with a position setpoint and reads
+  results stamped on the simulator's clock, a contact among them."""
 
 from __future__ import annotations
 
@@ -40,7 +45,7 @@ def drive(g: Graph, seconds: float) -> list[int]:
 
 
 def test_sitl_localization_results_per_moment_sample(tmp_path):
-    with Launch('sitl_localization.launch.py', ['possibilistic:=true'],
+    with Launch('sitl_localization.launch.py', ['possibilistic:=true', 'simulator:=false'],
                 tmp_path / 'launch.log') as launch, Graph() as g:
         g.wait_for_nodes(NODES, launch)
         params = g.get_parameters('/whisker_localization', ['possibilistic', 'beam.youngs_modulus'])
@@ -73,7 +78,8 @@ def test_sitl_localization_bad_parameter_type_stops_the_launch_naming_the_file(t
     assert 'beam.youngs_modulus: 52.0e+9' in text
     # YAML 1.1 (the launch system's parser) reads 52.0e9 as a string.
     bad.write_text(text.replace('beam.youngs_modulus: 52.0e+9', 'beam.youngs_modulus: 52.0e9'))
-    with Launch('sitl_localization.launch.py', [f'params:={bad}'], tmp_path / 'launch.log') as launch:
+    with Launch('sitl_localization.launch.py', [f'params:={bad}', 'simulator:=false'],
+                tmp_path / 'launch.log') as launch:
         code = launch.wait_exit(60)
         out = launch.output()
     assert code not in (None, 0), f'launch exit {code}:\n{out[-3000:]}'
@@ -81,3 +87,37 @@ def test_sitl_localization_bad_parameter_type_stops_the_launch_naming_the_file(t
     assert 'beam.youngs_modulus' in out and 'expected a double' in out and 'YAML 1.1' in out, out[-3000:]
     assert f'/whisker_localization from {bad}: whisker_localization.ros__parameters.beam.youngs_modulus: ' \
         'is a string (52.0e9), expected a double' in out, out[-3000:]
+
+
+def test_sitl_localization_starts_its_simulator(tmp_path):
+    """The default launch flies the whisker stage simulator with the node: the stage, moved
+    by a position setpoint so that the pin bends the whisker, gives base moments, and the
+    node's results are stamped on the simulator's clock (simulated seconds from 0, not wall
+    time), a valid contact among them."""
+    from geometry_msgs.msg import PoseStamped
+    from tactile_msgs.msg import LocalizationResult
+    with Launch('sitl_localization.launch.py', ['real_time_factor:=4.0'],
+                tmp_path / 'launch.log') as launch, Graph() as g:
+        g.wait_for_nodes(['/whisker_localization_container', '/tactile_sim', '/whisker_localization'],
+                         launch)
+        results = []
+        g.node.create_subscription(LocalizationResult, '/whisker/localization',
+                                   lambda m: results.append(m), 1000)
+        setpoint = g.node.create_publisher(PoseStamped, '/cmd_position', 10)
+        # whisker_stage_table1: base at (0, 0.02), whisker along +x, the pin at (0.1, 0):
+        # a base at (0.05, -0.002) touches it 50 mm along the whisker, 2 mm deflected.
+        target = PoseStamped()
+        target.header.frame_id = 'odom'
+        target.pose.position.x, target.pose.position.y = 0.05, -0.002
+        target.pose.orientation.w = 1.0
+        end = time.monotonic() + 60.0
+        while time.monotonic() < end and not any(m.contact_valid for m in results):
+            setpoint.publish(target)
+            g.spin(0.2)
+        sim = g.get_parameters('/tactile_sim', ['scenario'])
+        out = launch.output()
+    assert sim['scenario'] == str(CONFIG_DIR / 'scenarios' / 'whisker_stage_table1.yaml')
+    assert results, out[-3000:]
+    stamps = [m.header.stamp.sec + 1e-9 * m.header.stamp.nanosec for m in results]
+    assert max(stamps) < 600.0, max(stamps)  # simulated time, not the wall clock's ~1.7e9 s
+    assert any(m.contact_valid for m in results), (len(results), out[-3000:])

@@ -37,7 +37,7 @@ def test_sitl_whisker_graph_topics_and_arguments(tmp_path):
         check_graph(g, launch, NODES, RATE_TOPICS, EVENT_TOPICS)
         sim = g.get_parameters('/tactile_sim', ['scenario', 'seed', 'wait_for_publisher'])
         tdorc = g.get_parameters('/whisker/right/tdorc_filter', ['window', 'use_sim_time'])
-    assert sim == {'scenario': str(scenario), 'seed': 7, 'wait_for_publisher': '/cmd_hover'}
+    assert sim == {'scenario': str(scenario), 'seed': 7, 'wait_for_publisher': 'cmd_hover'}
     cfg = yaml.safe_load((CONFIG_DIR / 'tdorc_filter.yaml').read_text())['/**/tdorc_filter']['ros__parameters']
     assert tdorc == {'window': cfg['window'], 'use_sim_time': True}
 

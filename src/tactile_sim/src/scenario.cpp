@@ -225,8 +225,13 @@ FaultSpec parse_fault(const Node& n) {
                       "' (dropout, nan, out_of_range, stuck, spike, latency, loss)");
   }
   f.type = it->second;
+  // Stored relative, as the simulator publishes it: a leading '/' (the root namespace, the
+  // names the standalone host records in its bags) is accepted and dropped.
   f.topic = n.at("topic").text();
-  if (f.topic.empty() || f.topic.front() != '/') n.at("topic").fail("must be an absolute topic name");
+  if (!f.topic.empty() && f.topic.front() == '/') f.topic.erase(0, 1);
+  if (f.topic.empty() || f.topic.front() == '/' || f.topic.back() == '/') {
+    n.at("topic").fail("must name a topic of the simulator's, e.g. whisker/left/pressure");
+  }
   // The channel's upper bound depends on the topic's message type: SimLogic checks it.
   if (n.has("channel")) f.channel = static_cast<int>(n.at("channel").whole(0, kMaxFaultChannel));
   if (n.has("start_s")) f.start_s = n.at("start_s").non_negative();

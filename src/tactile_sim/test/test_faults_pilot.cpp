@@ -25,7 +25,7 @@ WhiskerPressure sample(double base) {
 FaultSpec rule(FaultSpec::Type type) {
   FaultSpec f;
   f.type = type;
-  f.topic = "/whisker/left/pressure";
+  f.topic = "whisker/left/pressure";
   return f;
 }
 

@@ -122,7 +122,7 @@ TEST(Scenario, MalformedFilesNameFileKeyAndReason) {
   expect_error(estimate, "vehicle.state_estimate", "imu_tof is the whiskered Crazyflie's estimator");
   expect_error(kMinimal + "faults:\n  - {type: gremlin, topic: /x}\n", "faults[0].type", "unknown fault 'gremlin'");
   expect_error(kMinimal + "faults:\n  - {type: latency, topic: /x}\n", "faults[0]", "needs delay_s");
-  expect_error(kMinimal + "faults:\n  - {type: loss, topic: x}\n", "faults[0].topic", "absolute topic");
+  expect_error(kMinimal + "faults:\n  - {type: loss, topic: /}\n", "faults[0].topic", "must name a topic");
   expect_error(kMinimal + "faults:\n  - {type: loss, topic: /x, probability: 2}\n", "faults[0].probability", "[0, 1]");
   std::string pilot = kMinimal;
   pilot.replace(pilot.find("  - {land: true}"), 16, "  - {velocity: [0.2, 0]}");

@@ -70,9 +70,9 @@ TEST(SimLogic, SensorRatesDivideThePhysicsRate) {
   const int steps = 1000;                // one simulated second
   for (int k = 0; k < steps; ++k) sim->step(k * sim->period_ns(), out);
   size_t left = 0, truth = 0, odom = 0;
-  for (const auto& m : out.pressure) left += m.topic == "/whisker/left/pressure";
-  for (const auto& m : out.whisker_truth) truth += m.topic == "/ground_truth/whisker/left/contact";
-  for (const auto& m : out.odometry) odom += m.topic == "/odom";
+  for (const auto& m : out.pressure) left += m.topic == "whisker/left/pressure";
+  for (const auto& m : out.whisker_truth) truth += m.topic == "ground_truth/whisker/left/contact";
+  for (const auto& m : out.odometry) odom += m.topic == "odom";
   EXPECT_EQ(left, 50u);   // 50 Hz barometers (000)
   EXPECT_EQ(truth, 50u);
   EXPECT_EQ(odom, 100u);  // 100 Hz state estimate

@@ -140,7 +140,7 @@ TEST(WhiskerStage, ScenarioPublishesBaseMomentsAndRejectsBadParameters) {
     out.clear();
     sim.step(k * sim.period_ns(), out);
     for (const auto& w : out.wrench) {
-      if (w.topic == "/whisker/base_wrench") {
+      if (w.topic == "whisker/base_wrench") {
         ++moments;
         m0 = w.msg.wrench.torque.z;
       }

@@ -51,10 +51,10 @@ namespace crazyflie_bridge {
 class CrazyflieBridgeLogic {
  public:
   static constexpr const char* kNodeName = "crazyflie_bridge";
-  static constexpr const char* kLeftPressureTopic = "/whisker/left/pressure";    // tactile_msgs/msg/WhiskerPressure
-  static constexpr const char* kRightPressureTopic = "/whisker/right/pressure";  // tactile_msgs/msg/WhiskerPressure
-  static constexpr const char* kOdomTopic = "/odom";                             // nav_msgs/msg/Odometry
-  static constexpr const char* kSetpointTopic = "/cmd_hover";                    // tactile_msgs/msg/HoverSetpoint
+  static constexpr const char* kLeftPressureTopic = "whisker/left/pressure";    // tactile_msgs/msg/WhiskerPressure
+  static constexpr const char* kRightPressureTopic = "whisker/right/pressure";  // tactile_msgs/msg/WhiskerPressure
+  static constexpr const char* kOdomTopic = "odom";                             // nav_msgs/msg/Odometry
+  static constexpr const char* kSetpointTopic = "cmd_hover";                    // tactile_msgs/msg/HoverSetpoint
 
   struct Params {
     std::string uri = "radio://0/80/2M/E7E7E7E7E7?safelink=1";

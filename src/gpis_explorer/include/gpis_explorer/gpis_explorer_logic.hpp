@@ -24,12 +24,12 @@ namespace gpis_explorer {
 class GpisExplorerLogic {
  public:
   static constexpr const char* kNodeName = "gpis_explorer";
-  static constexpr const char* kDepthTopic = "/whisker/depth";     // tactile_msgs/msg/TactileDepth
-  static constexpr const char* kOdomTopic = "/odom";               // nav_msgs/msg/Odometry
-  static constexpr const char* kSetpointTopic = "/cmd_hover";      // tactile_msgs/msg/HoverSetpoint
-  static constexpr const char* kStateTopic = "/fsm_state";         // tactile_msgs/msg/FsmState
-  static constexpr const char* kMapTopic = "/gpis/map";            // tactile_msgs/msg/GpisMap
-  static constexpr const char* kTargetTopic = "/gpis/target";      // tactile_msgs/msg/ExplorationTarget
+  static constexpr const char* kDepthTopic = "whisker/depth";     // tactile_msgs/msg/TactileDepth
+  static constexpr const char* kOdomTopic = "odom";               // nav_msgs/msg/Odometry
+  static constexpr const char* kSetpointTopic = "cmd_hover";      // tactile_msgs/msg/HoverSetpoint
+  static constexpr const char* kStateTopic = "fsm_state";         // tactile_msgs/msg/FsmState
+  static constexpr const char* kMapTopic = "gpis/map";            // tactile_msgs/msg/GpisMap
+  static constexpr const char* kTargetTopic = "gpis/target";      // tactile_msgs/msg/ExplorationTarget
   static constexpr const char* kFrame = "odom";
   static constexpr const char* kBehaviour = "gpis_exploration";
   /// Control tick, 50 Hz as 000 ("at 50 Hz" onboard).

@@ -27,17 +27,17 @@ namespace mapping_pcl {
 class XplorerMapLogic {
  public:
   static constexpr const char* kNodeName = "xplorer_mapping";
-  static constexpr const char* kWrenchBodyTopic = "/xplorer/wrench_body";  // geometry_msgs/msg/WrenchStamped
-  static constexpr const char* kOdometryTopic = "/odom";                   // nav_msgs/msg/Odometry
-  static constexpr const char* kCloudTopic = "/xplorer/map";               // sensor_msgs/msg/PointCloud2
+  static constexpr const char* kWrenchBodyTopic = "xplorer/wrench_body";  // geometry_msgs/msg/WrenchStamped
+  static constexpr const char* kOdometryTopic = "odom";                   // nav_msgs/msg/Odometry
+  static constexpr const char* kCloudTopic = "xplorer/map";               // sensor_msgs/msg/PointCloud2
   /// The shorter state gate after a turn is safe only with the recent-axis check, which needs
   /// the latest force samples: without them the 1 s average still pressing the face before the
   /// turn would be stamped on the new one (README "Recent axis"), so min_state_time_s applies.
   bool short_gate_after_turn() const { return params_.stamping.recent_axis && params_.force_now_samples > 0; }
   static constexpr const char* kDoneState = "done";  // tactile_fsm's loop closure (issue 17): ends the last face, the first contact's
   static constexpr const char* kTurningState = "tactile_turning";  // tactile_fsm's Tactile-turning (001 Gamma 2): ends a face at a convex corner
-  static constexpr const char* kFsmStateTopic = "/xplorer/fsm_state";      // tactile_msgs/msg/FsmState (optional)
-  static constexpr const char* kArmImuTopic = "/arm_imu";                  // tactile_msgs/msg/ArmImuArray (optional: edge_from_arms)
+  static constexpr const char* kFsmStateTopic = "xplorer/fsm_state";      // tactile_msgs/msg/FsmState (optional)
+  static constexpr const char* kArmImuTopic = "arm_imu";                  // tactile_msgs/msg/ArmImuArray (optional: edge_from_arms)
 
   /// MapParams with the XPLORER map's rules on (rule 18: outlier_face_length 0.2 m).
   static MapParams xplorer_map_params() {

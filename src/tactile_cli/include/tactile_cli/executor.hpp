@@ -23,6 +23,11 @@ namespace tactile_cli {
 /// "pressure") -> "/whisker/left/pressure"; absolute topics are kept.
 std::string resolve_topic(const std::string& ns, const std::string& topic);
 
+/// The name a topic of the node logic (relative, "odom") has on this host's bus and in the
+/// bags it records: the host runs one vehicle at the root namespace, so "/odom" -- the
+/// names bags recorded before the topic names became relative carry too.
+inline std::string root_topic(std::string_view topic) { return resolve_topic("", std::string(topic)); }
+
 /// A topic as a tap sees it: name, type and definition, stable for the bus's lifetime.
 struct TapTopic {
   const std::string& name;
@@ -41,7 +46,10 @@ class BusTap {
 };
 
 /// Typed publish/subscribe by topic name. Delivery is synchronous and in
-/// subscription order, so a run is deterministic.
+/// subscription order, so a run is deterministic. A relative name is resolved at the root
+/// namespace ("odom" and "/odom" are one topic, named "/odom" to taps and in
+/// published_counts()), as rclcpp resolves the node logic's relative names for a node
+/// without a namespace.
 ///
 /// Per message a publish costs one topic lookup (no allocation: topic names are
 /// looked up as string_views) and, with a tap, one serialization into a buffer the
@@ -92,12 +100,22 @@ class Bus {
     std::vector<std::function<void(const void*)>> subscribers;
   };
 
+  /// Orders names as resolved at the root: a leading '/' is ignored (keys always have one),
+  /// so a relative name finds its slot without building the absolute one.
+  struct RootOrder {
+    using is_transparent = void;
+    static std::string_view relative(std::string_view t) {
+      return !t.empty() && t.front() == '/' ? t.substr(1) : t;
+    }
+    bool operator()(std::string_view a, std::string_view b) const { return relative(a) < relative(b); }
+  };
+
   /// The topic's slot, created on first use; one topic carries one message type.
   template <class T>
   Slot& slot(std::string_view topic) {
     auto it = slots_.find(topic);
     if (it == slots_.end()) {
-      std::string name(topic);
+      const std::string name = root_topic(topic);
       it = slots_.emplace(name, Slot{name, std::type_index(typeid(T)), 0, {}}).first;
     } else if (it->second.type != std::type_index(typeid(T))) {
       throw std::logic_error("topic " + std::string(topic) + " is used with two different message types");
@@ -105,7 +123,7 @@ class Bus {
     return it->second;
   }
 
-  std::map<std::string, Slot, std::less<>> slots_;  // std::map: slot references stay valid
+  std::map<std::string, Slot, RootOrder> slots_;  // std::map: slot references stay valid
   std::vector<BusTap*> taps_;
 };
 

@@ -49,8 +49,8 @@ inline double wrap_angle(double a) { return std::atan2(std::sin(a), std::cos(a))
 
 class WallEffectEvaluation {
  public:
-  static constexpr const char* kTruthWallTopic = "/ground_truth/wall";
-  static constexpr const char* kTruthOdomTopic = "/ground_truth/odom";
+  static constexpr const char* kTruthWallTopic = "ground_truth/wall";
+  static constexpr const char* kTruthOdomTopic = "ground_truth/odom";
   static constexpr double kNearWall = 0.20;  ///< [m] 004: "within 20 cm from the wall"
 
   /// The window of the setpoint script: t = 10-70 s for 004's estimation

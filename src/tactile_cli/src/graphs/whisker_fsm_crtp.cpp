@@ -164,7 +164,7 @@ class WhiskerFsmCrtpGraph : public SimGraph {
   template <class T>
   void publish_both(const std::string& topic, const T& m) {
     inner_.bus().publish(topic, m, now_ns_);
-    outer_->bus().publish("/crtp" + topic, m, now_ns_);  // what came over the link, for the bag
+    outer_->bus().publish("/crtp" + root_topic(topic), m, now_ns_);  // what came over the link, for the bag
   }
   template <class T>
   void forward(const std::string& topic) {

@@ -18,10 +18,10 @@ namespace tactile_depth {
 class TactileDepthLogic {
  public:
   static constexpr const char* kNodeName = "tactile_depth";
-  static constexpr const char* kLeftSignalTopic = "/whisker/left/signal";    // tactile_msgs/msg/WhiskerSignal
-  static constexpr const char* kRightSignalTopic = "/whisker/right/signal";  // tactile_msgs/msg/WhiskerSignal
-  static constexpr const char* kOdometryTopic = "/odom";                     // nav_msgs/msg/Odometry
-  static constexpr const char* kOutputTopic = "/whisker/depth";              // tactile_msgs/msg/TactileDepth
+  static constexpr const char* kLeftSignalTopic = "whisker/left/signal";    // tactile_msgs/msg/WhiskerSignal
+  static constexpr const char* kRightSignalTopic = "whisker/right/signal";  // tactile_msgs/msg/WhiskerSignal
+  static constexpr const char* kOdometryTopic = "odom";                     // nav_msgs/msg/Odometry
+  static constexpr const char* kOutputTopic = "whisker/depth";              // tactile_msgs/msg/TactileDepth
   /// frame_id of the output when the odometry names no child frame.
   static constexpr const char* kDefaultBodyFrame = "base_link";
 

@@ -19,10 +19,10 @@ namespace tactile_fsm {
 class WallEffectNavLogic {
  public:
   static constexpr const char* kNodeName = "wall_effect_nav";
-  static constexpr const char* kWallTopic = "/wall_effect/estimate";     // tactile_msgs/msg/WallEstimate
-  static constexpr const char* kOdomTopic = "/odom";                     // nav_msgs/msg/Odometry
-  static constexpr const char* kSetpointTopic = "/wall_effect/setpoint"; // nav_msgs/msg/Odometry (world; NaN x, y = velocity only)
-  static constexpr const char* kStateTopic = "/fsm_state";               // tactile_msgs/msg/FsmState
+  static constexpr const char* kWallTopic = "wall_effect/estimate";     // tactile_msgs/msg/WallEstimate
+  static constexpr const char* kOdomTopic = "odom";                     // nav_msgs/msg/Odometry
+  static constexpr const char* kSetpointTopic = "wall_effect/setpoint"; // nav_msgs/msg/Odometry (world; NaN x, y = velocity only)
+  static constexpr const char* kStateTopic = "fsm_state";               // tactile_msgs/msg/FsmState
   static constexpr int64_t kTimerPeriodNs = 10'000'000;                  // 100 Hz
 
   struct Params {

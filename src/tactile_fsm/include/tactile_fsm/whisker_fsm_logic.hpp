@@ -23,12 +23,12 @@ class WhiskerFsmLogic {
  public:
   static constexpr const char* kNodeName = "whisker_fsm";
   static constexpr const char* kBehaviour = "whisker_wall_following";
-  static constexpr const char* kDepthTopic = "/whisker/depth";               // tactile_msgs/msg/TactileDepth
-  static constexpr const char* kLeftSignalTopic = "/whisker/left/signal";    // tactile_msgs/msg/WhiskerSignal
-  static constexpr const char* kRightSignalTopic = "/whisker/right/signal";  // tactile_msgs/msg/WhiskerSignal
-  static constexpr const char* kOdomTopic = "/odom";                         // nav_msgs/msg/Odometry
-  static constexpr const char* kSetpointTopic = "/cmd_hover";                // tactile_msgs/msg/HoverSetpoint
-  static constexpr const char* kStateTopic = "/fsm_state";                   // tactile_msgs/msg/FsmState
+  static constexpr const char* kDepthTopic = "whisker/depth";               // tactile_msgs/msg/TactileDepth
+  static constexpr const char* kLeftSignalTopic = "whisker/left/signal";    // tactile_msgs/msg/WhiskerSignal
+  static constexpr const char* kRightSignalTopic = "whisker/right/signal";  // tactile_msgs/msg/WhiskerSignal
+  static constexpr const char* kOdomTopic = "odom";                         // nav_msgs/msg/Odometry
+  static constexpr const char* kSetpointTopic = "cmd_hover";                // tactile_msgs/msg/HoverSetpoint
+  static constexpr const char* kStateTopic = "fsm_state";                   // tactile_msgs/msg/FsmState
   static constexpr const char* kBodyFrame = "base_link";
   /// Control tick, 50 Hz as 000 ("at 50 Hz" onboard).
   static constexpr int64_t kTimerPeriodNs = 20000000;

@@ -20,10 +20,10 @@ class XplorerFsmLogic {
  public:
   static constexpr const char* kNodeName = "xplorer_fsm";
   static constexpr const char* kBehaviour = "xplorer_exploration";
-  static constexpr const char* kWrenchTopic = "/xplorer/wrench";          // geometry_msgs/msg/WrenchStamped (world)
-  static constexpr const char* kOdomTopic = "/odom";                      // nav_msgs/msg/Odometry
-  static constexpr const char* kSetpointTopic = "/cmd_position";          // geometry_msgs/msg/PoseStamped
-  static constexpr const char* kStateTopic = "/xplorer/fsm_state";        // tactile_msgs/msg/FsmState
+  static constexpr const char* kWrenchTopic = "xplorer/wrench";          // geometry_msgs/msg/WrenchStamped (world)
+  static constexpr const char* kOdomTopic = "odom";                      // nav_msgs/msg/Odometry
+  static constexpr const char* kSetpointTopic = "cmd_position";          // geometry_msgs/msg/PoseStamped
+  static constexpr const char* kStateTopic = "xplorer/fsm_state";        // tactile_msgs/msg/FsmState
   static constexpr int64_t kTimerPeriodNs = 20000000;   ///< 50 Hz (the arm IMU and force-estimate rate)
   static constexpr int64_t kStatePeriodNs = 200000000;  ///< FsmState at least at 5 Hz and on transitions
 

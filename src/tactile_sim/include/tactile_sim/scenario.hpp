@@ -53,7 +53,7 @@ inline constexpr uint64_t kMaxFaultChannel = 255;
 struct FaultSpec {
   enum class Type { kDropout, kNan, kOutOfRange, kStuck, kSpike, kLatency, kLoss };
   Type type = Type::kLoss;
-  std::string topic;
+  std::string topic;           ///< relative, as the simulator publishes it ("whisker/left/pressure")
   int channel = -1;            ///< -1: every channel of the message
   double start_s = 0.0;
   double duration_s = std::numeric_limits<double>::infinity();

@@ -327,7 +327,7 @@ class CrazyflieVehicle : public SimLogic::Vehicle {
              std::vector<Vec2>& contacts) override {
     if (every(k, physics_hz, kImuHz)) {
       const ImuSample s = imu_.sample(cf_.specific_force_body(), cf_.state().angular_velocity);
-      out.imu.push_back({"/imu", imu_msg(s, cf_.estimate().orientation, now_ns, 0.0, 0.0)});
+      out.imu.push_back({"imu", imu_msg(s, cf_.estimate().orientation, now_ns, 0.0, 0.0)});
     }
     if (every(k, physics_hz, kBarometerHz)) {
       static const char* kSides[2] = {"left", "right"};
@@ -346,7 +346,7 @@ class CrazyflieVehicle : public SimLogic::Vehicle {
           p.temperature[c] = sample.temperature[c];
         }
         p.sequence = sequence_[static_cast<size_t>(i)]++;
-        static constexpr std::string_view kPressureTopics[2] = {"/whisker/left/pressure", "/whisker/right/pressure"};
+        static constexpr std::string_view kPressureTopics[2] = {"whisker/left/pressure", "whisker/right/pressure"};
         out.pressure.push_back({kPressureTopics[i], p});
 
         tactile_msgs::msg::WhiskerGroundTruth gt;
@@ -356,8 +356,8 @@ class CrazyflieVehicle : public SimLogic::Vehicle {
         gt.load = w.base_moment;
         gt.depth = w.depth;
         gt.motors_on = cf_.motors_on();
-        static constexpr std::string_view kTruthTopics[2] = {"/ground_truth/whisker/left/contact",
-                                                             "/ground_truth/whisker/right/contact"};
+        static constexpr std::string_view kTruthTopics[2] = {"ground_truth/whisker/left/contact",
+                                                             "ground_truth/whisker/right/contact"};
         out.whisker_truth.push_back({kTruthTopics[i], gt});
 
         if (w.contact) {
@@ -372,22 +372,22 @@ class CrazyflieVehicle : public SimLogic::Vehicle {
     }
     const auto& deck = cf_.flow_deck();
     if (cf_.params().estimate_mode != StateEstimateMode::kMocap) {
-      if (deck.flow_updated()) out.flow.push_back({"/flow", flow_msg(deck.last_flow(), now_ns)});
+      if (deck.flow_updated()) out.flow.push_back({"flow", flow_msg(deck.last_flow(), now_ns)});
       if (deck.range_updated()) {
-        out.range.push_back({"/tof", range_msg(deck.last_range(), deck.params().range, now_ns)});
+        out.range.push_back({"tof", range_msg(deck.last_range(), deck.params().range, now_ns)});
       }
     }
   }
 
   std::vector<std::pair<std::string, std::string>> topics() const override {
     std::vector<std::pair<std::string, std::string>> t = {
-        {"/imu", kImuType},
-        {"/whisker/left/pressure", kPressure},
-        {"/whisker/right/pressure", kPressure},
-        {"/ground_truth/whisker/left/contact", kTruthType},
-        {"/ground_truth/whisker/right/contact", kTruthType}};
-    if (cf_.params().estimate_mode == StateEstimateMode::kFlowDeck) t.emplace_back("/flow", kFlowType);
-    if (cf_.params().estimate_mode != StateEstimateMode::kMocap) t.emplace_back("/tof", kRangeType);
+        {"imu", kImuType},
+        {"whisker/left/pressure", kPressure},
+        {"whisker/right/pressure", kPressure},
+        {"ground_truth/whisker/left/contact", kTruthType},
+        {"ground_truth/whisker/right/contact", kTruthType}};
+    if (cf_.params().estimate_mode == StateEstimateMode::kFlowDeck) t.emplace_back("flow", kFlowType);
+    if (cf_.params().estimate_mode != StateEstimateMode::kMocap) t.emplace_back("tof", kRangeType);
     return t;
   }
 
@@ -449,13 +449,13 @@ class DuctedVehicle : public SimLogic::Vehicle {
     const double height = x.position.z() - arena.floor_z();
     if (every(k, physics_hz, kImuHz)) {
       const ImuSample s = imu_.sample(quad_.specific_force_body(), x.angular_velocity);
-      out.imu.push_back({"/imu", imu_msg(s, x.orientation, now_ns, 0.0, 0.0)});
+      out.imu.push_back({"imu", imu_msg(s, x.orientation, now_ns, 0.0, 0.0)});
     }
     if (every(k, physics_hz, tof_.params().rate_hz)) {
-      out.range.push_back({"/tof", range_msg(tof_.sample(height, x.orientation), tof_.params(), now_ns)});
+      out.range.push_back({"tof", range_msg(tof_.sample(height, x.orientation), tof_.params(), now_ns)});
     }
     if (every(k, physics_hz, flow_.params().rate_hz)) {
-      out.flow.push_back({"/flow", flow_msg(flow_.sample(x.velocity, x.orientation, x.angular_velocity, height), now_ns)});
+      out.flow.push_back({"flow", flow_msg(flow_.sample(x.velocity, x.orientation, x.angular_velocity, height), now_ns)});
     }
     if (every(k, physics_hz, 50.0)) {
       tactile_msgs::msg::ThrustCommand t;
@@ -464,7 +464,7 @@ class DuctedVehicle : public SimLogic::Vehicle {
       t.normalized = std::numeric_limits<double>::quiet_NaN();
       t.total_thrust = quad_.collective_thrust();
       t.rotor_thrust.assign(quad_.rotor_commands().begin(), quad_.rotor_commands().end());
-      out.thrust.push_back({"/thrust_command", t});
+      out.thrust.push_back({"thrust_command", t});
     }
     if (every(k, physics_hz, 100.0)) {
       const WallTruth w = quad_.wall_truth();
@@ -479,13 +479,13 @@ class DuctedVehicle : public SimLogic::Vehicle {
       m.velocity.x = v_body.x();
       m.velocity.y = v_body.y();
       m.velocity.z = v_body.z();
-      out.wall.push_back({"/ground_truth/wall", m});
+      out.wall.push_back({"ground_truth/wall", m});
       if (w.present) min_wall_ = std::min(min_wall_, w.distance);
     }
   }
   std::vector<std::pair<std::string, std::string>> topics() const override {
-    return {{"/imu", kImuType}, {"/tof", kRangeType}, {"/flow", kFlowType}, {"/thrust_command", kThrustType},
-            {"/ground_truth/wall", kWallType}};
+    return {{"imu", kImuType}, {"tof", kRangeType}, {"flow", kFlowType}, {"thrust_command", kThrustType},
+            {"ground_truth/wall", kWallType}};
   }
   void summarize(SimLogic::Summary& s) const override { s["min_wall_distance_m"] = min_wall_; }
 
@@ -524,7 +524,7 @@ class XplorerVehicle : public SimLogic::Vehicle {
     const auto& st = x_.state();
     if (every(k, physics_hz, kImuHz)) {
       const ImuSample sm = imu_.sample(x_.specific_force_body(), st.angular_velocity);
-      out.imu.push_back({"/imu", imu_msg(sm, st.orientation, now_ns, 0.0, 0.0)});
+      out.imu.push_back({"imu", imu_msg(sm, st.orientation, now_ns, 0.0, 0.0)});
     }
     if (every(k, physics_hz, kArmImuHz)) {  // 001: arm IMUs at 50 Hz
       tactile_msgs::msg::ArmImuArray a;
@@ -549,17 +549,17 @@ class XplorerVehicle : public SimLogic::Vehicle {
         a.arms.push_back(m);
         max_arm_ = std::max(max_arm_, std::abs(m.arm_angle));
       }
-      out.arm_imu.push_back({"/arm_imu", a});
+      out.arm_imu.push_back({"arm_imu", a});
       tactile_msgs::msg::ThrustCommand t;
       t.header = a.header;
       t.normalized = x_.thrust_command();
       t.total_thrust = x_.collective_thrust();
       t.rotor_thrust.assign(x_.rotor_thrusts().begin(), x_.rotor_thrusts().end());
-      out.thrust.push_back({"/thrust_command", t});
+      out.thrust.push_back({"thrust_command", t});
     }
   }
   std::vector<std::pair<std::string, std::string>> topics() const override {
-    return {{"/imu", kImuType}, {"/arm_imu", kArmType}, {"/thrust_command", kThrustType}};
+    return {{"imu", kImuType}, {"arm_imu", kArmType}, {"thrust_command", kThrustType}};
   }
   void summarize(SimLogic::Summary& s) const override { s["max_arm_deflection_deg"] = max_arm_ * 180.0 / M_PI; }
 
@@ -620,10 +620,10 @@ class WhiskerStageVehicle : public SimLogic::Vehicle {
     stamp(w.header.stamp, now_ns);
     w.header.frame_id = "whisker_base";
     w.wrench.torque.z = r.m0;
-    out.wrench.push_back({"/whisker/base_wrench", w});
+    out.wrench.push_back({"whisker/base_wrench", w});
     geometry_msgs::msg::WrenchStamped t = w;
     t.wrench.torque.z = r.m0_true;
-    out.wrench.push_back({"/ground_truth/whisker/base_wrench", t});
+    out.wrench.push_back({"ground_truth/whisker/base_wrench", t});
     ++samples_;
     if (r.contact) {
       contacts.push_back(r.contact_point);
@@ -633,8 +633,8 @@ class WhiskerStageVehicle : public SimLogic::Vehicle {
     }
   }
   std::vector<std::pair<std::string, std::string>> topics() const override {
-    return {{"/whisker/base_wrench", "geometry_msgs/msg/WrenchStamped"},
-            {"/ground_truth/whisker/base_wrench", "geometry_msgs/msg/WrenchStamped"}};
+    return {{"whisker/base_wrench", "geometry_msgs/msg/WrenchStamped"},
+            {"ground_truth/whisker/base_wrench", "geometry_msgs/msg/WrenchStamped"}};
   }
   void summarize(SimLogic::Summary& s) const override {
     s["whisker_contact_fraction"] = samples_ ? static_cast<double>(contact_samples_) / static_cast<double>(samples_) : 0.0;
@@ -723,10 +723,10 @@ SimLogic::SimLogic(const Scenario& scenario, uint64_t seed, double extra_arena_y
   // Faults: every rule must name a topic this simulator publishes, with a
   // message type that supports the fault.
   auto topics = vehicle_->topics();
-  topics.emplace_back("/odom", "nav_msgs/msg/Odometry");
-  topics.emplace_back("/ground_truth/odom", "nav_msgs/msg/Odometry");
-  topics.emplace_back("/ground_truth/external_force", "geometry_msgs/msg/WrenchStamped");
-  topics.emplace_back("/collisions", "tactile_msgs/msg/CollisionEvent");
+  topics.emplace_back("odom", "nav_msgs/msg/Odometry");
+  topics.emplace_back("ground_truth/odom", "nav_msgs/msg/Odometry");
+  topics.emplace_back("ground_truth/external_force", "geometry_msgs/msg/WrenchStamped");
+  topics.emplace_back("collisions", "tactile_msgs/msg/CollisionEvent");
   std::map<std::string, std::vector<FaultSpec>> by_topic;
   for (size_t i = 0; i < scenario.faults.size(); ++i) {
     const FaultSpec& f = scenario.faults[i];
@@ -872,8 +872,8 @@ void SimLogic::step(int64_t now_ns, Outputs& out) {
   const RigidBodyState& truth = vehicle_->truth();
   if (every(k_, hz, 100.0)) {
     const RigidBodyState est = vehicle_->estimate();
-    raw.odometry.push_back({"/odom", odometry(est, now_ns)});
-    raw.odometry.push_back({"/ground_truth/odom", odometry(truth, now_ns)});
+    raw.odometry.push_back({"odom", odometry(est, now_ns)});
+    raw.odometry.push_back({"ground_truth/odom", odometry(truth, now_ns)});
     trajectory_.push_back({tactile_common::to_seconds(now_ns), truth, est});
     geometry_msgs::msg::WrenchStamped w;
     stamp(w.header.stamp, now_ns);
@@ -883,7 +883,7 @@ void SimLogic::step(int64_t now_ns, Outputs& out) {
     w.wrench.force.x = f.x();
     w.wrench.force.y = f.y();
     w.wrench.force.z = f.z();
-    raw.wrench.push_back({"/ground_truth/external_force", w});
+    raw.wrench.push_back({"ground_truth/external_force", w});
   }
   for (auto& c : vehicle_->take_collisions()) {
     tactile_msgs::msg::CollisionEvent m;
@@ -897,7 +897,7 @@ void SimLogic::step(int64_t now_ns, Outputs& out) {
     m.normal.y = c.normal.y();
     m.impact_speed = c.impact_speed;
     m.obstacle_id = c.obstacle_id;
-    raw.collisions.push_back({"/collisions", m});
+    raw.collisions.push_back({"collisions", m});
     collisions_.push_back(c);
   }
 

@@ -25,7 +25,8 @@
 // At the scenario's end (duration_s) the simulator stops stepping and
 // publishing, logs one line "tactile_sim: scenario ... ended" with the
 // achieved real-time factor and the setpoint latency, and publishes
-// std_msgs/Bool true on /sim/done (reliable, transient local: a subscriber
+// std_msgs/Bool true on sim/done (relative, as every topic of the simulator's;
+// reliable, transient local: a subscriber
 // that joins later still gets it).
 //
 // /clock of a step's time t is published one timer period after the step's
@@ -67,7 +68,7 @@ namespace tactile_sim {
 
 class TactileSimComponent : public rclcpp::Node {
  public:
-  static constexpr const char * kDoneTopic = "/sim/done";
+  static constexpr const char * kDoneTopic = "sim/done";
 
   explicit TactileSimComponent(const rclcpp::NodeOptions & options)
   : Node(SimLogic::kNodeName, options),
@@ -102,9 +103,15 @@ class TactileSimComponent : public rclcpp::Node {
       std::string topic = subscribers.substr(begin, end - begin);
       topic.erase(0, topic.find_first_not_of(' '));
       topic.erase(topic.find_last_not_of(' ') + 1);
-      if (!topic.empty()) {wait_for_subscribers_.push_back(topic);}
+      // Resolved like the publishers' names: a relative topic is the one in this node's
+      // namespace (cf1/odom under /cf1).
+      if (!topic.empty()) {
+        wait_for_subscribers_.push_back(get_node_topics_interface()->resolve_topic_name(topic));
+      }
       begin = end + 1;
     }
+    // /clock is absolute (rclcpp's time source subscribes /clock); the launch files remap it
+    // into the vehicle's namespace, with every node's, where two simulators share a domain.
     clock_publisher_ = create_publisher<rosgraph_msgs::msg::Clock>("/clock", rclcpp::ClockQoS());
     // Latched (transient local), so a subscriber that joins later still gets it; never
     // intra-process (tactile_common/ros_qos.hpp: Humble refuses the combination).
@@ -164,7 +171,7 @@ class TactileSimComponent : public rclcpp::Node {
       if (publishers.find(topic) == publishers.end()) {
         publishers.emplace(topic, tactile_common::data_publisher<T>(*this, topic));
       }
-      publisher_bases_[topic] = publishers.at(topic);
+      publisher_bases_[publishers.at(topic)->get_topic_name()] = publishers.at(topic);
     }
   }
 

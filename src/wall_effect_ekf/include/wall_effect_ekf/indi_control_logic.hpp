@@ -28,11 +28,11 @@ Mat3 wall_frame_attitude(const Mat3& R_world_body, double wall_direction_body);
 class IndiControlLogic {
  public:
   static constexpr const char* kNodeName = "indi_controller";
-  static constexpr const char* kSetpointTopic = "/wall_effect/setpoint";  // nav_msgs/msg/Odometry (world)
-  static constexpr const char* kOdometryTopic = "/odom";                  // nav_msgs/msg/Odometry
-  static constexpr const char* kImuTopic = "/imu";                        // sensor_msgs/msg/Imu (with orientation)
-  static constexpr const char* kWallTopic = "/wall_effect/estimate";      // tactile_msgs/msg/WallEstimate
-  static constexpr const char* kOutputTopic = "/cmd_rotor_thrust";        // tactile_msgs/msg/ThrustCommand
+  static constexpr const char* kSetpointTopic = "wall_effect/setpoint";  // nav_msgs/msg/Odometry (world)
+  static constexpr const char* kOdometryTopic = "odom";                  // nav_msgs/msg/Odometry
+  static constexpr const char* kImuTopic = "imu";                        // sensor_msgs/msg/Imu (with orientation)
+  static constexpr const char* kWallTopic = "wall_effect/estimate";      // tactile_msgs/msg/WallEstimate
+  static constexpr const char* kOutputTopic = "cmd_rotor_thrust";        // tactile_msgs/msg/ThrustCommand
 
   struct Params {
     IndiParams indi;

@@ -20,11 +20,11 @@ namespace wall_effect_ekf {
 class WallEffectEkfLogic {
  public:
   static constexpr const char* kNodeName = "wall_effect_ekf";
-  static constexpr const char* kImuTopic = "/imu";                     // sensor_msgs/msg/Imu
-  static constexpr const char* kFlowTopic = "/flow";                   // tactile_msgs/msg/OpticalFlow
-  static constexpr const char* kRangeTopic = "/tof";                   // sensor_msgs/msg/Range (downward)
-  static constexpr const char* kThrustTopic = "/thrust_command";       // tactile_msgs/msg/ThrustCommand
-  static constexpr const char* kOutputTopic = "/wall_effect/estimate"; // tactile_msgs/msg/WallEstimate
+  static constexpr const char* kImuTopic = "imu";                     // sensor_msgs/msg/Imu
+  static constexpr const char* kFlowTopic = "flow";                   // tactile_msgs/msg/OpticalFlow
+  static constexpr const char* kRangeTopic = "tof";                   // sensor_msgs/msg/Range (downward)
+  static constexpr const char* kThrustTopic = "thrust_command";       // tactile_msgs/msg/ThrustCommand
+  static constexpr const char* kOutputTopic = "wall_effect/estimate"; // tactile_msgs/msg/WallEstimate
 
   struct Params {
     EkfParams ekf;

@@ -61,7 +61,7 @@ TrajectorySetpoint trajectory_setpoint(const TrajectoryParams& p, double t);
 class WallTrajectoryLogic {
  public:
   static constexpr const char* kNodeName = "wall_trajectory";
-  static constexpr const char* kOutputTopic = "/wall_effect/setpoint";  // nav_msgs/msg/Odometry
+  static constexpr const char* kOutputTopic = "wall_effect/setpoint";  // nav_msgs/msg/Odometry
   static constexpr int64_t kPeriodNs = 10'000'000;                      // 100 Hz
 
   static tactile_common::ParamMap default_parameters();

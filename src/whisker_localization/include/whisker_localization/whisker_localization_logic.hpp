@@ -25,10 +25,10 @@ namespace whisker_localization {
 class WhiskerLocalizationLogic {
  public:
   static constexpr const char* kNodeName = "whisker_localization";
-  static constexpr const char* kMomentTopic = "/whisker/base_wrench";     // geometry_msgs/msg/WrenchStamped (torque.z = M(0))
-  static constexpr const char* kOdomTopic = "/odom";                      // nav_msgs/msg/Odometry (the whisker base)
-  static constexpr const char* kResultTopic = "/whisker/localization";    // tactile_msgs/msg/LocalizationResult
-  static constexpr const char* kPoseSetTopic = "/whisker/pose_set";       // geometry_msgs/msg/PoseArray
+  static constexpr const char* kMomentTopic = "whisker/base_wrench";     // geometry_msgs/msg/WrenchStamped (torque.z = M(0))
+  static constexpr const char* kOdomTopic = "odom";                      // nav_msgs/msg/Odometry (the whisker base)
+  static constexpr const char* kResultTopic = "whisker/localization";    // tactile_msgs/msg/LocalizationResult
+  static constexpr const char* kPoseSetTopic = "whisker/pose_set";       // geometry_msgs/msg/PoseArray
   static constexpr const char* kMapFrame = "map";
 
   struct Params {

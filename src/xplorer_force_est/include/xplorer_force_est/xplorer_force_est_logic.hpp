@@ -21,11 +21,11 @@ namespace xplorer_force_est {
 class XplorerForceEstLogic {
  public:
   static constexpr const char* kNodeName = "xplorer_force_est";
-  static constexpr const char* kArmImuTopic = "/arm_imu";               // tactile_msgs/msg/ArmImuArray
-  static constexpr const char* kImuTopic = "/imu";                      // sensor_msgs/msg/Imu
-  static constexpr const char* kThrustTopic = "/thrust_command";        // tactile_msgs/msg/ThrustCommand
-  static constexpr const char* kWrenchWorldTopic = "/xplorer/wrench";     // geometry_msgs/msg/WrenchStamped (world)
-  static constexpr const char* kWrenchBodyTopic = "/xplorer/wrench_body"; // geometry_msgs/msg/WrenchStamped (body)
+  static constexpr const char* kArmImuTopic = "arm_imu";               // tactile_msgs/msg/ArmImuArray
+  static constexpr const char* kImuTopic = "imu";                      // sensor_msgs/msg/Imu
+  static constexpr const char* kThrustTopic = "thrust_command";        // tactile_msgs/msg/ThrustCommand
+  static constexpr const char* kWrenchWorldTopic = "xplorer/wrench";     // geometry_msgs/msg/WrenchStamped (world)
+  static constexpr const char* kWrenchBodyTopic = "xplorer/wrench_body"; // geometry_msgs/msg/WrenchStamped (body)
 
   struct Params {
     xplorer_force_est::Params estimator;

@@ -22,10 +22,10 @@ namespace tactile_sim {
 class ScriptedPilotLogic {
  public:
   static constexpr const char* kNodeName = "scenario_pilot";
-  static constexpr const char* kHoverTopic = "/cmd_hover";         // whisker_crazyflie
-  static constexpr const char* kPositionTopic = "/cmd_position";   // xplorer, ducted_quadrotor
-  static constexpr const char* kOdometryTopic = "/odom";
-  static constexpr const char* kCollisionTopic = "/collisions";
+  static constexpr const char* kHoverTopic = "cmd_hover";         // whisker_crazyflie
+  static constexpr const char* kPositionTopic = "cmd_position";   // xplorer, ducted_quadrotor
+  static constexpr const char* kOdometryTopic = "odom";
+  static constexpr const char* kCollisionTopic = "collisions";
   static constexpr double kRateHz = 50.0;
 
   struct Outputs {

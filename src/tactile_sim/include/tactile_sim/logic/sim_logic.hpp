@@ -50,9 +50,9 @@ struct TrajectoryPoint {
 class SimLogic {
  public:
   static constexpr const char* kNodeName = "tactile_sim";
-  static constexpr const char* kHoverSetpointTopic = "/cmd_hover";
-  static constexpr const char* kPositionSetpointTopic = "/cmd_position";
-  static constexpr const char* kRotorThrustTopic = "/cmd_rotor_thrust";
+  static constexpr const char* kHoverSetpointTopic = "cmd_hover";
+  static constexpr const char* kPositionSetpointTopic = "cmd_position";
+  static constexpr const char* kRotorThrustTopic = "cmd_rotor_thrust";
 
   struct Outputs {
     std::vector<Published<tactile_msgs::msg::WhiskerPressure>> pressure;
