@@ -96,9 +96,19 @@ def parameters(*entries):
     return list(entries) + ([{PARAMETER_SOURCES: sources}] if sources else [])
 
 
+def frame_prefix_argument():
+    """The launch argument frame_prefix of the sitl_* files: goes before every frame name
+    the simulator stamps and broadcasts but map ('' or ending in '/': cf1/ gives
+    cf1/base_link; tactile_common/frames.hpp)."""
+    from launch.actions import DeclareLaunchArgument
+    return DeclareLaunchArgument(
+        'frame_prefix', default_value='',
+        description="prefix of the vehicle's frames ('' or ending in '/', e.g. cf1/)")
+
+
 def simulator_node(wait_for_publisher, extra_arguments):
     """The SITL's simulator component of the sitl_* launch files (arguments scenario, seed,
-    real_time_factor, wait_for_subscribers). It starts the world once `wait_for_publisher`
+    real_time_factor, wait_for_subscribers, frame_prefix). It starts the world once `wait_for_publisher`
     (the graph's controller output, loaded last) has a publisher, and holds t = 0 until the
     topics of wait_for_subscribers have a subscriber in another process (a recorder;
     comma-separated, '' starts at once)."""
@@ -111,6 +121,7 @@ def simulator_node(wait_for_publisher, extra_arguments):
              'real_time_factor': ParameterValue(
                  LaunchConfiguration('real_time_factor'), value_type=float),
              'wait_for_publisher': wait_for_publisher,
+             'frame_prefix': ParameterValue(LaunchConfiguration('frame_prefix'), value_type=str),
              'wait_for_subscribers': ParameterValue(
                  LaunchConfiguration('wait_for_subscribers'), value_type=str)}),
         extra_arguments=extra_arguments)

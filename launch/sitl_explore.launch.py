@@ -22,6 +22,7 @@ from launch.actions import DeclareLaunchArgument
 from launch.substitutions import LaunchConfiguration
 from launch_ros.actions import ComposableNodeContainer
 from launch_ros.descriptions import ComposableNode
+from launch_ros.parameter_descriptions import ParameterValue
 
 CONFIG_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'config')
 
@@ -43,7 +44,8 @@ def generate_launch_description():
             package='tactile_sim', plugin='tactile_sim::TactileSimComponent', name='tactile_sim',
             parameters=launch_common.parameters(
                 {'scenario': LaunchConfiguration('scenario'),
-                 'seed': LaunchConfiguration('seed')}),
+                 'seed': LaunchConfiguration('seed'),
+                 'frame_prefix': ParameterValue(LaunchConfiguration('frame_prefix'), value_type=str)}),
             extra_arguments=intra),
     ]
     for side in ('left', 'right'):
@@ -66,6 +68,7 @@ def generate_launch_description():
         DeclareLaunchArgument('scenario', default_value=os.path.join(
             CONFIG_DIR, 'scenarios', 'whisker_room_exit_gpis.yaml'),
             description='scenario file of the simulator'),
+        launch_common.frame_prefix_argument(),
         DeclareLaunchArgument('seed', default_value='-1',
                               description="noise seed (-1: the scenario's)"),
         ComposableNodeContainer(

@@ -56,6 +56,7 @@ def generate_launch_description():
         DeclareLaunchArgument('scenario', default_value=os.path.join(
             CONFIG_DIR, 'scenarios', 'whisker_three_baffles_fsm.yaml'),
             description='scenario file of the simulator'),
+        launch_common.frame_prefix_argument(),
         DeclareLaunchArgument('seed', default_value='-1',
                               description="noise seed (-1: the scenario's)"),
         DeclareLaunchArgument('real_time_factor', default_value='1.0',
