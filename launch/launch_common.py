@@ -97,9 +97,9 @@ def parameters(*entries):
 
 
 def frame_prefix_argument():
-    """The launch argument frame_prefix of the sitl_* files: goes before every frame name
-    the simulator stamps and broadcasts but map ('' or ending in '/': cf1/ gives
-    cf1/base_link; tactile_common/frames.hpp)."""
+    """The launch argument frame_prefix of the vehicle launch files (sitl_*, sitl, radio):
+    goes before every frame name the simulator or the bridge stamps and broadcasts but map
+    ('' or ending in '/': cf1/ gives cf1/base_link; tactile_common/frames.hpp)."""
     from launch.actions import DeclareLaunchArgument
     return DeclareLaunchArgument(
         'frame_prefix', default_value='',

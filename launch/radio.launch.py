@@ -73,8 +73,9 @@ def autostart_argument():
 
 
 def bridge_overrides(uri):
-    """The bridge's launch-argument overrides: uri and autostart."""
-    return {'uri': uri, 'autostart': ParameterValue(LaunchConfiguration('autostart'), value_type=bool)}
+    """The bridge's launch-argument overrides: uri, autostart and frame_prefix."""
+    return {'uri': uri, 'autostart': ParameterValue(LaunchConfiguration('autostart'), value_type=bool),
+            'frame_prefix': ParameterValue(LaunchConfiguration('frame_prefix'), value_type=str)}
 
 
 def container_stop_timeout():
@@ -129,6 +130,7 @@ def generate_launch_description():
         DeclareLaunchArgument('uri', default_value='radio://0/80/2M/E7E7E7E7E7?safelink=1',
                               description='Crazyflie link URI (radio://, usb://, udp://)'),
         autostart_argument(),
+        launch_common.frame_prefix_argument(),
         container,
         launch_common.stop_on_load_failure(container),
     ] + bridge_lifecycle())

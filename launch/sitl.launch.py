@@ -62,6 +62,7 @@ def generate_launch_description():
         DeclareLaunchArgument('port', default_value='19850', description='UDP port (19850 + N)'),
         DeclareLaunchArgument('seed', default_value='-1', description="noise seed (-1: the scenario's)"),
         _radio.autostart_argument(),
+        _radio.launch_common.frame_prefix_argument(),
         server,
         container,
         _radio.launch_common.stop_on_load_failure(container),
