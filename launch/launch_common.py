@@ -106,6 +106,12 @@ def frame_prefix_argument():
         description="prefix of the vehicle's frames ('' or ending in '/', e.g. cf1/)")
 
 
+def prefixed_frame(frame):
+    """A frame-name parameter value behind the launch argument frame_prefix, e.g. for
+    xplorer_force_est's world_frame: 'odom' gives cf1/odom with frame_prefix:=cf1/."""
+    return ParameterValue([LaunchConfiguration('frame_prefix'), frame], value_type=str)
+
+
 def simulator_node(wait_for_publisher, extra_arguments):
     """The SITL's simulator component of the sitl_* launch files (arguments scenario, seed,
     real_time_factor, wait_for_subscribers, frame_prefix). It starts the world once `wait_for_publisher`
