@@ -113,41 +113,42 @@ def check_static_joints_in_tf(tf: Tf, joints: dict, launch: Launch):
             f'{parent} -> {child}: rotation {q} != URDF rpy {rpy}')
 
 
-@pytest.fixture(scope='module')
+@pytest.fixture(scope='class')
 def whisker_cf1(tmp_path_factory):
-    """sitl_whisker with frame_prefix cf1/ (the default three-baffles scenario)."""
+    """sitl_whisker with frame_prefix cf1/ (the default three-baffles scenario), shared by
+    the tests of one class and stopped after them (before the other launches)."""
     log = tmp_path_factory.mktemp('frames') / 'sitl_whisker.log'
     with Launch('sitl_whisker.launch.py', ['frame_prefix:=cf1/'], log) as launch, Graph('frames_probe') as g:
         g.wait_for_nodes(['/tactile_sim'], launch)
         yield launch, g
 
 
-def test_robot_description_of_the_whiskered_crazyflie_reaches_a_late_subscriber(whisker_cf1):
-    launch, g = whisker_cf1
-    joints = urdf_joints(late_robot_description(g, launch), 'whiskered_crazyflie', WHISKER_LINKS, 'cf1/')
-    assert joints['cf1/whisker_left'][0] == 'cf1/base_link'
-    # 000's mounting (tactile_sim CrazyflieParams): bases 5 cm apart, 5 cm ahead, pitched up 45 deg.
-    assert joints['cf1/whisker_left'][1] == pytest.approx([0.05, 0.025, 0.0])
-    assert joints['cf1/whisker_right'][1] == pytest.approx([0.05, -0.025, 0.0])
-    assert joints['cf1/whisker_left'][2] == pytest.approx([0.0, -math.pi / 4, 0.0])
+class TestSitlWhiskerWithFramePrefix:
+    def test_robot_description_of_the_whiskered_crazyflie_reaches_a_late_subscriber(self, whisker_cf1):
+        launch, g = whisker_cf1
+        joints = urdf_joints(late_robot_description(g, launch), 'whiskered_crazyflie', WHISKER_LINKS, 'cf1/')
+        assert joints['cf1/whisker_left'][0] == 'cf1/base_link'
+        # 000's mounting (tactile_sim CrazyflieParams): bases 5 cm apart, 5 cm ahead, pitched up 45 deg.
+        assert joints['cf1/whisker_left'][1] == pytest.approx([0.05, 0.025, 0.0])
+        assert joints['cf1/whisker_right'][1] == pytest.approx([0.05, -0.025, 0.0])
+        assert joints['cf1/whisker_left'][2] == pytest.approx([0.0, -math.pi / 4, 0.0])
 
-
-@needs_tf2
-def test_tf_resolves_map_to_the_prefixed_whisker_and_keeps_ground_truth_apart(whisker_cf1):
-    launch, g = whisker_cf1
-    tf = Tf(g)
-    tf.lookup('map', 'cf1/whisker_left', launch)
-    tf.lookup('map', 'cf1/ground_truth/base_link', launch)
-    parents = tf.parents()
-    assert parents['cf1/base_link'] == 'cf1/odom'
-    assert parents['cf1/odom'] == 'map'
-    assert parents['cf1/ground_truth/base_link'] == 'cf1/ground_truth/odom'
-    assert parents['cf1/ground_truth/odom'] == 'map'
-    unprefixed = sorted(f for f in parents if not f.startswith('cf1/'))
-    assert unprefixed == [], f'frames without the prefix: {unprefixed}'
-    # The static joints of the URDF are the transforms tf2 resolves.
-    urdf = late_robot_description(g, launch, late_s=0.0)
-    check_static_joints_in_tf(tf, urdf_joints(urdf, 'whiskered_crazyflie', WHISKER_LINKS, 'cf1/'), launch)
+    @needs_tf2
+    def test_tf_resolves_map_to_the_prefixed_whisker_and_keeps_ground_truth_apart(self, whisker_cf1):
+        launch, g = whisker_cf1
+        tf = Tf(g)
+        tf.lookup('map', 'cf1/whisker_left', launch)
+        tf.lookup('map', 'cf1/ground_truth/base_link', launch)
+        parents = tf.parents()
+        assert parents['cf1/base_link'] == 'cf1/odom'
+        assert parents['cf1/odom'] == 'map'
+        assert parents['cf1/ground_truth/base_link'] == 'cf1/ground_truth/odom'
+        assert parents['cf1/ground_truth/odom'] == 'map'
+        unprefixed = sorted(f for f in parents if not f.startswith('cf1/'))
+        assert unprefixed == [], f'frames without the prefix: {unprefixed}'
+        # The static joints of the URDF are the transforms tf2 resolves.
+        urdf = late_robot_description(g, launch, late_s=0.0)
+        check_static_joints_in_tf(tf, urdf_joints(urdf, 'whiskered_crazyflie', WHISKER_LINKS, 'cf1/'), launch)
 
 
 def test_sitl_xplorer_robot_description_and_frames_without_prefix(tmp_path):
@@ -170,7 +171,7 @@ def test_sitl_bridge_broadcasts_the_prefixed_tree_of_the_crazyflie(tmp_path):
     """The bridge (sitl.launch.py: the simulated Crazyflie over UDP) broadcasts map -> odom,
     odom -> base_link from the firmware's estimate and the whisker frames, all behind
     frame_prefix, and publishes the Crazyflie's URDF."""
-    with Launch('sitl.launch.py', [f'port:={unique_port(19950)}', 'frame_prefix:=cf2/'],
+    with Launch('sitl.launch.py', [f'port:={unique_port(19950)}', 'seed:=5', 'frame_prefix:=cf2/'],
                 tmp_path / 'launch.log') as launch, Graph('frames_probe') as g:
         g.wait_for_nodes(['/crazyflie_bridge'], launch)
         joints = urdf_joints(late_robot_description(g, launch), 'whiskered_crazyflie', WHISKER_LINKS, 'cf2/')

@@ -114,9 +114,8 @@ public:
     // activation), /tf_static map -> odom and base_link -> its links, /tf odom -> base_link
     // with every odometry message.
     const CrazyflieBridgeLogic frames(params_);
-    description_pub_ = rclcpp::create_publisher<std_msgs::msg::String>(
-      node_.get_node_topics_interface(), kRobotDescriptionTopic, rclcpp::QoS(1).reliable().transient_local(),
-      tactile_common::latched_publisher_options());
+    description_pub_ = tactile_common::latched_publisher<std_msgs::msg::String>(
+      node_.get_node_topics_interface(), kRobotDescriptionTopic);
     std_msgs::msg::String description;
     description.data = frames.robot_description();
     description_pub_->publish(description);
