@@ -171,8 +171,8 @@ INTRA = [{'use_intra_process_comms': True}]
 
 def sitl_arguments(default_scenario):
     """The launch arguments of every sitl_* launch file: scenario (default
-    config/scenarios/<default_scenario>.yaml), seed, real_time_factor, wait_for_subscribers
-    and namespace."""
+    config/scenarios/<default_scenario>.yaml), seed, real_time_factor, wait_for_subscribers,
+    namespace and frame_prefix."""
     from launch.actions import DeclareLaunchArgument as Arg
     return [
         Arg('scenario', default_value=scenario(default_scenario),
@@ -186,7 +186,24 @@ def sitl_arguments(default_scenario):
                         'namespace) that must have a subscriber in another process before '
                         'the world starts, e.g. a recorder'),
         namespace_argument(),
+        frame_prefix_argument(),
     ]
+
+
+def frame_prefix_argument():
+    """The launch argument frame_prefix of the vehicle launch files (sitl_*, sitl, radio):
+    goes before every frame name the simulator or the bridge stamps and broadcasts but map
+    ('' or ending in '/': cf1/ gives cf1/base_link; tactile_common/frames.hpp)."""
+    from launch.actions import DeclareLaunchArgument
+    return DeclareLaunchArgument(
+        'frame_prefix', default_value='',
+        description="prefix of the vehicle's frames ('' or ending in '/', e.g. cf1/)")
+
+
+def prefixed_frame(frame):
+    """A frame-name parameter value behind the launch argument frame_prefix, e.g. for
+    xplorer_force_est's world_frame: 'odom' gives cf1/odom with frame_prefix:=cf1/."""
+    return ParameterValue([LaunchConfiguration('frame_prefix'), frame], value_type=str)
 
 
 def simulator_node(wait_for_publisher):
@@ -204,6 +221,7 @@ def simulator_node(wait_for_publisher):
              'real_time_factor': ParameterValue(
                  LaunchConfiguration('real_time_factor'), value_type=float),
              'wait_for_publisher': wait_for_publisher,
+             'frame_prefix': ParameterValue(LaunchConfiguration('frame_prefix'), value_type=str),
              'wait_for_subscribers': ParameterValue(
                  LaunchConfiguration('wait_for_subscribers'), value_type=str)}),
         extra_arguments=INTRA)

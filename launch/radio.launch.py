@@ -69,9 +69,13 @@ def autostart_argument():
                     '(take-off on connect); false: nothing flies until the takeoff service')
 
 
-def bridge_overrides(uri):
-    """The bridge's launch-argument overrides: uri and autostart."""
-    return {'uri': uri, 'autostart': ParameterValue(LaunchConfiguration('autostart'), value_type=bool)}
+def bridge_overrides(uri, frame_prefix=None):
+    """The bridge's launch-argument overrides: uri, autostart and frame_prefix (the launch
+    argument unless given, e.g. a robot's namespace + '/')."""
+    if frame_prefix is None:
+        frame_prefix = LaunchConfiguration('frame_prefix')
+    return {'uri': uri, 'autostart': ParameterValue(LaunchConfiguration('autostart'), value_type=bool),
+            'frame_prefix': ParameterValue(frame_prefix, value_type=str)}
 
 
 def container_stop_timeout():
@@ -120,13 +124,14 @@ def pipeline_nodes(bridge_overrides):
     return nodes
 
 
-def radio_container(uri, namespace=None, name='radio_container'):
+def radio_container(uri, namespace=None, name='radio_container', frame_prefix=None):
     """One Crazyflie: the container `name` (bridge on `uri` + the whisker pipeline) in
-    `namespace` (else the launch argument namespace), and its load-failure watch."""
+    `namespace` (else the launch argument namespace), its frames behind `frame_prefix`
+    (else the launch argument frame_prefix), and its load-failure watch."""
     container = ComposableNodeContainer(
         name=name, namespace='', package='rclcpp_components',
         executable='component_container',
-        composable_node_descriptions=pipeline_nodes(bridge_overrides(uri)),
+        composable_node_descriptions=pipeline_nodes(bridge_overrides(uri, frame_prefix)),
         output='screen', sigterm_timeout=container_stop_timeout())
     return [launch_common.in_namespace([container], namespace=namespace),
             launch_common.stop_on_load_failure(container)]
@@ -140,8 +145,8 @@ def robots_or_one(context):
         return radio_container(LaunchConfiguration('uri')) + manage_bridges([BRIDGE])
     robots = launch_common.load_robots(path)
     actions = []
-    for robot in robots:
-        actions += radio_container(robot.uri, namespace=robot.namespace)
+    for robot in robots:  # each robot's frames behind its namespace: cf1/odom, cf1/base_link
+        actions += radio_container(robot.uri, namespace=robot.namespace, frame_prefix=robot.namespace + '/')
     return actions + manage_bridges(['/' + r.namespace + '/' + BRIDGE for r in robots])
 
 
@@ -161,6 +166,7 @@ def generate_launch_description():
                                           'and pipeline per enabled robot, in its namespace, on its '
                                           'uri (uri and namespace are then not used)'),
         autostart_argument(),
+        launch_common.frame_prefix_argument(),
     ] + ([lifecycle_common.activate_argument()] if lifecycle_common.is_lifecycle('crazyflie_bridge')
          else []) + [
         OpaqueFunction(function=robots_or_one),  # after every argument it reads

@@ -28,7 +28,7 @@ import importlib.util
 import os
 
 from launch import LaunchDescription
-from launch.actions import DeclareLaunchArgument, ExecuteProcess
+from launch.actions import DeclareLaunchArgument, ExecuteProcess, OpaqueFunction
 from launch.substitutions import LaunchConfiguration, PathJoinSubstitution, PythonExpression
 from launch_ros.substitutions import FindPackagePrefix
 
@@ -39,15 +39,23 @@ _radio = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(_radio)
 
 
-def generate_launch_description():
-    port = LaunchConfiguration('port')
-    server = ExecuteProcess(
+def simulated_crazyflie(context):
+    """crazyflie_sim_server on the scenario; seed -1 (the default) leaves --seed out: the
+    scenario's own seed (the server refuses negative seeds)."""
+    seed = LaunchConfiguration('seed').perform(context)
+    return [ExecuteProcess(
         cmd=[PathJoinSubstitution([FindPackagePrefix('crazyflie_bridge'), 'lib', 'crazyflie_bridge',
                                    'crazyflie_sim_server']),
-             LaunchConfiguration('scenario'), '--port', port, '--seed', LaunchConfiguration('seed'),
-             '--linger', _radio.container_stop_timeout()],
+             LaunchConfiguration('scenario'), '--port', LaunchConfiguration('port')]
+        + ([] if seed.strip() == '-1' else ['--seed', seed])
+        + ['--linger', _radio.container_stop_timeout()],
         # SIGTERM (which ends a linger at once) only after the linger's bound
-        output='screen', sigterm_timeout=str(float(_radio.container_stop_timeout()) + 2.0))
+        output='screen', sigterm_timeout=str(float(_radio.container_stop_timeout()) + 2.0))]
+
+
+def generate_launch_description():
+    port = LaunchConfiguration('port')
+    server = OpaqueFunction(function=simulated_crazyflie)
     uri = PythonExpression(["'udp://127.0.0.1:' + '", port, "'"])
     return LaunchDescription([
         DeclareLaunchArgument('scenario', default_value=_radio.launch_common.scenario(
@@ -57,5 +65,6 @@ def generate_launch_description():
         DeclareLaunchArgument('seed', default_value='-1', description="noise seed (-1: the scenario's)"),
         _radio.launch_common.namespace_argument(),
         _radio.autostart_argument(),
+        _radio.launch_common.frame_prefix_argument(),
         server,
     ] + _radio.radio_container(uri, name='sitl_bridge_container') + _radio.bridge_lifecycle())

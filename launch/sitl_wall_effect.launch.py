@@ -24,6 +24,7 @@ from launch import LaunchDescription
 from launch.actions import DeclareLaunchArgument, OpaqueFunction
 from launch.substitutions import LaunchConfiguration
 from launch_ros.descriptions import ComposableNode
+from launch_ros.parameter_descriptions import ParameterValue
 
 _common_spec = importlib.util.spec_from_file_location(
     'launch_common', os.path.join(os.path.dirname(os.path.abspath(__file__)), 'launch_common.py'))
@@ -55,7 +56,8 @@ def nodes(context):
         out.append(ComposableNode(
             package='wall_effect_ekf', plugin='wall_effect_ekf::WallTrajectoryComponent',
             name='wall_trajectory', parameters=launch_common.parameters(
-                config('wall_trajectory'), sim_time),
+                config('wall_trajectory'), sim_time,
+                {'frame_prefix': ParameterValue(LaunchConfiguration('frame_prefix'), value_type=str)}),
             extra_arguments=intra))
     else:
         out.append(ComposableNode(

@@ -40,19 +40,23 @@ def generate_launch_description():
         ComposableNode(
             package='xplorer_force_est', plugin='xplorer_force_est::XplorerForceEstComponent',
             name='xplorer_force_est', parameters=launch_common.parameters(
-                config('xplorer_force_est'), sim_time),
+                config('xplorer_force_est'), sim_time,
+                {'world_frame': launch_common.prefixed_frame('odom'),
+                 'body_frame': launch_common.prefixed_frame('base_link')}),
             extra_arguments=intra),
         ComposableNode(
             package='tactile_fsm', plugin='tactile_fsm::XplorerFsmComponent', name='xplorer_fsm',
             parameters=launch_common.parameters(
                 config('xplorer_fsm'), sim_time,
-                {'mission': LaunchConfiguration('mission')}),
+                {'mission': LaunchConfiguration('mission'),
+                 'frame_id': launch_common.prefixed_frame('odom')}),
             extra_arguments=intra),
         ComposableNode(
             package='mapping_pcl', plugin='mapping_pcl::XplorerMapComponent', name='xplorer_mapping',
             parameters=launch_common.parameters(
                 config('xplorer_mapping'), sim_time,
-                {'ply_file': LaunchConfiguration('ply_file')}),
+                {'ply_file': LaunchConfiguration('ply_file'),
+                 'frame_id': launch_common.prefixed_frame('odom')}),
             extra_arguments=intra),
     ]
     return LaunchDescription(launch_common.sitl_arguments('xplorer_box_traversal') + [

@@ -9,6 +9,7 @@
 #include "crazyflie_bridge/protocol.hpp"
 #include "tactile_common/time.hpp"
 #include "tactile_common/validation.hpp"
+#include "tactile_sim/robot_model.hpp"
 
 namespace crazyflie_bridge {
 
@@ -145,6 +146,7 @@ void CrazyflieBridgeLogic::Params::validate() const {
   }
   tactile_common::require_finite_positive(kType, "low_battery_hold_s", low_battery_hold_s);
   tactile_common::require_finite_positive(kType, "shutdown_land_timeout_s", shutdown_land_timeout_s);
+  tactile_common::validate_frame_prefix(frame_prefix, "CrazyflieBridgeLogic.frame_prefix");
   if (shutdown_land_timeout_s < land_duration_s) {
     throw std::invalid_argument("CrazyflieBridgeLogic.shutdown_land_timeout_s: must be >= land_duration_s (" +
                                 std::to_string(land_duration_s) + " s), got " + std::to_string(shutdown_land_timeout_s));
@@ -226,6 +228,8 @@ ParamMap CrazyflieBridgeLogic::default_parameters() {
         {"below low_battery_v this long: land", "s", positive(), false});
   m.set("shutdown_land_timeout_s", d.shutdown_land_timeout_s,
         {"bound of the Ctrl-C / SIGTERM land, then emergency stop; >= land_duration_s", "s", positive(), false});
+  m.set("frame_prefix", d.frame_prefix,
+        {"prefix of every frame but map, for several vehicles (cf1/: cf1/odom, cf1/base_link)", "", {}, false});
   return m;
 }
 
@@ -263,6 +267,7 @@ CrazyflieBridgeLogic::Params CrazyflieBridgeLogic::params_from(const ParamMap& m
   p.low_battery_v = m.get_double("low_battery_v");
   p.low_battery_hold_s = m.get_double("low_battery_hold_s");
   p.shutdown_land_timeout_s = m.get_double("shutdown_land_timeout_s");
+  p.frame_prefix = m.get_string("frame_prefix");
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {
@@ -271,7 +276,27 @@ CrazyflieBridgeLogic::Params CrazyflieBridgeLogic::params_from(const ParamMap& m
   return p;
 }
 
-CrazyflieBridgeLogic::CrazyflieBridgeLogic(const Params& params) : params_(params) { params_.validate(); }
+CrazyflieBridgeLogic::CrazyflieBridgeLogic(const Params& params) : params_(params) {
+  params_.validate();
+  namespace frames = tactile_common::frames;
+  odom_frame_ = tactile_common::prefixed(params_.frame_prefix, frames::kOdom);
+  base_frame_ = tactile_common::prefixed(params_.frame_prefix, frames::kBaseLink);
+  whisker_frame_[0] = tactile_common::prefixed(params_.frame_prefix, frames::kWhiskerLeft);
+  whisker_frame_[1] = tactile_common::prefixed(params_.frame_prefix, frames::kWhiskerRight);
+}
+
+std::vector<tactile_common::StaticFrame> CrazyflieBridgeLogic::static_frames() const {
+  std::vector<tactile_common::StaticFrame> out{{tactile_common::frames::kMap, odom_frame_, {}}};
+  for (auto& f : tactile_common::static_frames(tactile_sim::robot_model(tactile_sim::CrazyflieParams{}),
+                                               params_.frame_prefix)) {
+    out.push_back(std::move(f));
+  }
+  return out;
+}
+
+std::string CrazyflieBridgeLogic::robot_description() const {
+  return tactile_common::to_urdf(tactile_sim::robot_model(tactile_sim::CrazyflieParams{}), params_.frame_prefix);
+}
 
 std::vector<std::string> CrazyflieBridgeLogic::whisker_block() const {
   std::vector<std::string> v = params_.left_pressure_vars;
@@ -345,7 +370,7 @@ CrazyflieBridgeLogic::LogOutputs CrazyflieBridgeLogic::on_log_sample(const LogSa
     for (int w = 0; w < 2; ++w) {
       tactile_msgs::msg::WhiskerPressure m;
       tactile_common::to_stamp(ts.stamp_ns, m.header.stamp);
-      m.header.frame_id = w == 0 ? "whisker_left" : "whisker_right";
+      m.header.frame_id = whisker_frame_[w];
       m.whisker_id = w == 0 ? tactile_msgs::msg::WhiskerPressure::WHISKER_LEFT : tactile_msgs::msg::WhiskerPressure::WHISKER_RIGHT;
       for (size_t i = 0; i < 3; ++i) {
         m.pressure[i] = s.values[3 * static_cast<size_t>(w) + i] * params_.pressure_scale;
@@ -359,8 +384,8 @@ CrazyflieBridgeLogic::LogOutputs CrazyflieBridgeLogic::on_log_sample(const LogSa
   // State estimate: x, y, z [m], yaw [deg] (firmware unit), vx, vy [m/s, world].
   nav_msgs::msg::Odometry o;
   tactile_common::to_stamp(ts.stamp_ns, o.header.stamp);
-  o.header.frame_id = "odom";
-  o.child_frame_id = "base_link";
+  o.header.frame_id = odom_frame_;
+  o.child_frame_id = base_frame_;
   o.pose.pose.position.x = s.values[0];
   o.pose.pose.position.y = s.values[1];
   o.pose.pose.position.z = s.values[2];

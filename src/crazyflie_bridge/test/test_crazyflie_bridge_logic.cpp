@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 
 #include "crazyflie_bridge/crazyflie_bridge_logic.hpp"
 #include "crazyflie_bridge/protocol.hpp"
@@ -95,6 +96,41 @@ TEST(BridgeLogic, StateSampleToOdometry) {
   EXPECT_NEAR(o.pose.pose.orientation.w, std::sqrt(0.5), 1e-12);
   EXPECT_NEAR(o.twist.twist.linear.x, 0.1, 1e-12);
   EXPECT_NEAR(o.twist.twist.linear.y, -0.3, 1e-12);
+}
+
+// REP 105 frames behind frame_prefix: the odometry is odom -> base_link, the pressures
+// are in the whisker frames, and the static transforms and the URDF carry the
+// whiskered Crazyflie's geometry (tactile_sim's, 000's whiskers) under the same names.
+TEST(BridgeLogic, FramesArePrefixedAndMatchTheStaticTree) {
+  CrazyflieBridgeLogic::Params p;
+  p.frame_prefix = "cf1/";
+  CrazyflieBridgeLogic l(p);
+  l.set_block_ids(1, 2);
+  const auto w = l.on_log_sample(sample(1, {1, 2, 3, 4, 5, 6}, 5), 5 * kMs);
+  ASSERT_TRUE(w.left && w.right);
+  EXPECT_EQ(w.left->header.frame_id, "cf1/whisker_left");
+  EXPECT_EQ(w.right->header.frame_id, "cf1/whisker_right");
+  const auto o = l.on_log_sample(sample(2, {1.0, 2.0, 0.4, 90.0, 0.3, 0.1}), 0).odom;
+  ASSERT_TRUE(o);
+  EXPECT_EQ(o->header.frame_id, "cf1/odom");
+  EXPECT_EQ(o->child_frame_id, "cf1/base_link");
+  std::map<std::string, std::string> parent;
+  for (const auto& f : l.static_frames()) parent[f.child] = f.parent;
+  EXPECT_EQ(parent["cf1/odom"], "map");
+  for (const char* child : {"cf1/whisker_left", "cf1/whisker_right", "cf1/imu_link", "cf1/flow", "cf1/tof_down"}) {
+    EXPECT_EQ(parent[child], "cf1/base_link") << child;
+  }
+  const std::string urdf = l.robot_description();
+  EXPECT_NE(urdf.find("<child link=\"cf1/whisker_left\"/>"), std::string::npos) << urdf;
+  // A bad prefix is refused with the key and the reason.
+  auto m = CrazyflieBridgeLogic::default_parameters();
+  m.set("frame_prefix", std::string("cf1"));
+  try {
+    CrazyflieBridgeLogic::params_from(m);
+    FAIL() << "accepted frame_prefix cf1";
+  } catch (const tactile_common::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("frame_prefix: must end with '/'"), std::string::npos) << e.what();
+  }
 }
 
 TEST(BridgeLogic, BadSamplesCounted) {

@@ -228,15 +228,18 @@ void GpisExplorerLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
   }
   odom_ns_ = stamp;
   odom_t_ = tactile_common::to_seconds(stamp);
+  if (!msg.header.frame_id.empty()) odom_frame_ = msg.header.frame_id;
+  if (!msg.child_frame_id.empty()) body_frame_ = msg.child_frame_id;
   in_.x = p.x;
   in_.y = p.y;
   in_.yaw = tactile_common::yaw_of(q);
 }
 
-tactile_msgs::msg::GpisMap GpisExplorerLogic::make_map(const GpisExplorer& ex, int64_t stamp_ns) {
+tactile_msgs::msg::GpisMap GpisExplorerLogic::make_map(const GpisExplorer& ex, int64_t stamp_ns,
+                                                      const std::string& frame) {
   tactile_msgs::msg::GpisMap m;
   tactile_common::to_stamp(stamp_ns, m.header.stamp);
-  m.header.frame_id = kFrame;
+  m.header.frame_id = frame;
   const GridSpec& g = ex.grid();
   m.origin_x = g.origin_x;
   m.origin_y = g.origin_y;
@@ -282,7 +285,7 @@ GpisExplorerLogic::Outputs GpisExplorerLogic::on_timer(int64_t now_ns) {
   const SequencerOutput so = seq_.step(in_);
   auto& sp = out.setpoint;
   tactile_common::to_stamp(now_ns, sp.header.stamp);
-  sp.header.frame_id = "base_link";
+  sp.header.frame_id = body_frame_;  // body-frame velocities
   sp.vx = so.setpoint.vx;
   sp.vy = so.setpoint.vy;
   sp.yaw_rate = so.setpoint.yaw_rate;
@@ -301,11 +304,11 @@ GpisExplorerLogic::Outputs GpisExplorerLogic::on_timer(int64_t now_ns) {
     last_state_ns_ = now_ns;
   }
   if (so.gpis_updated) {
-    out.map = make_map(seq_.explorer(), now_ns);
+    out.map = make_map(seq_.explorer(), now_ns, odom_frame_);
     ++stats_.maps_published;
     tactile_msgs::msg::ExplorationTarget t;
     t.header.stamp = sp.header.stamp;
-    t.header.frame_id = kFrame;
+    t.header.frame_id = odom_frame_;
     t.target.x = seq_.target().x();
     t.target.y = seq_.target().y();
     t.acquisition = seq_.target_acquisition();

@@ -130,6 +130,8 @@ TEST(GpisExplorerLogic, OpenSpacePublishesMapAndTarget) {
     auto o = odom(ns, x, y);
     o.pose.pose.orientation.z = std::sin(yaw / 2);
     o.pose.pose.orientation.w = std::cos(yaw / 2);
+    o.header.frame_id = "cf1/odom";  // a prefixed vehicle: the outputs follow its frames
+    o.child_frame_id = "cf1/base_link";
     logic.on_odometry(o);
     tactile_msgs::msg::TactileDepth d;
     tactile_common::to_stamp(ns, d.header.stamp);
@@ -143,8 +145,10 @@ TEST(GpisExplorerLogic, OpenSpacePublishesMapAndTarget) {
       EXPECT_EQ(out.map->width, 10u);
       EXPECT_EQ(out.map->mean.size(), 100u);
       EXPECT_EQ(out.map->training_points.size(), out.map->training_labels.size());
-      EXPECT_EQ(out.map->header.frame_id, "odom");
+      EXPECT_EQ(out.map->header.frame_id, "cf1/odom");  // the frame of the odometry's positions
+      EXPECT_EQ(out.setpoint.header.frame_id, "cf1/base_link");  // body-frame velocities
       ASSERT_TRUE(out.target.has_value());
+      EXPECT_EQ(out.target->header.frame_id, "cf1/odom");
       EXPECT_FALSE(out.target->exit_found);
       EXPECT_EQ(out.target->gpis_update, 1u);
     }
@@ -260,7 +264,7 @@ TEST(GpisPlot, WritesAPictureOfARoomUpdate) {
   ex.add_point({0, 0}, -1.0);
   ex.update();
   gpis_explorer::GpisPicture pic;
-  pic.map = GpisExplorerLogic::make_map(ex, 0);
+  pic.map = GpisExplorerLogic::make_map(ex, 0, "odom");
   EXPECT_EQ(pic.map.contour_starts.size(), ex.last().contours.size());
   EXPECT_EQ(pic.map.corners.size(), ex.last().corners.size());
   pic.trajectory = {{0, 0}, {0.5, 0}, {0.5, 0.5}};

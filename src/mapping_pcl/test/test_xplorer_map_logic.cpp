@@ -81,7 +81,7 @@ TEST(XplorerMapLogic, StampsWhilePressingAndPublishesPointCloud2) {
   EXPECT_EQ(logic.mapper().stats().slabs, 60u);
   EXPECT_EQ(logic.stats().published, 2u);  // 1 Hz
   ASSERT_TRUE(last);
-  EXPECT_EQ(last->header.frame_id, "map");
+  EXPECT_EQ(last->header.frame_id, "odom");  // the frame of the odometry poses
   EXPECT_EQ(last->point_step, 12u);
   ASSERT_EQ(last->fields.size(), 3u);
   EXPECT_EQ(last->fields[2].name, "z");
@@ -154,7 +154,7 @@ TEST(XplorerMapLogic, SavePlyWritesTheConfiguredFormat) {
   ss << f.rdbuf();
   const std::string s = ss.str();
   EXPECT_NE(s.find("format binary_little_endian 1.0"), std::string::npos);
-  EXPECT_NE(s.find("comment frame map"), std::string::npos);
+  EXPECT_NE(s.find("comment frame odom"), std::string::npos);
   EXPECT_NE(s.find("element vertex " + std::to_string(logic.map().size())), std::string::npos);
   std::remove(path.c_str());
 }

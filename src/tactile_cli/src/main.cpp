@@ -186,7 +186,7 @@ int main(int argc, char** argv) {
   tactile_cli::ExportOptions exp;
   auto* export_cmd = app.add_subcommand("export", "rebuild the XPLORER contact map from a bag and write it as PLY (001)");
   export_cmd->add_option("bag", exp.bag, "input rosbag2 directory")->required();
-  export_cmd->add_option("--ply", exp.ply, "output PLY file (frame map, metres)")->required();
+  export_cmd->add_option("--ply", exp.ply, "output PLY file (frame: xplorer_mapping frame_id, odom by default; metres)")->required();
   export_cmd->add_flag("--binary", exp.binary, "binary little endian instead of ASCII");
   export_cmd->add_option("--metrics", exp.metrics,
                          "summary JSON with its warnings (default: the PLY's name with .metrics.json)");

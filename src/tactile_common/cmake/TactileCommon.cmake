@@ -106,6 +106,21 @@ macro(tactile_add_component target)
   install(TARGETS ${target} ARCHIVE DESTINATION lib LIBRARY DESTINATION lib RUNTIME DESTINATION bin)
 endmacro()
 
+# tactile_component_tf(<target>): /tf and /tf_static (tactile_common/ros_tf.hpp) where the
+# ROS 2 installation has tf2_ros (the Kilted toolchain's extras overlay, any apt install):
+# defines TACTILE_HAVE_TF2 for <target>; without it the component broadcasts no transforms
+# (its log says so) and still publishes robot_description.
+function(tactile_component_tf target)
+  find_package(tf2_ros QUIET)
+  if(tf2_ros_FOUND)
+    message(STATUS "${PROJECT_NAME}: tf2_ros found: ${target} broadcasts /tf and /tf_static")
+    target_link_libraries(${target} PUBLIC tf2_ros::tf2_ros)
+    target_compile_definitions(${target} PRIVATE TACTILE_HAVE_TF2)
+  else()
+    message(STATUS "${PROJECT_NAME}: tf2_ros not found: ${target} broadcasts no transforms")
+  endif()
+endfunction()
+
 # tactile_hardware_component_extras(<target> <DEFINE_PREFIX>): the optional ROS 2 parts of
 # a hardware component (crazyflie_bridge, whisker_driver), each where the ROS 2 installation
 # has it (the Kilted toolchain's extras overlay, any apt install):

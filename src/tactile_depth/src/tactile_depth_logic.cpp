@@ -270,7 +270,8 @@ TactileDepth TactileDepthLogic::tick(const WhiskerSignal& left, const WhiskerSig
 
   TactileDepth d;
   tactile_common::to_stamp(stamp_ns, d.header.stamp);
-  d.header.frame_id = body_frame_;
+  d.header.frame_id = body_frame_;     // depths and wall angle: body frame
+  d.contact_frame_id = odom_frame_;    // contact points: the odometry's frame
   switch (params_.estimator.model) {
     case EstimatorModel::kMlp: d.model = TactileDepth::MODEL_MLP; break;
     case EstimatorModel::kKfSimplified: d.model = TactileDepth::MODEL_MLP_KF_SIMPLIFIED; break;

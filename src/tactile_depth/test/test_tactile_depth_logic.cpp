@@ -161,6 +161,8 @@ TEST(TactileDepthLogic, PairsEqualStampsAndFillsEveryField) {
   EXPECT_NEAR(out->contact_point_right.x, 1.0 + c * 0.14 + s * 0.025, 1e-12);
   EXPECT_NEAR(out->contact_point_right.y, 2.0 + s * 0.14 - c * 0.025, 1e-12);
   EXPECT_EQ(out->contact_point_left.z, 0.0);
+  // The contact points are in the odometry's frame, not in the header's body frame.
+  EXPECT_EQ(out->contact_frame_id, "odom");
   // Right first, then left, works the same.
   EXPECT_FALSE(logic.on_right_signal(signal(1, 40 * kMs, 90)));
   out = logic.on_left_signal(signal(0, 40 * kMs, 80));

@@ -145,6 +145,7 @@ void WallEffectNavLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
   }
   position_ = Vec2(p.position.x, p.position.y);
   yaw_ = tactile_common::yaw_of(q);
+  if (!msg.header.frame_id.empty()) odom_frame_ = msg.header.frame_id;
   odom_ns_ = tactile_common::from_stamp(msg.header.stamp);
   have_odom_ = true;
 }
@@ -166,7 +167,8 @@ WallEffectNavLogic::Outputs WallEffectNavLogic::on_timer(int64_t now_ns) {
     ++stats_.ticks_wall_stale;
     nav_msgs::msg::Odometry m;
     tactile_common::to_stamp(now_ns, m.header.stamp);
-    m.header.frame_id = "map";
+    m.header.frame_id = odom_frame_;  // the frame of the odometry's positions (was map)
+    m.child_frame_id = odom_frame_;   // the twist (zero here) is a world velocity too
     m.pose.pose.position.x = position_.x();
     m.pose.pose.position.y = position_.y();
     m.pose.pose.position.z = params_.nav.height;
@@ -206,7 +208,8 @@ WallEffectNavLogic::Outputs WallEffectNavLogic::on_timer(int64_t now_ns) {
   const NavSetpoint sp = nav_.step(in);
   nav_msgs::msg::Odometry m;
   tactile_common::to_stamp(now_ns, m.header.stamp);
-  m.header.frame_id = "map";
+  m.header.frame_id = odom_frame_;  // positions from the odometry's (was map)
+  m.child_frame_id = odom_frame_;   // the twist is a world velocity, not a body one
   const double nan = std::numeric_limits<double>::quiet_NaN();
   m.pose.pose.position.x = sp.position_valid ? sp.position.x() : nan;
   m.pose.pose.position.y = sp.position_valid ? sp.position.y() : nan;

@@ -380,6 +380,7 @@ void WhiskerFsmLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
     return;
   }
   const int64_t stamp = tactile_common::from_stamp(msg.header.stamp);
+  if (!msg.child_frame_id.empty()) body_frame_ = msg.child_frame_id;
   if (stamp < odom_ns_) {
     ++stats_.dropped_out_of_order;
     return;
@@ -407,7 +408,7 @@ WhiskerFsmLogic::Outputs WhiskerFsmLogic::on_timer(int64_t now_ns) {
 
   Outputs out;
   tactile_common::to_stamp(now_ns, out.setpoint.header.stamp);
-  out.setpoint.header.frame_id = kBodyFrame;
+  out.setpoint.header.frame_id = body_frame_;
   out.setpoint.vx = o.setpoint.vx;
   out.setpoint.vy = o.setpoint.vy;
   out.setpoint.yaw_rate = o.setpoint.yaw_rate;
@@ -426,7 +427,7 @@ WhiskerFsmLogic::Outputs WhiskerFsmLogic::on_timer(int64_t now_ns) {
   if (o.transitioned || last_state_pub_ns_ == INT64_MIN || now_ns - last_state_pub_ns_ >= kStatePeriodNs) {
     tactile_msgs::msg::FsmState s;
     tactile_common::to_stamp(now_ns, s.header.stamp);
-    s.header.frame_id = kBodyFrame;
+    s.header.frame_id = body_frame_;
     s.behaviour = kBehaviour;
     s.state = current_state_name_;
     s.previous_state = previous_state_name_;

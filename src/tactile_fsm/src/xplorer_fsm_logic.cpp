@@ -168,7 +168,10 @@ void XplorerFsmLogic::on_wrench(const geometry_msgs::msg::WrenchStamped& msg) {
     ++stats_.dropped_nonfinite;
     return;
   }
-  if (msg.header.frame_id == "base_link") {
+  // The world-frame wrench, in the frame the FSM's setpoints are in (frame_id: odom, or
+  // cf1/odom with a prefix); the body wrench (base_link, cf1/base_link) or any other
+  // frame would push the admittance controller the wrong way.
+  if (msg.header.frame_id != params_.frame_id) {
     ++stats_.dropped_wrong_frame;
     return;
   }

@@ -239,12 +239,17 @@ TEST(WallEffectNavLogic, PublishesSetpointsAndStates) {
   logic.on_odometry(o);
   EXPECT_EQ(logic.stats().dropped_nonfinite, 1u);
   o.pose.pose.position.x = -1.0;
+  o.header.frame_id = "cf1/odom";
+  o.child_frame_id = "cf1/base_link";
   logic.on_odometry(o);
   const auto out = logic.on_timer(10'000'000);
   ASSERT_TRUE(out.setpoint.has_value());
   ASSERT_TRUE(out.state.has_value());
   EXPECT_EQ(out.state->state, "FREE_FLIGHT");
   EXPECT_NEAR(out.setpoint->twist.twist.linear.x, 0.10, 1e-12);  // towards the goal at the origin
+  // Positions and velocity in the odometry's frame (it was labelled map).
+  EXPECT_EQ(out.setpoint->header.frame_id, "cf1/odom");
+  EXPECT_EQ(out.setpoint->child_frame_id, "cf1/odom");
 }
 
 TEST(WallEffectNavLogic, RepoConfigEqualsDefaults) {

@@ -153,6 +153,18 @@ TEST(WhiskerFsmLogic, ParameterErrorsNameTheKey) {
   EXPECT_THROW(WhiskerFsmLogic::params_from(m), ParamError);
 }
 
+// The setpoint's velocities are body-frame: its frame is the odometry's child frame,
+// with the vehicle's frame_prefix (REP 105, several vehicles).
+TEST(WhiskerFsmLogic, SetpointIsInTheOdometryBodyFrame) {
+  WhiskerFsmLogic l(WhiskerFsmLogic::params_from(WhiskerFsmLogic::default_parameters()));
+  auto o = odom(0, 0.0, 0.0, 0.0);
+  o.header.frame_id = "cf1/odom";
+  o.child_frame_id = "cf1/base_link";
+  l.on_depth(depth(0, false, NAN, false, NAN));
+  l.on_odometry(o);
+  EXPECT_EQ(l.on_timer(0).setpoint.header.frame_id, "cf1/base_link");
+}
+
 TEST(WhiskerFsmLogic, FlightThroughMessages) {
   auto p = WhiskerFsmLogic::params_from(WhiskerFsmLogic::default_parameters());
   p.target_x = 2.0;

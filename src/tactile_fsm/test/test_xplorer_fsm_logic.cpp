@@ -20,7 +20,7 @@ nav_msgs::msg::Odometry odom(int64_t ns, double x, double y, double z) {
   o.pose.pose.orientation.w = 1.0;
   return o;
 }
-geometry_msgs::msg::WrenchStamped wrench(int64_t ns, double fx, const char* frame = "map") {
+geometry_msgs::msg::WrenchStamped wrench(int64_t ns, double fx, const char* frame = "odom") {
   geometry_msgs::msg::WrenchStamped w;
   tactile_common::to_stamp(ns, w.header.stamp);
   w.header.frame_id = frame;
@@ -80,11 +80,12 @@ TEST(XplorerFsmLogic, SetpointsStateMessagesAndBadInput) {
   // Bad input.
   logic.on_wrench(wrench(0, std::nan("")));
   logic.on_wrench(wrench(0, 1.0, "base_link"));
+  logic.on_wrench(wrench(0, 1.0, "map"));  // not the odometry's frame (xplorer_force_est said map before)
   auto o = odom(0, 0, 0, 0);
   o.pose.pose.orientation.w = 0.0;
   logic.on_odometry(o);
   EXPECT_EQ(logic.stats().dropped_nonfinite, 2u);
-  EXPECT_EQ(logic.stats().dropped_wrong_frame, 1u);
+  EXPECT_EQ(logic.stats().dropped_wrong_frame, 2u);
   // At the hover height: transition published.
   logic.on_odometry(odom(40000000, 0, 0, 0.7));
   out = logic.on_timer(40000000);

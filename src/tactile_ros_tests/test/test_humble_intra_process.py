@@ -99,6 +99,20 @@ CASES = {
         latched={'/sim/done': '/tactile_sim'}, intra=('/whisker/localization', '/whisker_localization')),
 }
 
+# The vehicle's components also latch robot_description and, where tf2_ros is found (the
+# Kilted extras overlay; not the Jazzy toolchain here), /tf_static.
+try:
+    import tf2_ros  # noqa: F401
+    _HAVE_TF2 = True
+except ImportError:
+    _HAVE_TF2 = False
+for _case in CASES.values():
+    for _vehicle in ('/tactile_sim', '/crazyflie_bridge'):
+        if _vehicle in _case['nodes']:
+            _case['latched']['/robot_description'] = _vehicle
+            if _HAVE_TF2:
+                _case['latched']['/tf_static'] = _vehicle
+
 
 def load_probe(g: Graph, container: str, timeout: float = 30.0):
     """LoadNode of the probe into `container` with use_intra_process_comms true; returns

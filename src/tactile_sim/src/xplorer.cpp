@@ -80,7 +80,7 @@ Xplorer::Xplorer(const XplorerParams& params, const RigidBodyState& initial)
       arm_contacts_{CircleContact(params.contact), CircleContact(params.contact),
                     CircleContact(params.contact), CircleContact(params.contact)},
       body_contact_(params.contact) {
-  arm_dir_ = {-M_PI / 4, M_PI / 4, 3 * M_PI / 4, -3 * M_PI / 4};
+  arm_dir_ = kArmDirections;
   nominal_.spin_sign = {1.0, -1.0, 1.0, -1.0};
   nominal_.torque_coefficient = p_.torque_coefficient;
   for (int i = 0; i < 4; ++i) nominal_.position_body[i] = arm_point_body(i, p_.arm_length);

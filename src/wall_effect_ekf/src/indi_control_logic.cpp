@@ -147,6 +147,7 @@ void IndiControlLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
     ++stats_.dropped_nonfinite;
     return;
   }
+  if (!msg.child_frame_id.empty()) body_frame_ = msg.child_frame_id;
   pos_ = p;
   vel_ = q.normalized() * vb;  // REP-105: twist in the body frame
   odom_ns_ = tactile_common::from_stamp(msg.header.stamp);
@@ -213,7 +214,7 @@ std::optional<tactile_msgs::msg::ThrustCommand> IndiControlLogic::on_timer(int64
   const auto f = ctl_.inner(gyro_, std::atan2(xb.y(), xb.x()), sp_.yaw, wall);  // 004 eq. 35-36
   tactile_msgs::msg::ThrustCommand out;
   tactile_common::to_stamp(now_ns, out.header.stamp);
-  out.header.frame_id = "base_link";
+  out.header.frame_id = body_frame_;  // the odometry's body frame (cf1/base_link with a prefix)
   out.normalized = std::numeric_limits<double>::quiet_NaN();
   out.rotor_thrust.assign(f.begin(), f.end());
   out.total_thrust = f[0] + f[1] + f[2] + f[3];

@@ -169,6 +169,7 @@ void WallEffectEkfLogic::on_thrust(const tactile_msgs::msg::ThrustCommand& msg) 
     ++stats_.dropped_bad_thrust;
     return;
   }
+  if (!msg.header.frame_id.empty()) body_frame_ = msg.header.frame_id;
   Vec4 t;
   for (int i = 0; i < 4; ++i) t[i] = msg.rotor_thrust[static_cast<size_t>(i)];
   if (!t.allFinite()) {
@@ -222,7 +223,7 @@ std::optional<tactile_msgs::msg::WallEstimate> WallEffectEkfLogic::on_timer(int6
   const Mat3 C = ekf_.output_covariance();
   tactile_msgs::msg::WallEstimate out;
   tactile_common::to_stamp(now_ns, out.header.stamp);
-  out.header.frame_id = "base_link";
+  out.header.frame_id = body_frame_;  // the thrust command's body frame (cf1/base_link with a prefix)
   out.distance = x.y;
   out.direction = x.wall_direction();
   out.height = x.z;

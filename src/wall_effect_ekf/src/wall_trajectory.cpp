@@ -4,6 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "tactile_common/frames.hpp"
 #include "tactile_common/time.hpp"
 
 namespace wall_effect_ekf {
@@ -25,6 +26,7 @@ void TrajectoryParams::validate() const {
   if (mode != "estimation_flight" && mode != "hold" && mode != "sweep")
     throw std::invalid_argument("TrajectoryParams.mode: must be 'estimation_flight', 'hold' or 'sweep', got '" + mode + "'");
   pos_check("sweep_hold_s", sweep_hold_s);
+  tactile_common::validate_frame_prefix(frame_prefix, "TrajectoryParams.frame_prefix");
   if (sweep_distances.empty()) throw std::invalid_argument("TrajectoryParams.sweep_distances: must not be empty");
   for (double d : sweep_distances) pos_check("sweep_distances", d);
   auto pos = [](const char* f, double v) {
@@ -92,6 +94,7 @@ tactile_common::ParamMap WallTrajectoryLogic::default_parameters() {
   m.set("yaw_deg", d.yaw_deg);
   m.set("sweep_distances", d.sweep_distances);
   m.set("sweep_hold_s", d.sweep_hold_s);
+  m.set("frame_prefix", d.frame_prefix);
   return m;
 }
 
@@ -113,6 +116,7 @@ TrajectoryParams WallTrajectoryLogic::params_from(const tactile_common::ParamMap
   p.yaw_deg = m.get_double("yaw_deg");
   p.sweep_distances = m.get_double_array("sweep_distances");
   p.sweep_hold_s = m.get_double("sweep_hold_s");
+  p.frame_prefix = m.get_string("frame_prefix");
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {
@@ -129,7 +133,10 @@ nav_msgs::msg::Odometry WallTrajectoryLogic::on_timer(int64_t now_ns) const {
   const TrajectorySetpoint s = trajectory_setpoint(p_, tactile_common::to_seconds(now_ns));
   nav_msgs::msg::Odometry m;
   tactile_common::to_stamp(now_ns, m.header.stamp);
-  m.header.frame_id = "map";
+  // Positions and the (world) velocity in odom: the controller tracks them with the
+  // odometry (they were labelled map).
+  m.header.frame_id = tactile_common::prefixed(p_.frame_prefix, tactile_common::frames::kOdom);
+  m.child_frame_id = m.header.frame_id;
   m.pose.pose.position.x = s.position.x();
   m.pose.pose.position.y = s.position.y();
   m.pose.pose.position.z = s.position.z();

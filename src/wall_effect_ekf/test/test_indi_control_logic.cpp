@@ -15,6 +15,7 @@ TEST(IndiControlLogic, HoversAtTheOdometryPoseAndCountsBadInput) {
   nav_msgs::msg::Odometry o;
   o.pose.pose.orientation.w = 1.0;
   o.pose.pose.position.z = 1.0;
+  o.child_frame_id = "cf1/base_link";
   logic.on_odometry(o);
   sensor_msgs::msg::Imu imu;
   imu.orientation.w = 1.0;
@@ -23,6 +24,7 @@ TEST(IndiControlLogic, HoversAtTheOdometryPoseAndCountsBadInput) {
   const auto out = logic.on_timer(0);
   ASSERT_TRUE(out.has_value());
   ASSERT_EQ(out->rotor_thrust.size(), 4u);
+  EXPECT_EQ(out->header.frame_id, "cf1/base_link");  // the odometry's body frame
   EXPECT_NEAR(out->total_thrust, 0.28 * kGravity, 1e-9);  // hover: T0 = m g, no torque
   for (double t : out->rotor_thrust) EXPECT_NEAR(t, 0.28 * kGravity / 4, 1e-9);
   imu.linear_acceleration.x = NAN;
@@ -86,6 +88,24 @@ TEST(Trajectory, EstimationFlightProtocolOf004) {
   auto m = WallTrajectoryLogic::default_parameters();
   m.set("mode", std::string("zigzag"));
   EXPECT_THROW(WallTrajectoryLogic::params_from(m), tactile_common::ParamError);
+}
+
+// The trajectory's positions and velocity are tracked with the odometry: odom (REP 105),
+// behind frame_prefix for one of several vehicles (they were labelled map).
+TEST(WallTrajectory, SetpointsAreInThePrefixedOdomFrame) {
+  auto m = WallTrajectoryLogic::default_parameters();
+  EXPECT_EQ(WallTrajectoryLogic(WallTrajectoryLogic::params_from(m)).on_timer(0).header.frame_id, "odom");
+  m.set("frame_prefix", std::string("cf1/"));
+  const auto sp = WallTrajectoryLogic(WallTrajectoryLogic::params_from(m)).on_timer(0);
+  EXPECT_EQ(sp.header.frame_id, "cf1/odom");
+  EXPECT_EQ(sp.child_frame_id, "cf1/odom");  // the twist is a world velocity
+  m.set("frame_prefix", std::string("/cf1/"));
+  try {
+    WallTrajectoryLogic::params_from(m);
+    FAIL() << "accepted frame_prefix /cf1/";
+  } catch (const tactile_common::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("frame_prefix"), std::string::npos) << e.what();
+  }
 }
 
 namespace {

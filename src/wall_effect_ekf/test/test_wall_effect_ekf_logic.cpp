@@ -107,9 +107,13 @@ TEST(WallEffectEkfLogic, BadInputIsCountedAndDropped) {
 
 TEST(WallEffectEkfLogic, StaleInputsStopTheFilter) {
   WallEffectEkfLogic logic(WallEffectEkfLogic::params_from(WallEffectEkfLogic::default_parameters()));
-  logic.on_thrust(thrust(0, Vec4::Constant(0.28 * kGravity / 4)));
+  auto t = thrust(0, Vec4::Constant(0.28 * kGravity / 4));
+  t.header.frame_id = "cf1/base_link";
+  logic.on_thrust(t);
   logic.on_imu(imu(0, Vec3(0, 0, kGravity), Vec3::Zero()));
-  EXPECT_TRUE(logic.on_timer(10'000'000).has_value());
+  const auto out = logic.on_timer(10'000'000);
+  ASSERT_TRUE(out.has_value());
+  EXPECT_EQ(out->header.frame_id, "cf1/base_link");  // the body frame of the thrusts (a prefixed vehicle)
   EXPECT_FALSE(logic.on_timer(200'000'000).has_value());  // 0.2 s > max_input_age_s
   EXPECT_EQ(logic.stats().ticks_without_input, 1u);
 }

@@ -245,7 +245,8 @@ WhiskerLocalizationLogic::Outputs WhiskerLocalizationLogic::on_moment(const geom
   res.header.stamp = msg.header.stamp;
   res.header.frame_id = kMapFrame;
   res.contact_valid = r.contact && (r.geometry.cx != 0.0 || r.geometry.cy != 0.0);
-  res.contact_point.x = r.geometry.cx;  // whisker base frame
+  res.contact_point.x = r.geometry.cx;  // whisker base frame: the base moment's
+  res.contact_frame_id = msg.header.frame_id;
   res.contact_point.y = r.geometry.cy;
   res.contact_point.z = 0.0;
   res.base_moment = m0;

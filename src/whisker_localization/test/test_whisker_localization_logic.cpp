@@ -30,6 +30,7 @@ nav_msgs::msg::Odometry odom(int64_t ns, const Pose2& p) {
 geometry_msgs::msg::WrenchStamped moment(int64_t ns, double m) {
   geometry_msgs::msg::WrenchStamped w;
   tactile_common::to_stamp(ns, w.header.stamp);
+  w.header.frame_id = "cf1/whisker_base";
   w.wrench.torque.z = m;
   return w;
 }
@@ -174,7 +175,8 @@ TEST(WhiskerLocalizationLogic, SweepAlongTheCornerLocalizesTheBase) {
     const auto out = logic.on_moment(moment(ns, wc.m0));
     ASSERT_TRUE(out.result && out.pose_set);
     EXPECT_EQ(out.result->pose_set.poses.size(), out.pose_set->poses.size());
-    EXPECT_EQ(out.result->header.frame_id, "map");
+    EXPECT_EQ(out.result->header.frame_id, "map");  // the pose set
+    EXPECT_EQ(out.result->contact_frame_id, "cf1/whisker_base");  // the contact point: the moment's frame
     if (k >= 5) {
       EXPECT_TRUE(out.result->contact_valid);
       EXPECT_NEAR(out.result->contact_point.x, wc.shape.contact_x, 1e-3);

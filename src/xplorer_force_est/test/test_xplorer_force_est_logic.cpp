@@ -114,7 +114,7 @@ TEST(XplorerForceEstLogic, StaticPushPublishesWorldAndBodyWrench) {
     out = logic.on_arm_imu(arms(t0 + 19'000'000LL, {-th, th, 0.0, 0.0}));
   }
   ASSERT_TRUE(out.world && out.body);
-  EXPECT_EQ(out.world->header.frame_id, "map");
+  EXPECT_EQ(out.world->header.frame_id, "odom");  // the IMU attitude's frame (REP 105)
   EXPECT_EQ(out.body->header.frame_id, "base_link");
   EXPECT_NEAR(out.body->wrench.force.x, -1.0, 0.1);
   EXPECT_NEAR(out.body->wrench.force.y, 0.0, 0.05);

@@ -42,6 +42,7 @@
 #include "crazyflie_bridge/crtp.hpp"
 #include "crazyflie_bridge/log_clock.hpp"
 #include "nav_msgs/msg/odometry.hpp"
+#include "tactile_common/frames.hpp"
 #include "tactile_common/parameters.hpp"
 #include "tactile_msgs/msg/hover_setpoint.hpp"
 #include "tactile_msgs/msg/whisker_pressure.hpp"
@@ -116,6 +117,9 @@ class CrazyflieBridgeLogic {
     /// firmware's 5 s so the bridge lands before the firmware's low-power state.
     double low_battery_hold_s = 2.0;
     double shutdown_land_timeout_s = 10.0; ///< bound of the blocking land on Ctrl-C / SIGTERM [s]
+    /// Goes before every frame name the bridge stamps and broadcasts but map ("" or
+    /// ending in '/': "cf1/" gives cf1/base_link; tactile_common/frames.hpp).
+    std::string frame_prefix;
     void validate() const;
   };
 
@@ -258,11 +262,19 @@ class CrazyflieBridgeLogic {
   Mode mode() const { return mode_; }
   const Stats& stats() const { return stats_; }
   const Params& params() const { return params_; }
+  /// Static transforms of the frame tree (prefixed): map -> odom (identity: no behaviour
+  /// of the radio graph owns a world map; the firmware's estimate starts at its origin)
+  /// and base_link -> whisker_left/right, imu_link, flow, tof_down, from the whiskered
+  /// Crazyflie's geometry (tactile_sim::robot_model(CrazyflieParams), 000's whiskers).
+  std::vector<tactile_common::StaticFrame> static_frames() const;
+  /// The URDF of the same links (robot_description).
+  std::string robot_description() const;
   /// The setpoint last sent (after clamping / safety), body-frame velocities.
   const tactile_msgs::msg::HoverSetpoint& last_command() const { return command_; }
 
  private:
   Params params_;
+  std::string odom_frame_, base_frame_, whisker_frame_[2];  ///< prefixed frame names
   Stats stats_;
   /// Sets mode_, counts the transition and records it (the only place mode_ changes).
   void transition(Mode to, const char* guard, std::string reason, int64_t now_ns);

@@ -40,8 +40,12 @@
 #include "crazyflie_bridge/bridge_runner.hpp"
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
+#include "std_msgs/msg/string.hpp"
 #include "tactile_common/ros_parameters.hpp"
 #include "tactile_common/ros_qos.hpp"
+#ifdef TACTILE_HAVE_TF2
+#include "tactile_common/ros_tf.hpp"
+#endif
 #include "tactile_msgs/msg/bridge_status.hpp"
 #include "tactile_msgs/srv/arm.hpp"
 #include "tactile_msgs/srv/go_to.hpp"
@@ -100,7 +104,30 @@ public:
       });
     sinks_.left = [this](const tactile_msgs::msg::WhiskerPressure & m) {left_pub_->publish(m);};
     sinks_.right = [this](const tactile_msgs::msg::WhiskerPressure & m) {right_pub_->publish(m);};
-    sinks_.odom = [this](const nav_msgs::msg::Odometry & m) {odom_pub_->publish(m);};
+    sinks_.odom = [this](const nav_msgs::msg::Odometry & m) {
+        odom_pub_->publish(m);
+#ifdef TACTILE_HAVE_TF2
+        broadcaster_->sendTransform(tactile_common::odometry_transform(m));  // odom -> base_link
+#endif
+      };
+    // Frames (README "Frames"): the whiskered Crazyflie's URDF on robot_description
+    // (latched; a plain publisher even in the lifecycle node, so it is there before
+    // activation), /tf_static map -> odom and base_link -> its links, /tf odom -> base_link
+    // with every odometry message.
+    const CrazyflieBridgeLogic frames(params_);
+    description_pub_ = tactile_common::latched_publisher<std_msgs::msg::String>(
+      node_.get_node_topics_interface(), kRobotDescriptionTopic);
+    std_msgs::msg::String description;
+    description.data = frames.robot_description();
+    description_pub_->publish(description);
+#ifdef TACTILE_HAVE_TF2
+    static_broadcaster_ = tactile_common::static_broadcaster(node_);
+    static_broadcaster_->sendTransform(
+      tactile_common::static_transforms(frames.static_frames(), builtin_interfaces::msg::Time()));
+    broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>(node_);
+#else
+    RCLCPP_WARN(node_.get_logger(), "crazyflie_bridge: built without tf2_ros: no /tf, /tf_static");
+#endif
 
     create_operator_services();
 #ifdef CRAZYFLIE_BRIDGE_HAVE_DIAGNOSTIC_UPDATER
@@ -398,6 +425,12 @@ private:
   PublisherPtr<tactile_msgs::msg::WhiskerPressure> left_pub_, right_pub_;
   PublisherPtr<nav_msgs::msg::Odometry> odom_pub_;
   PublisherPtr<tactile_msgs::msg::BridgeStatus> status_pub_;
+  static constexpr const char * kRobotDescriptionTopic = "robot_description";
+  rclcpp::Publisher<std_msgs::msg::String>::SharedPtr description_pub_;
+#ifdef TACTILE_HAVE_TF2
+  std::unique_ptr<tf2_ros::StaticTransformBroadcaster> static_broadcaster_;
+  std::unique_ptr<tf2_ros::TransformBroadcaster> broadcaster_;
+#endif
   rclcpp::Subscription<tactile_msgs::msg::HoverSetpoint>::SharedPtr setpoint_sub_;
   rclcpp::Service<tactile_msgs::srv::Takeoff>::SharedPtr takeoff_srv_;
   rclcpp::Service<tactile_msgs::srv::Land>::SharedPtr land_srv_;

@@ -30,7 +30,11 @@ class GpisExplorerLogic {
   static constexpr const char* kStateTopic = "fsm_state";         // tactile_msgs/msg/FsmState
   static constexpr const char* kMapTopic = "gpis/map";            // tactile_msgs/msg/GpisMap
   static constexpr const char* kTargetTopic = "gpis/target";      // tactile_msgs/msg/ExplorationTarget
+  /// Frames of the outputs before the first odometry; after it, the map and the target
+  /// are in the odometry's header frame and the setpoint in its child (body) frame, so
+  /// they follow the odometry's frame_prefix (e.g. cf1/odom, cf1/base_link).
   static constexpr const char* kFrame = "odom";
+  static constexpr const char* kBodyFrame = "base_link";
   static constexpr const char* kBehaviour = "gpis_exploration";
   /// Control tick, 50 Hz as 000 ("at 50 Hz" onboard).
   static constexpr int64_t kTimerPeriodNs = 20000000;
@@ -77,7 +81,7 @@ class GpisExplorerLogic {
   const ExplorationSequencer& sequencer() const { return seq_; }
 
   /// The GPIS map message of the explorer's current state.
-  static tactile_msgs::msg::GpisMap make_map(const GpisExplorer& ex, int64_t stamp_ns);
+  static tactile_msgs::msg::GpisMap make_map(const GpisExplorer& ex, int64_t stamp_ns, const std::string& frame);
 
  private:
   Params params_;
@@ -88,6 +92,7 @@ class GpisExplorerLogic {
   double odom_t_ = NAN;   ///< ... odometry
   int64_t depth_ns_ = INT64_MIN;
   int64_t odom_ns_ = INT64_MIN;
+  std::string odom_frame_ = kFrame, body_frame_ = kBodyFrame;  ///< of the last odometry
   int64_t last_state_ns_ = INT64_MIN;
 };
 

@@ -57,7 +57,7 @@ class XplorerMapLogic {
     double floor_z = 0.0;            ///< floor height for the flying check [m]
     double publish_rate_hz = 1.0;    ///< PointCloud2 rate (choice: the full map is large)
     double max_odometry_age_s = 0.1; ///< older odometry pauses the stamping (choice)
-    std::string frame_id = "map";
+    std::string frame_id = "odom";  ///< of the cloud: the odometry poses' frame (REP 105; was map)
     std::string ply_file;            ///< written by save_ply() ("" = none)
     bool ply_binary = false;         ///< false: ASCII as 001; true: binary little endian
     /// Stamp only while the exploration FSM is in one of these states (once an

@@ -62,7 +62,7 @@ tactile_common::ParamMap protocol_defaults() {
 geometry_msgs::msg::PoseStamped setpoint(const wl::Pose2& p, double z, int64_t now_ns) {
   geometry_msgs::msg::PoseStamped m;
   tactile_common::to_stamp(now_ns, m.header.stamp);
-  m.header.frame_id = "map";
+  m.header.frame_id = "odom";  // the stage's encoders: its odometry frame (REP 105; was map)
   m.pose.position.x = p.x;
   m.pose.position.y = p.y;
   m.pose.position.z = z;

@@ -33,7 +33,7 @@ def test_box_traversal_maps_open_with_count_and_bounds(tmp_path):
     assert len(a) == len(b) == m["map_raw_points"] > 0
     np.testing.assert_array_equal(a, b)
     ply = PlyData.read(str(tmp_path / "map.ply"))
-    assert ply.text and "frame map" in " ".join(ply.comments)
+    assert ply.text and "frame odom" in " ".join(ply.comments)  # the odometry poses' frame (REP 105)
     assert PlyData.read(str(tmp_path / "map_binary.ply")).byte_order == "<"
     # Box of config/scenarios/arenas/xplorer_box.yaml: x in [0.8, 1.8], y in [-0.61, 0.61].
     lo, hi = a.min(axis=0), a.max(axis=0)

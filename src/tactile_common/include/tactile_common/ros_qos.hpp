@@ -74,4 +74,16 @@ std::shared_ptr<rclcpp::Publisher<MessageT>> latched_publisher(rclcpp::Node& nod
                                          latched_publisher_options());
 }
 
+// The same on a node's topics interface: for a lifecycle node, whose own
+// create_publisher() makes a lifecycle publisher that drops messages until activation
+// (crazyflie_bridge's robot_description is there from construction).
+template <class MessageT>
+std::shared_ptr<rclcpp::Publisher<MessageT>> latched_publisher(
+    rclcpp::node_interfaces::NodeTopicsInterface::SharedPtr topics, const std::string& topic,
+    size_t depth = 1) {
+  // By value: Jazzy's rclcpp takes the interface pointer by non-const reference only.
+  return rclcpp::create_publisher<MessageT>(topics, topic, rclcpp::QoS(depth).reliable().transient_local(),
+                                            latched_publisher_options());
+}
+
 }  // namespace tactile_common

@@ -72,6 +72,9 @@ class WallEffectNavLogic {
   WallEffectNavigator nav_;
   Stats stats_;
   bool have_wall_ = false, have_odom_ = false;
+  /// Frame of the setpoints: the odometry's header frame (odom, or cf1/odom with a
+  /// frame_prefix), whose positions they are computed from.
+  std::string odom_frame_ = "odom";
   double wall_distance_ = 0.0, wall_direction_ = 0.0;
   Vec2 position_ = Vec2::Zero();
   double yaw_ = 0.0;

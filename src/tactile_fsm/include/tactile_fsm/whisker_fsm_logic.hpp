@@ -29,6 +29,8 @@ class WhiskerFsmLogic {
   static constexpr const char* kOdomTopic = "odom";                         // nav_msgs/msg/Odometry
   static constexpr const char* kSetpointTopic = "cmd_hover";                // tactile_msgs/msg/HoverSetpoint
   static constexpr const char* kStateTopic = "fsm_state";                   // tactile_msgs/msg/FsmState
+  /// Frame of the setpoint (body-frame velocities) before the first odometry; then the
+  /// odometry's child frame (it carries the vehicle's frame_prefix: cf1/base_link).
   static constexpr const char* kBodyFrame = "base_link";
   /// Control tick, 50 Hz as 000 ("at 50 Hz" onboard).
   static constexpr int64_t kTimerPeriodNs = 20000000;
@@ -86,6 +88,7 @@ class WhiskerFsmLogic {
   const WhiskerWallFollower& fsm() const { return fsm_; }
 
  private:
+  std::string body_frame_ = kBodyFrame;
   /// Last phantom_quiet_samples S_c sums of one whisker (ring, allocated once).
   struct SumWindow {
     std::vector<double> v;

@@ -29,6 +29,8 @@ class XplorerFsmLogic {
 
   struct Params {
     XplorerParams fsm;
+    /// Frame of the position setpoints and of the wrench taken (the world force of
+    /// xplorer_force_est): the odometry's frame (REP 105; cf1/odom with a frame prefix).
     std::string frame_id = "odom";
     double max_input_age_s = 0.2;  ///< older odometry or wrench: hold position (choice)
     void validate() const;

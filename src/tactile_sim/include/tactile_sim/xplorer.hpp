@@ -111,6 +111,9 @@ class Xplorer {
   std::vector<CollisionEvent> take_collisions();
   /// Rotor positions in the body frame with the current arm deflections.
   RotorGeometry geometry() const;
+  /// Undeflected direction of arm i in the body frame [rad] (arm 0 front-right, then
+  /// counter-clockwise; the X layout of 001 Fig. 1).
+  static constexpr std::array<double, 4> kArmDirections{-M_PI / 4, M_PI / 4, 3 * M_PI / 4, -3 * M_PI / 4};
   const XplorerParams& params() const { return p_; }
 
  private:

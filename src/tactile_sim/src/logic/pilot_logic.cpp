@@ -125,7 +125,7 @@ ScriptedPilotLogic::Outputs ScriptedPilotLogic::on_timer(int64_t now_ns) {
     if (land) position_sp_.z() = 0.0;
     geometry_msgs::msg::PoseStamped sp;
     tactile_common::to_stamp(now_ns, sp.header.stamp);
-    sp.header.frame_id = "map";
+    sp.header.frame_id = "odom";  // tracked with the vehicle's estimate (REP 105; was map)
     sp.pose.position.x = position_sp_.x();
     sp.pose.position.y = position_sp_.y();
     sp.pose.position.z = position_sp_.z();

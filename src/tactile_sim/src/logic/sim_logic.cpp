@@ -6,8 +6,10 @@
 #include <set>
 #include <tuple>
 
+#include "tactile_common/frames.hpp"
 #include "tactile_common/time.hpp"
 #include "tactile_sim/crazyflie.hpp"
+#include "tactile_sim/robot_model.hpp"
 #include "tactile_sim/ducted_quad.hpp"
 #include "tactile_sim/sensors.hpp"
 #include "tactile_sim/whisker_barometer_model.hpp"
@@ -40,11 +42,12 @@ void fill_pose(const RigidBodyState& x, geometry_msgs::msg::Pose& pose) {
   pose.orientation.w = x.orientation.w();
 }
 
-nav_msgs::msg::Odometry odometry(const RigidBodyState& x, int64_t now_ns) {
+nav_msgs::msg::Odometry odometry(const RigidBodyState& x, int64_t now_ns, const std::string& frame,
+                                  const std::string& child_frame) {
   nav_msgs::msg::Odometry m;
   stamp(m.header.stamp, now_ns);
-  m.header.frame_id = "odom";
-  m.child_frame_id = "base_link";
+  m.header.frame_id = frame;
+  m.child_frame_id = child_frame;
   fill_pose(x, m.pose.pose);
   // REP-105: twist in the child (body) frame.
   const Vec3 v_body = x.orientation.conjugate() * x.velocity;
@@ -57,11 +60,11 @@ nav_msgs::msg::Odometry odometry(const RigidBodyState& x, int64_t now_ns) {
   return m;
 }
 
-sensor_msgs::msg::Imu imu_msg(const ImuSample& s, const Quat& q, int64_t now_ns, double gyro_var,
-                              double accel_var) {
+sensor_msgs::msg::Imu imu_msg(const ImuSample& s, const Quat& q, int64_t now_ns, const SimFrames& f) {
+  constexpr double gyro_var = 0.0, accel_var = 0.0;  // not reported (0: unknown, REP 145)
   sensor_msgs::msg::Imu m;
   stamp(m.header.stamp, now_ns);
-  m.header.frame_id = "imu_link";
+  m.header.frame_id = f.imu;
   m.orientation.x = q.x();
   m.orientation.y = q.y();
   m.orientation.z = q.z();
@@ -79,10 +82,10 @@ sensor_msgs::msg::Imu imu_msg(const ImuSample& s, const Quat& q, int64_t now_ns,
   return m;
 }
 
-sensor_msgs::msg::Range range_msg(double range, const RangeParams& p, int64_t now_ns) {
+sensor_msgs::msg::Range range_msg(double range, const RangeParams& p, int64_t now_ns, const SimFrames& f) {
   sensor_msgs::msg::Range m;
   stamp(m.header.stamp, now_ns);
-  m.header.frame_id = "tof_down";
+  m.header.frame_id = f.tof_down;
   m.radiation_type = sensor_msgs::msg::Range::INFRARED;
   m.field_of_view = static_cast<float>(p.field_of_view);
   m.min_range = static_cast<float>(p.min_range);
@@ -95,10 +98,10 @@ sensor_msgs::msg::Range range_msg(double range, const RangeParams& p, int64_t no
   return m;
 }
 
-tactile_msgs::msg::OpticalFlow flow_msg(const FlowSample& s, int64_t now_ns) {
+tactile_msgs::msg::OpticalFlow flow_msg(const FlowSample& s, int64_t now_ns, const SimFrames& f) {
   tactile_msgs::msg::OpticalFlow m;
   stamp(m.header.stamp, now_ns);
-  m.header.frame_id = "flow";
+  m.header.frame_id = f.flow;
   m.flow_x = s.n_x;
   m.flow_y = s.n_y;
   m.integration_time = s.integration_time;
@@ -131,6 +134,10 @@ double& at_least(Map& m, const char* key, double v) {
 class SimLogic::Vehicle {
  public:
   virtual ~Vehicle() = default;
+  /// Geometry of the vehicle's links (static transforms, robot_description).
+  virtual tactile_common::RobotModel model() const = 0;
+  /// The frame names its messages carry (set by SimLogic after construction).
+  SimFrames frames;
   virtual void step(double dt, const Arena& arena) = 0;
   virtual const RigidBodyState& truth() const = 0;
   virtual RigidBodyState estimate() const = 0;
@@ -285,6 +292,8 @@ class CrazyflieVehicle : public SimLogic::Vehicle {
     baro_[1] = std::make_unique<WhiskerBarometerModel>(bp, stream_seed(seed, kStreamBarometerRight));
   }
 
+  tactile_common::RobotModel model() const override { return tactile_sim::robot_model(cf_.params()); }
+
   static CrazyflieParams make_params(const Scenario& s) {
     CrazyflieParams p;
     ParamOverrides o(s);
@@ -327,10 +336,9 @@ class CrazyflieVehicle : public SimLogic::Vehicle {
              std::vector<Vec2>& contacts) override {
     if (every(k, physics_hz, kImuHz)) {
       const ImuSample s = imu_.sample(cf_.specific_force_body(), cf_.state().angular_velocity);
-      out.imu.push_back({"imu", imu_msg(s, cf_.estimate().orientation, now_ns, 0.0, 0.0)});
+      out.imu.push_back({"imu", imu_msg(s, cf_.estimate().orientation, now_ns, frames)});
     }
     if (every(k, physics_hz, kBarometerHz)) {
-      static const char* kSides[2] = {"left", "right"};
       for (int i = 0; i < 2; ++i) {
         const auto& w = cf_.whiskers()[static_cast<size_t>(i)];
         const double noise_scale =
@@ -339,7 +347,7 @@ class CrazyflieVehicle : public SimLogic::Vehicle {
                                                                noise_scale);
         tactile_msgs::msg::WhiskerPressure p;
         stamp(p.header.stamp, now_ns);
-        p.header.frame_id = std::string("whisker_") + kSides[i];
+        p.header.frame_id = frames.whisker[i];
         p.whisker_id = static_cast<uint8_t>(i);
         for (size_t c = 0; c < 3; ++c) {
           p.pressure[c] = sample.pressure[c];
@@ -372,9 +380,9 @@ class CrazyflieVehicle : public SimLogic::Vehicle {
     }
     const auto& deck = cf_.flow_deck();
     if (cf_.params().estimate_mode != StateEstimateMode::kMocap) {
-      if (deck.flow_updated()) out.flow.push_back({"flow", flow_msg(deck.last_flow(), now_ns)});
+      if (deck.flow_updated()) out.flow.push_back({"flow", flow_msg(deck.last_flow(), now_ns, frames)});
       if (deck.range_updated()) {
-        out.range.push_back({"tof", range_msg(deck.last_range(), deck.params().range, now_ns)});
+        out.range.push_back({"tof", range_msg(deck.last_range(), deck.params().range, now_ns, frames)});
       }
     }
   }
@@ -431,6 +439,7 @@ class DuctedVehicle : public SimLogic::Vehicle {
     quad_.set_position_setpoint(hold_initial(s));
   }
   void step(double dt, const Arena& arena) override { quad_.step(dt, arena); }
+  tactile_common::RobotModel model() const override { return tactile_sim::robot_model(quad_.params()); }
   const RigidBodyState& truth() const override { return quad_.state(); }
   RigidBodyState estimate() const override { return quad_.state(); }  // motion capture
   Vec3 external_force_world() const override { return quad_.external_force_world() + quad_.wall_force_world(); }
@@ -449,18 +458,18 @@ class DuctedVehicle : public SimLogic::Vehicle {
     const double height = x.position.z() - arena.floor_z();
     if (every(k, physics_hz, kImuHz)) {
       const ImuSample s = imu_.sample(quad_.specific_force_body(), x.angular_velocity);
-      out.imu.push_back({"imu", imu_msg(s, x.orientation, now_ns, 0.0, 0.0)});
+      out.imu.push_back({"imu", imu_msg(s, x.orientation, now_ns, frames)});
     }
     if (every(k, physics_hz, tof_.params().rate_hz)) {
-      out.range.push_back({"tof", range_msg(tof_.sample(height, x.orientation), tof_.params(), now_ns)});
+      out.range.push_back({"tof", range_msg(tof_.sample(height, x.orientation), tof_.params(), now_ns, frames)});
     }
     if (every(k, physics_hz, flow_.params().rate_hz)) {
-      out.flow.push_back({"flow", flow_msg(flow_.sample(x.velocity, x.orientation, x.angular_velocity, height), now_ns)});
+      out.flow.push_back({"flow", flow_msg(flow_.sample(x.velocity, x.orientation, x.angular_velocity, height), now_ns, frames)});
     }
     if (every(k, physics_hz, 50.0)) {
       tactile_msgs::msg::ThrustCommand t;
       stamp(t.header.stamp, now_ns);
-      t.header.frame_id = "base_link";
+      t.header.frame_id = frames.base_link;
       t.normalized = std::numeric_limits<double>::quiet_NaN();
       t.total_thrust = quad_.collective_thrust();
       t.rotor_thrust.assign(quad_.rotor_commands().begin(), quad_.rotor_commands().end());
@@ -470,7 +479,7 @@ class DuctedVehicle : public SimLogic::Vehicle {
       const WallTruth w = quad_.wall_truth();
       tactile_msgs::msg::WallEstimate m;
       stamp(m.header.stamp, now_ns);
-      m.header.frame_id = "base_link";
+      m.header.frame_id = frames.ground_truth_base_link;  // the true wall, in the true body frame
       m.wall_detected = w.present;
       m.distance = w.present ? w.distance : std::numeric_limits<double>::infinity();
       m.direction = w.direction;
@@ -511,6 +520,7 @@ class XplorerVehicle : public SimLogic::Vehicle {
     x_.set_setpoint(hold_initial(s));
   }
   void step(double dt, const Arena& arena) override { x_.step(dt, arena); }
+  tactile_common::RobotModel model() const override { return tactile_sim::robot_model(x_.params()); }
   const RigidBodyState& truth() const override { return x_.state(); }
   RigidBodyState estimate() const override { return x_.state(); }  // motion capture (001)
   Vec3 external_force_world() const override { return x_.external_force_world(); }
@@ -524,12 +534,12 @@ class XplorerVehicle : public SimLogic::Vehicle {
     const auto& st = x_.state();
     if (every(k, physics_hz, kImuHz)) {
       const ImuSample sm = imu_.sample(x_.specific_force_body(), st.angular_velocity);
-      out.imu.push_back({"imu", imu_msg(sm, st.orientation, now_ns, 0.0, 0.0)});
+      out.imu.push_back({"imu", imu_msg(sm, st.orientation, now_ns, frames)});
     }
     if (every(k, physics_hz, kArmImuHz)) {  // 001: arm IMUs at 50 Hz
       tactile_msgs::msg::ArmImuArray a;
       stamp(a.header.stamp, now_ns);
-      a.header.frame_id = "base_link";
+      a.header.frame_id = frames.base_link;
       for (int i = 0; i < 4; ++i) {
         const ArmImuTruth t = x_.arm_imu(i);
         const ImuSample sm = arm_imus_[static_cast<size_t>(i)]->sample(t.accel, t.gyro);
@@ -604,6 +614,7 @@ class WhiskerStageVehicle : public SimLogic::Vehicle {
   }
 
   void step(double dt, const Arena&) override { stage_.step(dt); }
+  tactile_common::RobotModel model() const override { return tactile_sim::robot_model(stage_.params()); }
   const RigidBodyState& truth() const override { return stage_.state(); }
   RigidBodyState estimate() const override { return stage_.state(); }  // stage encoders (002: 10 um)
   Vec3 external_force_world() const override { return Vec3::Zero(); }
@@ -618,7 +629,7 @@ class WhiskerStageVehicle : public SimLogic::Vehicle {
     const WhiskerStage::Reading r = stage_.sense(arena);
     geometry_msgs::msg::WrenchStamped w;
     stamp(w.header.stamp, now_ns);
-    w.header.frame_id = "whisker_base";
+    w.header.frame_id = frames.whisker_base;
     w.wrench.torque.z = r.m0;
     out.wrench.push_back({"whisker/base_wrench", w});
     geometry_msgs::msg::WrenchStamped t = w;
@@ -701,8 +712,24 @@ size_t SimLogic::Outputs::size() const {
          arm_imu.size() + thrust.size() + wrench.size() + wall.size() + collisions.size();
 }
 
-SimLogic::SimLogic(const Scenario& scenario, uint64_t seed, double extra_arena_yaw)
-    : scenario_(scenario), seed_(seed), faults_(std::make_unique<FaultSet>()) {
+SimFrames::SimFrames(std::string_view frame_prefix)
+    : prefix(frame_prefix),
+      map(tactile_common::frames::kMap),
+      odom(tactile_common::prefixed(frame_prefix, tactile_common::frames::kOdom)),
+      base_link(tactile_common::prefixed(frame_prefix, tactile_common::frames::kBaseLink)),
+      imu(tactile_common::prefixed(frame_prefix, tactile_common::frames::kImu)),
+      tof_down(tactile_common::prefixed(frame_prefix, tactile_common::frames::kTofDown)),
+      flow(tactile_common::prefixed(frame_prefix, tactile_common::frames::kFlow)),
+      whisker_base(tactile_common::prefixed(frame_prefix, "whisker_base")),
+      whisker{tactile_common::prefixed(frame_prefix, tactile_common::frames::kWhiskerLeft),
+              tactile_common::prefixed(frame_prefix, tactile_common::frames::kWhiskerRight)},
+      ground_truth_odom(tactile_common::prefixed(frame_prefix, tactile_common::frames::kGroundTruthOdom)),
+      ground_truth_base_link(tactile_common::prefixed(frame_prefix, tactile_common::frames::kGroundTruthBaseLink)) {
+  tactile_common::validate_frame_prefix(frame_prefix);
+}
+
+SimLogic::SimLogic(const Scenario& scenario, uint64_t seed, double extra_arena_yaw, std::string_view frame_prefix)
+    : scenario_(scenario), seed_(seed), frames_(frame_prefix), faults_(std::make_unique<FaultSet>()) {
   arena_ = std::make_unique<Arena>(
       Arena::from_yaml_text(scenario.arena_yaml, scenario.arena_source, scenario.arena_key));
   // Randomised trials rotate the arena about its own origin, then the
@@ -719,6 +746,9 @@ SimLogic::SimLogic(const Scenario& scenario, uint64_t seed, double extra_arena_y
     case VehicleType::kXplorer: vehicle_ = std::make_unique<XplorerVehicle>(scenario, seed); break;
     case VehicleType::kWhiskerStage: vehicle_ = std::make_unique<WhiskerStageVehicle>(scenario, seed); break;
   }
+  vehicle_->frames = frames_;
+  robot_model_ = vehicle_->model();
+  robot_model_.validate();
 
   // Faults: every rule must name a topic this simulator publishes, with a
   // message type that supports the fault.
@@ -784,6 +814,9 @@ tactile_common::ParamMap SimLogic::default_parameters() {
   p.set("seed", int64_t{-1},
         {"random seed of the run; -1: the scenario's own seed", "",
          tactile_common::at_least(-1), false});
+  p.set("frame_prefix", std::string(""),
+        {"prefix of every frame but map, for several vehicles (cf1/: cf1/odom, cf1/base_link, cf1/ground_truth/odom)",
+         "", {}, false});
   return p;
 }
 
@@ -791,8 +824,28 @@ std::unique_ptr<SimLogic> SimLogic::from_parameters(const tactile_common::ParamM
   const std::string path = params.get_string("scenario");
   if (path.empty()) throw params.error("scenario", "must name a scenario file (config/scenarios/*.yaml)");
   const int64_t seed = params.get_int64("seed", -1, std::numeric_limits<int64_t>::max());  // -1: the scenario's seed
+  const std::string frame_prefix = params.get_string("frame_prefix");
+  try {
+    tactile_common::validate_frame_prefix(frame_prefix);
+  } catch (const std::invalid_argument& e) {
+    const std::string what = e.what();
+    throw params.error("frame_prefix", what.substr(what.find(": ") + 2));
+  }
   const Scenario scenario = load_scenario(path);
-  return std::make_unique<SimLogic>(scenario, seed < 0 ? scenario.seed : static_cast<uint64_t>(seed));
+  return std::make_unique<SimLogic>(scenario, seed < 0 ? scenario.seed : static_cast<uint64_t>(seed), 0.0,
+                                    frame_prefix);
+}
+
+std::vector<tactile_common::StaticFrame> SimLogic::static_frames() const {
+  std::vector<tactile_common::StaticFrame> out;
+  out.push_back({frames_.map, frames_.odom, {}});
+  out.push_back({frames_.map, frames_.ground_truth_odom, {}});
+  for (auto& f : tactile_common::static_frames(robot_model_, frames_.prefix)) out.push_back(std::move(f));
+  return out;
+}
+
+std::string SimLogic::robot_description() const {
+  return tactile_common::to_urdf(robot_model_, frames_.prefix);
 }
 
 const Arena& SimLogic::arena() const { return *arena_; }
@@ -872,12 +925,15 @@ void SimLogic::step(int64_t now_ns, Outputs& out) {
   const RigidBodyState& truth = vehicle_->truth();
   if (every(k_, hz, 100.0)) {
     const RigidBodyState est = vehicle_->estimate();
-    raw.odometry.push_back({"odom", odometry(est, now_ns)});
-    raw.odometry.push_back({"ground_truth/odom", odometry(truth, now_ns)});
+    // The estimate in odom -> base_link; the truth under its own pair (REP 105 frames
+    // have one publisher each: ground truth must not fight the estimate for base_link).
+    raw.odometry.push_back({"odom", odometry(est, now_ns, frames_.odom, frames_.base_link)});
+    raw.odometry.push_back(
+        {"ground_truth/odom", odometry(truth, now_ns, frames_.ground_truth_odom, frames_.ground_truth_base_link)});
     trajectory_.push_back({tactile_common::to_seconds(now_ns), truth, est});
     geometry_msgs::msg::WrenchStamped w;
     stamp(w.header.stamp, now_ns);
-    w.header.frame_id = "map";
+    w.header.frame_id = frames_.ground_truth_odom;  // a truth in the world frame
     const Vec3 f = vehicle_->external_force_world();
     max_external_force_ = std::max(max_external_force_, f.norm());
     w.wrench.force.x = f.x();
@@ -888,7 +944,7 @@ void SimLogic::step(int64_t now_ns, Outputs& out) {
   for (auto& c : vehicle_->take_collisions()) {
     tactile_msgs::msg::CollisionEvent m;
     stamp(m.header.stamp, now_ns);
-    m.header.frame_id = "map";
+    m.header.frame_id = frames_.ground_truth_odom;  // the true contact point, world frame
     m.part = c.part;
     m.point.x = c.point.x();
     m.point.y = c.point.y();

@@ -22,6 +22,18 @@
 //     discovery has matched them: without the wait, a recorder in another
 //     process missed the first seconds of a flight on a loaded machine.
 //
+// Frames (tactile_common/frames.hpp, README "Frames"): where tf2_ros is found
+// (tactile_component_tf) the simulator broadcasts /tf_static once (map -> odom and
+// map -> ground_truth/odom identity, base_link -> the vehicle's sensor, whisker,
+// arm and rotor links from SimLogic::static_frames()) and, with every odometry
+// message it publishes, the transform of that message: odom -> base_link (/odom,
+// the estimate) and ground_truth/odom -> ground_truth/base_link (/ground_truth/odom).
+// A dropped or delayed /odom (fault injection) drops or delays its transform too.
+// Every frame is behind the frame_prefix parameter. It publishes the vehicle's
+// URDF (SimLogic::robot_description(), the same links) on robot_description as
+// std_msgs/String, reliable and transient local (latched_publisher: RViz's
+// RobotModel display and a late subscriber get it).
+//
 // At the scenario's end (duration_s) the simulator stops stepping and
 // publishing, logs one line "tactile_sim: scenario ... ended" with the
 // achieved real-time factor and the setpoint latency, and publishes
@@ -59,16 +71,21 @@
 #include "rclcpp_components/register_node_macro.hpp"
 #include "rosgraph_msgs/msg/clock.hpp"
 #include "std_msgs/msg/bool.hpp"
+#include "std_msgs/msg/string.hpp"
 #include "tactile_common/ros_parameters.hpp"
 #include "tactile_common/ros_qos.hpp"
 #include "tactile_common/time.hpp"
 #include "tactile_sim/logic/sim_logic.hpp"
+#ifdef TACTILE_HAVE_TF2
+#include "tactile_common/ros_tf.hpp"
+#endif
 
 namespace tactile_sim {
 
 class TactileSimComponent : public rclcpp::Node {
  public:
   static constexpr const char * kDoneTopic = "sim/done";
+  static constexpr const char * kRobotDescriptionTopic = "robot_description";
 
   explicit TactileSimComponent(const rclcpp::NodeOptions & options)
   : Node(SimLogic::kNodeName, options),
@@ -116,6 +133,19 @@ class TactileSimComponent : public rclcpp::Node {
     // Latched (transient local), so a subscriber that joins later still gets it; never
     // intra-process (tactile_common/ros_qos.hpp: Humble refuses the combination).
     done_publisher_ = tactile_common::latched_publisher<std_msgs::msg::Bool>(*this, kDoneTopic);
+    description_publisher_ =
+      tactile_common::latched_publisher<std_msgs::msg::String>(*this, kRobotDescriptionTopic);
+    std_msgs::msg::String description;
+    description.data = logic_->robot_description();
+    description_publisher_->publish(description);
+#ifdef TACTILE_HAVE_TF2
+    static_broadcaster_ = tactile_common::static_broadcaster(*this);
+    static_broadcaster_->sendTransform(
+      tactile_common::static_transforms(logic_->static_frames(), builtin_interfaces::msg::Time()));
+    broadcaster_ = std::make_unique<tf2_ros::TransformBroadcaster>(*this);
+#else
+    RCLCPP_WARN(get_logger(), "tactile_sim: built without tf2_ros: no /tf, /tf_static");
+#endif
     // Best effort matches reliable and best-effort publishers alike: the INDI
     // controller publishes its rotor thrusts best effort (SensorDataQoS), the FSMs reliable;
     // a reliable subscription would never match the former.
@@ -271,6 +301,13 @@ class TactileSimComponent : public rclcpp::Node {
     publish(outputs_.pressure);
     publish(outputs_.whisker_truth);
     publish(outputs_.odometry);
+#ifdef TACTILE_HAVE_TF2
+    if (!outputs_.odometry.empty()) {
+      transforms_.clear();
+      for (const auto & m : outputs_.odometry) {transforms_.push_back(tactile_common::odometry_transform(m.msg));}
+      broadcaster_->sendTransform(transforms_);
+    }
+#endif
     publish(outputs_.imu);
     publish(outputs_.range);
     publish(outputs_.flow);
@@ -342,6 +379,12 @@ class TactileSimComponent : public rclcpp::Node {
     Publishers<tactile_msgs::msg::CollisionEvent>> publishers_;
   rclcpp::Publisher<rosgraph_msgs::msg::Clock>::SharedPtr clock_publisher_;
   rclcpp::Publisher<std_msgs::msg::Bool>::SharedPtr done_publisher_;
+  rclcpp::Publisher<std_msgs::msg::String>::SharedPtr description_publisher_;
+#ifdef TACTILE_HAVE_TF2
+  std::unique_ptr<tf2_ros::StaticTransformBroadcaster> static_broadcaster_;
+  std::unique_ptr<tf2_ros::TransformBroadcaster> broadcaster_;
+  std::vector<geometry_msgs::msg::TransformStamped> transforms_;
+#endif
   rclcpp::Subscription<tactile_msgs::msg::HoverSetpoint>::SharedPtr hover_subscription_;
   rclcpp::Subscription<geometry_msgs::msg::PoseStamped>::SharedPtr position_subscription_;
   rclcpp::Subscription<tactile_msgs::msg::ThrustCommand>::SharedPtr thrust_subscription_;

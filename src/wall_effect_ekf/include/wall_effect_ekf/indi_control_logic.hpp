@@ -11,6 +11,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <string>
 
 #include "nav_msgs/msg/odometry.hpp"
 #include "sensor_msgs/msg/imu.hpp"
@@ -65,6 +66,7 @@ class IndiControlLogic {
   const IndiController& controller() const { return ctl_; }
 
  private:
+  std::string body_frame_ = "base_link";  ///< of the rotor thrusts: the odometry's child frame
   Params params_;
   IndiController ctl_;
   Stats stats_;

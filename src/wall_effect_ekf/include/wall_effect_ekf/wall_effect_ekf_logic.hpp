@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <string>
 
 #include "sensor_msgs/msg/imu.hpp"
 #include "sensor_msgs/msg/range.hpp"
@@ -71,6 +72,7 @@ class WallEffectEkfLogic {
   const WallEkf& ekf() const { return ekf_; }
 
  private:
+  std::string body_frame_ = "base_link";  ///< of the wall estimate: the thrust command's frame
   Params params_;
   WallEkf ekf_;
   Stats stats_;

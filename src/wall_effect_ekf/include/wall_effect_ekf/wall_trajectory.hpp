@@ -44,6 +44,9 @@ struct TrajectoryParams {
   /// y_d of the "sweep" segments [m] (004 Fig. 5: 13 to 23 cm, 11 flights).
   std::vector<double> sweep_distances = {0.13, 0.14, 0.15, 0.16, 0.17, 0.18, 0.19, 0.20, 0.21, 0.22, 0.23};
   double sweep_hold_s = 60.0;    ///< [s] (004: 60 s each)
+  /// The setpoints are in odom (the frame of the odometry the controller tracks
+  /// with, REP 105) behind this prefix ("" or ending in '/': cf1/odom).
+  std::string frame_prefix;
   void validate() const;
 };
 

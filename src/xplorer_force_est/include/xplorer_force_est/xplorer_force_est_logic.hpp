@@ -29,7 +29,7 @@ class XplorerForceEstLogic {
 
   struct Params {
     xplorer_force_est::Params estimator;
-    std::string world_frame = "map";
+    std::string world_frame = "odom";  ///< of the IMU attitude that rotates the force (REP 105; was map)
     std::string body_frame = "base_link";
     /// A stamp gap larger than this on the arm or IMU stream resets the
     /// filters (choice: 0.5 s = 25 arm samples). An arm set more than this

@@ -25,6 +25,7 @@
 #include "tactile_msgs/msg/wall_estimate.hpp"
 #include "tactile_msgs/msg/whisker_ground_truth.hpp"
 #include "tactile_msgs/msg/whisker_pressure.hpp"
+#include "tactile_common/frames.hpp"
 #include "tactile_sim/arena.hpp"
 #include "tactile_sim/logic/faults.hpp"
 #include "tactile_sim/scenario.hpp"
@@ -38,6 +39,18 @@ template <class T>
 struct Published {
   std::string_view topic;
   T msg;
+};
+
+/// The frame names the simulator's messages and transforms carry, every one
+/// behind the frame_prefix (tactile_common/frames.hpp has the tree) except
+/// map, which all vehicles of one world share.
+struct SimFrames {
+  SimFrames() : SimFrames("") {}
+  explicit SimFrames(std::string_view prefix);
+  std::string prefix;
+  std::string map, odom, base_link, imu, tof_down, flow, whisker_base;
+  std::string whisker[2];  ///< left, right
+  std::string ground_truth_odom, ground_truth_base_link;
 };
 
 /// One point of the recorded trajectory (100 Hz): truth and state estimate.
@@ -78,11 +91,13 @@ class SimLogic {
   /// origin, for randomised trials), vehicle, sensors, faults; all noise
   /// seeded from `seed`. Throws ScenarioError / ArenaError /
   /// std::invalid_argument naming the file, key and reason.
-  SimLogic(const Scenario& scenario, uint64_t seed, double extra_arena_yaw = 0.0);
+  /// `frame_prefix` goes before every frame name but map (tactile_common::validate_frame_prefix).
+  SimLogic(const Scenario& scenario, uint64_t seed, double extra_arena_yaw = 0.0, std::string_view frame_prefix = "");
 
   /// Node parameters of the simulator when it runs as a node (rclcpp
-  /// component): `scenario` (path of the scenario file) and `seed` (-1: the
-  /// scenario's own seed).
+  /// component): `scenario` (path of the scenario file), `seed` (-1: the
+  /// scenario's own seed) and `frame_prefix` (string before every frame name
+  /// but map, "" or ending in '/': "cf1/" gives cf1/base_link).
   static tactile_common::ParamMap default_parameters();
   /// Loads the scenario named by the parameters and builds the world.
   /// Errors name the parameter source or the scenario file, key and reason.
@@ -107,6 +122,15 @@ class SimLogic {
   bool finished(int64_t now_ns) const;
 
   const Arena& arena() const;
+  const SimFrames& frames() const { return frames_; }
+  /// The vehicle's links (tactile_sim/robot_model.hpp), from the parameters its physics uses.
+  const tactile_common::RobotModel& robot_model() const { return robot_model_; }
+  /// Static transforms of the frame tree (prefixed): map -> odom and map ->
+  /// ground_truth/odom (identity: the simulated estimate starts at the world
+  /// origin, and the world is the map), base_link -> every sensor/arm link.
+  std::vector<tactile_common::StaticFrame> static_frames() const;
+  /// The URDF of robot_model() (prefixed links), for robot_description.
+  std::string robot_description() const;
   const Scenario& scenario() const { return scenario_; }
   uint64_t seed() const { return seed_; }
   const std::vector<TrajectoryPoint>& trajectory() const { return trajectory_; }
@@ -126,6 +150,8 @@ class SimLogic {
 
   Scenario scenario_;
   uint64_t seed_;
+  SimFrames frames_;
+  tactile_common::RobotModel robot_model_;
   std::unique_ptr<Arena> arena_;
   std::unique_ptr<Vehicle> vehicle_;
   int64_t period_ns_;
