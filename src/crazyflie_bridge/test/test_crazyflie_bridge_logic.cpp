@@ -623,7 +623,7 @@ TEST(BridgeOperator, HandOverForwardsThenHandBackHovers) {
   op.to(Mode::kHovering);
   auto r = op.logic.start_behaviour(op.t);  // no setpoint yet
   EXPECT_FALSE(r.accepted);
-  EXPECT_NE(r.reason.find("no fresh /cmd_hover setpoint"), std::string::npos) << r.reason;
+  EXPECT_NE(r.reason.find("no fresh cmd_hover setpoint"), std::string::npos) << r.reason;
   op.tick(true, hover(0.3, 0.1, 0.2, 0.6));
   ASSERT_TRUE(op.logic.start_behaviour(op.t).accepted);
   auto s = decode(op.tick(true, hover(0.9, 0.1, 0.2, 0.6)));  // forwarded, clamped
