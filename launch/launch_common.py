@@ -197,13 +197,23 @@ def frame_prefix_argument():
     from launch.actions import DeclareLaunchArgument
     return DeclareLaunchArgument(
         'frame_prefix', default_value='',
-        description="prefix of the vehicle's frames ('' or ending in '/', e.g. cf1/)")
+        description="prefix of the vehicle's frames ('' or ending in '/', e.g. cf1/; empty: "
+                    "'<namespace>/' under a namespace, none at the root)")
+
+
+def frame_prefix_value():
+    """The vehicle's frame prefix: the launch argument frame_prefix, else under a namespace
+    '<namespace>/' (namespace:=cf1 gives cf1/base_link: two vehicles never share a frame
+    on /tf), else '' (the root: base_link)."""
+    fp, ns = LaunchConfiguration('frame_prefix'), LaunchConfiguration('namespace')
+    return PythonExpression(["'", fp, "' or ('", ns, "'.strip().strip('/') + '/' if '", ns,
+                             "'.strip().strip('/') else '')"])
 
 
 def prefixed_frame(frame):
-    """A frame-name parameter value behind the launch argument frame_prefix, e.g. for
-    xplorer_force_est's world_frame: 'odom' gives cf1/odom with frame_prefix:=cf1/."""
-    return ParameterValue([LaunchConfiguration('frame_prefix'), frame], value_type=str)
+    """A frame-name parameter value behind the vehicle's frame prefix (frame_prefix_value()),
+    e.g. for xplorer_force_est's world_frame: 'odom' gives cf1/odom with frame_prefix:=cf1/."""
+    return ParameterValue([frame_prefix_value(), frame], value_type=str)
 
 
 def simulator_node(wait_for_publisher):
@@ -221,7 +231,7 @@ def simulator_node(wait_for_publisher):
              'real_time_factor': ParameterValue(
                  LaunchConfiguration('real_time_factor'), value_type=float),
              'wait_for_publisher': wait_for_publisher,
-             'frame_prefix': ParameterValue(LaunchConfiguration('frame_prefix'), value_type=str),
+             'frame_prefix': ParameterValue(frame_prefix_value(), value_type=str),
              'wait_for_subscribers': ParameterValue(
                  LaunchConfiguration('wait_for_subscribers'), value_type=str)}),
         extra_arguments=INTRA)

@@ -71,9 +71,9 @@ def autostart_argument():
 
 def bridge_overrides(uri, frame_prefix=None):
     """The bridge's launch-argument overrides: uri, autostart and frame_prefix (the launch
-    argument unless given, e.g. a robot's namespace + '/')."""
+    argument, or '<namespace>/' under a namespace, unless given: a robot's namespace + '/')."""
     if frame_prefix is None:
-        frame_prefix = LaunchConfiguration('frame_prefix')
+        frame_prefix = launch_common.frame_prefix_value()
     return {'uri': uri, 'autostart': ParameterValue(LaunchConfiguration('autostart'), value_type=bool),
             'frame_prefix': ParameterValue(frame_prefix, value_type=str)}
 

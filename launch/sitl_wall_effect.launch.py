@@ -57,7 +57,7 @@ def nodes(context):
             package='wall_effect_ekf', plugin='wall_effect_ekf::WallTrajectoryComponent',
             name='wall_trajectory', parameters=launch_common.parameters(
                 config('wall_trajectory'), sim_time,
-                {'frame_prefix': ParameterValue(LaunchConfiguration('frame_prefix'), value_type=str)}),
+                {'frame_prefix': ParameterValue(launch_common.frame_prefix_value(), value_type=str)}),
             extra_arguments=intra))
     else:
         out.append(ComposableNode(

@@ -63,5 +63,5 @@ def generate_launch_description():
         DeclareLaunchArgument('mission', default_value='explore',
                               description='explore | static_wrench | ricochet | waypoint'),
         DeclareLaunchArgument('ply_file', default_value='xplorer_map.ply',
-                              description='contact map written at shutdown (ASCII PLY, frame map)'),
+                              description='contact map written at shutdown (ASCII PLY, frame odom, or <prefix>odom: the odometry frame)'),
     ] + launch_common.sitl_container('sitl_xplorer_container', nodes))

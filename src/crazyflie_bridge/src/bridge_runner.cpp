@@ -131,7 +131,11 @@ bool BridgeRunner::on_hover_setpoint(const tactile_msgs::msg::HoverSetpoint& msg
 
 bool BridgeRunner::on_timer(int64_t now_ns) {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (!tick_.on_watchdog()) {
+  // Only forward mode is driven by arrivals: there the watchdog stays quiet while setpoints
+  // step the logic. Every other mode steps on every call, also the first one after leaving
+  // forward (a land, a hold, the emergency stop and its repeat go out at once).
+  const bool quiet = !tick_.on_watchdog();
+  if (quiet && logic_.mode() == Mode::kForward) {
     flush_outbox();
     return false;
   }

@@ -344,3 +344,24 @@ TEST(OperatorCrtp, InForwardModeTheBehavioursSetpointLeavesOnArrivalAndTheWatchd
   EXPECT_EQ(c.runner->mode(), Mode::kHoverHold);
   EXPECT_EQ(c.fw.emulator().stats().setpoints - before, 20u);
 }
+
+// The watchdog is quiet only in forward mode: right after a setpoint stepped the logic,
+// an emergency stop's repeat (land_and_stop's abort path) and a land's first setpoint go
+// out on the very next on_timer call, not one period later.
+TEST(OperatorCrtp, LeavingForwardTheNextWatchdogCallSendsAtOnce) {
+  for (const bool emergency : {true, false}) {
+    SCOPED_TRACE(emergency ? "emergency stop" : "land");
+    Crtp c;
+    c.to(Mode::kForward);
+    c.run_s(0.1);
+    ASSERT_TRUE(c.run_until([&] { return c.t % (20 * kMs) == 0; }, 0.02));
+    c.run_s(0.013);  // between two 20 ms ticks, more than half a period after the last setpoint
+    tactile_msgs::msg::HoverSetpoint sp;
+    sp.height = 0.5;
+    ASSERT_TRUE(c.runner->on_hover_setpoint(sp, c.t));  // a setpoint stepped the logic now
+    ASSERT_TRUE((emergency ? c.runner->emergency_stop(c.t) : c.runner->land(0.0, 1.0, c.t)).accepted);
+    const uint64_t before = c.fw.emulator().stats().setpoints;
+    EXPECT_TRUE(c.runner->on_timer(c.t));
+    EXPECT_EQ(c.fw.emulator().stats().setpoints, before + 1);
+  }
+}

@@ -159,6 +159,7 @@ nlohmann::json run_fly(const FlyOptions& o) {
       fsm_extra.set("target_y", t->y());
     }
   }
+  bool pipeline_on = true;  // until the run's end: the pipeline's setpoints reach the bridge
   // The pipeline's clock: wall time since t0 (set when the link is up and the loop
   // starts; no log data arrives before). The FSM steps on each depth's arrival on it.
   Clock::time_point t0{};
@@ -214,7 +215,12 @@ nlohmann::json run_fly(const FlyOptions& o) {
   t0 = Clock::now();
   host.bus().subscribe<tactile_msgs::msg::HoverSetpoint>(
       CrazyflieBridgeLogic::kSetpointTopic,
-      [&](const tactile_msgs::msg::HoverSetpoint& m) { runner.on_hover_setpoint(m, now_ns()); });
+      [&](const tactile_msgs::msg::HoverSetpoint& m) {
+        // The FSM steps on each depth's arrival, also while the shutdown landing pumps the
+        // link: after the run its setpoints no longer reach the bridge (as none did when
+        // it stepped on the host's timer, which stops with the pipeline).
+        if (pipeline_on) runner.on_hover_setpoint(m, now_ns());
+      });
   crazyflie_bridge::BridgeRunner::Sinks sinks;
   // Messages keep the bridge's stamps; the bag time is the host clock.
   sinks.left = [&](const auto& m) { host.bus().publish(CrazyflieBridgeLogic::kLeftPressureTopic, m, now_ns()); };
@@ -252,7 +258,6 @@ nlohmann::json run_fly(const FlyOptions& o) {
   const int64_t tick_ns = static_cast<int64_t>(1e9 / bridge_params.setpoint_rate_hz);
   const int64_t end_ns = static_cast<int64_t>(o.duration_s * 1e9);
   const int64_t hard_end_ns = end_ns + 15'000'000'000LL;
-  bool pipeline_on = true;
   int64_t pipeline_end_ns = -1;
   int64_t next = 0;
   int64_t last_print = 0;

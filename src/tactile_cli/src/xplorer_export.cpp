@@ -76,7 +76,7 @@ nlohmann::json run_export(const ExportOptions& o) {
     bool operator>(const Pending& o) const { return t != o.t ? t > o.t : order > o.order; }
   };
   std::priority_queue<Pending, std::vector<Pending>, std::greater<>> pending;
-  uint64_t read_order = 0, late = 0;
+  uint64_t read_order = 0, late = 0, off_clock = 0;
   int64_t replayed_ns = std::numeric_limits<int64_t>::min();
   auto replay_until = [&](int64_t t_ns) {
     while (!pending.empty() && pending.top().t <= t_ns) {
@@ -94,11 +94,15 @@ nlohmann::json run_export(const ExportOptions& o) {
     int64_t t = m.timestamp_ns;
     if (o.time == ExportOptions::Time::kHeader) {
       const int64_t stamp = tactile_common::from_stamp(msg.header.stamp);
-      if (stamp < replayed_ns) {
-        ++late;
+      // A stamp far from the bag's time (unset, another clock, corrupt) is not a time to
+      // replay at: the bag's time is, and the hold stays bounded by kMaxStampSkewNs.
+      const bool skewed = stamp < m.timestamp_ns - ExportOptions::kMaxStampSkewNs ||
+                          stamp > m.timestamp_ns + ExportOptions::kMaxStampSkewNs;
+      if (skewed) ++off_clock;
+      t = skewed ? m.timestamp_ns : stamp;
+      if (t < replayed_ns) {
+        if (!skewed) ++late;
         t = replayed_ns;
-      } else {
-        t = stamp;
       }
     }
     pending.push(Pending{t, read_order++, [&host, topic, msg](int64_t now) { host.bus().publish(topic, msg, now); }});
@@ -132,6 +136,10 @@ nlohmann::json run_export(const ExportOptions& o) {
   if (!map) start_nodes(reader.start_time_ns());  // nothing decoded: an empty map, said below
   warnings.add("corrupt_messages_dropped", undecodable,
                std::to_string(undecodable) + " message(s) that did not decode dropped (first: " + first_error + ")");
+  warnings.add("stamps_off_the_bag_clock_replayed_at_bag_time", off_clock,
+               std::to_string(off_clock) + " message(s) stamped more than " +
+                   std::to_string(ExportOptions::kMaxStampSkewNs / 1'000'000'000) +
+                   " s from the bag's time (unset, another clock): replayed at the bag's timestamp");
   warnings.add("late_stamps_replayed_at_the_current_time", late,
                std::to_string(late) + " message(s) stamped before what was already replayed (more than " +
                    std::to_string(ExportOptions::kReorderWindowNs / 1'000'000) +

@@ -64,4 +64,14 @@ TEST(EventTick, AWatchdogStepNeverHoldsAnArrivalBack) {
   EXPECT_TRUE(tick.on_event(11 * kMs)); // exactly T/2 after the last event step
 }
 
+TEST(EventTick, AClockThatGoesBackStartsTheRateLimitOver) {
+  EventTick tick(20 * kMs);
+  EXPECT_TRUE(tick.on_event(1000 * kMs));
+  // The clock went back (a bag played again): arrivals step again at once instead of
+  // being held back until the old time is reached.
+  EXPECT_TRUE(tick.on_event(5 * kMs));
+  EXPECT_TRUE(tick.on_event(25 * kMs));
+  EXPECT_FALSE(tick.on_event(30 * kMs));  // the rate limit holds on the new timeline
+}
+
 }  // namespace

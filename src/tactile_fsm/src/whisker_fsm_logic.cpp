@@ -380,11 +380,11 @@ void WhiskerFsmLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
     return;
   }
   const int64_t stamp = tactile_common::from_stamp(msg.header.stamp);
-  if (!msg.child_frame_id.empty()) body_frame_ = msg.child_frame_id;
   if (stamp < odom_ns_) {
     ++stats_.dropped_out_of_order;
     return;
   }
+  if (!msg.child_frame_id.empty()) body_frame_ = msg.child_frame_id;  // only from an accepted message
   odom_ns_ = stamp;
   in_.odom_stamp = tactile_common::to_seconds(stamp);
   in_.x = p.x;

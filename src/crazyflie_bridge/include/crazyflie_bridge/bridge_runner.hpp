@@ -82,9 +82,10 @@ class BridgeRunner {
   /// a setpoint period ago (then the watchdog sends it). Returns true if a setpoint
   /// packet was sent.
   bool on_hover_setpoint(const tactile_msgs::msg::HoverSetpoint& msg, int64_t now_ns);
-  /// The watchdog, called at setpoint_rate_hz: sends the logic's queued packets and, if
-  /// no setpoint stepped the logic since the previous call, steps it and sends its
-  /// setpoint packet (if any). Returns true if a setpoint packet was sent.
+  /// The watchdog, called at setpoint_rate_hz: sends the logic's queued packets and steps
+  /// the logic and sends its setpoint packet (if any), unless the logic is in forward mode
+  /// and a setpoint stepped it since the previous call. Every other mode steps on every
+  /// call. Returns true if a setpoint packet was sent.
   bool on_timer(int64_t now_ns);
 
   // Operator commands: CrazyflieBridgeLogic's, mutex-guarded; packets they

@@ -100,7 +100,10 @@ public:
     setpoint_sub_ = node_.template create_subscription<tactile_msgs::msg::HoverSetpoint>(
       CrazyflieBridgeLogic::kSetpointTopic, rclcpp::QoS(10),
       [this](const tactile_msgs::msg::HoverSetpoint & msg) {
-        if (active_) {runner_->on_hover_setpoint(msg, now_ns());}
+        // In forward mode this sends at once: link I/O under io_mutex_, as the timer's.
+        std::lock_guard<std::mutex> lock(io_mutex_);
+        if (shut_down_ || !active_) {return;}  // the shutdown landing owns the link now
+        runner_->on_hover_setpoint(msg, now_ns());
       });
     sinks_.left = [this](const tactile_msgs::msg::WhiskerPressure & m) {left_pub_->publish(m);};
     sinks_.right = [this](const tactile_msgs::msg::WhiskerPressure & m) {right_pub_->publish(m);};

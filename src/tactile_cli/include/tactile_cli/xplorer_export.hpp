@@ -27,13 +27,16 @@ struct ExportOptions {
   ///    topics; replayed at the stamps the map is the one the live mapper built.
   ///    Messages are held in a reorder window of kReorderWindowNs of bag time; equal
   ///    stamps keep the bag's order; one whose stamp is older than what was already
-  ///    replayed (more than the window late, or unset in a wall-clock bag) is replayed at
-  ///    the newest time replayed so far, counted as a warning.
+  ///    replayed (more than the window late) is replayed at the newest time replayed so
+  ///    far; one stamped more than kMaxStampSkewNs from its bag timestamp (unset, another
+  ///    clock, corrupt) at its bag timestamp: both counted as warnings. So a message is
+  ///    held at most kMaxStampSkewNs + kReorderWindowNs of bag time.
   ///  - kReceive: the bag's timestamps, in bag order (this workspace's own bags store
   ///    the publish time, equal to the stamps).
   enum class Time { kHeader, kReceive };
   Time time = Time::kHeader;
   static constexpr int64_t kReorderWindowNs = 500'000'000;
+  static constexpr int64_t kMaxStampSkewNs = 5'000'000'000;
 };
 
 /// Returns a summary (messages used, source of the wrench, points, map

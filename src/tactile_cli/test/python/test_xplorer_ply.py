@@ -124,3 +124,44 @@ def test_export_replays_at_the_header_stamps_of_a_bag_recorded_with_receive_lag(
     r = subprocess.run([TACTILE, "--config", CONFIG, "export", str(dst), "--ply", str(tmp_path / "x.ply"),
                         "--time", "bag"], capture_output=True, text=True)
     assert r.returncode != 0 and "header" in r.stderr and "receive" in r.stderr, r.stderr
+
+
+def test_export_replays_stamps_off_the_bag_clock_at_bag_time(tmp_path):
+    """A stamp far from the bag's time -- 10^6 s ahead on the first odometry, unset (0) on
+    the last -- is replayed at the bag's timestamp and counted; before, the nodes started
+    at the first stamp in stamp order and an unset one in a wall-clock bag left the
+    mapper's timer ~10^11 ticks to run to the next stamp (a hang), and a far-ahead one
+    was held to the end of the bag."""
+    from rosbags.rosbag2 import Reader, StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_typestore
+    store = get_typestore(Stores.ROS2_JAZZY)
+    sim("xplorer_wall_traversal.yaml", tmp_path)
+    dst = tmp_path / "off_clock"
+    w = Writer(dst, version=9, storage_plugin=StoragePlugin.MCAP)
+    changed = 0
+    with Reader(tmp_path / "bag") as r, w:
+        conns = {c.id: w.add_connection(c.topic, c.msgtype, msgdef=c.msgdef.data, rihs01=c.digest)
+                 for c in r.connections}
+        n_odom = sum(1 for c, _, _ in r.messages() if c.topic == "/odom")
+        odom = 0
+        for c, t, raw in r.messages():
+            if c.topic == "/odom":
+                odom += 1
+                if odom in (1, n_odom):
+                    assert odom == 1 or t > 6_000_000_000, "the last odometry within 6 s of the start"
+                    msg = store.deserialize_cdr(raw, c.msgtype)
+                    if odom == 1:
+                        msg.header.stamp.sec += 1_000_000
+                    else:
+                        msg.header.stamp.sec, msg.header.stamp.nanosec = 0, 0
+                    raw = store.serialize_cdr(msg, c.msgtype)
+                    changed += 1
+            w.write(conns[c.id], t, raw)
+    assert changed == 2
+    out = tmp_path / "off_clock.ply"
+    subprocess.run([TACTILE, "--config", CONFIG, "export", str(dst), "--ply", str(out)],
+                   check=True, capture_output=True, text=True, timeout=120)
+    summary = json.loads(out.with_suffix(".metrics.json").read_text())
+    kinds = {w["kind"]: w["count"] for w in summary["warnings"]}
+    assert kinds.get("stamps_off_the_bag_clock_replayed_at_bag_time") == 2, summary["warnings"]
+    assert summary["points"] > 0

@@ -17,8 +17,8 @@
 //      stays quiet. So the node steps at least once per watchdog
 //      period whatever the inputs do (the timer-driven design's guarantee), and on the
 //      input's arrival while they flow (no timer phase in the latency).
-// Steps are counted by cause (event_steps, watchdog_steps); `t` is any monotonic clock
-// in ns (the node's clock: sim time under use_sim_time).
+// Steps are counted by cause (event_steps, watchdog_steps); `t` is the node's clock in ns
+// (sim time under use_sim_time); if it goes back, the rate limit starts over.
 #pragma once
 
 #include <cstdint>
@@ -45,6 +45,8 @@ class EventTick {
 
   /// Rule 1: true if the node steps now on this arrival.
   bool on_event(int64_t now_ns) {
+    // A clock that went back (a bag played again, a simulator restarted) starts over.
+    if (last_event_ns_ != kNever && now_ns < last_event_ns_) last_event_ns_ = kNever;
     if (last_event_ns_ != kNever && now_ns - last_event_ns_ < period_ns_ / 2) {
       ++stats_.skipped_events;
       held_back_ = true;
