@@ -73,9 +73,10 @@ def namespace_of(context, value=None):
 
 def in_namespace(actions, clock=False, namespace=None):
     """`actions` (containers and their nodes) under `namespace`, else the launch argument
-    namespace (namespace_argument()); with clock=True every node's /clock is remapped to
-    /<namespace>/clock (the sitl_* launches: each simulator publishes its vehicle's time).
-    At the root nothing is pushed or remapped."""
+    namespace (namespace_argument()); with clock=True every node's /clock, /tf and
+    /tf_static are remapped to /<namespace>/clock, /<namespace>/tf, /<namespace>/tf_static
+    (the sitl_* launches: each simulator publishes its vehicle's time, and its transforms
+    are stamped on it). At the root nothing is pushed or remapped."""
     def build(context):
         from launch_ros.actions import PushRosNamespace, SetRemap
         ns = namespace_of(context, namespace)
@@ -83,7 +84,10 @@ def in_namespace(actions, clock=False, namespace=None):
         if ns:
             scoped.append(PushRosNamespace(ns))
             if clock:
-                scoped.append(SetRemap(src='/clock', dst=f'/{ns}/clock'))
+                # Each simulator's own time, and its TF on that time: /tf and /tf_static
+                # move with /clock (a tool following one vehicle takes the same remaps).
+                for topic in ('/clock', '/tf', '/tf_static'):
+                    scoped.append(SetRemap(src=topic, dst=f'/{ns}{topic}'))
         return [GroupAction(scoped + list(actions))]
     return OpaqueFunction(function=build)
 

@@ -88,7 +88,16 @@ def test_ros2_verbs_see_the_sitl_whisker_graph(tmp_path):
         assert 'Boolean value is: True' in sim_time, sim_time
 
         # `ros2 node info` lists the FSM's inputs and outputs.
-        node = ros2('node', 'info', '/whisker_fsm', '--no-daemon')
-        for topic in ('/whisker/depth', '/odom', '/cmd_hover', '/fsm_state'):
+        # Each call discovers the graph afresh (--no-daemon): a call can return before the
+        # node's writers were discovered (seen once: every subscription listed, no
+        # publisher, not even /rosout), so it is asked again for up to 15 s.
+        wanted = ('/whisker/depth', '/odom', '/cmd_hover', '/fsm_state')
+        end = time.monotonic() + 15.0
+        while True:
+            node = ros2('node', 'info', '/whisker_fsm', '--no-daemon')
+            if all(t in node for t in wanted) or time.monotonic() > end:
+                break
+            time.sleep(0.5)
+        for topic in wanted:
             assert topic in node, node
         assert launch.running(), launch.output()[-3000:]

@@ -77,13 +77,19 @@ std::shared_ptr<rclcpp::Publisher<MessageT>> latched_publisher(rclcpp::Node& nod
 // The same on a node's topics interface: for a lifecycle node, whose own
 // create_publisher() makes a lifecycle publisher that drops messages until activation
 // (crazyflie_bridge's robot_description is there from construction).
+// Not QoS-overridable: rclcpp declares the qos_overrides parameters through the node's
+// parameters interface, which a topics interface alone does not give (creating it with
+// QosOverridingOptions throws "passed non-default qos overriding options without providing
+// a parameters interface": the lifecycle bridge then failed to load).
 template <class MessageT>
 std::shared_ptr<rclcpp::Publisher<MessageT>> latched_publisher(
     rclcpp::node_interfaces::NodeTopicsInterface::SharedPtr topics, const std::string& topic,
     size_t depth = 1) {
+  rclcpp::PublisherOptions options;
+  options.use_intra_process_comm = rclcpp::IntraProcessSetting::Disable;
   // By value: Jazzy's rclcpp takes the interface pointer by non-const reference only.
   return rclcpp::create_publisher<MessageT>(topics, topic, rclcpp::QoS(depth).reliable().transient_local(),
-                                            latched_publisher_options());
+                                            options);
 }
 
 }  // namespace tactile_common
