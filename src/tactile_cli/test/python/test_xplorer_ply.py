@@ -81,6 +81,26 @@ def test_export_names_the_missing_topic(tmp_path):
     assert "error" in r.stderr
 
 
+def rewrite_bag(src, dst, edit):
+    """A copy of the bag `src` written by rosbags (mcap) to `dst`, every message through
+    `edit(connection, timestamp, raw) -> (timestamp, raw)` in the bag's order."""
+    from rosbags.rosbag2 import Reader, StoragePlugin, Writer
+    w = Writer(dst, version=9, storage_plugin=StoragePlugin.MCAP)
+    with Reader(src) as r, w:
+        conns = {c.id: w.add_connection(c.topic, c.msgtype, msgdef=c.msgdef.data, rihs01=c.digest)
+                 for c in r.connections}
+        for c, t, raw in r.messages():
+            w.write(conns[c.id], *edit(c, t, raw))
+    return dst
+
+
+def export(bag, out, *extra):
+    """`tactile export BAG --ply OUT` (extra options): the map's points and the summary."""
+    subprocess.run([TACTILE, "--config", CONFIG, "export", str(bag), "--ply", str(out), *extra],
+                   check=True, capture_output=True, text=True, timeout=120)
+    return xyz(out), json.loads(out.with_suffix(".metrics.json").read_text())
+
+
 def test_export_replays_at_the_header_stamps_of_a_bag_recorded_with_receive_lag(tmp_path):
     """A `ros2 bag record` stores receive times: the messages in the order it received
     them, each with the recorder's clock when it did, which lags the header stamp by a
@@ -90,31 +110,21 @@ def test_export_replays_at_the_header_stamps_of_a_bag_recorded_with_receive_lag(
     default), the original bag's map point for point; `--time receive` replays at the
     lagged receive times (the summary says which clock)."""
     import random
-    from rosbags.rosbag2 import Reader, StoragePlugin, Writer
     m = sim("xplorer_wall_traversal.yaml", tmp_path)["xplorer"]
     rng = random.Random(7)
-    dst = tmp_path / "lagged"
-    w = Writer(dst, version=9, storage_plugin=StoragePlugin.MCAP)
-    lagged = 0
-    with Reader(tmp_path / "bag") as r, w:
-        conns = {c.id: w.add_connection(c.topic, c.msgtype, msgdef=c.msgdef.data, rihs01=c.digest)
-                 for c in r.connections}
-        received = 0
-        for c, t, raw in r.messages():
-            received = max(t + rng.randint(1_000_000, 6_000_000), received)
-            lagged += received != t
-            w.write(conns[c.id], received, raw)
+    received, lagged = 0, 0
+
+    def lag(c, t, raw):
+        nonlocal received, lagged
+        received = max(t + rng.randint(1_000_000, 6_000_000), received)
+        lagged += received != t
+        return received, raw
+
+    dst = rewrite_bag(tmp_path / "bag", tmp_path / "lagged", lag)
     assert lagged > 0
-
-    def export(bag, name, *extra):
-        out = tmp_path / name
-        subprocess.run([TACTILE, "--config", CONFIG, "export", str(bag), "--ply", str(out), *extra],
-                       check=True, capture_output=True, text=True)
-        return xyz(out), json.loads(out.with_suffix(".metrics.json").read_text())
-
-    original, s0 = export(tmp_path / "bag", "original.ply")
-    header, s1 = export(dst, "header.ply")
-    _, s2 = export(dst, "receive.ply", "--time", "receive")
+    original, s0 = export(tmp_path / "bag", tmp_path / "original.ply")
+    header, s1 = export(dst, tmp_path / "header.ply")
+    _, s2 = export(dst, tmp_path / "receive.ply", "--time", "receive")
     assert len(original) == m["map_points"] > 0
     np.testing.assert_array_equal(header, original)
     assert (s0["time"], s1["time"], s2["time"]) == ("header", "header", "receive")
@@ -132,36 +142,32 @@ def test_export_replays_stamps_off_the_bag_clock_at_bag_time(tmp_path):
     at the first stamp in stamp order and an unset one in a wall-clock bag left the
     mapper's timer ~10^11 ticks to run to the next stamp (a hang), and a far-ahead one
     was held to the end of the bag."""
-    from rosbags.rosbag2 import Reader, StoragePlugin, Writer
+    from rosbags.rosbag2 import Reader
     from rosbags.typesys import Stores, get_typestore
     store = get_typestore(Stores.ROS2_JAZZY)
     sim("xplorer_wall_traversal.yaml", tmp_path)
-    dst = tmp_path / "off_clock"
-    w = Writer(dst, version=9, storage_plugin=StoragePlugin.MCAP)
-    changed = 0
-    with Reader(tmp_path / "bag") as r, w:
-        conns = {c.id: w.add_connection(c.topic, c.msgtype, msgdef=c.msgdef.data, rihs01=c.digest)
-                 for c in r.connections}
+    with Reader(tmp_path / "bag") as r:
         n_odom = sum(1 for c, _, _ in r.messages() if c.topic == "/odom")
-        odom = 0
-        for c, t, raw in r.messages():
-            if c.topic == "/odom":
-                odom += 1
-                if odom in (1, n_odom):
-                    assert odom == 1 or t > 6_000_000_000, "the last odometry within 6 s of the start"
-                    msg = store.deserialize_cdr(raw, c.msgtype)
-                    if odom == 1:
-                        msg.header.stamp.sec += 1_000_000
-                    else:
-                        msg.header.stamp.sec, msg.header.stamp.nanosec = 0, 0
-                    raw = store.serialize_cdr(msg, c.msgtype)
-                    changed += 1
-            w.write(conns[c.id], t, raw)
+    odom, changed = 0, 0
+
+    def restamp(c, t, raw):
+        nonlocal odom, changed
+        if c.topic == "/odom":
+            odom += 1
+            if odom in (1, n_odom):
+                assert odom == 1 or t > 6_000_000_000, "the last odometry within 6 s of the start"
+                msg = store.deserialize_cdr(raw, c.msgtype)
+                if odom == 1:
+                    msg.header.stamp.sec += 1_000_000
+                else:
+                    msg.header.stamp.sec, msg.header.stamp.nanosec = 0, 0
+                raw = store.serialize_cdr(msg, c.msgtype)
+                changed += 1
+        return t, raw
+
+    dst = rewrite_bag(tmp_path / "bag", tmp_path / "off_clock", restamp)
     assert changed == 2
-    out = tmp_path / "off_clock.ply"
-    subprocess.run([TACTILE, "--config", CONFIG, "export", str(dst), "--ply", str(out)],
-                   check=True, capture_output=True, text=True, timeout=120)
-    summary = json.loads(out.with_suffix(".metrics.json").read_text())
+    points, summary = export(dst, tmp_path / "off_clock.ply")
     kinds = {w["kind"]: w["count"] for w in summary["warnings"]}
     assert kinds.get("stamps_off_the_bag_clock_replayed_at_bag_time") == 2, summary["warnings"]
-    assert summary["points"] > 0
+    assert summary["points"] == len(points) > 0
