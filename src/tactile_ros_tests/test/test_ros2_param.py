@@ -109,3 +109,38 @@ def test_set_a_key_read_at_start_is_rejected_as_read_only_on_every_node(whisker_
 
 def g_call(g: Graph, srv_type, name: str, request, timeout: float = 10.0):
     return g.call(srv_type, name, request, timeout)
+
+
+# The other vehicles' graphs (issue 35 item 5): each of their nodes shows one key's
+# description, unit and range, read at start, and refuses `ros2 param set` as read-only
+# (none of these nodes applies a key while running).
+OTHER_GRAPHS = {
+    'xplorer': ('sitl_xplorer.launch.py', [f"scenario:={CONFIG_DIR / 'scenarios' / 'xplorer_box.yaml'}"], {
+        '/xplorer_mapping': ('delta_map', '1.51', ['initiates the mapping', '[N]', 'range (0, inf)']),
+        '/xplorer_force_est': ('arm_median_window', '5',
+                               ['median filter of the arm angles', '[samples]', 'Min value: 1', 'Max value: 15']),
+    }),
+    'wall_effect': ('sitl_wall_effect.launch.py',
+                    [f"scenario:={CONFIG_DIR / 'scenarios' / 'ducted_estimation.yaml'}", 'behaviour:=trajectory'], {
+        '/indi_controller': ('max_tilt', '0.5', ['no rate setpoint tilts further', '[rad]', 'range (0, 1.4)']),
+        '/wall_trajectory': ('sweep_hold_s', '60.0', ['hold of each sweep segment (004: 60 s)', '[s]']),
+    }),
+    'localization': ('sitl_localization.launch.py', ['simulator:=false'], {
+        '/whisker_localization': ('beam.n_segments', '64',
+                                  ['RK4 steps', 'Min value: 4', 'Max value: 100000']),
+    }),
+}
+
+
+@pytest.mark.parametrize('graph', sorted(OTHER_GRAPHS))
+def test_xplorer_wall_effect_and_localization_keys_are_described_and_read_only(graph, tmp_path):
+    launch_file, args, keys = OTHER_GRAPHS[graph]
+    with Launch(launch_file, args, tmp_path / 'launch.log') as launch, Graph() as g:
+        g.wait_for_nodes(list(keys), launch)
+        for node, (key, value, texts) in keys.items():
+            described = ros2('param', 'describe', node, key)
+            for text in texts + ['Read only: true', 'read at start: restart the node to change it']:
+                assert text in described, f'{node} {key}: {text!r} not in\n{described}'
+            out = set_param(node, key, value)
+            assert 'Setting parameter failed' in out and 'read-only' in out, f'{node} {key}: {out}'
+        assert launch.running(), launch.output()[-3000:]
