@@ -167,7 +167,7 @@ def generate_launch_description():
                                           'uri (uri and namespace are then not used)'),
         autostart_argument(),
         launch_common.frame_prefix_argument(),
-    ] + ([lifecycle_common.activate_argument()] if lifecycle_common.is_lifecycle('crazyflie_bridge')
+    ] + launch_common.rviz_arguments('crazyflie', sim_time=False) + ([lifecycle_common.activate_argument()] if lifecycle_common.is_lifecycle('crazyflie_bridge')
          else []) + [
         OpaqueFunction(function=robots_or_one),  # after every argument it reads
     ])

@@ -67,4 +67,4 @@ def generate_launch_description():
         _radio.autostart_argument(),
         _radio.launch_common.frame_prefix_argument(),
         server,
-    ] + _radio.radio_container(uri, name='sitl_bridge_container') + _radio.bridge_lifecycle())
+    ] + _radio.launch_common.rviz_arguments('crazyflie', sim_time=False) + _radio.radio_container(uri, name='sitl_bridge_container') + _radio.bridge_lifecycle())
