@@ -110,6 +110,12 @@ TEST(GpisExplorerLogic, EveryParameterIsDescribedWithTheRangeValidateAccepts) {
        })) {
     ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
   }
+  // An unbounded range means every finite value: infinity itself is refused.
+  for (const auto& leak : tactile_common::infinities_accepted(d, [](const tactile_common::ParamMap& m) {
+         GpisExplorerLogic::params_from(m);
+       })) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is accepted";
+  }
   ASSERT_NE(d.info("grid_cells"), nullptr);
   EXPECT_EQ(d.info("grid_cells")->range->text(), "[2, 5000]");
   ASSERT_NE(d.info("corner_curvature"), nullptr);

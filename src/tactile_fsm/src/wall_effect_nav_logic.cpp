@@ -34,7 +34,11 @@ void WallEffectNavLogic::Params::validate() const {
     throw std::invalid_argument("WallEffectNavLogic.goal_mode: must be 'position', 'gps' or 'direction', got '" + goal_mode + "'");
   if (!std::isfinite(goal_x) || !std::isfinite(goal_y) || !std::isfinite(direction_deg))
     throw std::invalid_argument("WallEffectNavLogic.goal_x: goal_x, goal_y and direction_deg must be finite");
-  if (!(max_input_age_s > 0.0)) throw std::invalid_argument("WallEffectNavLogic.max_input_age_s: must be > 0");
+  // Finite: an infinite age would never call an input stale (FAILSAFE_HOVER off).
+  if (!(max_input_age_s > 0.0) || !std::isfinite(max_input_age_s)) {
+    throw std::invalid_argument("WallEffectNavLogic.max_input_age_s: must be finite and > 0, got " +
+                                std::to_string(max_input_age_s));
+  }
   if (goal_mode == "gps") (void)goal();  // throws naming origin/point and the field
 }
 

@@ -15,7 +15,11 @@ using tactile_common::ParamMap;
 void XplorerFsmLogic::Params::validate() const {
   fsm.validate();
   if (frame_id.empty()) throw std::invalid_argument("XplorerFsmLogic.frame_id: must not be empty");
-  if (!(max_input_age_s > 0.0)) throw std::invalid_argument("XplorerFsmLogic.max_input_age_s: must be > 0, got " + std::to_string(max_input_age_s));
+  // Finite: an infinite age would never call an input stale (the hold on stale input off).
+  if (!(max_input_age_s > 0.0) || !std::isfinite(max_input_age_s)) {
+    throw std::invalid_argument("XplorerFsmLogic.max_input_age_s: must be finite and > 0, got " +
+                                std::to_string(max_input_age_s));
+  }
 }
 
 ParamMap XplorerFsmLogic::default_parameters() {

@@ -273,6 +273,12 @@ TEST(WallEffectNavLogic, EveryParameterIsDescribedWithTheRangeValidateAccepts) {
        })) {
     ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
   }
+  // An unbounded range means every finite value: infinity itself is refused.
+  for (const auto& leak : tactile_common::infinities_accepted(d, [](const tactile_common::ParamMap& m) {
+         WallEffectNavLogic::params_from(m);
+       })) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is accepted";
+  }
   ASSERT_NE(d.info("repulse_base"), nullptr);
   EXPECT_EQ(d.info("repulse_base")->range->text(), "(0, 1)");  // 004 eq. 12: a base below 1
   ASSERT_NE(d.info("follow_distance"), nullptr);

@@ -74,6 +74,11 @@ TEST(XplorerFsmLogic, EveryParameterIsDescribedWithTheRangeValidateAccepts) {
   for (const auto& leak : tactile_common::range_leaks(d, [](const ParamMap& m) { XplorerFsmLogic::params_from(m); })) {
     ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
   }
+  // An unbounded range means every finite value: infinity itself is refused.
+  for (const auto& leak :
+       tactile_common::infinities_accepted(d, [](const ParamMap& m) { XplorerFsmLogic::params_from(m); })) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is accepted";
+  }
   ASSERT_NE(d.info("turn_limit"), nullptr);
   EXPECT_EQ(d.info("turn_limit")->range->text(), "(0, 3.14159]");  // (0, pi] (001: 180 deg)
   EXPECT_EQ(d.info("turn_limit")->unit, "rad");
