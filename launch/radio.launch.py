@@ -31,7 +31,7 @@ commander hover setpoints, clamped, with the stale-input chain hover -> land -> 
 
 Parameters come from config/ (crazyflie_bridge.yaml, crazyflie_bridge_health.yaml, tdorc_filter.yaml,
 tactile_depth.yaml, tactile_fsm.yaml); `uri` overrides the bridge's. The FSM's first
-approach steps and scans by default (tactile_fsm README "Round 12"); against a single wall
+approach steps and scans by default (src/tactile_fsm/docs/whisker_fsm.md "Step and scan"); against a single wall
 ahead set first_whisk_amplitude: 0 there for the paper's straight approach. The Crazyradio needs
 the Bitcraze udev rules (or run as root / pass the device into the container). Without a
 Crazyradio the bridge cannot connect: the plain node's load fails and the launch ends with its

@@ -274,7 +274,7 @@ void XplorerExplorer::push_window(std::deque<PoseSample>& h, const PoseSample& s
 }
 
 bool XplorerExplorer::plan_square(const XplorerInput& in) {
-  // Issue 17, class B (our choice; README "Oblique first face"): the path of the last
+  // Issue 17, class B (our choice; docs/tuning/tactile_fsm.md "Oblique first face"): the path of the last
   // square_window s of Exploration, deflected from the Exploration direction, runs along the
   // face the vehicle slid on; the face's normal is perpendicular to it, on the side the force
   // comes from (the fused force points out of the obstacle).

@@ -30,7 +30,7 @@ ParamMap XplorerFsmLogic::default_parameters() {
   const Params d;
   const XplorerParams& f = d.fsm;
   ParamMap m(kNodeName, "defaults");
-  // The node's parameter spec (config/xplorer_fsm.yaml, README "XPLORER behaviours"): value,
+  // The node's parameter spec (config/xplorer_fsm.yaml, docs/xplorer_fsm.md): value,
   // description (from the XplorerParams comments; "choice" where 001 gives no value), unit
   // and the range params_from()/validate() accept for the key alone (delta_psi0 > delta_0 is
   // validate()'s relation, named in the text). Every key is read at start (ros2 param set:
