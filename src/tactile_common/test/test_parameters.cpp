@@ -437,13 +437,17 @@ TEST(ParamInfo, RangeLeaksFindsADescribedRangeNarrowerThanTheCheck) {
 }
 
 // infinities_accepted finds an unbounded described range whose infinite end params_from
-// takes ("> 0" checked without isfinite): (0, inf) means every finite value.
+// takes ("> 0" checked without isfinite): (0, inf) means every finite value. A closed
+// infinite end, (0, inf], takes infinity on purpose (inf = never) and is not reported.
 TEST(ParamInfo, InfinitiesAcceptedFindsAnInfiniteEndTheCheckTakes) {
+  const double inf = std::numeric_limits<double>::infinity();
   tactile_common::ParamMap d("n", "defaults");
   d.set("age", 0.2, {"age", "s", tactile_common::positive(), false});
   d.set("gain", 1.0, {"gain", "", tactile_common::positive(), false});
-  d.set("offset", 0.0, {"offset", "m", tactile_common::ParamRange{}, false});  // (-inf, inf)
+  d.set("offset", 0.0, {"offset", "m", tactile_common::ParamRange{-inf, inf, true, true}, false});  // (-inf, inf)
+  d.set("timeout", 0.2, {"timeout; inf: never", "s", tactile_common::ParamRange{0.0, inf, true, false}, false});
   const auto checked = [](const tactile_common::ParamMap& m) {
+    if (!(m.get_double("timeout") > 0.0)) throw m.error("timeout", "must be > 0");  // takes inf, as described
     if (!(m.get_double("age") > 0.0)) throw m.error("age", "must be > 0");  // takes inf
     const double gain = m.get_double("gain");
     if (!(std::isfinite(gain) && gain > 0.0)) throw m.error("gain", "must be finite and > 0");
