@@ -175,15 +175,21 @@ WallEffectEkfLogic::Params WallEffectEkfLogic::params_from(const ParamMap& map) 
     const std::string what = e.what();
     const std::string field = what.substr(0, what.find(':'));
     const std::string leaf = field.substr(field.rfind('.') + 1);
-    std::string key = "vehicle.inertia_diag";
+    std::string key;
+    if (leaf == "dt") {
+      key = "rate_hz";  // ekf.dt = 1 / rate_hz (a rate so small that dt overflows)
+    } else if (leaf.rfind("inertia_diag", 0) == 0) {
+      key = "vehicle.inertia_diag";  // "inertia_diag[i]"
+    }
     for (const auto& f : fields) {
       const std::string& k = f.key;
+      if (!key.empty()) break;
       if (k.size() >= leaf.size() && k.compare(k.size() - leaf.size(), leaf.size(), leaf) == 0 &&
           (k.size() == leaf.size() || k[k.size() - leaf.size() - 1] == '.')) {
         key = k;
-        break;
       }
     }
+    if (key.empty()) key = field;  // no key of its own: the message's field, not another key
     throw map.error(key, what);
   }
   return p;

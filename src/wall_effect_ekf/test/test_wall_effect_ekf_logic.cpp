@@ -69,6 +69,25 @@ TEST(WallEffectEkfLogic, BadParametersNameTheKey) {
   m = WallEffectEkfLogic::default_parameters();
   m.set("vehicle.inertia_diag", std::vector<double>{1e-3, 1e-3});
   EXPECT_THROW(WallEffectEkfLogic::params_from(m), tactile_common::ParamError);
+  m.set("vehicle.inertia_diag", std::vector<double>{1e-3, -1e-3, 1e-3});
+  try {
+    WallEffectEkfLogic::params_from(m);
+    FAIL();
+  } catch (const tactile_common::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("ros__parameters.vehicle.inertia_diag: VehicleParams.inertia_diag[1]"),
+              std::string::npos)
+        << e.what();
+  }
+  // A rate so small that ekf.dt = 1 / rate_hz overflows: EkfParams refuses dt, which is no
+  // key of its own; the error names rate_hz (it named vehicle.inertia_diag).
+  m = WallEffectEkfLogic::default_parameters();
+  m.set("rate_hz", 1e-310);
+  try {
+    WallEffectEkfLogic::params_from(m);
+    FAIL();
+  } catch (const tactile_common::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("wall_effect_ekf.ros__parameters.rate_hz: "), std::string::npos) << e.what();
+  }
 }
 
 // Every integer parameter set to its default + 2^32 is rejected with its key
