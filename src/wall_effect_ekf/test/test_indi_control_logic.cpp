@@ -160,6 +160,10 @@ TEST(IndiControlLogic, EveryParameterIsDescribedWithTheRangeValidateAccepts) {
   for (const auto& leak : tactile_common::range_leaks(d, [](const ParamMap& m) { IndiControlLogic::params_from(m); })) {
     ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
   }
+  for (const auto& inf :
+       tactile_common::infinities_accepted(d, [](const ParamMap& m) { IndiControlLogic::params_from(m); })) {
+    ADD_FAILURE() << inf.key << " = " << inf.value << " is accepted, its described range says finite";
+  }
   ASSERT_NE(d.info("max_tilt"), nullptr);
   EXPECT_EQ(d.info("max_tilt")->range->text(), "(0, 1.4)");
   EXPECT_EQ(d.info("max_tilt")->unit, "rad");
