@@ -7,6 +7,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 #include <tuple>
 
@@ -219,6 +220,16 @@ namespace {
 
 std::string bound_text(double v) {
   if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  // An integer-valued bound (a count, INT_MAX, an integer key's get_int() range) prints as
+  // the integer: the stream's six significant digits would show INT_MAX as "2.14748e+09",
+  // a bound no integer has. [-2^63, 2^63) is what int64_t holds (an IntegerRange); a larger
+  // one (INT64_MAX rounds to 2^63 as a double) prints with the 17 digits that read it back.
+  if (v == std::trunc(v)) {
+    if (v >= -0x1p63 && v < 0x1p63) return std::to_string(static_cast<int64_t>(v));
+    std::ostringstream out;
+    out << std::setprecision(std::numeric_limits<double>::max_digits10) << v;
+    return out.str();
+  }
   std::ostringstream out;
   out << v;
   return out.str();

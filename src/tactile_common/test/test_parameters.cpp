@@ -399,6 +399,27 @@ TEST(ParamInfo, RangesPrintAndContainAsDescribed) {
   EXPECT_THROW(m.set("bad", 1.0, {"empty", "", tactile_common::closed(2, 1), false}), std::logic_error);
 }
 
+// Integer-valued bounds print exactly, as the integer a get_int() range or an IntegerRange
+// descriptor holds: INT_MAX is "2147483647", not the stream's six digits "2.14748e+09"
+// (ros2 param describe of whisker_driver's baud showed that, and a refused value's reason
+// "must be in [1, 2.14748e+09]"). Other bounds keep the short form.
+TEST(ParamInfo, IntegerBoundsPrintExactly) {
+  using tactile_common::ParamRange;
+  EXPECT_EQ(tactile_common::closed(1, std::numeric_limits<int>::max()).text(), "[1, 2147483647]");
+  EXPECT_EQ(tactile_common::closed(0, 1e6).text(), "[0, 1000000]");
+  EXPECT_EQ(tactile_common::closed(std::numeric_limits<int>::min(), -1e7).text(), "[-2147483648, -10000000]");
+  // 2^53 + 2: integer-valued doubles beyond 2^53 are still exact integers.
+  EXPECT_EQ(tactile_common::at_least(9007199254740994.0).text(), "[9007199254740994, inf)");
+  // INT64_MIN is a double exactly; INT64_MAX is not (it rounds to 2^63, printed so it reads back).
+  EXPECT_EQ(tactile_common::closed(static_cast<double>(std::numeric_limits<int64_t>::min()), 0).text(),
+            "[-9223372036854775808, 0]");
+  EXPECT_EQ(tactile_common::closed(0, static_cast<double>(std::numeric_limits<int64_t>::max())).text(),
+            "[0, 9.2233720368547758e+18]");
+  EXPECT_EQ((ParamRange{-0.0, 1.0, true, false}).text(), "(0, 1]");
+  EXPECT_EQ(tactile_common::at_least(1e-6).text(), "[1e-06, inf)");
+  EXPECT_EQ((ParamRange{0.05, 1.5, true, true}).text(), "(0.05, 1.5)");
+}
+
 // range_leaks finds a described range narrower than what params_from accepts:
 // a value just outside it that params_from takes.
 TEST(ParamInfo, RangeLeaksFindsADescribedRangeNarrowerThanTheCheck) {
@@ -416,13 +437,17 @@ TEST(ParamInfo, RangeLeaksFindsADescribedRangeNarrowerThanTheCheck) {
 }
 
 // infinities_accepted finds an unbounded described range whose infinite end params_from
-// takes ("> 0" checked without isfinite): (0, inf) means every finite value.
+// takes ("> 0" checked without isfinite): (0, inf) means every finite value. A closed
+// infinite end, (0, inf], takes infinity on purpose (inf = never) and is not reported.
 TEST(ParamInfo, InfinitiesAcceptedFindsAnInfiniteEndTheCheckTakes) {
+  const double inf = std::numeric_limits<double>::infinity();
   tactile_common::ParamMap d("n", "defaults");
   d.set("age", 0.2, {"age", "s", tactile_common::positive(), false});
   d.set("gain", 1.0, {"gain", "", tactile_common::positive(), false});
-  d.set("offset", 0.0, {"offset", "m", tactile_common::ParamRange{}, false});  // (-inf, inf)
+  d.set("offset", 0.0, {"offset", "m", tactile_common::ParamRange{-inf, inf, true, true}, false});  // (-inf, inf)
+  d.set("timeout", 0.2, {"timeout; inf: never", "s", tactile_common::ParamRange{0.0, inf, true, false}, false});
   const auto checked = [](const tactile_common::ParamMap& m) {
+    if (!(m.get_double("timeout") > 0.0)) throw m.error("timeout", "must be > 0");  // takes inf, as described
     if (!(m.get_double("age") > 0.0)) throw m.error("age", "must be > 0");  // takes inf
     const double gain = m.get_double("gain");
     if (!(std::isfinite(gain) && gain > 0.0)) throw m.error("gain", "must be finite and > 0");

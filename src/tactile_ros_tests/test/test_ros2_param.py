@@ -150,9 +150,11 @@ def g_call(g: Graph, srv_type, name: str, request, timeout: float = 10.0):
 
 # The other vehicles' graphs (issue 35 item 5): each of their nodes shows one key's
 # description, unit and range, read at start, and refuses `ros2 param set` as read-only
-# (none of these nodes applies a key while running).
-OTHER_GRAPHS = {
-    'xplorer': ('sitl_xplorer.launch.py', [f"scenario:={CONFIG_DIR / 'scenarios' / 'xplorer_box.yaml'}"], {
+# (none of these nodes applies a key while running). Named apart from OTHER_GRAPHS above,
+# whose test looks its dict up when it runs.
+VEHICLE_GRAPHS = {
+    'xplorer': ('sitl_xplorer.launch.py', [f"scenario:={CONFIG_DIR / 'scenarios' / 'xplorer_box.yaml'}",
+                                           'ply_file:={tmp}/map.ply'], {
         '/xplorer_mapping': ('delta_map', '1.51', ['initiates the mapping', '[N]', 'range (0, inf)']),
         '/xplorer_force_est': ('arm_median_window', '5',
                                ['median filter of the arm angles', '[samples]', 'Min value: 1', 'Max value: 15']),
@@ -161,6 +163,8 @@ OTHER_GRAPHS = {
                     [f"scenario:={CONFIG_DIR / 'scenarios' / 'ducted_estimation.yaml'}", 'behaviour:=trajectory'], {
         '/indi_controller': ('max_tilt', '0.5', ['no rate setpoint tilts further', '[rad]', 'range (0, 1.4)']),
         '/wall_trajectory': ('sweep_hold_s', '60.0', ['hold of each sweep segment (004: 60 s)', '[s]']),
+        '/wall_effect_ekf': ('proximity.b1', '0.5', ['b1 of gamma_h = a1 b1^d_bar (004 eq. 4', 'Min value: 0.0',
+                                                     'Max value: 1.0', 'range (0, 1)']),
     }),
     'localization': ('sitl_localization.launch.py', ['simulator:=false'], {
         '/whisker_localization': ('beam.n_segments', '64',
@@ -169,9 +173,10 @@ OTHER_GRAPHS = {
 }
 
 
-@pytest.mark.parametrize('graph', sorted(OTHER_GRAPHS))
+@pytest.mark.parametrize('graph', sorted(VEHICLE_GRAPHS))
 def test_xplorer_wall_effect_and_localization_keys_are_described_and_read_only(graph, tmp_path):
-    launch_file, args, keys = OTHER_GRAPHS[graph]
+    launch_file, args, keys = VEHICLE_GRAPHS[graph]
+    args = [a.replace('{tmp}', str(tmp_path)) for a in args]  # the PLY not into the working directory
     with Launch(launch_file, args, tmp_path / 'launch.log') as launch, Graph() as g:
         g.wait_for_nodes(list(keys), launch)
         for node, (key, value, texts) in keys.items():

@@ -14,47 +14,118 @@ using tactile_common::ParamMap;
 
 namespace {
 
-/// Every double parameter of the node and where it lives in Params.
-std::vector<std::pair<std::string, double*>> doubles(WallEffectEkfLogic::Params& p) {
+using tactile_common::at_least;
+using tactile_common::closed;
+using tactile_common::ParamInfo;
+using tactile_common::ParamRange;
+using tactile_common::positive;
+
+/// A double parameter of the node: its key, where it lives in Params and its description
+/// (from the Params comments; config/wall_effect_ekf.yaml gives the same sources), unit and
+/// the range validate() takes for the key alone (a bound set by another key is named in the
+/// description). None is live: the component reads them at start, so `ros2 param set`
+/// refuses every key (read-only).
+struct DoubleKey {
+  std::string key;
+  double* field;
+  ParamInfo info;
+};
+
+/// Every double parameter of the node.
+std::vector<DoubleKey> doubles(WallEffectEkfLogic::Params& p) {
   EkfParams& e = p.ekf;
   VehicleParams& v = e.vehicle;
+  const ParamRange below_one{0.0, 1.0, true, true};  // b1, b2: (0, 1) (004 eq. 4)
   return {
-      {"rate_hz", &p.rate_hz},
-      {"detection_range", &p.detection_range},
-      {"detection_sigma", &p.detection_sigma},
-      {"max_input_age_s", &p.max_input_age_s},
-      {"vehicle.mass", &v.mass},
-      {"vehicle.rotor_offset", &v.rotor_offset},
-      {"vehicle.torque_coefficient", &v.torque_coefficient},
-      {"vehicle.linear_drag", &v.linear_drag},
-      {"vehicle.max_rotor_thrust", &v.max_rotor_thrust},
-      {"proximity.rotor_radius", &v.proximity.rotor_radius},
-      {"proximity.a1", &v.proximity.a1},
-      {"proximity.b1", &v.proximity.b1},
-      {"proximity.a2", &v.proximity.a2},
-      {"proximity.b2", &v.proximity.b2},
-      {"ekf.q_distance", &e.q_distance},
-      {"ekf.q_height", &e.q_height},
-      {"ekf.q_velocity", &e.q_velocity},
-      {"ekf.q_attitude", &e.q_attitude},
-      {"ekf.q_rate", &e.q_rate},
-      {"ekf.r_accel", &e.r_accel},
-      {"ekf.r_accel_z", &e.r_accel_z},
-      {"motor_time_constant", &p.motor_time_constant},
-      {"ekf.r_gyro", &e.r_gyro},
-      {"ekf.r_flow", &e.r_flow},
-      {"ekf.r_tof", &e.r_tof},
-      {"ekf.gate_chi2", &e.gate_chi2},
-      {"ekf.y_min", &e.y_min},
-      {"ekf.y_max", &e.y_max},
-      {"ekf.sigma_y_init", &e.sigma_y_init},
-      {"ekf.sigma_yaw_init", &e.sigma_yaw_init},
-      {"ekf.sigma_y_max", &e.sigma_y_max},
-      {"ekf.sigma_attitude_max", &e.sigma_attitude_max},
-      {"ekf.min_height", &e.min_height},
-      {"ekf.reacquire_accel", &e.reacquire_accel},
-      {"ekf.reacquire_angle", &e.reacquire_angle},
-      {"ekf.reacquire_time_constant", &e.reacquire_time_constant},
+      {"rate_hz", &p.rate_hz, {"filter rate; ekf.dt = 1 / rate_hz (004: 100 Hz)", "Hz", positive(), false}},
+      {"detection_range", &p.detection_range,
+       {"wall_detected: y_hat below this and sqrt(P_yy) below detection_sigma (choice, a little beyond 004's "
+        "d_dagger = 20 cm, within which its estimates are reliable)",
+        "m", positive(), false}},
+      {"detection_sigma", &p.detection_sigma,
+       {"wall_detected: sqrt(P_yy) below this and y_hat below detection_range (choice)", "m", positive(), false}},
+      {"max_input_age_s", &p.max_input_age_s,
+       {"thrust command / IMU older than this: no filter step, nothing published (choice)", "s", positive(),
+        false}},
+      {"vehicle.mass", &v.mass,
+       {"m (004: 280 g); the four rotors must carry it: vehicle.mass g < 4 vehicle.max_rotor_thrust", "kg",
+        positive(), false}},
+      {"vehicle.rotor_offset", &v.rotor_offset,
+       {"L of the rotor positions (+-L, +-L, 0) (004: d* = 17 cm with a 5 cm duct gap, and d_bar = 2.1 at "
+        "0.2 m, give 0.082 m)",
+        "m", positive(), false}},
+      {"vehicle.torque_coefficient", &v.torque_coefficient, {"c_tau of 004 eq. 7 (choice)", "m", at_least(0.0), false}},
+      {"vehicle.linear_drag", &v.linear_drag,
+       {"linear drag k subtracted from the wall-frame thrust in 004 eq. 6 (choice; 004 has none: 0 is the "
+        "paper's model)",
+        "N s/m", at_least(0.0), false}},
+      {"vehicle.max_rotor_thrust", &v.max_rotor_thrust,
+       {"per rotor (004: over 440 g of thrust in total); > vehicle.mass g / 4", "N", positive(), false}},
+      {"proximity.rotor_radius", &v.proximity.rotor_radius,
+       {"R of d_bar = y_i / R (004: AVAN 3024, R = 38 mm)", "m", positive(), false}},
+      {"proximity.a1", &v.proximity.a1,
+       {"a1 of gamma_h = a1 b1^d_bar (004 eq. 4 least-squares fit: 0.21)", "", positive(), false}},
+      {"proximity.b1", &v.proximity.b1, {"b1 of gamma_h = a1 b1^d_bar (004 eq. 4: 0.34)", "", below_one, false}},
+      {"proximity.a2", &v.proximity.a2,
+       {"a2 of gamma_v = 1 + a2 b2^d_bar (004 eq. 4 least-squares fit: 0.06)", "", positive(), false}},
+      {"proximity.b2", &v.proximity.b2, {"b2 of gamma_v = 1 + a2 b2^d_bar (004 eq. 4: 0.54)", "", below_one, false}},
+      {"ekf.q_distance", &e.q_distance,
+       {"process noise: random walk of y, the wall geometry changing (choice, 004 gives none: tuned for a "
+        "consistent NEES on ducted_estimation)",
+        "m/sqrt(s)", at_least(0.0), false}},
+      {"ekf.q_height", &e.q_height,
+       {"process noise: random walk of z, the floor changing (choice, NEES-tuned)", "m/sqrt(s)", at_least(0.0),
+        false}},
+      {"ekf.q_velocity", &e.q_velocity,
+       {"process noise of the velocity: unmodelled force (choice)", "m/s^2/sqrt(Hz)", at_least(0.0), false}},
+      {"ekf.q_attitude", &e.q_attitude,
+       {"process noise of the attitude (choice, NEES-tuned)", "rad/sqrt(s)", at_least(0.0), false}},
+      {"ekf.q_rate", &e.q_rate,
+       {"process noise of the body rates: unmodelled torque, motor lag (choice)", "rad/s^2/sqrt(Hz)", at_least(0.0),
+        false}},
+      {"ekf.r_accel", &e.r_accel,
+       {"accelerometer noise std, body x and y (004 eq. 23; choice for a BMI088, NEES-tuned)", "m/s^2", positive(),
+        false}},
+      {"ekf.r_accel_z", &e.r_accel_z,
+       {"accelerometer noise std, body z: larger, it also absorbs the thrust-magnitude error (motor lag, thrust "
+        "constant) that would leak into y through gamma_v (choice)",
+        "m/s^2", positive(), false}},
+      {"motor_time_constant", &p.motor_time_constant,
+       {"first-order lag of the commanded thrusts before the prediction, the motors' response; 0: none (choice: "
+        "the simulated motors' 20 ms)",
+        "s", at_least(0.0), false}},
+      {"ekf.r_gyro", &e.r_gyro, {"gyro noise std (choice, NEES-tuned)", "rad/s", positive(), false}},
+      {"ekf.r_flow", &e.r_flow,
+       {"optical-flow noise std (004 eq. 9-10; choice for a PMW3901, NEES-tuned)", "rad/s", positive(), false}},
+      {"ekf.r_tof", &e.r_tof, {"ToF noise std (choice: a VL53L1x at 1 m, 2 mm + 0.5 %)", "m", positive(), false}},
+      {"ekf.gate_chi2", &e.gate_chi2,
+       {"chi-square gate of the flow (2 dof) and ToF (1 dof) innovations: beyond it the sample is dropped and "
+        "counted (choice)",
+        "", positive(), false}},
+      {"ekf.y_min", &e.y_min,
+       {"lower bound of y_hat, the centre-to-wall distance (choice); < ekf.y_max", "m", positive(), false}},
+      {"ekf.y_max", &e.y_max,
+       {"upper bound of y_hat and its start, \"no wall nearby\": beyond it the wall effect is below the sensor "
+        "noise (choice); > ekf.y_min",
+        "m", positive(), false}},
+      {"ekf.sigma_y_init", &e.sigma_y_init, {"initial std of y (choice)", "m", positive(), false}},
+      {"ekf.sigma_yaw_init", &e.sigma_yaw_init,
+       {"initial std of the yaw, i.e. of the wall direction (choice)", "rad", positive(), false}},
+      {"ekf.sigma_y_max", &e.sigma_y_max, {"cap of sqrt(P_yy) (choice)", "m", positive(), false}},
+      {"ekf.sigma_attitude_max", &e.sigma_attitude_max, {"cap of the attitude std (choice)", "rad", positive(), false}},
+      {"ekf.min_height", &e.min_height,
+       {"flow and ToF are used above this height (choice)", "m", at_least(0.0), false}},
+      {"ekf.reacquire_accel", &e.reacquire_accel,
+       {"re-acquisition: a low-passed horizontal specific force beyond this that the estimate does not explain "
+        "re-initialises the wall direction and distance (choice)",
+        "m/s^2", positive(), false}},
+      {"ekf.reacquire_angle", &e.reacquire_angle,
+       {"re-acquisition: the mismatch between that force's direction and the estimated wall direction that "
+        "triggers it (choice)",
+        "rad", positive(), false}},
+      {"ekf.reacquire_time_constant", &e.reacquire_time_constant,
+       {"re-acquisition: low-pass time constant of the horizontal specific force (choice)", "s", positive(),
+        false}},
   };
 }
 
@@ -78,17 +149,20 @@ void WallEffectEkfLogic::Params::validate() const {
 ParamMap WallEffectEkfLogic::default_parameters() {
   Params d;
   ParamMap m(kNodeName, "defaults");
-  for (const auto& [key, ptr] : doubles(d)) m.set(key, *ptr);
+  for (const auto& k : doubles(d)) m.set(k.key, *k.field, k.info);
   const Vec3& J = d.ekf.vehicle.inertia_diag;
-  m.set("vehicle.inertia_diag", std::vector<double>{J.x(), J.y(), J.z()});
-  m.set("min_flow_quality", static_cast<int64_t>(d.min_flow_quality));
+  m.set("vehicle.inertia_diag", std::vector<double>{J.x(), J.y(), J.z()},
+        {"J diagonal, each finite and > 0 (choice: the simulated vehicle's estimate)", "kg m^2", {}, false});
+  m.set("min_flow_quality", static_cast<int64_t>(d.min_flow_quality),
+        {"flow samples below this quality (the OpticalFlow quality byte) are dropped (choice)", "",
+         closed(0, 255), false});
   return m;
 }
 
 WallEffectEkfLogic::Params WallEffectEkfLogic::params_from(const ParamMap& map) {
   Params p;
-  auto fields = doubles(p);
-  for (auto& [key, ptr] : fields) *ptr = map.get_double(key);
+  const auto fields = doubles(p);
+  for (const auto& k : fields) *k.field = map.get_double(k.key);
   const std::vector<double> J = map.get_double_array("vehicle.inertia_diag");
   if (J.size() != 3) throw map.error("vehicle.inertia_diag", "must have 3 entries, got " + std::to_string(J.size()));
   p.ekf.vehicle.inertia_diag = Vec3(J[0], J[1], J[2]);
@@ -101,15 +175,21 @@ WallEffectEkfLogic::Params WallEffectEkfLogic::params_from(const ParamMap& map) 
     const std::string what = e.what();
     const std::string field = what.substr(0, what.find(':'));
     const std::string leaf = field.substr(field.rfind('.') + 1);
-    std::string key = "vehicle.inertia_diag";
+    std::string key;
+    if (leaf == "dt") {
+      key = "rate_hz";  // ekf.dt = 1 / rate_hz (a rate so small that dt overflows)
+    } else if (leaf.rfind("inertia_diag", 0) == 0) {
+      key = "vehicle.inertia_diag";  // "inertia_diag[i]"
+    }
     for (const auto& f : fields) {
-      const std::string& k = f.first;
+      const std::string& k = f.key;
+      if (!key.empty()) break;
       if (k.size() >= leaf.size() && k.compare(k.size() - leaf.size(), leaf.size(), leaf) == 0 &&
           (k.size() == leaf.size() || k[k.size() - leaf.size() - 1] == '.')) {
         key = k;
-        break;
       }
     }
+    if (key.empty()) key = field;  // no key of its own: the message's field, not another key
     throw map.error(key, what);
   }
   return p;

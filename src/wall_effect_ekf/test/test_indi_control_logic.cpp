@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -112,6 +113,28 @@ TEST(WallTrajectory, SetpointsAreInThePrefixedOdomFrame) {
   }
 }
 
+// x, angular_frequency and yaw_deg go into the setpoint unchecked: a NaN x made the
+// position along the wall NaN, which the INDI controller takes as a velocity-only axis (no
+// position hold along the wall); a NaN frequency or yaw made y_d or psi_d NaN. Each must be
+// finite, and the error names the key.
+TEST(WallTrajectory, NonFiniteXFrequencyOrYawIsRefusedNamingTheKey) {
+  const double inf = std::numeric_limits<double>::infinity();
+  for (const std::string key : {"x", "angular_frequency", "yaw_deg"}) {
+    for (const double v : {std::numeric_limits<double>::quiet_NaN(), inf, -inf}) {
+      auto m = WallTrajectoryLogic::default_parameters();
+      m.set(key, v);
+      try {
+        WallTrajectoryLogic::params_from(m);
+        ADD_FAILURE() << key << " = " << v << " accepted";
+      } catch (const tactile_common::ParamError& e) {
+        EXPECT_NE(std::string(e.what()).find("wall_trajectory.ros__parameters." + key + ": "), std::string::npos)
+            << e.what();
+        EXPECT_NE(std::string(e.what()).find("must be finite"), std::string::npos) << e.what();
+      }
+    }
+  }
+}
+
 namespace {
 void expect_config_equals_defaults(const std::string& file, const std::string& node, const tactile_common::ParamMap& d) {
   const auto f = tactile_common::load_node_parameters(file, node, d);
@@ -137,6 +160,10 @@ TEST(IndiControlLogic, EveryParameterIsDescribedWithTheRangeValidateAccepts) {
   for (const auto& leak : tactile_common::range_leaks(d, [](const ParamMap& m) { IndiControlLogic::params_from(m); })) {
     ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
   }
+  for (const auto& inf :
+       tactile_common::infinities_accepted(d, [](const ParamMap& m) { IndiControlLogic::params_from(m); })) {
+    ADD_FAILURE() << inf.key << " = " << inf.value << " is accepted, its described range says finite";
+  }
   ASSERT_NE(d.info("max_tilt"), nullptr);
   EXPECT_EQ(d.info("max_tilt")->range->text(), "(0, 1.4)");
   EXPECT_EQ(d.info("max_tilt")->unit, "rad");
@@ -151,8 +178,14 @@ TEST(WallTrajectory, EveryParameterIsDescribedWithTheRangeValidateAccepts) {
        tactile_common::range_leaks(d, [](const ParamMap& m) { WallTrajectoryLogic::params_from(m); })) {
     ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
   }
+  for (const auto& inf :
+       tactile_common::infinities_accepted(d, [](const ParamMap& m) { WallTrajectoryLogic::params_from(m); })) {
+    ADD_FAILURE() << inf.key << " = " << inf.value << " is accepted, its described range says finite";
+  }
   ASSERT_NE(d.info("amplitude"), nullptr);
   EXPECT_EQ(d.info("amplitude")->range->text(), "[0, inf)");
+  EXPECT_EQ(d.info("x")->range->text(), "(-inf, inf)");  // any finite value
+  EXPECT_EQ(d.info("t_yaw2")->range->text(), "[0, inf]");  // inf: no second ramp
   EXPECT_EQ(d.info("sweep_hold_s")->range->text(), "(0, inf)");
   EXPECT_EQ(d.info("yaw_deg")->unit, "deg");
   for (const auto& [key, info] : d.infos()) EXPECT_FALSE(info.live) << key;

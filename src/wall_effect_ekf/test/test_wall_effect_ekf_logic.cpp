@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <random>
+#include <string>
+#include <vector>
 
 #include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/time.hpp"
@@ -67,6 +69,25 @@ TEST(WallEffectEkfLogic, BadParametersNameTheKey) {
   m = WallEffectEkfLogic::default_parameters();
   m.set("vehicle.inertia_diag", std::vector<double>{1e-3, 1e-3});
   EXPECT_THROW(WallEffectEkfLogic::params_from(m), tactile_common::ParamError);
+  m.set("vehicle.inertia_diag", std::vector<double>{1e-3, -1e-3, 1e-3});
+  try {
+    WallEffectEkfLogic::params_from(m);
+    FAIL();
+  } catch (const tactile_common::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("ros__parameters.vehicle.inertia_diag: VehicleParams.inertia_diag[1]"),
+              std::string::npos)
+        << e.what();
+  }
+  // A rate so small that ekf.dt = 1 / rate_hz overflows: EkfParams refuses dt, which is no
+  // key of its own; the error names rate_hz (it named vehicle.inertia_diag).
+  m = WallEffectEkfLogic::default_parameters();
+  m.set("rate_hz", 1e-310);
+  try {
+    WallEffectEkfLogic::params_from(m);
+    FAIL();
+  } catch (const tactile_common::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("wall_effect_ekf.ros__parameters.rate_hz: "), std::string::npos) << e.what();
+  }
 }
 
 // Every integer parameter set to its default + 2^32 is rejected with its key
@@ -76,6 +97,30 @@ TEST(WallEffectEkfLogic, IntegerParametersAreCheckedBeforeTheyAreNarrowed) {
                                                         [](const ParamMap& m) { WallEffectEkfLogic::params_from(m); });
   EXPECT_EQ(wrapped.size(), 1u);  // min_flow_quality
   for (const auto& [key, w] : wrapped) EXPECT_TRUE(w.rejected_as_given()) << key << ": " << w.error;
+}
+
+// Issue 35 item 5: every key has a description, a unit and the range validate() takes
+// for it alone (none wider: range_leaks; an unbounded end means every finite value:
+// infinities_accepted), and none is live (the component applies none).
+TEST(WallEffectEkfLogic, EveryParameterIsDescribedWithTheRangeValidateAccepts) {
+  const ParamMap d = WallEffectEkfLogic::default_parameters();
+  EXPECT_EQ(tactile_common::undescribed(d), std::vector<std::string>{});
+  EXPECT_EQ(d.infos().size(), d.values().size());
+  const auto params_from = [](const ParamMap& m) { WallEffectEkfLogic::params_from(m); };
+  for (const auto& leak : tactile_common::range_leaks(d, params_from)) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
+  }
+  for (const auto& inf : tactile_common::infinities_accepted(d, params_from)) {
+    ADD_FAILURE() << inf.key << " = " << inf.value << " is accepted, its described range says finite";
+  }
+  ASSERT_NE(d.info("proximity.b1"), nullptr);
+  EXPECT_EQ(d.info("proximity.b1")->range->text(), "(0, 1)");
+  EXPECT_EQ(d.info("min_flow_quality")->range->text(), "[0, 255]");
+  EXPECT_EQ(d.info("ekf.q_distance")->range->text(), "[0, inf)");
+  EXPECT_EQ(d.info("ekf.q_distance")->unit, "m/sqrt(s)");
+  EXPECT_EQ(d.info("rate_hz")->unit, "Hz");
+  EXPECT_EQ(d.info("vehicle.linear_drag")->unit, "N s/m");
+  for (const auto& [key, info] : d.infos()) EXPECT_FALSE(info.live) << key;
 }
 
 TEST(WallEffectEkfLogic, BadInputIsCountedAndDropped) {

@@ -6,6 +6,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include "tactile_common/time.hpp"
 #include "whisker_localization/stage_sim.hpp"
@@ -38,8 +39,12 @@ void WhiskerLocalizationLogic::Params::validate() const {
     throw std::invalid_argument("WhiskerLocalizationLogic.map_spacing: must be finite and > 0, got " + std::to_string(map_spacing));
   if (!(fillet_radius > 0.0)) throw std::invalid_argument("WhiskerLocalizationLogic.fillet_radius: must be > 0, got " + std::to_string(fillet_radius));
   if (!(leg > 0.0)) throw std::invalid_argument("WhiskerLocalizationLogic.leg: must be > 0, got " + std::to_string(leg));
-  if (!std::isfinite(prior_x) || !std::isfinite(prior_y) || !std::isfinite(prior_yaw))
-    throw std::invalid_argument("WhiskerLocalizationLogic.prior_x: prior must be finite");
+  for (const auto& [field, v] : {std::pair<const char*, double>{"prior_x", prior_x}, {"prior_y", prior_y},
+                                  {"prior_yaw", prior_yaw}}) {
+    if (!std::isfinite(v))
+      throw std::invalid_argument(std::string("WhiskerLocalizationLogic.") + field + ": must be finite, got " +
+                                  std::to_string(v));
+  }
   if (input != "moment" && input != "flux")
     throw std::invalid_argument("WhiskerLocalizationLogic.input: must be \"moment\" or \"flux\", got \"" + input + "\"");
   if (hall_coefficients.empty() || hall_coefficients.size() > 10)
@@ -62,6 +67,7 @@ ParamMap WhiskerLocalizationLogic::default_parameters() {
   // "> 0" and ">= 0" without a finite check: validate() takes inf too (inf = never stale, never a contact).
   const ParamRange above_zero{0.0, kInf, true, false};
   const ParamRange from_zero{0.0, kInf, false, false};
+  const ParamRange any_finite{-kInf, kInf, true, true};  // (-inf, inf): checked finite only
   const Params d;
   ParamMap m(kNodeName, "defaults");
   // The localizer's parameter spec: value, description (from the Params comments; README
@@ -119,9 +125,9 @@ ParamMap WhiskerLocalizationLogic::default_parameters() {
         {"default map: radius of the concave arc (choice)", "m", above_zero, false});
   m.set("leg", d.leg, {"default map: length of the straight floor and wall (choice)", "m", above_zero, false});
   m.set("use_prior", d.use_prior, {"start from a known pose prior_x/y/yaw (002 Sec. VII-D)", "", {}, false});
-  m.set("prior_x", d.prior_x, {"known start x (use_prior); finite", "m", {}, false});
-  m.set("prior_y", d.prior_y, {"known start y (use_prior); finite", "m", {}, false});
-  m.set("prior_yaw", d.prior_yaw, {"known start heading (use_prior); finite", "rad", {}, false});
+  m.set("prior_x", d.prior_x, {"known start x (use_prior); finite", "m", any_finite, false});
+  m.set("prior_y", d.prior_y, {"known start y (use_prior); finite", "m", any_finite, false});
+  m.set("prior_yaw", d.prior_yaw, {"known start heading (use_prior); finite", "rad", any_finite, false});
   m.set("input", d.input,
         {"what torque.z carries: moment (M(0) [N m]) or flux (Hall flux density B [mT], 002 Sec. V-B)", "", {},
          false});

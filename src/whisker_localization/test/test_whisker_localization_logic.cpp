@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -81,6 +82,26 @@ TEST(WhiskerLocalizationLogic, BadParametersNameTheKey) {
   EXPECT_THROW(WhiskerLocalizationLogic::params_from(m), tactile_common::ParamError);
 }
 
+// A non-finite prior coordinate is refused naming that key: a NaN prior_y or prior_yaw was
+// reported as prior_x, which sent the user to a correct value.
+TEST(WhiskerLocalizationLogic, NonFinitePriorNamesItsKey) {
+  const double inf = std::numeric_limits<double>::infinity();
+  for (const std::string key : {"prior_x", "prior_y", "prior_yaw"}) {
+    for (const double v : {std::numeric_limits<double>::quiet_NaN(), inf, -inf}) {
+      ParamMap m = WhiskerLocalizationLogic::default_parameters();
+      m.set(key, v);
+      try {
+        WhiskerLocalizationLogic::params_from(m);
+        ADD_FAILURE() << key << " = " << v << " accepted";
+      } catch (const tactile_common::ParamError& e) {
+        EXPECT_NE(std::string(e.what()).find("whisker_localization.ros__parameters." + key + ": must be finite"),
+                  std::string::npos)
+            << e.what();
+      }
+    }
+  }
+}
+
 // Every integer parameter set to its default + 2^32 (an int would wrap it back
 // to the default) is rejected with its key and the value as given.
 TEST(WhiskerLocalizationLogic, IntegerParametersAreCheckedBeforeTheyAreNarrowed) {
@@ -105,6 +126,11 @@ TEST(WhiskerLocalizationLogic, EveryParameterIsDescribedWithTheRangeValidateAcce
   EXPECT_EQ(d.info("epsilon")->range->text(), "[0, 1)");
   // validate() takes an infinite age (never stale): the range keeps it.
   EXPECT_EQ(d.info("max_odom_age_s")->range->text(), "(0, inf]");
+  EXPECT_EQ(d.info("prior_yaw")->range->text(), "(-inf, inf)");  // finite
+  for (const auto& inf : tactile_common::infinities_accepted(
+           d, [](const ParamMap& m) { WhiskerLocalizationLogic::params_from(m); })) {
+    ADD_FAILURE() << inf.key << " = " << inf.value << " is accepted, its described range says finite";
+  }
   for (const auto& [key, info] : d.infos()) EXPECT_FALSE(info.live) << key;
 }
 
