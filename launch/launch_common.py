@@ -241,6 +241,18 @@ def simulator_node(wait_for_publisher):
         extra_arguments=INTRA)
 
 
+def visualization_node():
+    """The visualization component (tactile_viz) of every sitl_* launch: RViz markers of the
+    graph's estimates and events on visualization/markers, the GPIS mean and variance grids
+    on gpis/mean_grid and gpis/variance_grid (topics relative: in the launch namespace; the
+    markers take their frames from the input messages, so the frame prefix needs no
+    parameter here). On simulated time, parameters from config/visualization.yaml."""
+    from launch_ros.descriptions import ComposableNode
+    return ComposableNode(
+        package='tactile_viz', plugin='tactile_viz::VisualizationComponent', name='visualization',
+        parameters=parameters(config('visualization'), SIM_TIME), extra_arguments=INTRA)
+
+
 def sitl_container(name, nodes):
     """The container of a sitl_* launch: `nodes` (the simulator first) in one process, in
     the launch argument namespace with /clock remapped into it, and a failed load stops the
