@@ -35,17 +35,13 @@ class VisualizationComponent : public rclcpp::Node {
     localization_ = create_subscription<tactile_msgs::msg::LocalizationResult>(
       L::kLocalizationTopic, rclcpp::SensorDataQoS(),
       [this](const tactile_msgs::msg::LocalizationResult & m) {publish(logic_.on_localization(m));});
-    // Transient local is never intra-process (Humble refuses the combination in an
-    // intra-process container; tactile_common/ros_qos.hpp).
-    const auto latched = rclcpp::QoS(1).reliable().transient_local();
-    rclcpp::SubscriptionOptions latched_options;
-    latched_options.use_intra_process_comm = rclcpp::IntraProcessSetting::Disable;
-    gpis_map_ = create_subscription<tactile_msgs::msg::GpisMap>(
-      L::kGpisMapTopic, latched, [this](const tactile_msgs::msg::GpisMap & m) {on_gpis_map(m);}, latched_options);
-    gpis_target_ = create_subscription<tactile_msgs::msg::ExplorationTarget>(
-      L::kGpisTargetTopic, latched,
-      [this](const tactile_msgs::msg::ExplorationTarget & m) {publish(logic_.on_exploration_target(m));},
-      latched_options);
+    // latched_subscription: transient local, never intra-process (Humble refuses the
+    // combination in an intra-process container; tactile_common/ros_qos.hpp).
+    gpis_map_ = tactile_common::latched_subscription<tactile_msgs::msg::GpisMap>(
+      *this, L::kGpisMapTopic, [this](const tactile_msgs::msg::GpisMap & m) {on_gpis_map(m);});
+    gpis_target_ = tactile_common::latched_subscription<tactile_msgs::msg::ExplorationTarget>(
+      *this, L::kGpisTargetTopic,
+      [this](const tactile_msgs::msg::ExplorationTarget & m) {publish(logic_.on_exploration_target(m));});
   }
 
  private:
