@@ -241,16 +241,30 @@ def simulator_node(wait_for_publisher):
         extra_arguments=INTRA)
 
 
-def visualization_node():
-    """The visualization component (tactile_viz) of every sitl_* launch: RViz markers of the
-    graph's estimates and events on visualization/markers, the GPIS mean and variance grids
-    on gpis/mean_grid and gpis/variance_grid (topics relative: in the launch namespace; the
-    markers take their frames from the input messages, so the frame prefix needs no
-    parameter here). On simulated time, parameters from config/visualization.yaml."""
+def visualization_nodes():
+    """The visualization component (tactile_viz) of every sitl_* launch, as a list to add to
+    the container's nodes: RViz markers of the graph's estimates and events on
+    visualization/markers, the GPIS mean and variance grids on gpis/mean_grid and
+    gpis/variance_grid (topics relative: in the launch namespace; the markers take their
+    frames from the input messages, so the frame prefix needs no parameter here). On
+    simulated time, parameters from config/visualization.yaml. Empty, with a warning, where
+    tactile_viz was built without its component (a ROS 2 installation without
+    visualization_msgs, e.g. the Jazzy toolchain): the graph runs without markers."""
+    from ament_index_python import get_resource
+    from launch.logging import get_logger
     from launch_ros.descriptions import ComposableNode
-    return ComposableNode(
-        package='tactile_viz', plugin='tactile_viz::VisualizationComponent', name='visualization',
-        parameters=parameters(config('visualization'), SIM_TIME), extra_arguments=INTRA)
+    plugin = 'tactile_viz::VisualizationComponent'
+    try:
+        registered, _ = get_resource('rclcpp_components', 'tactile_viz')
+    except LookupError:
+        registered = ''
+    if plugin not in registered:
+        get_logger('launch_common').warning(
+            f'{plugin} is not installed (tactile_viz built without visualization_msgs): no visualization node')
+        return []
+    return [ComposableNode(
+        package='tactile_viz', plugin=plugin, name='visualization',
+        parameters=parameters(config('visualization'), SIM_TIME), extra_arguments=INTRA)]
 
 
 def sitl_container(name, nodes):

@@ -32,8 +32,35 @@ try:
 except ImportError:
     HAVE_TF2 = False
 
-pytestmark = pytest.mark.skipif(
+needs_viz = pytest.mark.skipif(
     not HAVE_VIZ, reason='no visualization_msgs in this ROS 2 installation: no tactile_viz component, no sim/arena')
+
+
+def launch_common():
+    import importlib.util
+    from launch_check import WORKSPACE
+    spec = importlib.util.spec_from_file_location('launch_common', WORKSPACE / 'launch' / 'launch_common.py')
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_viz_launch_helper_is_empty_without_the_component(monkeypatch):
+    """Where tactile_viz registered no component (built without visualization_msgs), the
+    sitl_* launches get no visualization node (and a warning) instead of a load failure
+    that would stop them."""
+    import os
+    prefixes = [p for p in os.environ.get('AMENT_PREFIX_PATH', '').split(os.pathsep)
+                if p and os.path.basename(p.rstrip('/')) != 'tactile_viz']
+    monkeypatch.setenv('AMENT_PREFIX_PATH', os.pathsep.join(prefixes))
+    assert launch_common().visualization_nodes() == []
+
+
+@needs_viz
+def test_viz_launch_helper_loads_the_component_where_installed():
+    nodes = launch_common().visualization_nodes()
+    assert [(n.package[0].text, n.node_plugin[0].text) for n in nodes] == [
+        ('tactile_viz', 'tactile_viz::VisualizationComponent')]
 
 
 @pytest.fixture(scope='module')
@@ -44,6 +71,7 @@ def whisker_cf1(tmp_path_factory):
         yield launch, g
 
 
+@needs_viz
 def test_viz_sim_arena_is_latched_for_a_late_subscriber(whisker_cf1):
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
     from visualization_msgs.msg import Marker, MarkerArray
@@ -65,6 +93,7 @@ def test_viz_sim_arena_is_latched_for_a_late_subscriber(whisker_cf1):
     assert sorted(m.id for m in walls) == list(range(len(walls)))  # stable ids: the wall indices
 
 
+@needs_viz
 def test_viz_grids_are_offered_latched(whisker_cf1):
     from rclpy.qos import DurabilityPolicy
     launch, g = whisker_cf1
@@ -75,6 +104,7 @@ def test_viz_grids_are_offered_latched(whisker_cf1):
         assert infos[0].qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL, infos[0].qos_profile
 
 
+@needs_viz
 def test_viz_markers_of_the_whisker_contacts_in_frames_that_resolve(whisker_cf1):
     from rclpy.qos import DurabilityPolicy, ReliabilityPolicy
     from visualization_msgs.msg import Marker, MarkerArray
