@@ -241,13 +241,13 @@ def simulator_node(wait_for_publisher):
         extra_arguments=INTRA)
 
 
-def visualization_nodes():
+def visualization_nodes(sim_time=True):
     """The visualization component (tactile_viz) of every sitl_* launch, as a list to add to
     the container's nodes: RViz markers of the graph's estimates and events on
     visualization/markers, the GPIS mean and variance grids on gpis/mean_grid and
     gpis/variance_grid (topics relative: in the launch namespace; the markers take their
     frames from the input messages, so the frame prefix needs no parameter here). On
-    simulated time, parameters from config/visualization.yaml. Empty, with a warning, where
+    simulated time unless sim_time is False; parameters from config/visualization.yaml. Empty, with a warning, where
     tactile_viz was built without its component (a ROS 2 installation without
     visualization_msgs, e.g. the Jazzy toolchain): the graph runs without markers."""
     from ament_index_python import get_resource
@@ -264,7 +264,8 @@ def visualization_nodes():
         return []
     return [ComposableNode(
         package='tactile_viz', plugin=plugin, name='visualization',
-        parameters=parameters(config('visualization'), SIM_TIME), extra_arguments=INTRA)]
+        parameters=parameters(config('visualization'), *([SIM_TIME] if sim_time else [])),
+        extra_arguments=INTRA)]
 
 
 def sitl_container(name, nodes):
@@ -276,6 +277,57 @@ def sitl_container(name, nodes):
         name=name, namespace='', package='rclcpp_components', executable='component_container',
         composable_node_descriptions=nodes, output='screen')
     return [in_namespace([container], clock=True), stop_on_load_failure(container)]
+
+
+class RvizUnavailable(RuntimeError):
+    pass
+
+
+def rviz_config(name):
+    """config/rviz/<name>.rviz: the RViz configuration shipped for a launch file."""
+    return os.path.join(CONFIG_DIR, 'rviz', name + '.rviz')
+
+
+def rviz_arguments(default_config, sim_time):
+    """The launch arguments rviz (default false) and rviz_config (default
+    config/rviz/<default_config>.rviz) of the vehicle launch files, and the action that
+    starts rviz2 with them: in the launch's namespace (the configs' topics are relative, so
+    namespace:=cf1 shows cf1), on simulated time with /clock, /tf and /tf_static remapped as
+    the simulator's (in_namespace(clock=True)) when `sim_time` (a bool, or a function of the
+    launch context giving one). rviz:=true where rviz2 is not
+    installed ends the launch saying so, before any node starts."""
+    return [
+        DeclareLaunchArgument('rviz', default_value='false', choices=['true', 'false'],
+                              description='true: start rviz2 with rviz_config'),
+        DeclareLaunchArgument('rviz_config', default_value=rviz_config(default_config),
+                              description='RViz configuration (config/rviz/)'),
+        OpaqueFunction(function=lambda context: _rviz(context, sim_time)),
+    ]
+
+
+def _rviz(context, sim_time):
+    from launch.substitutions import LaunchConfiguration
+    if LaunchConfiguration('rviz').perform(context) != 'true':
+        return []
+    path = LaunchConfiguration('rviz_config').perform(context)
+    if not os.path.isfile(path):
+        raise RvizUnavailable(f'rviz_config:={path}: no such file')
+    from ament_index_python.packages import PackageNotFoundError, get_package_prefix
+    try:
+        get_package_prefix('rviz2')
+    except PackageNotFoundError:
+        distro = os.environ.get('ROS_DISTRO', '<distro>')
+        raise RvizUnavailable(
+            f'rviz:=true but the package rviz2 is not installed in this ROS 2 (Debian/Ubuntu: '
+            f'apt install ros-{distro}-rviz2); the graph does not need it: launch without '
+            f'rviz:=true, or run rviz2 -d {path} where it is installed') from None
+    from launch_ros.actions import Node
+    ns = namespace_of(context)
+    sim_time = sim_time(context) if callable(sim_time) else sim_time
+    remaps = [(t, f'/{ns}{t}') for t in ('/clock', '/tf', '/tf_static')] if ns and sim_time else []
+    return [Node(package='rviz2', executable='rviz2', name='rviz2', namespace=ns,
+                 arguments=['-d', path], parameters=[{'use_sim_time': sim_time}],
+                 remappings=remaps, output='screen')]
 
 
 class RobotsFileError(ValueError):

@@ -31,7 +31,7 @@ commander hover setpoints, clamped, with the stale-input chain hover -> land -> 
 
 Parameters come from config/ (crazyflie_bridge.yaml, crazyflie_bridge_health.yaml, tdorc_filter.yaml,
 tactile_depth.yaml, tactile_fsm.yaml); `uri` overrides the bridge's. The FSM's first
-approach steps and scans by default (tactile_fsm README "Round 12"); against a single wall
+approach steps and scans by default (src/tactile_fsm/docs/whisker_fsm.md "Step and scan"); against a single wall
 ahead set first_whisk_amplitude: 0 there for the paper's straight approach. The Crazyradio needs
 the Bitcraze udev rules (or run as root / pass the device into the container). Without a
 Crazyradio the bridge cannot connect: the plain node's load fails and the launch ends with its
@@ -69,13 +69,17 @@ def autostart_argument():
                     '(take-off on connect); false: nothing flies until the takeoff service')
 
 
-def bridge_overrides(uri, frame_prefix=None):
+def bridge_overrides(uri, frame_prefix=None, initial_position=None):
     """The bridge's launch-argument overrides: uri, autostart and frame_prefix (the launch
-    argument, or '<namespace>/' under a namespace, unless given: a robot's namespace + '/')."""
+    argument, or '<namespace>/' under a namespace, unless given: a robot's namespace + '/'),
+    and a robot's initial_position (map -> odom) where given."""
     if frame_prefix is None:
         frame_prefix = launch_common.frame_prefix_value()
-    return {'uri': uri, 'autostart': ParameterValue(LaunchConfiguration('autostart'), value_type=bool),
-            'frame_prefix': ParameterValue(frame_prefix, value_type=str)}
+    overrides = {'uri': uri, 'autostart': ParameterValue(LaunchConfiguration('autostart'), value_type=bool),
+                 'frame_prefix': ParameterValue(frame_prefix, value_type=str)}
+    if initial_position is not None:
+        overrides['initial_position'] = [float(v) for v in initial_position]
+    return overrides
 
 
 def container_stop_timeout():
@@ -124,14 +128,15 @@ def pipeline_nodes(bridge_overrides):
     return nodes
 
 
-def radio_container(uri, namespace=None, name='radio_container', frame_prefix=None):
+def radio_container(uri, namespace=None, name='radio_container', frame_prefix=None, initial_position=None):
     """One Crazyflie: the container `name` (bridge on `uri` + the whisker pipeline) in
     `namespace` (else the launch argument namespace), its frames behind `frame_prefix`
-    (else the launch argument frame_prefix), and its load-failure watch."""
+    (else the launch argument frame_prefix), at `initial_position` in map (else the
+    bridge's config), and its load-failure watch."""
     container = ComposableNodeContainer(
         name=name, namespace='', package='rclcpp_components',
         executable='component_container',
-        composable_node_descriptions=pipeline_nodes(bridge_overrides(uri, frame_prefix)),
+        composable_node_descriptions=pipeline_nodes(bridge_overrides(uri, frame_prefix, initial_position)),
         output='screen', sigterm_timeout=container_stop_timeout())
     return [launch_common.in_namespace([container], namespace=namespace),
             launch_common.stop_on_load_failure(container)]
@@ -146,7 +151,8 @@ def robots_or_one(context):
     robots = launch_common.load_robots(path)
     actions = []
     for robot in robots:  # each robot's frames behind its namespace: cf1/odom, cf1/base_link
-        actions += radio_container(robot.uri, namespace=robot.namespace, frame_prefix=robot.namespace + '/')
+        actions += radio_container(robot.uri, namespace=robot.namespace, frame_prefix=robot.namespace + '/',
+                                   initial_position=robot.initial_position)
     return actions + manage_bridges(['/' + r.namespace + '/' + BRIDGE for r in robots])
 
 
@@ -167,7 +173,7 @@ def generate_launch_description():
                                           'uri (uri and namespace are then not used)'),
         autostart_argument(),
         launch_common.frame_prefix_argument(),
-    ] + ([lifecycle_common.activate_argument()] if lifecycle_common.is_lifecycle('crazyflie_bridge')
+    ] + launch_common.rviz_arguments('crazyflie', sim_time=False) + ([lifecycle_common.activate_argument()] if lifecycle_common.is_lifecycle('crazyflie_bridge')
          else []) + [
         OpaqueFunction(function=robots_or_one),  # after every argument it reads
     ])

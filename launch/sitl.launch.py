@@ -20,8 +20,8 @@ instead: udp://127.0.0.1:19850. The standalone host does the whole flight withou
 Note: the FSM's parameters (target, band, first approach) come from config/tactile_fsm.yaml
 here; `tactile fly --sim` also applies the scenario's node_parameters and metrics.target.
 For the darkness scenarios those set the band 40-100 mm and the paper's straight first
-approach (first_whisk_amplitude: 0; the default steps and scans, tactile_fsm README
-"Round 12"): to fly them here as there, set the same keys in config/tactile_fsm.yaml.
+approach (first_whisk_amplitude: 0; the default steps and scans, src/tactile_fsm/docs/whisker_fsm.md
+"Step and scan"): to fly them here as there, set the same keys in config/tactile_fsm.yaml.
 """
 
 import importlib.util
@@ -67,4 +67,4 @@ def generate_launch_description():
         _radio.autostart_argument(),
         _radio.launch_common.frame_prefix_argument(),
         server,
-    ] + _radio.radio_container(uri, name='sitl_bridge_container') + _radio.bridge_lifecycle())
+    ] + _radio.launch_common.rviz_arguments('crazyflie', sim_time=False) + _radio.radio_container(uri, name='sitl_bridge_container') + _radio.bridge_lifecycle())

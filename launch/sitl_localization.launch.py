@@ -49,7 +49,10 @@ def nodes(context):
 
 
 def generate_launch_description():
-    return LaunchDescription(launch_common.sitl_arguments('whisker_stage_table1') + [
+    return LaunchDescription(launch_common.sitl_arguments('whisker_stage_table1')
+        + launch_common.rviz_arguments(
+            'localization',
+            sim_time=lambda context: LaunchConfiguration('simulator').perform(context) == 'true') + [
         DeclareLaunchArgument('params', default_value=launch_common.config('whisker_localization'),
                               description='whisker_localization parameter file'),
         DeclareLaunchArgument('possibilistic', default_value='false',

@@ -69,7 +69,8 @@ def nodes(context):
 
 
 def generate_launch_description():
-    return LaunchDescription(launch_common.sitl_arguments('ducted_track_0') + [
+    return LaunchDescription(launch_common.sitl_arguments('ducted_track_0')
+        + launch_common.rviz_arguments('wall_effect', sim_time=True) + [
         DeclareLaunchArgument('behaviour', default_value='navigation',
                               description="'navigation' (wall_effect_nav) or 'trajectory' "
                                           "(004 estimation-flight script)"),

@@ -59,7 +59,8 @@ def generate_launch_description():
                  'frame_id': launch_common.prefixed_frame('odom')}),
             extra_arguments=intra),
     ]
-    return LaunchDescription(launch_common.sitl_arguments('xplorer_box_traversal') + [
+    return LaunchDescription(launch_common.sitl_arguments('xplorer_box_traversal')
+        + launch_common.rviz_arguments('xplorer', sim_time=True) + [
         DeclareLaunchArgument('mission', default_value='explore',
                               description='explore | static_wrench | ricochet | waypoint'),
         DeclareLaunchArgument('ply_file', default_value='xplorer_map.ply',

@@ -147,6 +147,13 @@ void CrazyflieBridgeLogic::Params::validate() const {
   tactile_common::require_finite_positive(kType, "low_battery_hold_s", low_battery_hold_s);
   tactile_common::require_finite_positive(kType, "shutdown_land_timeout_s", shutdown_land_timeout_s);
   tactile_common::validate_frame_prefix(frame_prefix, "CrazyflieBridgeLogic.frame_prefix");
+  if (initial_position.size() != 3 || !std::isfinite(initial_position[0]) || !std::isfinite(initial_position[1]) ||
+      !std::isfinite(initial_position[2])) {
+    std::string got;
+    for (const double v : initial_position) got += (got.empty() ? "" : ", ") + std::to_string(v);
+    throw std::invalid_argument("CrazyflieBridgeLogic.initial_position: must be [x, y, z], 3 finite values in m, got [" +
+                                got + "]");
+  }
   if (shutdown_land_timeout_s < land_duration_s) {
     throw std::invalid_argument("CrazyflieBridgeLogic.shutdown_land_timeout_s: must be >= land_duration_s (" +
                                 std::to_string(land_duration_s) + " s), got " + std::to_string(shutdown_land_timeout_s));
@@ -230,6 +237,10 @@ ParamMap CrazyflieBridgeLogic::default_parameters() {
         {"bound of the Ctrl-C / SIGTERM land, then emergency stop; >= land_duration_s", "s", positive(), false});
   m.set("frame_prefix", d.frame_prefix,
         {"prefix of every frame but map, for several vehicles (cf1/: cf1/odom, cf1/base_link)", "", {}, false});
+  m.set("initial_position", d.initial_position,
+        {"where the Crazyflie stands at take-off in map, [x, y, z] finite (robots file); map -> odom is this "
+         "translation",
+         "m", {}, false});
   return m;
 }
 
@@ -268,6 +279,7 @@ CrazyflieBridgeLogic::Params CrazyflieBridgeLogic::params_from(const ParamMap& m
   p.low_battery_hold_s = m.get_double("low_battery_hold_s");
   p.shutdown_land_timeout_s = m.get_double("shutdown_land_timeout_s");
   p.frame_prefix = m.get_string("frame_prefix");
+  p.initial_position = m.get_double_array("initial_position");
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {
@@ -286,7 +298,9 @@ CrazyflieBridgeLogic::CrazyflieBridgeLogic(const Params& params) : params_(param
 }
 
 std::vector<tactile_common::StaticFrame> CrazyflieBridgeLogic::static_frames() const {
-  std::vector<tactile_common::StaticFrame> out{{tactile_common::frames::kMap, odom_frame_, {}}};
+  tactile_common::RigidTransform map_to_odom;
+  for (int i = 0; i < 3; ++i) map_to_odom.xyz[static_cast<size_t>(i)] = params_.initial_position[static_cast<size_t>(i)];
+  std::vector<tactile_common::StaticFrame> out{{tactile_common::frames::kMap, odom_frame_, map_to_odom}};
   for (auto& f : tactile_common::static_frames(tactile_sim::robot_model(tactile_sim::CrazyflieParams{}),
                                                params_.frame_prefix)) {
     out.push_back(std::move(f));

@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
+#include <vector>
 
 #include "crazyflie_bridge/crazyflie_bridge_logic.hpp"
 #include "crazyflie_bridge/protocol.hpp"
@@ -101,6 +103,41 @@ TEST(BridgeLogic, StateSampleToOdometry) {
 // REP 105 frames behind frame_prefix: the odometry is odom -> base_link, the pressures
 // are in the whisker frames, and the static transforms and the URDF carry the
 // whiskered Crazyflie's geometry (tactile_sim's, 000's whiskers) under the same names.
+// initial_position (a robots file's) is the map -> odom translation, identity by default;
+// anything but 3 finite values is refused naming the key.
+TEST(BridgeLogic, InitialPositionIsTheMapToOdomTranslation) {
+  const auto map_to_odom = [](const CrazyflieBridgeLogic& l) {
+    for (const auto& f : l.static_frames()) {
+      if (f.parent == "map") return f;
+    }
+    ADD_FAILURE() << "no map -> odom";
+    return tactile_common::StaticFrame{};
+  };
+  {
+    const auto f = map_to_odom(CrazyflieBridgeLogic(CrazyflieBridgeLogic::Params{}));
+    EXPECT_EQ(f.child, "odom");
+    EXPECT_EQ(f.transform.xyz, (std::array<double, 3>{0.0, 0.0, 0.0}));
+  }
+  auto m = CrazyflieBridgeLogic::default_parameters();
+  m.set("frame_prefix", std::string("cf2/"));
+  m.set("initial_position", std::vector<double>{1.5, -0.5, 0.0});
+  const auto f = map_to_odom(CrazyflieBridgeLogic(CrazyflieBridgeLogic::params_from(m)));
+  EXPECT_EQ(f.child, "cf2/odom");
+  EXPECT_EQ(f.transform.xyz, (std::array<double, 3>{1.5, -0.5, 0.0}));
+  EXPECT_EQ(f.transform.rpy, (std::array<double, 3>{0.0, 0.0, 0.0}));
+  for (const auto& bad : {std::vector<double>{1.0, 2.0}, std::vector<double>{0.0, std::nan(""), 0.0}}) {
+    m.set("initial_position", bad);
+    try {
+      CrazyflieBridgeLogic::params_from(m);
+      FAIL() << "accepted initial_position of " << bad.size() << " values";
+    } catch (const tactile_common::ParamError& e) {
+      EXPECT_NE(std::string(e.what()).find("initial_position: must be [x, y, z], 3 finite values in m"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+}
+
 TEST(BridgeLogic, FramesArePrefixedAndMatchTheStaticTree) {
   CrazyflieBridgeLogic::Params p;
   p.frame_prefix = "cf1/";

@@ -99,6 +99,32 @@ TEST(GpisExplorerLogic, IntegerParametersAreCheckedBeforeTheyAreNarrowed) {
   }
 }
 
+
+// Every key carries a description, a unit and the range params_from()/validate() accept
+// for it alone (never wider: a value just outside each end is refused); all read at start.
+TEST(GpisExplorerLogic, EveryParameterIsDescribedWithTheRangeValidateAccepts) {
+  const tactile_common::ParamMap d = GpisExplorerLogic::default_parameters();
+  EXPECT_EQ(tactile_common::undescribed(d), std::vector<std::string>{});
+  for (const auto& leak : tactile_common::range_leaks(d, [](const tactile_common::ParamMap& m) {
+         GpisExplorerLogic::params_from(m);
+       })) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
+  }
+  // An unbounded range means every finite value: infinity itself is refused.
+  for (const auto& leak : tactile_common::infinities_accepted(d, [](const tactile_common::ParamMap& m) {
+         GpisExplorerLogic::params_from(m);
+       })) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is accepted";
+  }
+  ASSERT_NE(d.info("grid_cells"), nullptr);
+  EXPECT_EQ(d.info("grid_cells")->range->text(), "[2, 5000]");
+  ASSERT_NE(d.info("corner_curvature"), nullptr);
+  EXPECT_EQ(d.info("corner_curvature")->range->text(), "(-inf, 0)");  // q < 0 (000 eq. 41)
+  EXPECT_EQ(d.info("corner_curvature")->unit, "1/m");
+  ASSERT_NE(d.info("slow_fraction"), nullptr);
+  EXPECT_EQ(d.info("slow_fraction")->range->text(), "(0, 1]");
+  for (const auto& [key, info] : d.infos()) EXPECT_FALSE(info.live) << key;
+}
 TEST(GpisExplorerLogic, DropsBadInputAndHoversWithoutOdometry) {
   GpisExplorerLogic logic(GpisExplorerLogic::params_from(GpisExplorerLogic::default_parameters()));
   auto out = logic.on_timer(0);

@@ -7,6 +7,8 @@
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "mapping_pcl/xplorer_map_logic.hpp"
 #include "tactile_common/parameter_testing.hpp"
@@ -66,6 +68,24 @@ TEST(XplorerMapLogic, IntegerParametersAreCheckedBeforeTheyAreNarrowed) {
                                                         [](const ParamMap& m) { XplorerMapLogic::params_from(m); });
   EXPECT_EQ(wrapped.size(), 3u);  // outlier_mean_k, force_average_samples, force_now_samples
   for (const auto& [key, w] : wrapped) EXPECT_TRUE(w.rejected_as_given()) << key << ": " << w.error;
+}
+
+// Issue 35 item 5: every key has a description, a unit and the range validate() takes
+// for it alone (none wider: range_leaks), and none is live (the component applies none).
+TEST(XplorerMapLogic, EveryParameterIsDescribedWithTheRangeValidateAccepts) {
+  const ParamMap d = XplorerMapLogic::default_parameters();
+  EXPECT_EQ(tactile_common::undescribed(d), std::vector<std::string>{});
+  for (const auto& leak : tactile_common::range_leaks(d, [](const ParamMap& m) { XplorerMapLogic::params_from(m); })) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
+  }
+  ASSERT_NE(d.info("delta_map"), nullptr);
+  EXPECT_EQ(d.info("delta_map")->unit, "N");
+  EXPECT_EQ(d.info("delta_map")->range->text(), "(0, inf)");
+  EXPECT_EQ(d.info("outlier_face_support")->range->text(), "(0, 1]");
+  EXPECT_EQ(d.info("outlier_face_tolerance")->range->text(), "[0.0001, inf)");
+  // inf is a valid age (never stale): the range keeps it.
+  EXPECT_EQ(d.info("max_odometry_age_s")->range->text(), "(0, inf]");
+  for (const auto& [key, info] : d.infos()) EXPECT_FALSE(info.live) << key;
 }
 
 TEST(XplorerMapLogic, StampsWhilePressingAndPublishesPointCloud2) {

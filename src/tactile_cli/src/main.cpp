@@ -188,6 +188,9 @@ int main(int argc, char** argv) {
   export_cmd->add_option("bag", exp.bag, "input rosbag2 directory")->required();
   export_cmd->add_option("--ply", exp.ply, "output PLY file (frame: xplorer_mapping frame_id, odom by default; metres)")->required();
   export_cmd->add_flag("--binary", exp.binary, "binary little endian instead of ASCII");
+  export_cmd->add_option("--namespace", exp.ns,
+                         "the vehicle's namespace in the bag (a launch with namespace:=cf1 records /cf1/odom, ...); "
+                         "default: the root names tactile records");
   export_cmd->add_option("--metrics", exp.metrics,
                          "summary JSON with its warnings (default: the PLY's name with .metrics.json)");
   std::string export_time = "header";

@@ -104,7 +104,8 @@ nlohmann::json run_replay(const ReplayOptions& options) {
     // contact topic of another type is skipped, and said so.
     if (t.type != pressure_type && !namespace_of(t.name, "pressure").empty()) {
       skipped.push_back(t.name + " (type " + t.type + ", expected " + pressure_type + ")");
-    } else if (t.type != truth_type && t.name.rfind("/ground_truth/", 0) == 0 && !namespace_of(t.name, "contact").empty()) {
+    } else if (t.type != truth_type && t.name.find("/ground_truth/") != std::string::npos &&
+               !namespace_of(t.name, "contact").empty()) {
       skipped.push_back(t.name + " (type " + t.type + ", expected " + truth_type + ")");
     }
     if (t.type == pressure_type) {
@@ -115,13 +116,15 @@ nlohmann::json run_replay(const ReplayOptions& options) {
       }
       whiskers.emplace_back(t.name, ns);
     } else if (t.type == tactile_msgs::cdr::MessageTraits<WhiskerGroundTruth>::type_name) {
-      // /ground_truth/whisker/left/contact -> /whisker/left
+      // /ground_truth/whisker/left/contact -> /whisker/left; in a vehicle namespace (a
+      // launch's bag) /cf1/ground_truth/whisker/left/contact -> /cf1/whisker/left.
       std::string ns = namespace_of(t.name, "contact");
-      const std::string prefix = "/ground_truth";
-      if (ns.rfind(prefix, 0) == 0) {
-        truth_topics[ns.substr(prefix.size())] = t.name;
+      const std::string segment = "/ground_truth";
+      const size_t at = (ns + "/").find(segment + "/");
+      if (at != std::string::npos) {
+        truth_topics[ns.substr(0, at) + ns.substr(at + segment.size())] = t.name;
       } else {
-        skipped.push_back(t.name + " (" + truth_type + " not named /ground_truth/<namespace>/contact)");
+        skipped.push_back(t.name + " (" + truth_type + " not named [/<vehicle>]/ground_truth/<namespace>/contact)");
       }
     }
   }

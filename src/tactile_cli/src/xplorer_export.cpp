@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <functional>
 #include <limits>
+#include <map>
 #include <queue>
 #include <fstream>
 #include <stdexcept>
@@ -20,19 +21,46 @@ namespace tactile_cli {
 nlohmann::json run_export(const ExportOptions& o) {
   using xplorer_force_est::XplorerForceEstLogic;
   using MapLogic = mapping_pcl::XplorerMapLogic;
-  // The bag's topic names: the host records at the root namespace (executor.hpp root_topic).
-  const std::string odom_topic = root_topic(MapLogic::kOdometryTopic);
-  const std::string wrench_topic = root_topic(MapLogic::kWrenchBodyTopic);
-  const std::string state_topic = root_topic(MapLogic::kFsmStateTopic);
-  const std::string map_arm_topic = root_topic(MapLogic::kArmImuTopic);
-  const std::string arm_topic = root_topic(XplorerForceEstLogic::kArmImuTopic);
-  const std::string imu_topic = root_topic(XplorerForceEstLogic::kImuTopic);
-  const std::string thrust_topic = root_topic(XplorerForceEstLogic::kThrustTopic);
+  // The bag's topic names: the host records at the root namespace (executor.hpp
+  // root_topic); a launch's bag in its namespace (--namespace). Each is published on the
+  // host's bus under its root name.
+  std::string ns = o.ns;
+  while (!ns.empty() && ns.front() == '/') ns.erase(ns.begin());
+  while (!ns.empty() && ns.back() == '/') ns.pop_back();
+  auto bag_topic = [&ns](const char* topic) { return resolve_topic(ns, topic); };
+  const std::string odom_topic = bag_topic(MapLogic::kOdometryTopic);
+  const std::string wrench_topic = bag_topic(MapLogic::kWrenchBodyTopic);
+  const std::string state_topic = bag_topic(MapLogic::kFsmStateTopic);
+  const std::string map_arm_topic = bag_topic(MapLogic::kArmImuTopic);
+  const std::string arm_topic = bag_topic(XplorerForceEstLogic::kArmImuTopic);
+  const std::string imu_topic = bag_topic(XplorerForceEstLogic::kImuTopic);
+  const std::string thrust_topic = bag_topic(XplorerForceEstLogic::kThrustTopic);
+  const std::map<std::string, std::string> bus_topic = {
+      {odom_topic, root_topic(MapLogic::kOdometryTopic)},
+      {wrench_topic, root_topic(MapLogic::kWrenchBodyTopic)},
+      {state_topic, root_topic(MapLogic::kFsmStateTopic)},
+      {map_arm_topic, root_topic(MapLogic::kArmImuTopic)},
+      {arm_topic, root_topic(XplorerForceEstLogic::kArmImuTopic)},
+      {imu_topic, root_topic(XplorerForceEstLogic::kImuTopic)},
+      {thrust_topic, root_topic(XplorerForceEstLogic::kThrustTopic)}};
   tactile_bag::Reader reader(o.bag);
   Warnings warnings;
   warnings.add_bag_metadata(o.bag, reader);
   const bool have_odom = reader.find_topic(odom_topic) != nullptr;
-  if (!have_odom) throw std::runtime_error(o.bag + ": no " + std::string(odom_topic) + " topic (the map needs the pose)");
+  if (!have_odom) {
+    // A bag of a namespaced launch has /<ns>/odom: name the namespaces it has.
+    std::string hint;
+    const std::string suffix = "/" + std::string(MapLogic::kOdometryTopic);
+    for (const auto& t : reader.topics()) {
+      if (t.type == "nav_msgs/msg/Odometry" && t.name.size() > suffix.size() &&
+          t.name.compare(t.name.size() - suffix.size(), suffix.size(), suffix) == 0 &&
+          t.name.rfind("/ground_truth/", 0) != 0) {
+        hint += (hint.empty() ? "; the bag has " : ", ") + t.name + " (--namespace " +
+                t.name.substr(1, t.name.size() - suffix.size() - 1) + ")";
+      }
+    }
+    throw std::runtime_error(o.bag + ": no " + std::string(odom_topic) + " topic (the map needs the pose)" + hint);
+  }
   const bool have_wrench = reader.find_topic(wrench_topic) != nullptr;
   if (!have_wrench && (!reader.find_topic(arm_topic) || !reader.find_topic(imu_topic) ||
                        !reader.find_topic(thrust_topic))) {
@@ -49,7 +77,13 @@ nlohmann::json run_export(const ExportOptions& o) {
   std::shared_ptr<XplorerForceEstLogic> force;
   auto start_nodes = [&](int64_t t0) {
     host.executor().set_time(t0);
-    map = add_xplorer_mapping(host, overrides({{"publish_rate_hz", 0.0}}));
+    auto over = overrides({{"publish_rate_hz", 0.0}});
+    if (!ns.empty()) {
+      const std::string frame = host.load_parameters("", MapLogic::kNodeName, MapLogic::default_parameters(), {})
+                                    .get_string("frame_id");
+      over.set("frame_id", ns + "/" + frame);
+    }
+    map = add_xplorer_mapping(host, over);
     if (!have_wrench) force = add_xplorer_force_est(host, {});
   };
   std::vector<std::string> topics = {odom_topic};
@@ -105,7 +139,9 @@ nlohmann::json run_export(const ExportOptions& o) {
         t = replayed_ns;
       }
     }
-    pending.push(Pending{t, read_order++, [&host, topic, msg](int64_t now) { host.bus().publish(topic, msg, now); }});
+    pending.push(Pending{t, read_order++, [&host, topic = bus_topic.at(topic), msg](int64_t now) {
+                           host.bus().publish(topic, msg, now);
+                         }});
   };
   while (reader.read_next(m)) {
     try {

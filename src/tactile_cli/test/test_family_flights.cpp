@@ -1,7 +1,7 @@
 // Scenario tests of the issue-17 families (short, seeded): a few environments
 // drawn by the `baffles_*`, `rooms` and `xplorer_objects` generators are flown in the full
 // graphs and must meet the behaviour's criteria. The seeds are from the tuning
-// block (1000-1009) of the sweeps in the gpis_explorer and tactile_fsm READMEs;
+// block (1000-1009) of the sweeps in the gpis_explorer README and docs/tuning/tactile_fsm.md;
 // the held-out measurement is the sweep, not this test.
 #include <gtest/gtest.h>
 
@@ -63,7 +63,7 @@ TEST(FamilyFlights, GeneratedRoomsAreLeftThroughAnExit) {
 // (>= 97 %): the bounding rectangle vs the box (001 Sec. V-D), the hull vs the
 // true area for the cylinder and the polygon. Tuning seeds where the goal
 // holds with the rules of issue 17 (mapping_pcl README, "Procedural objects";
-// tactile_fsm README, "Large held-out blocks"). The polygon was 1004 until the
+// docs/tuning/tactile_fsm.md, "Large held-out blocks"). The polygon was 1004 until the
 // changes of 2026-11-27 (transition-tick mend, yaw-first allocation, face clip)
 // moved it to 0.966; 1001 (0.92 before them) maps at 0.983 with them. Of the
 // 1000 block 46/50 meet the goal now (1004, 1020, 1024, 1038 do not).

@@ -12,7 +12,7 @@
 // issue 17's rigid / textile / glass course (seeds 101-105):
 // every trial reaches the target with zero collisions. Darkness (000 Fig. 6): every trial sweeps the
 // rigid and the textile wall for the paper's 7 s without a collision. Seeds
-// 6-20 are measured in src/tactile_fsm/README.md ("SITL results"), not all at
+// 6-20 are measured in docs/tuning/tactile_fsm.md ("SITL results"), not all at
 // 5/5 in every group of five.
 #include <gtest/gtest.h>
 
@@ -35,7 +35,7 @@ nlohmann::json run_trials(const std::string& scenario, int trials) { return tact
 /// average over the trials (mean in-band fraction, mean heading error) with
 /// no trial far off (per-trial floors: in band >= 0.3, heading <= 8 deg; the
 /// lowest trials of seeds 1-5 are 0.35 (tilted 30 deg) and 0.39 (wide), of
-/// seeds 1-20 0.28-0.55 per layout, src/tactile_fsm/README.md).
+/// seeds 1-20 0.28-0.55 per layout, docs/tuning/tactile_fsm.md).
 void expect_course_flown(const std::string& scenario, int trials, double min_mean_band, double max_mean_heading_deg,
                          double min_trial_band = 0.3, double max_trial_heading_deg = 8.0,
                          std::optional<uint64_t> seed = std::nullopt) {
@@ -92,7 +92,7 @@ TEST(WhiskerFsmSitl, FourBafflesEveryTrialReachesTheTarget) {
 }
 
 // Issue 17's rigid / textile / glass course (three staggered 1.3 m baffles),
-// seeds 101-105, the block its failures were diagnosed on (README "Round 13").
+// seeds 101-105, the block its failures were diagnosed on (docs/tuning/tactile_fsm.md "Round 13").
 // Without the turn anchor seeds 102 and 104 turn in place on the textile
 // baffle until the guard touches it (3/5; seeds 1-60: 56/60); with it 5/5
 // (seeds 1-60: 60/60). Measured 2026-11-27: band 0.48 on average (per trial

@@ -1,7 +1,7 @@
 // SITL scenario tests of the XPLORER graph (paper 001): simulator ->
 // xplorer_force_est -> xplorer_fsm -> /cmd_position, xplorer_mapping. Each
 // scenario is one seeded run (< 1 s of wall time each) asserting the paper's
-// metrics as measured in this SITL (src/tactile_fsm/README.md, "XPLORER").
+// metrics as measured in this SITL (src/tactile_fsm/docs/xplorer_fsm.md, "Results").
 #include <gtest/gtest.h>
 
 #include <unistd.h>
@@ -79,7 +79,7 @@ TEST(XplorerSitl, StaticWrenchSurvivesFaultyArmImusAndSpikes) {
 // issue goal >= 98 %), on every one of five seeded trials. Each convex corner
 // is one Tactile-turning that re-contacts the next face (turn_pivot: the
 // vehicle orbits the corner instead of being spun round it by the released
-// push; with the previous rule seeds 2 and 3 failed, src/tactile_fsm/README.md).
+// push; with the previous rule seeds 2 and 3 failed, docs/tuning/tactile_fsm.md "Convex corners").
 TEST(XplorerSitl, BoxTraversalClosesTheLoopAndMapsTheBoxOnEverySeed) {
   const auto m = run_trials("xplorer_box_traversal.yaml", 5);
   EXPECT_EQ(m["success_count"].get<int>(), 5);

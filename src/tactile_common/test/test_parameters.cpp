@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -412,4 +413,23 @@ TEST(ParamInfo, RangeLeaksFindsADescribedRangeNarrowerThanTheCheck) {
   ASSERT_EQ(leaks.size(), 1u);
   EXPECT_EQ(leaks[0].key, "window");
   EXPECT_EQ(leaks[0].value, 1.0);
+}
+
+// infinities_accepted finds an unbounded described range whose infinite end params_from
+// takes ("> 0" checked without isfinite): (0, inf) means every finite value.
+TEST(ParamInfo, InfinitiesAcceptedFindsAnInfiniteEndTheCheckTakes) {
+  tactile_common::ParamMap d("n", "defaults");
+  d.set("age", 0.2, {"age", "s", tactile_common::positive(), false});
+  d.set("gain", 1.0, {"gain", "", tactile_common::positive(), false});
+  d.set("offset", 0.0, {"offset", "m", tactile_common::ParamRange{}, false});  // (-inf, inf)
+  const auto checked = [](const tactile_common::ParamMap& m) {
+    if (!(m.get_double("age") > 0.0)) throw m.error("age", "must be > 0");  // takes inf
+    const double gain = m.get_double("gain");
+    if (!(std::isfinite(gain) && gain > 0.0)) throw m.error("gain", "must be finite and > 0");
+    if (!std::isfinite(m.get_double("offset"))) throw m.error("offset", "must be finite");
+  };
+  const auto accepted = tactile_common::infinities_accepted(d, checked);
+  ASSERT_EQ(accepted.size(), 1u);
+  EXPECT_EQ(accepted[0].key, "age");
+  EXPECT_EQ(accepted[0].value, std::numeric_limits<double>::infinity());
 }

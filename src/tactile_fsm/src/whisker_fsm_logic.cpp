@@ -31,7 +31,7 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   using tactile_common::ParamRange;
   using tactile_common::positive;
   ParamMap m(kNodeName, "defaults");
-  // The node's parameter spec (README "Parameters"): value, description (from the
+  // The node's parameter spec (docs/whisker_fsm.md "Parameters"): value, description (from the
   // WallFollowerParams comments), unit and the range validate() accepts alone (the
   // relations -- t_max > t_min, align_exit <= align_enter, wall_end_depth 0 or >= t_max,
   // first_whisk_speed <= v_max -- are validate()'s). Every key is read at start: the FSM's
@@ -76,7 +76,7 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   // One depth left beyond wall_end_depth after both touched = the wall ends
   // (issue 17, round 7): on in the whisker FSM node, off in the core. 105 mm:
   // tuning blocks 413 -> 415 of 450 (tied with 110 / 115 mm), seen blocks
-  // 5000-8000 1068 -> 1088 of 1200 (README "Round 7").
+  // 5000-8000 1068 -> 1088 of 1200 (docs/tuning/tactile_fsm.md "Round 7").
   m.set("wall_end_depth", 0.105,
         {"one depth beyond this after both touched = the wall ends (issue 17, round 7); 0 or >= t_max", "m", {}, false});
   // A whisker lost out of reach, not off an end (issue 17, round 11).
@@ -90,7 +90,7 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   m.set("max_heading_offset", d.max_heading_offset,
         {"wall following never turns further than this from the course heading; 0: off", "rad", closed(0.0, M_PI), false});
   // Turn anchor (issue 17, round 13): on in the whisker FSM node, off in the core.
-  // 10 deg, 10 deg, 2 deg/s: held-out block 27000-27299 857 -> 874 of 900 (README
+  // 10 deg, 10 deg, 2 deg/s: held-out block 27000-27299 857 -> 874 of 900 (docs/tuning/tactile_fsm.md
   // "Round 13").
   m.set("turn_anchor_tolerance", 10.0 * M_PI / 180.0,
         {"turn at most this beyond the anchored wall heading (issue 17, round 13); 0: off", "rad", closed(0.0, M_PI), false});
@@ -99,21 +99,21 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   m.set("turn_anchor_rate", 2.0 * M_PI / 180.0,
         {"the anchor follows the read wall heading at most this fast; 0: fixed", "rad/s", at_least(0.0), false});
   // Pressed whisker (issue 17): on in the whisker FSM node, off in the core
-  // (as hold_heading_trailing_lost). 900 Pa, no hold: tuning blocks, README.
+  // (as hold_heading_trailing_lost). 900 Pa, no hold: tuning blocks, docs/tuning/tactile_fsm.md "Round 3".
   m.set("press_sum_pa", 900.0,
         {"a whisker whose S_c sum reached this is pressed: depth taken <= press_depth (issue 17); 0: off", "Pa", at_least(0.0), false});
   m.set("press_hold_s", 0.0,
         {"how long a press counts", "s", at_least(0.0), false});
   // Pressed by the stick-slip amplitude (issue 17, round 6): off. 450 Pa, best on
   // the tuning blocks (413 -> 419 of 450), lost on the fresh held-out block
-  // 12000-12099 (273 -> 270 of 300; README "Round 6").
+  // 12000-12099 (273 -> 270 of 300; docs/tuning/tactile_fsm.md "Round 6").
   m.set("press_rms_pa", 0.0,
         {"pressed by the stick-slip amplitude (issue 17, round 6); 0: off", "Pa", at_least(0.0), false});
   m.set("press_depth", d.press_depth,
         {"depth a pressed whisker is taken at, at most", "m", positive(), false});
   // Depth bounded by the drone's own motion since the contact's onset (issue 17,
   // round 8; our choice): off. 0.04 m/s: tuning blocks 415 -> 417 of 450, seen
-  // blocks 1088 -> 1081 of 1200, imu_tof loses (README "Round 8"); not kept.
+  // blocks 1088 -> 1081 of 1200, imu_tof loses (docs/tuning/tactile_fsm.md "Round 8"); not kept.
   m.set("motion_depth_relax", 0.0,
         {"depth bounded by the drone's own motion may rise this fast (issue 17, round 8); 0: off", "m/s", at_least(0.0), false});
   m.set("motion_depth_margin", d.motion_depth_margin,
@@ -124,7 +124,7 @@ ParamMap WhiskerFsmLogic::default_parameters() {
         {"x of the whisker bases ahead of the odometry origin (000 frame, tactile_sim); finite", "m", {}, false});
   // Phantom hold gated by odometry (issue 17, round 4): on in the whisker FSM
   // node, off in the core. 6.5 Pa over 25 samples, 0.03 m, latched: tuning
-  // blocks, README "Round 4".
+  // blocks, docs/tuning/tactile_fsm.md "Round 4".
   m.set("phantom_quiet_rms", 6.5,
         {"a whisker in contact whose S_c sum stays quieter than this while the drone moves is a phantom (issue 17, round 4); 0: off", "Pa", at_least(0.0), false});
   m.set("phantom_quiet_samples", static_cast<int64_t>(n.phantom_quiet_samples),
@@ -132,7 +132,8 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   m.set("phantom_travel", 0.03,
         {"drone travel with a quiet sum that makes a phantom", "m", at_least(0.0), false});
   // Latched, with a side-step of up to 2 m while the phantom is held: chosen on the tuning
-  // blocks (279 of 300), switched on after the fresh held-out block 10000-10099 (README).
+  // blocks (279 of 300), switched on after the fresh held-out block 10000-10099
+  // (docs/tuning/tactile_fsm.md "Round 4b").
   m.set("phantom_resume_max", 2.0,
         {"keep side-stepping while a phantom is held, up to this far from the clearing", "m", at_least(0.0), false});
   m.set("phantom_latch", true,
@@ -141,7 +142,7 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   // best on the tuning blocks (0.23 rad every 0.7 s, up to 3 rad/s, only after
   // a clearing, paused while a whisker's sum moves, 13 Pa) gave 413 -> 424 of
   // 450 there but 268 -> 269 of 300 on the fresh held-out block 11000-11099 and
-  // more collisions in the darkness rigid course (README "Round 5").
+  // more collisions in the darkness rigid course (docs/tuning/tactile_fsm.md "Round 5").
   m.set("whisk_amplitude", 0.0,
         {"active whisking amplitude in FLY_FORWARD (issue 17, round 5); 0: off", "rad", closed(0.0, M_PI / 2), false});
   m.set("whisk_period_s", 0.7,
@@ -152,7 +153,7 @@ ParamMap WhiskerFsmLogic::default_parameters() {
         {"whisk only in a FLY_FORWARD that follows a clearing", "", {}, false});
   m.set("whisk_pause_rms", 13.0,
         {"pause the whisk while a whisker's S_c sum moves more than this; 0: never", "Pa", at_least(0.0), false});
-  // Yaw offset after a clearing (issue 17, README "Round 9"): 14 deg (0.2443 rad) with
+  // Yaw offset after a clearing (issue 17, docs/tuning/tactile_fsm.md "Round 9"): 14 deg (0.2443 rad) with
   // the release at 13 Pa: tuning blocks 415 -> 433 of 450, seen blocks 1088 -> 1123 of
   // 1200, the shipped courses pass on seeds 1-20. 20 deg wins as much but fails the
   // shipped wide-spacing (heading error 11-14 deg > 8) and tilted-30 (a guard touch in
@@ -163,7 +164,7 @@ ParamMap WhiskerFsmLogic::default_parameters() {
         {"also hold that offset during the side-step", "", {}, false});
   m.set("clear_yaw_release_rms", 13.0,
         {"back to the track's heading once a whisker's sum moves more than this; 0: never", "Pa", at_least(0.0), false});
-  // The first approach (issue 17, README "Round 12"): step and scan with the
+  // The first approach (issue 17, docs/tuning/tactile_fsm.md "Round 12"): step and scan with the
   // round 10 amplitude and end rule; held out 600 courses per estimate: mocap
   // 93.0 -> 95.8 %, flow deck 92.8 -> 96.7 %, imu_tof 94.0 -> 95.2 %; the shipped
   // courses pass on seeds 1-30. The darkness scenarios turn it off (000 Fig. 6's

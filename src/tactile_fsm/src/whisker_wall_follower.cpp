@@ -110,7 +110,7 @@ void WallFollowerParams::validate() const {
           motion_depth_baseline);
   require(std::isfinite(whisker_base_x), "whisker_base_x", "must be finite", whisker_base_x);
   require(finite_nonneg(resume_quiet_rms), "resume_quiet_rms", "must be finite and >= 0 (0 = off)", resume_quiet_rms);
-  // The margin moves only within phantom_resume_max of the clearing (README "Round 11").
+  // The margin moves only within phantom_resume_max of the clearing (docs/tuning/tactile_fsm.md "Round 11").
   require(resume_quiet_rms == 0.0 || phantom_resume_max > 0.0, "resume_quiet_rms",
           "has no effect unless phantom_resume_max > 0", resume_quiet_rms);
   require(finite_nonneg(lost_far_depth), "lost_far_depth", "must be finite and >= 0 (0 = off)", lost_far_depth);
@@ -169,7 +169,7 @@ WallSubState wall_sub_state(double d_l, bool l_valid, double d_r, bool r_valid, 
       // One whisker lost while it was already beyond lost_far_depth and the
       // other beyond T_max (last_l / last_r: NaN unless the other was beyond
       // T_max when it was lost): out of reach, not off an end; both far ->
-      // FLY_FORWARD back to the wall (000 Fig. S4e; issue 17, README "Round 11";
+      // FLY_FORWARD back to the wall (000 Fig. S4e; issue 17, docs/tuning/tactile_fsm.md "Round 11";
       // our choice).
       return WallSubState::kFlyForward;
     }
@@ -177,7 +177,7 @@ WallSubState wall_sub_state(double d_l, bool l_valid, double d_r, bool r_valid, 
       // One whisker lost after both touched, the other beyond wall_end_depth:
       // the wall ends here (a whisker held past the end), not a wall ahead;
       // keep passing the edge instead of flying forward into the end (issue
-      // 17, README "Round 7"; our choice).
+      // 17, docs/tuning/tactile_fsm.md "Round 7"; our choice).
       return WallSubState::kFlySideways;
     }
     if (both_touched && leading_lost) {
@@ -188,7 +188,7 @@ WallSubState wall_sub_state(double d_l, bool l_valid, double d_r, bool r_valid, 
     if (both_touched && p.hold_heading_trailing_lost) {
       // The trailing whisker lost the wall the leading one is still on: at a
       // straight baffle it cannot have run off an end, so hold the heading and
-      // keep the remaining depth in the band (issue 17, README).
+      // keep the remaining depth in the band (issue 17; docs/whisker_fsm.md "Trailing whisker lost").
       const double remaining = l_valid ? d_l : d_r;
       if (remaining < p.t_min) return WallSubState::kFlyBackward;
       if (remaining > p.t_max) return WallSubState::kFlyForward;
@@ -323,7 +323,7 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
   // Contact as reported, before the phantom gate below.
   const bool held_raw_l = l_valid || tdorc_l, held_raw_r = r_valid || tdorc_r;
 
-  // Phantom hold gated by odometry (issue 17, README "Round 4"): a held
+  // Phantom hold gated by odometry (issue 17, docs/tuning/tactile_fsm.md "Round 4"): a held
   // contact whose S_c sum (000 eq. 5) stays quiet while the drone travels
   // more than phantom_travel is the gel-hysteresis offset (000 eq. 1, N_h) of
   // a whisker that left the wall, not a wall: ignore it.
@@ -353,7 +353,7 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
     phantom_l_ = phantom_r_ = false;
   }
 
-  // Depth bounded by the drone's own motion (issue 17, README "Round 8"; our
+  // Depth bounded by the drone's own motion (issue 17, docs/tuning/tactile_fsm.md "Round 8"; our
   // choice): the wall is fixed in the world, so the depth a whisker had at
   // its contact's onset, carried with the odometry, bounds the depth now; the
   // published depth of a pressed whisker (friction-limited load, the model
@@ -485,7 +485,7 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
       case FsmState::kFlyForward:
       case FsmState::kResumeForward:
         // resume_quiet_rms: a sum still moving is a whisker still on the wall;
-        // the margin counts from here (README "Round 11"; our choice).
+        // the margin counts from here (docs/tuning/tactile_fsm.md "Round 11"; our choice).
         if (state_ == FsmState::kResumeForward && sum_moves(in, p_.resume_quiet_rms) &&
             std::hypot(in.x - clear_x_, in.y - clear_y_) < p_.phantom_resume_max) {
           margin_x_ = in.x;
@@ -504,7 +504,7 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
                        p_.same_obstacle_distance) {
           // Contact right after a clearing: the same obstacle (its contact
           // flags dropped mid-wall). Keep the side instead of re-choosing it,
-          // which went back along the baffle (issue 17, README).
+          // which went back along the baffle (issue 17; docs/whisker_fsm.md "Same obstacle").
           both_touched_ = false;
           last_contact_t_ = t;
           enter(FsmState::kWallFollowing, "whisker contact, same obstacle (just cleared)", t);
@@ -519,7 +519,7 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
           }
           both_touched_ = false;
           last_contact_t_ = t;
-          // A baffle's end met by one whisker beside the axis (README "Round
+          // A baffle's end met by one whisker beside the axis (docs/tuning/tactile_fsm.md "Round
           // 10"): pass it on the other side, as an edge (rule 2).
           const double end_lat = end_contact_offset(in, contact_l, contact_r, l_valid, r_valid);
           if (p_.end_contact_lateral > 0.0 && std::fabs(end_lat) > p_.end_contact_lateral) {
@@ -568,14 +568,14 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
     }
   }
 
-  // Pressed past the depth model (issue 17, README "Pressed whisker"): the
+  // Pressed past the depth model (issue 17, docs/whisker_fsm.md "Pressed whisker"): the
   // whisker's S_c sum bounds its depth by press_depth whatever depth is read.
   double d_left = f_left_, d_right = f_right_;
   if (p_.press_sum_pa > 0.0 || p_.press_rms_pa > 0.0) {
     const double sum_level = p_.press_sum_pa > 0.0 ? p_.press_sum_pa : INFINITY;
     const double rms_level = p_.press_rms_pa > 0.0 ? p_.press_rms_pa : INFINITY;
     // Pressed: the sum beyond the model's range, or its stick-slip changes as large
-    // as a whisker pressed to the depths the model cannot resolve (README "Round 6").
+    // as a whisker pressed to the depths the model cannot resolve (docs/tuning/tactile_fsm.md "Round 6").
     if (l_valid && (in.input_sum_left >= sum_level || in.input_change_rms_left >= rms_level)) pressed_t_left_ = t;
     if (r_valid && (in.input_sum_right >= sum_level || in.input_change_rms_right >= rms_level)) pressed_t_right_ = t;
     if (!l_valid) pressed_t_left_ = -INFINITY;
@@ -628,13 +628,13 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
       const double off = std::remainder(in.yaw - ref, 2.0 * M_PI);
       return (next == WallSubState::kTurnLeft && off >= limit) || (next == WallSubState::kTurnRight && off <= -limit);
     };
-    // Heading limit about the course heading (issue 17, README): no turn beyond
+    // Heading limit about the course heading (issue 17; docs/whisker_fsm.md "Heading limit"): no turn beyond
     // max_heading_offset; translate on the depths instead.
     if (p_.max_heading_offset > 0.0 && origin_set_ && std::isfinite(in.yaw) &&
         turns_beyond(course_yaw_, p_.max_heading_offset)) {
       next = translate_instead();
     }
-    // Turn anchor (issue 17, README "Round 13"): the wall heading read at the
+    // Turn anchor (issue 17, docs/tuning/tactile_fsm.md "Round 13"): the wall heading read at the
     // first tick both whiskers touched (before the tips slide), replaced by a
     // clear angle (|theta| >= turn_anchor_theta) read while not turning and
     // crept toward the heading read while not turning (a tip dragged round by
@@ -672,7 +672,7 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
     out.setpoint = whisk(in, out.setpoint, p_.whisk_amplitude, p_.whisk_period_s, p_.v_max);
   }
   if (state_ == FsmState::kWallFollowing) contacted_ = true;
-  // Whisking on the first approach (README "Round 10"): no clearing yet, the
+  // Whisking on the first approach (docs/tuning/tactile_fsm.md "Round 10"): no clearing yet, the
   // first baffle's end may lie in the blind band on either side.
   if (p_.first_whisk_amplitude > 0.0 && state_ == FsmState::kFlyForward && !contacted_ && !after_clear_ &&
       origin_set_ && std::isfinite(in.yaw) && std::isfinite(in.x) && std::isfinite(in.y)) {
@@ -681,7 +681,7 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
                        : whisk(in, out.setpoint, p_.first_whisk_amplitude, p_.first_whisk_period_s,
                                p_.first_whisk_speed > 0.0 ? p_.first_whisk_speed : p_.v_max,
                                p_.first_whisk_pause_to_course);
-    // A wall ahead (README "Round 10b", our choice): at a yaw toward one side a
+    // A wall ahead (docs/tuning/tactile_fsm.md "Round 10b", our choice): at a yaw toward one side a
     // square wall is met first by the other side's whisker (its tip lies
     // further ahead), an end beside the axis by the yaw side's whisker. The
     // former turns the yaw back to the course before TDORC flags it, so the
@@ -713,7 +713,7 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
 }
 
 Setpoint WhiskerWallFollower::offset_yaw(const WallFollowerInput& in, const Setpoint& s, double dt) {
-  // Yaw offset after a clearing (README "Round 9"). track_yaw_ is the heading
+  // Yaw offset after a clearing (docs/tuning/tactile_fsm.md "Round 9"). track_yaw_ is the heading
   // the drone flies without the rule: it starts at the yaw on entering
   // RESUME_FORWARD and realigns to the course as realign() does (omega_max at
   // most). The body is held clear_yaw_offset beyond it away from the
@@ -792,7 +792,7 @@ Setpoint WhiskerWallFollower::command(const WallFollowerInput& in) const {
 
 Setpoint WhiskerWallFollower::whisk(const WallFollowerInput& in, const Setpoint& s, double amplitude, double period,
                                     double speed, bool pause_to_course) const {
-  // Active whisking (README "Round 5"): yaw reference course + A sin(w t),
+  // Active whisking (docs/tuning/tactile_fsm.md "Round 5"): yaw reference course + A sin(w t),
   // tracked with the realignment gain plus the reference's rate; the phase
   // starts at 0 on entering FLY_FORWARD (a continuous reference from the
   // course heading). The velocity is the course direction in the world frame,
@@ -815,7 +815,7 @@ Setpoint WhiskerWallFollower::whisk(const WallFollowerInput& in, const Setpoint&
 }
 
 Setpoint WhiskerWallFollower::step_and_scan(const WallFollowerInput& in, const Setpoint& s, double dt) {
-  // Step and scan (README "Round 12", our choice). Along the course the
+  // Step and scan (docs/tuning/tactile_fsm.md "Round 12", our choice). Along the course the
   // drone flies to the step's end, v = (goal - progress) / kApproachTau
   // (at most V_max), and holds it there while it scans; the velocity is the
   // course direction in the world frame, expressed in the body-yaw frame.

@@ -169,7 +169,8 @@ void XplorerParams::validate() const {
   pos("reshape_limit", reshape_limit);
   pos("release_force", release_force);
   pos("release_time", release_time);
-  if (!(settle_time >= 0.0)) bad("XplorerParams", "settle_time", "must be >= 0", settle_time);
+  if (!(settle_time >= 0.0) || !std::isfinite(settle_time))
+    bad("XplorerParams", "settle_time", "must be finite and >= 0", settle_time);
   pos("loop_closure_radius", loop_closure_radius);
   pos("loop_min_path", loop_min_path);
   if (!(contact_lost_turn_min_s >= 0.0) || !std::isfinite(contact_lost_turn_min_s))
@@ -197,8 +198,11 @@ void XplorerParams::validate() const {
   pos("ricochet_speed", ricochet_speed);
   pos("collision_force", collision_force);
   if (!(restitution >= 0.0 && restitution <= 1.0)) bad("XplorerParams", "restitution", "must be in [0, 1]", restitution);
-  if (!(recovery_gain >= 0.0)) bad("XplorerParams", "recovery_gain", "must be >= 0", recovery_gain);
-  if (!(recovery_time >= 0.0)) bad("XplorerParams", "recovery_time", "must be >= 0", recovery_time);
+  // Finite: an infinite gain would send the recovery setpoint to infinity.
+  if (!(recovery_gain >= 0.0) || !std::isfinite(recovery_gain))
+    bad("XplorerParams", "recovery_gain", "must be finite and >= 0", recovery_gain);
+  if (!(recovery_time >= 0.0) || !std::isfinite(recovery_time))
+    bad("XplorerParams", "recovery_time", "must be finite and >= 0", recovery_time);
   admittance.validate();
 }
 
@@ -270,7 +274,7 @@ void XplorerExplorer::push_window(std::deque<PoseSample>& h, const PoseSample& s
 }
 
 bool XplorerExplorer::plan_square(const XplorerInput& in) {
-  // Issue 17, class B (our choice; README "Oblique first face"): the path of the last
+  // Issue 17, class B (our choice; docs/tuning/tactile_fsm.md "Oblique first face"): the path of the last
   // square_window s of Exploration, deflected from the Exploration direction, runs along the
   // face the vehicle slid on; the face's normal is perpendicular to it, on the side the force
   // comes from (the fused force points out of the obstacle).

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/time.hpp"
 #include "tactile_fsm/geo_goal.hpp"
 #include "tactile_fsm/wall_effect_nav_logic.hpp"
@@ -260,6 +261,30 @@ TEST(WallEffectNavLogic, RepoConfigEqualsDefaults) {
     EXPECT_EQ(f.origin(key), file) << key << " not set in " << file;
     EXPECT_TRUE(value == f.values().at(key)) << key;
   }
+}
+
+// Every key carries a description, a unit and the range params_from()/validate() accept
+// for it alone (never wider: a value just outside each end is refused); all read at start.
+TEST(WallEffectNavLogic, EveryParameterIsDescribedWithTheRangeValidateAccepts) {
+  const tactile_common::ParamMap d = WallEffectNavLogic::default_parameters();
+  EXPECT_EQ(tactile_common::undescribed(d), std::vector<std::string>{});
+  for (const auto& leak : tactile_common::range_leaks(d, [](const tactile_common::ParamMap& m) {
+         WallEffectNavLogic::params_from(m);
+       })) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
+  }
+  // An unbounded range means every finite value: infinity itself is refused.
+  for (const auto& leak : tactile_common::infinities_accepted(d, [](const tactile_common::ParamMap& m) {
+         WallEffectNavLogic::params_from(m);
+       })) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is accepted";
+  }
+  ASSERT_NE(d.info("repulse_base"), nullptr);
+  EXPECT_EQ(d.info("repulse_base")->range->text(), "(0, 1)");  // 004 eq. 12: a base below 1
+  ASSERT_NE(d.info("follow_distance"), nullptr);
+  EXPECT_EQ(d.info("follow_distance")->unit, "m");
+  EXPECT_EQ(d.info("follow_distance")->range->text(), "(0, inf)");
+  for (const auto& [key, info] : d.infos()) EXPECT_FALSE(info.live) << key;
 }
 
 // Issue 33 (stale inputs): the wall estimate stops (the EKF's thrust / IMU

@@ -183,7 +183,7 @@ TEST(WallSubStateRule, MissingDepth) {
             WallSubState::kTurnLeft);
 }
 
-// Issue 17 (README "Random baffle courses"): the trailing whisker lost after
+// Issue 17 (docs/tuning/tactile_fsm.md "Random baffle courses"): the trailing whisker lost after
 // both touched, hand cases. Following right the trailing whisker is the left
 // one; following left, the right one. The remaining depth decides the
 // translation (band 60-100 mm); the drone never turns toward the lost whisker.
@@ -206,7 +206,7 @@ TEST(WallSubStateRule, TrailingWhiskerLostHoldsHeading) {
   EXPECT_EQ(wall_sub_state(0.08, true, NAN, false, Side::kLeft, false, ws, p), WallSubState::kTurnLeft);
 }
 
-// Issue 17, README "Round 7": after both touched, one whisker lost and the
+// Issue 17, docs/tuning/tactile_fsm.md "Round 7": after both touched, one whisker lost and the
 // other beyond T_max. Following right, the leading (right) whisker ran off a
 // baffle's end and is still held at 115 mm (truly free), the trailing (left)
 // one is released at the end: without the rule the remaining depth asks for
@@ -335,7 +335,7 @@ TEST(WhiskerWallFollower, HeadingLimitAboutTheCourse) {
   EXPECT_EQ(fsm.step(in).sub_state, WallSubState::kTurnRight);
 }
 
-// Issue 17, README "Round 13": the turn anchor. The first tick both whiskers
+// Issue 17, docs/tuning/tactile_fsm.md "Round 13": the turn anchor. The first tick both whiskers
 // touch reads the wall heading (yaw 0, d_l = d_r = 80 mm: heading 0). Depths
 // then biased as on textile (d_l 86 mm, d_r 80 mm: theta = atan(0.006/0.05) =
 // 6.8 deg < turn_anchor_theta 10 deg) turn the drone right at yaw -5 deg
@@ -427,7 +427,7 @@ TEST(WhiskerWallFollower, TurnAnchorParametersAreValidated) {
   EXPECT_THROW(p.validate(), std::invalid_argument);
 }
 
-// Issue 17, README "Pressed whisker": both depths read 70 mm (in the 60-100 mm
+// Issue 17, docs/whisker_fsm.md "Pressed whisker": both depths read 70 mm (in the 60-100 mm
 // band, aligned: FLY_SIDEWAYS), but the left whisker's S_c sum is 1200 Pa, over
 // press_sum_pa (900 Pa): its depth counts as press_depth (50 mm) < T_min, the
 // two whiskers are in different intervals and aligned, so the drone backs off.
@@ -1057,7 +1057,7 @@ TEST(BaffleCourse, TiltedBafflesReachTarget) {
   EXPECT_GT(r.min_frame_clearance, 0.06);
 }
 
-// Active whisking (issue 17, README "Round 5"): in FLY_FORWARD the heading
+// Active whisking (issue 17, docs/tuning/tactile_fsm.md "Round 5"): in FLY_FORWARD the heading
 // oscillates about the course heading so the whisker tips (0.19 m ahead of
 // the centre, bases 25 mm off the axis) sweep the guard's 80 mm half-width,
 // while the track stays on the course. Kinematic drone integrating the
@@ -1104,7 +1104,7 @@ TEST(WhiskerWallFollower, ActiveWhiskingSweepsGuardWidthOnCourse) {
 }
 
 // Whisking only after a clearing (whisk_after_clear_only) and paused while a
-// whisker's S_c sum moves (whisk_pause_rms), README "Round 5".
+// whisker's S_c sum moves (whisk_pause_rms), docs/tuning/tactile_fsm.md "Round 5".
 TEST(WhiskerWallFollower, WhiskingAfterClearOnlyAndPausedOnMovingSum) {
   WallFollowerParams p;
   p.whisk_amplitude = 0.23;
@@ -1133,7 +1133,7 @@ TEST(WhiskerWallFollower, WhiskingAfterClearOnlyAndPausedOnMovingSum) {
   EXPECT_THROW(q.validate(), std::invalid_argument);
 }
 
-// Issue 17, README "Round 6": both depths read 70 mm (in band, aligned:
+// Issue 17, docs/tuning/tactile_fsm.md "Round 6": both depths read 70 mm (in band, aligned:
 // FLY_SIDEWAYS) and both sums are 500 Pa (under press_sum_pa), but the left
 // whisker's S_c sum jumps by ~600 Pa from sample to sample (change RMS 600 Pa,
 // the stick-slip of a whisker pressed to 20-50 mm): with press_rms_pa 450 Pa
@@ -1258,7 +1258,7 @@ TEST(WhiskerWallFollower, MotionBoundUsesTheWallFromTheContactPoints) {
   EXPECT_EQ(fly(WallFollowerParams{}, tilted), -1);  // off: no bound
 }
 
-// Issue 17, README "Round 9": after a clearing the body yaw is held
+// Issue 17, docs/tuning/tactile_fsm.md "Round 9": after a clearing the body yaw is held
 // clear_yaw_offset away from the side-step side (left here: the target is
 // ahead, follow_side right, the drone side-steps right), in the FLY_FORWARD
 // after it (and with clear_yaw_in_resume during the side-step), while the
@@ -1331,7 +1331,7 @@ TEST(WhiskerWallFollower, YawOffsetAfterClearingTurnsWhiskersNotTrack) {
   EXPECT_THROW(bad.validate(), std::invalid_argument);
 }
 
-// clear_yaw_release_rms (README "Round 9"): once a whisker's S_c sum moves
+// clear_yaw_release_rms (docs/tuning/tactile_fsm.md "Round 9"): once a whisker's S_c sum moves
 // (a touch TDORC has not flagged yet) the offset is dropped until the next
 // clearing: the yaw goes back to the track's heading.
 TEST(WhiskerWallFollower, YawOffsetReleasedOnMovingSum) {
@@ -1372,7 +1372,7 @@ TEST(WhiskerWallFollower, YawOffsetReleasedOnMovingSum) {
   EXPECT_THROW(bad.validate(), std::invalid_argument);
 }
 
-// Issue 17, README "Round 10": the first baffle of tuning course 1003, its end
+// Issue 17, docs/tuning/tactile_fsm.md "Round 10": the first baffle of tuning course 1003, its end
 // 65 mm right of the course axis and the baffle receding to the right: flown
 // straight (the paper) the guard meets the end before either whisker touches
 // the baffle (the blind band); whisking on the first approach (0.35 rad,
@@ -1513,7 +1513,7 @@ TEST(WhiskerWallFollower, FirstApproachWhiskEndsAtTheFirstContact) {
   EXPECT_LT(std::fabs(d.yaw), 5.0 * kDeg);    // and back on the course heading
 }
 
-// first_whisk_wall_rate (README "Round 10b"): whisked left of the course, the
+// first_whisk_wall_rate (docs/tuning/tactile_fsm.md "Round 10b"): whisked left of the course, the
 // right whisker's sum moving (a square wall ahead is met first by the whisker
 // opposite the yaw) turns the yaw back to the course; the left one's (the yaw
 // side: a baffle's end beside the axis) holds it as the whisk pause does. Off,
@@ -1546,7 +1546,7 @@ TEST(WhiskerWallFollower, FirstWhiskTurnsBackToTheCourseAtAWallAhead) {
   expect_rejected(bad, "first_whisk_wall_rate");
 }
 
-// end_contact_lateral (README "Round 10"): a first touch by the right whisker
+// end_contact_lateral (docs/tuning/tactile_fsm.md "Round 10"): a first touch by the right whisker
 // alone, depth 100 mm, at a yaw 20 deg right of the course puts the contact
 // point 0.15 sin 20 + 0.025 cos 20 = 75 mm right of the axis: a baffle's end
 // on the right; with the rule the drone passes it on the left, side-stepping
@@ -1584,7 +1584,7 @@ TEST(WhiskerWallFollower, EndContactBesideTheAxisIsPassedOnTheOtherSide) {
   expect_rejected(bad, "end_contact_lateral");
 }
 
-// lost_far_depth (README "Round 11"): after both touched, a whisker lost while
+// lost_far_depth (docs/tuning/tactile_fsm.md "Round 11"): after both touched, a whisker lost while
 // it was already beyond lost_far_depth, the other beyond T_max: the drone
 // drifted off the wall (mocap 12007: sliding sideways 5-6 deg off the baffle's
 // line, true depths 99 -> 138 mm), not past an end. Without the rule the
@@ -1646,7 +1646,7 @@ TEST(WallSubStateRule, WhiskerLostOutOfReachFliesBackToTheWall) {
   EXPECT_THROW(q.validate(), std::invalid_argument);
 }
 
-// resume_quiet_rms (README "Round 11"): the side-step after a clearing counts
+// resume_quiet_rms (docs/tuning/tactile_fsm.md "Round 11"): the side-step after a clearing counts
 // clear_margin from where both sums went quiet. A sum still moving in the
 // first second of RESUME_FORWARD (a whisker still on the wall although its
 // flag dropped) lengthens the side-step by the distance flown meanwhile; a
@@ -1752,7 +1752,7 @@ WallFollowerParams scan_params(double step) {
 
 }  // namespace
 
-// Step and scan (README "Round 12"): course 1003's first baffle, whose near end
+// Step and scan (docs/tuning/tactile_fsm.md "Round 12"): course 1003's first baffle, whose near end
 // lies 65 mm right of the axis, is met by the guard on the paper's straight
 // approach and by a whisker in a scan (yawed); a wall across the course is
 // mostly met in a step, at the course heading, where the continuous whisk

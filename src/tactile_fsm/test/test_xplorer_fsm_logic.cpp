@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
+#include <vector>
 
 #include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/time.hpp"
@@ -62,6 +64,29 @@ TEST(XplorerFsmLogic, IntegerParametersAreCheckedBeforeTheyAreNarrowed) {
                                                         [](const ParamMap& m) { XplorerFsmLogic::params_from(m); });
   EXPECT_EQ(wrapped.size(), 2u);  // force_average_samples, max_clockwise_turns_in_a_row
   for (const auto& [key, w] : wrapped) EXPECT_TRUE(w.rejected_as_given()) << key << ": " << w.error;
+}
+
+// Every key carries a description, a unit and the range params_from()/validate() accept
+// for it alone (never wider: a value just outside each end is refused); all read at start.
+TEST(XplorerFsmLogic, EveryParameterIsDescribedWithTheRangeValidateAccepts) {
+  const ParamMap d = XplorerFsmLogic::default_parameters();
+  EXPECT_EQ(tactile_common::undescribed(d), std::vector<std::string>{});
+  for (const auto& leak : tactile_common::range_leaks(d, [](const ParamMap& m) { XplorerFsmLogic::params_from(m); })) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
+  }
+  // An unbounded range means every finite value: infinity itself is refused.
+  for (const auto& leak :
+       tactile_common::infinities_accepted(d, [](const ParamMap& m) { XplorerFsmLogic::params_from(m); })) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is accepted";
+  }
+  ASSERT_NE(d.info("turn_limit"), nullptr);
+  EXPECT_EQ(d.info("turn_limit")->range->text(), "(0, 3.14159]");  // (0, pi] (001: 180 deg)
+  EXPECT_EQ(d.info("turn_limit")->unit, "rad");
+  ASSERT_NE(d.info("delta_0"), nullptr);
+  EXPECT_EQ(d.info("delta_0")->unit, "N");
+  ASSERT_NE(d.info("contact_backoff_time"), nullptr);
+  EXPECT_EQ(d.info("contact_backoff_time")->range->text(), "[0, 2]");
+  for (const auto& [key, info] : d.infos()) EXPECT_FALSE(info.live) << key;
 }
 
 TEST(XplorerFsmLogic, SetpointsStateMessagesAndBadInput) {

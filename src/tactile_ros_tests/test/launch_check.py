@@ -51,7 +51,9 @@ class Launch:
         self.proc = subprocess.Popen(
             ['ros2', 'launch', *where, *map(str, args)],
             stdout=self._log, stderr=subprocess.STDOUT, start_new_session=True,
-            env=os.environ.copy(), cwd=cwd)
+            # Files a launch writes relative to its directory (sitl_xplorer's ply_file) go
+            # beside its log (a test's tmp_path), never into the source tree.
+            env=os.environ.copy(), cwd=cwd if cwd is not None else self.log_path.parent)
 
     def output(self) -> str:
         if not self._log.closed:

@@ -79,6 +79,7 @@ def test_radio_launch_starts_one_namespaced_bridge_per_enabled_robot(tmp_path):
     servers = [SimServer(p, tmp_path / f'sim_server_{p}.log') for p in ports]
     path = robots_file(tmp_path, 'robots:\n'
                        + ''.join(f'  cf{i + 1}:\n' + ROBOT.format(uri=f'udp://127.0.0.1:{p}')
+                                 .replace('[0.0, 0.0, 0.0]', '[1.5, -0.5, 0.0]' if i else '[0.0, 0.0, 0.0]')
                                  for i, p in enumerate(ports))
                        + '  cf3:\n    enabled: false\n    uri: udp://127.0.0.1:9\n'
                        '    initial_position: [2.0, 0.0, 0.0]\n')
@@ -99,9 +100,13 @@ def test_radio_launch_starts_one_namespaced_bridge_per_enabled_robot(tmp_path):
                          'odometry of both robots', launch)
             names = g.node_names()
             topics = set(g.topic_types())
+            # Each robot's initial_position reached its bridge (its map -> odom translation).
+            positions = {i: list(g.get_parameters(f'/cf{i}/crazyflie_bridge', ['initial_position'])
+                                 ['initial_position']) for i in (1, 2)}
     finally:
         launch.stop()
         outputs = [s.stop() for s in servers]
+    assert positions == {1: [0.0, 0.0, 0.0], 2: [1.5, -0.5, 0.0]}, positions
     assert not any(n.startswith('/cf3/') for n in names), sorted(names)  # disabled
     assert not {'/crazyflie_bridge', '/whisker_fsm'} & names, sorted(names)
     assert not {'/odom', '/cmd_hover', '/whisker/left/pressure'} & topics, sorted(topics)

@@ -107,5 +107,77 @@ def test_set_a_key_read_at_start_is_rejected_as_read_only_on_every_node(whisker_
     assert launch.running(), launch.output()[-3000:]
 
 
+# The nodes of the other SITL graphs (every key read at start): one key shown by `ros2 param
+# describe`, and every key of the node described and read-only.
+OTHER_GRAPHS = {
+    'gpis_explorer': ('sitl_explore.launch.py', ['scenario:=whisker_room_exit_gpis.yaml'], 'corner_curvature', '-0.5',
+                      ['curvature threshold of a corner point', '000 eq. 41', '[1/m]', 'Min value: -inf',
+                       'Max value: 0.0', 'range (-inf, 0)']),
+    'xplorer_fsm': ('sitl_xplorer.launch.py', ['scenario:=xplorer_box_traversal.yaml', 'ply_file:={tmp}/map.ply'],
+                    'turn_limit', '1.0',
+                    ['limit of one turn', '001 Sec. IV-A', '[rad]', 'Min value: 0.0', 'Max value: 3.14159',
+                     'range (0, 3.14159]']),
+    'wall_effect_nav': ('sitl_wall_effect.launch.py', ['scenario:=ducted_track_0.yaml'], 'follow_distance', '0.1',
+                        ['d*, wall tracking distance', '004: 17 cm', '[m]', 'range (0, inf)']),
+}
+
+
+@pytest.mark.parametrize('node', sorted(OTHER_GRAPHS))
+def test_other_graphs_nodes_describe_every_key_read_at_start(node, tmp_path):
+    launch_file, args, key, value, shown = OTHER_GRAPHS[node]
+    args = [a.replace('scenario:=', f'scenario:={CONFIG_DIR / "scenarios"}/').replace('{tmp}', str(tmp_path))
+            for a in args]
+    with Launch(launch_file, args, tmp_path / 'launch.log') as launch, Graph() as g:
+        g.wait_for_nodes(['/' + node], launch)
+        out = ros2('param', 'describe', '/' + node, key)
+        for text in shown + ['Read only: true', 'read at start: restart the node to change it']:
+            assert text in out, out
+        out = set_param('/' + node, key, value)  # in the range: refused as read-only
+        assert 'Setting parameter failed' in out and 'read-only' in out, out
+        from rcl_interfaces.srv import DescribeParameters, ListParameters
+        names = g_call(g, ListParameters, f'/{node}/list_parameters', ListParameters.Request()).result.names
+        ours = [n for n in names if n != 'use_sim_time' and not n.startswith('qos_overrides.')]
+        descriptors = g_call(g, DescribeParameters, f'/{node}/describe_parameters',
+                             DescribeParameters.Request(names=ours)).descriptors
+        undescribed = [n for n, d in zip(ours, descriptors) if not d.description or not d.read_only]
+        assert len(ours) > 20 and not undescribed, undescribed
+        assert launch.running(), launch.output()[-3000:]
+
+
 def g_call(g: Graph, srv_type, name: str, request, timeout: float = 10.0):
     return g.call(srv_type, name, request, timeout)
+
+
+# The other vehicles' graphs (issue 35 item 5): each of their nodes shows one key's
+# description, unit and range, read at start, and refuses `ros2 param set` as read-only
+# (none of these nodes applies a key while running).
+OTHER_GRAPHS = {
+    'xplorer': ('sitl_xplorer.launch.py', [f"scenario:={CONFIG_DIR / 'scenarios' / 'xplorer_box.yaml'}"], {
+        '/xplorer_mapping': ('delta_map', '1.51', ['initiates the mapping', '[N]', 'range (0, inf)']),
+        '/xplorer_force_est': ('arm_median_window', '5',
+                               ['median filter of the arm angles', '[samples]', 'Min value: 1', 'Max value: 15']),
+    }),
+    'wall_effect': ('sitl_wall_effect.launch.py',
+                    [f"scenario:={CONFIG_DIR / 'scenarios' / 'ducted_estimation.yaml'}", 'behaviour:=trajectory'], {
+        '/indi_controller': ('max_tilt', '0.5', ['no rate setpoint tilts further', '[rad]', 'range (0, 1.4)']),
+        '/wall_trajectory': ('sweep_hold_s', '60.0', ['hold of each sweep segment (004: 60 s)', '[s]']),
+    }),
+    'localization': ('sitl_localization.launch.py', ['simulator:=false'], {
+        '/whisker_localization': ('beam.n_segments', '64',
+                                  ['RK4 steps', 'Min value: 4', 'Max value: 100000']),
+    }),
+}
+
+
+@pytest.mark.parametrize('graph', sorted(OTHER_GRAPHS))
+def test_xplorer_wall_effect_and_localization_keys_are_described_and_read_only(graph, tmp_path):
+    launch_file, args, keys = OTHER_GRAPHS[graph]
+    with Launch(launch_file, args, tmp_path / 'launch.log') as launch, Graph() as g:
+        g.wait_for_nodes(list(keys), launch)
+        for node, (key, value, texts) in keys.items():
+            described = ros2('param', 'describe', node, key)
+            for text in texts + ['Read only: true', 'read at start: restart the node to change it']:
+                assert text in described, f'{node} {key}: {text!r} not in\n{described}'
+            out = set_param(node, key, value)
+            assert 'Setting parameter failed' in out and 'read-only' in out, f'{node} {key}: {out}'
+        assert launch.running(), launch.output()[-3000:]

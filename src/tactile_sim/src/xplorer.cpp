@@ -39,7 +39,7 @@ CascadedControllerParams XplorerParams::default_controller() {
   // PIXHAWK; our choice): the arms' springs pass contact yaw torques (up to 0.68 N m per
   // arm at the 30 deg stop) that the rotors cannot match (~0.18 N m at
   // hover); scaling every axis alike gave up the attitude with the yaw and
-  // the vehicle sank in contact (tactile_fsm README, "Height lost in contact").
+  // the vehicle sank in contact (docs/tuning/tactile_fsm.md, "Height lost in contact").
   c.desaturation = TorqueDesaturation::kYawFirst;
   return c;
 }

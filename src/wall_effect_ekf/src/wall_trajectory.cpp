@@ -76,25 +76,45 @@ TrajectorySetpoint trajectory_setpoint(const TrajectoryParams& p, double t) {
 }
 
 tactile_common::ParamMap WallTrajectoryLogic::default_parameters() {
+  using tactile_common::at_least;
+  using tactile_common::positive;
   const TrajectoryParams d;
   tactile_common::ParamMap m(kNodeName, "defaults");
-  m.set("mode", d.mode);
-  m.set("x", d.x);
-  m.set("start_y", d.start_y);
-  m.set("height", d.height);
-  m.set("wall_distance", d.wall_distance);
-  m.set("amplitude", d.amplitude);
-  m.set("angular_frequency", d.angular_frequency);
-  m.set("t_start", d.t_start);
-  m.set("t_sine", d.t_sine);
-  m.set("t_sine_end", d.t_sine_end);
-  m.set("t_yaw1", d.t_yaw1);
-  m.set("t_yaw2", d.t_yaw2);
-  m.set("yaw_ramp_s", d.yaw_ramp_s);
-  m.set("yaw_deg", d.yaw_deg);
-  m.set("sweep_distances", d.sweep_distances);
-  m.set("sweep_hold_s", d.sweep_hold_s);
-  m.set("frame_prefix", d.frame_prefix);
+  // The setpoint script's parameter spec: value, description (from the TrajectoryParams
+  // comments and the protocol in wall_trajectory.hpp), unit, the range validate() takes for
+  // the key alone (the times' order and amplitude < wall_distance are named in the
+  // descriptions), and none live: the script is fixed at start, so `ros2 param set` refuses
+  // every key (read-only). x, angular_frequency and yaw_deg are not range-checked.
+  m.set("mode", d.mode,
+        {"setpoint script: estimation_flight (004 Fig. 4a), hold or sweep (004 Fig. 5)", "", {}, false});
+  m.set("x", d.x, {"position along the wall", "m", {}, false});
+  m.set("start_y", d.start_y, {"take-off distance from the wall (004: ~40 cm)", "m", positive(), false});
+  m.set("height", d.height, {"flight height (004: 1.0 m)", "m", positive(), false});
+  m.set("wall_distance", d.wall_distance, {"y_d from t_start (004: 18 cm)", "m", positive(), false});
+  m.set("amplitude", d.amplitude,
+        {"amplitude of the sinusoid in y_d (004: 0.03 m); < wall_distance", "m", at_least(0.0), false});
+  m.set("angular_frequency", d.angular_frequency,
+        {"w of the sinusoid sin(w (t - t0)) (004: sin(t - 25))", "rad/s", {}, false});
+  m.set("t_start", d.t_start,
+        {"take-off until then, then y_d = wall_distance (004: 5 s); t_start <= t_sine, t_start <= t_yaw1", "s",
+         at_least(0.0), false});
+  m.set("t_sine", d.t_sine, {"the sinusoid starts (004: 25 s); t_start <= t_sine <= t_sine_end", "s",
+                             at_least(0.0), false});
+  m.set("t_sine_end", d.t_sine_end, {"the sinusoid ends (004: 41 s); >= t_sine", "s", at_least(0.0), false});
+  m.set("t_yaw1", d.t_yaw1, {"the first -90 deg yaw ramp starts (004: 41 s); t_start <= t_yaw1 <= t_yaw2", "s",
+                             at_least(0.0), false});
+  m.set("t_yaw2", d.t_yaw2, {"the second -90 deg yaw ramp starts (004: 66 s); >= t_yaw1", "s", at_least(0.0),
+                             false});
+  m.set("yaw_ramp_s", d.yaw_ramp_s,
+        {"duration of each 90 deg yaw ramp (choice: 004's \"90 deg in 30 s\" would overlap the ramps)", "s",
+         positive(), false});
+  m.set("yaw_deg", d.yaw_deg, {"psi_d of hold and sweep, and before the ramps (004: 0)", "deg", {}, false});
+  m.set("sweep_distances", d.sweep_distances,
+        {"y_d of the sweep segments, not empty, each finite and > 0 (004 Fig. 5: 13 to 23 cm)", "m", {}, false});
+  m.set("sweep_hold_s", d.sweep_hold_s, {"hold of each sweep segment (004: 60 s)", "s", positive(), false});
+  m.set("frame_prefix", d.frame_prefix,
+        {"the setpoints are in <prefix>odom (REP 105): \"\" or a relative name ending in '/' (cf1/)", "", {},
+         false});
   return m;
 }
 

@@ -2,12 +2,16 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
+#include <vector>
 
+#include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/time.hpp"
 #include "wall_effect_ekf/indi_control_logic.hpp"
 #include "wall_effect_ekf/wall_trajectory.hpp"
 
 using namespace wall_effect_ekf;
+using tactile_common::ParamMap;
 
 TEST(IndiControlLogic, HoversAtTheOdometryPoseAndCountsBadInput) {
   IndiControlLogic logic(IndiControlLogic::params_from(IndiControlLogic::default_parameters()));
@@ -123,4 +127,33 @@ TEST(RepoConfig, IndiControllerAndWallTrajectoryEqualDefaults) {
                                 IndiControlLogic::default_parameters());
   expect_config_equals_defaults("../../config/wall_trajectory.yaml", "/wall_trajectory",
                                 WallTrajectoryLogic::default_parameters());
+}
+
+// Issue 35 item 5: every key has a description, a unit and the range validate() takes
+// for it alone (none wider: range_leaks), and none is live (the components apply none).
+TEST(IndiControlLogic, EveryParameterIsDescribedWithTheRangeValidateAccepts) {
+  const ParamMap d = IndiControlLogic::default_parameters();
+  EXPECT_EQ(tactile_common::undescribed(d), std::vector<std::string>{});
+  for (const auto& leak : tactile_common::range_leaks(d, [](const ParamMap& m) { IndiControlLogic::params_from(m); })) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
+  }
+  ASSERT_NE(d.info("max_tilt"), nullptr);
+  EXPECT_EQ(d.info("max_tilt")->range->text(), "(0, 1.4)");
+  EXPECT_EQ(d.info("max_tilt")->unit, "rad");
+  EXPECT_EQ(d.info("vehicle.max_rotor_thrust")->unit, "N");
+  for (const auto& [key, info] : d.infos()) EXPECT_FALSE(info.live) << key;
+}
+
+TEST(WallTrajectory, EveryParameterIsDescribedWithTheRangeValidateAccepts) {
+  const ParamMap d = WallTrajectoryLogic::default_parameters();
+  EXPECT_EQ(tactile_common::undescribed(d), std::vector<std::string>{});
+  for (const auto& leak :
+       tactile_common::range_leaks(d, [](const ParamMap& m) { WallTrajectoryLogic::params_from(m); })) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
+  }
+  ASSERT_NE(d.info("amplitude"), nullptr);
+  EXPECT_EQ(d.info("amplitude")->range->text(), "[0, inf)");
+  EXPECT_EQ(d.info("sweep_hold_s")->range->text(), "(0, inf)");
+  EXPECT_EQ(d.info("yaw_deg")->unit, "deg");
+  for (const auto& [key, info] : d.infos()) EXPECT_FALSE(info.live) << key;
 }

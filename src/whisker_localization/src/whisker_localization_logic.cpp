@@ -3,6 +3,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -53,38 +54,87 @@ void WhiskerLocalizationLogic::Params::validate() const {
 }
 
 ParamMap WhiskerLocalizationLogic::default_parameters() {
+  using tactile_common::at_least;
+  using tactile_common::closed;
+  using tactile_common::ParamRange;
+  using tactile_common::positive;
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  // "> 0" and ">= 0" without a finite check: validate() takes inf too (inf = never stale, never a contact).
+  const ParamRange above_zero{0.0, kInf, true, false};
+  const ParamRange from_zero{0.0, kInf, false, false};
   const Params d;
   ParamMap m(kNodeName, "defaults");
-  m.set("beam.length", d.beam.length);                         // 002 Sec. V-A, L = 75 mm
-  m.set("beam.youngs_modulus", d.beam.youngs_modulus);         // 002 Sec. V-A, E = 52 GPa
-  m.set("beam.moment_of_inertia", d.beam.moment_of_inertia);   // 002 Sec. V-A, I = 5.555e-15 m^4
-  m.set("beam.taper_ratio", d.beam.taper_ratio);
-  m.set("beam.n_segments", static_cast<int64_t>(d.beam.n_segments));
-  m.set("contact_tolerance", d.localizer.contact_tolerance);
-  m.set("match_angle", d.localizer.match_angle);
-  m.set("epsilon", d.localizer.epsilon);                       // 002 eq. 24, 5 %
-  m.set("epsilon_samples", static_cast<int64_t>(d.localizer.epsilon_samples));
-  m.set("possibilistic", d.localizer.possibilistic);
-  m.set("slope_samples", static_cast<int64_t>(d.localizer.slope_samples));  // 002 Sec. VII-D, 2 to 5
-  m.set("min_clearance", d.localizer.min_clearance);
-  m.set("heading_samples", static_cast<int64_t>(d.localizer.heading_samples));
-  m.set("heading_spread", d.localizer.heading_spread);
-  m.set("prior_radius", d.localizer.prior_radius);
-  m.set("mode_radius", d.localizer.mode_radius);
-  m.set("refine_passes", static_cast<int64_t>(d.localizer.refine_passes));
-  m.set("map_file", d.map_file);
-  m.set("map_spacing", d.map_spacing);                         // 002 Sec. VII-B, 1 mm
-  m.set("fillet_radius", d.fillet_radius);
-  m.set("leg", d.leg);
-  m.set("use_prior", d.use_prior);
-  m.set("prior_x", d.prior_x);
-  m.set("prior_y", d.prior_y);
-  m.set("prior_yaw", d.prior_yaw);
-  m.set("input", d.input);
-  m.set("hall_coefficients", d.hall_coefficients);             // 002 Sec. V-B, fitted B -> M(0)
-  m.set("contact_threshold", d.contact_threshold);
-  m.set("max_odom_age_s", d.max_odom_age_s);
-  m.set("min_step", d.min_step);
+  // The localizer's parameter spec: value, description (from the Params comments; README
+  // "Parameters"), unit, the range params_from()/validate() take for the key alone, and none
+  // live: the beam model, the map and the pose set are built at start, so `ros2 param set`
+  // refuses every key (read-only).
+  m.set("beam.length", d.beam.length, {"L, whisker length (002 Sec. V-A: 75 mm)", "m", positive(), false});
+  m.set("beam.youngs_modulus", d.beam.youngs_modulus,
+        {"E, Young's modulus (002 Sec. V-A: nitinol, 52 GPa)", "Pa", positive(), false});
+  m.set("beam.moment_of_inertia", d.beam.moment_of_inertia,
+        {"I at the base (002 Sec. V-A: pi d^4 / 64, d = 0.58 mm)", "m^4", positive(), false});
+  m.set("beam.taper_ratio", d.beam.taper_ratio,
+        {"tip-to-base diameter ratio of a linear taper; 1: uniform wire", "", ParamRange{0.0, 1.0, true, false},
+         false});
+  m.set("beam.n_segments", static_cast<int64_t>(d.beam.n_segments),
+        {"RK4 steps over the loaded part of the beam (choice; 16 already within 1 um)", "", closed(4, 100000),
+         false});
+  m.set("contact_tolerance", d.localizer.contact_tolerance,
+        {"a projected contact point must lie this close to the map boundary (choice: best of 0.2-0.5 mm in the "
+         "Table II SITL)", "m", positive(), false});
+  m.set("match_angle", d.localizer.match_angle,
+        {"boundary-slope tolerance of the set intersection (choice: 3 deg)", "rad", positive(), false});
+  m.set("epsilon", d.localizer.epsilon,
+        {"possibilistic bound as a fraction of the observation (002 eq. 24: 5 %)", "",
+         ParamRange{0.0, 1.0, false, true}, false});
+  m.set("epsilon_samples", static_cast<int64_t>(d.localizer.epsilon_samples),
+        {"samples across the possibilistic bounds of the observation and of phi_E (choice)", "",
+         closed(1, 1000), false});
+  m.set("possibilistic", d.localizer.possibilistic,
+        {"false: deterministic preimages (002 Sec. VII-B); true: possibilistic (002 Sec. VII-C, eq. 23-25)", "",
+         {}, false});
+  m.set("slope_samples", static_cast<int64_t>(d.localizer.slope_samples),
+        {"contact points that estimate the boundary slope phi_E (002 Sec. VII-A/D: 2 to 5)", "", closed(2, 50),
+         false});
+  m.set("min_clearance", d.localizer.min_clearance,
+        {"the base must lie at least this far on the free side of the boundary (choice)", "m", from_zero, false});
+  m.set("heading_samples", static_cast<int64_t>(d.localizer.heading_samples),
+        {"heading hypotheses per aligned pose when a set is (re)built (choice)", "", closed(1, 101), false});
+  m.set("heading_spread", d.localizer.heading_spread,
+        {"... over +- this about the contact point (choice: about 3 sigma of phi_E at 0.5 % noise)", "rad",
+         ParamRange{0.0, 0.5, false, true}, false});
+  m.set("prior_radius", d.localizer.prior_radius,
+        {"only poses within this of the prior start the set (002 Sec. VII-D; choice: 30 mm); <= 0: the whole "
+         "map; finite", "m", {}, false});
+  m.set("mode_radius", d.localizer.mode_radius,
+        {"neighbourhood of the mode used as the best estimate (choice: 2 mm)", "m", above_zero, false});
+  m.set("refine_passes", static_cast<int64_t>(d.localizer.refine_passes),
+        {"shape refinement passes, force along the estimated boundary normal (choice)", "", closed(0, 10), false});
+  m.set("map_file", d.map_file,
+        {"known map: YAML polylines: [[[x, y], ...], ...], free space on the left; \"\": the Table II concave "
+         "corner (fillet_radius, leg)", "", {}, false});
+  m.set("map_spacing", d.map_spacing,
+        {"boundary discretisation (002 Sec. VII-B: 1 mm)", "m", positive(), false});
+  m.set("fillet_radius", d.fillet_radius,
+        {"default map: radius of the concave arc (choice)", "m", above_zero, false});
+  m.set("leg", d.leg, {"default map: length of the straight floor and wall (choice)", "m", above_zero, false});
+  m.set("use_prior", d.use_prior, {"start from a known pose prior_x/y/yaw (002 Sec. VII-D)", "", {}, false});
+  m.set("prior_x", d.prior_x, {"known start x (use_prior); finite", "m", {}, false});
+  m.set("prior_y", d.prior_y, {"known start y (use_prior); finite", "m", {}, false});
+  m.set("prior_yaw", d.prior_yaw, {"known start heading (use_prior); finite", "rad", {}, false});
+  m.set("input", d.input,
+        {"what torque.z carries: moment (M(0) [N m]) or flux (Hall flux density B [mT], 002 Sec. V-B)", "", {},
+         false});
+  m.set("hall_coefficients", d.hall_coefficients,
+        {"M(0) = c0 + c1 B + c2 B^2 + ... [N m, B in mT] (002 Sec. V-B, HallCalibration); 1 to 10 finite "
+         "values", "", {}, false});
+  m.set("contact_threshold", d.contact_threshold,
+        {"|M(0)| below this is no contact (choice: 5x a 0.2 uN m noise floor)", "N m", from_zero, false});
+  m.set("max_odom_age_s", d.max_odom_age_s,
+        {"odometry older than this at a moment sample is stale (choice)", "s", above_zero, false});
+  m.set("min_step", d.min_step,
+        {"a contact sample is localized only after this much base travel since the previous one (002 Sec. "
+         "VII-D: steps below 1 mm; choice); 0: every sample", "m", at_least(0.0), false});
   return m;
 }
 

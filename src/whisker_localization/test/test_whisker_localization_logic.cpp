@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/time.hpp"
@@ -87,6 +88,24 @@ TEST(WhiskerLocalizationLogic, IntegerParametersAreCheckedBeforeTheyAreNarrowed)
                                                         [](const ParamMap& m) { WhiskerLocalizationLogic::params_from(m); });
   EXPECT_EQ(wrapped.size(), 5u);  // beam.n_segments ... refine_passes
   for (const auto& [key, w] : wrapped) EXPECT_TRUE(w.rejected_as_given()) << key << ": " << w.error;
+}
+
+// Issue 35 item 5: every key has a description, a unit and the range validate() takes
+// for it alone (none wider: range_leaks), and none is live (the component applies none).
+TEST(WhiskerLocalizationLogic, EveryParameterIsDescribedWithTheRangeValidateAccepts) {
+  const ParamMap d = WhiskerLocalizationLogic::default_parameters();
+  EXPECT_EQ(tactile_common::undescribed(d), std::vector<std::string>{});
+  for (const auto& leak :
+       tactile_common::range_leaks(d, [](const ParamMap& m) { WhiskerLocalizationLogic::params_from(m); })) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
+  }
+  ASSERT_NE(d.info("beam.youngs_modulus"), nullptr);
+  EXPECT_EQ(d.info("beam.youngs_modulus")->unit, "Pa");
+  EXPECT_EQ(d.info("beam.n_segments")->range->text(), "[4, 100000]");
+  EXPECT_EQ(d.info("epsilon")->range->text(), "[0, 1)");
+  // validate() takes an infinite age (never stale): the range keeps it.
+  EXPECT_EQ(d.info("max_odom_age_s")->range->text(), "(0, inf]");
+  for (const auto& [key, info] : d.infos()) EXPECT_FALSE(info.live) << key;
 }
 
 TEST(WhiskerLocalizationLogic, MapFileErrorsNameFileAndKey) {

@@ -3,6 +3,8 @@
 
 #include <cmath>
 #include <limits>
+#include <string>
+#include <vector>
 
 #include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/time.hpp"
@@ -92,6 +94,22 @@ TEST(XplorerForceEstLogic, IntegerParametersAreCheckedBeforeTheyAreNarrowed) {
     EXPECT_NE(std::string(e.what()).find("com_median_window: must be odd and in [1, 15], got 4"), std::string::npos)
         << e.what();
   }
+}
+
+// Issue 35 item 5: every key has a description, a unit and the range validate() takes
+// for it alone (none wider: range_leaks), and none is live (the component applies none).
+TEST(XplorerForceEstLogic, EveryParameterIsDescribedWithTheRangeValidateAccepts) {
+  const ParamMap d = XplorerForceEstLogic::default_parameters();
+  EXPECT_EQ(tactile_common::undescribed(d), std::vector<std::string>{});
+  for (const auto& leak :
+       tactile_common::range_leaks(d, [](const ParamMap& m) { XplorerForceEstLogic::params_from(m); })) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
+  }
+  ASSERT_NE(d.info("arm_median_window"), nullptr);
+  EXPECT_EQ(d.info("arm_median_window")->range->text(), "[1, 15]");
+  EXPECT_EQ(d.info("arm_stiffness")->unit, "N m/rad");
+  EXPECT_EQ(d.info("arm_damping")->range->text(), "[0, inf)");
+  for (const auto& [key, info] : d.infos()) EXPECT_FALSE(info.live) << key;
 }
 
 TEST(XplorerForceEstLogic, StaticPushPublishesWorldAndBodyWrench) {

@@ -120,6 +120,11 @@ class CrazyflieBridgeLogic {
     /// Goes before every frame name the bridge stamps and broadcasts but map ("" or
     /// ending in '/': "cf1/" gives cf1/base_link; tactile_common/frames.hpp).
     std::string frame_prefix;
+    /// Where the Crazyflie stands at take-off, in map [m] (x, y, z; a robots file's
+    /// initial_position, as Crazyswarm2's crazyflies.yaml). The firmware's estimate starts
+    /// at its own origin, so map -> odom is this translation: several Crazyflies in one
+    /// map each show where they are. The estimate, odometry and go-to goals stay in odom.
+    std::vector<double> initial_position{0.0, 0.0, 0.0};
     void validate() const;
   };
 
@@ -262,8 +267,9 @@ class CrazyflieBridgeLogic {
   Mode mode() const { return mode_; }
   const Stats& stats() const { return stats_; }
   const Params& params() const { return params_; }
-  /// Static transforms of the frame tree (prefixed): map -> odom (identity: no behaviour
-  /// of the radio graph owns a world map; the firmware's estimate starts at its origin)
+  /// Static transforms of the frame tree (prefixed): map -> odom (the translation
+  /// initial_position: no behaviour of the radio graph owns a world map, and the firmware's
+  /// estimate starts at its origin, where the Crazyflie stood)
   /// and base_link -> whisker_left/right, imu_link, flow, tof_down, from the whiskered
   /// Crazyflie's geometry (tactile_sim::robot_model(CrazyflieParams), 000's whiskers).
   std::vector<tactile_common::StaticFrame> static_frames() const;

@@ -41,7 +41,7 @@ struct XplorerMapParams {
   /// Hold through a traversal (rule 14): once initiated inside a face
   /// traversal (hold_initiation(true), the node logic's stamp_states),
   /// mapping is not released by the force falling below delta_map_hold until
-  /// that traversal ends. The FSM's contact back-off (tactile_fsm README,
+  /// that traversal ends. The FSM's contact back-off (docs/tuning/tactile_fsm.md,
   /// "Transition ticks and the contact back-off") pulls the averaged force of
   /// every first contact down to ~0.25 N for a moment; the steady traversal
   /// then reads 1.27-1.49 N, under delta_map, and the first face stayed

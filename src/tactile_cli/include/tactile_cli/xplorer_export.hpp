@@ -17,6 +17,11 @@ struct ExportOptions {
   std::string ply;              ///< output PLY file
   bool binary = false;          ///< binary little endian instead of ASCII
   std::string config_dir = "config";
+  /// The vehicle's namespace in the bag (--namespace): "" reads the root names the host
+  /// records (/odom, /xplorer/wrench_body); "cf1" reads /cf1/odom, ... (a bag of a launch
+  /// with namespace:=cf1), and the map's frame is cf1/<frame_id>, as that launch's frame
+  /// prefix defaults to cf1/.
+  std::string ns;
   /// Where the summary goes as JSON (with its `warnings`): --metrics, default
   /// <ply without .ply>.metrics.json beside the map.
   std::string metrics;

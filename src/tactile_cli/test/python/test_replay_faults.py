@@ -244,3 +244,25 @@ def test_bag_cut_inside_its_first_chunk_is_an_error(demo, tmp_path):
     assert "nothing recovered" in r.stderr and "no mcap footer" in r.stderr, r.stderr
     assert "FPR" not in r.stdout
     assert not (out / "metrics.json").exists()
+
+
+def test_bag_of_a_namespaced_launch_replays_with_its_ground_truth(demo, tmp_path):
+    """A launch with namespace:=cf1 records /cf1/whisker/left/pressure and
+    /cf1/ground_truth/whisker/left/contact: the contact bag under those names replays as
+    the root bag does, its ground truth used (the false positives counted on the truth's
+    free samples), the whiskers named by their namespaced topics."""
+    def ns(conn, ts, raw):
+        return [("/cf1" + conn.topic, conn.msgtype, conn.msgdef.data, ts, raw)]
+
+    src = demo / "contact" / "raw_bag"
+    with Reader(src) as r:
+        assert any(c.topic.startswith("/ground_truth/") for c in r.connections)
+    _copy_bag(src, tmp_path / "bag", ns)
+    root, _ = replay(src, tmp_path / "root")
+    m, err = replay(tmp_path / "bag", tmp_path / "out")
+    assert m["warnings"] == [], err
+    assert m["fpr_basis"] == root["fpr_basis"] and "ground truth says no contact" in m["fpr_basis"]
+    for mode, r in root["modes"].items():
+        got = m["modes"][mode]
+        assert list(got["whiskers"]) == ["/cf1" + w for w in r["whiskers"]]
+        assert list(got["whiskers"].values()) == list(r["whiskers"].values())

@@ -171,3 +171,28 @@ def test_export_replays_stamps_off_the_bag_clock_at_bag_time(tmp_path):
     kinds = {w["kind"]: w["count"] for w in summary["warnings"]}
     assert kinds.get("stamps_off_the_bag_clock_replayed_at_bag_time") == 2, summary["warnings"]
     assert summary["points"] == len(points) > 0
+
+
+def test_export_of_a_namespaced_bag_with_namespace(tmp_path):
+    """A launch with namespace:=cf1 records /cf1/odom, /cf1/xplorer/wrench_body, ...: the
+    same bag under those names exports with --namespace cf1 the map of the root bag point
+    for point, in the frame cf1/odom (the launch's frame prefix); without it the error
+    names the namespace the bag has."""
+    sim("xplorer_wall_traversal.yaml", tmp_path)
+    from rosbags.rosbag2 import Reader, StoragePlugin, Writer
+    dst = tmp_path / "cf1_bag"
+    w = Writer(dst, version=9, storage_plugin=StoragePlugin.MCAP)
+    with Reader(tmp_path / "bag") as r, w:
+        conns = {c.id: w.add_connection("/cf1" + c.topic, c.msgtype, msgdef=c.msgdef.data, rihs01=c.digest)
+                 for c in r.connections}
+        for c, t, raw in r.messages():
+            w.write(conns[c.id], t, raw)
+    root, _ = export(tmp_path / "bag", tmp_path / "root.ply")
+    r = subprocess.run([TACTILE, "--config", CONFIG, "export", str(dst), "--ply", str(tmp_path / "x.ply")],
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode != 0 and "no /odom topic" in r.stderr and "/cf1/odom (--namespace cf1)" in r.stderr, r.stderr
+    assert not (tmp_path / "x.ply").exists()
+    ns, summary = export(dst, tmp_path / "cf1.ply", "--namespace", "cf1")
+    assert len(root) > 0 and summary["warnings"] == []
+    np.testing.assert_array_equal(ns, root)
+    assert "frame cf1/odom" in " ".join(PlyData.read(str(tmp_path / "cf1.ply")).comments)

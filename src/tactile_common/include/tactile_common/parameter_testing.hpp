@@ -94,6 +94,30 @@ std::vector<RangeLeak> range_leaks(const ParamMap& defaults, ParamsFrom params_f
   return out;
 }
 
+/// For every double key of `defaults` whose described range has an infinite end, alone: sets
+/// it to that infinity and calls `params_from(map)`. Returns the values it accepted: none when
+/// an unbounded range ("(0, inf)") means every finite value, as ParamRange::contains() takes
+/// it (range_leaks() probes finite ends only; an infinite max_input_age_s would switch a
+/// stale-input failsafe off).
+template <typename ParamsFrom>
+std::vector<RangeLeak> infinities_accepted(const ParamMap& defaults, ParamsFrom params_from) {
+  std::vector<RangeLeak> out;
+  for (const auto& [key, info] : defaults.infos()) {
+    if (!info.range || !std::holds_alternative<double>(defaults.values().at(key))) continue;
+    for (const double v : {info.range->lo, info.range->hi}) {
+      if (!std::isinf(v)) continue;
+      ParamMap m = defaults;
+      m.set(key, v);
+      try {
+        params_from(m);
+        out.push_back({key, v});
+      } catch (const ParamError&) {
+      }
+    }
+  }
+  return out;
+}
+
 /// The keys of `defaults` without a ParamInfo (or with an empty description).
 inline std::vector<std::string> undescribed(const ParamMap& defaults) {
   std::vector<std::string> out;

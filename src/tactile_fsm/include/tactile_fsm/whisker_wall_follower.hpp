@@ -78,7 +78,7 @@ struct WallFollowerParams {
   /// tilted baffle the drone turns back to the course, so the next baffle is
   /// met head-on (000 Fig. 4h: -1 / 24.3 / -1 deg). 0 = off. [1/s]
   double realign_gain = 1.5;
-  /// Trailing whisker lost after both touched (issue 17, README "Random baffle
+  /// Trailing whisker lost after both touched (issue 17, docs/tuning/tactile_fsm.md "Random baffle
   /// courses"): hold the heading and translate on the remaining depth instead of
   /// turning toward the lost whisker. On rigid baffles TDORC can drop a pressed
   /// whisker (stick-slip) and not see it again; turning toward it then yawed the
@@ -89,7 +89,7 @@ struct WallFollowerParams {
   /// and config/tactile_fsm.yaml turn it on.
   bool hold_heading_trailing_lost = false;
   /// One whisker left beyond this depth after both touched: the wall ends
-  /// (issue 17, README "Round 7"; our choice, 000 Fig. S4e has no case for a
+  /// (issue 17, docs/tuning/tactile_fsm.md "Round 7"; our choice, 000 Fig. S4e has no case for a
   /// lost depth). With one depth missing after both whiskers touched, a
   /// remaining depth > wall_end_depth asks for FLY_SIDEWAYS (keep passing
   /// the edge, as for the leading whisker lost) instead of FLY_FORWARD at
@@ -102,7 +102,7 @@ struct WallFollowerParams {
   /// off, the next touch brings it back to the rule of both depths. 0 = off
   /// (the previous rule); otherwise >= t_max. [m]
   double wall_end_depth = 0.0;
-  /// A whisker lost out of reach, not off an end (issue 17, README "Round 11";
+  /// A whisker lost out of reach, not off an end (issue 17, docs/tuning/tactile_fsm.md "Round 11";
   /// our choice). After both touched, one whisker lost while its last depth
   /// was > lost_far_depth and the other's depth was beyond T_max on that tick,
   /// the other still beyond T_max: the drone has drifted away from the wall
@@ -119,14 +119,14 @@ struct WallFollowerParams {
   double lost_far_depth = 0.0;
   /// The side-step after a clearing counts clear_margin from where both
   /// whiskers' S_c sums went quiet (RMS of their changes < this), not from
-  /// where the flags dropped (issue 17, README "Round 11"; our choice): a
+  /// where the flags dropped (issue 17, docs/tuning/tactile_fsm.md "Round 11"; our choice): a
   /// clearing declared while the whiskers still touch the wall (true 133-141
   /// mm, flags dropped) ended the side-step short of the true end (mocap
   /// 12007). Within phantom_resume_max of the clearing. 0 = off. [Pa]
   double resume_quiet_rms = 0.0;
   /// A contact in FLY_FORWARD less than this far ahead (along the course
   /// heading) of where the side-step after a clearing ended is the same
-  /// obstacle: keep the side (issue 17, README "Random baffle courses": on rigid
+  /// obstacle: keep the side (issue 17, docs/tuning/tactile_fsm.md "Random baffle courses": on rigid
   /// baffles both contact flags dropped together mid-wall, the drone "cleared",
   /// re-touched 8 cm further on and re-chose the side toward the target, going
   /// back along the baffle; flow-deck seed 1001 did so three times). 0.15 m:
@@ -135,7 +135,7 @@ struct WallFollowerParams {
   double same_obstacle_distance = 0.15;
   /// Wall following never turns the heading further than this from the course
   /// heading (heading at the end of HOVER_INIT); a turn that would is replaced
-  /// by the translation the depths ask for (issue 17, README "Random baffle
+  /// by the translation the depths ask for (issue 17, docs/tuning/tactile_fsm.md "Random baffle
   /// courses": with contact flags held after a whisker left a baffle, the drone
   /// followed a phantom wall, turning 95-120 deg off the course, and wrapped round
   /// the baffle's tip into the guard, 8 of 24 failures of tuning block 2000-2049).
@@ -143,7 +143,7 @@ struct WallFollowerParams {
   /// most 25 deg plus the alignment overshoot (45 deg: 35/50 on block 2000,
   /// 60 deg: 33/50). 0 = off. [rad]
   double max_heading_offset = 45.0 * M_PI / 180.0;
-  /// Turn anchor (issue 17, README "Round 13"; our choice, not in 000): in one
+  /// Turn anchor (issue 17, docs/tuning/tactile_fsm.md "Round 13"; our choice, not in 000): in one
   /// wall following the heading turns at most turn_anchor_tolerance beyond an
   /// anchor, unless |theta| >= turn_anchor_theta; a turn that would is replaced
   /// by the translation the depths ask for (as max_heading_offset). The anchor
@@ -165,7 +165,7 @@ struct WallFollowerParams {
   double turn_anchor_tolerance = 0.0;              ///< [rad]
   double turn_anchor_theta = 10.0 * M_PI / 180.0;  ///< [rad]
   double turn_anchor_rate = 0.0;                   ///< [rad/s]
-  /// Pressed past the depth model (issue 17, README "Pressed whisker"): a
+  /// Pressed past the depth model (issue 17, docs/whisker_fsm.md "Pressed whisker"): a
   /// whisker pressed and sliding along a baffle is friction-limited, its input
   /// (sum of the three S_c, 000 eq. 5) stops growing below ~70 mm and the
   /// depth estimate reads ~70 mm (inside the band) at any true depth down to
@@ -178,7 +178,7 @@ struct WallFollowerParams {
   /// press_sum_pa 0 = off (the paper). [Pa]
   double press_sum_pa = 0.0;
   double press_hold_s = 0.2;   ///< [s]
-  /// Pressed by the stick-slip amplitude (issue 17, README "Round 6"): the
+  /// Pressed by the stick-slip amplitude (issue 17, docs/tuning/tactile_fsm.md "Round 6"): the
   /// mean load of a whisker sliding on a wall is friction-limited, but each
   /// slip releases the bending stored since the last stick, which grows with
   /// the deflection, so the sample-to-sample changes of the S_c sum grow
@@ -191,7 +191,7 @@ struct WallFollowerParams {
   /// 0 = off. [Pa]
   double press_rms_pa = 0.0;
   double press_depth = 0.05;   ///< [m]
-  /// Depth bounded by the drone's own motion (issue 17, README "Round 8"; our
+  /// Depth bounded by the drone's own motion (issue 17, docs/tuning/tactile_fsm.md "Round 8"; our
   /// choice, 000's depth is the pressure regression alone). The wall is fixed
   /// in the world: from the whisker's first published depth of a contact, the
   /// bound is carried with the odometry (the whisker base moved along the wall
@@ -205,12 +205,12 @@ struct WallFollowerParams {
   /// touches by the normal of the line through the two first contact points
   /// when they are >= motion_depth_baseline apart, else by eq. 21 on the
   /// depths of that tick. Tried on the tuning and seen blocks, not kept
-  /// (README "Round 8"). motion_depth_relax 0 = off (core and node).
+  /// (docs/tuning/tactile_fsm.md "Round 8"). motion_depth_relax 0 = off (core and node).
   double motion_depth_relax = 0.0;     ///< [m/s]
   double motion_depth_margin = 0.01;   ///< [m]
   double motion_depth_baseline = 0.05; ///< [m]; 0 = never use the contact points
   double whisker_base_x = 0.05;        ///< whisker bases ahead of the odometry origin [m] (000 frame, tactile_sim)
-  /// Phantom hold gated by odometry (issue 17, README "Round 4"): the gel
+  /// Phantom hold gated by odometry (issue 17, docs/tuning/tactile_fsm.md "Round 4"): the gel
   /// hysteresis (000 eq. 1, N_h) can leave a whisker held "in contact" by
   /// TDORC after it left a baffle, its S_c frozen on a slowly decaying offset.
   /// A whisker pressed by a moving drone follows every millimetre of the
@@ -229,12 +229,12 @@ struct WallFollowerParams {
   /// RESUME_FORWARD keeps side-stepping past clear_margin while a whisker is
   /// still held as a phantom, up to this distance from the clearing [m].
   double phantom_resume_max = 0.0;
-  /// Latch (issue 17, README "Round 4" and "4b"; off in the core struct, on in
+  /// Latch (issue 17, docs/tuning/tactile_fsm.md "Round 4" and "4b"; off in the core struct, on in
   /// the whisker FSM node with phantom_resume_max 2 m): a whisker taken for a
   /// phantom stays one until its contact ends or the RMS of its sum's changes
   /// reaches 2 * phantom_quiet_rms.
   bool phantom_latch = false;
-  /// Active whisking (issue 17, README "Round 5", choice): the two forward
+  /// Active whisking (issue 17, docs/tuning/tactile_fsm.md "Round 5", choice): the two forward
   /// whiskers (bases 25 mm off the axis, tips 0.19 m ahead) are blind to a
   /// baffle tip 3-8 cm beside the axis, inside the guard's 80 mm. In
   /// FLY_FORWARD the heading oscillates about the course heading,
@@ -249,7 +249,7 @@ struct WallFollowerParams {
   double whisk_rate_max = 2.0;                 ///< [rad/s]
   /// Whisk only in a FLY_FORWARD that follows a clearing (not on the way to
   /// the first obstacle): the first contact is then met on the course heading,
-  /// as without whisking (README "Round 5": whisking before the first contact
+  /// as without whisking (docs/tuning/tactile_fsm.md "Round 5": whisking before the first contact
   /// lowered the darkness sweeps' first-sweep in-band fraction).
   bool whisk_after_clear_only = false;
   /// Pause the whisk (hold the yaw, keep the course velocity) while either
@@ -258,7 +258,7 @@ struct WallFollowerParams {
   /// and a whisk continuing through that sweeps the whisker into the wall.
   /// 0 = never pause. [Pa]
   double whisk_pause_rms = 0.0;
-  /// Yaw offset after a clearing (issue 17, README "Round 9", choice): the
+  /// Yaw offset after a clearing (issue 17, docs/tuning/tactile_fsm.md "Round 9", choice): the
   /// two forward whiskers (bases 25 mm off the axis, tips 0.191 m ahead) leave
   /// a band 25-80 mm beside the axis, inside the guard's radius, where a
   /// baffle's end meets the guard without a whisker touching. After a
@@ -281,7 +281,7 @@ struct WallFollowerParams {
   /// window): a touch TDORC has not flagged yet, so that the wall following
   /// starts at the heading it has without the offset. 0 = never. [Pa]
   double clear_yaw_release_rms = 0.0;
-  /// Whisking on the first approach (issue 17, README "Round 10", choice): the
+  /// Whisking on the first approach (issue 17, docs/tuning/tactile_fsm.md "Round 10", choice): the
   /// first baffle is met with no clearing before it, so clear_yaw_offset has
   /// no side to turn to; its end can lie in the blind band (25-80 mm beside
   /// the axis) on either side. In the FLY_FORWARD before the flight's first
@@ -296,12 +296,12 @@ struct WallFollowerParams {
   /// turns back to the course heading (realign_gain) instead of holding the
   /// yaw, so that the wall following starts nearer the course heading.
   bool first_whisk_pause_to_course = false;
-  /// Our choice (README "Round 10b"): in the first-approach whisk, a whisker's
+  /// Our choice (docs/tuning/tactile_fsm.md "Round 10b"): in the first-approach whisk, a whisker's
   /// S_c sum moving (whisk_pause_rms) on the side opposite the yaw (or both) is
   /// a wall ahead, not an end beside the axis: the yaw is turned back to the
   /// course at up to this rate for the rest of that FLY_FORWARD. 0 = off. [rad/s]
   double first_whisk_wall_rate = 0.0;
-  /// Step and scan on the first approach (issue 17, README "Round 12", our
+  /// Step and scan on the first approach (issue 17, docs/tuning/tactile_fsm.md "Round 12", our
   /// choice; first_whisk_amplitude 0 turns it off with the whisk): instead of whisking while
   /// flying, the first approach alternates steps of first_scan_step along the
   /// course (yaw on the course, the speed brought down to 0 at the step's end)
@@ -312,7 +312,7 @@ struct WallFollowerParams {
   /// an end beside the axis in a scan. 0 = off (the continuous whisk). [m]
   double first_scan_step = 0.0;
   double first_scan_rate = 2.0;  ///< [rad/s], at most whisk_rate_max
-  /// A baffle's end met by one whisker (issue 17, README "Round 10", choice):
+  /// A baffle's end met by one whisker (issue 17, docs/tuning/tactile_fsm.md "Round 10", choice):
   /// a first touch in FLY_FORWARD by exactly one whisker whose contact point
   /// (the depth along the whisker, turned by the yaw off the course heading)
   /// lies more than end_contact_lateral beside the course axis on that
@@ -375,7 +375,7 @@ struct WallFollowerOutput {
 };
 
 /// The wall-following sub-state rule (000 Fig. S4e; the exact conditions are
-/// only in the figure, this is our rule, derived in README.md):
+/// only in the figure, this is our rule, derived in docs/whisker_fsm.md):
 ///  - both depths valid:
 ///    * both < T_min                         -> FLY_BACKWARD
 ///    * both > T_max                         -> FLY_FORWARD

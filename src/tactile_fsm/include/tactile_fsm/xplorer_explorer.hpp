@@ -105,7 +105,7 @@ struct XplorerParams {
   /// the yaw setpoint turns at turn_rate, so the contact torque of the guard sliding off
   /// the edge and the push stored in the position loop no longer spin the vehicle into the
   /// next face. false: the previous rule (push turn_push along C_n, lead along lambda,
-  /// C_n turning with the measured yaw) (choice; README "convex corners").
+  /// C_n turning with the measured yaw) (choice; docs/tuning/tactile_fsm.md "Convex corners").
   bool turn_pivot = true;
   double contact_reach = 0.21;       ///< centre -> edge of the vehicle along a body axis [m] (001 Sec. IV-B: 0.21 m)
   double turn_radius = 0.15;         ///< orbit radius about the pivot [m] (< contact_reach: the guards meet the next face) (choice)
@@ -134,7 +134,7 @@ struct XplorerParams {
   /// point projected onto the turning C_n drives r* into the surface and the
   /// force up until contact breaks. Default true since the corner pivot: the
   /// box then does as well as with false, so one setting serves faces and
-  /// cylinders (choice; see README).
+  /// cylinders (choice; docs/tuning/tactile_fsm.md "Convex corners").
   bool reshape_follows_contact = true;
   double release_force = 0.3;        ///< averaged |force| below which contact is lost [N] (choice)
   double release_time = 1.0;         ///< ... for this long -> Exploration [s] (choice)
@@ -152,7 +152,7 @@ struct XplorerParams {
   /// turn at that corner, the closure tested only in traversal misses it and the next lap
   /// runs out of time, 13020: within 0.25 m for 5 s at 305 deg). Below a full circuit it
   /// keeps the earlier turns' orbits from closing early [rad] (choice, on at 5.5 = 315 deg
-  /// since 2026-11-27, README "Open loops on the held-out blocks"; 0: off, closure only in
+  /// since 2026-11-27, docs/tuning/tactile_fsm.md "Open loops on the held-out blocks"; 0: off, closure only in
   /// traversal).
   double loop_turn_min_winding = 5.5;
   /// Right-hand traversal round a convex object turns counter-clockwise at every convex
@@ -184,12 +184,12 @@ struct XplorerParams {
   /// along the measured force (out of the obstacle), capped at contact_backoff_max, at hover
   /// height with the yaw held; then the traversal (or the wrench) starts from where the
   /// vehicle is. Using it at first contact is our choice: it takes out the approach momentum
-  /// the position loop carries into the face (issue 17; README "Transition ticks and the
+  /// the position loop carries into the face (issue 17; docs/tuning/tactile_fsm.md "Transition ticks and the
   /// contact back-off"). contact_backoff_time 0: off (the traversal starts at once).
   double contact_backoff_gain = 0.04;  ///< [m/N] (choice, tuned; recovery_gain is 0.02)
   double contact_backoff_max = 0.15;   ///< [m] (choice)
   double contact_backoff_time = 0.3;   ///< [s] (choice, as recovery_time; 0: off)
-  /// Square up to a face slid along in Exploration (issue 17, class B open loops; README
+  /// Square up to a face slid along in Exploration (issue 17, class B open loops; docs/tuning/tactile_fsm.md
   /// "Oblique first face: squaring up to the face slid along"). 001 keeps the yaw in
   /// admittance "ensuring two arms of the UAV are in contact with the obstacle" (Sec. V-C1);
   /// on a face at ~40-50 deg to the approach the force on the leading arm points nearly
