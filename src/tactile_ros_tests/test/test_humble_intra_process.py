@@ -116,8 +116,8 @@ for _case in CASES.values():
 
 
 # Where the ROS 2 installation has visualization_msgs (tactile_viz builds its component),
-# every sitl_* container also holds the visualization node, which latches the GPIS grids,
-# and the simulator latches the arena on /sim/arena.
+# every vehicle container (sitl_*, sitl, radio) also holds the visualization node, which
+# latches the GPIS grids, and the simulator latches the arena on /sim/arena.
 try:
     import visualization_msgs.msg  # noqa: F401
     _HAVE_VIZ = True
@@ -125,7 +125,7 @@ except ImportError:
     _HAVE_VIZ = False
 if _HAVE_VIZ:
     for _case in CASES.values():
-        if _case['launch'].startswith('sitl_'):
+        if _case['launch'].startswith('sitl'):
             _case['nodes'].append('/visualization')
             _case['plugins'].add('tactile_viz::VisualizationComponent')
             _case['latched'].update({'/gpis/mean_grid': '/visualization', '/gpis/variance_grid': '/visualization'})
