@@ -241,6 +241,33 @@ def simulator_node(wait_for_publisher):
         extra_arguments=INTRA)
 
 
+def visualization_nodes(sim_time=True):
+    """The visualization component (tactile_viz) of every sitl_* launch, as a list to add to
+    the container's nodes: RViz markers of the graph's estimates and events on
+    visualization/markers, the GPIS mean and variance grids on gpis/mean_grid and
+    gpis/variance_grid (topics relative: in the launch namespace; the markers take their
+    frames from the input messages, so the frame prefix needs no parameter here). On
+    simulated time unless sim_time is False; parameters from config/visualization.yaml. Empty, with a warning, where
+    tactile_viz was built without its component (a ROS 2 installation without
+    visualization_msgs, e.g. the Jazzy toolchain): the graph runs without markers."""
+    from ament_index_python import get_resource
+    from launch.logging import get_logger
+    from launch_ros.descriptions import ComposableNode
+    plugin = 'tactile_viz::VisualizationComponent'
+    try:
+        registered, _ = get_resource('rclcpp_components', 'tactile_viz')
+    except LookupError:
+        registered = ''
+    if plugin not in registered:
+        get_logger('launch_common').warning(
+            f'{plugin} is not installed (tactile_viz built without visualization_msgs): no visualization node')
+        return []
+    return [ComposableNode(
+        package='tactile_viz', plugin=plugin, name='visualization',
+        parameters=parameters(config('visualization'), *([SIM_TIME] if sim_time else [])),
+        extra_arguments=INTRA)]
+
+
 def sitl_container(name, nodes):
     """The container of a sitl_* launch: `nodes` (the simulator first) in one process, in
     the launch argument namespace with /clock remapped into it, and a failed load stops the

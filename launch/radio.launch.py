@@ -136,7 +136,8 @@ def radio_container(uri, namespace=None, name='radio_container', frame_prefix=No
     container = ComposableNodeContainer(
         name=name, namespace='', package='rclcpp_components',
         executable='component_container',
-        composable_node_descriptions=pipeline_nodes(bridge_overrides(uri, frame_prefix, initial_position)),
+        composable_node_descriptions=pipeline_nodes(bridge_overrides(uri, frame_prefix, initial_position))
+        + launch_common.visualization_nodes(sim_time=False),
         output='screen', sigterm_timeout=container_stop_timeout())
     return [launch_common.in_namespace([container], namespace=namespace),
             launch_common.stop_on_load_failure(container)]

@@ -52,4 +52,4 @@ def generate_launch_description():
     return LaunchDescription(
         launch_common.sitl_arguments('whisker_room_exit_gpis')
         + launch_common.rviz_arguments('explore', sim_time=True)
-        + launch_common.sitl_container('sitl_explore_container', nodes))
+        + launch_common.sitl_container('sitl_explore_container', nodes + launch_common.visualization_nodes()))

@@ -45,7 +45,7 @@ def nodes(context):
         extra_arguments=launch_common.INTRA)
     # The localization publishes its outputs from construction: the world starts once it is loaded.
     graph = [launch_common.simulator_node('whisker/localization')] if simulator else []
-    return launch_common.sitl_container('whisker_localization_container', graph + [localization])
+    return launch_common.sitl_container('whisker_localization_container', graph + [localization] + launch_common.visualization_nodes())
 
 
 def generate_launch_description():

@@ -65,7 +65,7 @@ def nodes(context):
             name='wall_effect_nav', parameters=launch_common.parameters(
                 config('wall_effect_nav'), sim_time),
             extra_arguments=intra))
-    return launch_common.sitl_container('sitl_wall_effect_container', out)
+    return launch_common.sitl_container('sitl_wall_effect_container', out + launch_common.visualization_nodes())
 
 
 def generate_launch_description():

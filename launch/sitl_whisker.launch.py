@@ -51,4 +51,4 @@ def generate_launch_description():
     return LaunchDescription(
         launch_common.sitl_arguments('whisker_three_baffles_fsm')
         + launch_common.rviz_arguments('whisker', sim_time=True)
-        + launch_common.sitl_container('sitl_whisker_container', nodes))
+        + launch_common.sitl_container('sitl_whisker_container', nodes + launch_common.visualization_nodes()))

@@ -65,4 +65,4 @@ def generate_launch_description():
                               description='explore | static_wrench | ricochet | waypoint'),
         DeclareLaunchArgument('ply_file', default_value='xplorer_map.ply',
                               description='contact map written at shutdown (ASCII PLY, frame odom, or <prefix>odom: the odometry frame)'),
-    ] + launch_common.sitl_container('sitl_xplorer_container', nodes))
+    ] + launch_common.sitl_container('sitl_xplorer_container', nodes + launch_common.visualization_nodes()))

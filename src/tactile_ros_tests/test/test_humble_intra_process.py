@@ -21,7 +21,8 @@ cannot be built here, so these tests check the condition itself, on Kilted or Ja
 - test_no_transient_local_outside_ros_qos: the probe cannot tell an intra-process
   subscription from the graph, so the component sources must not name transient local
   (publisher or subscription) except through tactile_common/ros_qos.hpp's
-  latched_publisher(), which turns intra-process off for that publisher.
+  latched_publisher() and latched_subscription(), which turn intra-process off for that
+  publisher or subscription.
 """
 
 from __future__ import annotations
@@ -112,6 +113,24 @@ for _case in CASES.values():
             _case['latched']['/robot_description'] = _vehicle
             if _HAVE_TF2:
                 _case['latched']['/tf_static'] = _vehicle
+
+
+# Where the ROS 2 installation has visualization_msgs (tactile_viz builds its component),
+# every vehicle container (sitl_*, sitl, radio) also holds the visualization node, which
+# latches the GPIS grids, and the simulator latches the arena on /sim/arena.
+try:
+    import visualization_msgs.msg  # noqa: F401
+    _HAVE_VIZ = True
+except ImportError:
+    _HAVE_VIZ = False
+if _HAVE_VIZ:
+    for _case in CASES.values():
+        if _case['launch'].startswith('sitl'):
+            _case['nodes'].append('/visualization')
+            _case['plugins'].add('tactile_viz::VisualizationComponent')
+            _case['latched'].update({'/gpis/mean_grid': '/visualization', '/gpis/variance_grid': '/visualization'})
+        if '/tactile_sim' in _case['nodes']:
+            _case['latched']['/sim/arena'] = '/tactile_sim'
 
 
 def load_probe(g: Graph, container: str, timeout: float = 30.0):

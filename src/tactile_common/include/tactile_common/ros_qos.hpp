@@ -35,6 +35,7 @@
 
 #include <memory>
 #include <string>
+#include <utility>
 
 #include "rclcpp/rclcpp.hpp"
 
@@ -72,6 +73,18 @@ std::shared_ptr<rclcpp::Publisher<MessageT>> latched_publisher(rclcpp::Node& nod
                                                               size_t depth = 1) {
   return node.create_publisher<MessageT>(topic, rclcpp::QoS(depth).reliable().transient_local(),
                                          latched_publisher_options());
+}
+
+// A reliable, transient-local subscription to a latched topic (a late subscriber still gets
+// the last `depth` messages), never intra-process (Humble refuses transient local with it,
+// as for latched_publisher()).
+template <class MessageT, class CallbackT>
+std::shared_ptr<rclcpp::Subscription<MessageT>> latched_subscription(rclcpp::Node& node, const std::string& topic,
+                                                                    CallbackT&& callback, size_t depth = 1) {
+  rclcpp::SubscriptionOptions options;
+  options.use_intra_process_comm = rclcpp::IntraProcessSetting::Disable;
+  return node.create_subscription<MessageT>(topic, rclcpp::QoS(depth).reliable().transient_local(),
+                                            std::forward<CallbackT>(callback), options);
 }
 
 // The same on a node's topics interface: for a lifecycle node, whose own

@@ -34,6 +34,11 @@
 // std_msgs/String, reliable and transient local (latched_publisher: RViz's
 // RobotModel display and a late subscriber get it).
 //
+// Where the toolchain has visualization_msgs (TACTILE_SIM_HAVE_VISUALIZATION_MSGS), the
+// arena of the run (with the scenario's transform and the trial's randomised yaw) is
+// published once on sim/arena as visualization_msgs/MarkerArray in frame map
+// (arena_markers(), logic/arena_markers.hpp), latched like robot_description.
+//
 // At the scenario's end (duration_s) the simulator stops stepping and
 // publishing, logs one line "tactile_sim: scenario ... ended" with the
 // achieved real-time factor and the setpoint latency, and publishes
@@ -76,6 +81,9 @@
 #include "tactile_common/ros_qos.hpp"
 #include "tactile_common/time.hpp"
 #include "tactile_sim/logic/sim_logic.hpp"
+#ifdef TACTILE_SIM_HAVE_VISUALIZATION_MSGS
+#include "tactile_sim/logic/arena_markers.hpp"
+#endif
 #ifdef TACTILE_HAVE_TF2
 #include "tactile_common/ros_tf.hpp"
 #endif
@@ -86,6 +94,7 @@ class TactileSimComponent : public rclcpp::Node {
  public:
   static constexpr const char * kDoneTopic = "sim/done";
   static constexpr const char * kRobotDescriptionTopic = "robot_description";
+  static constexpr const char * kArenaTopic = "sim/arena";
 
   explicit TactileSimComponent(const rclcpp::NodeOptions & options)
   : Node(SimLogic::kNodeName, options),
@@ -138,6 +147,11 @@ class TactileSimComponent : public rclcpp::Node {
     std_msgs::msg::String description;
     description.data = logic_->robot_description();
     description_publisher_->publish(description);
+#ifdef TACTILE_SIM_HAVE_VISUALIZATION_MSGS
+    arena_publisher_ =
+      tactile_common::latched_publisher<visualization_msgs::msg::MarkerArray>(*this, kArenaTopic);
+    arena_publisher_->publish(arena_markers(logic_->arena(), "map"));  // map: never prefixed
+#endif
 #ifdef TACTILE_HAVE_TF2
     static_broadcaster_ = tactile_common::static_broadcaster(*this);
     static_broadcaster_->sendTransform(
@@ -380,6 +394,9 @@ class TactileSimComponent : public rclcpp::Node {
   rclcpp::Publisher<rosgraph_msgs::msg::Clock>::SharedPtr clock_publisher_;
   rclcpp::Publisher<std_msgs::msg::Bool>::SharedPtr done_publisher_;
   rclcpp::Publisher<std_msgs::msg::String>::SharedPtr description_publisher_;
+#ifdef TACTILE_SIM_HAVE_VISUALIZATION_MSGS
+  rclcpp::Publisher<visualization_msgs::msg::MarkerArray>::SharedPtr arena_publisher_;
+#endif
 #ifdef TACTILE_HAVE_TF2
   std::unique_ptr<tf2_ros::StaticTransformBroadcaster> static_broadcaster_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> broadcaster_;
