@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <iostream>
 #include <optional>
+#include <string>
+#include <vector>
 
 #include "tactile_cli/evaluate.hpp"
 #include "tactile_cli/hardware.hpp"
@@ -14,6 +16,7 @@
 #include "tactile_cli/interrupt.hpp"
 #include "tactile_cli/output_dir.hpp"
 #include "tactile_cli/parallel.hpp"
+#include "tactile_cli/param_schema.hpp"
 
 #include "tactile_cli/scenario_family.hpp"
 #include "tactile_cli/sim_run.hpp"
@@ -253,6 +256,23 @@ int main(int argc, char** argv) {
       ->check(CLI::ExistingDirectory);
   sweep_cmd->require_subcommand(0, 1);
 
+  std::vector<std::string> params_nodes;
+  std::string params_format = "markdown";
+  std::string params_readme_dir;
+  auto* params_cmd = app.add_subcommand(
+      "params", "the parameter schema of each node (key, type, default, range, unit, live, description); "
+                "without NODE: the nodes");
+  params_cmd->add_option("node", params_nodes, "node names (tactile params lists them)");
+  params_cmd->add_option("--format", params_format,
+                         "markdown (a table, as in the package READMEs) or yaml (a ROS 2 parameter file at "
+                         "the defaults, each key's description as a comment)")
+      ->check(CLI::IsMember({"markdown", "yaml"}))
+      ->capture_default_str();
+  params_cmd->add_option("--write-readme", params_readme_dir,
+                         "regenerate the tables between <!-- BEGIN params NODE --> and <!-- END params NODE --> "
+                         "in DIR/*/README.md (DIR: the workspace's src/)")
+      ->check(CLI::ExistingDirectory);
+
   CLI11_PARSE(app, argc, argv);
   if (!bag_options.compression.empty() && bag_options.storage != "mcap") {
     std::fprintf(stderr, "tactile: error: --bag-compression %s needs --storage mcap (sqlite3 bags are written uncompressed)\n",
@@ -276,6 +296,43 @@ int main(int argc, char** argv) {
       }
     } catch (const std::exception& e) {
       std::fprintf(stderr, "tactile: error: %s\n", e.what());
+      return 1;
+    }
+    return 0;
+  }
+
+  if (*params_cmd) {  // needs no node parameter files
+    try {
+      if (!params_readme_dir.empty()) {
+        if (!params_nodes.empty()) {
+          std::fprintf(stderr, "tactile params: error: --write-readme regenerates every block; give no NODE\n");
+          return 2;
+        }
+        for (const auto& line : tactile_cli::write_param_tables(params_readme_dir)) std::printf("%s\n", line.c_str());
+        return 0;
+      }
+      if (params_nodes.empty()) {
+        for (const auto& s : tactile_cli::node_schemas()) {
+          std::string files;
+          for (const auto& f : s.config_files) files += (files.empty() ? "config/" : ", config/") + f;
+          std::printf("%-22s %3zu parameters  package %-21s %s\n", s.name.c_str(), s.parameters().values().size(),
+                      s.package.c_str(), files.empty() ? "(launch arguments)" : files.c_str());
+        }
+        return 0;
+      }
+      std::vector<const tactile_cli::NodeSchema*> chosen;
+      for (const auto& n : params_nodes) chosen.push_back(&tactile_cli::node_schema(n));  // all known before output
+      for (size_t i = 0; i < chosen.size(); ++i) {
+        if (i) std::printf("\n");
+        const std::string text =
+            params_format == "yaml" ? tactile_cli::schema_yaml(*chosen[i]) : tactile_cli::schema_markdown(*chosen[i]);
+        std::fputs(text.c_str(), stdout);
+      }
+    } catch (const tactile_cli::UnknownNode& e) {
+      std::fprintf(stderr, "tactile params: error: %s\n", e.what());
+      return 2;
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "tactile params: error: %s\n", e.what());
       return 1;
     }
     return 0;
