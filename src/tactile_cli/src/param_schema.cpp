@@ -71,7 +71,10 @@ std::vector<NodeSchema> make_schemas() {
        [] { return tactile_depth::TactileDepthLogic::default_parameters(); }},
       // No file: launch_common.simulator_node() passes every key from launch arguments.
       {"tactile_sim", "tactile_sim", {}, {"tactile_sim"},
-       [] { return tactile_sim::SimLogic::default_parameters(); }},
+       [] {
+         return combined("tactile_sim", {tactile_sim::SimLogic::default_parameters(),
+                                         tactile_sim::SimLogic::component_parameters()});
+       }},
       {"tdorc_filter", "tdorc_filter", {"tdorc_filter.yaml"},
        {"/whisker/left/tdorc_filter", "/whisker/right/tdorc_filter"},
        [] { return tdorc_filter::TdorcFilterLogic::default_parameters(); }},

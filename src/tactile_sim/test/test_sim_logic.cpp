@@ -61,6 +61,37 @@ TEST(SimLogic, EveryParameterIsDescribedAndNoneIsLive) {
   for (const auto& [key, info] : d.infos()) EXPECT_FALSE(info.live) << key;
 }
 
+// The component's own keys (issue 33 item 4: one schema per node): described, read-only,
+// defaults as the component had them, real_time_factor's range (0, 1000] exactly what
+// component_params_from() takes, its error naming the key and the value.
+TEST(SimLogic, ComponentParametersAreDescribedAndChecked) {
+  const auto d = SimLogic::component_parameters();
+  EXPECT_TRUE(tactile_common::undescribed(d).empty());
+  for (const auto& [key, info] : d.infos()) EXPECT_FALSE(info.live) << key;
+  const auto c = SimLogic::component_params_from(d);
+  EXPECT_EQ(c.real_time_factor, 1.0);
+  EXPECT_EQ(c.wait_for_publisher, "");
+  EXPECT_EQ(c.wait_for_subscribers, "");
+  EXPECT_EQ(d.info("real_time_factor")->range->text(), "(0, 1000]");
+  for (const auto& leak : tactile_common::range_leaks(
+           d, [](const tactile_common::ParamMap& m) { SimLogic::component_params_from(m); })) {
+    ADD_FAILURE() << leak.key << " = " << leak.value << " is outside its described range but accepted";
+  }
+  auto m = d;
+  m.set("real_time_factor", 0.0);
+  try {
+    SimLogic::component_params_from(m);
+    FAIL() << "0 accepted";
+  } catch (const tactile_common::ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find("tactile_sim.ros__parameters.real_time_factor: must be in (0, 1000], got 0"),
+              std::string::npos)
+        << e.what();
+  }
+  // No key of the simulation's: the component declares both maps on one node.
+  const auto simulation = SimLogic::default_parameters();
+  for (const auto& [key, value] : simulation.values()) EXPECT_FALSE(d.has(key)) << key;
+}
+
 TEST(SimLogic, SensorRatesDivideThePhysicsRate) {
   auto p = SimLogic::default_parameters();
   p.set("scenario", kSweep);

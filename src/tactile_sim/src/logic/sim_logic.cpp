@@ -820,6 +820,32 @@ tactile_common::ParamMap SimLogic::default_parameters() {
   return p;
 }
 
+tactile_common::ParamMap SimLogic::component_parameters() {
+  tactile_common::ParamMap p(kNodeName, "defaults");
+  // 1000x: a bound of ours (the wall timer's period is the physics step divided by it).
+  p.set("real_time_factor", 1.0,
+        {"simulated seconds per wall-clock second (1: real time; a container that cannot keep up advances "
+         "simulated time slower)", "", tactile_common::ParamRange{0.0, 1000.0, true, false}, false});
+  p.set("wait_for_publisher", std::string(""),
+        {"the clock starts once this topic (relative: in the node's namespace) has a publisher; \"\": at once", "",
+         {}, false});
+  p.set("wait_for_subscribers", std::string(""),
+        {"comma-separated topics of the simulator's; it holds t = 0 until each has a subscriber in another "
+         "process; \"\": none", "", {}, false});
+  return p;
+}
+
+SimLogic::ComponentParams SimLogic::component_params_from(const tactile_common::ParamMap& params) {
+  ComponentParams c;
+  c.real_time_factor = params.get_double("real_time_factor");
+  if (!(c.real_time_factor > 0.0) || c.real_time_factor > 1000.0) {
+    throw params.error("real_time_factor", "must be in (0, 1000], got " + std::to_string(c.real_time_factor));
+  }
+  c.wait_for_publisher = params.get_string("wait_for_publisher");
+  c.wait_for_subscribers = params.get_string("wait_for_subscribers");
+  return c;
+}
+
 std::unique_ptr<SimLogic> SimLogic::from_parameters(const tactile_common::ParamMap& params) {
   const std::string path = params.get_string("scenario");
   if (path.empty()) throw params.error("scenario", "must name a scenario file (config/scenarios/*.yaml)");

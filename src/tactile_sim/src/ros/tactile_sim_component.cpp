@@ -3,7 +3,8 @@
 // time from 0, stepped by a wall timer and published on /clock, so the other
 // nodes run with use_sim_time:=true.
 //
-// Parameters besides SimLogic's (scenario, seed):
+// Parameters besides SimLogic's (scenario, seed, frame_prefix), declared with them from
+// SimLogic::component_parameters() (descriptions, range) and read at start:
 //   real_time_factor (double, default 1.0): the timer period is the physics
 //     period divided by it. 1.0 flies in real time (what an operator at a
 //     ground station expects); CI flies faster. If the container cannot keep
@@ -98,31 +99,15 @@ class TactileSimComponent : public rclcpp::Node {
 
   explicit TactileSimComponent(const rclcpp::NodeOptions & options)
   : Node(SimLogic::kNodeName, options),
-    parameters_(*this, SimLogic::default_parameters()),  // every key read-only
+    // The simulation's keys and the component's own (real_time_factor, wait_for_*): read
+    // at start, read-only, so `ros2 param set` refuses them.
+    parameters_(*this, {SimLogic::default_parameters(), SimLogic::component_parameters()}),
     logic_(SimLogic::from_parameters(parameters_.values()))
   {
-    // The host's own parameters (not the simulation's): read at start, read-only like the
-    // logic's (tactile_common::NodeParameters), so `ros2 param set` refuses them.
-    const auto read_only = [](const char * description) {
-        rcl_interfaces::msg::ParameterDescriptor d;
-        d.description = description;
-        d.read_only = true;
-        d.additional_constraints = "read at start: restart the node to change it";
-        return d;
-      };
-    real_time_factor_ = declare_parameter<double>(
-      "real_time_factor", 1.0,
-      read_only("simulated seconds per wall-clock second, in (0, 1000]"));
-    if (!(real_time_factor_ > 0.0) || real_time_factor_ > 1000.0) {
-      throw std::invalid_argument(
-        tactile_common::parameter_source(*this) + ": real_time_factor: must be in (0, 1000], got " +
-        std::to_string(real_time_factor_));
-    }
-    wait_for_publisher_ = declare_parameter<std::string>(
-      "wait_for_publisher", "", read_only("the clock starts once this topic has a publisher (\"\": at once)"));
-    const auto subscribers = declare_parameter<std::string>(
-      "wait_for_subscribers", "",
-      read_only("comma-separated topics the clock waits for a subscriber of (\"\": none)"));
+    const SimLogic::ComponentParams host = SimLogic::component_params_from(parameters_.values());
+    real_time_factor_ = host.real_time_factor;
+    wait_for_publisher_ = host.wait_for_publisher;
+    const std::string & subscribers = host.wait_for_subscribers;
     for (size_t begin = 0; begin < subscribers.size(); ) {
       size_t end = subscribers.find(',', begin);
       if (end == std::string::npos) {end = subscribers.size();}

@@ -102,6 +102,20 @@ class SimLogic {
   /// Loads the scenario named by the parameters and builds the world.
   /// Errors name the parameter source or the scenario file, key and reason.
   static std::unique_ptr<SimLogic> from_parameters(const tactile_common::ParamMap& params);
+
+  /// The rclcpp component's own keys, beside default_parameters() on the same node (the
+  /// standalone host steps the world itself and reads none): `real_time_factor`
+  /// (simulated seconds per wall-clock second, (0, 1000]), `wait_for_publisher` and
+  /// `wait_for_subscribers` (README "ROS 2 component"). Read at start (read-only).
+  static tactile_common::ParamMap component_parameters();
+  struct ComponentParams {
+    double real_time_factor = 1.0;
+    std::string wait_for_publisher;    ///< "" : the clock starts at once
+    std::string wait_for_subscribers;  ///< comma-separated topics; "" : none
+  };
+  /// The component's keys from `params`; ParamError naming the key for a value outside
+  /// its range.
+  static ComponentParams component_params_from(const tactile_common::ParamMap& params);
   ~SimLogic();
   SimLogic(const SimLogic&) = delete;
   SimLogic& operator=(const SimLogic&) = delete;
