@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
-# Regenerates the parameter tables of the package READMEs: the lines between
+# Regenerates the parameter tables of the package READMEs (and docs/*.md pages): the lines between
 #   <!-- BEGIN params <node> -->  and  <!-- END params <node> -->
 # become `tactile params <node>` (from each node logic's default_parameters()). Run it after
 # changing a parameter's default, range, unit or description; test_param_schema
-# (tactile_cli, ParamTables.EveryReadmeTableIsTheGeneratedOne) fails until the tables match.
+# (tactile_cli, ParamTables.EveryDocumentTableIsTheGeneratedOne) fails until the tables match.
 # Usage: scripts/param_tables.sh     (after a colcon build of tactile_cli)
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"

@@ -270,7 +270,7 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   params_cmd->add_option("--write-readme", params_readme_dir,
                          "regenerate the tables between <!-- BEGIN params NODE --> and <!-- END params NODE --> "
-                         "in DIR/*/README.md (DIR: the workspace's src/)")
+                         "in DIR/*/README.md and DIR/*/docs/*.md (DIR: the workspace's src/)")
       ->check(CLI::ExistingDirectory);
 
   CLI11_PARSE(app, argc, argv);

@@ -335,14 +335,26 @@ ReadmeTables regenerate_param_tables(const std::string& text, const std::string&
   return result;
 }
 
+std::vector<std::filesystem::path> package_documents(const std::string& src_dir) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> out;
+  for (const auto& entry : fs::directory_iterator(src_dir)) {
+    if (!entry.is_directory()) continue;
+    const fs::path readme = entry.path() / "README.md";
+    if (fs::is_regular_file(readme)) out.push_back(readme);
+    const fs::path docs = entry.path() / "docs";
+    if (!fs::is_directory(docs)) continue;
+    for (const auto& doc : fs::directory_iterator(docs)) {
+      if (doc.is_regular_file() && doc.path().extension() == ".md") out.push_back(doc.path());
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 std::vector<std::string> write_param_tables(const std::string& src_dir) {
   namespace fs = std::filesystem;
-  std::vector<fs::path> readmes;
-  for (const auto& entry : fs::directory_iterator(src_dir)) {
-    const fs::path readme = entry.path() / "README.md";
-    if (entry.is_directory() && fs::is_regular_file(readme)) readmes.push_back(readme);
-  }
-  std::sort(readmes.begin(), readmes.end());
+  std::vector<fs::path> readmes = package_documents(src_dir);
   std::vector<std::string> lines;
   for (const auto& readme : readmes) {
     std::ifstream in(readme, std::ios::binary);

@@ -176,30 +176,22 @@ TEST(ParamTables, MalformedBlocksNameTheLineAndReason) {
   }
 }
 
-// Nodes whose README is being rewritten (tactile_fsm, mapping_pcl): their blocks come
-// with that rewrite; this test then asks for the name to be removed here.
-const std::set<std::string> kBlocksPending = {"whisker_fsm", "xplorer_fsm", "wall_effect_nav", "xplorer_mapping"};
-
-TEST(ParamTables, EveryReadmeTableIsTheGeneratedOne) {
-  const fs::path src = TACTILE_SOURCE_DIR;
-  std::map<std::string, std::vector<std::string>> readmes_of;  // node -> packages with its block
-  for (const auto& entry : fs::directory_iterator(src)) {
-    const fs::path readme = entry.path() / "README.md";
-    if (!fs::is_regular_file(readme)) continue;
-    const std::string text = read(readme);
-    const auto r = tactile_cli::regenerate_param_tables(text, readme.string());
-    EXPECT_TRUE(r.text == text) << readme << ": a parameter table differs from `tactile params` "
+TEST(ParamTables, EveryDocumentTableIsTheGeneratedOne) {
+  // Every node's table, once, in its own package: README.md or docs/<page>.md.
+  std::map<std::string, std::vector<std::string>> documents_of;  // node -> packages with its block
+  for (const auto& doc : tactile_cli::package_documents(TACTILE_SOURCE_DIR)) {
+    const std::string text = read(doc);
+    const auto r = tactile_cli::regenerate_param_tables(text, doc.string());
+    EXPECT_TRUE(r.text == text) << doc << ": a parameter table differs from `tactile params` "
                                 << "(default_parameters() changed?): run scripts/param_tables.sh";
-    for (const auto& n : r.nodes) readmes_of[n].push_back(entry.path().filename().string());
+    const fs::path package = doc.parent_path().filename() == "docs" ? doc.parent_path().parent_path()
+                                                                     : doc.parent_path();
+    for (const auto& n : r.nodes) documents_of[n].push_back(package.filename().string());
   }
   for (const auto& s : node_schemas()) {
-    const auto it = readmes_of.find(s.name);
-    if (kBlocksPending.count(s.name)) {
-      EXPECT_TRUE(it == readmes_of.end()) << s.name << " has its block now: remove it from kBlocksPending";
-      continue;
-    }
-    ASSERT_TRUE(it != readmes_of.end()) << s.name << ": no <!-- BEGIN params " << s.name << " --> block in "
-                                        << s.package << "/README.md";
+    const auto it = documents_of.find(s.name);
+    ASSERT_TRUE(it != documents_of.end()) << s.name << ": no <!-- BEGIN params " << s.name << " --> block in "
+                                          << s.package << "/README.md or " << s.package << "/docs/*.md";
     EXPECT_EQ(it->second, std::vector<std::string>{s.package}) << s.name;
   }
 }

@@ -7,6 +7,7 @@
 // and test_param_schema checks the READMEs and config/<node>.yaml against it.
 #pragma once
 
+#include <filesystem>
 #include <functional>
 #include <stdexcept>
 #include <string>
@@ -98,9 +99,14 @@ struct ReadmeTables {
 /// nested blocks or a node's second block; the text outside the blocks is kept as it is.
 ReadmeTables regenerate_param_tables(const std::string& text, const std::string& source);
 
-/// regenerate_param_tables() on every `<src_dir>/<package>/README.md`, writing those whose
-/// tables changed. One line per README with blocks: its path, its nodes, "updated" or
-/// "up to date". ReadmeError on a malformed README (nothing of it is written).
+/// The documents of the packages under `src_dir` that may carry parameter blocks:
+/// `<package>/README.md` and `<package>/docs/*.md` (a package whose README points to a
+/// page per behaviour: tactile_fsm), sorted.
+std::vector<std::filesystem::path> package_documents(const std::string& src_dir);
+
+/// regenerate_param_tables() on every package_documents() file, writing those whose
+/// tables changed. One line per file with blocks: its path, its nodes, "updated" or
+/// "up to date". ReadmeError on a malformed file (nothing of it is written).
 std::vector<std::string> write_param_tables(const std::string& src_dir);
 
 }  // namespace tactile_cli
