@@ -21,6 +21,7 @@
 #include "tactile_fsm/whisker_fsm_logic.hpp"
 #include "tactile_fsm/xplorer_fsm_logic.hpp"
 #include "tactile_sim/logic/sim_logic.hpp"
+#include "tactile_viz/visualization_logic.hpp"
 #include "tdorc_filter/tdorc_filter_logic.hpp"
 #include "wall_effect_ekf/indi_control_logic.hpp"
 #include "wall_effect_ekf/wall_effect_ekf_logic.hpp"
@@ -78,6 +79,9 @@ std::vector<NodeSchema> make_schemas() {
       {"tdorc_filter", "tdorc_filter", {"tdorc_filter.yaml"},
        {"/whisker/left/tdorc_filter", "/whisker/right/tdorc_filter"},
        [] { return tdorc_filter::TdorcFilterLogic::default_parameters(); }},
+      // launch_common.visualization_nodes(); no component where visualization_msgs is missing.
+      {"visualization", "tactile_viz", {"visualization.yaml"}, {"visualization"},
+       [] { return tactile_viz::VisualizationLogic::default_parameters(); }},
       {"wall_effect_ekf", "wall_effect_ekf", {"wall_effect_ekf.yaml"}, {"wall_effect_ekf"},
        [] { return wall_effect_ekf::WallEffectEkfLogic::default_parameters(); }},
       {"wall_effect_nav", "tactile_fsm", {"wall_effect_nav.yaml"}, {"wall_effect_nav"},

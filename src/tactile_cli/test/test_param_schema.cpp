@@ -54,7 +54,7 @@ TEST(ParamSchema, EveryNodeOnceWithEveryKeyDescribed) {
   }
   // Every node logic with default_parameters() that a launch file runs.
   EXPECT_EQ(names, (std::set<std::string>{"crazyflie_bridge", "gpis_explorer", "indi_controller", "tactile_depth",
-                                          "tactile_sim", "tdorc_filter", "wall_effect_ekf", "wall_effect_nav",
+                                          "tactile_sim", "tdorc_filter", "visualization", "wall_effect_ekf", "wall_effect_nav",
                                           "wall_trajectory", "whisker_driver", "whisker_fsm", "whisker_localization",
                                           "xplorer_force_est", "xplorer_fsm", "xplorer_mapping"}));
 }

@@ -21,7 +21,7 @@ def listed_nodes():
 def test_without_node_lists_every_node_with_its_count():
     nodes = listed_nodes()
     assert {"tdorc_filter", "whisker_fsm", "crazyflie_bridge", "tactile_sim", "xplorer_mapping"} <= set(nodes)
-    assert len(nodes) == 15
+    assert len(nodes) == 16
     assert all(n > 0 for n in nodes.values())
 
 
