@@ -349,7 +349,7 @@ TEST(XplorerMappingRules, CornerSlabOnlyAtRightAngleCorners) {
   EXPECT_FALSE(is_right_angle_corner(X, dir(0), X, dir(62), tol));
   EXPECT_FALSE(is_right_angle_corner(X, dir(44.5), X, dir(45.5), tol));
   EXPECT_FALSE(is_right_angle_corner(X, dir(0), BodyDirection::kMinusY, dir(-90), tol));
-  EXPECT_FALSE(is_right_angle_corner(std::nullopt, dir(0), X, dir(90), tol));
+  EXPECT_FALSE(is_right_angle_corner(BodyDirection::kNone, dir(0), X, dir(90), tol));
   EXPECT_TRUE(is_right_angle_corner(X, dir(44.5), X, dir(45.5), M_PI / 2));  // 001: every lambda change
   // The mapper: vehicle yawed so that C_n (+b1) points along 44 deg, then 46 deg
   // (lambda's world axis changes from -X... to the next): no corner slab; then
