@@ -21,6 +21,15 @@ bool listed(const std::vector<std::string>& list, const std::string& state) {
 }
 }  // namespace
 
+const std::vector<std::pair<std::string, uint8_t>>& XplorerMapLogic::turning_reasons() {
+  using tactile_msgs::msg::FsmState;
+  static const std::vector<std::pair<std::string, uint8_t>> reasons = {
+      {"yaw_rate_peak", FsmState::REASON_XPLORER_YAW_RATE_PEAK},         // a convex corner (001 Sec. IV-A)
+      {"contact_lost_turn", FsmState::REASON_XPLORER_CONTACT_LOST_TURN},  // about a face's end after a contact lost
+  };
+  return reasons;
+}
+
 void XplorerMapLogic::Params::validate() const {
   stamping.validate();
   map.validate();
@@ -35,8 +44,14 @@ void XplorerMapLogic::Params::validate() const {
   if (!(min_state_time_after_turn_s >= 0.0) || !std::isfinite(min_state_time_after_turn_s))
     bad("min_state_time_after_turn_s", "must be finite and >= 0");
   if (frame_id.empty()) bad("frame_id", "must not be empty");
-  for (const auto& r : impact_turn_reasons)
-    if (r.empty()) bad("impact_turn_reasons", "must not hold an empty reason (it would match every turn)");
+  for (const auto& r : impact_turn_reasons) {
+    const auto& known = turning_reasons();
+    if (std::none_of(known.begin(), known.end(), [&](const auto& k) { return k.first == r; })) {
+      std::string names;
+      for (const auto& k : known) names += (names.empty() ? "\"" : ", \"") + k.first + "\"";
+      bad("impact_turn_reasons", "must hold only reasons of entering tactile_turning (" + names + "), got \"" + r + "\"");
+    }
+  }
   for (const auto& r : impact_turn_rules)
     if (r != "contact_now" && r != "steady" && r != "gate")
       bad("impact_turn_rules", "must hold only \"contact_now\", \"steady\", \"gate\", got \"" + r + "\"");
@@ -164,9 +179,9 @@ ParamMap XplorerMapLogic::default_parameters() {
         {"the contact-now check applies only in a state entered from one of these (empty: always) (choice; "
          "README \"Contact now\")", "", {}, false});
   m.set("impact_turn_reasons", d.impact_turn_reasons,
-        {"a Tactile-turning entered for one of these reasons (prefix of FsmState.reason, not empty) counts as "
-         "an impact (choice; rule 10, README \"Re-contact after a contact-lost turn\"); empty: off", "", {},
-         false});
+        {"a Tactile-turning entered for one of these reasons (FsmState.reason_code by name: contact_lost_turn, "
+         "yaw_rate_peak) counts as an impact (choice; rule 10, README \"Re-contact after a contact-lost turn\"); "
+         "empty: off", "", {}, false});
   m.set("impact_turn_rules", d.impact_turn_rules,
         {"first-contact rules after such a turn: any of contact_now, steady, gate (choice; rule 10)", "", {},
          false});
@@ -297,7 +312,11 @@ XplorerMapLogic::Params XplorerMapLogic::params_from(const ParamMap& m) {
 }
 
 XplorerMapLogic::XplorerMapLogic(const Params& params)
-    : params_((params.validate(), params)), map_(params.map), mapper_(params.stamping, map_) {}
+    : params_((params.validate(), params)), map_(params.map), mapper_(params.stamping, map_) {
+  for (const auto& name : params_.impact_turn_reasons)
+    for (const auto& [known, code] : turning_reasons())
+      if (known == name) impact_turn_codes_.push_back(code);
+}
 
 int64_t XplorerMapLogic::period_ns() const { return tactile_common::from_seconds(1.0 / params_.stamping.rate_hz); }
 
@@ -342,10 +361,11 @@ void XplorerMapLogic::on_fsm_state(const tactile_msgs::msg::FsmState& msg) {
   fsm_previous_state_ = msg.previous_state;
   if (changed) {
     // README "Re-contact after a contact-lost turn": a turn entered because the face was
-    // lost brings the vehicle back to the object from off its face, like Exploration.
+    // lost brings the vehicle back to the object from off its face, like Exploration. Keyed
+    // by the reason code: the reason text is for people and may be reworded.
     if (msg.state == kTurningState)
-      turn_after_impact_reason_ = std::any_of(params_.impact_turn_reasons.begin(), params_.impact_turn_reasons.end(),
-                                              [&](const std::string& r) { return msg.reason.rfind(r, 0) == 0; });
+      turn_after_impact_reason_ =
+          std::find(impact_turn_codes_.begin(), impact_turn_codes_.end(), msg.reason_code) != impact_turn_codes_.end();
     entered_after_impact_turn_ = !listed(params_.contact_now_after, msg.previous_state) &&
                                  msg.previous_state == kTurningState && turn_after_impact_reason_;
     entered_after_impact_ = listed(params_.contact_now_after, msg.previous_state) || entered_after_impact_turn_;

@@ -9,46 +9,6 @@
 
 namespace mapping_pcl {
 
-Eigen::Vector2d unit(BodyDirection d) {
-  switch (d) {
-    case BodyDirection::kPlusX: return {1.0, 0.0};
-    case BodyDirection::kMinusX: return {-1.0, 0.0};
-    case BodyDirection::kPlusY: return {0.0, 1.0};
-    case BodyDirection::kMinusY: return {0.0, -1.0};
-  }
-  return {0.0, 0.0};
-}
-
-const char* to_string(BodyDirection d) {
-  switch (d) {
-    case BodyDirection::kPlusX: return "+X";
-    case BodyDirection::kMinusX: return "-X";
-    case BodyDirection::kPlusY: return "+Y";
-    case BodyDirection::kMinusY: return "-Y";
-  }
-  return "?";
-}
-
-BodyDirection right_hand_move(BodyDirection c) {
-  switch (c) {
-    case BodyDirection::kPlusX: return BodyDirection::kMinusY;   // wall ahead -> move right
-    case BodyDirection::kMinusY: return BodyDirection::kMinusX;  // wall on the right -> move back
-    case BodyDirection::kMinusX: return BodyDirection::kPlusY;
-    case BodyDirection::kPlusY: return BodyDirection::kPlusX;    // wall on the left -> move forward
-  }
-  return c;
-}
-
-std::optional<BodyDirection> contact_direction(const Eigen::Vector2d& f, double threshold) {
-  if (!f.allFinite()) return std::nullopt;
-  if (std::abs(f.x()) >= std::abs(f.y())) {
-    if (std::abs(f.x()) <= threshold) return std::nullopt;
-    return f.x() < 0 ? BodyDirection::kPlusX : BodyDirection::kMinusX;
-  }
-  if (std::abs(f.y()) <= threshold) return std::nullopt;
-  return f.y() < 0 ? BodyDirection::kPlusY : BodyDirection::kMinusY;
-}
-
 void XplorerMapParams::validate() const {
   auto bad = [](const std::string& f, const std::string& why, double v) {
     throw std::invalid_argument("XplorerMapParams." + f + ": " + why + ", got " + std::to_string(v));
@@ -103,10 +63,10 @@ namespace {
 constexpr double kArmDir[4] = {-M_PI / 4, M_PI / 4, 3 * M_PI / 4, -3 * M_PI / 4};  // tactile_msgs/ArmImu.arm_id
 }  // namespace
 
-bool is_right_angle_corner(std::optional<BodyDirection> previous_body, const Eigen::Vector2d& previous_world,
+bool is_right_angle_corner(BodyDirection previous_body, const Eigen::Vector2d& previous_world,
                            BodyDirection body, const Eigen::Vector2d& world, double tolerance) {
   if (tolerance >= M_PI / 2) return true;  // 001: every change of lambda
-  if (!previous_body || *previous_body != body) return false;
+  if (previous_body != body) return false;  // also before the first slab (kNone)
   const double turned = std::acos(std::clamp(previous_world.normalized().dot(world.normalized()), -1.0, 1.0));
   return std::abs(turned - M_PI / 2) <= tolerance;
 }
@@ -582,8 +542,8 @@ int XplorerContactMapper::update(const ContactSample& s) {
     ++stats_.skipped_low_force;
     return 0;
   }
-  const auto c = contact_direction(s.force_body, 0.0);
-  if (!c) {
+  const BodyDirection c = contact_direction(s.force_body, 0.0);
+  if (c == BodyDirection::kNone) {
     ++stats_.skipped_low_force;
     return 0;
   }
@@ -598,7 +558,7 @@ int XplorerContactMapper::update(const ContactSample& s) {
     return 0;
   }
   const Eigen::Rotation2Dd R(s.yaw);
-  const Eigen::Vector2d c_w = p_.normal_from_force ? Eigen::Vector2d(-(R * s.force_body).normalized()) : Eigen::Vector2d(R * unit(*c));
+  const Eigen::Vector2d c_w = p_.normal_from_force ? Eigen::Vector2d(-(R * s.force_body).normalized()) : Eigen::Vector2d(R * unit(c));
   const bool arms_known = s.arm_angles && std::all_of(s.arm_angles->begin(), s.arm_angles->end(), [](double a) {
                             return std::isfinite(a);
                           });
@@ -641,7 +601,7 @@ int XplorerContactMapper::update(const ContactSample& s) {
   const double ang = std::atan2(m_w.y(), m_w.x());
   const int move_world = static_cast<int>(std::lround(ang / (M_PI / 2))) & 3;  // nearest world axis
   if (last_move_world_ && *last_move_world_ != move_world) {  // 001 Sec. IV-B: corner
-    if (is_right_angle_corner(last_contact_, last_contact_world_, *c, c_w, p_.corner_angle_tolerance)) {
+    if (is_right_angle_corner(last_contact_, last_contact_world_, c, c_w, p_.corner_angle_tolerance)) {
       stamp(s.t, corner_slab(s, last_contact_world_, c_w), c_w, near);
       ++stats_.corner_slabs;
       ++stamped;

@@ -349,7 +349,7 @@ TEST(XplorerMappingRules, CornerSlabOnlyAtRightAngleCorners) {
   EXPECT_FALSE(is_right_angle_corner(X, dir(0), X, dir(62), tol));
   EXPECT_FALSE(is_right_angle_corner(X, dir(44.5), X, dir(45.5), tol));
   EXPECT_FALSE(is_right_angle_corner(X, dir(0), BodyDirection::kMinusY, dir(-90), tol));
-  EXPECT_FALSE(is_right_angle_corner(std::nullopt, dir(0), X, dir(90), tol));
+  EXPECT_FALSE(is_right_angle_corner(BodyDirection::kNone, dir(0), X, dir(90), tol));
   EXPECT_TRUE(is_right_angle_corner(X, dir(44.5), X, dir(45.5), M_PI / 2));  // 001: every lambda change
   // The mapper: vehicle yawed so that C_n (+b1) points along 44 deg, then 46 deg
   // (lambda's world axis changes from -X... to the next): no corner slab; then
@@ -619,28 +619,30 @@ TEST(XplorerMappingRules, LogicHoldsATraversalAfterExplorationOnly) {
 }
 
 // README "Re-contact after a contact-lost turn": tactile_fsm turns about a face's end
-// when the contact is lost ("contact lost: turn about the corner"); the traversal
-// after that turn re-contacts the object from off its face, an impact like the one
-// after Exploration. With impact_turn_reasons = ["contact lost"] (default) it gets the
-// first-contact rules listed in impact_turn_rules: contact now (the average 1.81 N, the
-// latest samples 0.1 N: no slab), the steady hold and the 1 s state gate; after a corner
-// turn ("yaw rate peak") none of them; with impact_turn_reasons empty the contact-lost
-// turn is a corner turn.
+// when the contact is lost (REASON_XPLORER_CONTACT_LOST_TURN); the traversal after that
+// turn re-contacts the object from off its face, an impact like the one after Exploration.
+// With impact_turn_reasons = ["contact_lost_turn"] (default) it gets the first-contact rules
+// listed in impact_turn_rules: contact now (the average 1.81 N, the latest samples 0.1 N: no
+// slab), the steady hold and the 1 s state gate; after a corner turn (yaw_rate_peak) none of
+// them; with impact_turn_reasons empty the contact-lost turn is a corner turn. The reason
+// text is whatever tactile_fsm writes today; the mapper reads the code only (next test).
 TEST(XplorerMappingRules, LogicTreatsTheReContactAfterAContactLostTurnAsAnImpact) {
-  const std::string lost = "contact lost: turn about the corner";
+  using tactile_msgs::msg::FsmState;
+  const uint8_t lost = FsmState::REASON_XPLORER_CONTACT_LOST_TURN, peak = FsmState::REASON_XPLORER_YAW_RATE_PEAK;
   const std::vector<std::string> all = {"contact_now", "steady", "gate"};
   struct Case {
-    std::string reason;
+    uint8_t code;                      // FsmState.reason_code of the turn
     std::vector<std::string> reasons;  // impact_turn_reasons
     std::vector<std::string> rules;    // impact_turn_rules
     bool now, gate, steady;            // which rules apply
   };
-  for (const Case& c : {Case{lost, {"contact lost"}, all, true, true, true},
-                        Case{"yaw rate peak", {"contact lost"}, all, false, false, false},
+  for (const Case& c : {Case{lost, {"contact_lost_turn"}, all, true, true, true},
+                        Case{peak, {"contact_lost_turn"}, all, false, false, false},
                         Case{lost, {}, all, false, false, false},
-                        Case{lost, {"contact lost"}, {"contact_now", "steady"}, true, false, true},
-                        Case{lost, {"contact lost"}, {"gate"}, false, true, false}}) {
-    std::string what = c.reason + " reasons " + std::to_string(c.reasons.size()) + " rules";
+                        Case{peak, {"yaw_rate_peak"}, all, true, true, true},
+                        Case{lost, {"contact_lost_turn"}, {"contact_now", "steady"}, true, false, true},
+                        Case{lost, {"contact_lost_turn"}, {"gate"}, false, true, false}}) {
+    std::string what = "code " + std::to_string(c.code) + " reasons " + std::to_string(c.reasons.size()) + " rules";
     for (const auto& r : c.rules) what += " " + r;
     auto make = [&](bool no_gate) {
       auto d = XplorerMapLogic::default_parameters();
@@ -658,11 +660,13 @@ TEST(XplorerMappingRules, LogicTreatsTheReContactAfterAContactLostTurnAsAnImpact
       tactile_msgs::msg::FsmState st;
       st.state = "tactile_turning";
       st.previous_state = "tactile_traversal";
-      st.reason = c.reason;
+      st.reason = c.code == lost ? "contact lost: turn about the corner" : "yaw rate peak";
+      st.reason_code = c.code;
       logic.on_fsm_state(st);
       st.state = "tactile_traversal";
       st.previous_state = "tactile_turning";
       st.reason = "re-contact +X";
+      st.reason_code = FsmState::REASON_XPLORER_RE_CONTACT;
       logic.on_fsm_state(st);
     };
     auto press = [](XplorerMapLogic& logic, double t, int n_strong, int n) {
@@ -701,6 +705,64 @@ TEST(XplorerMappingRules, LogicTreatsTheReContactAfterAContactLostTurnAsAnImpact
     ADD_FAILURE() << "an unknown rule must be rejected";
   } catch (const std::exception& e) {
     EXPECT_NE(std::string(e.what()).find("impact_turn_rules"), std::string::npos) << e.what();
+  }
+  // A reason text (the rule before reason codes) or a state's code is no reason of a turn.
+  for (const std::string bad : {"contact lost", "contact_lost", ""}) {
+    d = XplorerMapLogic::default_parameters();
+    d.set("impact_turn_reasons", std::vector<std::string>{bad});
+    try {
+      XplorerMapLogic::params_from(d);
+      ADD_FAILURE() << "impact_turn_reasons \"" << bad << "\" must be rejected";
+    } catch (const std::exception& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find("impact_turn_reasons"), std::string::npos) << what;
+      EXPECT_NE(what.find("\"contact_lost_turn\""), std::string::npos) << what;  // names what it takes
+    }
+  }
+}
+
+// The mapper keys on FsmState.reason_code, never on the human-readable reason: the same
+// flight with every reason reworded (or swapped between the two kinds of turn) maps the
+// same, slab for slab; a different code with the same text does not.
+TEST(XplorerMappingRules, RewordingTheReasonTextChangesNothing) {
+  using tactile_msgs::msg::FsmState;
+  const uint8_t lost = FsmState::REASON_XPLORER_CONTACT_LOST_TURN, peak = FsmState::REASON_XPLORER_YAW_RATE_PEAK;
+  // Slabs stamped (and held) after a turn with this code and text, pressing with a firm
+  // average whose latest samples are light (contact now refuses it after an impact turn).
+  auto fly = [&](uint8_t code, const std::string& text) {
+    auto d = XplorerMapLogic::default_parameters();
+    d.set("publish_rate_hz", 0.0);
+    d.set("corner_release_s", 0.0);
+    d.set("min_state_time_s", 0.0);
+    d.set("min_state_time_after_turn_s", 0.0);
+    XplorerMapLogic logic(XplorerMapLogic::params_from(d));
+    FsmState st;
+    st.state = "tactile_turning";
+    st.previous_state = "tactile_traversal";
+    st.reason = text;
+    st.reason_code = code;
+    logic.on_fsm_state(st);
+    st.state = "tactile_traversal";
+    st.previous_state = "tactile_turning";
+    st.reason = text + " (re-contact)";
+    st.reason_code = FsmState::REASON_XPLORER_RE_CONTACT;
+    logic.on_fsm_state(st);
+    geometry_msgs::msg::WrenchStamped w;
+    w.header.frame_id = "base_link";
+    for (int i = 0; i < 50; ++i) {
+      w.wrench.force.x = i < 40 ? -2.0 : -0.1;
+      logic.on_wrench_body(w);
+    }
+    tick_at_origin(logic, 0.0);
+    return std::make_pair(logic.mapper().stats().slabs, logic.mapper().stats().skipped_no_contact_now);
+  };
+  const auto impact = fly(lost, "contact lost: turn about the corner");
+  const auto corner = fly(peak, "yaw rate peak");
+  EXPECT_EQ(impact, std::make_pair(uint64_t{0}, uint64_t{1}));  // contact now refused the slab
+  EXPECT_EQ(corner, std::make_pair(uint64_t{1}, uint64_t{0}));
+  for (const std::string text : {"", "face ended: pivot round its end", "contact lost", "yaw rate peak"}) {
+    EXPECT_EQ(fly(lost, text), impact) << text;
+    EXPECT_EQ(fly(peak, text), corner) << text;
   }
 }
 

@@ -19,15 +19,6 @@ ContactSample sample(double t, Vec3 p, double yaw, Eigen::Vector2d f) {
 }
 }  // namespace
 
-TEST(Directions, ContactDirectionAndRightHandMove) {
-  EXPECT_EQ(*contact_direction({-2.0, 0.5}, 1.5), BodyDirection::kPlusX);   // pushed back: obstacle ahead
-  EXPECT_EQ(*contact_direction({0.3, 1.6}, 1.5), BodyDirection::kMinusY);   // pushed left: obstacle right
-  EXPECT_FALSE(contact_direction({1.4, -1.4}, 1.5).has_value());
-  EXPECT_EQ(right_hand_move(BodyDirection::kPlusX), BodyDirection::kMinusY);
-  EXPECT_EQ(right_hand_move(BodyDirection::kMinusY), BodyDirection::kMinusX);
-  EXPECT_EQ(right_hand_move(BodyDirection::kPlusY), BodyDirection::kPlusX);
-}
-
 TEST(XplorerStamping, FaceSlabGeometryByHand) {
   PointMap map;
   XplorerContactMapper m(XplorerMapParams{}, map);

@@ -7,11 +7,19 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <map>
 #include <filesystem>
+#include <set>
 #include <string>
 #include <utility>
 
+#include "mapping_pcl/xplorer_map_logic.hpp"
 #include "sim_test_util.hpp"
+#include "tactile_bag/bag.hpp"
+#include "tactile_bag/typed.hpp"
+#include "tactile_fsm/xplorer_explorer.hpp"
+#include "tactile_fsm/xplorer_fsm_logic.hpp"
+#include "tactile_msgs/msg/fsm_state.hpp"
 
 namespace fs = std::filesystem;
 
@@ -184,4 +192,78 @@ TEST(XplorerSitl, RicochetRisesFasterThanWaypointFlight) {
   ASSERT_FALSE(w["xplorer"]["settling_time_s"].is_null());
   EXPECT_LT(r["xplorer"]["rise_time_s"].get<double>(), w["xplorer"]["rise_time_s"].get<double>());
   EXPECT_LT(r["xplorer"]["settling_time_s"].get<double>(), w["xplorer"]["settling_time_s"].get<double>());
+}
+
+// The reason codes in a bag written by `tactile sim` (the box of 001 Sec. V-C, seed 1): read
+// back, every FsmState of the exploration FSM carries reason_code, C_n and lambda; each
+// transition's code is one that leads from its previous state to its state; the corner turns
+// are the metrics' turns; the loop closes with its code. mapping_pcl's names of the turning
+// reasons (impact_turn_reasons) are tactile_fsm's names of those codes.
+TEST(XplorerSitl, BagCarriesTheReasonCodesOfTheTransitions) {
+  using tactile_msgs::msg::FsmState;
+  const fs::path out = fs::temp_directory_path() / ("tactile_cli_test_xplorer_reasons_" + std::to_string(::getpid()));
+  fs::remove_all(out);
+  tactile_cli::SimOptions o;
+  o.scenario = (tactile_cli::test::config_dir() / "scenarios" / "xplorer_box_traversal.yaml").string();
+  o.out_dir = out.string();
+  o.config_dir = tactile_cli::test::config_dir().string();
+  o.seed = 1;
+  o.progress = false;
+  o.write_png = false;
+  const auto m = tactile_cli::run_sim(o);
+  ASSERT_TRUE(m["success"].get<bool>());
+  // (previous state, state) -> the codes of that transition (FsmState.msg).
+  const std::map<std::pair<std::string, std::string>, std::set<uint8_t>> allowed = {
+      {{"takeoff", "exploration"}, {FsmState::REASON_XPLORER_HOVER_HEIGHT_REACHED}},
+      {{"exploration", "tactile_traversal"}, {FsmState::REASON_XPLORER_CONTACT, FsmState::REASON_XPLORER_CONTACT_SQUARE_UP}},
+      {{"tactile_traversal", "tactile_turning"},
+       {FsmState::REASON_XPLORER_YAW_RATE_PEAK, FsmState::REASON_XPLORER_CONTACT_LOST_TURN}},
+      {{"tactile_traversal", "exploration"},
+       {FsmState::REASON_XPLORER_CONTACT_LOST, FsmState::REASON_XPLORER_CONTACT_LOST_SQUARING}},
+      {{"tactile_turning", "tactile_traversal"}, {FsmState::REASON_XPLORER_RE_CONTACT}},
+      {{"tactile_turning", "exploration"}, {FsmState::REASON_XPLORER_TURN_LIMIT}},
+      {{"tactile_traversal", "done"}, {FsmState::REASON_XPLORER_LOOP_CLOSED}},
+      {{"tactile_turning", "done"}, {FsmState::REASON_XPLORER_LOOP_CLOSED}},
+  };
+  tactile_bag::Reader bag((out / "bag").string());
+  const std::string topic = std::string("/") + tactile_fsm::XplorerFsmLogic::kStateTopic;
+  bag.set_topic_filter({topic});
+  tactile_bag::SerializedMessage msg;
+  std::string state;
+  int messages = 0, turns = 0, traversal_messages = 0;
+  FsmState last;
+  while (bag.read_next(msg)) {
+    const auto s = tactile_bag::decode<FsmState>(msg);
+    ++messages;
+    EXPECT_EQ(s.behaviour, tactile_fsm::XplorerFsmLogic::kBehaviour);
+    if (messages == 1) {
+      EXPECT_EQ(s.state, "takeoff");
+      EXPECT_EQ(s.reason_code, FsmState::REASON_NONE);
+    }
+    if (s.state != state && messages > 1) {  // a transition
+      const auto it = allowed.find({s.previous_state, s.state});
+      ASSERT_NE(it, allowed.end()) << s.previous_state << " -> " << s.state;
+      EXPECT_EQ(it->second.count(s.reason_code), 1u)
+          << s.previous_state << " -> " << s.state << ": code " << int{s.reason_code} << " (" << s.reason << ")";
+      if (s.reason_code == FsmState::REASON_XPLORER_YAW_RATE_PEAK ||
+          s.reason_code == FsmState::REASON_XPLORER_CONTACT_LOST_TURN)
+        ++turns;
+    }
+    if (s.state == "tactile_traversal" || s.state == "tactile_turning") {  // C_n and lambda of the right-hand traversal
+      ++traversal_messages;
+      EXPECT_NE(s.contact_direction, FsmState::DIRECTION_NONE) << s.state;
+      EXPECT_EQ(s.move_direction, static_cast<uint8_t>(tactile_common::right_hand(
+                                      static_cast<tactile_common::BodyDirection>(s.contact_direction))));
+    }
+    state = s.state;
+    last = s;
+  }
+  EXPECT_GT(traversal_messages, 100);
+  EXPECT_EQ(turns, m["xplorer"]["turns"].get<int>());
+  EXPECT_EQ(turns, 4);  // one per corner of the box
+  EXPECT_EQ(last.state, "done");
+  EXPECT_EQ(last.reason_code, FsmState::REASON_XPLORER_LOOP_CLOSED);
+  for (const auto& [name, code] : mapping_pcl::XplorerMapLogic::turning_reasons())
+    EXPECT_EQ(name, tactile_fsm::to_string(static_cast<tactile_fsm::XplorerReason>(code)));
+  fs::remove_all(out);
 }

@@ -100,37 +100,24 @@ const char* to_string(XplorerState s) {
   return "?";
 }
 
-const char* to_string(XDir d) {
-  switch (d) {
-    case XDir::kPlusX: return "+X";
-    case XDir::kMinusX: return "-X";
-    case XDir::kPlusY: return "+Y";
-    case XDir::kMinusY: return "-Y";
-    case XDir::kNone: return "none";
+const char* to_string(XplorerReason r) {
+  switch (r) {
+    case XplorerReason::kNone: return "none";
+    case XplorerReason::kHoverHeightReached: return "hover_height_reached";
+    case XplorerReason::kContact: return "contact";
+    case XplorerReason::kContactSquareUp: return "contact_square_up";
+    case XplorerReason::kNewContact: return "new_contact";
+    case XplorerReason::kYawRatePeak: return "yaw_rate_peak";
+    case XplorerReason::kContactLostTurn: return "contact_lost_turn";
+    case XplorerReason::kContactLost: return "contact_lost";
+    case XplorerReason::kContactLostSquaring: return "contact_lost_squaring";
+    case XplorerReason::kReContact: return "re_contact";
+    case XplorerReason::kTurnLimit: return "turn_limit";
+    case XplorerReason::kLoopClosed: return "loop_closed";
+    case XplorerReason::kCollisionRecovered: return "collision_recovered";
+    case XplorerReason::kGoalPassed: return "goal_passed";
   }
   return "?";
-}
-
-XVec2 unit(XDir d) {
-  switch (d) {
-    case XDir::kPlusX: return {1, 0};
-    case XDir::kMinusX: return {-1, 0};
-    case XDir::kPlusY: return {0, 1};
-    case XDir::kMinusY: return {0, -1};
-    case XDir::kNone: return {0, 0};
-  }
-  return {0, 0};
-}
-
-XDir right_hand(XDir c) {
-  switch (c) {
-    case XDir::kPlusX: return XDir::kMinusY;
-    case XDir::kMinusY: return XDir::kMinusX;
-    case XDir::kMinusX: return XDir::kPlusY;
-    case XDir::kPlusY: return XDir::kPlusX;
-    case XDir::kNone: return XDir::kNone;
-  }
-  return XDir::kNone;
 }
 
 XVec2 post_collision_velocity(const XVec2& v, const XVec2& n_in, double e) {
@@ -224,23 +211,95 @@ double XplorerExplorer::reshape(const XVec2& n, const XVec2& p, const XVec3& for
   return rn;
 }
 
-void XplorerExplorer::enter(XplorerState s, const XplorerInput& in, const std::string& why) {
+std::string XplorerExplorer::reason_text(XplorerReason why) const {
+  switch (why) {
+    case XplorerReason::kNone: return "";
+    case XplorerReason::kHoverHeightReached: return "hover height reached";
+    case XplorerReason::kContact: return std::string("contact ") + to_string(contact_);
+    case XplorerReason::kContactSquareUp: {
+      std::ostringstream r;
+      r << "contact " << to_string(contact_) << " (square up "
+        << std::lround(wrap(square_yaw_ - square_yaw0_) * 180.0 / M_PI) << " deg)";
+      return r.str();
+    }
+    case XplorerReason::kNewContact: return std::string("new contact ") + to_string(contact_);
+    case XplorerReason::kYawRatePeak: return "yaw rate peak";
+    case XplorerReason::kContactLostTurn: return "contact lost: turn about the corner";
+    case XplorerReason::kContactLost: return "contact lost";
+    case XplorerReason::kContactLostSquaring: return "contact lost while squaring up";
+    case XplorerReason::kReContact: return std::string("re-contact ") + to_string(contact_);
+    case XplorerReason::kTurnLimit: return "turn limit without re-contact";
+    case XplorerReason::kLoopClosed: return "loop closed";
+    case XplorerReason::kCollisionRecovered: return "collision recovered";
+    case XplorerReason::kGoalPassed: return "goal passed without collision";
+  }
+  return "?";
+}
+
+void XplorerExplorer::enter(XplorerState s, XplorerReason why, const XplorerInput& in, XplorerOutput& out) {
+  const XplorerState from = state_;
+  const XVec3 hold_before = hold_;  // the take-off's hover point (Ricocheting's first setpoint)
+  const double hold_yaw_before = hold_yaw_;
   state_ = s;
   t_enter_ = in.t;
-  reason_ = why;
   ++transitions_;
   low_force_since_ = -1.0;
   hold_ = in.position;
   hold_yaw_ = in.yaw;
   yaw_enter_ = in.yaw;
   squaring_ = false;
-  if (s == XplorerState::kExploration) explore_history_.clear();
-  if (s == XplorerState::kTactileTraversal || s == XplorerState::kStaticWrench) {
-    adm_.reset(XVec3(in.position.x(), in.position.y(), p_.hover_height), in.yaw);
-    r_star_ = in.position.head<2>();
-    t_quiet_ = in.t;
-    traverse_history_.clear();
+  // Entry actions: the state's set-up and its setpoint on this tick (by default the vehicle's
+  // position at hover height with the yaw held; never the output's default, the world origin
+  // at z = 0).
+  const XVec2 p2 = in.position.head<2>();
+  out.position = XVec3(p2.x(), p2.y(), p_.hover_height);
+  out.yaw = hold_yaw_;
+  switch (s) {
+    case XplorerState::kExploration: explore_history_.clear(); break;
+    case XplorerState::kTactileTraversal:
+    case XplorerState::kStaticWrench:
+      // The admittance (001 eq. 8) starts at rest at the vehicle, r* there.
+      adm_.reset(XVec3(in.position.x(), in.position.y(), p_.hover_height), in.yaw);
+      r_star_ = p2;
+      t_quiet_ = in.t;
+      traverse_history_.clear();
+      if (from == XplorerState::kExploration) {  // the first contact of this approach
+        start_backoff(in);
+        if (s == XplorerState::kTactileTraversal && plan_square(in)) {  // a face slid along: square up first
+          square_t0_ = std::max(in.t, backoff_until_);
+          why = XplorerReason::kContactSquareUp;
+        }
+      }
+      // The contact back-off's setpoint (or, without one, the vehicle's position; the
+      // admittance starts there next tick).
+      if (in.t < backoff_until_) out.position = backoff_sp_;
+      break;
+    case XplorerState::kTactileTurning: out.position = turning_setpoint(in, &out.yaw); break;
+    case XplorerState::kRicocheting:  // the take-off's hover setpoint once more; the line to the goal next tick
+      out.position = XVec3(hold_before.x(), hold_before.y(), p_.hover_height);
+      out.yaw = hold_yaw_before;
+      break;
+    case XplorerState::kGoTo: out.position = XVec3(p_.goal.x(), p_.goal.y(), p_.hover_height); break;
+    case XplorerState::kTakeoff:
+    case XplorerState::kDone: break;
   }
+  reason_code_ = why;
+  reason_ = reason_text(why);
+  out.state = s;
+  out.transitioned = true;
+}
+
+void XplorerExplorer::plan_turn(double sign, double face_yaw, const XVec2& face_p, const XplorerInput& in) {
+  // The face as it was before the release: its yaw, its normal C_n and the pivot on it in
+  // front of the vehicle, abreast of it along lambda.
+  turn_sign_ = sign;
+  ++turns_;
+  face_yaw_ = face_yaw;
+  face_n_ = rot(face_yaw, unit(contact_));
+  face_t_ = rot(face_yaw, unit(move_));
+  const XVec2 p2 = in.position.head<2>();
+  pivot_ = face_p + p_.contact_reach * face_n_ + (p2 - face_p).dot(face_t_) * face_t_;
+  phi0_ = std::clamp(turn_sign_ * wrap(in.yaw - face_yaw_), 0.0, p_.turn_limit);
 }
 
 void XplorerExplorer::hold_backoff(const XplorerInput& in, XplorerOutput& out) {
@@ -295,9 +354,9 @@ bool XplorerExplorer::plan_square(const XplorerInput& in) {
   // C_n: body +X (square_to_x) or the body axis nearest to the normal; the yaw that puts it on
   // the normal (|.| < 90 / <= 45 deg).
   const XVec2 nb = rot(-in.yaw, n);
-  const XDir c = p_.square_to_x ? XDir::kPlusX
-                : std::abs(nb.x()) >= std::abs(nb.y()) ? (nb.x() > 0 ? XDir::kPlusX : XDir::kMinusX)
-                                                      : (nb.y() > 0 ? XDir::kPlusY : XDir::kMinusY);
+  const BodyDirection c = p_.square_to_x ? BodyDirection::kPlusX
+                : std::abs(nb.x()) >= std::abs(nb.y()) ? (nb.x() > 0 ? BodyDirection::kPlusX : BodyDirection::kMinusX)
+                                                      : (nb.y() > 0 ? BodyDirection::kPlusY : BodyDirection::kMinusY);
   const XVec2 cw = rot(in.yaw, unit(c));
   contact_ = c;
   move_ = right_hand(c);  // 001 Sec. IV-A: right-hand traversal
@@ -330,18 +389,6 @@ XVec3 XplorerExplorer::turning_setpoint(const XplorerInput& in, double* yaw) con
   return out;
 }
 
-XDir XplorerExplorer::detect_contact(double threshold) const {
-  // 001 Sec. IV-A: |b_delta_f_x| > delta_0 -> contact along b1 (obstacle
-  // opposite to the force it exerts), likewise for b2.
-  const XVec2& f = f_body_avg_;
-  if (std::abs(f.x()) >= std::abs(f.y())) {
-    if (std::abs(f.x()) <= threshold) return XDir::kNone;
-    return f.x() < 0 ? XDir::kPlusX : XDir::kMinusX;
-  }
-  if (std::abs(f.y()) <= threshold) return XDir::kNone;
-  return f.y() < 0 ? XDir::kPlusY : XDir::kMinusY;
-}
-
 XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
   // Body force (001 Sec. IV-A: b_delta = w_R_b^T delta) and its 50-sample moving average (Sec. V-C).
   const XVec2 fb = rot(-in.yaw, in.force.head<2>());
@@ -372,7 +419,7 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
     t_enter_ = in.t;
   }
   XplorerOutput out;
-  const XplorerState before = state_;
+  out.state = state_;
   // Loop closure (001 Sec. V-C2): back at the first contact point after going round,
   // traversing its face (001: "continues traversing all the edges until it returns to
   // the initial contact position"), not while a turn swings past it.
@@ -387,288 +434,256 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
       winding_ >= p_.loop_min_winding && (p2 - first_contact_p_).norm() < p_.loop_closure_radius) {
     loop_closed_ = true;
     loop_closure_t_ = in.t;
-    enter(XplorerState::kDone, in, "loop closed");
+    enter(XplorerState::kDone, XplorerReason::kLoopClosed, in, out);
+    return out;
   }
-  const double lead_t = p_.traverse_speed / p_.position_gain;
   switch (state_) {
-    case XplorerState::kTakeoff: {
-      out.position = XVec3(hold_.x(), hold_.y(), p_.hover_height);
-      out.yaw = hold_yaw_;
-      if (std::abs(in.position.z() - p_.hover_height) < p_.takeoff_tolerance) {
-        switch (p_.mission) {
-          case XplorerMission::kExplore:
-          case XplorerMission::kStaticWrench:
-            enter(XplorerState::kExploration, in, "hover height reached");
-            explore_dir_ = rot(in.yaw, XVec2(1, 0));  // 001 Sec. V-C: move along body +x
-            break;
-          case XplorerMission::kRicochet: enter(XplorerState::kRicocheting, in, "hover height reached"); break;
-          case XplorerMission::kWaypoint: enter(XplorerState::kGoTo, in, "hover height reached"); break;
-        }
-      }
-      break;
-    }
-    case XplorerState::kExploration: {
-      const XDir c = detect_contact(p_.delta_0);
-      if (c != XDir::kNone) {
-        contact_ = c;
-        if (p_.mission == XplorerMission::kStaticWrench) {
-          enter(XplorerState::kStaticWrench, in, std::string("contact ") + to_string(c));
-          start_backoff(in);
-        } else {
-          move_ = right_hand(c);  // 001 Sec. IV-A: right-hand traversal
-          if (first_contact_t_ < 0) {
-            first_contact_t_ = in.t;
-            first_contact_p_ = p2;
-            started_path_ = true;
-          }
-          enter(XplorerState::kTactileTraversal, in, std::string("contact ") + to_string(c));
-          start_backoff(in);
-          if (plan_square(in)) {  // a face slid along: square up to it first (square_*)
-            square_t0_ = std::max(in.t, backoff_until_);
-            std::ostringstream r;
-            r << "contact " << to_string(contact_) << " (square up "
-              << std::lround(wrap(square_yaw_ - square_yaw0_) * 180.0 / M_PI) << " deg)";
-            reason_ = r.str();
-          }
-        }
-        break;
-      }
-      out.position = XVec3(p2.x(), p2.y(), p_.hover_height);
-      out.position.head<2>() += (p_.explore_speed / p_.position_gain) * explore_dir_;
-      out.yaw = hold_yaw_;
-      if (p_.square_min_deflection > 0.0) {  // the path for squaring up (square_window)
-        push_window(explore_history_, {in.t, p2, in.yaw}, p_.square_window);
-      }
-      break;
-    }
-    case XplorerState::kTactileTraversal: {
-      if (in.t < backoff_until_) {
-        // Contact back-off: hold its setpoint; the traversal starts afterwards from where the
-        // vehicle is (no turn trigger, release timer or reshaped r* from the back-off).
-        hold_backoff(in, out);
-        break;
-      }
-      if (squaring_) {
-        // Squaring up to the face slid along (square_*, our choice): the yaw setpoint ramps at
-        // turn_rate (001 Sec. V-C) to put C_n on the face normal, then holds square_hold s; the
-        // contact is held along the normal (eq. 8 with r* reshaped along it), no lead along
-        // the face; no turn trigger, concave-corner update or face lookback meanwhile.
-        const double dpsi = wrap(square_yaw_ - square_yaw0_);
-        const double ramp_s = std::abs(dpsi) / p_.turn_rate, el = in.t - square_t0_;
-        const XVec2 n = rot(square_yaw_, unit(contact_));
-        if (f_body_avg_.norm() < p_.release_force) {
-          if (low_force_since_ < 0) low_force_since_ = in.t;
-          if (in.t - low_force_since_ > p_.release_time) {  // the face went: Exploration towards it
-            explore_dir_ = n;
-            hold_yaw_ = in.yaw;
-            enter(XplorerState::kExploration, in, "contact lost while squaring up");
-            break;
-          }
-        } else {
-          low_force_since_ = -1.0;
-        }
-        if (el < ramp_s + p_.square_hold) {
-          const XVec3 f_des(-p_.contact_force * n.x(), -p_.contact_force * n.y(), 0.0);
-          const double rn = reshape(n, p2, in.force, f_des, dt);
-          const XVec2 rs = p2 + (rn - p2.dot(n)) * n;
-          adm_.update(in.force, f_des, XVec3(rs.x(), rs.y(), p_.hover_height), in.torque_z, 0.0, in.yaw, dt);
-          out.position = adm_.position();
-          out.yaw = wrap(square_yaw0_ + std::copysign(std::min(p_.turn_rate * std::max(el, 0.0), std::abs(dpsi)), dpsi));
-          t_quiet_ = in.t;
-          break;
-        }
-        squaring_ = false;  // squared: the traversal of 001 from here
-        // The yaw row ran on under the ramp (yaw* = the measured yaw): restarted at rest from
-        // the squared heading, or its lag and rate would carry the setpoint ~8 deg past it.
-        adm_.reset_yaw(in.yaw);
-        t_quiet_ = in.t;
-        low_force_since_ = -1.0;
-        traverse_history_.clear();
-      }
-      // 001 Sec. IV-A: a yaw-rate peak (release at a corner) starts Tactile-turning.
-      push_window(traverse_history_, {in.t, p2, in.yaw}, p_.corner_lookback);
-      // A convex corner of the right-hand traversal turns counter-clockwise (yaw rate > 0).
-      // A clockwise peak may turn once (re-aligning after an oblique contact); a second
-      // clockwise turn before a counter-clockwise one would cycle round one corner point,
-      // so that peak leaves the traversal going on (C_n follows the yaw).
-      const bool against = yaw_rate_f_ < 0.0 && clockwise_in_a_row_ >= p_.max_clockwise_turns_in_a_row;
-      if (in.t - t_quiet_ > p_.settle_time && std::abs(yaw_rate_f_) > p_.yaw_rate_trigger && against) {
-        if (!peak_against_) ++turns_against_;
-        peak_against_ = true;
-      } else if (std::abs(yaw_rate_f_) <= p_.yaw_rate_trigger) {
-        peak_against_ = false;
-      }
-      if (in.t - t_quiet_ > p_.settle_time && std::abs(yaw_rate_f_) > p_.yaw_rate_trigger && !against) {
-        turn_sign_ = yaw_rate_f_ > 0 ? 1.0 : -1.0;
-        clockwise_in_a_row_ = turn_sign_ > 0 ? 0 : clockwise_in_a_row_ + 1;
-        ++turns_;
-        // The face as it was before the release (the yaw has already turned by the
-        // time the low-passed rate crosses the trigger): its yaw, its normal C_n and
-        // the pivot on it in front of the vehicle.
-        const PoseSample& f = traverse_history_.front();
-        face_yaw_ = f.yaw;
-        face_n_ = rot(f.yaw, unit(contact_));
-        const XVec2 t0 = rot(f.yaw, unit(move_));
-        pivot_ = f.p + p_.contact_reach * face_n_ + (p2 - f.p).dot(t0) * t0;
-        face_t_ = t0;
-        phi0_ = std::clamp(turn_sign_ * wrap(in.yaw - face_yaw_), 0.0, p_.turn_limit);
-        enter(XplorerState::kTactileTurning, in, "yaw rate peak");
-        break;
-      }
-      // A new contact in the move direction (concave corner): C_n <- latest contact.
-      const XDir c = detect_contact(p_.delta_0);
-      if (c != XDir::kNone && c == move_ && in.t - t_quiet_ > p_.settle_time) {
-        contact_ = c;
-        move_ = right_hand(c);
-        t_quiet_ = in.t;
-        reason_ = std::string("new contact ") + to_string(c);
-        traverse_history_.clear();  // the face ahead is the new one
-      }
-      if (f_body_avg_.norm() < p_.release_force) {
-        if (low_force_since_ < 0) {
-          low_force_since_ = in.t;
-          lost_p_ = p2;  // the face as it was when the force went
-          lost_yaw_ = in.yaw;
-        }
-        if (in.t - low_force_since_ > p_.release_time && p_.turn_on_contact_lost && p_.turn_pivot &&
-            in.t - t_enter_ >= p_.contact_lost_turn_min_s) {
-          // The face ended without a yaw-rate peak (an obtuse convex corner the yaw followed
-          // slowly): right-hand traversal round a convex object goes on round the corner,
-          // so turn counter-clockwise about it instead of flying off along the lost C_n.
-          turn_sign_ = 1.0;
-          clockwise_in_a_row_ = 0;
-          ++turns_;
-          face_yaw_ = lost_yaw_;
-          face_n_ = rot(lost_yaw_, unit(contact_));
-          face_t_ = rot(lost_yaw_, unit(move_));
-          pivot_ = lost_p_ + p_.contact_reach * face_n_ + (p2 - lost_p_).dot(face_t_) * face_t_;
-          phi0_ = std::clamp(wrap(in.yaw - face_yaw_), 0.0, p_.turn_limit);
-          enter(XplorerState::kTactileTurning, in, "contact lost: turn about the corner");
-          break;
-        }
-        if (in.t - low_force_since_ > p_.release_time) {
-          explore_dir_ = rot(in.yaw, unit(contact_));
-          hold_yaw_ = in.yaw;
-          enter(XplorerState::kExploration, in, "contact lost");
-          break;
-        }
-      } else {
-        low_force_since_ = -1.0;
-      }
-      const XVec2 n = rot(in.yaw, unit(contact_)), t = rot(in.yaw, unit(move_));
-      const XVec3 f_des(-p_.contact_force * n.x(), -p_.contact_force * n.y(), 0.0);
-      // r*: along lambda a lead ahead of the vehicle, along C_n reshaped by the force error.
-      const double rn = reshape(n, p2, in.force, f_des, dt);
-      const XVec2 rs = p2 + (rn - p2.dot(n)) * n + lead_t * t;
-      adm_.update(in.force, f_des, XVec3(rs.x(), rs.y(), p_.hover_height), in.torque_z, 0.0, in.yaw, dt);  // 001 eq. 8
-      out.position = adm_.position();
-      out.yaw = adm_.yaw();
-      break;
-    }
-    case XplorerState::kTactileTurning: {
-      out.position = turning_setpoint(in, &out.yaw);
-      // Re-contact (|b_delta_f_x| or |b_delta_f_y| > delta_psi0), once the moving
-      // average no longer holds the force of the face just left.
-      if (in.t - t_enter_ > p_.settle_time &&
-          (std::abs(f_body_avg_.x()) > p_.delta_psi0 || std::abs(f_body_avg_.y()) > p_.delta_psi0)) {
-        contact_ = detect_contact(p_.delta_psi0);
-        move_ = right_hand(contact_);
-        enter(XplorerState::kTactileTraversal, in, std::string("re-contact ") + to_string(contact_));
-        out.position = XVec3(p2.x(), p2.y(), p_.hover_height);
-        out.yaw = in.yaw;
-      } else if (in.t - t_enter_ > p_.turn_limit / p_.turn_rate + 3.0) {
-        explore_dir_ = rot(in.yaw, unit(contact_));
-        hold_yaw_ = in.yaw;
-        enter(XplorerState::kExploration, in, "turn limit without re-contact");
-      }
-      break;
-    }
-    case XplorerState::kStaticWrench: {
-      if (in.t < backoff_until_) {
-        hold_backoff(in, out);
-        break;
-      }
-      // 001 Sec. V-B: delta_f_ref = 1 N onto the surface, r* = current position
-      // (the setpoint is reshaped by the force error only).
-      const XVec2 n = rot(in.yaw, unit(contact_));
-      const XVec3 f_des(-p_.static_force * n.x(), -p_.static_force * n.y(), 0.0);
-      const double rn = reshape(n, p2, in.force, f_des, dt);
-      const XVec2 h = hold_.head<2>();
-      const XVec2 rs = h + (rn - h.dot(n)) * n;  // tangentially at the contact point
-      adm_.update(in.force, f_des, XVec3(rs.x(), rs.y(), p_.hover_height), in.torque_z, 0.0, in.yaw, dt);
-      out.position = adm_.position();
-      out.yaw = adm_.yaw();
-      break;
-    }
-    case XplorerState::kRicocheting: {
-      // 001 Sec. IV-C: fly at the maximum speed along the line to the goal (beyond
-      // it), collide, recover (setpoint away from the collision, proportional to
-      // its intensity), then regulate at the goal.
-      const XVec2 dir = (p_.goal - hold_.head<2>()).normalized();
-      const double fmag = in.force.head<2>().norm();
-      if (collision_peak_ == 0.0 && fmag > p_.collision_force) {
-        ++collisions_;
-        collision_normal_ = in.force.head<2>().normalized();  // out of the obstacle
-        collision_peak_ = fmag;
-        t_quiet_ = in.t;
-      }
-      if (collision_peak_ > 0.0) {
-        collision_peak_ = std::max(collision_peak_, fmag);
-        recovery_sp_ = XVec3(p2.x(), p2.y(), p_.hover_height);
-        recovery_sp_.head<2>() += p_.recovery_gain * collision_peak_ * collision_normal_;
-        if (in.t - t_quiet_ > p_.recovery_time) {
-          enter(XplorerState::kGoTo, in, "collision recovered");
-        }
-        out.position = recovery_sp_;
-      } else {
-        out.position = XVec3(p2.x(), p2.y(), p_.hover_height);
-        out.position.head<2>() += (p_.ricochet_speed / p_.position_gain + 1.0) * dir;  // saturates the vehicle's speed
-        // Well past the goal without a collision (no wall there): regulate at the goal.
-        if ((p2 - hold_.head<2>()).dot(dir) > (p_.goal - hold_.head<2>()).norm() + 0.3) {
-          enter(XplorerState::kGoTo, in, "goal passed without collision");
-        }
-      }
-      out.yaw = yaw_enter_;
-      break;
-    }
-    case XplorerState::kGoTo: {
+    case XplorerState::kTakeoff: tick_takeoff(in, out); break;
+    case XplorerState::kExploration: tick_exploration(in, out); break;
+    case XplorerState::kTactileTraversal: tick_traversal(in, dt, out); break;
+    case XplorerState::kTactileTurning: tick_turning(in, out); break;
+    case XplorerState::kStaticWrench: tick_static_wrench(in, dt, out); break;
+    case XplorerState::kRicocheting: tick_ricochet(in, out); break;
+    case XplorerState::kGoTo:
       out.position = XVec3(p_.goal.x(), p_.goal.y(), p_.hover_height);
       out.yaw = hold_yaw_;
       break;
-    }
-    case XplorerState::kDone: {
+    case XplorerState::kDone:
       out.position = hold_;
       out.yaw = hold_yaw_;
       break;
-    }
-  }
-  out.state = state_;
-  out.transitioned = state_ != before;
-  // The tick of a transition publishes the entered state's own setpoint (a branch that
-  // enters a state and breaks has not set one; the output's default is the world origin at
-  // z = 0, which must never be published).
-  if (out.transitioned) {
-    switch (state_) {
-      case XplorerState::kTactileTurning: out.position = turning_setpoint(in, &out.yaw); break;
-      case XplorerState::kTactileTraversal:
-      case XplorerState::kStaticWrench:
-        // The contact back-off's setpoint (or, without one, the vehicle's position; the
-        // admittance starts there next tick).
-        out.position = in.t < backoff_until_ ? backoff_sp_ : XVec3(p2.x(), p2.y(), p_.hover_height);
-        out.yaw = hold_yaw_;
-        break;
-      case XplorerState::kRicocheting: break;  // the take-off's hover setpoint, set above
-      case XplorerState::kGoTo:
-        out.position = XVec3(p_.goal.x(), p_.goal.y(), p_.hover_height);
-        out.yaw = hold_yaw_;
-        break;
-      default:  // first tick of a plain state: its own setpoint next tick; hold now
-        out.position = XVec3(p2.x(), p2.y(), p_.hover_height);
-        out.yaw = hold_yaw_;
-        break;
-    }
   }
   return out;
+}
+
+void XplorerExplorer::tick_takeoff(const XplorerInput& in, XplorerOutput& out) {
+  out.position = XVec3(hold_.x(), hold_.y(), p_.hover_height);
+  out.yaw = hold_yaw_;
+  if (!(std::abs(in.position.z() - p_.hover_height) < p_.takeoff_tolerance)) return;
+  switch (p_.mission) {
+    case XplorerMission::kExplore:
+    case XplorerMission::kStaticWrench:
+      explore_dir_ = rot(in.yaw, XVec2(1, 0));  // 001 Sec. V-C: move along body +x
+      enter(XplorerState::kExploration, XplorerReason::kHoverHeightReached, in, out);
+      break;
+    case XplorerMission::kRicochet: enter(XplorerState::kRicocheting, XplorerReason::kHoverHeightReached, in, out); break;
+    case XplorerMission::kWaypoint: enter(XplorerState::kGoTo, XplorerReason::kHoverHeightReached, in, out); break;
+  }
+}
+
+void XplorerExplorer::tick_exploration(const XplorerInput& in, XplorerOutput& out) {
+  const XVec2 p2 = in.position.head<2>();
+  const BodyDirection c = contact_direction(f_body_avg_, p_.delta_0);
+  if (c != BodyDirection::kNone) {  // 001 Sec. IV-A: contact
+    contact_ = c;
+    if (p_.mission == XplorerMission::kStaticWrench) {
+      enter(XplorerState::kStaticWrench, XplorerReason::kContact, in, out);
+      return;
+    }
+    move_ = right_hand(c);  // 001 Sec. IV-A: right-hand traversal
+    if (first_contact_t_ < 0) {
+      first_contact_t_ = in.t;
+      first_contact_p_ = p2;
+      started_path_ = true;
+    }
+    enter(XplorerState::kTactileTraversal, XplorerReason::kContact, in, out);
+    return;
+  }
+  out.position = XVec3(p2.x(), p2.y(), p_.hover_height);
+  out.position.head<2>() += (p_.explore_speed / p_.position_gain) * explore_dir_;
+  out.yaw = hold_yaw_;
+  if (p_.square_min_deflection > 0.0) {  // the path for squaring up (square_window)
+    push_window(explore_history_, {in.t, p2, in.yaw}, p_.square_window);
+  }
+}
+
+bool XplorerExplorer::tick_squaring(const XplorerInput& in, double dt, XplorerOutput& out) {
+  // Squaring up to the face slid along (square_*, our choice): the yaw setpoint ramps at
+  // turn_rate (001 Sec. V-C) to put C_n on the face normal, then holds square_hold s; the
+  // contact is held along the normal (eq. 8 with r* reshaped along it), no lead along
+  // the face; no turn trigger, concave-corner update or face lookback meanwhile.
+  const XVec2 p2 = in.position.head<2>();
+  const double dpsi = wrap(square_yaw_ - square_yaw0_);
+  const double ramp_s = std::abs(dpsi) / p_.turn_rate, el = in.t - square_t0_;
+  const XVec2 n = rot(square_yaw_, unit(contact_));
+  if (f_body_avg_.norm() < p_.release_force) {
+    if (low_force_since_ < 0) low_force_since_ = in.t;
+    if (in.t - low_force_since_ > p_.release_time) {  // the face went: Exploration towards it
+      explore_dir_ = n;
+      enter(XplorerState::kExploration, XplorerReason::kContactLostSquaring, in, out);
+      return true;
+    }
+  } else {
+    low_force_since_ = -1.0;
+  }
+  if (el < ramp_s + p_.square_hold) {
+    const XVec3 f_des(-p_.contact_force * n.x(), -p_.contact_force * n.y(), 0.0);
+    const double rn = reshape(n, p2, in.force, f_des, dt);
+    const XVec2 rs = p2 + (rn - p2.dot(n)) * n;
+    adm_.update(in.force, f_des, XVec3(rs.x(), rs.y(), p_.hover_height), in.torque_z, 0.0, in.yaw, dt);
+    out.position = adm_.position();
+    out.yaw = wrap(square_yaw0_ + std::copysign(std::min(p_.turn_rate * std::max(el, 0.0), std::abs(dpsi)), dpsi));
+    t_quiet_ = in.t;
+    return true;
+  }
+  squaring_ = false;  // squared: the traversal of 001 from here
+  // The yaw row ran on under the ramp (yaw* = the measured yaw): restarted at rest from
+  // the squared heading, or its lag and rate would carry the setpoint ~8 deg past it.
+  adm_.reset_yaw(in.yaw);
+  t_quiet_ = in.t;
+  low_force_since_ = -1.0;
+  traverse_history_.clear();
+  return false;
+}
+
+void XplorerExplorer::tick_traversal(const XplorerInput& in, double dt, XplorerOutput& out) {
+  // Tactile-traversal runs in phases: the contact back-off (after a contact from
+  // Exploration), squaring up (after a face slid along), then the traversal of 001.
+  if (in.t < backoff_until_) {
+    // Contact back-off: hold its setpoint; the traversal starts afterwards from where the
+    // vehicle is (no turn trigger, release timer or reshaped r* from the back-off).
+    hold_backoff(in, out);
+    return;
+  }
+  if (squaring_ && tick_squaring(in, dt, out)) return;
+  const XVec2 p2 = in.position.head<2>();
+  // 001 Sec. IV-A: a yaw-rate peak (release at a corner) starts Tactile-turning.
+  push_window(traverse_history_, {in.t, p2, in.yaw}, p_.corner_lookback);
+  // A convex corner of the right-hand traversal turns counter-clockwise (yaw rate > 0).
+  // A clockwise peak may turn once (re-aligning after an oblique contact); a second
+  // clockwise turn before a counter-clockwise one would cycle round one corner point,
+  // so that peak leaves the traversal going on (C_n follows the yaw).
+  const bool against = yaw_rate_f_ < 0.0 && clockwise_in_a_row_ >= p_.max_clockwise_turns_in_a_row;
+  const bool peak = in.t - t_quiet_ > p_.settle_time && std::abs(yaw_rate_f_) > p_.yaw_rate_trigger;
+  if (peak && against) {
+    if (!peak_against_) ++turns_against_;
+    peak_against_ = true;
+  } else if (std::abs(yaw_rate_f_) <= p_.yaw_rate_trigger) {
+    peak_against_ = false;
+  }
+  if (peak && !against) {
+    const double sign = yaw_rate_f_ > 0 ? 1.0 : -1.0;
+    clockwise_in_a_row_ = sign > 0 ? 0 : clockwise_in_a_row_ + 1;
+    // The face as it was before the release (the yaw has already turned by the time the
+    // low-passed rate crosses the trigger): corner_lookback s ago.
+    const PoseSample& f = traverse_history_.front();
+    plan_turn(sign, f.yaw, f.p, in);
+    enter(XplorerState::kTactileTurning, XplorerReason::kYawRatePeak, in, out);
+    return;
+  }
+  // A new contact in the move direction (concave corner): C_n <- latest contact.
+  const BodyDirection c = contact_direction(f_body_avg_, p_.delta_0);
+  if (c != BodyDirection::kNone && c == move_ && in.t - t_quiet_ > p_.settle_time) {
+    contact_ = c;
+    move_ = right_hand(c);
+    t_quiet_ = in.t;
+    reason_code_ = XplorerReason::kNewContact;
+    reason_ = reason_text(reason_code_);
+    traverse_history_.clear();  // the face ahead is the new one
+  }
+  if (f_body_avg_.norm() < p_.release_force) {
+    if (low_force_since_ < 0) {
+      low_force_since_ = in.t;
+      lost_p_ = p2;  // the face as it was when the force went
+      lost_yaw_ = in.yaw;
+    }
+    if (in.t - low_force_since_ > p_.release_time && p_.turn_on_contact_lost && p_.turn_pivot &&
+        in.t - t_enter_ >= p_.contact_lost_turn_min_s) {
+      // The face ended without a yaw-rate peak (an obtuse convex corner the yaw followed
+      // slowly): right-hand traversal round a convex object goes on round the corner,
+      // so turn counter-clockwise about it instead of flying off along the lost C_n.
+      clockwise_in_a_row_ = 0;
+      plan_turn(1.0, lost_yaw_, lost_p_, in);
+      enter(XplorerState::kTactileTurning, XplorerReason::kContactLostTurn, in, out);
+      return;
+    }
+    if (in.t - low_force_since_ > p_.release_time) {
+      explore_dir_ = rot(in.yaw, unit(contact_));
+      enter(XplorerState::kExploration, XplorerReason::kContactLost, in, out);
+      return;
+    }
+  } else {
+    low_force_since_ = -1.0;
+  }
+  const XVec2 n = rot(in.yaw, unit(contact_)), t = rot(in.yaw, unit(move_));
+  const XVec3 f_des(-p_.contact_force * n.x(), -p_.contact_force * n.y(), 0.0);
+  // r*: along lambda a lead ahead of the vehicle, along C_n reshaped by the force error.
+  const double lead_t = p_.traverse_speed / p_.position_gain;
+  const double rn = reshape(n, p2, in.force, f_des, dt);
+  const XVec2 rs = p2 + (rn - p2.dot(n)) * n + lead_t * t;
+  adm_.update(in.force, f_des, XVec3(rs.x(), rs.y(), p_.hover_height), in.torque_z, 0.0, in.yaw, dt);  // 001 eq. 8
+  out.position = adm_.position();
+  out.yaw = adm_.yaw();
+}
+
+void XplorerExplorer::tick_turning(const XplorerInput& in, XplorerOutput& out) {
+  // Re-contact (|b_delta_f_x| or |b_delta_f_y| > delta_psi0), once the moving
+  // average no longer holds the force of the face just left.
+  if (in.t - t_enter_ > p_.settle_time &&
+      (std::abs(f_body_avg_.x()) > p_.delta_psi0 || std::abs(f_body_avg_.y()) > p_.delta_psi0)) {
+    contact_ = contact_direction(f_body_avg_, p_.delta_psi0);
+    move_ = right_hand(contact_);
+    enter(XplorerState::kTactileTraversal, XplorerReason::kReContact, in, out);
+    return;
+  }
+  if (in.t - t_enter_ > p_.turn_limit / p_.turn_rate + 3.0) {
+    explore_dir_ = rot(in.yaw, unit(contact_));
+    enter(XplorerState::kExploration, XplorerReason::kTurnLimit, in, out);
+    return;
+  }
+  out.position = turning_setpoint(in, &out.yaw);
+}
+
+void XplorerExplorer::tick_static_wrench(const XplorerInput& in, double dt, XplorerOutput& out) {
+  if (in.t < backoff_until_) {
+    hold_backoff(in, out);
+    return;
+  }
+  // 001 Sec. V-B: delta_f_ref = 1 N onto the surface, r* = current position
+  // (the setpoint is reshaped by the force error only).
+  const XVec2 p2 = in.position.head<2>();
+  const XVec2 n = rot(in.yaw, unit(contact_));
+  const XVec3 f_des(-p_.static_force * n.x(), -p_.static_force * n.y(), 0.0);
+  const double rn = reshape(n, p2, in.force, f_des, dt);
+  const XVec2 h = hold_.head<2>();
+  const XVec2 rs = h + (rn - h.dot(n)) * n;  // tangentially at the contact point
+  adm_.update(in.force, f_des, XVec3(rs.x(), rs.y(), p_.hover_height), in.torque_z, 0.0, in.yaw, dt);
+  out.position = adm_.position();
+  out.yaw = adm_.yaw();
+}
+
+void XplorerExplorer::tick_ricochet(const XplorerInput& in, XplorerOutput& out) {
+  // 001 Sec. IV-C: fly at the maximum speed along the line to the goal (beyond
+  // it), collide, recover (setpoint away from the collision, proportional to
+  // its intensity), then regulate at the goal.
+  const XVec2 p2 = in.position.head<2>();
+  const XVec2 dir = (p_.goal - hold_.head<2>()).normalized();
+  const double fmag = in.force.head<2>().norm();
+  if (collision_peak_ == 0.0 && fmag > p_.collision_force) {
+    ++collisions_;
+    collision_normal_ = in.force.head<2>().normalized();  // out of the obstacle
+    collision_peak_ = fmag;
+    t_quiet_ = in.t;
+  }
+  if (collision_peak_ > 0.0) {
+    collision_peak_ = std::max(collision_peak_, fmag);
+    recovery_sp_ = XVec3(p2.x(), p2.y(), p_.hover_height);
+    recovery_sp_.head<2>() += p_.recovery_gain * collision_peak_ * collision_normal_;
+    if (in.t - t_quiet_ > p_.recovery_time) {
+      enter(XplorerState::kGoTo, XplorerReason::kCollisionRecovered, in, out);
+      return;
+    }
+    out.position = recovery_sp_;
+  } else {
+    // Well past the goal without a collision (no wall there): regulate at the goal.
+    if ((p2 - hold_.head<2>()).dot(dir) > (p_.goal - hold_.head<2>()).norm() + 0.3) {
+      enter(XplorerState::kGoTo, XplorerReason::kGoalPassed, in, out);
+      return;
+    }
+    out.position = XVec3(p2.x(), p2.y(), p_.hover_height);
+    out.position.head<2>() += (p_.ricochet_speed / p_.position_gain + 1.0) * dir;  // saturates the vehicle's speed
+  }
+  out.yaw = yaw_enter_;
 }
 
 }  // namespace tactile_fsm

@@ -11,6 +11,28 @@
 namespace tactile_fsm {
 
 using tactile_common::ParamMap;
+using tactile_msgs::msg::FsmState;
+
+// The core's codes are the message's (FsmState.msg documents them): a cast publishes them.
+static_assert(static_cast<uint8_t>(XplorerReason::kNone) == FsmState::REASON_NONE);
+static_assert(static_cast<uint8_t>(XplorerReason::kHoverHeightReached) == FsmState::REASON_XPLORER_HOVER_HEIGHT_REACHED);
+static_assert(static_cast<uint8_t>(XplorerReason::kContact) == FsmState::REASON_XPLORER_CONTACT);
+static_assert(static_cast<uint8_t>(XplorerReason::kContactSquareUp) == FsmState::REASON_XPLORER_CONTACT_SQUARE_UP);
+static_assert(static_cast<uint8_t>(XplorerReason::kNewContact) == FsmState::REASON_XPLORER_NEW_CONTACT);
+static_assert(static_cast<uint8_t>(XplorerReason::kYawRatePeak) == FsmState::REASON_XPLORER_YAW_RATE_PEAK);
+static_assert(static_cast<uint8_t>(XplorerReason::kContactLostTurn) == FsmState::REASON_XPLORER_CONTACT_LOST_TURN);
+static_assert(static_cast<uint8_t>(XplorerReason::kContactLost) == FsmState::REASON_XPLORER_CONTACT_LOST);
+static_assert(static_cast<uint8_t>(XplorerReason::kContactLostSquaring) == FsmState::REASON_XPLORER_CONTACT_LOST_SQUARING);
+static_assert(static_cast<uint8_t>(XplorerReason::kReContact) == FsmState::REASON_XPLORER_RE_CONTACT);
+static_assert(static_cast<uint8_t>(XplorerReason::kTurnLimit) == FsmState::REASON_XPLORER_TURN_LIMIT);
+static_assert(static_cast<uint8_t>(XplorerReason::kLoopClosed) == FsmState::REASON_XPLORER_LOOP_CLOSED);
+static_assert(static_cast<uint8_t>(XplorerReason::kCollisionRecovered) == FsmState::REASON_XPLORER_COLLISION_RECOVERED);
+static_assert(static_cast<uint8_t>(XplorerReason::kGoalPassed) == FsmState::REASON_XPLORER_GOAL_PASSED);
+static_assert(static_cast<uint8_t>(BodyDirection::kNone) == FsmState::DIRECTION_NONE);
+static_assert(static_cast<uint8_t>(BodyDirection::kPlusX) == FsmState::DIRECTION_PLUS_X);
+static_assert(static_cast<uint8_t>(BodyDirection::kMinusX) == FsmState::DIRECTION_MINUS_X);
+static_assert(static_cast<uint8_t>(BodyDirection::kPlusY) == FsmState::DIRECTION_PLUS_Y);
+static_assert(static_cast<uint8_t>(BodyDirection::kMinusY) == FsmState::DIRECTION_MINUS_Y);
 
 void XplorerFsmLogic::Params::validate() const {
   fsm.validate();
@@ -313,7 +335,7 @@ XplorerFsmLogic::Outputs XplorerFsmLogic::on_timer(int64_t now_ns) {
     hold_yaw_ = r.yaw;
     have_hold_ = true;
     if (r.transitioned || last_state_ns_ < 0 || now_ns - last_state_ns_ >= kStatePeriodNs) {
-      tactile_msgs::msg::FsmState s;
+      FsmState s;
       s.header.stamp = sp.header.stamp;
       s.header.frame_id = params_.frame_id;
       s.behaviour = kBehaviour;
@@ -321,6 +343,9 @@ XplorerFsmLogic::Outputs XplorerFsmLogic::on_timer(int64_t now_ns) {
       if (r.transitioned) previous_state_ = to_string(last_state_);
       s.previous_state = previous_state_;
       s.reason = fsm_.reason();
+      s.reason_code = static_cast<uint8_t>(fsm_.reason_code());
+      s.contact_direction = static_cast<uint8_t>(fsm_.contact());
+      s.move_direction = static_cast<uint8_t>(fsm_.move());
       s.time_in_state = fsm_.time_in_state(in.t);
       s.transitions = fsm_.transitions();
       out.state = s;

@@ -39,11 +39,7 @@ TEST(Admittance, ForceErrorSetsTheOffsetZPassesThroughYawYields) {
   EXPECT_NEAR(a.yaw(), 0.3 + 0.05 / 1.0, 1e-3);            // tau / K_yaw
 }
 
-TEST(Directions, RightHandTraversalAndPostCollisionModel) {
-  EXPECT_EQ(right_hand(XDir::kPlusX), XDir::kMinusY);
-  EXPECT_EQ(right_hand(XDir::kMinusY), XDir::kMinusX);
-  EXPECT_EQ(right_hand(XDir::kMinusX), XDir::kPlusY);
-  EXPECT_EQ(right_hand(XDir::kPlusY), XDir::kPlusX);
+TEST(Directions, PostCollisionModel) {
   // 1.5 m/s into a wall with normal -x (out of the wall), 0.3 m/s along it, e = 0.2:
   // normal -> -0.3 m/s, tangential kept.
   const XVec2 v = post_collision_velocity(XVec2(1.5, 0.3), XVec2(-1, 0), 0.2);
@@ -93,8 +89,8 @@ TEST(XplorerExplorer, TakeoffExplorationContactTraversalTurningAndReContact) {
   }
   EXPECT_EQ(k, 10);
   EXPECT_EQ(x.state(), XplorerState::kTactileTraversal);
-  EXPECT_EQ(x.contact(), XDir::kPlusX);
-  EXPECT_EQ(x.move(), XDir::kMinusY);
+  EXPECT_EQ(x.contact(), BodyDirection::kPlusX);
+  EXPECT_EQ(x.move(), BodyDirection::kMinusY);
   // Traversal pressing with exactly 1.25 N: moves along -y, no normal offset.
   for (int i = 0; i < 100; ++i) o = x.update(input(t += dt, XVec3(0.79, 0, 0.7), 0.0, XVec3(-1.25, 0, 0)), dt);
   EXPECT_NEAR(o.position.x(), 0.79, 1e-3);
@@ -110,7 +106,7 @@ TEST(XplorerExplorer, TakeoffExplorationContactTraversalTurningAndReContact) {
   for (int i = 0; i < 200 && x.state() == XplorerState::kTactileTurning; ++i)
     x.update(input(t += dt, XVec3(1.0, -1.2, 0.7), M_PI / 2, XVec3(0, -2.5, 0)), dt);
   EXPECT_EQ(x.state(), XplorerState::kTactileTraversal);
-  EXPECT_EQ(x.contact(), XDir::kPlusX);
+  EXPECT_EQ(x.contact(), BodyDirection::kPlusX);
   EXPECT_EQ(x.turns(), 1u);
 }
 
@@ -245,9 +241,9 @@ TEST(XplorerExplorer, ContactLostAfterALongTraversalTurnsAboutTheFacesEnd) {
         x.update(input(t += 0.02, XVec3(0, -0.5, 0.7), 0.0, XVec3::Zero()), 0.02);
       if (turn && traverse_s > 4.0) {
         ASSERT_EQ(x.state(), XplorerState::kTactileTurning) << x.reason();
-        // mapping_pcl's rule 10 (impact_turn_reasons: ["contact lost"]) tells this turn
-        // from a corner turn by its reason's prefix (FsmState.reason).
-        EXPECT_EQ(x.reason().rfind("contact lost", 0), 0u) << x.reason();
+        // mapping_pcl's rule 10 (impact_turn_reasons: ["contact_lost_turn"]) tells this turn
+        // from a corner turn by its reason code (FsmState.reason_code).
+        EXPECT_EQ(x.reason_code(), XplorerReason::kContactLostTurn) << x.reason();
         EXPECT_EQ(x.turns(), 1u);
         EXPECT_NEAR(x.pivot().x(), 0.21, 1e-9);
         EXPECT_NEAR(x.pivot().y(), -0.5, 1e-9);
@@ -278,7 +274,7 @@ TEST(XplorerExplorer, ConvexCornerTurnOrbitsThePivot) {
   for (int i = 0; i < 20 && x.state() == XplorerState::kTactileTraversal; ++i)
     x.update(input(t += dt, XVec3(0.80, -0.5, 0.7), 0.2, XVec3(-1.0, 0, 0), 1.0), dt);
   ASSERT_EQ(x.state(), XplorerState::kTactileTurning);
-  EXPECT_NE(x.reason().rfind("contact lost", 0), 0u) << x.reason();  // a corner turn (mapping_pcl rule 10)
+  EXPECT_EQ(x.reason_code(), XplorerReason::kYawRatePeak) << x.reason();  // a corner turn (mapping_pcl rule 10)
   EXPECT_NEAR(x.pivot().x(), 0.79 + 0.21, 1e-12);  // on the face (x = 0.79 + contact_reach)
   EXPECT_NEAR(x.pivot().y(), -0.5, 1e-12);         // abreast of the vehicle along lambda
   const double t_turn = t;
@@ -719,8 +715,8 @@ TEST(XplorerExplorer, FaceSlidAlongInExplorationIsSquaredUpTo) {
     p.square_min_deflection = 0.0;
     SlideResult r = slide_along_a_face(p, -40.0, true);
     ASSERT_EQ(r.x.state(), XplorerState::kTactileTraversal);
-    EXPECT_EQ(r.x.contact(), XDir::kPlusX);
-    EXPECT_EQ(r.x.move(), XDir::kMinusY);
+    EXPECT_EQ(r.x.contact(), BodyDirection::kPlusX);
+    EXPECT_EQ(r.x.move(), BodyDirection::kMinusY);
     EXPECT_EQ(r.x.squarings(), 0u);
   }
   XplorerParams p;
@@ -729,11 +725,12 @@ TEST(XplorerExplorer, FaceSlidAlongInExplorationIsSquaredUpTo) {
   SlideResult r = slide_along_a_face(p, -40.0, true);
   XplorerExplorer& x = r.x;
   ASSERT_EQ(x.state(), XplorerState::kTactileTraversal);
-  EXPECT_EQ(x.contact(), XDir::kPlusY);
-  EXPECT_EQ(x.move(), XDir::kPlusX);
+  EXPECT_EQ(x.contact(), BodyDirection::kPlusY);
+  EXPECT_EQ(x.move(), BodyDirection::kPlusX);
   EXPECT_EQ(x.squarings(), 1u);
   EXPECT_NEAR(x.square_target_yaw(), target, 1e-6);
   EXPECT_EQ(x.reason().rfind("contact +Y (square up -40 deg)", 0), 0u) << x.reason();
+  EXPECT_EQ(x.reason_code(), XplorerReason::kContactSquareUp);
   const double t0 = r.t + p.contact_backoff_time;  // the squaring starts after the back-off
   const XVec2 tf(std::cos(target), std::sin(target)), nf(-std::sin(target), std::cos(target));
   XplorerOutput o;
@@ -766,8 +763,8 @@ TEST(XplorerExplorer, FaceSlidAlongInExplorationIsSquaredUpTo) {
   EXPECT_EQ(x.turns(), 0u);
   // The mirrored face (+40 deg, the vehicle slides left): C_n = -Y, squared counter-clockwise.
   SlideResult m = slide_along_a_face(p, 40.0, true);
-  EXPECT_EQ(m.x.contact(), XDir::kMinusY);
-  EXPECT_EQ(m.x.move(), XDir::kMinusX);
+  EXPECT_EQ(m.x.contact(), BodyDirection::kMinusY);
+  EXPECT_EQ(m.x.move(), BodyDirection::kMinusX);
   EXPECT_NEAR(m.x.square_target_yaw(), -target, 1e-6);
   // square_to_x: C_n is body +X (the frame of a square first contact), lambda = -Y, squared
   // counter-clockwise by 50 deg onto the face's normal.
@@ -775,19 +772,114 @@ TEST(XplorerExplorer, FaceSlidAlongInExplorationIsSquaredUpTo) {
     XplorerParams px = p;
     px.square_to_x = true;
     SlideResult rx = slide_along_a_face(px, -40.0, true);
-    EXPECT_EQ(rx.x.contact(), XDir::kPlusX);
-    EXPECT_EQ(rx.x.move(), XDir::kMinusY);
+    EXPECT_EQ(rx.x.contact(), BodyDirection::kPlusX);
+    EXPECT_EQ(rx.x.move(), BodyDirection::kMinusY);
     EXPECT_NEAR(rx.x.square_target_yaw(), 50.0 * M_PI / 180.0, 1e-6);
     EXPECT_EQ(rx.x.reason().rfind("contact +X (square up 50 deg)", 0), 0u) << rx.x.reason();
+    EXPECT_EQ(rx.x.reason_code(), XplorerReason::kContactSquareUp);
   }
   // No slide (a square hit, or the vehicle stopped at the face): nothing changes.
   SlideResult s = slide_along_a_face(p, -40.0, false);
   EXPECT_EQ(s.x.squarings(), 0u);
-  EXPECT_EQ(s.x.contact(), XDir::kPlusY);  // 001's body axis of the larger force component
+  EXPECT_EQ(s.x.contact(), BodyDirection::kPlusY);  // 001's body axis of the larger force component
   EXPECT_FALSE(s.x.squaring());
   p.square_hold = -1.0;
   EXPECT_THROW(p.validate(), std::invalid_argument);
   p = XplorerParams{};
   p.square_min_deflection = 1.6;
   EXPECT_THROW(p.validate(), std::invalid_argument);
+}
+
+// Entry actions: the tick that enters a state publishes that state's own first setpoint,
+// written by its entry action (never the output's default, the world origin at z = 0), with
+// the transition's reason code; the state's tick takes over on the next one. Each state is
+// entered by the shortest input that gets the FSM there.
+TEST(XplorerExplorer, EntryActionSetsTheFirstTickOfEachState) {
+  const double dt = 0.02;
+  auto expect_sp = [](const XplorerOutput& o, const XVec3& p, double yaw, const char* what) {
+    EXPECT_TRUE(o.transitioned) << what;
+    EXPECT_NEAR((o.position - p).norm(), 0.0, 1e-12) << what << ": " << o.position.transpose();
+    EXPECT_NEAR(o.yaw, yaw, 1e-12) << what;
+  };
+  {  // takeoff -> Exploration (hover at the vehicle, yaw held), then the Exploration lead
+    XplorerExplorer x{XplorerParams{}};
+    double t = 0.0;
+    x.update(input(t, XVec3(1, 2, 0.2), 0.5, XVec3::Zero()), dt);
+    XplorerOutput o = x.update(input(t += dt, XVec3(1.01, 2.02, 0.69), 0.6, XVec3::Zero()), dt);
+    ASSERT_EQ(o.state, XplorerState::kExploration);
+    EXPECT_EQ(x.reason_code(), XplorerReason::kHoverHeightReached);
+    expect_sp(o, XVec3(1.01, 2.02, 0.7), 0.6, "exploration entry");
+    o = x.update(input(t += dt, XVec3(1.01, 2.02, 0.7), 0.6, XVec3::Zero()), dt);
+    EXPECT_FALSE(o.transitioned);
+    EXPECT_NEAR(o.position.x(), 1.01 + 0.2 * std::cos(0.6), 1e-12);  // explore_speed / position_gain along body +x
+  }
+  {  // Exploration -> Tactile-traversal: the contact back-off's setpoint (gain |f| along f, capped)
+    XplorerParams p;
+    p.contact_backoff_gain = 0.03;
+    XplorerExplorer x{p};
+    double t = 0.0;
+    x.update(input(t, XVec3(0, 0, 0.7), 0.0, XVec3::Zero()), dt);
+    XplorerOutput o;
+    const XVec3 f(-3.0, 0.4, 0.0), at(0.5, 0.1, 0.72);
+    for (int i = 0; i < 100 && x.state() != XplorerState::kTactileTraversal; ++i) o = x.update(input(t += dt, at, 0.0, f), dt);
+    ASSERT_EQ(o.state, XplorerState::kTactileTraversal);
+    EXPECT_EQ(x.reason_code(), XplorerReason::kContact);
+    EXPECT_EQ(x.contact(), BodyDirection::kPlusX);
+    EXPECT_EQ(x.move(), BodyDirection::kMinusY);
+    const XVec2 back = std::min(0.03 * f.head<2>().norm(), 0.15) * f.head<2>().normalized();
+    expect_sp(o, XVec3(0.5 + back.x(), 0.1 + back.y(), 0.7), 0.0, "traversal entry (back-off)");
+    EXPECT_TRUE(x.backing_off(t));
+  }
+  {  // Tactile-traversal -> Tactile-turning: the orbit's first point about the pivot
+    XplorerExplorer x{XplorerParams{}};
+    double t = take_off_and_press(x, XVec3(0.79, 0, 0.7), XVec3(0.79, 0, 0.7), XVec3(-2, 0, 0));
+    ASSERT_EQ(x.state(), XplorerState::kTactileTraversal);
+    for (int i = 0; i < 100; ++i) x.update(input(t += dt, XVec3(0.79, -0.002 * i, 0.7), 0.0, XVec3(-1.25, 0, 0)), dt);
+    XplorerOutput o;
+    for (int i = 0; i < 20 && x.state() == XplorerState::kTactileTraversal; ++i)
+      o = x.update(input(t += dt, XVec3(0.80, -0.5, 0.7), 0.2, XVec3(-1.0, 0, 0), 1.0), dt);
+    ASSERT_EQ(o.state, XplorerState::kTactileTurning);
+    EXPECT_EQ(x.reason_code(), XplorerReason::kYawRatePeak);
+    // phi0 = the 0.2 rad already turned, radius turn_radius + turn_backoff, no slide yet:
+    // pivot + R(0.2) (-0.35, 0) with the face yaw 0.
+    const XVec2 sp = x.pivot() + Eigen::Rotation2Dd(0.2) * XVec2(-0.35, 0.0);
+    expect_sp(o, XVec3(sp.x(), sp.y(), 0.7), 0.2, "turning entry");
+    // Tactile-turning -> Tactile-traversal on a re-contact: hover at the vehicle, yaw held.
+    for (int i = 0; i < 200 && x.state() == XplorerState::kTactileTurning; ++i)
+      o = x.update(input(t += dt, XVec3(1.0, -0.6, 0.71), 1.4, XVec3(-2.5 * std::cos(1.4), -2.5 * std::sin(1.4), 0)), dt);
+    ASSERT_EQ(o.state, XplorerState::kTactileTraversal);
+    EXPECT_EQ(x.reason_code(), XplorerReason::kReContact);
+    expect_sp(o, XVec3(1.0, -0.6, 0.7), 1.4, "traversal entry (re-contact)");
+  }
+  {  // takeoff -> Ricocheting: the take-off's hover point once more (not the vehicle's position)
+    XplorerParams p;
+    p.mission = XplorerMission::kRicochet;
+    p.goal = XVec2(2.0, 0.0);
+    XplorerExplorer x{p};
+    double t = 0.0;
+    x.update(input(t, XVec3(0, 0, 0.3), 0.1, XVec3::Zero()), dt);
+    XplorerOutput o = x.update(input(t += dt, XVec3(0.03, -0.02, 0.7), 0.2, XVec3::Zero()), dt);
+    ASSERT_EQ(o.state, XplorerState::kRicocheting);
+    expect_sp(o, XVec3(0, 0, 0.7), 0.1, "ricochet entry");
+    // Ricocheting -> goto after the collision recovery: the goal.
+    x.update(input(t += dt, XVec3(1.8, 0, 0.7), 0.2, XVec3(-5, 0, 0)), dt);
+    for (int i = 0; i < 20 && x.state() == XplorerState::kRicocheting; ++i)
+      o = x.update(input(t += dt, XVec3(1.75, 0, 0.7), 0.2, XVec3::Zero()), dt);
+    ASSERT_EQ(o.state, XplorerState::kGoTo);
+    EXPECT_EQ(x.reason_code(), XplorerReason::kCollisionRecovered);
+    expect_sp(o, XVec3(2.0, 0.0, 0.7), 0.2, "goto entry");
+  }
+}
+
+// Every transition carries its reason code, and the text is built from it (a reworded text
+// is a change of reason_text() alone).
+TEST(XplorerExplorer, ReasonCodesOfTheTransitionsOfAnExploration) {
+  XplorerExplorer x{XplorerParams{}};
+  EXPECT_EQ(x.reason_code(), XplorerReason::kNone);
+  go_round_square(x, M_PI / 2);
+  ASSERT_EQ(x.state(), XplorerState::kDone);
+  EXPECT_EQ(x.reason_code(), XplorerReason::kLoopClosed);
+  EXPECT_EQ(x.reason(), "loop closed");
+  EXPECT_STREQ(to_string(XplorerReason::kContactLostTurn), "contact_lost_turn");
+  EXPECT_STREQ(to_string(XplorerReason::kYawRatePeak), "yaw_rate_peak");
 }

@@ -10,6 +10,7 @@
 #include <deque>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "geometry_msgs/msg/wrench_stamped.hpp"
@@ -83,17 +84,17 @@ class XplorerMapLogic {
     /// intermittent but the vehicle stays at the face, and the check cut
     /// their coverage (choice; README "Contact now").
     std::vector<std::string> contact_now_after = {"exploration"};
-    /// A Tactile-turning entered for one of these reasons (FsmState.reason,
-    /// matched as a prefix) counts as a state of contact_now_after for the
-    /// traversal that follows it: the first-contact rules of impact_turn_rules
-    /// (default contact now and the steady first contact; min_state_time_s
-    /// instead of the shorter gate after a turn only with "gate") apply to its
-    /// re-contact. tactile_fsm's turn about a face's end after a contact lost
-    /// ("contact lost: turn about the corner") is no corner turn of a steady
-    /// traversal: the vehicle comes back to the object from off its face, and
-    /// the re-contact is an impact like the one after Exploration (choice;
-    /// README "Re-contact after a contact-lost turn"). Empty: off.
-    std::vector<std::string> impact_turn_reasons = {"contact lost"};
+    /// A Tactile-turning entered for one of these reasons (FsmState.reason_code, by the
+    /// names of turning_reasons(): "contact_lost_turn", "yaw_rate_peak"; never the
+    /// human-readable FsmState.reason) counts as a state of contact_now_after for the
+    /// traversal that follows it: the first-contact rules of impact_turn_rules (default
+    /// contact now and the steady first contact; min_state_time_s instead of the shorter
+    /// gate after a turn only with "gate") apply to its re-contact. tactile_fsm's turn about
+    /// a face's end after a contact lost (REASON_XPLORER_CONTACT_LOST_TURN) is no corner
+    /// turn of a steady traversal: the vehicle comes back to the object from off its face,
+    /// and the re-contact is an impact like the one after Exploration (choice; README
+    /// "Re-contact after a contact-lost turn"). Empty: off.
+    std::vector<std::string> impact_turn_reasons = {"contact_lost_turn"};
     /// Which first-contact rules the traversal after such a turn gets: "contact_now"
     /// (stamping.min_force_now), "steady" (the steady hold), "gate" (min_state_time_s
     /// instead of min_state_time_after_turn_s; not by default: on the polygons 3012
@@ -122,6 +123,10 @@ class XplorerMapLogic {
     uint64_t received_arm_imu = 0;
     uint64_t dropped_arm_samples = 0; ///< arm samples with a bad arm_id or a non-finite / > 0.8 rad angle
   };
+
+  /// The reasons of entering Tactile-turning that impact_turn_reasons may name, with their
+  /// FsmState.reason_code (REASON_XPLORER_*; names as tactile_fsm's to_string(XplorerReason)).
+  static const std::vector<std::pair<std::string, uint8_t>>& turning_reasons();
 
   static tactile_common::ParamMap default_parameters();
   static Params params_from(const tactile_common::ParamMap& map);
@@ -159,6 +164,7 @@ class XplorerMapLogic {
   std::optional<std::string> fsm_state_;
   double fsm_state_since_s_ = 0.0;  ///< stamp time of entering the current state
   std::string fsm_previous_state_;  ///< FsmState.previous_state of the current state
+  std::vector<uint8_t> impact_turn_codes_;  ///< FsmState.reason_code of impact_turn_reasons
   bool turn_after_impact_reason_ = false;  ///< the latest Tactile-turning was entered for one of impact_turn_reasons
   bool entered_after_impact_ = false;      ///< the current state was entered from contact_now_after or such a turn
   bool entered_after_impact_turn_ = false; ///< ... from such a turn (impact_turn_rules apply)

@@ -14,21 +14,17 @@
 #include <vector>
 
 #include "mapping_pcl/point_map.hpp"
+#include "tactile_common/body_direction.hpp"
 
 namespace mapping_pcl {
 
-/// Contact / move directions of 001 Sec. IV-A in the body frame: b1, -b1, b2, -b2
-/// (C_n is one-hot over these four; lambda takes "+X", "-X", "+Y", "-Y").
-enum class BodyDirection : int { kPlusX = 0, kMinusX = 1, kPlusY = 2, kMinusY = 3 };
-Eigen::Vector2d unit(BodyDirection d);
-const char* to_string(BodyDirection d);
-/// Right-hand traversal (001 Sec. IV-A): the move direction is the contact
-/// direction turned by -90 deg (obstacle ahead -> move right).
-BodyDirection right_hand_move(BodyDirection contact);
-/// Contact direction from the body force: the axis of the larger |component|
-/// if it exceeds `threshold`; the obstacle lies opposite to the force it
-/// exerts (force along -b1 -> obstacle at +b1). Empty if below threshold.
-std::optional<BodyDirection> contact_direction(const Eigen::Vector2d& force_body, double threshold);
+/// Contact / move directions of 001 Sec. IV-A in the body frame (b1, -b1, b2, -b2; C_n from
+/// the body force with contact_direction(), lambda = right_hand(C_n)): the definitions
+/// tactile_fsm's exploration FSM uses (tactile_common/body_direction.hpp).
+using tactile_common::BodyDirection;
+using tactile_common::contact_direction;
+using tactile_common::right_hand;
+using tactile_common::unit;
 
 struct XplorerMapParams {
   double delta_map = 1.51;                     ///< [N] (001 Sec. V-D)
@@ -261,7 +257,7 @@ bool both_arms_touch(const Eigen::Vector2d& d, const std::array<double, 4>& thet
 /// True if a change of lambda is a right-angle corner (corner_angle_tolerance):
 /// the contact stayed on the same body axis and C_n turned in the world by
 /// 90 deg +- `tolerance` [rad]; always true for tolerance >= pi/2 (001; validate() allows up to pi).
-bool is_right_angle_corner(std::optional<BodyDirection> previous_body, const Eigen::Vector2d& previous_world,
+bool is_right_angle_corner(BodyDirection previous_body, const Eigen::Vector2d& previous_world,
                            BodyDirection body, const Eigen::Vector2d& world, double tolerance);
 
 class XplorerContactMapper {
@@ -364,7 +360,7 @@ class XplorerContactMapper {
 
   const Stats& stats() const { return stats_; }
   const XplorerMapParams& params() const { return p_; }
-  std::optional<BodyDirection> last_contact() const { return last_contact_; }
+  BodyDirection last_contact() const { return last_contact_; }  ///< kNone before the first slab
 
  private:
   XplorerMapParams p_;
@@ -418,7 +414,7 @@ class XplorerContactMapper {
   void drop_held();
   bool initiated_ = false;
   bool in_traversal_ = false;  ///< hold_initiation
-  std::optional<BodyDirection> last_contact_;
+  BodyDirection last_contact_ = BodyDirection::kNone;
   std::optional<int> last_move_world_;       ///< lambda quantised to a world axis (0:+X 1:+Y 2:-X 3:-Y)
   Eigen::Vector2d last_contact_world_ = Eigen::Vector2d::Zero();
   std::vector<FaceSample> face_;                       ///< face slabs of the current traversal (corner fill, face clip)

@@ -18,6 +18,8 @@
 
 #include <Eigen/Geometry>
 
+#include "tactile_common/body_direction.hpp"
+
 namespace tactile_fsm {
 
 using XVec2 = Eigen::Vector2d;
@@ -78,11 +80,35 @@ enum class XplorerState {
 };
 const char* to_string(XplorerState s);
 
-/// Contact / move direction in the body frame: b1, -b1, b2, -b2 (001 Sec. IV-A).
-enum class XDir : int { kPlusX = 0, kMinusX = 1, kPlusY = 2, kMinusY = 3, kNone = 4 };
-const char* to_string(XDir d);
-XVec2 unit(XDir d);
-XDir right_hand(XDir contact);  ///< lambda for a contact: C_n turned by -90 deg
+/// Contact / move direction in the body frame: b1, -b1, b2, -b2 (001 Sec. IV-A), with
+/// unit(), right_hand() (lambda: C_n turned by -90 deg) and contact_direction(), shared with
+/// mapping_pcl's contact mapper (tactile_common/body_direction.hpp).
+using tactile_common::BodyDirection;
+using tactile_common::contact_direction;
+using tactile_common::right_hand;
+using tactile_common::unit;
+
+/// Why the last transition happened (reason()'s text is for people; this is what programs
+/// key on). The values are tactile_msgs/msg/FsmState's REASON_XPLORER_* (the node logic
+/// checks that at compile time); kNewContact changes C_n inside Tactile-traversal without a
+/// state change.
+enum class XplorerReason : uint8_t {
+  kNone = 0,                 ///< no transition yet
+  kHoverHeightReached = 10,  ///< takeoff -> the mission's first state
+  kContact = 11,             ///< Exploration -> Tactile-traversal / static wrench (delta_0)
+  kContactSquareUp = 12,     ///< ... Tactile-traversal, squaring up to a face slid along first (square_*)
+  kNewContact = 13,          ///< inside Tactile-traversal: a contact along lambda (concave corner) is the new C_n
+  kYawRatePeak = 14,         ///< Tactile-traversal -> Tactile-turning (psi_dot_0, convex corner)
+  kContactLostTurn = 15,     ///< Tactile-traversal -> Tactile-turning about the face's end (turn_on_contact_lost)
+  kContactLost = 16,         ///< Tactile-traversal -> Exploration
+  kContactLostSquaring = 17, ///< Tactile-traversal (squaring up) -> Exploration
+  kReContact = 18,           ///< Tactile-turning -> Tactile-traversal (delta_psi0)
+  kTurnLimit = 19,           ///< Tactile-turning -> Exploration: no re-contact
+  kLoopClosed = 20,          ///< -> done (001 Sec. V-C2)
+  kCollisionRecovered = 21,  ///< Ricocheting -> goto (001 Sec. IV-C)
+  kGoalPassed = 22,          ///< Ricocheting -> goto: no collision
+};
+const char* to_string(XplorerReason r);  ///< snake-case name: "contact_lost_turn", ...
 
 struct XplorerParams {
   XplorerMission mission = XplorerMission::kExplore;
@@ -252,11 +278,12 @@ class XplorerExplorer {
   XplorerOutput update(const XplorerInput& in, double dt);
 
   XplorerState state() const { return state_; }
-  XDir contact() const { return contact_; }
-  XDir move() const { return move_; }
+  BodyDirection contact() const { return contact_; }
+  BodyDirection move() const { return move_; }
   const XVec2& body_force() const { return f_body_avg_; }  ///< 50-sample moving average
   double filtered_yaw_rate() const { return yaw_rate_f_; }
-  const std::string& reason() const { return reason_; }
+  const std::string& reason() const { return reason_; }  ///< human readable; programs use reason_code()
+  XplorerReason reason_code() const { return reason_code_; }
   double time_in_state(double t) const { return t - t_enter_; }
   uint32_t transitions() const { return transitions_; }
   bool loop_closed() const { return loop_closed_; }
@@ -277,8 +304,24 @@ class XplorerExplorer {
   const XplorerParams& params() const { return p_; }
 
  private:
-  void enter(XplorerState s, const XplorerInput& in, const std::string& why);
-  XDir detect_contact(double threshold) const;
+  /// The transition to `s`: the common bookkeeping, then `s`'s entry action (its set-up and
+  /// the setpoint of this tick, written to `out`). Entering Tactile-traversal or the static
+  /// wrench from Exploration starts the contact back-off, and the traversal may square up
+  /// first (why becomes kContactSquareUp); Tactile-turning needs pivot_, face_*, phi0_ and
+  /// turn_sign_ set before (plan_turn).
+  void enter(XplorerState s, XplorerReason why, const XplorerInput& in, XplorerOutput& out);
+  std::string reason_text(XplorerReason why) const;
+  /// The Tactile-turning's corner from the face pose (yaw, position) before the release.
+  void plan_turn(double sign, double face_yaw, const XVec2& face_p, const XplorerInput& in);
+  // One control tick of each state: its setpoint in `out`, or a transition (enter()).
+  void tick_takeoff(const XplorerInput& in, XplorerOutput& out);
+  void tick_exploration(const XplorerInput& in, XplorerOutput& out);
+  void tick_traversal(const XplorerInput& in, double dt, XplorerOutput& out);
+  /// Tactile-traversal's squaring-up phase (square_*); false once squared (the traversal goes on this tick).
+  bool tick_squaring(const XplorerInput& in, double dt, XplorerOutput& out);
+  void tick_turning(const XplorerInput& in, XplorerOutput& out);
+  void tick_static_wrench(const XplorerInput& in, double dt, XplorerOutput& out);
+  void tick_ricochet(const XplorerInput& in, XplorerOutput& out);
   double reshape(const XVec2& n, const XVec2& p, const XVec3& force, const XVec3& f_des, double dt);
   void start_backoff(const XplorerInput& in);
   bool plan_square(const XplorerInput& in);  ///< square_*: sets contact_, move_ and the squaring's yaw
@@ -288,7 +331,7 @@ class XplorerExplorer {
   XplorerParams p_;
   AdmittanceController adm_;
   XplorerState state_ = XplorerState::kTakeoff;
-  XDir contact_ = XDir::kNone, move_ = XDir::kNone;
+  BodyDirection contact_ = BodyDirection::kNone, move_ = BodyDirection::kNone;
   std::deque<XVec2> forces_;
   XVec2 f_sum_ = XVec2::Zero(), f_body_avg_ = XVec2::Zero();
   double yaw_rate_f_ = 0.0;
@@ -299,6 +342,7 @@ class XplorerExplorer {
   XVec3 hold_ = XVec3::Zero();
   double hold_yaw_ = 0.0;
   std::string reason_;
+  XplorerReason reason_code_ = XplorerReason::kNone;
   uint32_t transitions_ = 0, turns_ = 0, collisions_ = 0, turns_against_ = 0;
   int clockwise_in_a_row_ = 0;
   bool loop_closed_ = false, started_path_ = false, initialised_ = false, peak_against_ = false;
