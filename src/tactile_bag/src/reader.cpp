@@ -275,6 +275,7 @@ void Reader::close() {
   }
   temp_files_.clear();
   upgraded_.clear();
+  upgraded_fsm_state_.clear();
   storage_ = "sqlite3";
   compression_format_.clear();
   compression_mode_.clear();
@@ -502,6 +503,15 @@ void Reader::open(const std::string& dir) {
       old_layout = metadata_version_ > 0 && metadata_version_ < 9;
     }
     if (old_layout) upgraded_.push_back(t.name);
+  }
+  // tactile_msgs/FsmState before its three trailing uint8 fields (reason_code,
+  // contact_direction, move_direction): by the definition the bag stores (every rosbag2
+  // since Iron and every bag of this workspace stores one).
+  for (const auto& t : topics_) {
+    if (t.type == "tactile_msgs/msg/FsmState" && !t.type_definition.empty() && t.definition_encoding == "ros2msg" &&
+        !definition_has_field(t.type_definition, t.type, t.type, "reason_code")) {
+      upgraded_fsm_state_.push_back(t.name);
+    }
   }
 }
 
@@ -781,6 +791,12 @@ void Reader::finish_message(SerializedMessage& out) {
       out.data.resize(n);
       out.data.insert(out.data.end(), 4, 0);  // variance 0: unknown
     }
+  }
+  if (!upgraded_fsm_state_.empty() &&
+      std::find(upgraded_fsm_state_.begin(), upgraded_fsm_state_.end(), out.topic) != upgraded_fsm_state_.end()) {
+    // The old layout ends with uint32 transitions, 4-aligned: no trailing padding, so the
+    // three uint8 fields follow at once (0: REASON_NONE, DIRECTION_NONE).
+    out.data.insert(out.data.end(), 3, 0);
   }
 }
 

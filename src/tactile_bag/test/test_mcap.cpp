@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "sensor_msgs/msg/range.hpp"
+#include "tactile_msgs/msg/fsm_state.hpp"
 #include "tactile_bag/distro.hpp"
 #include "tactile_bag/typed.hpp"
 
@@ -151,6 +152,78 @@ TEST(Distro, HumbleRangeLayoutWrittenAndUpgradedOnRead) {
       ++i;
     }
     EXPECT_EQ(i, 4);
+    fs::remove_all(dir);
+  }
+}
+
+// A bag recorded before FsmState gained reason_code, contact_direction and move_direction
+// (its stored definition lacks them; each payload ends at `transitions`) reads back as the
+// current type with the three fields 0; a bag with the current definition is read as is.
+TEST(Distro, FsmStateWithoutReasonCodeIsUpgradedOnRead) {
+  const auto state = [](int i) {
+    tactile_msgs::msg::FsmState m;
+    m.header.stamp.sec = i;
+    m.header.frame_id = "odom";
+    m.behaviour = "xplorer_exploration";
+    m.state = "tactile_traversal";
+    m.previous_state = "exploration";
+    m.reason = "contact: averaged body force above delta_0";
+    m.time_in_state = 0.25 * i;
+    m.transitions = static_cast<uint32_t>(3 + i);
+    return m;
+  };
+  std::string old_definition = tactile_msgs::cdr::MessageTraits<tactile_msgs::msg::FsmState>::definition();
+  for (const char* field : {"reason_code", "contact_direction", "move_direction"}) {
+    old_definition = tactile_bag::remove_field_from_definition(old_definition, "tactile_msgs/msg/FsmState",
+                                                               "tactile_msgs/msg/FsmState", field);
+  }
+  ASSERT_FALSE(tactile_bag::definition_has_field(old_definition, "tactile_msgs/msg/FsmState",
+                                                 "tactile_msgs/msg/FsmState", "reason_code"));
+  for (const std::string storage : {"mcap", "sqlite3"}) {
+    const std::string dir = temp_bag("fsm_old");
+    {
+      WriterOptions o;
+      o.storage = storage;
+      Writer w(o);
+      w.open(dir);
+      tactile_bag::TopicInfo t;
+      t.name = "/xplorer/fsm_state";
+      t.type = "tactile_msgs/msg/FsmState";
+      t.type_definition = old_definition;
+      w.create_topic(t);
+      for (int i = 0; i < 3; ++i) {
+        auto bytes = tactile_msgs::cdr::serialize(state(i));
+        bytes.resize(bytes.size() - 3);  // the old layout: nothing after `transitions`
+        w.write("/xplorer/fsm_state", 1000000000LL + i, bytes);
+      }
+      // The current layout on another topic is not touched (mcap: a schema per channel;
+      // sqlite3 stores one definition per type, as rosbag2 does).
+      if (storage == "mcap") {
+        auto now = state(7);
+        now.reason_code = tactile_msgs::msg::FsmState::REASON_XPLORER_CONTACT;
+        now.contact_direction = tactile_msgs::msg::FsmState::DIRECTION_PLUS_X;
+        now.move_direction = tactile_msgs::msg::FsmState::DIRECTION_PLUS_Y;
+        w.write("/fsm_state", 2000000000LL, now);
+      }
+      w.close();
+    }
+    Reader r(dir);
+    EXPECT_EQ(r.upgraded_fsm_state_topics(), std::vector<std::string>{"/xplorer/fsm_state"}) << storage;
+    SerializedMessage m;
+    int i = 0;
+    while (r.read_next(m)) {
+      const auto got = tactile_bag::decode<tactile_msgs::msg::FsmState>(m);
+      if (m.topic == "/fsm_state") {
+        EXPECT_EQ(got.reason_code, tactile_msgs::msg::FsmState::REASON_XPLORER_CONTACT);
+        EXPECT_EQ(got.move_direction, tactile_msgs::msg::FsmState::DIRECTION_PLUS_Y);
+        continue;
+      }
+      EXPECT_EQ(m.data, tactile_msgs::cdr::serialize(state(i))) << storage << " " << i;
+      EXPECT_EQ(got.transitions, static_cast<uint32_t>(3 + i));
+      EXPECT_EQ(got.reason_code, tactile_msgs::msg::FsmState::REASON_NONE);
+      ++i;
+    }
+    EXPECT_EQ(i, 3) << storage;
     fs::remove_all(dir);
   }
 }

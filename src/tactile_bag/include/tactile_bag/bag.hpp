@@ -238,6 +238,11 @@ class Reader {
   /// Topics of type sensor_msgs/msg/Range recorded in Humble's layout (no variance): read
   /// with a variance of 0 ("unknown") appended, so they decode as the current type.
   const std::vector<std::string>& upgraded_range_topics() const { return upgraded_; }
+  /// Topics of type tactile_msgs/msg/FsmState recorded before reason_code,
+  /// contact_direction and move_direction were appended (their stored definition lacks
+  /// reason_code): read with the three uint8 fields appended as 0 (REASON_NONE,
+  /// DIRECTION_NONE), so they decode as the current type.
+  const std::vector<std::string>& upgraded_fsm_state_topics() const { return upgraded_fsm_state_; }
   bool metadata_complete() const { return metadata_complete_; }
   /// What was reconstructed or lost, with the file, byte offset and reason (empty when the
   /// bag is complete).
@@ -289,6 +294,7 @@ class Reader {
   std::vector<McapFile> mcap_files_;
   std::vector<std::string> temp_files_;  // decompressed copies of file-compressed bags
   std::vector<std::string> upgraded_;
+  std::vector<std::string> upgraded_fsm_state_;
   std::vector<uint8_t> scratch_;
   std::vector<std::string> db_paths_;
   std::vector<TopicInfo> topics_;
