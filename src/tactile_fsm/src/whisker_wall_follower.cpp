@@ -101,27 +101,12 @@ void WallFollowerParams::validate() const {
           same_obstacle_distance);
   require(finite_nonneg(press_sum_pa), "press_sum_pa", "must be finite and >= 0 (0 = off)", press_sum_pa);
   require(finite_nonneg(press_hold_s), "press_hold_s", "must be finite and >= 0", press_hold_s);
-  require(finite_nonneg(press_rms_pa), "press_rms_pa", "must be finite and >= 0 (0 = off)", press_rms_pa);
   require(finite_positive(press_depth), "press_depth", "must be finite and > 0", press_depth);
-  require(finite_nonneg(motion_depth_relax), "motion_depth_relax", "must be finite and >= 0 (0 = off)",
-          motion_depth_relax);
-  require(finite_nonneg(motion_depth_margin), "motion_depth_margin", "must be finite and >= 0", motion_depth_margin);
-  require(finite_nonneg(motion_depth_baseline), "motion_depth_baseline", "must be finite and >= 0",
-          motion_depth_baseline);
   require(std::isfinite(whisker_base_x), "whisker_base_x", "must be finite", whisker_base_x);
-  require(finite_nonneg(resume_quiet_rms), "resume_quiet_rms", "must be finite and >= 0 (0 = off)", resume_quiet_rms);
-  // The margin moves only within phantom_resume_max of the clearing (docs/tuning/tactile_fsm.md "Round 11").
-  require(resume_quiet_rms == 0.0 || phantom_resume_max > 0.0, "resume_quiet_rms",
-          "has no effect unless phantom_resume_max > 0", resume_quiet_rms);
-  require(finite_nonneg(lost_far_depth), "lost_far_depth", "must be finite and >= 0 (0 = off)", lost_far_depth);
   require(finite_nonneg(phantom_quiet_rms), "phantom_quiet_rms", "must be finite and >= 0 (0 = off)",
           phantom_quiet_rms);
   require(finite_nonneg(phantom_travel), "phantom_travel", "must be finite and >= 0", phantom_travel);
   require(finite_nonneg(phantom_resume_max), "phantom_resume_max", "must be finite and >= 0", phantom_resume_max);
-  require(finite_nonneg(whisk_amplitude) && whisk_amplitude <= M_PI / 2.0, "whisk_amplitude",
-          "must be in [0, pi/2] (0 = off)", whisk_amplitude);
-  require(std::isfinite(whisk_period_s) && whisk_period_s > 0.0, "whisk_period_s", "must be finite and > 0",
-          whisk_period_s);
   require(std::isfinite(whisk_rate_max) && whisk_rate_max > 0.0, "whisk_rate_max", "must be finite and > 0",
           whisk_rate_max);
   require(finite_nonneg(whisk_pause_rms), "whisk_pause_rms", "must be finite and >= 0 (0 = off)", whisk_pause_rms);
@@ -131,21 +116,10 @@ void WallFollowerParams::validate() const {
           clear_yaw_release_rms);
   require(finite_nonneg(first_whisk_amplitude) && first_whisk_amplitude <= M_PI / 2.0, "first_whisk_amplitude",
           "must be in [0, pi/2] (0 = off)", first_whisk_amplitude);
-  require(finite_positive(first_whisk_period_s), "first_whisk_period_s", "must be finite and > 0",
-          first_whisk_period_s);
-  require(finite_nonneg(first_whisk_speed) && first_whisk_speed <= v_max, "first_whisk_speed",
-          "must be in [0, v_max] (0 = v_max)", first_whisk_speed);
-  require(finite_nonneg(first_whisk_wall_rate), "first_whisk_wall_rate", "must be finite and >= 0 (0 = off)",
-          first_whisk_wall_rate);
-  require(finite_nonneg(first_scan_step), "first_scan_step", "must be finite and >= 0 (0 = off)", first_scan_step);
-  require(first_scan_step == 0.0 || first_scan_step >= 0.02, "first_scan_step",
-          "must be 0 (off) or >= 0.02 m (the step ends 15 mm before its end)", first_scan_step);
-  if (first_scan_step > 0.0) {
-    require(finite_positive(first_scan_rate) && first_scan_rate <= whisk_rate_max, "first_scan_rate",
-            "must be finite, > 0 and <= whisk_rate_max", first_scan_rate);
-    require(!first_whisk_pause_to_course, "first_whisk_pause_to_course",
-            "has no effect with first_scan_step > 0 (the scan holds the yaw on a moving sum)", 1.0);
-  }
+  require(std::isfinite(first_scan_step) && first_scan_step >= 0.02, "first_scan_step",
+          "must be finite and >= 0.02 m (the step ends 15 mm before its end)", first_scan_step);
+  require(finite_positive(first_scan_rate) && first_scan_rate <= whisk_rate_max, "first_scan_rate",
+          "must be finite, > 0 and <= whisk_rate_max", first_scan_rate);
   require(finite_nonneg(end_contact_lateral), "end_contact_lateral", "must be finite and >= 0 (0 = off)",
           end_contact_lateral);
   require(finite_positive(target_radius), "target_radius", "must be finite and > 0", target_radius);
@@ -156,23 +130,12 @@ void WallFollowerParams::validate() const {
 }
 
 WallSubState wall_sub_state(double d_l, bool l_valid, double d_r, bool r_valid, Side side, bool both_touched,
-                            WallSubState current, const WallFollowerParams& p, double theta_in, double last_l,
-                            double last_r) {
+                            WallSubState current, const WallFollowerParams& p, double theta_in) {
   l_valid = l_valid && std::isfinite(d_l);
   r_valid = r_valid && std::isfinite(d_r);
   if (!l_valid && !r_valid) return WallSubState::kFlySideways;
   if (l_valid != r_valid) {
     const bool leading_lost = (side == Side::kRight) ? !r_valid : !l_valid;
-    const double lost_last = l_valid ? last_r : last_l;
-    if (both_touched && p.lost_far_depth > 0.0 && std::isfinite(lost_last) && lost_last > p.lost_far_depth &&
-        (l_valid ? d_l : d_r) > p.t_max) {
-      // One whisker lost while it was already beyond lost_far_depth and the
-      // other beyond T_max (last_l / last_r: NaN unless the other was beyond
-      // T_max when it was lost): out of reach, not off an end; both far ->
-      // FLY_FORWARD back to the wall (000 Fig. S4e; issue 17, docs/tuning/tactile_fsm.md "Round 11";
-      // our choice).
-      return WallSubState::kFlyForward;
-    }
     if (both_touched && p.wall_end_depth > 0.0 && (l_valid ? d_l : d_r) > p.wall_end_depth) {
       // One whisker lost after both touched, the other beyond wall_end_depth:
       // the wall ends here (a whisker held past the end), not a wall ahead;
@@ -254,15 +217,9 @@ void WhiskerWallFollower::reset() {
   both_touched_ = false;
   last_contact_t_ = 0.0;
   f_left_ = f_right_ = NAN;
-  last_l_ = last_r_ = NAN;
-  lost_far_l_ = lost_far_r_ = prev_l_valid_ = prev_r_valid_ = false;
   pressed_t_left_ = pressed_t_right_ = -INFINITY;
   live_x_l_ = live_y_l_ = live_x_r_ = live_y_r_ = NAN;
   phantom_l_ = phantom_r_ = false;
-  motion_b_l_ = motion_b_r_ = NAN;
-  motion_qx_l_ = motion_qy_l_ = motion_qx_r_ = motion_qy_r_ = NAN;
-  onset_x_l_ = onset_y_l_ = onset_x_r_ = onset_y_r_ = NAN;
-  motion_nx_ = motion_ny_ = NAN;
   wall_heading_ = theta_ = anchor_ = NAN;
   origin_set_ = false;
   origin_x_ = origin_y_ = clear_x_ = clear_y_ = 0.0;
@@ -353,90 +310,6 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
     phantom_l_ = phantom_r_ = false;
   }
 
-  // Depth bounded by the drone's own motion (issue 17, docs/tuning/tactile_fsm.md "Round 8"; our
-  // choice): the wall is fixed in the world, so the depth a whisker had at
-  // its contact's onset, carried with the odometry, bounds the depth now; the
-  // published depth of a pressed whisker (friction-limited load, the model
-  // saturating at ~70 mm) cannot undo a measured approach.
-  if (p_.motion_depth_relax > 0.0 && odom_fresh && std::isfinite(in.x) && std::isfinite(in.y) &&
-      std::isfinite(in.yaw) && (l_valid || r_valid)) {
-    const double c = std::cos(in.yaw), s = std::sin(in.yaw);
-    auto base = [&](double side, double& bx, double& by) {  // side +1 left, -1 right
-      bx = in.x + c * p_.whisker_base_x - s * side * 0.5 * p_.whisker_spacing;
-      by = in.y + s * p_.whisker_base_x + c * side * 0.5 * p_.whisker_spacing;
-    };
-    // The wall's normal is fixed in the world for the contact (both whiskers'
-    // contacts, until neither is in contact): the heading at the first onset
-    // (wall taken square to it), replaced once the other whisker touches by
-    // the normal of the line through the two first contact points when they
-    // are >= motion_depth_baseline apart, else by eq. 21 on the depths at that
-    // moment (before a long press saturates them).
-    const bool first_onset = !std::isfinite(motion_nx_);
-    auto onset = [&](bool valid, double d_pub, double side, double& ox, double& oy) {
-      if (!valid || std::isfinite(ox)) return false;
-      double bx, by;
-      base(side, bx, by);
-      ox = bx + d_pub * c;
-      oy = by + d_pub * s;
-      return true;
-    };
-    const bool new_l = onset(l_valid, in.depth_left, 1.0, onset_x_l_, onset_y_l_);
-    const bool new_r = onset(r_valid, in.depth_right, -1.0, onset_x_r_, onset_y_r_);
-    if (first_onset) {
-      motion_nx_ = c;
-      motion_ny_ = s;
-    }
-    if ((new_l || new_r) && std::isfinite(onset_x_l_) && std::isfinite(onset_x_r_)) {
-      const double dx = onset_x_r_ - onset_x_l_, dy = onset_y_r_ - onset_y_l_;
-      const double len = std::hypot(dx, dy);
-      double mx = NAN, my = NAN;
-      if (p_.motion_depth_baseline > 0.0 && len >= p_.motion_depth_baseline) {
-        mx = dy / len;
-        my = -dx / len;
-        if (mx * c + my * s < 0.0) {
-          mx = -mx;
-          my = -my;
-        }
-      } else if (l_valid && r_valid) {
-        const double w = in.yaw - std::atan((in.depth_left - in.depth_right) / p_.whisker_spacing);
-        mx = std::cos(w);
-        my = std::sin(w);
-      }
-      // More than 60 deg off the heading: not a wall the whiskers point at.
-      if (std::isfinite(mx) && mx * c + my * s >= 0.5) {
-        motion_nx_ = mx;
-        motion_ny_ = my;
-      }
-    }
-    const double nx = motion_nx_, ny = motion_ny_;
-    const double nu = std::fmax(nx * c + ny * s, 0.1);
-    auto carry = [&](bool valid, double d_pub, double side, double& b, double& qx, double& qy) {
-      if (!valid) {
-        b = qx = qy = NAN;
-        return;
-      }
-      double bx, by;
-      base(side, bx, by);
-      if (!std::isfinite(b)) {
-        b = d_pub;  // (re)touch: the published depth of this contact's first tick
-      } else {
-        // Depth along body x from the base to the wall line through the
-        // bound's point with normal n, allowed to rise by relax * dt.
-        const double carried = (nx * (qx - bx) + ny * (qy - by)) / nu;
-        b = std::fmin(d_pub, carried + p_.motion_depth_relax * dt);
-      }
-      qx = bx + b * c;
-      qy = by + b * s;
-    };
-    carry(l_valid, in.depth_left, 1.0, motion_b_l_, motion_qx_l_, motion_qy_l_);
-    carry(r_valid, in.depth_right, -1.0, motion_b_r_, motion_qx_r_, motion_qy_r_);
-  } else {
-    motion_b_l_ = motion_b_r_ = NAN;
-    motion_qx_l_ = motion_qy_l_ = motion_qx_r_ = motion_qy_r_ = NAN;
-    onset_x_l_ = onset_y_l_ = onset_x_r_ = onset_y_r_ = NAN;
-    motion_nx_ = motion_ny_ = NAN;
-  }
-
   // First-order low-pass of the depths for the sub-state rule (our choice;
   // restarts when a whisker loses the wall).
   const double a = p_.depth_filter_tau_s > 0.0 ? dt / (p_.depth_filter_tau_s + dt) : 1.0;
@@ -484,13 +357,6 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
         break;
       case FsmState::kFlyForward:
       case FsmState::kResumeForward:
-        // resume_quiet_rms: a sum still moving is a whisker still on the wall;
-        // the margin counts from here (docs/tuning/tactile_fsm.md "Round 11"; our choice).
-        if (state_ == FsmState::kResumeForward && sum_moves(in, p_.resume_quiet_rms) &&
-            std::hypot(in.x - clear_x_, in.y - clear_y_) < p_.phantom_resume_max) {
-          margin_x_ = in.x;
-          margin_y_ = in.y;
-        }
         if (contact && state_ == FsmState::kResumeForward) {
           // Contact again while side-stepping past the edge: the same
           // obstacle's end (the contact flags dropped early). Keep the side and
@@ -530,7 +396,7 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
             enter(FsmState::kWallFollowing, "whisker contact", t);
           }
         } else if (state_ == FsmState::kResumeForward &&
-                   std::hypot(in.x - margin_x_, in.y - margin_y_) >= p_.clear_margin &&
+                   std::hypot(in.x - clear_x_, in.y - clear_y_) >= p_.clear_margin &&
                    (!(held_raw_l || held_raw_r) ||
                     std::hypot(in.x - clear_x_, in.y - clear_y_) >= p_.phantom_resume_max)) {
           // A whisker still held as a phantom: TDORC has not released it yet,
@@ -546,8 +412,8 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
         if (contact) last_contact_t_ = t;
         if (l_valid && r_valid) both_touched_ = true;
         if (!contact && t - last_contact_t_ >= p_.clear_confirm_s - kTimeEps) {
-          clear_x_ = margin_x_ = in.x;
-          clear_y_ = margin_y_ = in.y;
+          clear_x_ = in.x;
+          clear_y_ = in.y;
           enter(FsmState::kResumeForward, "obstacle cleared (both whiskers off the wall)", t);
         }
         break;
@@ -571,49 +437,21 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
   // Pressed past the depth model (issue 17, docs/whisker_fsm.md "Pressed whisker"): the
   // whisker's S_c sum bounds its depth by press_depth whatever depth is read.
   double d_left = f_left_, d_right = f_right_;
-  if (p_.press_sum_pa > 0.0 || p_.press_rms_pa > 0.0) {
-    const double sum_level = p_.press_sum_pa > 0.0 ? p_.press_sum_pa : INFINITY;
-    const double rms_level = p_.press_rms_pa > 0.0 ? p_.press_rms_pa : INFINITY;
-    // Pressed: the sum beyond the model's range, or its stick-slip changes as large
-    // as a whisker pressed to the depths the model cannot resolve (docs/tuning/tactile_fsm.md "Round 6").
-    if (l_valid && (in.input_sum_left >= sum_level || in.input_change_rms_left >= rms_level)) pressed_t_left_ = t;
-    if (r_valid && (in.input_sum_right >= sum_level || in.input_change_rms_right >= rms_level)) pressed_t_right_ = t;
+  if (p_.press_sum_pa > 0.0) {
+    // Pressed: the sum beyond the model's range.
+    if (l_valid && in.input_sum_left >= p_.press_sum_pa) pressed_t_left_ = t;
+    if (r_valid && in.input_sum_right >= p_.press_sum_pa) pressed_t_right_ = t;
     if (!l_valid) pressed_t_left_ = -INFINITY;
     if (!r_valid) pressed_t_right_ = -INFINITY;
     if (l_valid && t - pressed_t_left_ <= p_.press_hold_s + kTimeEps) d_left = std::fmin(d_left, p_.press_depth);
     if (r_valid && t - pressed_t_right_ <= p_.press_hold_s + kTimeEps) d_right = std::fmin(d_right, p_.press_depth);
   }
 
-  if (std::isfinite(motion_b_l_) && l_valid) d_left = std::fmin(d_left, motion_b_l_ + p_.motion_depth_margin);
-  if (std::isfinite(motion_b_r_) && r_valid) d_right = std::fmin(d_right, motion_b_r_ + p_.motion_depth_margin);
-
   if (state_ != FsmState::kWallFollowing) {
     anchor_ = NAN;  // a new wall following reads its own anchor
-    last_l_ = last_r_ = NAN;
-    lost_far_l_ = lost_far_r_ = false;
   }
   if (state_ == FsmState::kWallFollowing) {
-    // lost_far_depth: a whisker lost counts as out of reach only if it was
-    // beyond lost_far_depth and the other beyond T_max on the tick it was lost
-    // (both drifting off the wall). A whisker run off an end while the other
-    // is still in the band, and read far afterwards (held past the end), is
-    // round 7's case (mocap 1023, 1025, 1029), left to wall_end_depth.
-    if (l_valid) {
-      lost_far_l_ = false;
-    } else if (std::isfinite(last_l_) && !lost_far_l_ && prev_l_valid_) {
-      lost_far_l_ = last_l_ > p_.lost_far_depth && r_valid && d_right > p_.t_max;
-    }
-    if (r_valid) {
-      lost_far_r_ = false;
-    } else if (std::isfinite(last_r_) && !lost_far_r_ && prev_r_valid_) {
-      lost_far_r_ = last_r_ > p_.lost_far_depth && l_valid && d_left > p_.t_max;
-    }
-    WallSubState next = wall_sub_state(d_left, l_valid, d_right, r_valid, side_, both_touched_, sub_, p_, theta_,
-                                       lost_far_l_ ? last_l_ : NAN, lost_far_r_ ? last_r_ : NAN);
-    if (l_valid && std::isfinite(d_left)) last_l_ = d_left;
-    if (r_valid && std::isfinite(d_right)) last_r_ = d_right;
-    prev_l_valid_ = l_valid;
-    prev_r_valid_ = r_valid;
+    WallSubState next = wall_sub_state(d_left, l_valid, d_right, r_valid, side_, both_touched_, sub_, p_, theta_);
     // A turn that a heading limit refuses becomes the translation the depths
     // ask for.
     auto translate_instead = [&] {
@@ -667,42 +505,17 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
   out.sub_state = sub_;
   out.transitioned = state_ != state_before || sub_ != sub_before;
   out.setpoint = saturate(command(in), p_);
-  if (p_.whisk_amplitude > 0.0 && state_ == FsmState::kFlyForward && origin_set_ && std::isfinite(in.yaw) &&
-      (after_clear_ || !p_.whisk_after_clear_only)) {
-    out.setpoint = whisk(in, out.setpoint, p_.whisk_amplitude, p_.whisk_period_s, p_.v_max);
-  }
   if (state_ == FsmState::kWallFollowing) contacted_ = true;
-  // Whisking on the first approach (docs/tuning/tactile_fsm.md "Round 10"): no clearing yet, the
-  // first baffle's end may lie in the blind band on either side.
+  // Step and scan on the first approach (docs/tuning/tactile_fsm.md "Round 10", "Round 12"): no
+  // clearing yet, the first baffle's end may lie in the blind band on either side.
   if (p_.first_whisk_amplitude > 0.0 && state_ == FsmState::kFlyForward && !contacted_ && !after_clear_ &&
       origin_set_ && std::isfinite(in.yaw) && std::isfinite(in.x) && std::isfinite(in.y)) {
-    out.setpoint = p_.first_scan_step > 0.0
-                       ? step_and_scan(in, out.setpoint, dt)
-                       : whisk(in, out.setpoint, p_.first_whisk_amplitude, p_.first_whisk_period_s,
-                               p_.first_whisk_speed > 0.0 ? p_.first_whisk_speed : p_.v_max,
-                               p_.first_whisk_pause_to_course);
-    // A wall ahead (docs/tuning/tactile_fsm.md "Round 10b", our choice): at a yaw toward one side a
-    // square wall is met first by the other side's whisker (its tip lies
-    // further ahead), an end beside the axis by the yaw side's whisker. The
-    // former turns the yaw back to the course before TDORC flags it, so the
-    // wall following starts as without the whisk.
-    if (p_.first_whisk_wall_rate > 0.0) {
-      const double rel = std::remainder(in.yaw - course_yaw_, 2.0 * M_PI);
-      const bool mv_l = moves(in.input_change_rms_left, p_.whisk_pause_rms);
-      const bool mv_r = moves(in.input_change_rms_right, p_.whisk_pause_rms);
-      if ((mv_l && mv_r) || (mv_l && rel < 0.0) || (mv_r && rel > 0.0)) first_whisk_wall_ = true;
-      if (first_whisk_wall_) {
-        out.setpoint.yaw_rate =
-            std::clamp(-8.0 * rel, -p_.first_whisk_wall_rate, p_.first_whisk_wall_rate);  // 8 1/s: our choice
-      }
-    }
+    out.setpoint = step_and_scan(in, out.setpoint, dt);
   } else {
-    first_whisk_wall_ = false;
     scan_goal_ = NAN;  // step_and_scan starts afresh on the next first approach
   }
   const bool offset_on = p_.clear_yaw_offset > 0.0 && origin_set_ && std::isfinite(in.yaw) &&
-                         ((state_ == FsmState::kResumeForward && p_.clear_yaw_in_resume) ||
-                          (state_ == FsmState::kFlyForward && after_clear_));
+                         state_ == FsmState::kFlyForward && after_clear_;
   if (offset_on) {
     out.setpoint = offset_yaw(in, out.setpoint, dt);
   } else {
@@ -714,8 +527,8 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
 
 Setpoint WhiskerWallFollower::offset_yaw(const WallFollowerInput& in, const Setpoint& s, double dt) {
   // Yaw offset after a clearing (docs/tuning/tactile_fsm.md "Round 9"). track_yaw_ is the heading
-  // the drone flies without the rule: it starts at the yaw on entering
-  // RESUME_FORWARD and realigns to the course as realign() does (omega_max at
+  // the drone flies without the rule: it starts at the yaw on entering the
+  // FLY_FORWARD after the clearing and realigns to the course as realign() does (omega_max at
   // most). The body is held clear_yaw_offset beyond it away from the
   // side-step side; the body-frame velocity of s, meant for that
   // heading, is rotated into the body's frame, so the track stays the same.
@@ -788,30 +601,6 @@ Setpoint WhiskerWallFollower::command(const WallFollowerInput& in) const {
       break;
   }
   return s;
-}
-
-Setpoint WhiskerWallFollower::whisk(const WallFollowerInput& in, const Setpoint& s, double amplitude, double period,
-                                    double speed, bool pause_to_course) const {
-  // Active whisking (docs/tuning/tactile_fsm.md "Round 5"): yaw reference course + A sin(w t),
-  // tracked with the realignment gain plus the reference's rate; the phase
-  // starts at 0 on entering FLY_FORWARD (a continuous reference from the
-  // course heading). The velocity is the course direction in the world frame,
-  // expressed in the body-yaw frame.
-  Setpoint o = s;
-  const double w = 2.0 * M_PI / period;
-  const double ph = w * (in.t - entered_);
-  const double ref = course_yaw_ + amplitude * std::sin(ph);
-  const double ff = amplitude * w * std::cos(ph);
-  o.yaw_rate = std::clamp(ff + tracking_gain(p_) * std::remainder(ref - in.yaw, 2.0 * M_PI), -p_.whisk_rate_max,
-                          p_.whisk_rate_max);
-  // A whisker's sum moving: a touch TDORC has not flagged yet; hold the yaw.
-  if (sum_moves(in, p_.whisk_pause_rms)) {
-    o.yaw_rate = pause_to_course ? std::clamp(realign_rate(in.yaw), -p_.omega_max, p_.omega_max) : 0.0;
-  }
-  const double rel = std::remainder(course_yaw_ - in.yaw, 2.0 * M_PI);
-  o.vx = speed * std::cos(rel);
-  o.vy = speed * std::sin(rel);
-  return o;
 }
 
 Setpoint WhiskerWallFollower::step_and_scan(const WallFollowerInput& in, const Setpoint& s, double dt) {

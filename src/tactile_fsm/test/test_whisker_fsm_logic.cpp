@@ -4,6 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <variant>
 #include <vector>
@@ -105,9 +108,7 @@ TEST(WhiskerFsmLogic, RepositoryConfigMatchesDefaults) {
   }
   const auto p = WhiskerFsmLogic::params_from(m);
   EXPECT_NEAR(p.fsm.omega_max, 25.0 * M_PI / 180.0, 1e-15);  // 000 Fig. S4e, 25 deg/s
-  EXPECT_EQ(p.fsm.whisk_amplitude, 0.0);                     // round 5: not kept
   EXPECT_TRUE(p.fsm.phantom_latch);                          // round 4b
-  EXPECT_EQ(p.fsm.press_rms_pa, 0.0);                        // round 6: not kept
   EXPECT_DOUBLE_EQ(p.fsm.wall_end_depth, 0.105);             // round 7
 }
 
@@ -374,4 +375,48 @@ TEST(WhiskerFsmLogic, StaleSignalContactIsIgnored) {
   l.on_left_signal(signal(0, 0, true));  // contact at t = 0, never updated
   for (int k = 0; k <= 120; ++k) tick(l, k * kStepNs);
   EXPECT_EQ(l.fsm().state(), tactile_fsm::FsmState::kFlyForward);
+}
+
+namespace {
+
+/// The reference's parameter table, one row per key of the spec (sorted):
+/// key, type, default, range, unit, description.
+std::string parameter_table(const tactile_common::ParamMap& d) {
+  std::string t = "| key | type | default | range | unit | description |\n| --- | --- | --- | --- | --- | --- |\n";
+  for (const auto& [key, value] : d.values()) {
+    std::string v;
+    if (const auto* x = std::get_if<double>(&value)) {
+      char buf[32];
+      std::snprintf(buf, sizeof buf, "%g", *x);
+      v = buf;
+    } else if (const auto* b = std::get_if<bool>(&value)) {
+      v = *b ? "true" : "false";
+    } else if (const auto* i = std::get_if<int64_t>(&value)) {
+      v = std::to_string(*i);
+    } else if (const auto* s = std::get_if<std::string>(&value)) {
+      v = "\"" + *s + "\"";
+    }
+    const tactile_common::ParamInfo* info = d.info(key);
+    t += "| `" + key + "` | " + tactile_common::type_name(value) + " | `" + v + "` | " +
+         (info && info->range ? info->range->text() : "") + " | " + (info ? info->unit : "") + " | " +
+         (info ? info->description : "") + " |\n";
+  }
+  return t;
+}
+
+}  // namespace
+
+// docs/whisker_fsm.md's parameter table is default_parameters(), row by row, between
+// its markers: a key added, removed or changed in the spec fails here until the
+// reference says the same (the table printed on failure is the one to paste).
+TEST(WhiskerFsmLogic, ReferenceParameterTableIsTheSpec) {
+  std::ifstream f("docs/whisker_fsm.md");
+  ASSERT_TRUE(f.good()) << "docs/whisker_fsm.md not found (the test runs in the package source directory)";
+  const std::string doc((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  const std::string begin = "<!-- BEGIN params whisker_fsm -->\n", end = "<!-- END params whisker_fsm -->";
+  const auto b = doc.find(begin), e = doc.find(end);
+  ASSERT_NE(b, std::string::npos);
+  ASSERT_NE(e, std::string::npos);
+  const std::string table = parameter_table(WhiskerFsmLogic::default_parameters());
+  EXPECT_EQ(doc.substr(b + begin.size(), e - b - begin.size()), table) << "expected table:\n" << table;
 }

@@ -1057,220 +1057,18 @@ TEST(BaffleCourse, TiltedBafflesReachTarget) {
   EXPECT_GT(r.min_frame_clearance, 0.06);
 }
 
-// Active whisking (issue 17, docs/tuning/tactile_fsm.md "Round 5"): in FLY_FORWARD the heading
-// oscillates about the course heading so the whisker tips (0.19 m ahead of
-// the centre, bases 25 mm off the axis) sweep the guard's 80 mm half-width,
-// while the track stays on the course. Kinematic drone integrating the
-// setpoint; without the rule the tips stay 25 mm off the axis.
-TEST(WhiskerWallFollower, ActiveWhiskingSweepsGuardWidthOnCourse) {
-  auto fly = [](double amplitude) {
-    WallFollowerParams p;
-    p.whisk_amplitude = amplitude;
-    p.whisk_period_s = 1.0;
-    WhiskerWallFollower fsm(p);
-    double t = 0.0, x = 0.0, y = 0.0, yaw = 0.0, max_tip = 0.0, max_y = 0.0, min_speed = 1.0;
-    for (; t < p.hover_init_s + 3.0; t += kDt) {
-      WallFollowerInput in = input(t, x, y, yaw);
-      in.target_x = 10.0;
-      const WallFollowerOutput o = fsm.step(in);
-      if (o.state != FsmState::kFlyForward) continue;
-      EXPECT_LE(std::fabs(o.setpoint.yaw_rate), p.whisk_rate_max + 1e-12);
-      // Body -> world velocity.
-      const double vx = std::cos(yaw) * o.setpoint.vx - std::sin(yaw) * o.setpoint.vy;
-      const double vy = std::sin(yaw) * o.setpoint.vx + std::cos(yaw) * o.setpoint.vy;
-      min_speed = std::min(min_speed, vx);
-      x += vx * kDt;
-      y += vy * kDt;
-      yaw += o.setpoint.yaw_rate * kDt;
-      // Lateral offset of the left whisker's tip (base (0.05, 0.025), reach 0.141 m).
-      max_tip = std::max(max_tip, 0.191 * std::sin(yaw) + 0.025 * std::cos(yaw));
-      max_y = std::max(max_y, std::fabs(y));
-    }
-    EXPECT_GT(x, 0.5);
-    return std::vector<double>{max_tip, max_y, min_speed};
-  };
-  const std::vector<double> off = fly(0.0);
-  EXPECT_NEAR(off[0], 0.025, 1e-9);
-  const std::vector<double> on = fly(20.0 * kDeg);
-  EXPECT_GT(on[0], 0.08);           // the tip reaches the guard's radius
-  EXPECT_LT(on[1], 0.005);          // track kept on the course (world frame)
-  EXPECT_NEAR(on[2], 0.2, 1e-9);    // full V_max along the course
-  WallFollowerParams bad;
-  bad.whisk_amplitude = 2.0;
-  EXPECT_THROW(bad.validate(), std::invalid_argument);
-  bad.whisk_amplitude = 0.2;
-  bad.whisk_period_s = 0.0;
-  EXPECT_THROW(bad.validate(), std::invalid_argument);
-}
-
-// Whisking only after a clearing (whisk_after_clear_only) and paused while a
-// whisker's S_c sum moves (whisk_pause_rms), docs/tuning/tactile_fsm.md "Round 5".
-TEST(WhiskerWallFollower, WhiskingAfterClearOnlyAndPausedOnMovingSum) {
-  WallFollowerParams p;
-  p.whisk_amplitude = 0.23;
-  p.whisk_period_s = 0.7;
-  p.whisk_rate_max = 3.0;
-  auto first_forward_rate = [&](const WallFollowerParams& q, double rms) {
-    WhiskerWallFollower fsm(q);
-    double t = 0.0;
-    for (; t < q.hover_init_s + 1e-9; t += kDt) fsm.step(input(t));
-    WallFollowerInput in = input(t + 0.05);
-    in.input_change_rms_left = rms;
-    in.input_change_rms_right = 5.0;
-    const WallFollowerOutput o = fsm.step(in);
-    EXPECT_EQ(o.state, FsmState::kFlyForward);
-    return o.setpoint.yaw_rate;
-  };
-  EXPECT_GT(first_forward_rate(p, 5.0), 1.0);  // whisking from the first FLY_FORWARD
-  WallFollowerParams q = p;
-  q.whisk_pause_rms = 13.0;
-  EXPECT_GT(first_forward_rate(q, 12.0), 1.0);       // quiet sum: whisking
-  EXPECT_EQ(first_forward_rate(q, 13.0), 0.0);       // moving sum: yaw held
-  q.whisk_pause_rms = 0.0;
-  q.whisk_after_clear_only = true;
-  EXPECT_EQ(first_forward_rate(q, 5.0), 0.0);        // before the first obstacle: no whisk
-  q.whisk_pause_rms = -1.0;
-  EXPECT_THROW(q.validate(), std::invalid_argument);
-}
-
-// Issue 17, docs/tuning/tactile_fsm.md "Round 6": both depths read 70 mm (in band, aligned:
-// FLY_SIDEWAYS) and both sums are 500 Pa (under press_sum_pa), but the left
-// whisker's S_c sum jumps by ~600 Pa from sample to sample (change RMS 600 Pa,
-// the stick-slip of a whisker pressed to 20-50 mm): with press_rms_pa 450 Pa
-// its depth counts as press_depth (50 mm) < T_min and the drone backs off;
-// at 300 Pa of RMS (70-100 mm), an unknown RMS or with the rule off it flies
-// sideways as before.
-TEST(WhiskerWallFollower, StickSlipAmplitudeCountsAsPressed) {
-  auto sub_at = [](WallFollowerParams p, double rms_l) {
-    WhiskerWallFollower fsm(p);
-    double t = 0.0;
-    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t));
-    WallFollowerInput in = input(t, 1.0, 0.0);
-    set_depths(in, 0.07, 0.07);
-    in.input_sum_left = in.input_sum_right = 500.0;
-    in.input_change_rms_left = rms_l;
-    in.input_change_rms_right = 300.0;
-    return fsm.step(in).sub_state;
-  };
-  WallFollowerParams p;
-  p.press_sum_pa = 900.0;
-  p.press_hold_s = 0.0;
-  EXPECT_EQ(sub_at(p, 600.0), WallSubState::kFlySideways);  // rule off: the sum alone is not pressed
-  p.press_rms_pa = 450.0;
-  EXPECT_EQ(sub_at(p, 600.0), WallSubState::kFlyBackward);
-  EXPECT_EQ(sub_at(p, 300.0), WallSubState::kFlySideways);
-  EXPECT_EQ(sub_at(p, NAN), WallSubState::kFlySideways);
-  // Works without the sum rule too.
-  p.press_sum_pa = 0.0;
-  EXPECT_EQ(sub_at(p, 600.0), WallSubState::kFlyBackward);
-  p.press_rms_pa = -1.0;
-  EXPECT_THROW(p.validate(), std::invalid_argument);
-}
-
-// Issue 17, round 8: the depth bounded by the drone's own motion. Hand case:
-// both whiskers touch a wall square to the heading at a published 100 mm
-// (tick 0, drone at x = 1.0), the drone then moves 3 mm per tick toward it
-// (+x) while the published depths stay at a saturated 75 / 75 mm (inside the
-// band: FLY_SIDEWAYS without the rule). With relax 0.02 m/s (0.4 mm per tick)
-// and margin 0.01 m: tick 1 carries 100 - 3 + 0.4 = 97.4 mm, the published
-// 75 mm is lower and becomes the bound; from there it falls by 2.6 mm per
-// tick, 75 - 2.6 (k - 1), and the rule reads it + 10 mm < T_min = 60 mm once
-// k - 1 > 9.6: FLY_BACKWARD from tick 11.
-TEST(WhiskerWallFollower, MotionTowardTheWallBoundsAPressedDepth) {
-  auto fly = [](WallFollowerParams p, double step_m, double dy_m) {
-    WhiskerWallFollower fsm(p);
-    double t = 0.0;
-    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t, 1.0, 0.0));
-    int first_backward = -1;
-    for (int k = 0; k < 40; ++k, t += kDt) {
-      WallFollowerInput in = input(t, 1.0 + step_m * k, dy_m * k);
-      if (k == 0) {
-        set_depths(in, 0.100, 0.100);
-      } else {
-        set_depths(in, 0.075, 0.075);
-      }
-      in.tdorc_contact_left = in.tdorc_contact_right = true;
-      const WallFollowerOutput o = fsm.step(in);
-      if (first_backward < 0 && o.sub_state == WallSubState::kFlyBackward) first_backward = k;
-    }
-    return first_backward;
-  };
-  WallFollowerParams p;
-  p.motion_depth_relax = 0.02;
-  p.motion_depth_margin = 0.01;
-  EXPECT_EQ(fly(p, 0.003, 0.0), 11);
-  // Off (the paper, the core default): the saturated 75 mm is flown sideways.
-  EXPECT_EQ(WallFollowerParams{}.motion_depth_relax, 0.0);
-  EXPECT_EQ(fly(WallFollowerParams{}, 0.003, 0.0), -1);
-  // Hovering, or sliding along a wall square to the heading: the bound only
-  // relaxes back to the published depth, no back-off.
-  EXPECT_EQ(fly(p, 0.0, 0.0), -1);
-  EXPECT_EQ(fly(p, 0.0, -0.004), -1);
-  // Bad values name the field.
-  p.motion_depth_relax = -0.1;
-  expect_rejected(p, "motion_depth_relax");
-  p.motion_depth_relax = 0.02;
-  p.motion_depth_margin = NAN;
-  EXPECT_THROW(p.validate(), std::invalid_argument);
-}
-
-// Round 8: the wall normal, fixed in the world for the contact. The drone
-// (heading 0) touches a wall tilted by 20 deg (nearer on the right): left at
-// 100 mm, right at 100 - 50 tan 20 deg = 81.8 mm (contact points 0.05 m
-// apart), then slides right (-y) by 4 mm per tick while the published depths
-// stay at 75 / 75 mm (the wall read square). Sliding right closes the wall by
-// 4 tan 20 deg = 1.456 mm per tick; with relax 0.4 mm per tick the right
-// bound is 75 - 1.056 (k - 1) mm from tick 1 (the published 75 mm is lower
-// than the carried 80.7 mm there), and it + 10 mm < 60 mm once k - 1 > 23.7:
-// tick 25. The same with the baseline off (eq. 21 on the depths of the tick
-// both touched gives the same 20 deg). A wall touched square (100 / 100 mm)
-// does not move the bound when sliding along it.
-TEST(WhiskerWallFollower, MotionBoundUsesTheWallFromTheContactPoints) {
-  auto fly = [](WallFollowerParams p, double dr0) {
-    WhiskerWallFollower fsm(p);
-    double t = 0.0;
-    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t, 1.0, 0.0));
-    int first = -1;
-    for (int k = 0; k < 45; ++k, t += kDt) {
-      WallFollowerInput in = input(t, 1.0, -0.004 * k);
-      if (k == 0) {
-        set_depths(in, 0.100, dr0);
-      } else {
-        set_depths(in, 0.075, 0.075);
-      }
-      in.tdorc_contact_left = in.tdorc_contact_right = true;
-      fsm.step(in);
-      if (k > 0 && first < 0 && std::isfinite(fsm.motion_bound_right()) &&
-          fsm.motion_bound_right() + p.motion_depth_margin < p.t_min) {
-        first = k;
-      }
-    }
-    return first;
-  };
-  const double tilted = 0.100 - 0.05 * std::tan(20.0 * kDeg);
-  WallFollowerParams p;
-  p.motion_depth_relax = 0.02;
-  p.motion_depth_margin = 0.01;
-  EXPECT_EQ(fly(p, tilted), 25);
-  EXPECT_EQ(fly(p, 0.100), -1);
-  p.motion_depth_baseline = 0.0;  // no contact-point line: eq. 21 at the onset
-  EXPECT_EQ(fly(p, tilted), 25);
-  EXPECT_EQ(fly(WallFollowerParams{}, tilted), -1);  // off: no bound
-}
-
 // Issue 17, docs/tuning/tactile_fsm.md "Round 9": after a clearing the body yaw is held
 // clear_yaw_offset away from the side-step side (left here: the target is
 // ahead, follow_side right, the drone side-steps right), in the FLY_FORWARD
-// after it (and with clear_yaw_in_resume during the side-step), while the
+// after it (not during the side-step), while the
 // track is the one flown without the offset (side-step along -y, then +x at
 // V_max). Kinematic drone: the left whisker's tip (base (0.05, 0.025), reach
 // 0.141 m) reaches beyond the guard's 80 mm on the left, where the next
 // baffle's outer end lies; off, it stays at 25 mm.
 TEST(WhiskerWallFollower, YawOffsetAfterClearingTurnsWhiskersNotTrack) {
-  auto fly = [](double offset, bool in_resume) {
+  auto fly = [](double offset) {
     WallFollowerParams p;
     p.clear_yaw_offset = offset;
-    p.clear_yaw_in_resume = in_resume;
     WhiskerWallFollower fsm(p);
     double t = 0.0, x = 0.0, y = 0.0, yaw = 0.0;
     for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t, x, y, yaw));
@@ -1314,16 +1112,13 @@ TEST(WhiskerWallFollower, YawOffsetAfterClearingTurnsWhiskersNotTrack) {
     EXPECT_LT(y, resume_y0 - p.clear_margin + 1e-6);
     return std::vector<double>{tip_left, yaw, max_resume_yaw};
   };
-  const std::vector<double> off = fly(0.0, false);
+  const std::vector<double> off = fly(0.0);
   EXPECT_NEAR(off[0], 0.025, 1e-9);
   EXPECT_NEAR(off[1], 0.0, 1e-9);
-  const std::vector<double> on = fly(20.0 * kDeg, false);
+  const std::vector<double> on = fly(20.0 * kDeg);
   EXPECT_GT(on[0], 0.085);                       // beyond the guard's 80 mm
   EXPECT_NEAR(on[1], 20.0 * kDeg, 0.5 * kDeg);   // held to the left, away from the side-step
   EXPECT_NEAR(on[2], 0.0, 1e-9);                 // not during the side-step
-  const std::vector<double> resume = fly(20.0 * kDeg, true);
-  EXPECT_GT(resume[2], 15.0 * kDeg);             // already during the side-step
-  EXPECT_NEAR(resume[1], 20.0 * kDeg, 0.5 * kDeg);
   WallFollowerParams bad;
   bad.clear_yaw_offset = -0.1;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
@@ -1370,61 +1165,6 @@ TEST(WhiskerWallFollower, YawOffsetReleasedOnMovingSum) {
   WallFollowerParams bad;
   bad.clear_yaw_release_rms = -1.0;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
-}
-
-// Issue 17, docs/tuning/tactile_fsm.md "Round 10": the first baffle of tuning course 1003, its end
-// 65 mm right of the course axis and the baffle receding to the right: flown
-// straight (the paper) the guard meets the end before either whisker touches
-// the baffle (the blind band); whisking on the first approach (0.35 rad,
-// 0.7 s, 0.14 m/s) puts the right whisker across it first. Kinematic drone
-// (the setpoint's velocity and yaw rate applied), whiskers as segments from
-// (0.05, +-0.025) to (0.191, +-0.025) in the body frame, guard circle 80 mm.
-TEST(WhiskerWallFollower, FirstApproachWhiskReachesAnEndInTheBlindBand) {
-  const double ax = 0.7141, ay = -0.0647, bx = 1.0361, by = -0.9199;  // baffle_1 of baffles_*_1003
-  const Segment baffle{ax, ay, bx, by};
-  // "whisker" or "guard": which meets the baffle first.
-  auto fly = [&](double amplitude) {
-    WallFollowerParams p;
-    p.first_whisk_amplitude = amplitude;
-    p.first_whisk_period_s = 0.7;
-    p.first_whisk_speed = 0.14;
-    p.whisk_rate_max = 3.0;
-    WhiskerWallFollower fsm(p);
-    double x = 0.0, y = 0.0, yaw = 0.0;
-    for (double t = 0.0; t < 30.0; t += kDt) {
-      WallFollowerInput in = input(t, x, y, yaw);
-      in.target_x = 3.0;
-      const WallFollowerOutput o = fsm.step(in);
-      EXPECT_LE(std::fabs(o.setpoint.yaw_rate), p.whisk_rate_max + 1e-12);
-      const double vx = std::cos(yaw) * o.setpoint.vx - std::sin(yaw) * o.setpoint.vy;
-      const double vy = std::sin(yaw) * o.setpoint.vx + std::cos(yaw) * o.setpoint.vy;
-      if (o.state == FsmState::kFlyForward) {
-        EXPECT_NEAR(vx, amplitude > 0.0 ? 0.14 : p.v_max, 1e-9);  // along the course
-        EXPECT_NEAR(vy, 0.0, 1e-9);
-      }
-      for (int k = 0; k < 10; ++k) {  // 2 ms sub-steps of the 20 ms tick
-        x += 0.1 * vx * kDt;
-        y += 0.1 * vy * kDt;
-        yaw += 0.1 * o.setpoint.yaw_rate * kDt;
-        const double c = std::cos(yaw), s = std::sin(yaw);
-        for (double side : {1.0, -1.0}) {
-          const double b0x = x + c * 0.05 - s * side * 0.025, b0y = y + s * 0.05 + c * side * 0.025;
-          const double t0x = x + c * 0.191 - s * side * 0.025, t0y = y + s * 0.191 + c * side * 0.025;
-          if (segments_cross({b0x, b0y, t0x, t0y}, baffle)) return std::string("whisker");
-        }
-        if (point_segment_distance(x, y, baffle) <= 0.08) return std::string("guard");
-      }
-    }
-    return std::string("none");
-  };
-  EXPECT_EQ(fly(0.0), "guard");     // the paper's straight approach: blind band
-  EXPECT_EQ(fly(0.35), "whisker");  // whisked: the right whisker crosses the baffle first
-  WallFollowerParams bad;
-  bad.first_whisk_amplitude = -0.1;
-  expect_rejected(bad, "first_whisk_amplitude");
-  bad.first_whisk_amplitude = 0.35;
-  bad.first_whisk_speed = 0.3;  // > v_max
-  expect_rejected(bad, "first_whisk_speed");
 }
 
 namespace {
@@ -1489,63 +1229,6 @@ double scan_cut_by_failsafe(WhiskerWallFollower& fsm, const WallFollowerParams& 
 
 }  // namespace
 
-// Only the first approach is whisked: after a contact and a clearing the
-// FLY_FORWARD flies as without the rule (yaw rate of the realignment only).
-TEST(WhiskerWallFollower, FirstApproachWhiskEndsAtTheFirstContact) {
-  WallFollowerParams p;
-  p.first_whisk_amplitude = 0.35;
-  p.first_whisk_period_s = 0.7;
-  p.whisk_rate_max = 3.0;
-  WhiskerWallFollower fsm(p);
-  double t = 0.0;
-  PointDrone d;
-  for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t));
-  double max_rate = 0.0;
-  for (int k = 0; k < 35; ++k, t += kDt) {  // one period
-    const WallFollowerOutput o = fsm.step(input(t, d.x, d.y, d.yaw));
-    max_rate = std::max(max_rate, std::fabs(o.setpoint.yaw_rate));
-    d.move(o);
-  }
-  EXPECT_GT(max_rate, 1.0);  // whisking before the first contact
-  const AfterClearing a = contact_then_clear(fsm, d, t);
-  EXPECT_GT(a.forward, 100);
-  EXPECT_LT(a.max_rate, p.omega_max + 1e-9);  // realignment only, no 3 rad/s whisk
-  EXPECT_LT(std::fabs(d.yaw), 5.0 * kDeg);    // and back on the course heading
-}
-
-// first_whisk_wall_rate (docs/tuning/tactile_fsm.md "Round 10b"): whisked left of the course, the
-// right whisker's sum moving (a square wall ahead is met first by the whisker
-// opposite the yaw) turns the yaw back to the course; the left one's (the yaw
-// side: a baffle's end beside the axis) holds it as the whisk pause does. Off,
-// the right one's holds it too.
-TEST(WhiskerWallFollower, FirstWhiskTurnsBackToTheCourseAtAWallAhead) {
-  auto run = [](double wall_rate, bool right_moves) {
-    WallFollowerParams p;
-    p.first_whisk_amplitude = 0.35;
-    p.first_whisk_period_s = 0.7;
-    p.whisk_rate_max = 3.0;
-    p.first_whisk_wall_rate = wall_rate;
-    p.whisk_pause_rms = 13.0;
-    WhiskerWallFollower fsm(p);
-    double t = 0.0, yaw = 0.0;
-    for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t));
-    for (int k = 0; k < 35 && yaw < 0.2; ++k, t += kDt) yaw += fsm.step(input(t, 0.0, 0.0, yaw)).setpoint.yaw_rate * kDt;
-    EXPECT_GT(yaw, 0.2);  // whisked left
-    for (int k = 0; k < 15; ++k, t += kDt) {  // 0.3 s of a moving sum, no contact flagged
-      WallFollowerInput in = input(t, 0.0, 0.0, yaw);
-      (right_moves ? in.input_change_rms_right : in.input_change_rms_left) = 30.0;
-      yaw += fsm.step(in).setpoint.yaw_rate * kDt;
-    }
-    return yaw;
-  };
-  EXPECT_LT(std::fabs(run(3.0, true)), 2.0 * kDeg);  // a wall ahead: back on the course
-  EXPECT_GT(run(3.0, false), 0.2);                    // an end on the yaw side: held
-  EXPECT_GT(run(0.0, true), 0.2);                     // off: held
-  WallFollowerParams bad;
-  bad.first_whisk_wall_rate = -1.0;
-  expect_rejected(bad, "first_whisk_wall_rate");
-}
-
 // end_contact_lateral (docs/tuning/tactile_fsm.md "Round 10"): a first touch by the right whisker
 // alone, depth 100 mm, at a yaw 20 deg right of the course puts the contact
 // point 0.15 sin 20 + 0.025 cos 20 = 75 mm right of the axis: a baffle's end
@@ -1582,120 +1265,6 @@ TEST(WhiskerWallFollower, EndContactBesideTheAxisIsPassedOnTheOtherSide) {
   WallFollowerParams bad;
   bad.end_contact_lateral = -0.01;
   expect_rejected(bad, "end_contact_lateral");
-}
-
-// lost_far_depth (docs/tuning/tactile_fsm.md "Round 11"): after both touched, a whisker lost while
-// it was already beyond lost_far_depth, the other beyond T_max: the drone
-// drifted off the wall (mocap 12007: sliding sideways 5-6 deg off the baffle's
-// line, true depths 99 -> 138 mm), not past an end. Without the rule the
-// leading whisker lost (or wall_end_depth) asks for FLY_SIDEWAYS, which slid
-// on until both flags dropped mid-wall; with it FLY_FORWARD back to the wall.
-// A lost whisker last read in the band (an end), a remaining depth in the
-// band, or the approach are unchanged.
-TEST(WallSubStateRule, WhiskerLostOutOfReachFliesBackToTheWall) {
-  WallFollowerParams p;
-  p.hold_heading_trailing_lost = true;  // the whisker FSM node's defaults
-  p.wall_end_depth = 0.105;
-  const auto ws = WallSubState::kFlySideways;
-  // Following left, the leading (left) whisker lost at 106 mm, the right at 128 mm.
-  EXPECT_EQ(wall_sub_state(NAN, false, 0.128, true, Side::kLeft, true, ws, p, NAN, 0.106, 0.12),
-            WallSubState::kFlySideways);  // off: the core default
-  EXPECT_EQ(WallFollowerParams{}.lost_far_depth, 0.0);
-  p.lost_far_depth = 0.095;
-  EXPECT_EQ(wall_sub_state(NAN, false, 0.128, true, Side::kLeft, true, ws, p, NAN, 0.106, 0.12),
-            WallSubState::kFlyForward);
-  // The trailing (right) one lost at 101 mm, the left at 121 mm (wall_end_depth's case).
-  EXPECT_EQ(wall_sub_state(0.121, true, NAN, false, Side::kLeft, true, ws, p, NAN, 0.12, 0.101),
-            WallSubState::kFlyForward);
-  // Lost whisker last read in the band (it ran off an end): wall_end_depth as before.
-  EXPECT_EQ(wall_sub_state(0.121, true, NAN, false, Side::kLeft, true, ws, p, NAN, 0.12, 0.08),
-            WallSubState::kFlySideways);
-  // Remaining depth in the band: the leading lost keeps passing the edge.
-  EXPECT_EQ(wall_sub_state(NAN, false, 0.09, true, Side::kLeft, true, ws, p, NAN, 0.106, 0.09),
-            WallSubState::kFlySideways);
-  // Unknown last depth, or the approach (before both touched): unchanged.
-  EXPECT_EQ(wall_sub_state(NAN, false, 0.128, true, Side::kLeft, true, ws, p), WallSubState::kFlySideways);
-  EXPECT_EQ(wall_sub_state(NAN, false, 0.128, true, Side::kLeft, false, ws, p, NAN, 0.106, 0.12),
-            WallSubState::kFlyForward);
-  EXPECT_EQ(wall_sub_state(NAN, false, 0.09, true, Side::kLeft, false, ws, p, NAN, 0.106, 0.09),
-            WallSubState::kTurnRight);
-  // Through step(): both on the wall drifting out (depths growing past T_max),
-  // then the left flag drops at 106 mm with the right read at 128 mm.
-  auto sub_after_loss = [](WallFollowerParams q) {
-    WhiskerWallFollower fsm(q);
-    double t = 0.0;
-    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t, 1.0, 0.0));
-    for (int k = 0; k < 20; ++k, t += kDt) {
-      WallFollowerInput in = input(t, 1.0, 0.0);
-      set_depths(in, 0.09 + 0.0008 * k, 0.09 + 0.0015 * k);
-      fsm.step(in);
-    }
-    return sub_with_left_lost(fsm, t, 0.128);
-  };
-  WallFollowerParams q;
-  q.hold_heading_trailing_lost = true;
-  q.wall_end_depth = 0.105;
-  q.follow_side = Side::kLeft;
-  q.side_toward_target = false;
-  EXPECT_EQ(sub_after_loss(q), WallSubState::kFlySideways);
-  q.lost_far_depth = 0.095;
-  EXPECT_EQ(sub_after_loss(q), WallSubState::kFlyForward);
-  q.lost_far_depth = -0.01;
-  EXPECT_THROW(q.validate(), std::invalid_argument);
-  q.lost_far_depth = NAN;
-  EXPECT_THROW(q.validate(), std::invalid_argument);
-}
-
-// resume_quiet_rms (docs/tuning/tactile_fsm.md "Round 11"): the side-step after a clearing counts
-// clear_margin from where both sums went quiet. A sum still moving in the
-// first second of RESUME_FORWARD (a whisker still on the wall although its
-// flag dropped) lengthens the side-step by the distance flown meanwhile; a
-// quiet sum or the rule off leave it at clear_margin.
-TEST(WhiskerWallFollower, SideStepCountsFromWhereTheSumsWentQuiet) {
-  auto side_step = [](double quiet_rms, double rms) {
-    WallFollowerParams p;
-    p.resume_quiet_rms = quiet_rms;
-    p.phantom_resume_max = 2.0;
-    WhiskerWallFollower fsm(p);
-    double t = 0.0, x = 0.0, y = 0.0;
-    for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t, x, y));
-    for (int k = 0; k < 50; ++k, t += kDt) {
-      WallFollowerInput in = input(t, x, y);
-      set_depths(in, 0.08, 0.08);
-      fsm.step(in);
-    }
-    double resume_s = 0.0, y0 = NAN, y1 = NAN;
-    for (int k = 0; k < 600; ++k, t += kDt) {
-      WallFollowerInput in = input(t, x, y);
-      in.input_change_rms_left = resume_s < 1.0 ? rms : 3.0;
-      in.input_change_rms_right = 3.0;
-      const WallFollowerOutput o = fsm.step(in);
-      if (o.state == FsmState::kResumeForward) {
-        if (std::isnan(y0)) y0 = y;
-        resume_s += kDt;
-      } else if (o.state == FsmState::kFlyForward && std::isfinite(y0) && std::isnan(y1)) {
-        y1 = y;
-      }
-      x += o.setpoint.vx * kDt;
-      y += o.setpoint.vy * kDt;
-    }
-    EXPECT_TRUE(std::isfinite(y1));
-    return std::fabs(y1 - y0);
-  };
-  const double off = side_step(0.0, 30.0);
-  EXPECT_NEAR(off, 0.30, 0.03);                          // clear_margin
-  EXPECT_NEAR(side_step(20.0, 5.0), off, 1e-9);          // quiet sums: unchanged
-  EXPECT_GT(side_step(20.0, 30.0), off + 0.1);           // moving for 1 s: longer
-  WallFollowerParams bad;
-  bad.resume_quiet_rms = -1.0;
-  EXPECT_THROW(bad.validate(), std::invalid_argument);
-  // Set where it cannot act (the margin moves only within phantom_resume_max): rejected.
-  WallFollowerParams idle;
-  idle.resume_quiet_rms = 20.0;
-  idle.phantom_resume_max = 0.0;
-  expect_rejected(idle, "resume_quiet_rms");
-  idle.phantom_resume_max = 2.0;
-  EXPECT_NO_THROW(idle.validate());
 }
 
 namespace {
@@ -1746,7 +1315,6 @@ WallFollowerParams scan_params(double step) {
   p.first_scan_step = step;
   p.first_scan_rate = 2.0;
   p.whisk_rate_max = 3.0;
-  p.first_whisk_speed = 0.14;  // the continuous whisk's (step 0)
   return p;
 }
 
@@ -1755,9 +1323,8 @@ WallFollowerParams scan_params(double step) {
 // Step and scan (docs/tuning/tactile_fsm.md "Round 12"): course 1003's first baffle, whose near end
 // lies 65 mm right of the axis, is met by the guard on the paper's straight
 // approach and by a whisker in a scan (yawed); a wall across the course is
-// mostly met in a step, at the course heading, where the continuous whisk
-// (first_scan_step 0) meets it at a whisked yaw, which is what the shipped
-// course tests refused (rounds 10, 10b).
+// mostly met in a step, at the course heading (round 10's continuous whisk
+// met it at a whisked yaw, which the shipped course tests refused).
 TEST(WhiskerWallFollower, StepAndScanFindsTheEndAndMeetsAWallAheadInAStep) {
   const double ax = 0.7141, ay = -0.0647, bx = 1.0361, by = -0.9199;  // baffle_1 of baffles_*_1003
   WallFollowerParams straight;
@@ -1768,20 +1335,16 @@ TEST(WhiskerWallFollower, StepAndScanFindsTheEndAndMeetsAWallAheadInAStep) {
   // Walls 11 mm apart: every phase of a step. Measured: the scan meets 7 of
   // the 10 within 0.9-1.5 deg of the course; the other 3 lay just beyond the
   // tips when a scan began and are met in it (6-19 deg) as the drone creeps on
-  // to the step's end. The continuous whisk meets 1 of 10 within 2 deg.
-  int scan_on_course = 0, whisk_on_course = 0;
+  // to the step's end.
+  int scan_on_course = 0;
   for (int k = 0; k < 10; ++k) {
     const double wall_x = 0.60 + 0.011 * k;
     SCOPED_TRACE("wall at x = " + std::to_string(wall_x));
     const FirstMeet m = first_meet(scan_params(0.08), wall_x, -2.0, wall_x, 2.0);
     EXPECT_EQ(m.who, "whisker");
     if (std::fabs(m.yaw) < 2.0 * kDeg) ++scan_on_course;
-    const FirstMeet w = first_meet(scan_params(0.0), wall_x, -2.0, wall_x, 2.0);
-    EXPECT_EQ(w.who, "whisker");
-    if (std::fabs(w.yaw) < 2.0 * kDeg) ++whisk_on_course;
   }
   EXPECT_GE(scan_on_course, 7);
-  EXPECT_LE(whisk_on_course, 2);
 }
 
 // The scan is held while a whisker's sum moves (a touch TDORC has not flagged
@@ -1837,10 +1400,8 @@ TEST(WhiskerWallFollower, StepAndScanHoldsTheYawOnAMovingSumAndValidates) {
   bad.first_scan_rate = 0.0;
   expect_rejected(bad, "first_scan_rate");
   bad = scan_params(0.08);
-  bad.first_whisk_pause_to_course = true;  // the continuous whisk's only
-  expect_rejected(bad, "first_whisk_pause_to_course");
-  bad.first_scan_step = 0.0;
-  EXPECT_NO_THROW(bad.validate());
+  bad.first_scan_step = 0.0;  // no continuous whisk any more: the scan needs a step
+  expect_rejected(bad, "first_scan_step");
 }
 
 // The scan ends at the first contact: after it and a clearing, FLY_FORWARD

@@ -102,28 +102,6 @@ struct WallFollowerParams {
   /// off, the next touch brings it back to the rule of both depths. 0 = off
   /// (the previous rule); otherwise >= t_max. [m]
   double wall_end_depth = 0.0;
-  /// A whisker lost out of reach, not off an end (issue 17, docs/tuning/tactile_fsm.md "Round 11";
-  /// our choice). After both touched, one whisker lost while its last depth
-  /// was > lost_far_depth and the other's depth was beyond T_max on that tick,
-  /// the other still beyond T_max: the drone has drifted away from the wall
-  /// (a sideways slide a few degrees off the wall's line), not reached an
-  /// end: FLY_FORWARD back to the wall (000 Fig. S4e: both beyond T_max)
-  /// instead of FLY_SIDEWAYS (leading whisker lost, or wall_end_depth), which
-  /// slid on until the other flag dropped too and the drone "cleared"
-  /// mid-wall (mocap 12007, 14026: whiskers truly on the wall at 130-140 mm,
-  /// the side-step ended short of the true end, which the guard then met in
-  /// the blind band). The other's depth at the loss keeps round 7's case (a
-  /// whisker run off an end while the other is in the band, then held past
-  /// it) with wall_end_depth. Checked before wall_end_depth. 0 = off;
-  /// otherwise > 0. [m]
-  double lost_far_depth = 0.0;
-  /// The side-step after a clearing counts clear_margin from where both
-  /// whiskers' S_c sums went quiet (RMS of their changes < this), not from
-  /// where the flags dropped (issue 17, docs/tuning/tactile_fsm.md "Round 11"; our choice): a
-  /// clearing declared while the whiskers still touch the wall (true 133-141
-  /// mm, flags dropped) ended the side-step short of the true end (mocap
-  /// 12007). Within phantom_resume_max of the clearing. 0 = off. [Pa]
-  double resume_quiet_rms = 0.0;
   /// A contact in FLY_FORWARD less than this far ahead (along the course
   /// heading) of where the side-step after a clearing ended is the same
   /// obstacle: keep the side (issue 17, docs/tuning/tactile_fsm.md "Random baffle courses": on rigid
@@ -178,38 +156,8 @@ struct WallFollowerParams {
   /// press_sum_pa 0 = off (the paper). [Pa]
   double press_sum_pa = 0.0;
   double press_hold_s = 0.2;   ///< [s]
-  /// Pressed by the stick-slip amplitude (issue 17, docs/tuning/tactile_fsm.md "Round 6"): the
-  /// mean load of a whisker sliding on a wall is friction-limited, but each
-  /// slip releases the bending stored since the last stick, which grows with
-  /// the deflection, so the sample-to-sample changes of the S_c sum grow
-  /// monotonically as the whisker is pressed (SITL bags of the tuning blocks'
-  /// failures, RMS over 0.5 s, median 650 / 530 / 540 Pa at 20-30 / 30-40 /
-  /// 40-50 mm true depth against 350 / 310 / 250 at 70-80 / 80-90 / 90-100
-  /// mm; the sum's own median is ~500 at 20-50 and at 70-80 mm). A whisker in
-  /// contact whose change RMS (the node's phantom window) is >= press_rms_pa
-  /// counts as pressed, as for press_sum_pa. Our choice, not in 000.
-  /// 0 = off. [Pa]
-  double press_rms_pa = 0.0;
   double press_depth = 0.05;   ///< [m]
-  /// Depth bounded by the drone's own motion (issue 17, docs/tuning/tactile_fsm.md "Round 8"; our
-  /// choice, 000's depth is the pressure regression alone). The wall is fixed
-  /// in the world: from the whisker's first published depth of a contact, the
-  /// bound is carried with the odometry (the whisker base moved along the wall
-  /// normal, the heading turned), and at every tick it is the lower of that and
-  /// the published depth. It may rise by at most motion_depth_relax [m/s]
-  /// (odometry drift, wall-angle error, the depth model's own noise), so a
-  /// drone that closed 60 mm on the wall cannot read 30 mm further from it.
-  /// The rule takes min(filtered depth, bound + motion_depth_margin). The wall
-  /// normal is fixed in the world for the contact (until neither whisker is in
-  /// contact): the heading at the first onset, replaced once the other whisker
-  /// touches by the normal of the line through the two first contact points
-  /// when they are >= motion_depth_baseline apart, else by eq. 21 on the
-  /// depths of that tick. Tried on the tuning and seen blocks, not kept
-  /// (docs/tuning/tactile_fsm.md "Round 8"). motion_depth_relax 0 = off (core and node).
-  double motion_depth_relax = 0.0;     ///< [m/s]
-  double motion_depth_margin = 0.01;   ///< [m]
-  double motion_depth_baseline = 0.05; ///< [m]; 0 = never use the contact points
-  double whisker_base_x = 0.05;        ///< whisker bases ahead of the odometry origin [m] (000 frame, tactile_sim)
+  double whisker_base_x = 0.05;  ///< whisker bases ahead of the odometry origin [m] (000 frame, tactile_sim); end_contact_lateral
   /// Phantom hold gated by odometry (issue 17, docs/tuning/tactile_fsm.md "Round 4"): the gel
   /// hysteresis (000 eq. 1, N_h) can leave a whisker held "in contact" by
   /// TDORC after it left a baffle, its S_c frozen on a slowly decaying offset.
@@ -234,29 +182,14 @@ struct WallFollowerParams {
   /// phantom stays one until its contact ends or the RMS of its sum's changes
   /// reaches 2 * phantom_quiet_rms.
   bool phantom_latch = false;
-  /// Active whisking (issue 17, docs/tuning/tactile_fsm.md "Round 5", choice): the two forward
-  /// whiskers (bases 25 mm off the axis, tips 0.19 m ahead) are blind to a
-  /// baffle tip 3-8 cm beside the axis, inside the guard's 80 mm. In
-  /// FLY_FORWARD the heading oscillates about the course heading,
-  /// yaw = course + whisk_amplitude * sin(2 pi t / whisk_period_s), so the
-  /// whisker tips sweep the guard's width (rats whisk); the velocity is then
-  /// set along the course heading in the world frame (body vx, vy rotated), so
-  /// the track stays straight while the yaw oscillates. The yaw rate of the
-  /// whisk is limited by whisk_rate_max, not omega_max (the wall-following
-  /// turn rate). whisk_amplitude 0 = off (the paper: fly forward, no whisking). [rad]
-  double whisk_amplitude = 0.0;
-  double whisk_period_s = 1.0;                 ///< [s]
-  double whisk_rate_max = 2.0;                 ///< [rad/s]
-  /// Whisk only in a FLY_FORWARD that follows a clearing (not on the way to
-  /// the first obstacle): the first contact is then met on the course heading,
-  /// as without whisking (docs/tuning/tactile_fsm.md "Round 5": whisking before the first contact
-  /// lowered the darkness sweeps' first-sweep in-band fraction).
-  bool whisk_after_clear_only = false;
-  /// Pause the whisk (hold the yaw, keep the course velocity) while either
-  /// whisker's S_c sum moves (RMS of its changes >= whisk_pause_rms, the
-  /// node's phantom window): a touch starts 0.2-0.3 s before TDORC flags it,
-  /// and a whisk continuing through that sweeps the whisker into the wall.
-  /// 0 = never pause. [Pa]
+  /// Yaw-rate limit of the first-approach scan (first_scan_step), not
+  /// omega_max (the wall-following turn rate). [rad/s]
+  double whisk_rate_max = 2.0;
+  /// Hold the scan's yaw (first_scan_step) while either whisker's S_c sum
+  /// moves (RMS of its changes >= whisk_pause_rms, the node's phantom
+  /// window): a touch starts 0.2-0.3 s before TDORC flags it, and a scan
+  /// continuing through that sweeps the whisker into the wall. 0 = never
+  /// hold. [Pa]
   double whisk_pause_rms = 0.0;
   /// Yaw offset after a clearing (issue 17, docs/tuning/tactile_fsm.md "Round 9", choice): the
   /// two forward whiskers (bases 25 mm off the axis, tips 0.191 m ahead) leave
@@ -273,44 +206,30 @@ struct WallFollowerParams {
   /// reaches 0.191 sin(a) + 0.025 cos(a) beside the axis (20 deg: 89 mm,
   /// beyond the guard). 0 = off (the paper: no offset). [rad]
   double clear_yaw_offset = 0.0;
-  /// Also hold the offset during RESUME_FORWARD's side-step (it is then
-  /// established when FLY_FORWARD begins).
-  bool clear_yaw_in_resume = false;
   /// Back to the track's heading (until the next clearing) once either
   /// whisker's S_c sum moves (RMS of its changes >= this, the node's phantom
   /// window): a touch TDORC has not flagged yet, so that the wall following
   /// starts at the heading it has without the offset. 0 = never. [Pa]
   double clear_yaw_release_rms = 0.0;
-  /// Whisking on the first approach (issue 17, docs/tuning/tactile_fsm.md "Round 10", choice): the
-  /// first baffle is met with no clearing before it, so clear_yaw_offset has
-  /// no side to turn to; its end can lie in the blind band (25-80 mm beside
-  /// the axis) on either side. In the FLY_FORWARD before the flight's first
-  /// contact the yaw whisks about the course heading by first_whisk_amplitude
-  /// with period first_whisk_period_s (rate limit whisk_rate_max, paused while
-  /// a whisker's sum moves, whisk_pause_rms), the track kept on the course at
-  /// first_whisk_speed (0 = V_max). 0 = off (the paper). [rad]
+  /// The first approach (issue 17, docs/tuning/tactile_fsm.md "Round 10",
+  /// "Round 12", choice): the first baffle is met with no clearing before it,
+  /// so clear_yaw_offset has no side to turn to; its end can lie in the blind
+  /// band (25-80 mm beside the axis) on either side. In the FLY_FORWARD before
+  /// the flight's first contact the whiskers are scanned by
+  /// first_whisk_amplitude about the course heading (step and scan, below).
+  /// 0 = off (the paper's straight approach at V_max). [rad]
   double first_whisk_amplitude = 0.0;
-  double first_whisk_period_s = 0.7;   ///< [s]
-  double first_whisk_speed = 0.0;      ///< [m/s]; 0 = v_max
-  /// While a whisker's sum moves (whisk_pause_rms) the first-approach whisk
-  /// turns back to the course heading (realign_gain) instead of holding the
-  /// yaw, so that the wall following starts nearer the course heading.
-  bool first_whisk_pause_to_course = false;
-  /// Our choice (docs/tuning/tactile_fsm.md "Round 10b"): in the first-approach whisk, a whisker's
-  /// S_c sum moving (whisk_pause_rms) on the side opposite the yaw (or both) is
-  /// a wall ahead, not an end beside the axis: the yaw is turned back to the
-  /// course at up to this rate for the rest of that FLY_FORWARD. 0 = off. [rad/s]
-  double first_whisk_wall_rate = 0.0;
   /// Step and scan on the first approach (issue 17, docs/tuning/tactile_fsm.md "Round 12", our
-  /// choice; first_whisk_amplitude 0 turns it off with the whisk): instead of whisking while
-  /// flying, the first approach alternates steps of first_scan_step along the
+  /// choice; first_whisk_amplitude 0 turns it off): the first approach alternates steps of first_scan_step along the
   /// course (yaw on the course, the speed brought down to 0 at the step's end)
   /// and scans in place (yaw course -> +A -> -A -> course at first_scan_rate,
   /// A = first_whisk_amplitude, held while a whisker's sum moves,
   /// whisk_pause_rms). Yawed in place the whisker tips lie nearer than when
   /// straight, so a wall ahead is met in a step at the course heading and only
-  /// an end beside the axis in a scan. 0 = off (the continuous whisk). [m]
-  double first_scan_step = 0.0;
+  /// an end beside the axis in a scan (round 10's continuous whisk while
+  /// flying met walls ahead at a whisked yaw; removed, see the tuning history).
+  /// >= 0.02 (the step ends 15 mm before its end). [m]
+  double first_scan_step = 0.08;
   double first_scan_rate = 2.0;  ///< [rad/s], at most whisk_rate_max
   /// A baffle's end met by one whisker (issue 17, docs/tuning/tactile_fsm.md "Round 10", choice):
   /// a first touch in FLY_FORWARD by exactly one whisker whose contact point
@@ -397,11 +316,8 @@ struct WallFollowerOutput {
 ///  - none: FLY_SIDEWAYS (clearing is decided by the top level).
 /// theta: wall angle estimate to use when both depths are valid; NaN = compute
 /// it from the depths (000 eq. 21).
-/// last_l, last_r: the last depth each whisker had while valid in this
-/// episode (NaN = unknown), read only by lost_far_depth.
 WallSubState wall_sub_state(double d_l, bool l_valid, double d_r, bool r_valid, Side side, bool both_touched,
-                            WallSubState current, const WallFollowerParams& p, double theta = NAN,
-                            double last_l = NAN, double last_r = NAN);
+                            WallSubState current, const WallFollowerParams& p, double theta = NAN);
 
 /// The staleness rule of the behaviours that fly on whisker depth and
 /// odometry (this wall follower, gpis_explorer's sequencer): an input stamped
@@ -440,9 +356,6 @@ class WhiskerWallFollower {
   /// Whisker held in contact but taken for a phantom (phantom_quiet_rms) on the last tick.
   bool phantom_left() const { return phantom_l_; }
   bool phantom_right() const { return phantom_r_; }
-  /// Motion-carried depth bound of each whisker (motion_depth_relax; NaN when off or not in contact) [m].
-  double motion_bound_left() const { return motion_b_l_; }
-  double motion_bound_right() const { return motion_b_r_; }
   /// Wall angle in the body frame used by the rule [rad] (NaN unless both valid).
   double wall_angle() const { return theta_; }
   const WallFollowerParams& params() const { return p_; }
@@ -456,8 +369,6 @@ class WhiskerWallFollower {
                             bool r_valid) const;
   double realign(const WallFollowerInput& in) const;
   double realign_rate(double yaw) const;  ///< realign()'s rate toward the course from `yaw` (unsaturated)
-  Setpoint whisk(const WallFollowerInput& in, const Setpoint& s, double amplitude, double period, double speed,
-                 bool pause_to_course = false) const;
   Setpoint offset_yaw(const WallFollowerInput& in, const Setpoint& s, double dt);
   Setpoint step_and_scan(const WallFollowerInput& in, const Setpoint& s, double dt);
 
@@ -474,32 +385,21 @@ class WhiskerWallFollower {
   bool both_touched_ = false;
   double last_contact_t_ = 0.0;
   double f_left_ = NAN, f_right_ = NAN;
-  double last_l_ = NAN, last_r_ = NAN;  ///< last valid depth of each whisker in this episode (lost_far_depth)
-  bool lost_far_l_ = false, lost_far_r_ = false;      ///< lost beyond lost_far_depth with the other beyond T_max
-  bool prev_l_valid_ = false, prev_r_valid_ = false;  ///< validity on the previous wall-following tick
   double pressed_t_left_ = -INFINITY, pressed_t_right_ = -INFINITY;  ///< last tick with sum >= press_sum_pa
   double live_x_l_ = NAN, live_y_l_ = NAN;  ///< where the left S_c sum last moved (or the whisker was free)
   double live_x_r_ = NAN, live_y_r_ = NAN;
   bool phantom_l_ = false, phantom_r_ = false;
-  double motion_b_l_ = NAN, motion_b_r_ = NAN;      ///< motion-carried depth bound [m] (NaN: no contact)
-  double motion_qx_l_ = NAN, motion_qy_l_ = NAN;    ///< world point of the bound on the wall
-  double motion_qx_r_ = NAN, motion_qy_r_ = NAN;
-  double onset_x_l_ = NAN, onset_y_l_ = NAN;        ///< first contact point of the current contact
-  double onset_x_r_ = NAN, onset_y_r_ = NAN;
-  double motion_nx_ = NAN, motion_ny_ = NAN;        ///< wall normal (world) of the current contact
   double wall_heading_ = NAN;  ///< filtered yaw - theta [rad]
   double theta_ = NAN;
   double anchor_ = NAN;  ///< turn_anchor_tolerance: wall heading anchor of this wall following [rad]
   bool origin_set_ = false;
   double origin_x_ = 0.0, origin_y_ = 0.0;  ///< course start (end of hover)
   double course_yaw_ = 0.0;                   ///< heading at the course start [rad]
-  double margin_x_ = 0.0, margin_y_ = 0.0;  ///< where the side-step's clear_margin counts from (resume_quiet_rms)
   double clear_x_ = 0.0, clear_y_ = 0.0;    ///< where the obstacle was cleared
   bool after_clear_ = false;                 ///< FLY_FORWARD entered from RESUME_FORWARD
   double resume_x_ = 0.0, resume_y_ = 0.0;  ///< where that FLY_FORWARD began
   double track_yaw_ = NAN;  ///< clear_yaw_offset: the heading the drone would fly without the offset [rad]
   bool yaw_offset_released_ = false;  ///< clear_yaw_release_rms reached since the clearing
-  bool first_whisk_wall_ = false;  ///< first_whisk_wall_rate latched in this FLY_FORWARD
   bool contacted_ = false;  ///< wall following entered at least once in this flight (first_whisk_amplitude)
   // first_scan_step: the step's end along the course [m] (NaN: not started;
   // the rest is set when it starts), scanning (else stepping), the scan's yaw
