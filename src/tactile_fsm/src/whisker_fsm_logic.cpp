@@ -69,12 +69,13 @@ ParamMap WhiskerFsmLogic::default_parameters() {
         {"extra side-step after a clearing, so the frame passes the edge", "m", at_least(0.0), false});
   m.set("realign_gain", d.realign_gain,
         {"heading realignment to the course outside wall following; 0: off", "1/s", at_least(0.0), false});
-  // On in the whisker FSM node (issue 17); the core default stays off so the other
-  // users of wall_sub_state() (gpis_explorer's wall follows) keep their rule.
+  // The node's two defaults that differ from the core struct's: on in the whisker FSM
+  // node (issue 17), off in WallFollowerParams, because gpis_explorer's wall follows call
+  // wall_sub_state() with the core defaults and were not measured with these rules.
   m.set("hold_heading_trailing_lost", true,
         {"trailing whisker lost after both touched: hold the heading (issue 17)", "", {}, false});
   // One depth left beyond wall_end_depth after both touched = the wall ends
-  // (issue 17, round 7): on in the whisker FSM node, off in the core. 105 mm:
+  // (issue 17, round 7): on in the whisker FSM node, off in the core (above). 105 mm:
   // tuning blocks 413 -> 415 of 450 (tied with 110 / 115 mm), seen blocks
   // 5000-8000 1068 -> 1088 of 1200 (docs/tuning/tactile_fsm.md "Round 7").
   m.set("wall_end_depth", 0.105,
@@ -83,66 +84,64 @@ ParamMap WhiskerFsmLogic::default_parameters() {
         {"a contact this close after a clearing is the same obstacle: keep the side; 0: off", "m", at_least(0.0), false});
   m.set("max_heading_offset", d.max_heading_offset,
         {"wall following never turns further than this from the course heading; 0: off", "rad", closed(0.0, M_PI), false});
-  // Turn anchor (issue 17, round 13): on in the whisker FSM node, off in the core.
+  // Turn anchor (issue 17, round 13).
   // 10 deg, 10 deg, 2 deg/s: held-out block 27000-27299 857 -> 874 of 900 (docs/tuning/tactile_fsm.md
   // "Round 13").
-  m.set("turn_anchor_tolerance", 10.0 * M_PI / 180.0,
+  m.set("turn_anchor_tolerance", d.turn_anchor_tolerance,
         {"turn at most this beyond the anchored wall heading (issue 17, round 13); 0: off", "rad", closed(0.0, M_PI), false});
   m.set("turn_anchor_theta", d.turn_anchor_theta,
         {"a wall angle at least this replaces the anchor", "rad", ParamRange{0.0, M_PI / 2, true, true}, false});
-  m.set("turn_anchor_rate", 2.0 * M_PI / 180.0,
+  m.set("turn_anchor_rate", d.turn_anchor_rate,
         {"the anchor follows the read wall heading at most this fast; 0: fixed", "rad/s", at_least(0.0), false});
-  // Pressed whisker (issue 17): on in the whisker FSM node, off in the core
-  // (as hold_heading_trailing_lost). 900 Pa, no hold: tuning blocks, docs/tuning/tactile_fsm.md "Round 3".
-  m.set("press_sum_pa", 900.0,
+  // Pressed whisker (issue 17): 900 Pa, no hold: tuning blocks, docs/tuning/tactile_fsm.md "Round 3".
+  m.set("press_sum_pa", d.press_sum_pa,
         {"a whisker whose S_c sum reached this is pressed: depth taken <= press_depth (issue 17); 0: off", "Pa", at_least(0.0), false});
-  m.set("press_hold_s", 0.0,
+  m.set("press_hold_s", d.press_hold_s,
         {"how long a press counts", "s", at_least(0.0), false});
   m.set("press_depth", d.press_depth,
         {"depth a pressed whisker is taken at, at most", "m", positive(), false});
   m.set("whisker_base_x", d.whisker_base_x,
         {"x of the whisker bases ahead of the odometry origin (000 frame, tactile_sim), for end_contact_lateral; finite", "m", {}, false});
-  // Phantom hold gated by odometry (issue 17, round 4): on in the whisker FSM
-  // node, off in the core. 6.5 Pa over 25 samples, 0.03 m, latched: tuning
+  // Phantom hold gated by odometry (issue 17, round 4): 6.5 Pa over 25 samples, 0.03 m, latched: tuning
   // blocks, docs/tuning/tactile_fsm.md "Round 4".
-  m.set("phantom_quiet_rms", 6.5,
+  m.set("phantom_quiet_rms", d.phantom_quiet_rms,
         {"a whisker in contact whose S_c sum stays quieter than this while the drone moves is a phantom (issue 17, round 4); 0: off", "Pa", at_least(0.0), false});
   m.set("phantom_quiet_samples", static_cast<int64_t>(n.phantom_quiet_samples),
         {"signals over which that RMS is taken", "samples", closed(2, 10000), false});
-  m.set("phantom_travel", 0.03,
+  m.set("phantom_travel", d.phantom_travel,
         {"drone travel with a quiet sum that makes a phantom", "m", at_least(0.0), false});
   // Latched, with a side-step of up to 2 m while the phantom is held: chosen on the tuning
   // blocks (279 of 300), switched on after the fresh held-out block 10000-10099
   // (docs/tuning/tactile_fsm.md "Round 4b").
-  m.set("phantom_resume_max", 2.0,
+  m.set("phantom_resume_max", d.phantom_resume_max,
         {"keep side-stepping while a phantom is held, up to this far from the clearing", "m", at_least(0.0), false});
-  m.set("phantom_latch", true,
+  m.set("phantom_latch", d.phantom_latch,
         {"a phantom stays one until its contact ends or its sum moves again (issue 17, round 4)", "", {}, false});
-  m.set("whisk_rate_max", 3.0,
+  m.set("whisk_rate_max", d.whisk_rate_max,
         {"yaw-rate limit of the first-approach scan", "rad/s", positive(), false});
-  m.set("whisk_pause_rms", 13.0,
+  m.set("whisk_pause_rms", d.whisk_pause_rms,
         {"hold the first-approach scan while a whisker's S_c sum moves more than this; 0: never", "Pa", at_least(0.0), false});
   // Yaw offset after a clearing (issue 17, docs/tuning/tactile_fsm.md "Round 9"): 14 deg (0.2443 rad) with
   // the release at 13 Pa: tuning blocks 415 -> 433 of 450, seen blocks 1088 -> 1123 of
   // 1200, the shipped courses pass on seeds 1-20. 20 deg wins as much but fails the
   // shipped wide-spacing (heading error 11-14 deg > 8) and tilted-30 (a guard touch in
-  // every trial) courses. Core struct: off.
-  m.set("clear_yaw_offset", 0.2443,
+  // every trial) courses.
+  m.set("clear_yaw_offset", d.clear_yaw_offset,
         {"yaw offset after a clearing, away from the side-step side (issue 17, round 9); 0: off", "rad", closed(0.0, M_PI / 4), false});
-  m.set("clear_yaw_release_rms", 13.0,
+  m.set("clear_yaw_release_rms", d.clear_yaw_release_rms,
         {"back to the track's heading once a whisker's sum moves more than this; 0: never", "Pa", at_least(0.0), false});
   // The first approach (issue 17, docs/tuning/tactile_fsm.md "Round 12"): step and scan with the
   // round 10 amplitude and end rule; held out 600 courses per estimate: mocap
   // 93.0 -> 95.8 %, flow deck 92.8 -> 96.7 %, imu_tof 94.0 -> 95.2 %; the shipped
   // courses pass on seeds 1-30. The darkness scenarios turn it off (000 Fig. 6's
-  // straight approach). Core struct: off.
-  m.set("first_whisk_amplitude", 0.44,
+  // straight approach).
+  m.set("first_whisk_amplitude", d.first_whisk_amplitude,
         {"scan amplitude on the first approach (issue 17, round 10/12); 0: off (the paper's straight approach)", "rad", closed(0.0, M_PI / 2), false});
-  m.set("first_scan_step", 0.08,
+  m.set("first_scan_step", d.first_scan_step,
         {"step-and-scan step on the first approach (issue 17, round 12)", "m", at_least(0.02), false});
-  m.set("first_scan_rate", 2.0,
+  m.set("first_scan_rate", d.first_scan_rate,
         {"scan yaw rate; <= whisk_rate_max", "rad/s", positive(), false});
-  m.set("end_contact_lateral", 0.045,
+  m.set("end_contact_lateral", d.end_contact_lateral,
         {"a one-whisker first touch this far beside the axis is a baffle's end (issue 17, round 10); 0: off", "m", at_least(0.0), false});
   m.set("target_radius", d.target_radius,
         {"land within this distance of the target", "m", positive(), false});

@@ -420,3 +420,31 @@ TEST(WhiskerFsmLogic, ReferenceParameterTableIsTheSpec) {
   const std::string table = parameter_table(WhiskerFsmLogic::default_parameters());
   EXPECT_EQ(doc.substr(b + begin.size(), e - b - begin.size()), table) << "expected table:\n" << table;
 }
+
+// One default per key (issue 33): params_from(default_parameters()) is the core
+// struct's defaults except the two keys gpis_explorer reads at their core default
+// through wall_sub_state() (hold_heading_trailing_lost, wall_end_depth).
+TEST(WhiskerFsmLogic, NodeDefaultsAreTheCoreDefaultsButTwo) {
+  const WhiskerFsmLogic::Params n = WhiskerFsmLogic::params_from(WhiskerFsmLogic::default_parameters());
+  const tactile_fsm::WallFollowerParams c;
+  const tactile_fsm::WallFollowerParams& f = n.fsm;
+  EXPECT_TRUE(f.hold_heading_trailing_lost && !c.hold_heading_trailing_lost);
+  EXPECT_DOUBLE_EQ(f.wall_end_depth, 0.105);
+  EXPECT_EQ(c.wall_end_depth, 0.0);
+  EXPECT_EQ(f.turn_anchor_tolerance, c.turn_anchor_tolerance);
+  EXPECT_EQ(f.turn_anchor_rate, c.turn_anchor_rate);
+  EXPECT_EQ(f.press_sum_pa, c.press_sum_pa);
+  EXPECT_EQ(f.press_hold_s, c.press_hold_s);
+  EXPECT_EQ(f.phantom_quiet_rms, c.phantom_quiet_rms);
+  EXPECT_EQ(f.phantom_travel, c.phantom_travel);
+  EXPECT_EQ(f.phantom_resume_max, c.phantom_resume_max);
+  EXPECT_EQ(f.phantom_latch, c.phantom_latch);
+  EXPECT_EQ(f.whisk_rate_max, c.whisk_rate_max);
+  EXPECT_EQ(f.whisk_pause_rms, c.whisk_pause_rms);
+  EXPECT_EQ(f.clear_yaw_offset, c.clear_yaw_offset);
+  EXPECT_EQ(f.clear_yaw_release_rms, c.clear_yaw_release_rms);
+  EXPECT_EQ(f.first_whisk_amplitude, c.first_whisk_amplitude);
+  EXPECT_EQ(f.first_scan_step, c.first_scan_step);
+  EXPECT_EQ(f.first_scan_rate, c.first_scan_rate);
+  EXPECT_EQ(f.end_contact_lateral, c.end_contact_lateral);
+}

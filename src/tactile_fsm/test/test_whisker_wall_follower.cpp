@@ -27,6 +27,29 @@ using tactile_fsm::WhiskerWallFollower;
 
 namespace {
 
+/// The rules of issue 17 that the whisker FSM ships (and WallFollowerParams'
+/// defaults since issue 33) off: the FSM these tests were written against
+/// (000 Fig. S4e with the heading limit, the same-obstacle rule and the
+/// realignment). A test of one rule turns that rule on.
+WallFollowerParams rules_off() {
+  WallFollowerParams p;
+  p.turn_anchor_tolerance = 0.0;
+  p.turn_anchor_rate = 0.0;
+  p.press_sum_pa = 0.0;
+  p.press_hold_s = 0.2;
+  p.phantom_quiet_rms = 0.0;
+  p.phantom_travel = 0.05;
+  p.phantom_resume_max = 0.0;
+  p.phantom_latch = false;
+  p.whisk_rate_max = 2.0;
+  p.whisk_pause_rms = 0.0;
+  p.clear_yaw_offset = 0.0;
+  p.clear_yaw_release_rms = 0.0;
+  p.first_whisk_amplitude = 0.0;
+  p.end_contact_lateral = 0.0;
+  return p;
+}
+
 constexpr double kDt = 0.02;  // 50 Hz
 constexpr double kDeg = M_PI / 180.0;
 
@@ -65,7 +88,7 @@ WallSubState sub_with_left_lost(WhiskerWallFollower& fsm, double& t, double righ
 }
 
 WallSubState rule(double dl, double dr, WallSubState current = WallSubState::kFlySideways) {
-  return wall_sub_state(dl, true, dr, true, Side::kRight, true, current, WallFollowerParams{});
+  return wall_sub_state(dl, true, dr, true, Side::kRight, true, current, rules_off());
 }
 
 /// validate() rejects p with an error naming WallFollowerParams.<field>.
@@ -92,6 +115,31 @@ TEST(WallFollowerParams, DefaultsArePaperValuesAndValidate) {
   EXPECT_NO_THROW(p.validate());
 }
 
+// One default per key (issue 33): the core struct's defaults are the rules the
+// whisker FSM node ships (config/tactile_fsm.yaml), except the two rules
+// gpis_explorer's wall follows read through wall_sub_state() with the core
+// defaults (not measured there): hold_heading_trailing_lost and wall_end_depth.
+TEST(WallFollowerParams, DefaultsAreTheShippedRules) {
+  const WallFollowerParams p;
+  EXPECT_DOUBLE_EQ(p.turn_anchor_tolerance, 10.0 * kDeg);  // round 13
+  EXPECT_DOUBLE_EQ(p.turn_anchor_rate, 2.0 * kDeg);
+  EXPECT_DOUBLE_EQ(p.press_sum_pa, 900.0);                 // round 3
+  EXPECT_DOUBLE_EQ(p.press_hold_s, 0.0);
+  EXPECT_DOUBLE_EQ(p.phantom_quiet_rms, 6.5);              // rounds 4, 4b
+  EXPECT_DOUBLE_EQ(p.phantom_travel, 0.03);
+  EXPECT_DOUBLE_EQ(p.phantom_resume_max, 2.0);
+  EXPECT_TRUE(p.phantom_latch);
+  EXPECT_DOUBLE_EQ(p.clear_yaw_offset, 0.2443);            // round 9
+  EXPECT_DOUBLE_EQ(p.clear_yaw_release_rms, 13.0);
+  EXPECT_DOUBLE_EQ(p.first_whisk_amplitude, 0.44);         // round 12
+  EXPECT_DOUBLE_EQ(p.first_scan_step, 0.08);
+  EXPECT_DOUBLE_EQ(p.whisk_rate_max, 3.0);
+  EXPECT_DOUBLE_EQ(p.whisk_pause_rms, 13.0);
+  EXPECT_DOUBLE_EQ(p.end_contact_lateral, 0.045);          // round 10
+  EXPECT_FALSE(p.hold_heading_trailing_lost);              // gpis_explorer's rule
+  EXPECT_EQ(p.wall_end_depth, 0.0);
+}
+
 TEST(WallFollowerParams, ValidateNamesFieldAndReason) {
   auto message = [](WallFollowerParams p) -> std::string {
     try {
@@ -101,16 +149,16 @@ TEST(WallFollowerParams, ValidateNamesFieldAndReason) {
     }
     return "";
   };
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.t_max = 0.05;  // below t_min
   EXPECT_NE(message(p).find("WallFollowerParams.t_max: must be finite and > t_min"), std::string::npos) << message(p);
-  p = WallFollowerParams{};
+  p = rules_off();
   p.v_max = -1.0;
   EXPECT_NE(message(p).find("WallFollowerParams.v_max"), std::string::npos);
-  p = WallFollowerParams{};
+  p = rules_off();
   p.align_exit = 5.0 * kDeg;  // above align_enter (3 deg)
   EXPECT_NE(message(p).find("WallFollowerParams.align_exit"), std::string::npos);
-  p = WallFollowerParams{};
+  p = rules_off();
   p.max_input_age_s = std::nan("");
   EXPECT_NE(message(p).find("WallFollowerParams.max_input_age_s"), std::string::npos);
   EXPECT_THROW(WhiskerWallFollower{p}, std::invalid_argument);
@@ -158,7 +206,7 @@ TEST(WallSubStateRule, AlignedButStraddlingBandEdgeTranslates) {
 }
 
 TEST(WallSubStateRule, MissingDepth) {
-  const WallFollowerParams p;
+  const WallFollowerParams p = rules_off();
   // Approach: left not touching yet counts as beyond T_max -> turn right (toward the wall on the right).
   EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kRight, false, WallSubState::kNone, p),
             WallSubState::kTurnRight);
@@ -188,7 +236,7 @@ TEST(WallSubStateRule, MissingDepth) {
 // one; following left, the right one. The remaining depth decides the
 // translation (band 60-100 mm); the drone never turns toward the lost whisker.
 TEST(WallSubStateRule, TrailingWhiskerLostHoldsHeading) {
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.hold_heading_trailing_lost = true;  // the whisker FSM node's default
   const auto ws = WallSubState::kFlySideways;
   // Right side, left lost: remaining right depth in band / too close / too far.
@@ -214,7 +262,7 @@ TEST(WallSubStateRule, TrailingWhiskerLostHoldsHeading) {
 // with wall_end_depth the wall ends: FLY_SIDEWAYS. A remaining depth in the
 // band or below, and the approach (before both touched), are unchanged.
 TEST(WallSubStateRule, OneDepthBeyondWallEndDepthAfterBothTouchedPassesTheEdge) {
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.hold_heading_trailing_lost = true;  // the whisker FSM node's default
   const auto ws = WallSubState::kFlySideways;
   EXPECT_EQ(wall_sub_state(NAN, false, 0.115, true, Side::kRight, true, ws, p), WallSubState::kFlyForward);
@@ -244,7 +292,7 @@ TEST(WallSubStateRule, OneDepthBeyondWallEndDepthAfterBothTouchedPassesTheEdge) 
     }
     return sub_with_left_lost(fsm, t, 0.115);
   };
-  WallFollowerParams q;
+  WallFollowerParams q = rules_off();
   q.hold_heading_trailing_lost = true;
   EXPECT_EQ(sub_after_release(q), WallSubState::kFlyForward);  // off: the core default
   EXPECT_EQ(WallFollowerParams{}.wall_end_depth, 0.0);
@@ -266,7 +314,7 @@ TEST(WallSubStateRule, OneDepthBeyondWallEndDepthAfterBothTouchedPassesTheEdge) 
 // target is now clearly on the other side; further on, the side is re-chosen.
 TEST(WhiskerWallFollower, ContactJustAfterClearingKeepsTheSide) {
   auto run = [](double forward_after_resume) {
-    WhiskerWallFollower fsm{WallFollowerParams{}};
+    WhiskerWallFollower fsm{rules_off()};
     double t = 0.0;
     for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t));
     // Contact at x = 1, target (2, 0) straight ahead -> default side right.
@@ -309,7 +357,7 @@ TEST(WhiskerWallFollower, ContactJustAfterClearingKeepsTheSide) {
 // (back toward the course) is still allowed. Below T_min it backs off.
 TEST(WhiskerWallFollower, HeadingLimitAboutTheCourse) {
   auto sub_at = [](double yaw_deg, double dl, double dr) {
-    WhiskerWallFollower fsm{WallFollowerParams{}};
+    WhiskerWallFollower fsm{rules_off()};
     double t = 0.0;
     for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t));
     WallFollowerInput in = input(t, 1.0, 0.0, yaw_deg * kDeg);
@@ -325,7 +373,7 @@ TEST(WhiskerWallFollower, HeadingLimitAboutTheCourse) {
   EXPECT_EQ(sub_at(46.0, 0.07, 0.10), WallSubState::kFlySideways);
   EXPECT_EQ(sub_at(30.0, 0.07, 0.10), WallSubState::kTurnLeft);
   // Off (0): the turn is kept.
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.max_heading_offset = 0.0;
   WhiskerWallFollower fsm(p);
   double t = 0.0;
@@ -348,7 +396,7 @@ TEST(WhiskerWallFollower, HeadingLimitAboutTheCourse) {
 // heading read at turn_anchor_rate (1 deg/s here): the bias held at -11 deg
 // turns again after 2 s, not with the anchor fixed (rate 0). Off: it turns.
 TEST(WhiskerWallFollower, TurnAnchorHoldsTheFirstWallHeading) {
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.turn_anchor_tolerance = 10.0 * kDeg;
   p.turn_anchor_theta = 10.0 * kDeg;
   p.turn_anchor_rate = 0.0;
@@ -406,14 +454,13 @@ TEST(WhiskerWallFollower, TurnAnchorHoldsTheFirstWallHeading) {
 
 TEST(WhiskerWallFollower, TurnAnchorParametersAreValidated) {
   auto bad = [](double tol, double th) {
-    WallFollowerParams p;
+    WallFollowerParams p = rules_off();
     p.turn_anchor_tolerance = tol;
     p.turn_anchor_theta = th;
     return p;
   };
   EXPECT_NO_THROW(bad(0.0, 0.1).validate());
   EXPECT_NO_THROW(bad(0.2, 0.2).validate());
-  EXPECT_EQ(WallFollowerParams{}.turn_anchor_tolerance, 0.0);  // off in the core (the paper); on in the node
   EXPECT_THROW(bad(-0.1, 0.2).validate(), std::invalid_argument);
   EXPECT_THROW(bad(M_PI + 0.1, 0.2).validate(), std::invalid_argument);
   EXPECT_THROW(bad(NAN, 0.2).validate(), std::invalid_argument);
@@ -454,7 +501,7 @@ TEST(WhiskerWallFollower, PressedWhiskerCountsAsAtPressDepth) {
     }
     return s;
   };
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.press_sum_pa = 900.0;
   p.press_hold_s = 0.0;
   EXPECT_EQ(sub_at(p, 1200.0, 300.0), WallSubState::kFlyBackward);
@@ -470,8 +517,7 @@ TEST(WhiskerWallFollower, PressedWhiskerCountsAsAtPressDepth) {
   dark.t_min = 0.04;
   EXPECT_EQ(sub_at(dark, 1200.0, 1200.0), WallSubState::kFlySideways);
   // Off (the paper, the core default).
-  EXPECT_EQ(WallFollowerParams{}.press_sum_pa, 0.0);
-  EXPECT_EQ(sub_at(WallFollowerParams{}, 1200.0, 1200.0), WallSubState::kFlySideways);
+  EXPECT_EQ(sub_at(rules_off(), 1200.0, 1200.0), WallSubState::kFlySideways);
   // Bad values name the field.
   p.press_sum_pa = -1.0;
   expect_rejected(p, "press_sum_pa");
@@ -512,7 +558,7 @@ TEST(WhiskerWallFollower, QuietHeldContactWhileTravellingIsPhantom) {
     }
     return r;
   };
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.phantom_quiet_rms = 8.0;
   p.phantom_travel = 0.05;
   const Run quiet = fly(p, 3.0, 0.004);
@@ -522,8 +568,7 @@ TEST(WhiskerWallFollower, QuietHeldContactWhileTravellingIsPhantom) {
   EXPECT_EQ(fly(p, NAN, 0.004).cleared_tick, -1);   // unknown: kept
   EXPECT_EQ(fly(p, 3.0, 0.0).cleared_tick, -1);     // quiet but hovering: kept
   // Off (the paper, the core default).
-  EXPECT_EQ(WallFollowerParams{}.phantom_quiet_rms, 0.0);
-  EXPECT_EQ(fly(WallFollowerParams{}, 3.0, 0.004).cleared_tick, -1);
+  EXPECT_EQ(fly(rules_off(), 3.0, 0.004).cleared_tick, -1);
   // Bad values name the field.
   p.phantom_travel = -0.1;
   expect_rejected(p, "phantom_travel");
@@ -542,7 +587,7 @@ TEST(WhiskerWallFollower, QuietHeldContactWhileTravellingIsPhantom) {
 // hold ends at tick 120).
 TEST(WhiskerWallFollower, ResumeKeepsSideSteppingWhilePhantomHeld) {
   auto fly = [](double resume_max, int release_tick) {
-    WallFollowerParams p;
+    WallFollowerParams p = rules_off();
     p.phantom_quiet_rms = 8.0;
     p.phantom_travel = 0.05;
     p.phantom_resume_max = resume_max;
@@ -565,7 +610,7 @@ TEST(WhiskerWallFollower, ResumeKeepsSideSteppingWhilePhantomHeld) {
   EXPECT_EQ(fly(0.0, 1000), 97);
   EXPECT_EQ(fly(0.6, 1000), 172);
   EXPECT_EQ(fly(0.6, 120), 120);
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.phantom_resume_max = -1.0;
   EXPECT_THROW(p.validate(), std::invalid_argument);
 }
@@ -577,7 +622,7 @@ TEST(WhiskerWallFollower, ResumeKeepsSideSteppingWhilePhantomHeld) {
 // and an RMS of 20 Pa (>= 2 * 8 Pa, a new touch) brings it back.
 TEST(WhiskerWallFollower, PhantomLatch) {
   auto state_at_39 = [](bool latch, double later_rms) {
-    WallFollowerParams p;
+    WallFollowerParams p = rules_off();
     p.phantom_quiet_rms = 8.0;
     p.phantom_travel = 0.05;
     p.phantom_latch = latch;
@@ -602,11 +647,10 @@ TEST(WhiskerWallFollower, PhantomLatch) {
   EXPECT_EQ(state_at_39(false, 9.0), FsmState::kWallFollowing);
   EXPECT_EQ(state_at_39(true, 9.0), FsmState::kResumeForward);
   EXPECT_EQ(state_at_39(true, 20.0), FsmState::kWallFollowing);
-  EXPECT_FALSE(WallFollowerParams{}.phantom_latch);
 }
 
 TEST(Saturation, ScalesSpeedAndClampsYawRate) {
-  const WallFollowerParams p;
+  const WallFollowerParams p = rules_off();
   Setpoint s;
   s.vx = 0.3;
   s.vy = 0.4;  // |v| = 0.5 -> scaled by 0.4 to 0.2
@@ -625,7 +669,7 @@ TEST(Saturation, ScalesSpeedAndClampsYawRate) {
   EXPECT_DOUBLE_EQ(n.vy, 0.1);
   EXPECT_EQ(n.yaw_rate, 0.0);
   // A smaller V_max in the params scales the FSM's own commands too.
-  WallFollowerParams slow;
+  WallFollowerParams slow = rules_off();
   slow.v_max = 0.1;
   slow.omega_max = 0.2;
   WhiskerWallFollower fsm(slow);
@@ -637,7 +681,7 @@ TEST(Saturation, ScalesSpeedAndClampsYawRate) {
 // --- Scripted sequence: hover 2 s -> forward -> contact -> wall following ->
 // cleared -> resume -> forward -> target -> landing -> landed.
 TEST(WhiskerWallFollower, ScriptedStateSequence) {
-  const WallFollowerParams p;
+  const WallFollowerParams p = rules_off();
   WhiskerWallFollower fsm(p);
   double t = 0.0;
   WallFollowerOutput o;
@@ -722,7 +766,7 @@ TEST(WhiskerWallFollower, ScriptedStateSequence) {
 }
 
 TEST(WhiskerWallFollower, LandsWithinTargetRadius) {
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.land_past_target = false;
   WhiskerWallFollower fsm(p);
   for (int k = 0; k <= 100; ++k) fsm.step(input(k * kDt));
@@ -734,7 +778,7 @@ TEST(WhiskerWallFollower, LandsWithinTargetRadius) {
 
 TEST(WhiskerWallFollower, SideTowardTargetLateralOffset) {
   // Target (2, 0.5) from the origin heading +x: 0.5 m to the left -> follow left.
-  WhiskerWallFollower fsm{WallFollowerParams{}};
+  WhiskerWallFollower fsm{rules_off()};
   for (int k = 0; k <= 100; ++k) fsm.step(input(k * kDt));
   WallFollowerInput in = input(2.1);
   in.target_y = 0.5;
@@ -743,7 +787,7 @@ TEST(WhiskerWallFollower, SideTowardTargetLateralOffset) {
   ASSERT_EQ(fsm.state(), FsmState::kWallFollowing);
   EXPECT_EQ(fsm.active_side(), Side::kLeft);
   // Heading +y (yaw 90 deg): the same target is 2 m to the right.
-  WhiskerWallFollower fsm2{WallFollowerParams{}};
+  WhiskerWallFollower fsm2{rules_off()};
   for (int k = 0; k <= 100; ++k) fsm2.step(input(k * kDt, 0.0, 0.0, M_PI / 2));
   in = input(2.1, 0.0, 0.0, M_PI / 2);
   in.target_y = 0.5;
@@ -752,7 +796,7 @@ TEST(WhiskerWallFollower, SideTowardTargetLateralOffset) {
   EXPECT_EQ(fsm2.active_side(), Side::kRight);
   EXPECT_DOUBLE_EQ(o.setpoint.vy, -0.2);
   // With side_toward_target off the configured side is used.
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.side_toward_target = false;
   p.follow_side = Side::kLeft;
   WhiskerWallFollower fsm3(p);
@@ -765,7 +809,7 @@ TEST(WhiskerWallFollower, SideTowardTargetLateralOffset) {
 }
 
 TEST(WhiskerWallFollower, StaleDepthFailsafeHoverThenLand) {
-  WhiskerWallFollower fsm{WallFollowerParams{}};
+  WhiskerWallFollower fsm{rules_off()};
   for (int k = 0; k <= 125; ++k) fsm.step(input(k * kDt));
   ASSERT_EQ(fsm.state(), FsmState::kFlyForward);
   // Depth stops at t = 2.5 s; odometry continues. Stale after 0.2 s.
@@ -796,7 +840,7 @@ TEST(WhiskerWallFollower, StaleDepthFailsafeHoverThenLand) {
 }
 
 TEST(WhiskerWallFollower, StaleOdometryFailsafeAndRecovery) {
-  WhiskerWallFollower fsm{WallFollowerParams{}};
+  WhiskerWallFollower fsm{rules_off()};
   for (int k = 0; k <= 125; ++k) fsm.step(input(k * kDt));
   WallFollowerInput in = input(3.0);
   in.odom_stamp = 2.5;
@@ -808,7 +852,7 @@ TEST(WhiskerWallFollower, StaleOdometryFailsafeAndRecovery) {
 }
 
 TEST(WhiskerWallFollower, NoInputAtEndOfHoverIsFailsafe) {
-  WhiskerWallFollower fsm{WallFollowerParams{}};
+  WhiskerWallFollower fsm{rules_off()};
   WallFollowerInput in;  // never received anything
   for (int k = 0; k < 100; ++k) {
     in.t = k * kDt;
@@ -833,7 +877,7 @@ struct ClosedLoopResult {
 };
 
 ClosedLoopResult fly_to_wall(double wall_deg, unsigned seed) {
-  const WallFollowerParams p;
+  const WallFollowerParams p = rules_off();
   WhiskerWallFollower fsm(p);
   std::mt19937 rng(seed);
   std::normal_distribution<double> noise(0.0, 0.002);
@@ -965,7 +1009,7 @@ struct CourseResult {
 };
 
 CourseResult fly_course(const std::vector<Segment>& walls, double t_max) {
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.t_max = t_max;
   WhiskerWallFollower fsm(p);
   std::mt19937 rng(7);
@@ -1067,7 +1111,7 @@ TEST(BaffleCourse, TiltedBafflesReachTarget) {
 // baffle's outer end lies; off, it stays at 25 mm.
 TEST(WhiskerWallFollower, YawOffsetAfterClearingTurnsWhiskersNotTrack) {
   auto fly = [](double offset) {
-    WallFollowerParams p;
+    WallFollowerParams p = rules_off();
     p.clear_yaw_offset = offset;
     WhiskerWallFollower fsm(p);
     double t = 0.0, x = 0.0, y = 0.0, yaw = 0.0;
@@ -1119,7 +1163,7 @@ TEST(WhiskerWallFollower, YawOffsetAfterClearingTurnsWhiskersNotTrack) {
   EXPECT_GT(on[0], 0.085);                       // beyond the guard's 80 mm
   EXPECT_NEAR(on[1], 20.0 * kDeg, 0.5 * kDeg);   // held to the left, away from the side-step
   EXPECT_NEAR(on[2], 0.0, 1e-9);                 // not during the side-step
-  WallFollowerParams bad;
+  WallFollowerParams bad = rules_off();
   bad.clear_yaw_offset = -0.1;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
   bad.clear_yaw_offset = 1.0;
@@ -1131,7 +1175,7 @@ TEST(WhiskerWallFollower, YawOffsetAfterClearingTurnsWhiskersNotTrack) {
 // clearing: the yaw goes back to the track's heading.
 TEST(WhiskerWallFollower, YawOffsetReleasedOnMovingSum) {
   auto final_yaw = [](double release_rms, double rms) {
-    WallFollowerParams p;
+    WallFollowerParams p = rules_off();
     p.clear_yaw_offset = 20.0 * kDeg;
     p.clear_yaw_release_rms = release_rms;
     WhiskerWallFollower fsm(p);
@@ -1162,7 +1206,7 @@ TEST(WhiskerWallFollower, YawOffsetReleasedOnMovingSum) {
   EXPECT_NEAR(final_yaw(0.0, 20.0), 20.0 * kDeg, 0.5 * kDeg);   // off: offset kept
   EXPECT_NEAR(final_yaw(13.0, 5.0), 20.0 * kDeg, 0.5 * kDeg);   // quiet sum: kept
   EXPECT_NEAR(final_yaw(13.0, 20.0), 0.0, 0.5 * kDeg);          // moving sum: back to the track
-  WallFollowerParams bad;
+  WallFollowerParams bad = rules_off();
   bad.clear_yaw_release_rms = -1.0;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
 }
@@ -1237,7 +1281,7 @@ double scan_cut_by_failsafe(WhiskerWallFollower& fsm, const WallFollowerParams& 
 // off the contact is an approach on the default side (right).
 TEST(WhiskerWallFollower, EndContactBesideTheAxisIsPassedOnTheOtherSide) {
   auto first_touch = [](double lateral, double yaw) {
-    WallFollowerParams p;
+    WallFollowerParams p = rules_off();
     p.end_contact_lateral = lateral;
     p.side_toward_target = false;  // the default side (right) unless the rule picks
     WhiskerWallFollower fsm(p);
@@ -1262,7 +1306,7 @@ TEST(WhiskerWallFollower, EndContactBesideTheAxisIsPassedOnTheOtherSide) {
   const auto off = first_touch(0.0, -20.0 * kDeg);
   EXPECT_EQ(off.first, Side::kRight);
   EXPECT_NE(off.second, WallSubState::kFlySideways);
-  WallFollowerParams bad;
+  WallFollowerParams bad = rules_off();
   bad.end_contact_lateral = -0.01;
   expect_rejected(bad, "end_contact_lateral");
 }
@@ -1310,7 +1354,7 @@ FirstMeet first_meet(const WallFollowerParams& p, double ax, double ay, double b
 }
 
 WallFollowerParams scan_params(double step) {
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.first_whisk_amplitude = 0.44;
   p.first_scan_step = step;
   p.first_scan_rate = 2.0;
@@ -1327,7 +1371,7 @@ WallFollowerParams scan_params(double step) {
 // met it at a whisked yaw, which the shipped course tests refused).
 TEST(WhiskerWallFollower, StepAndScanFindsTheEndAndMeetsAWallAheadInAStep) {
   const double ax = 0.7141, ay = -0.0647, bx = 1.0361, by = -0.9199;  // baffle_1 of baffles_*_1003
-  WallFollowerParams straight;
+  WallFollowerParams straight = rules_off();
   EXPECT_EQ(first_meet(straight, ax, ay, bx, by).who, "guard");
   const FirstMeet end = first_meet(scan_params(0.08), ax, ay, bx, by);
   EXPECT_EQ(end.who, "whisker");

@@ -44,6 +44,10 @@ const char* to_string(Side s);
 /// "right" / "left"; throws std::invalid_argument otherwise.
 Side side_from_string(const char* s);
 
+/// The defaults are what the whisker FSM node ships (config/tactile_fsm.yaml),
+/// one default per key, except hold_heading_trailing_lost and wall_end_depth:
+/// off here, on in the node (gpis_explorer's wall follows call
+/// wall_sub_state() with these defaults and were not measured with them).
 struct WallFollowerParams {
   // --- paper 000 values ---
   double v_max = 0.2;                          ///< V_max [m/s] (000 Results: "V_max = 20 cm/s")
@@ -83,10 +87,11 @@ struct WallFollowerParams {
   /// turning toward the lost whisker. On rigid baffles TDORC can drop a pressed
   /// whisker (stick-slip) and not see it again; turning toward it then yawed the
   /// drone 40-50 deg into the wall (seeds 1001, 1043 of the tuning block). false =
-  /// the previous rule (missing depth counts as beyond T_max, turn). Core
-  /// default false (gpis_explorer's wall follows call wall_sub_state() with
-  /// these params and were not re-measured); the whisker FSM node's default
-  /// and config/tactile_fsm.yaml turn it on.
+  /// the previous rule (missing depth counts as beyond T_max, turn). One of
+  /// the two keys whose core default differs from the whisker FSM node's
+  /// (with wall_end_depth): gpis_explorer's wall follows call wall_sub_state()
+  /// with the core defaults and were not re-measured with the rule; the node's
+  /// default and config/tactile_fsm.yaml turn it on.
   bool hold_heading_trailing_lost = false;
   /// One whisker left beyond this depth after both touched: the wall ends
   /// (issue 17, docs/tuning/tactile_fsm.md "Round 7"; our choice, 000 Fig. S4e has no case for a
@@ -100,7 +105,9 @@ struct WallFollowerParams {
   /// axis) before the phantom gate's RMS window had quietened. A wall
   /// the other whisker just lost is not ahead; if the drone had only drifted
   /// off, the next touch brings it back to the rule of both depths. 0 = off
-  /// (the previous rule); otherwise >= t_max. [m]
+  /// (the previous rule); otherwise >= t_max. Core default 0, the whisker
+  /// FSM node's 0.105 m, as for hold_heading_trailing_lost (gpis_explorer's
+  /// wall follows read the core default). [m]
   double wall_end_depth = 0.0;
   /// A contact in FLY_FORWARD less than this far ahead (along the course
   /// heading) of where the side-step after a clearing ended is the same
@@ -139,10 +146,11 @@ struct WallFollowerParams {
   /// that bends by more than 20 deg within one turn (a concave corner met
   /// gradually) is aligned to at the creep rate (45 deg: ~12 s) unless a clear
   /// angle is read outside a turn (a whisker touching again).
-  /// turn_anchor_tolerance 0 = off.
-  double turn_anchor_tolerance = 0.0;              ///< [rad]
-  double turn_anchor_theta = 10.0 * M_PI / 180.0;  ///< [rad]
-  double turn_anchor_rate = 0.0;                   ///< [rad/s]
+  /// turn_anchor_tolerance 0 = off. 10 deg, 10 deg, 2 deg/s: held-out block
+  /// 27000-27299 857 -> 874 of 900 (docs/tuning/tactile_fsm.md "Round 13").
+  double turn_anchor_tolerance = 10.0 * M_PI / 180.0;  ///< [rad]
+  double turn_anchor_theta = 10.0 * M_PI / 180.0;      ///< [rad]
+  double turn_anchor_rate = 2.0 * M_PI / 180.0;        ///< [rad/s]
   /// Pressed past the depth model (issue 17, docs/whisker_fsm.md "Pressed whisker"): a
   /// whisker pressed and sliding along a baffle is friction-limited, its input
   /// (sum of the three S_c, 000 eq. 5) stops growing below ~70 mm and the
@@ -153,9 +161,10 @@ struct WallFollowerParams {
   /// come from in the SITL (20-50 mm). Below T_min (band 60-100 mm) the drone
   /// backs off or turns away until the load is in the range the model
   /// resolves; inside the band (darkness, 40-100 mm) the rule does nothing.
-  /// press_sum_pa 0 = off (the paper). [Pa]
-  double press_sum_pa = 0.0;
-  double press_hold_s = 0.2;   ///< [s]
+  /// press_sum_pa 0 = off (the paper). 900 Pa, no hold: tuning blocks
+  /// (docs/tuning/tactile_fsm.md "Round 3"). [Pa]
+  double press_sum_pa = 900.0;
+  double press_hold_s = 0.0;   ///< [s]
   double press_depth = 0.05;   ///< [m]
   double whisker_base_x = 0.05;  ///< whisker bases ahead of the odometry origin [m] (000 frame, tactile_sim); end_contact_lateral
   /// Phantom hold gated by odometry (issue 17, docs/tuning/tactile_fsm.md "Round 4"): the gel
@@ -171,26 +180,27 @@ struct WallFollowerParams {
   /// and contact flag. Unlike tdorc_filter's hold_quiet_rms it does not end
   /// the filter's hold (no window learns pressed samples) and a pressed
   /// whisker of a hovering or turning drone is never dropped.
-  /// phantom_quiet_rms 0 = off (the paper). [Pa]
-  double phantom_quiet_rms = 0.0;
-  double phantom_travel = 0.05;  ///< [m]
+  /// phantom_quiet_rms 0 = off (the paper). 6.5 Pa over 25 samples, 0.03 m:
+  /// tuning blocks (docs/tuning/tactile_fsm.md "Round 4"). [Pa]
+  double phantom_quiet_rms = 6.5;
+  double phantom_travel = 0.03;  ///< [m]
   /// RESUME_FORWARD keeps side-stepping past clear_margin while a whisker is
   /// still held as a phantom, up to this distance from the clearing [m].
-  double phantom_resume_max = 0.0;
-  /// Latch (issue 17, docs/tuning/tactile_fsm.md "Round 4" and "4b"; off in the core struct, on in
-  /// the whisker FSM node with phantom_resume_max 2 m): a whisker taken for a
-  /// phantom stays one until its contact ends or the RMS of its sum's changes
-  /// reaches 2 * phantom_quiet_rms.
-  bool phantom_latch = false;
+  double phantom_resume_max = 2.0;
+  /// Latch (issue 17, docs/tuning/tactile_fsm.md "Round 4" and "4b", with
+  /// phantom_resume_max 2 m: tuning 269 -> 279 of 300, held out 10000-10099
+  /// 252 -> 268): a whisker taken for a phantom stays one until its contact
+  /// ends or the RMS of its sum's changes reaches 2 * phantom_quiet_rms.
+  bool phantom_latch = true;
   /// Yaw-rate limit of the first-approach scan (first_scan_step), not
   /// omega_max (the wall-following turn rate). [rad/s]
-  double whisk_rate_max = 2.0;
+  double whisk_rate_max = 3.0;
   /// Hold the scan's yaw (first_scan_step) while either whisker's S_c sum
   /// moves (RMS of its changes >= whisk_pause_rms, the node's phantom
   /// window): a touch starts 0.2-0.3 s before TDORC flags it, and a scan
   /// continuing through that sweeps the whisker into the wall. 0 = never
   /// hold. [Pa]
-  double whisk_pause_rms = 0.0;
+  double whisk_pause_rms = 13.0;
   /// Yaw offset after a clearing (issue 17, docs/tuning/tactile_fsm.md "Round 9", choice): the
   /// two forward whiskers (bases 25 mm off the axis, tips 0.191 m ahead) leave
   /// a band 25-80 mm beside the axis, inside the guard's radius, where a
@@ -204,21 +214,25 @@ struct WallFollowerParams {
   /// velocity setpoint is turned back into that heading, so the track is
   /// unchanged and only the whiskers turn: that side's whisker tip then
   /// reaches 0.191 sin(a) + 0.025 cos(a) beside the axis (20 deg: 89 mm,
-  /// beyond the guard). 0 = off (the paper: no offset). [rad]
-  double clear_yaw_offset = 0.0;
+  /// beyond the guard). 0 = off (the paper: no offset). 14 deg with the
+  /// release at 13 Pa: tuning 415 -> 433 of 450, seen 1088 -> 1123 of 1200
+  /// (docs/tuning/tactile_fsm.md "Round 9"). [rad]
+  double clear_yaw_offset = 0.2443;
   /// Back to the track's heading (until the next clearing) once either
   /// whisker's S_c sum moves (RMS of its changes >= this, the node's phantom
   /// window): a touch TDORC has not flagged yet, so that the wall following
   /// starts at the heading it has without the offset. 0 = never. [Pa]
-  double clear_yaw_release_rms = 0.0;
+  double clear_yaw_release_rms = 13.0;
   /// The first approach (issue 17, docs/tuning/tactile_fsm.md "Round 10",
   /// "Round 12", choice): the first baffle is met with no clearing before it,
   /// so clear_yaw_offset has no side to turn to; its end can lie in the blind
   /// band (25-80 mm beside the axis) on either side. In the FLY_FORWARD before
   /// the flight's first contact the whiskers are scanned by
   /// first_whisk_amplitude about the course heading (step and scan, below).
-  /// 0 = off (the paper's straight approach at V_max). [rad]
-  double first_whisk_amplitude = 0.0;
+  /// 0 = off (the paper's straight approach at V_max; the darkness scenarios,
+  /// 000 Fig. 6). 0.44 rad: held out 16000-17299, docs/tuning/tactile_fsm.md
+  /// "Round 12". [rad]
+  double first_whisk_amplitude = 0.44;
   /// Step and scan on the first approach (issue 17, docs/tuning/tactile_fsm.md "Round 12", our
   /// choice; first_whisk_amplitude 0 turns it off): the first approach alternates steps of first_scan_step along the
   /// course (yaw on the course, the speed brought down to 0 at the step's end)
@@ -240,7 +254,7 @@ struct WallFollowerParams {
   /// starts as when passing an edge (both touched), side-stepping away from
   /// it, instead of approaching it (which drove the guard into the end 65-75
   /// mm beside the axis). 0 = off. [m]
-  double end_contact_lateral = 0.0;
+  double end_contact_lateral = 0.045;
   double target_radius = 0.15;                 ///< land within this distance of the target [m]
   bool land_past_target = true;                ///< also land once past the target along the course direction
   double landing_duration_s = 2.0;             ///< LANDING -> LANDED after this [s]
