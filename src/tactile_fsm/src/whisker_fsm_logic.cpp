@@ -350,6 +350,10 @@ WhiskerFsmLogic::Outputs WhiskerFsmLogic::on_timer(int64_t now_ns) {
   in_.input_change_rms_left = std::isfinite(in_.input_sum_left) ? left_window_.change_rms() : NAN;
   in_.input_change_rms_right = std::isfinite(in_.input_sum_right) ? right_window_.change_rms() : NAN;
   const WallFollowerOutput o = fsm_.step(in_);
+  stats_.rule_heading_limit = fsm_.override_count(OverrideRule::kHeadingLimit);
+  stats_.rule_turn_anchor = fsm_.override_count(OverrideRule::kTurnAnchor);
+  stats_.rule_step_and_scan = fsm_.override_count(OverrideRule::kStepAndScan);
+  stats_.rule_yaw_offset = fsm_.override_count(OverrideRule::kYawOffset);
 
   Outputs out;
   tactile_common::to_stamp(now_ns, out.setpoint.header.stamp);
@@ -369,7 +373,8 @@ WhiskerFsmLogic::Outputs WhiskerFsmLogic::on_timer(int64_t now_ns) {
       current_state_name_ += to_string(o.sub_state);
     }
   }
-  if (o.transitioned || last_state_pub_ns_ == INT64_MIN || now_ns - last_state_pub_ns_ >= kStatePeriodNs) {
+  if (o.transitioned || o.override_started || last_state_pub_ns_ == INT64_MIN ||
+      now_ns - last_state_pub_ns_ >= kStatePeriodNs) {
     tactile_msgs::msg::FsmState s;
     tactile_common::to_stamp(now_ns, s.header.stamp);
     s.header.frame_id = body_frame_;

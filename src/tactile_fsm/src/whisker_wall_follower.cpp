@@ -201,7 +201,8 @@ Setpoint saturate(const Setpoint& s, const WallFollowerParams& p) {
   return o;
 }
 
-WhiskerWallFollower::WhiskerWallFollower(const WallFollowerParams& params) : p_(params) {
+WhiskerWallFollower::WhiskerWallFollower(const WallFollowerParams& params)
+    : p_(params), heading_limit_(params), turn_anchor_(params), step_and_scan_(params), yaw_offset_(params) {
   p_.validate();
   reset();
 }
@@ -210,6 +211,7 @@ void WhiskerWallFollower::reset() {
   state_ = previous_ = FsmState::kHoverInit;
   sub_ = WallSubState::kNone;
   reason_ = "start";
+  reason_composed_ = false;
   started_ = false;
   entered_ = last_t_ = 0.0;
   transitions_ = 0;
@@ -220,22 +222,27 @@ void WhiskerWallFollower::reset() {
   pressed_t_left_ = pressed_t_right_ = -INFINITY;
   live_x_l_ = live_y_l_ = live_x_r_ = live_y_r_ = NAN;
   phantom_l_ = phantom_r_ = false;
-  wall_heading_ = theta_ = anchor_ = NAN;
+  wall_heading_ = theta_ = NAN;
   origin_set_ = false;
   origin_x_ = origin_y_ = clear_x_ = clear_y_ = 0.0;
   after_clear_ = false;
   resume_x_ = resume_y_ = 0.0;
-  track_yaw_ = NAN;
-  yaw_offset_released_ = false;
   contacted_ = false;
   course_yaw_ = 0.0;
-  scan_goal_ = NAN;
+  heading_limit_.reset();
+  turn_anchor_.reset();
+  step_and_scan_.reset();
+  yaw_offset_.reset();
+  override_count_.fill(0);
+  override_active_.fill(false);
+  override_started_ = false;
 }
 
 void WhiskerWallFollower::enter(FsmState s, const char* reason, double t) {
   previous_ = state_;
   state_ = s;
   reason_ = reason;
+  reason_composed_ = false;
   entered_ = t;
   ++transitions_;
   sub_ = WallSubState::kNone;
@@ -447,107 +454,61 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
     if (r_valid && t - pressed_t_right_ <= p_.press_hold_s + kTimeEps) d_right = std::fmin(d_right, p_.press_depth);
   }
 
-  if (state_ != FsmState::kWallFollowing) {
-    anchor_ = NAN;  // a new wall following reads its own anchor
-  }
-  if (state_ == FsmState::kWallFollowing) {
-    WallSubState next = wall_sub_state(d_left, l_valid, d_right, r_valid, side_, both_touched_, sub_, p_, theta_);
-    // A turn that a heading limit refuses becomes the translation the depths
-    // ask for.
-    auto translate_instead = [&] {
-      const double lo = std::fmin(l_valid ? d_left : INFINITY, r_valid ? d_right : INFINITY);
-      const double hi = std::fmax(l_valid ? d_left : -INFINITY, r_valid ? d_right : -INFINITY);
-      return (l_valid || r_valid) && lo < p_.t_min   ? WallSubState::kFlyBackward
-             : (l_valid || r_valid) && hi > p_.t_max ? WallSubState::kFlyForward
-                                                     : WallSubState::kFlySideways;
-    };
-    // True when `next` is a turn that goes on beyond `limit` from the heading `ref`.
-    auto turns_beyond = [&](double ref, double limit) {
-      const double off = std::remainder(in.yaw - ref, 2.0 * M_PI);
-      return (next == WallSubState::kTurnLeft && off >= limit) || (next == WallSubState::kTurnRight && off <= -limit);
-    };
-    // Heading limit about the course heading (issue 17; docs/whisker_fsm.md "Heading limit"): no turn beyond
-    // max_heading_offset; translate on the depths instead.
-    if (p_.max_heading_offset > 0.0 && origin_set_ && std::isfinite(in.yaw) &&
-        turns_beyond(course_yaw_, p_.max_heading_offset)) {
-      next = translate_instead();
+  // The override rules (issue 33; docs/whisker_fsm.md "Override rules"), in
+  // order: first on the sub-state rule's result, then on the state's setpoint.
+  const bool top = state_ != state_before;
+  override_started_ = false;
+  TickSnapshot snap;
+  snap.in = in;
+  snap.dt = dt;
+  snap.state = state_;
+  snap.current = sub_;
+  snap.side = side_;
+  snap.l_valid = l_valid;
+  snap.r_valid = r_valid;
+  snap.d_left = d_left;
+  snap.d_right = d_right;
+  snap.theta = theta_;
+  snap.wall_heading = wall_heading_;
+  snap.origin_set = origin_set_;
+  snap.origin_x = origin_x_;
+  snap.origin_y = origin_y_;
+  snap.course_yaw = course_yaw_;
+  snap.after_clear = after_clear_;
+  snap.sub_state = state_ == FsmState::kWallFollowing
+                       ? wall_sub_state(d_left, l_valid, d_right, r_valid, side_, both_touched_, sub_, p_, theta_)
+                       : WallSubState::kNone;
+  const WallSubState rule_sub = snap.sub_state;
+  const char* sub_reason = nullptr;
+  run_rule(heading_limit_, OverrideRule::kHeadingLimit, snap, top);
+  if (snap.sub_state != rule_sub) sub_reason = HeadingLimitRule::kReason;
+  const WallSubState limited_sub = snap.sub_state;
+  run_rule(turn_anchor_, OverrideRule::kTurnAnchor, snap, top);
+  if (snap.sub_state != limited_sub) sub_reason = TurnAnchorRule::kReason;
+  if (snap.sub_state != sub_ && !top) {
+    // A sub-state change: the Fig. S4e rule's, or the override's that made it.
+    if (sub_reason == nullptr) {
+      reason_ = "sub-state rule (000 Fig. S4e)";
+      reason_composed_ = false;
+    } else if (!override_started_) {
+      reason_ = sub_reason;  // else run_rule named it
+      reason_composed_ = false;
     }
-    // Turn anchor (issue 17, docs/tuning/tactile_fsm.md "Round 13"): the wall heading read at the
-    // first tick both whiskers touched (before the tips slide), replaced by a
-    // clear angle (|theta| >= turn_anchor_theta) read while not turning and
-    // crept toward the heading read while not turning (a tip dragged round by
-    // the yaw reads an angle toward the turn); small angles turn the heading at
-    // most turn_anchor_tolerance beyond it.
-    if (p_.turn_anchor_tolerance > 0.0 && l_valid && r_valid && std::isfinite(wall_heading_) &&
-        std::isfinite(theta_)) {
-      const bool clear_angle = std::fabs(theta_) >= p_.turn_anchor_theta;
-      const bool turning = sub_ == WallSubState::kTurnLeft || sub_ == WallSubState::kTurnRight;
-      if (!std::isfinite(anchor_) || (clear_angle && !turning)) {
-        anchor_ = wall_heading_;
-      } else if (p_.turn_anchor_rate > 0.0 && !turning) {
-        // Not turning: the anchor follows the wall heading read, at most
-        // turn_anchor_rate (a wall that turns away slowly).
-        const double step = p_.turn_anchor_rate * dt;
-        anchor_ += std::clamp(std::remainder(wall_heading_ - anchor_, 2.0 * M_PI), -step, step);
-      }
-      if (!clear_angle && std::isfinite(in.yaw) && turns_beyond(anchor_, p_.turn_anchor_tolerance)) {
-        next = translate_instead();
-      }
-    }
-    if (next != sub_ && state_ == state_before) reason_ = "sub-state rule (000 Fig. S4e)";
-    sub_ = next;
-  } else {
-    sub_ = WallSubState::kNone;
   }
+  sub_ = snap.sub_state;
 
   WallFollowerOutput out;
   out.state = state_;
   out.sub_state = sub_;
   out.transitioned = state_ != state_before || sub_ != sub_before;
-  out.setpoint = saturate(command(in), p_);
   if (state_ == FsmState::kWallFollowing) contacted_ = true;
-  // Step and scan on the first approach (docs/tuning/tactile_fsm.md "Round 10", "Round 12"): no
-  // clearing yet, the first baffle's end may lie in the blind band on either side.
-  if (p_.first_whisk_amplitude > 0.0 && state_ == FsmState::kFlyForward && !contacted_ && !after_clear_ &&
-      origin_set_ && std::isfinite(in.yaw) && std::isfinite(in.x) && std::isfinite(in.y)) {
-    out.setpoint = step_and_scan(in, out.setpoint, dt);
-  } else {
-    scan_goal_ = NAN;  // step_and_scan starts afresh on the next first approach
-  }
-  const bool offset_on = p_.clear_yaw_offset > 0.0 && origin_set_ && std::isfinite(in.yaw) &&
-                         state_ == FsmState::kFlyForward && after_clear_;
-  if (offset_on) {
-    out.setpoint = offset_yaw(in, out.setpoint, dt);
-  } else {
-    track_yaw_ = NAN;
-    yaw_offset_released_ = false;
-  }
+  snap.contacted = contacted_;
+  snap.setpoint = saturate(command(in), p_);
+  run_rule(step_and_scan_, OverrideRule::kStepAndScan, snap, top);
+  run_rule(yaw_offset_, OverrideRule::kYawOffset, snap, top);
+  out.setpoint = snap.setpoint;
+  out.override_started = override_started_;
   return out;
-}
-
-Setpoint WhiskerWallFollower::offset_yaw(const WallFollowerInput& in, const Setpoint& s, double dt) {
-  // Yaw offset after a clearing (docs/tuning/tactile_fsm.md "Round 9"). track_yaw_ is the heading
-  // the drone flies without the rule: it starts at the yaw on entering the
-  // FLY_FORWARD after the clearing and realigns to the course as realign() does (omega_max at
-  // most). The body is held clear_yaw_offset beyond it away from the
-  // side-step side; the body-frame velocity of s, meant for that
-  // heading, is rotated into the body's frame, so the track stays the same.
-  const double sign = side_ == Side::kLeft ? -1.0 : 1.0;  // away from the side-step (yaw > 0 is left)
-  if (!std::isfinite(track_yaw_)) track_yaw_ = in.yaw;
-  const double track_rate = std::clamp(realign_rate(track_yaw_), -p_.omega_max, p_.omega_max);
-  track_yaw_ = std::remainder(track_yaw_ + track_rate * dt, 2.0 * M_PI);
-  // A whisker's sum moving: a touch TDORC has not flagged yet; back to the
-  // track's heading (latched until the next clearing), so that the wall
-  // following starts as without the offset.
-  if (sum_moves(in, p_.clear_yaw_release_rms)) yaw_offset_released_ = true;
-  const double ref = track_yaw_ + (yaw_offset_released_ ? 0.0 : sign * p_.clear_yaw_offset);
-  Setpoint o = s;
-  o.yaw_rate = std::clamp(track_rate + tracking_gain(p_) * std::remainder(ref - in.yaw, 2.0 * M_PI), -p_.omega_max,
-                          p_.omega_max);
-  const double rel = std::remainder(track_yaw_ - in.yaw, 2.0 * M_PI);
-  o.vx = std::cos(rel) * s.vx - std::sin(rel) * s.vy;
-  o.vy = std::sin(rel) * s.vx + std::cos(rel) * s.vy;
-  return o;
 }
 
 double WhiskerWallFollower::end_contact_offset(const WallFollowerInput& in, bool contact_l, bool contact_r,
@@ -603,72 +564,215 @@ Setpoint WhiskerWallFollower::command(const WallFollowerInput& in) const {
   return s;
 }
 
-Setpoint WhiskerWallFollower::step_and_scan(const WallFollowerInput& in, const Setpoint& s, double dt) {
-  // Step and scan (docs/tuning/tactile_fsm.md "Round 12", our choice). Along the course the
-  // drone flies to the step's end, v = (goal - progress) / kApproachTau
-  // (at most V_max), and holds it there while it scans; the velocity is the
-  // course direction in the world frame, expressed in the body-yaw frame.
+// --- Override rules ---------------------------------------------------------
+
+const char* to_string(OverrideRule r) {
+  switch (r) {
+    case OverrideRule::kHeadingLimit: return HeadingLimitRule::kName;
+    case OverrideRule::kTurnAnchor: return TurnAnchorRule::kName;
+    case OverrideRule::kStepAndScan: return StepAndScanRule::kName;
+    case OverrideRule::kYawOffset: return YawOffsetRule::kName;
+  }
+  return "unknown";
+}
+
+WallSubState translation_instead_of_turn(const TickSnapshot& s, const WallFollowerParams& p) {
+  const double lo = std::fmin(s.l_valid ? s.d_left : INFINITY, s.r_valid ? s.d_right : INFINITY);
+  const double hi = std::fmax(s.l_valid ? s.d_left : -INFINITY, s.r_valid ? s.d_right : -INFINITY);
+  return (s.l_valid || s.r_valid) && lo < p.t_min   ? WallSubState::kFlyBackward
+         : (s.l_valid || s.r_valid) && hi > p.t_max ? WallSubState::kFlyForward
+                                                    : WallSubState::kFlySideways;
+}
+
+bool turns_beyond(const TickSnapshot& s, double ref, double limit) {
+  const double off = std::remainder(s.in.yaw - ref, 2.0 * M_PI);
+  return (s.sub_state == WallSubState::kTurnLeft && off >= limit) ||
+         (s.sub_state == WallSubState::kTurnRight && off <= -limit);
+}
+
+bool HeadingLimitRule::applies(const TickSnapshot& s) const {
+  return s.state == FsmState::kWallFollowing && p_.max_heading_offset > 0.0 && s.origin_set &&
+         std::isfinite(s.in.yaw) && turns_beyond(s, s.course_yaw, p_.max_heading_offset);
+}
+
+bool TurnAnchorRule::tracks(const TickSnapshot& s) const {
+  return s.state == FsmState::kWallFollowing && p_.turn_anchor_tolerance > 0.0 && s.l_valid && s.r_valid &&
+         std::isfinite(s.wall_heading) && std::isfinite(s.theta);
+}
+
+void TurnAnchorRule::observe(const TickSnapshot& s) {
+  if (s.state != FsmState::kWallFollowing) {
+    anchor_ = NAN;  // a new wall following reads its own anchor
+    return;
+  }
+  if (!tracks(s)) return;
+  // Readings in a turn never move the anchor: a tip dragged round by the yaw
+  // reads an angle toward the turn.
+  const bool clear_angle = std::fabs(s.theta) >= p_.turn_anchor_theta;
+  const bool turning = s.current == WallSubState::kTurnLeft || s.current == WallSubState::kTurnRight;
+  if (!std::isfinite(anchor_) || (clear_angle && !turning)) {
+    anchor_ = s.wall_heading;
+  } else if (p_.turn_anchor_rate > 0.0 && !turning) {
+    // Not turning: the anchor follows the wall heading read, at most
+    // turn_anchor_rate (a wall that turns away slowly).
+    const double step = p_.turn_anchor_rate * s.dt;
+    anchor_ += std::clamp(std::remainder(s.wall_heading - anchor_, 2.0 * M_PI), -step, step);
+  }
+}
+
+bool TurnAnchorRule::applies(const TickSnapshot& s) const {
+  return tracks(s) && std::fabs(s.theta) < p_.turn_anchor_theta && std::isfinite(s.in.yaw) &&
+         turns_beyond(s, anchor_, p_.turn_anchor_tolerance);
+}
+
+bool StepAndScanRule::applies(const TickSnapshot& s) const {
+  // No clearing yet: the first baffle's end may lie in the blind band on either side.
+  return p_.first_whisk_amplitude > 0.0 && s.state == FsmState::kFlyForward && !s.contacted && !s.after_clear &&
+         s.origin_set && std::isfinite(s.in.yaw) && std::isfinite(s.in.x) && std::isfinite(s.in.y);
+}
+
+void StepAndScanRule::begin_scan(int leg) {
+  scanning_ = true;
+  ref_ = 0.0;
+  leg_ = leg;
+  hold_s_ = settle_s_ = 0.0;
+}
+
+void StepAndScanRule::apply(TickSnapshot& snap) {
+  // Along the course the drone flies to the step's end, v = (goal - progress)
+  // / kApproachTau (at most V_max), and holds it there while it scans; the
+  // velocity is the course direction in the world frame, expressed in the
+  // body-yaw frame.
   constexpr double kApproachTau = 0.3;  // [s], our choice: the vehicle's velocity lag is ~0.23 s
   constexpr double kAtGoal = 0.015;     // [m] the step is done this near its end
   constexpr double kSettled = 0.05;     // [rad] back on the course: the next step starts
   constexpr double kMaxHold = 1.0;      // [s] per scan: a moving sum no flag follows holds no longer
   constexpr double kMaxSettle = 2.0;    // [s] back toward the course at most this long, then step
-  const double c = std::cos(course_yaw_), sn = std::sin(course_yaw_);
-  const double progress = c * (in.x - origin_x_) + sn * (in.y - origin_y_);
-  const double off = std::remainder(in.yaw - course_yaw_, 2.0 * M_PI);
-  const auto begin_scan = [this](int leg) {
-    scanning_ = true;
-    scan_ref_ = 0.0;
-    scan_leg_ = leg;
-    scan_hold_s_ = scan_settle_s_ = 0.0;
-  };
-  if (!std::isfinite(scan_goal_)) {
+  const WallFollowerInput& in = snap.in;
+  const double dt = snap.dt;
+  const double c = std::cos(snap.course_yaw), sn = std::sin(snap.course_yaw);
+  const double progress = c * (in.x - snap.origin_x) + sn * (in.y - snap.origin_y);
+  const double off = std::remainder(in.yaw - snap.course_yaw, 2.0 * M_PI);
+  if (!std::isfinite(goal_)) {
     // (Re)entering the first approach, e.g. after a fail-safe hover in a
     // scan: off the course, settle first rather than step at a yawed heading.
     if (std::fabs(off) >= kSettled) {
-      scan_goal_ = progress;
+      goal_ = progress;
       begin_scan(3);
     } else {
-      scan_goal_ = progress + p_.first_scan_step;
+      goal_ = progress + p_.first_scan_step;
       scanning_ = false;
-      scan_ref_ = 0.0;  // a scan cut short (e.g. by a fail-safe hover) leaves no yaw offset
+      ref_ = 0.0;  // a scan cut short (e.g. by a fail-safe hover) leaves no yaw offset
     }
   }
   const double a = p_.first_whisk_amplitude;
   const double r = p_.first_scan_rate;
   double ff = 0.0;
-  if (!scanning_ && scan_goal_ - progress < kAtGoal) begin_scan(0);
+  if (!scanning_ && goal_ - progress < kAtGoal) begin_scan(0);
   // A whisker's sum moving: a touch TDORC has not flagged yet; hold the yaw
   // (up to kMaxHold per scan, so that a brush no flag follows cannot stop the
   // approach for good).
-  const bool held = scanning_ && sum_moves(in, p_.whisk_pause_rms) && scan_hold_s_ < kMaxHold;
-  if (held) scan_hold_s_ += dt;
+  const bool held = scanning_ && sum_moves(in, p_.whisk_pause_rms) && hold_s_ < kMaxHold;
+  if (held) hold_s_ += dt;
   if (scanning_) {
     if (!held) {
-      switch (scan_leg_) {
-        case 0: scan_ref_ = std::fmin(a, scan_ref_ + r * dt); ff = r; if (scan_ref_ >= a) scan_leg_ = 1; break;
-        case 1: scan_ref_ = std::fmax(-a, scan_ref_ - r * dt); ff = -r; if (scan_ref_ <= -a) scan_leg_ = 2; break;
-        case 2: scan_ref_ = std::fmin(0.0, scan_ref_ + r * dt); ff = r; if (scan_ref_ >= 0.0) scan_leg_ = 3; break;
-        default: scan_settle_s_ += dt; break;
+      switch (leg_) {
+        case 0: ref_ = std::fmin(a, ref_ + r * dt); ff = r; if (ref_ >= a) leg_ = 1; break;
+        case 1: ref_ = std::fmax(-a, ref_ - r * dt); ff = -r; if (ref_ <= -a) leg_ = 2; break;
+        case 2: ref_ = std::fmin(0.0, ref_ + r * dt); ff = r; if (ref_ >= 0.0) leg_ = 3; break;
+        default: settle_s_ += dt; break;
       }
     }
-    if (scan_leg_ == 3 && (std::fabs(off) < kSettled || scan_settle_s_ >= kMaxSettle)) {
+    if (leg_ == 3 && (std::fabs(off) < kSettled || settle_s_ >= kMaxSettle)) {
       scanning_ = false;
-      scan_goal_ += p_.first_scan_step;
+      goal_ += p_.first_scan_step;
     }
   }
-  Setpoint o = s;
+  Setpoint& o = snap.setpoint;
   if (held) {
     o.yaw_rate = 0.0;
   } else {
-    o.yaw_rate = std::clamp(ff + tracking_gain(p_) * std::remainder(course_yaw_ + scan_ref_ - in.yaw, 2.0 * M_PI),
+    o.yaw_rate = std::clamp(ff + tracking_gain(p_) * std::remainder(snap.course_yaw + ref_ - in.yaw, 2.0 * M_PI),
                             -p_.whisk_rate_max, p_.whisk_rate_max);
   }
-  const double v = std::clamp((scan_goal_ - progress) / kApproachTau, -p_.v_max, p_.v_max);
+  const double v = std::clamp((goal_ - progress) / kApproachTau, -p_.v_max, p_.v_max);
   o.vx = v * std::cos(off);
   o.vy = -v * std::sin(off);
-  return o;
 }
+
+bool YawOffsetRule::applies(const TickSnapshot& s) const {
+  return p_.clear_yaw_offset > 0.0 && s.origin_set && std::isfinite(s.in.yaw) && s.state == FsmState::kFlyForward &&
+         s.after_clear;
+}
+
+void YawOffsetRule::apply(TickSnapshot& snap) {
+  // track_yaw_ is the heading the drone flies without the rule: it starts at
+  // the yaw on entering the FLY_FORWARD after the clearing and realigns to the
+  // course as the realignment does (omega_max at most). The body is held
+  // clear_yaw_offset beyond it away from the side-step side; the body-frame
+  // velocity of the setpoint, meant for that heading, is rotated into the
+  // body's frame, so the track stays the same.
+  const WallFollowerInput& in = snap.in;
+  const double sign = snap.side == Side::kLeft ? -1.0 : 1.0;  // away from the side-step (yaw > 0 is left)
+  if (!std::isfinite(track_yaw_)) track_yaw_ = in.yaw;
+  const double track_rate =
+      std::clamp(p_.realign_gain * std::remainder(snap.course_yaw - track_yaw_, 2.0 * M_PI), -p_.omega_max,
+                 p_.omega_max);
+  track_yaw_ = std::remainder(track_yaw_ + track_rate * snap.dt, 2.0 * M_PI);
+  // A whisker's sum moving: a touch TDORC has not flagged yet; back to the
+  // track's heading (latched until the next clearing), so that the wall
+  // following starts as without the offset.
+  if (sum_moves(in, p_.clear_yaw_release_rms)) released_ = true;
+  const double ref = track_yaw_ + (released_ ? 0.0 : sign * p_.clear_yaw_offset);
+  const Setpoint s = snap.setpoint;
+  Setpoint& o = snap.setpoint;
+  o.yaw_rate = std::clamp(track_rate + tracking_gain(p_) * std::remainder(ref - in.yaw, 2.0 * M_PI), -p_.omega_max,
+                          p_.omega_max);
+  const double rel = std::remainder(track_yaw_ - in.yaw, 2.0 * M_PI);
+  o.vx = std::cos(rel) * s.vx - std::sin(rel) * s.vy;
+  o.vy = std::sin(rel) * s.vx + std::cos(rel) * s.vy;
+}
+
+template <typename Rule>
+void WhiskerWallFollower::run_rule(Rule& rule, OverrideRule id, TickSnapshot& s, bool top_transition) {
+  const auto k = static_cast<std::size_t>(id);
+  rule.observe(s);
+  if (!rule.applies(s)) {
+    rule.idle();
+    override_active_[k] = false;
+    return;
+  }
+  rule.apply(s);
+  ++override_count_[k];
+  if (!override_active_[k]) {
+    override_active_[k] = true;
+    override_started_ = true;
+    note_rule(Rule::kReason, top_transition);
+  }
+}
+
+void WhiskerWallFollower::note_rule(const char* rule_reason, bool top_transition) {
+  if (!top_transition) {
+    reason_ = rule_reason;
+    reason_composed_ = false;
+    return;
+  }
+  // A rule that begins on a transition's tick: both, the transition first
+  // (a second rule beginning on that tick appends to the first's).
+  // Truncated at the buffer's size (the reasons are short static texts).
+  std::array<char, 192> text{};
+  std::size_t n = 0;
+  const auto append = [&](const char* part) {
+    for (; *part != '\0' && n + 1 < text.size(); ++part) text[n++] = *part;
+  };
+  append(reason());
+  append("; ");
+  append(rule_reason);
+  text[n] = '\0';
+  reason_buf_ = text;
+  reason_composed_ = true;
+}
+
 
 double WhiskerWallFollower::realign(const WallFollowerInput& in) const {
   // Back to the course heading after a (tilted) obstacle; saturate() limits it to omega_max.

@@ -193,8 +193,11 @@ TEST(WhiskerFsmLogic, FlightThroughMessages) {
   ASSERT_TRUE(o.state.has_value());
   EXPECT_EQ(o.state->state, "FLY_FORWARD");
   EXPECT_EQ(o.state->previous_state, "HOVER_INIT");
-  EXPECT_EQ(o.state->reason, "hover initialisation done");
+  // The step and scan (an override rule) begins on the same tick: both reasons.
+  EXPECT_EQ(o.state->reason,
+            "hover initialisation done; step and scan on the first approach (first_whisk_amplitude, first_scan_step)");
   EXPECT_EQ(o.state->transitions, 1u);
+  EXPECT_EQ(l.stats().rule_step_and_scan, 1u);
   EXPECT_DOUBLE_EQ(o.setpoint.vx, 0.2);
   tactile_common::to_stamp(100 * kStepNs, o.setpoint.header.stamp);
   // A TDORC contact on the right whisker alone triggers wall following.

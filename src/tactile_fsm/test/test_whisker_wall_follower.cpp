@@ -1505,3 +1505,243 @@ TEST(WhiskerWallFollower, StepAndScanIgnoresANonFinitePosition) {
   EXPECT_TRUE(std::isfinite(o.setpoint.vy));
   EXPECT_TRUE(std::isfinite(o.setpoint.yaw_rate));
 }
+
+// --- Override rules (issue 33): each rule alone on a hand-made snapshot, in the
+// situation that fires it and just outside it; then the follower's counts and reasons.
+
+namespace {
+
+using tactile_fsm::HeadingLimitRule;
+using tactile_fsm::OverrideRule;
+using tactile_fsm::StepAndScanRule;
+using tactile_fsm::TickSnapshot;
+using tactile_fsm::TurnAnchorRule;
+using tactile_fsm::YawOffsetRule;
+
+/// Wall following on the course heading 0, both depths valid (80 mm, in the
+/// band), the drone at yaw `yaw`, the sub-state rule asking `asked`.
+TickSnapshot wall_snapshot(double yaw, WallSubState asked) {
+  TickSnapshot s;
+  s.in = input(10.0, 1.0, 0.0, yaw);
+  s.dt = kDt;
+  s.state = FsmState::kWallFollowing;
+  s.current = WallSubState::kFlySideways;
+  s.l_valid = s.r_valid = true;
+  s.d_left = s.d_right = 0.08;
+  s.theta = 0.0;
+  s.wall_heading = yaw;
+  s.origin_set = true;
+  s.contacted = true;
+  s.sub_state = asked;
+  return s;
+}
+
+/// FLY_FORWARD on the course heading 0 at (x, 0), state's setpoint V_max ahead.
+TickSnapshot forward_snapshot(double x, bool after_clear, bool contacted) {
+  TickSnapshot s;
+  s.in = input(10.0, x, 0.0, 0.0);
+  s.dt = kDt;
+  s.state = FsmState::kFlyForward;
+  s.origin_set = true;
+  s.after_clear = after_clear;
+  s.contacted = contacted;
+  s.setpoint.vx = 0.2;
+  s.setpoint.height = 0.4;
+  return s;
+}
+
+}  // namespace
+
+TEST(OverrideRules, NamesInRunOrder) {
+  EXPECT_STREQ(tactile_fsm::to_string(OverrideRule::kHeadingLimit), "heading_limit");
+  EXPECT_STREQ(tactile_fsm::to_string(OverrideRule::kTurnAnchor), "turn_anchor");
+  EXPECT_STREQ(tactile_fsm::to_string(OverrideRule::kStepAndScan), "step_and_scan");
+  EXPECT_STREQ(tactile_fsm::to_string(OverrideRule::kYawOffset), "yaw_offset");
+}
+
+// A left turn asked for at 50 deg left of the course (limit 45 deg) becomes
+// the translation the depths ask for: sideways in the band, forward with one
+// depth beyond T_max, backward with one below T_min.
+TEST(OverrideRules, HeadingLimitFiresOnATurnBeyondTheLimitOnly) {
+  const WallFollowerParams p;  // max_heading_offset 45 deg
+  HeadingLimitRule rule(p);
+  TickSnapshot s = wall_snapshot(50.0 * kDeg, WallSubState::kTurnLeft);
+  ASSERT_TRUE(rule.applies(s));
+  rule.apply(s);
+  EXPECT_EQ(s.sub_state, WallSubState::kFlySideways);
+  s = wall_snapshot(50.0 * kDeg, WallSubState::kTurnLeft);
+  s.d_right = 0.12;
+  rule.apply(s);
+  EXPECT_EQ(s.sub_state, WallSubState::kFlyForward);
+  s = wall_snapshot(50.0 * kDeg, WallSubState::kTurnLeft);
+  s.d_left = 0.05;
+  rule.apply(s);
+  EXPECT_EQ(s.sub_state, WallSubState::kFlyBackward);
+  // Outside it: within the limit, a turn back toward the course, no turn, not
+  // wall following, no course yet, the rule off.
+  EXPECT_FALSE(rule.applies(wall_snapshot(40.0 * kDeg, WallSubState::kTurnLeft)));
+  EXPECT_FALSE(rule.applies(wall_snapshot(50.0 * kDeg, WallSubState::kTurnRight)));
+  EXPECT_FALSE(rule.applies(wall_snapshot(50.0 * kDeg, WallSubState::kFlySideways)));
+  s = wall_snapshot(50.0 * kDeg, WallSubState::kTurnLeft);
+  s.state = FsmState::kResumeForward;
+  EXPECT_FALSE(rule.applies(s));
+  s = wall_snapshot(50.0 * kDeg, WallSubState::kTurnLeft);
+  s.origin_set = false;
+  EXPECT_FALSE(rule.applies(s));
+  WallFollowerParams off = p;
+  off.max_heading_offset = 0.0;
+  EXPECT_FALSE(HeadingLimitRule(off).applies(wall_snapshot(50.0 * kDeg, WallSubState::kTurnLeft)));
+}
+
+// The anchor is the wall heading first read (observe); a turn asked for by a
+// small angle that goes more than 10 deg beyond it is refused, one within 10
+// deg or asked for by a clear angle (>= 10 deg) is not; readings in a turn do
+// not move the anchor; outside wall following it is dropped.
+TEST(OverrideRules, TurnAnchorFiresOnASmallAngleTurnBeyondTheAnchorOnly) {
+  const WallFollowerParams p;  // 10 deg, 10 deg, 2 deg/s
+  TurnAnchorRule rule(p);
+  TickSnapshot first = wall_snapshot(0.0, WallSubState::kFlySideways);
+  rule.observe(first);
+  EXPECT_DOUBLE_EQ(rule.anchor(), 0.0);
+  // 15 deg left of the anchor, theta 3 deg (the tips dragged round): refused.
+  TickSnapshot s = wall_snapshot(15.0 * kDeg, WallSubState::kTurnLeft);
+  s.current = WallSubState::kTurnLeft;
+  s.theta = -3.0 * kDeg;
+  s.wall_heading = 18.0 * kDeg;
+  rule.observe(s);
+  EXPECT_DOUBLE_EQ(rule.anchor(), 0.0);  // read in a turn: not moved
+  ASSERT_TRUE(rule.applies(s));
+  rule.apply(s);
+  EXPECT_EQ(s.sub_state, WallSubState::kFlySideways);
+  // Within the tolerance, or a clear angle: the turn goes on.
+  TickSnapshot near = wall_snapshot(8.0 * kDeg, WallSubState::kTurnLeft);
+  near.theta = -3.0 * kDeg;
+  EXPECT_FALSE(rule.applies(near));
+  TickSnapshot clear = wall_snapshot(15.0 * kDeg, WallSubState::kTurnLeft);
+  clear.theta = -12.0 * kDeg;
+  EXPECT_FALSE(rule.applies(clear));
+  // One depth missing: no wall heading, the rule does not act.
+  TickSnapshot one = wall_snapshot(15.0 * kDeg, WallSubState::kTurnLeft);
+  one.theta = -3.0 * kDeg;
+  one.r_valid = false;
+  EXPECT_FALSE(rule.applies(one));
+  // Out of wall following the anchor is dropped; the next one reads its own.
+  TickSnapshot out = wall_snapshot(0.0, WallSubState::kNone);
+  out.state = FsmState::kResumeForward;
+  rule.observe(out);
+  EXPECT_TRUE(std::isnan(rule.anchor()));
+  EXPECT_FALSE(rule.applies(out));
+  WallFollowerParams off = p;
+  off.turn_anchor_tolerance = 0.0;
+  TurnAnchorRule none(off);
+  none.observe(first);
+  EXPECT_TRUE(std::isnan(none.anchor()));
+  EXPECT_FALSE(none.applies(s));
+}
+
+// Before the flight's first contact the step flies toward its end on the
+// course heading, then scans; after a contact, after a clearing, out of
+// FLY_FORWARD, without a position or with the amplitude 0 it does not act.
+TEST(OverrideRules, StepAndScanFiresOnTheFirstApproachOnly) {
+  const WallFollowerParams p;  // 0.44 rad, 0.08 m steps, 2 rad/s
+  StepAndScanRule rule(p);
+  TickSnapshot s = forward_snapshot(0.0, false, false);
+  ASSERT_TRUE(rule.applies(s));
+  rule.apply(s);
+  EXPECT_NEAR(s.setpoint.vx, p.v_max, 1e-12);  // (0.08 - 0) / 0.3 s, capped at V_max
+  EXPECT_NEAR(s.setpoint.vy, 0.0, 1e-12);
+  EXPECT_NEAR(s.setpoint.yaw_rate, 0.0, 1e-12);  // on the course while stepping
+  EXPECT_FALSE(rule.scanning());
+  TickSnapshot end = forward_snapshot(0.07, false, false);  // 10 mm before the step's end
+  rule.apply(end);
+  EXPECT_TRUE(rule.scanning());
+  EXPECT_GT(end.setpoint.yaw_rate, 1.0);  // the scan turns toward +A
+  EXPECT_LE(end.setpoint.yaw_rate, p.whisk_rate_max);
+  EXPECT_FALSE(rule.applies(forward_snapshot(0.0, false, true)));  // contacted
+  EXPECT_FALSE(rule.applies(forward_snapshot(0.0, true, false)));  // after a clearing
+  TickSnapshot resume = forward_snapshot(0.0, false, false);
+  resume.state = FsmState::kResumeForward;
+  EXPECT_FALSE(rule.applies(resume));
+  TickSnapshot lost = forward_snapshot(0.0, false, false);
+  lost.in.x = NAN;
+  EXPECT_FALSE(rule.applies(lost));
+  WallFollowerParams off = p;
+  off.first_whisk_amplitude = 0.0;
+  EXPECT_FALSE(StepAndScanRule(off).applies(forward_snapshot(0.0, false, false)));
+  // A tick it does not apply ends the scan: the next first approach steps afresh.
+  rule.idle();
+  TickSnapshot again = forward_snapshot(0.07, false, false);
+  rule.apply(again);
+  EXPECT_FALSE(rule.scanning());
+}
+
+// In the FLY_FORWARD after a clearing (side-step to the right) the body yaw
+// turns left toward the offset while the track stays along the course; a
+// moving sum releases it; before a clearing, in the side-step or with the
+// offset 0 it does not act.
+TEST(OverrideRules, YawOffsetFiresAfterAClearingOnly) {
+  const WallFollowerParams p;  // 0.2443 rad, released at 13 Pa
+  YawOffsetRule rule(p);
+  TickSnapshot s = forward_snapshot(1.0, true, true);
+  s.side = Side::kRight;
+  ASSERT_TRUE(rule.applies(s));
+  rule.apply(s);
+  EXPECT_GT(s.setpoint.yaw_rate, 0.0);             // toward the left, away from the side-step
+  EXPECT_NEAR(s.setpoint.vx, 0.2, 1e-12);          // track heading = yaw here: velocity unchanged
+  TickSnapshot yawed = forward_snapshot(1.0, true, true);  // body already at the offset
+  yawed.in.yaw = p.clear_yaw_offset;
+  rule.apply(yawed);
+  EXPECT_NEAR(std::cos(p.clear_yaw_offset) * yawed.setpoint.vx - std::sin(p.clear_yaw_offset) * yawed.setpoint.vy,
+              0.2, 1e-3);  // world velocity still along the course
+  TickSnapshot touch = forward_snapshot(1.0, true, true);
+  touch.in.yaw = p.clear_yaw_offset;
+  touch.in.input_change_rms_left = 20.0;
+  rule.apply(touch);
+  EXPECT_TRUE(rule.released());
+  EXPECT_LT(touch.setpoint.yaw_rate, 0.0);  // back toward the track's heading
+  EXPECT_FALSE(rule.applies(forward_snapshot(1.0, false, true)));  // no clearing before
+  TickSnapshot side_step = forward_snapshot(1.0, true, true);
+  side_step.state = FsmState::kResumeForward;
+  EXPECT_FALSE(rule.applies(side_step));
+  WallFollowerParams off = p;
+  off.clear_yaw_offset = 0.0;
+  EXPECT_FALSE(YawOffsetRule(off).applies(forward_snapshot(1.0, true, true)));
+  rule.idle();
+  EXPECT_FALSE(rule.released());
+}
+
+// The follower counts the ticks each rule fired and names a rule in reason()
+// when it begins: the step and scan from the first FLY_FORWARD tick (with the
+// transition's reason), ending at the first contact; the heading limit when it
+// turns the Fig. S4e rule's turn into a translation.
+TEST(OverrideRules, FollowerCountsEachRuleAndNamesItInTheReason) {
+  WhiskerWallFollower fsm{WallFollowerParams{}};
+  double t = 0.0;
+  for (; t < 2.0 - 1e-9; t += kDt) fsm.step(input(t));
+  WallFollowerOutput o = fsm.step(input(t));
+  t += kDt;
+  EXPECT_EQ(o.state, FsmState::kFlyForward);
+  EXPECT_TRUE(o.override_started);
+  EXPECT_STREQ(fsm.reason(), (std::string("hover initialisation done; ") + StepAndScanRule::kReason).c_str());
+  for (int k = 0; k < 9; ++k, t += kDt) EXPECT_FALSE(fsm.step(input(t)).override_started);
+  EXPECT_EQ(fsm.override_count(OverrideRule::kStepAndScan), 10u);
+  EXPECT_EQ(fsm.override_count(OverrideRule::kHeadingLimit), 0u);
+  // A contact at 50 deg left of the course, the depths asking for a left turn.
+  WallFollowerInput in = input(t, 0.0, 0.0, 50.0 * kDeg);
+  set_depths(in, 0.07, 0.09);
+  o = fsm.step(in);
+  t += kDt;
+  EXPECT_EQ(o.state, FsmState::kWallFollowing);
+  EXPECT_EQ(o.sub_state, WallSubState::kFlySideways);  // not TURN_LEFT
+  EXPECT_TRUE(o.override_started);
+  EXPECT_STREQ(fsm.reason(), (std::string("whisker contact; ") + HeadingLimitRule::kReason).c_str());
+  EXPECT_EQ(fsm.override_count(OverrideRule::kStepAndScan), 10u);  // ended at the contact
+  EXPECT_EQ(fsm.override_count(OverrideRule::kHeadingLimit), 1u);
+  in = input(t, 0.0, 0.0, 50.0 * kDeg);
+  set_depths(in, 0.07, 0.09);
+  o = fsm.step(in);
+  EXPECT_FALSE(o.override_started);  // still firing, not begun
+  EXPECT_EQ(fsm.override_count(OverrideRule::kHeadingLimit), 2u);
+  fsm.reset();
+  EXPECT_EQ(fsm.override_count(OverrideRule::kHeadingLimit), 0u);
+}

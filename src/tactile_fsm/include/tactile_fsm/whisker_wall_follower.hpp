@@ -7,7 +7,9 @@
 // velocity-mode hover setpoint (body vx, vy, yaw rate, height, land).
 #pragma once
 
+#include <array>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 namespace tactile_fsm {
@@ -305,6 +307,8 @@ struct WallFollowerOutput {
   FsmState state = FsmState::kHoverInit;
   WallSubState sub_state = WallSubState::kNone;
   bool transitioned = false;  ///< the top-level state or sub-state changed this tick
+  /// An override rule (OverrideRules) began to fire this tick; reason() names it.
+  bool override_started = false;
 };
 
 /// The wall-following sub-state rule (000 Fig. S4e; the exact conditions are
@@ -347,6 +351,157 @@ inline bool input_fresh(double t, double stamp, double max_age) {
 /// non-finite values -> 0.
 Setpoint saturate(const Setpoint& s, const WallFollowerParams& p);
 
+// --- Override rules --------------------------------------------------------
+//
+// After the state switch and the sub-state rule, an ordered list of named
+// rules may override what the state asked for (issue 33): first the two that
+// replace a turn of the sub-state rule by a translation (heading limit, turn
+// anchor), then, on the setpoint of the state, the two first-approach and
+// after-clearing yaw rules (step and scan, yaw offset). Each reads one
+// TickSnapshot, fires when applies() holds, then apply() changes the
+// snapshot's sub-state or setpoint; WhiskerWallFollower counts the ticks each
+// fired and, when one begins to fire (or its override changes the sub-state),
+// publishes its reason. A later rule sees what the earlier ones left.
+
+/// What the override rules read on one tick, and what they override.
+struct TickSnapshot {
+  WallFollowerInput in;  ///< this tick's input (t, pose, S_c change RMS)
+  double dt = 0.0;       ///< since the last tick [s]
+  FsmState state = FsmState::kHoverInit;  ///< after this tick's state switch
+  WallSubState current = WallSubState::kNone;  ///< sub-state of the last tick (turning or not)
+  Side side = Side::kRight;                    ///< the followed side
+  bool l_valid = false, r_valid = false;       ///< depths valid after the phantom gate
+  double d_left = NAN, d_right = NAN;          ///< depths of the sub-state rule (filtered, pressed-capped) [m]
+  double theta = NAN;         ///< wall angle of the rule (NaN unless both valid) [rad]
+  double wall_heading = NAN;  ///< filtered yaw - theta [rad]
+  bool origin_set = false;    ///< the course was set at the end of HOVER_INIT
+  double origin_x = 0.0, origin_y = 0.0, course_yaw = 0.0;
+  bool after_clear = false;  ///< FLY_FORWARD entered from RESUME_FORWARD
+  bool contacted = false;    ///< wall following entered in this flight
+  /// Overridden by the sub-state rules: the Fig. S4e rule's sub-state (kNone
+  /// outside WALL_FOLLOWING); by the setpoint rules: the state's setpoint
+  /// (after saturate()).
+  WallSubState sub_state = WallSubState::kNone;
+  Setpoint setpoint;
+};
+
+/// The translation the depths ask for when a turn is refused: FLY_BACKWARD
+/// if a valid depth is below T_min, FLY_FORWARD if one is above T_max, else
+/// FLY_SIDEWAYS.
+WallSubState translation_instead_of_turn(const TickSnapshot& s, const WallFollowerParams& p);
+/// s.sub_state is a turn that goes on beyond `limit` from the heading `ref`.
+bool turns_beyond(const TickSnapshot& s, double ref, double limit);
+
+/// Heading limit (issue 17; docs/whisker_fsm.md "Heading limit"): in wall
+/// following, a turn that would take the heading further than
+/// max_heading_offset from the course heading becomes the translation the
+/// depths ask for.
+class HeadingLimitRule {
+ public:
+  static constexpr const char* kName = "heading_limit";
+  static constexpr const char* kReason = "heading limit: a turn beyond max_heading_offset from the course, translating";
+  explicit HeadingLimitRule(const WallFollowerParams& p) : p_(p) {}
+  void observe(const TickSnapshot&) {}
+  bool applies(const TickSnapshot& s) const;
+  void apply(TickSnapshot& s) const { s.sub_state = translation_instead_of_turn(s, p_); }
+  void idle() {}
+  void reset() {}
+
+ private:
+  WallFollowerParams p_;
+};
+
+/// Turn anchor (issue 17, docs/tuning/tactile_fsm.md "Round 13"): the wall
+/// heading read at the first tick both whiskers touched, replaced by a clear
+/// angle (|theta| >= turn_anchor_theta) read while not turning and crept
+/// toward the heading read while not turning (turn_anchor_rate); a turn asked
+/// for by a small angle that goes on beyond turn_anchor_tolerance from it
+/// becomes the translation the depths ask for. observe() keeps the anchor
+/// (NaN outside wall following: each wall following reads its own).
+class TurnAnchorRule {
+ public:
+  static constexpr const char* kName = "turn_anchor";
+  static constexpr const char* kReason = "turn anchor: a turn beyond turn_anchor_tolerance from the wall heading, translating";
+  explicit TurnAnchorRule(const WallFollowerParams& p) : p_(p) {}
+  void observe(const TickSnapshot& s);
+  bool applies(const TickSnapshot& s) const;
+  void apply(TickSnapshot& s) const { s.sub_state = translation_instead_of_turn(s, p_); }
+  void idle() {}
+  void reset() { anchor_ = NAN; }
+  double anchor() const { return anchor_; }  ///< [rad]; NaN: none
+
+ private:
+  bool tracks(const TickSnapshot& s) const;  ///< the rule is on and both depths give a wall heading
+  WallFollowerParams p_;
+  double anchor_ = NAN;
+};
+
+/// Step and scan (issue 17, docs/tuning/tactile_fsm.md "Round 10", "Round
+/// 12"): in the FLY_FORWARD before the flight's first contact (no clearing
+/// yet), steps of first_scan_step along the course alternate with scans in
+/// place (course -> +A -> -A -> course at first_scan_rate, A =
+/// first_whisk_amplitude, held while a whisker's sum moves, whisk_pause_rms).
+/// A tick it does not apply ends the scan: the next first approach starts
+/// afresh.
+class StepAndScanRule {
+ public:
+  static constexpr const char* kName = "step_and_scan";
+  static constexpr const char* kReason = "step and scan on the first approach (first_whisk_amplitude, first_scan_step)";
+  explicit StepAndScanRule(const WallFollowerParams& p) : p_(p) {}
+  void observe(const TickSnapshot&) {}
+  bool applies(const TickSnapshot& s) const;
+  void apply(TickSnapshot& s);
+  void idle() { goal_ = NAN; }
+  void reset() { goal_ = NAN; }
+  bool scanning() const { return scanning_; }
+
+ private:
+  void begin_scan(int leg);
+  WallFollowerParams p_;
+  // The step's end along the course [m] (NaN: not started; the rest is set when
+  // it starts), scanning (else stepping), the scan's yaw reference off the
+  // course [rad] and its leg (0: to +A, 1: to -A, 2: back to the course, 3: settling).
+  double goal_ = NAN;
+  bool scanning_ = false;
+  double ref_ = 0.0;
+  int leg_ = 0;
+  double hold_s_ = 0.0;    ///< time this scan was held on a moving sum [s]
+  double settle_s_ = 0.0;  ///< time in this scan's last leg [s]
+};
+
+/// Yaw offset after a clearing (issue 17, docs/tuning/tactile_fsm.md "Round
+/// 9"): in the FLY_FORWARD after a clearing the body yaw is held
+/// clear_yaw_offset away from the side-step side of the heading the drone
+/// would otherwise fly (track unchanged); back to that heading once a
+/// whisker's sum moves (clear_yaw_release_rms). A tick it does not apply
+/// ends it.
+class YawOffsetRule {
+ public:
+  static constexpr const char* kName = "yaw_offset";
+  static constexpr const char* kReason = "yaw offset after a clearing (clear_yaw_offset)";
+  explicit YawOffsetRule(const WallFollowerParams& p) : p_(p) {}
+  void observe(const TickSnapshot&) {}
+  bool applies(const TickSnapshot& s) const;
+  void apply(TickSnapshot& s);
+  void idle() { reset(); }
+  void reset() {
+    track_yaw_ = NAN;
+    released_ = false;
+  }
+  bool released() const { return released_; }
+
+ private:
+  WallFollowerParams p_;
+  double track_yaw_ = NAN;  ///< the heading the drone would fly without the offset [rad]
+  bool released_ = false;   ///< clear_yaw_release_rms reached since the clearing
+};
+
+/// The override rules in the order they run.
+enum class OverrideRule : uint8_t { kHeadingLimit, kTurnAnchor, kStepAndScan, kYawOffset };
+constexpr std::size_t kOverrideRuleCount = 4;
+/// "heading_limit", "turn_anchor", "step_and_scan", "yaw_offset".
+const char* to_string(OverrideRule r);
+
 class WhiskerWallFollower {
  public:
   explicit WhiskerWallFollower(const WallFollowerParams& params);
@@ -358,8 +513,12 @@ class WhiskerWallFollower {
   FsmState state() const { return state_; }
   FsmState previous_state() const { return previous_; }
   WallSubState sub_state() const { return sub_; }
-  /// Why the last top-level transition (or sub-state change) happened; static text.
-  const char* reason() const { return reason_; }
+  /// Why the last top-level transition, sub-state change or override rule's
+  /// onset happened: a transition's or rule's text, or both ("<transition>;
+  /// <rule>") when a rule begins on a transition's tick. Valid until the next step().
+  const char* reason() const { return reason_composed_ ? reason_buf_.data() : reason_; }
+  /// Ticks on which each override rule fired (index: OverrideRule), since reset().
+  uint64_t override_count(OverrideRule r) const { return override_count_[static_cast<std::size_t>(r)]; }
   bool started() const { return started_; }
   double state_entered() const { return entered_; }
   uint32_t transitions() const { return transitions_; }
@@ -383,8 +542,11 @@ class WhiskerWallFollower {
                             bool r_valid) const;
   double realign(const WallFollowerInput& in) const;
   double realign_rate(double yaw) const;  ///< realign()'s rate toward the course from `yaw` (unsaturated)
-  Setpoint offset_yaw(const WallFollowerInput& in, const Setpoint& s, double dt);
-  Setpoint step_and_scan(const WallFollowerInput& in, const Setpoint& s, double dt);
+  /// Runs one override rule on the snapshot: observe, then apply (counted) or idle.
+  template <typename Rule>
+  void run_rule(Rule& rule, OverrideRule id, TickSnapshot& s, bool top_transition);
+  /// reason_ for a rule that fired on a sub-state change or began to fire this tick.
+  void note_rule(const char* rule_reason, bool top_transition);
 
   WallFollowerParams p_;
   FsmState state_ = FsmState::kHoverInit;
@@ -405,26 +567,23 @@ class WhiskerWallFollower {
   bool phantom_l_ = false, phantom_r_ = false;
   double wall_heading_ = NAN;  ///< filtered yaw - theta [rad]
   double theta_ = NAN;
-  double anchor_ = NAN;  ///< turn_anchor_tolerance: wall heading anchor of this wall following [rad]
   bool origin_set_ = false;
   double origin_x_ = 0.0, origin_y_ = 0.0;  ///< course start (end of hover)
   double course_yaw_ = 0.0;                   ///< heading at the course start [rad]
   double clear_x_ = 0.0, clear_y_ = 0.0;    ///< where the obstacle was cleared
   bool after_clear_ = false;                 ///< FLY_FORWARD entered from RESUME_FORWARD
   double resume_x_ = 0.0, resume_y_ = 0.0;  ///< where that FLY_FORWARD began
-  double track_yaw_ = NAN;  ///< clear_yaw_offset: the heading the drone would fly without the offset [rad]
-  bool yaw_offset_released_ = false;  ///< clear_yaw_release_rms reached since the clearing
   bool contacted_ = false;  ///< wall following entered at least once in this flight (first_whisk_amplitude)
-  // first_scan_step: the step's end along the course [m] (NaN: not started;
-  // the rest is set when it starts), scanning (else stepping), the scan's yaw
-  // reference off the course [rad] and its leg (0: to +A, 1: to -A, 2: back to
-  // the course, 3: settling).
-  double scan_goal_ = NAN;
-  bool scanning_ = false;
-  double scan_ref_ = 0.0;
-  int scan_leg_ = 0;
-  double scan_hold_s_ = 0.0;    ///< time this scan was held on a moving sum [s]
-  double scan_settle_s_ = 0.0;  ///< time in this scan's last leg [s]
+  // The override rules, in the order they run, with their firing record.
+  HeadingLimitRule heading_limit_;
+  TurnAnchorRule turn_anchor_;
+  StepAndScanRule step_and_scan_;
+  YawOffsetRule yaw_offset_;
+  std::array<uint64_t, kOverrideRuleCount> override_count_{};
+  std::array<bool, kOverrideRuleCount> override_active_{};  ///< fired on the last tick
+  bool override_started_ = false;                           ///< a rule began to fire this tick
+  std::array<char, 192> reason_buf_{};                      ///< "<transition>; <rule>" (no allocation)
+  bool reason_composed_ = false;                            ///< reason() is reason_buf_, else reason_
 };
 
 }  // namespace tactile_fsm
