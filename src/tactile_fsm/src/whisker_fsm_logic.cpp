@@ -34,8 +34,8 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   // The node's parameter spec (docs/whisker_fsm.md "Parameters"): value, description (from the
   // WallFollowerParams comments), unit and the range validate() accepts alone (the
   // relations -- t_max > t_min, align_exit <= align_enter, wall_end_depth 0 or >= t_max,
-  // first_whisk_speed <= v_max -- are validate()'s). Every key is read at start: the FSM's
-  // rules are tuned as a set and its state (band, anchors, whisk phase) is built from
+  // first_scan_rate <= whisk_rate_max -- are validate()'s). Every key is read at start: the FSM's
+  // rules are tuned as a set and its state (band, anchors, scan phase) is built from
   // them, so none is changed in flight (ros2 param set: read-only).
   m.set("v_max", d.v_max,
         {"V_max, forward speed (000 Results: 20 cm/s)", "m/s", positive(), false});
@@ -69,121 +69,79 @@ ParamMap WhiskerFsmLogic::default_parameters() {
         {"extra side-step after a clearing, so the frame passes the edge", "m", at_least(0.0), false});
   m.set("realign_gain", d.realign_gain,
         {"heading realignment to the course outside wall following; 0: off", "1/s", at_least(0.0), false});
-  // On in the whisker FSM node (issue 17); the core default stays off so the other
-  // users of wall_sub_state() (gpis_explorer's wall follows) keep their rule.
+  // The node's two defaults that differ from the core struct's: on in the whisker FSM
+  // node (issue 17), off in WallFollowerParams, because gpis_explorer's wall follows call
+  // wall_sub_state() with the core defaults and were not measured with these rules.
   m.set("hold_heading_trailing_lost", true,
         {"trailing whisker lost after both touched: hold the heading (issue 17)", "", {}, false});
   // One depth left beyond wall_end_depth after both touched = the wall ends
-  // (issue 17, round 7): on in the whisker FSM node, off in the core. 105 mm:
+  // (issue 17, round 7): on in the whisker FSM node, off in the core (above). 105 mm:
   // tuning blocks 413 -> 415 of 450 (tied with 110 / 115 mm), seen blocks
   // 5000-8000 1068 -> 1088 of 1200 (docs/tuning/tactile_fsm.md "Round 7").
   m.set("wall_end_depth", 0.105,
         {"one depth beyond this after both touched = the wall ends (issue 17, round 7); 0 or >= t_max", "m", {}, false});
-  // A whisker lost out of reach, not off an end (issue 17, round 11).
-  m.set("lost_far_depth", 0.0,
-        {"a whisker lost out of reach, not off an end (issue 17, round 11); 0: off", "m", at_least(0.0), false});
-  // The side-step's margin from where the sums went quiet (issue 17, round 11).
-  m.set("resume_quiet_rms", 0.0,
-        {"side-step margin counted from where the sums went quiet (issue 17, round 11); 0: off", "Pa", at_least(0.0), false});
   m.set("same_obstacle_distance", d.same_obstacle_distance,
         {"a contact this close after a clearing is the same obstacle: keep the side; 0: off", "m", at_least(0.0), false});
   m.set("max_heading_offset", d.max_heading_offset,
         {"wall following never turns further than this from the course heading; 0: off", "rad", closed(0.0, M_PI), false});
-  // Turn anchor (issue 17, round 13): on in the whisker FSM node, off in the core.
+  // Turn anchor (issue 17, round 13).
   // 10 deg, 10 deg, 2 deg/s: held-out block 27000-27299 857 -> 874 of 900 (docs/tuning/tactile_fsm.md
   // "Round 13").
-  m.set("turn_anchor_tolerance", 10.0 * M_PI / 180.0,
+  m.set("turn_anchor_tolerance", d.turn_anchor_tolerance,
         {"turn at most this beyond the anchored wall heading (issue 17, round 13); 0: off", "rad", closed(0.0, M_PI), false});
   m.set("turn_anchor_theta", d.turn_anchor_theta,
         {"a wall angle at least this replaces the anchor", "rad", ParamRange{0.0, M_PI / 2, true, true}, false});
-  m.set("turn_anchor_rate", 2.0 * M_PI / 180.0,
+  m.set("turn_anchor_rate", d.turn_anchor_rate,
         {"the anchor follows the read wall heading at most this fast; 0: fixed", "rad/s", at_least(0.0), false});
-  // Pressed whisker (issue 17): on in the whisker FSM node, off in the core
-  // (as hold_heading_trailing_lost). 900 Pa, no hold: tuning blocks, docs/tuning/tactile_fsm.md "Round 3".
-  m.set("press_sum_pa", 900.0,
+  // Pressed whisker (issue 17): 900 Pa, no hold: tuning blocks, docs/tuning/tactile_fsm.md "Round 3".
+  m.set("press_sum_pa", d.press_sum_pa,
         {"a whisker whose S_c sum reached this is pressed: depth taken <= press_depth (issue 17); 0: off", "Pa", at_least(0.0), false});
-  m.set("press_hold_s", 0.0,
+  m.set("press_hold_s", d.press_hold_s,
         {"how long a press counts", "s", at_least(0.0), false});
-  // Pressed by the stick-slip amplitude (issue 17, round 6): off. 450 Pa, best on
-  // the tuning blocks (413 -> 419 of 450), lost on the fresh held-out block
-  // 12000-12099 (273 -> 270 of 300; docs/tuning/tactile_fsm.md "Round 6").
-  m.set("press_rms_pa", 0.0,
-        {"pressed by the stick-slip amplitude (issue 17, round 6); 0: off", "Pa", at_least(0.0), false});
   m.set("press_depth", d.press_depth,
         {"depth a pressed whisker is taken at, at most", "m", positive(), false});
-  // Depth bounded by the drone's own motion since the contact's onset (issue 17,
-  // round 8; our choice): off. 0.04 m/s: tuning blocks 415 -> 417 of 450, seen
-  // blocks 1088 -> 1081 of 1200, imu_tof loses (docs/tuning/tactile_fsm.md "Round 8"); not kept.
-  m.set("motion_depth_relax", 0.0,
-        {"depth bounded by the drone's own motion may rise this fast (issue 17, round 8); 0: off", "m/s", at_least(0.0), false});
-  m.set("motion_depth_margin", d.motion_depth_margin,
-        {"margin over that motion bound", "m", at_least(0.0), false});
-  m.set("motion_depth_baseline", d.motion_depth_baseline,
-        {"contact points this far apart define the wall normal; 0: never", "m", at_least(0.0), false});
   m.set("whisker_base_x", d.whisker_base_x,
-        {"x of the whisker bases ahead of the odometry origin (000 frame, tactile_sim); finite", "m", {}, false});
-  // Phantom hold gated by odometry (issue 17, round 4): on in the whisker FSM
-  // node, off in the core. 6.5 Pa over 25 samples, 0.03 m, latched: tuning
+        {"x of the whisker bases ahead of the odometry origin (000 frame, tactile_sim), for end_contact_lateral; finite", "m", {}, false});
+  // Phantom hold gated by odometry (issue 17, round 4): 6.5 Pa over 25 samples, 0.03 m, latched: tuning
   // blocks, docs/tuning/tactile_fsm.md "Round 4".
-  m.set("phantom_quiet_rms", 6.5,
+  m.set("phantom_quiet_rms", d.phantom_quiet_rms,
         {"a whisker in contact whose S_c sum stays quieter than this while the drone moves is a phantom (issue 17, round 4); 0: off", "Pa", at_least(0.0), false});
   m.set("phantom_quiet_samples", static_cast<int64_t>(n.phantom_quiet_samples),
         {"signals over which that RMS is taken", "samples", closed(2, 10000), false});
-  m.set("phantom_travel", 0.03,
+  m.set("phantom_travel", d.phantom_travel,
         {"drone travel with a quiet sum that makes a phantom", "m", at_least(0.0), false});
   // Latched, with a side-step of up to 2 m while the phantom is held: chosen on the tuning
   // blocks (279 of 300), switched on after the fresh held-out block 10000-10099
   // (docs/tuning/tactile_fsm.md "Round 4b").
-  m.set("phantom_resume_max", 2.0,
+  m.set("phantom_resume_max", d.phantom_resume_max,
         {"keep side-stepping while a phantom is held, up to this far from the clearing", "m", at_least(0.0), false});
-  m.set("phantom_latch", true,
+  m.set("phantom_latch", d.phantom_latch,
         {"a phantom stays one until its contact ends or its sum moves again (issue 17, round 4)", "", {}, false});
-  // Active whisking (issue 17, round 5): off (whisk_amplitude 0). The values
-  // best on the tuning blocks (0.23 rad every 0.7 s, up to 3 rad/s, only after
-  // a clearing, paused while a whisker's sum moves, 13 Pa) gave 413 -> 424 of
-  // 450 there but 268 -> 269 of 300 on the fresh held-out block 11000-11099 and
-  // more collisions in the darkness rigid course (docs/tuning/tactile_fsm.md "Round 5").
-  m.set("whisk_amplitude", 0.0,
-        {"active whisking amplitude in FLY_FORWARD (issue 17, round 5); 0: off", "rad", closed(0.0, M_PI / 2), false});
-  m.set("whisk_period_s", 0.7,
-        {"whisking period", "s", positive(), false});
-  m.set("whisk_rate_max", 3.0,
-        {"whisking yaw-rate limit", "rad/s", positive(), false});
-  m.set("whisk_after_clear_only", true,
-        {"whisk only in a FLY_FORWARD that follows a clearing", "", {}, false});
-  m.set("whisk_pause_rms", 13.0,
-        {"pause the whisk while a whisker's S_c sum moves more than this; 0: never", "Pa", at_least(0.0), false});
+  m.set("whisk_rate_max", d.whisk_rate_max,
+        {"yaw-rate limit of the first-approach scan", "rad/s", positive(), false});
+  m.set("whisk_pause_rms", d.whisk_pause_rms,
+        {"hold the first-approach scan while a whisker's S_c sum moves more than this; 0: never", "Pa", at_least(0.0), false});
   // Yaw offset after a clearing (issue 17, docs/tuning/tactile_fsm.md "Round 9"): 14 deg (0.2443 rad) with
   // the release at 13 Pa: tuning blocks 415 -> 433 of 450, seen blocks 1088 -> 1123 of
   // 1200, the shipped courses pass on seeds 1-20. 20 deg wins as much but fails the
   // shipped wide-spacing (heading error 11-14 deg > 8) and tilted-30 (a guard touch in
-  // every trial) courses. Core struct: off.
-  m.set("clear_yaw_offset", 0.2443,
+  // every trial) courses.
+  m.set("clear_yaw_offset", d.clear_yaw_offset,
         {"yaw offset after a clearing, away from the side-step side (issue 17, round 9); 0: off", "rad", closed(0.0, M_PI / 4), false});
-  m.set("clear_yaw_in_resume", false,
-        {"also hold that offset during the side-step", "", {}, false});
-  m.set("clear_yaw_release_rms", 13.0,
+  m.set("clear_yaw_release_rms", d.clear_yaw_release_rms,
         {"back to the track's heading once a whisker's sum moves more than this; 0: never", "Pa", at_least(0.0), false});
   // The first approach (issue 17, docs/tuning/tactile_fsm.md "Round 12"): step and scan with the
   // round 10 amplitude and end rule; held out 600 courses per estimate: mocap
   // 93.0 -> 95.8 %, flow deck 92.8 -> 96.7 %, imu_tof 94.0 -> 95.2 %; the shipped
   // courses pass on seeds 1-30. The darkness scenarios turn it off (000 Fig. 6's
-  // straight approach). Core struct: off.
-  m.set("first_whisk_amplitude", 0.44,
-        {"whisking on the first approach (issue 17, round 10/12); 0: off", "rad", closed(0.0, M_PI / 2), false});
-  m.set("first_whisk_period_s", 0.7,
-        {"first-approach whisking period", "s", positive(), false});
-  m.set("first_whisk_speed", 0.0,
-        {"first-approach speed; 0: v_max; <= v_max", "m/s", at_least(0.0), false});
-  m.set("first_whisk_pause_to_course", false,
-        {"while a sum moves, the first-approach whisk turns back to the course", "", {}, false});
-  m.set("first_whisk_wall_rate", 0.0,
-        {"turn back to the course at this rate on a wall ahead in the first-approach whisk; 0: off", "rad/s", at_least(0.0), false});
-  m.set("first_scan_step", 0.08,
-        {"step-and-scan step on the first approach (issue 17, round 12); 0 or >= 0.02", "m", at_least(0.0), false});
-  m.set("first_scan_rate", 2.0,
-        {"scan yaw rate; <= whisk_rate_max (checked when first_scan_step > 0)", "rad/s", {}, false});
-  m.set("end_contact_lateral", 0.045,
+  // straight approach).
+  m.set("first_whisk_amplitude", d.first_whisk_amplitude,
+        {"scan amplitude on the first approach (issue 17, round 10/12); 0: off (the paper's straight approach)", "rad", closed(0.0, M_PI / 2), false});
+  m.set("first_scan_step", d.first_scan_step,
+        {"step-and-scan step on the first approach (issue 17, round 12)", "m", at_least(0.02), false});
+  m.set("first_scan_rate", d.first_scan_rate,
+        {"scan yaw rate; <= whisk_rate_max", "rad/s", positive(), false});
+  m.set("end_contact_lateral", d.end_contact_lateral,
         {"a one-whisker first touch this far beside the axis is a baffle's end (issue 17, round 10); 0: off", "m", at_least(0.0), false});
   m.set("target_radius", d.target_radius,
         {"land within this distance of the target", "m", positive(), false});
@@ -228,8 +186,6 @@ WhiskerFsmLogic::Params WhiskerFsmLogic::params_from(const ParamMap& m) {
   f.realign_gain = m.get_double("realign_gain");
   f.hold_heading_trailing_lost = m.get_bool("hold_heading_trailing_lost");
   f.wall_end_depth = m.get_double("wall_end_depth");
-  f.lost_far_depth = m.get_double("lost_far_depth");
-  f.resume_quiet_rms = m.get_double("resume_quiet_rms");
   f.same_obstacle_distance = m.get_double("same_obstacle_distance");
   f.max_heading_offset = m.get_double("max_heading_offset");
   f.turn_anchor_tolerance = m.get_double("turn_anchor_tolerance");
@@ -237,30 +193,18 @@ WhiskerFsmLogic::Params WhiskerFsmLogic::params_from(const ParamMap& m) {
   f.turn_anchor_rate = m.get_double("turn_anchor_rate");
   f.press_sum_pa = m.get_double("press_sum_pa");
   f.press_hold_s = m.get_double("press_hold_s");
-  f.press_rms_pa = m.get_double("press_rms_pa");
   f.press_depth = m.get_double("press_depth");
-  f.motion_depth_relax = m.get_double("motion_depth_relax");
-  f.motion_depth_margin = m.get_double("motion_depth_margin");
-  f.motion_depth_baseline = m.get_double("motion_depth_baseline");
   f.whisker_base_x = m.get_double("whisker_base_x");
   f.phantom_quiet_rms = m.get_double("phantom_quiet_rms");
   p.phantom_quiet_samples = m.get_int("phantom_quiet_samples", 2, 10000);
   f.phantom_travel = m.get_double("phantom_travel");
   f.phantom_resume_max = m.get_double("phantom_resume_max");
   f.phantom_latch = m.get_bool("phantom_latch");
-  f.whisk_amplitude = m.get_double("whisk_amplitude");
-  f.whisk_period_s = m.get_double("whisk_period_s");
   f.whisk_rate_max = m.get_double("whisk_rate_max");
-  f.whisk_after_clear_only = m.get_bool("whisk_after_clear_only");
   f.whisk_pause_rms = m.get_double("whisk_pause_rms");
   f.clear_yaw_offset = m.get_double("clear_yaw_offset");
-  f.clear_yaw_in_resume = m.get_bool("clear_yaw_in_resume");
   f.clear_yaw_release_rms = m.get_double("clear_yaw_release_rms");
   f.first_whisk_amplitude = m.get_double("first_whisk_amplitude");
-  f.first_whisk_period_s = m.get_double("first_whisk_period_s");
-  f.first_whisk_speed = m.get_double("first_whisk_speed");
-  f.first_whisk_pause_to_course = m.get_bool("first_whisk_pause_to_course");
-  f.first_whisk_wall_rate = m.get_double("first_whisk_wall_rate");
   f.first_scan_step = m.get_double("first_scan_step");
   f.first_scan_rate = m.get_double("first_scan_rate");
   f.end_contact_lateral = m.get_double("end_contact_lateral");
@@ -406,6 +350,10 @@ WhiskerFsmLogic::Outputs WhiskerFsmLogic::on_timer(int64_t now_ns) {
   in_.input_change_rms_left = std::isfinite(in_.input_sum_left) ? left_window_.change_rms() : NAN;
   in_.input_change_rms_right = std::isfinite(in_.input_sum_right) ? right_window_.change_rms() : NAN;
   const WallFollowerOutput o = fsm_.step(in_);
+  stats_.rule_heading_limit = fsm_.override_count(OverrideRule::kHeadingLimit);
+  stats_.rule_turn_anchor = fsm_.override_count(OverrideRule::kTurnAnchor);
+  stats_.rule_step_and_scan = fsm_.override_count(OverrideRule::kStepAndScan);
+  stats_.rule_yaw_offset = fsm_.override_count(OverrideRule::kYawOffset);
 
   Outputs out;
   tactile_common::to_stamp(now_ns, out.setpoint.header.stamp);
@@ -425,7 +373,8 @@ WhiskerFsmLogic::Outputs WhiskerFsmLogic::on_timer(int64_t now_ns) {
       current_state_name_ += to_string(o.sub_state);
     }
   }
-  if (o.transitioned || last_state_pub_ns_ == INT64_MIN || now_ns - last_state_pub_ns_ >= kStatePeriodNs) {
+  if (o.transitioned || o.override_started || last_state_pub_ns_ == INT64_MIN ||
+      now_ns - last_state_pub_ns_ >= kStatePeriodNs) {
     tactile_msgs::msg::FsmState s;
     tactile_common::to_stamp(now_ns, s.header.stamp);
     s.header.frame_id = body_frame_;

@@ -101,27 +101,12 @@ void WallFollowerParams::validate() const {
           same_obstacle_distance);
   require(finite_nonneg(press_sum_pa), "press_sum_pa", "must be finite and >= 0 (0 = off)", press_sum_pa);
   require(finite_nonneg(press_hold_s), "press_hold_s", "must be finite and >= 0", press_hold_s);
-  require(finite_nonneg(press_rms_pa), "press_rms_pa", "must be finite and >= 0 (0 = off)", press_rms_pa);
   require(finite_positive(press_depth), "press_depth", "must be finite and > 0", press_depth);
-  require(finite_nonneg(motion_depth_relax), "motion_depth_relax", "must be finite and >= 0 (0 = off)",
-          motion_depth_relax);
-  require(finite_nonneg(motion_depth_margin), "motion_depth_margin", "must be finite and >= 0", motion_depth_margin);
-  require(finite_nonneg(motion_depth_baseline), "motion_depth_baseline", "must be finite and >= 0",
-          motion_depth_baseline);
   require(std::isfinite(whisker_base_x), "whisker_base_x", "must be finite", whisker_base_x);
-  require(finite_nonneg(resume_quiet_rms), "resume_quiet_rms", "must be finite and >= 0 (0 = off)", resume_quiet_rms);
-  // The margin moves only within phantom_resume_max of the clearing (docs/tuning/tactile_fsm.md "Round 11").
-  require(resume_quiet_rms == 0.0 || phantom_resume_max > 0.0, "resume_quiet_rms",
-          "has no effect unless phantom_resume_max > 0", resume_quiet_rms);
-  require(finite_nonneg(lost_far_depth), "lost_far_depth", "must be finite and >= 0 (0 = off)", lost_far_depth);
   require(finite_nonneg(phantom_quiet_rms), "phantom_quiet_rms", "must be finite and >= 0 (0 = off)",
           phantom_quiet_rms);
   require(finite_nonneg(phantom_travel), "phantom_travel", "must be finite and >= 0", phantom_travel);
   require(finite_nonneg(phantom_resume_max), "phantom_resume_max", "must be finite and >= 0", phantom_resume_max);
-  require(finite_nonneg(whisk_amplitude) && whisk_amplitude <= M_PI / 2.0, "whisk_amplitude",
-          "must be in [0, pi/2] (0 = off)", whisk_amplitude);
-  require(std::isfinite(whisk_period_s) && whisk_period_s > 0.0, "whisk_period_s", "must be finite and > 0",
-          whisk_period_s);
   require(std::isfinite(whisk_rate_max) && whisk_rate_max > 0.0, "whisk_rate_max", "must be finite and > 0",
           whisk_rate_max);
   require(finite_nonneg(whisk_pause_rms), "whisk_pause_rms", "must be finite and >= 0 (0 = off)", whisk_pause_rms);
@@ -131,21 +116,10 @@ void WallFollowerParams::validate() const {
           clear_yaw_release_rms);
   require(finite_nonneg(first_whisk_amplitude) && first_whisk_amplitude <= M_PI / 2.0, "first_whisk_amplitude",
           "must be in [0, pi/2] (0 = off)", first_whisk_amplitude);
-  require(finite_positive(first_whisk_period_s), "first_whisk_period_s", "must be finite and > 0",
-          first_whisk_period_s);
-  require(finite_nonneg(first_whisk_speed) && first_whisk_speed <= v_max, "first_whisk_speed",
-          "must be in [0, v_max] (0 = v_max)", first_whisk_speed);
-  require(finite_nonneg(first_whisk_wall_rate), "first_whisk_wall_rate", "must be finite and >= 0 (0 = off)",
-          first_whisk_wall_rate);
-  require(finite_nonneg(first_scan_step), "first_scan_step", "must be finite and >= 0 (0 = off)", first_scan_step);
-  require(first_scan_step == 0.0 || first_scan_step >= 0.02, "first_scan_step",
-          "must be 0 (off) or >= 0.02 m (the step ends 15 mm before its end)", first_scan_step);
-  if (first_scan_step > 0.0) {
-    require(finite_positive(first_scan_rate) && first_scan_rate <= whisk_rate_max, "first_scan_rate",
-            "must be finite, > 0 and <= whisk_rate_max", first_scan_rate);
-    require(!first_whisk_pause_to_course, "first_whisk_pause_to_course",
-            "has no effect with first_scan_step > 0 (the scan holds the yaw on a moving sum)", 1.0);
-  }
+  require(std::isfinite(first_scan_step) && first_scan_step >= 0.02, "first_scan_step",
+          "must be finite and >= 0.02 m (the step ends 15 mm before its end)", first_scan_step);
+  require(finite_positive(first_scan_rate) && first_scan_rate <= whisk_rate_max, "first_scan_rate",
+          "must be finite, > 0 and <= whisk_rate_max", first_scan_rate);
   require(finite_nonneg(end_contact_lateral), "end_contact_lateral", "must be finite and >= 0 (0 = off)",
           end_contact_lateral);
   require(finite_positive(target_radius), "target_radius", "must be finite and > 0", target_radius);
@@ -156,23 +130,12 @@ void WallFollowerParams::validate() const {
 }
 
 WallSubState wall_sub_state(double d_l, bool l_valid, double d_r, bool r_valid, Side side, bool both_touched,
-                            WallSubState current, const WallFollowerParams& p, double theta_in, double last_l,
-                            double last_r) {
+                            WallSubState current, const WallFollowerParams& p, double theta_in) {
   l_valid = l_valid && std::isfinite(d_l);
   r_valid = r_valid && std::isfinite(d_r);
   if (!l_valid && !r_valid) return WallSubState::kFlySideways;
   if (l_valid != r_valid) {
     const bool leading_lost = (side == Side::kRight) ? !r_valid : !l_valid;
-    const double lost_last = l_valid ? last_r : last_l;
-    if (both_touched && p.lost_far_depth > 0.0 && std::isfinite(lost_last) && lost_last > p.lost_far_depth &&
-        (l_valid ? d_l : d_r) > p.t_max) {
-      // One whisker lost while it was already beyond lost_far_depth and the
-      // other beyond T_max (last_l / last_r: NaN unless the other was beyond
-      // T_max when it was lost): out of reach, not off an end; both far ->
-      // FLY_FORWARD back to the wall (000 Fig. S4e; issue 17, docs/tuning/tactile_fsm.md "Round 11";
-      // our choice).
-      return WallSubState::kFlyForward;
-    }
     if (both_touched && p.wall_end_depth > 0.0 && (l_valid ? d_l : d_r) > p.wall_end_depth) {
       // One whisker lost after both touched, the other beyond wall_end_depth:
       // the wall ends here (a whisker held past the end), not a wall ahead;
@@ -238,7 +201,8 @@ Setpoint saturate(const Setpoint& s, const WallFollowerParams& p) {
   return o;
 }
 
-WhiskerWallFollower::WhiskerWallFollower(const WallFollowerParams& params) : p_(params) {
+WhiskerWallFollower::WhiskerWallFollower(const WallFollowerParams& params)
+    : p_(params), heading_limit_(params), turn_anchor_(params), step_and_scan_(params), yaw_offset_(params) {
   p_.validate();
   reset();
 }
@@ -247,6 +211,7 @@ void WhiskerWallFollower::reset() {
   state_ = previous_ = FsmState::kHoverInit;
   sub_ = WallSubState::kNone;
   reason_ = "start";
+  reason_composed_ = false;
   started_ = false;
   entered_ = last_t_ = 0.0;
   transitions_ = 0;
@@ -254,31 +219,30 @@ void WhiskerWallFollower::reset() {
   both_touched_ = false;
   last_contact_t_ = 0.0;
   f_left_ = f_right_ = NAN;
-  last_l_ = last_r_ = NAN;
-  lost_far_l_ = lost_far_r_ = prev_l_valid_ = prev_r_valid_ = false;
   pressed_t_left_ = pressed_t_right_ = -INFINITY;
   live_x_l_ = live_y_l_ = live_x_r_ = live_y_r_ = NAN;
   phantom_l_ = phantom_r_ = false;
-  motion_b_l_ = motion_b_r_ = NAN;
-  motion_qx_l_ = motion_qy_l_ = motion_qx_r_ = motion_qy_r_ = NAN;
-  onset_x_l_ = onset_y_l_ = onset_x_r_ = onset_y_r_ = NAN;
-  motion_nx_ = motion_ny_ = NAN;
-  wall_heading_ = theta_ = anchor_ = NAN;
+  wall_heading_ = theta_ = NAN;
   origin_set_ = false;
   origin_x_ = origin_y_ = clear_x_ = clear_y_ = 0.0;
   after_clear_ = false;
   resume_x_ = resume_y_ = 0.0;
-  track_yaw_ = NAN;
-  yaw_offset_released_ = false;
   contacted_ = false;
   course_yaw_ = 0.0;
-  scan_goal_ = NAN;
+  heading_limit_.reset();
+  turn_anchor_.reset();
+  step_and_scan_.reset();
+  yaw_offset_.reset();
+  override_count_.fill(0);
+  override_active_.fill(false);
+  override_started_ = false;
 }
 
 void WhiskerWallFollower::enter(FsmState s, const char* reason, double t) {
   previous_ = state_;
   state_ = s;
   reason_ = reason;
+  reason_composed_ = false;
   entered_ = t;
   ++transitions_;
   sub_ = WallSubState::kNone;
@@ -353,90 +317,6 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
     phantom_l_ = phantom_r_ = false;
   }
 
-  // Depth bounded by the drone's own motion (issue 17, docs/tuning/tactile_fsm.md "Round 8"; our
-  // choice): the wall is fixed in the world, so the depth a whisker had at
-  // its contact's onset, carried with the odometry, bounds the depth now; the
-  // published depth of a pressed whisker (friction-limited load, the model
-  // saturating at ~70 mm) cannot undo a measured approach.
-  if (p_.motion_depth_relax > 0.0 && odom_fresh && std::isfinite(in.x) && std::isfinite(in.y) &&
-      std::isfinite(in.yaw) && (l_valid || r_valid)) {
-    const double c = std::cos(in.yaw), s = std::sin(in.yaw);
-    auto base = [&](double side, double& bx, double& by) {  // side +1 left, -1 right
-      bx = in.x + c * p_.whisker_base_x - s * side * 0.5 * p_.whisker_spacing;
-      by = in.y + s * p_.whisker_base_x + c * side * 0.5 * p_.whisker_spacing;
-    };
-    // The wall's normal is fixed in the world for the contact (both whiskers'
-    // contacts, until neither is in contact): the heading at the first onset
-    // (wall taken square to it), replaced once the other whisker touches by
-    // the normal of the line through the two first contact points when they
-    // are >= motion_depth_baseline apart, else by eq. 21 on the depths at that
-    // moment (before a long press saturates them).
-    const bool first_onset = !std::isfinite(motion_nx_);
-    auto onset = [&](bool valid, double d_pub, double side, double& ox, double& oy) {
-      if (!valid || std::isfinite(ox)) return false;
-      double bx, by;
-      base(side, bx, by);
-      ox = bx + d_pub * c;
-      oy = by + d_pub * s;
-      return true;
-    };
-    const bool new_l = onset(l_valid, in.depth_left, 1.0, onset_x_l_, onset_y_l_);
-    const bool new_r = onset(r_valid, in.depth_right, -1.0, onset_x_r_, onset_y_r_);
-    if (first_onset) {
-      motion_nx_ = c;
-      motion_ny_ = s;
-    }
-    if ((new_l || new_r) && std::isfinite(onset_x_l_) && std::isfinite(onset_x_r_)) {
-      const double dx = onset_x_r_ - onset_x_l_, dy = onset_y_r_ - onset_y_l_;
-      const double len = std::hypot(dx, dy);
-      double mx = NAN, my = NAN;
-      if (p_.motion_depth_baseline > 0.0 && len >= p_.motion_depth_baseline) {
-        mx = dy / len;
-        my = -dx / len;
-        if (mx * c + my * s < 0.0) {
-          mx = -mx;
-          my = -my;
-        }
-      } else if (l_valid && r_valid) {
-        const double w = in.yaw - std::atan((in.depth_left - in.depth_right) / p_.whisker_spacing);
-        mx = std::cos(w);
-        my = std::sin(w);
-      }
-      // More than 60 deg off the heading: not a wall the whiskers point at.
-      if (std::isfinite(mx) && mx * c + my * s >= 0.5) {
-        motion_nx_ = mx;
-        motion_ny_ = my;
-      }
-    }
-    const double nx = motion_nx_, ny = motion_ny_;
-    const double nu = std::fmax(nx * c + ny * s, 0.1);
-    auto carry = [&](bool valid, double d_pub, double side, double& b, double& qx, double& qy) {
-      if (!valid) {
-        b = qx = qy = NAN;
-        return;
-      }
-      double bx, by;
-      base(side, bx, by);
-      if (!std::isfinite(b)) {
-        b = d_pub;  // (re)touch: the published depth of this contact's first tick
-      } else {
-        // Depth along body x from the base to the wall line through the
-        // bound's point with normal n, allowed to rise by relax * dt.
-        const double carried = (nx * (qx - bx) + ny * (qy - by)) / nu;
-        b = std::fmin(d_pub, carried + p_.motion_depth_relax * dt);
-      }
-      qx = bx + b * c;
-      qy = by + b * s;
-    };
-    carry(l_valid, in.depth_left, 1.0, motion_b_l_, motion_qx_l_, motion_qy_l_);
-    carry(r_valid, in.depth_right, -1.0, motion_b_r_, motion_qx_r_, motion_qy_r_);
-  } else {
-    motion_b_l_ = motion_b_r_ = NAN;
-    motion_qx_l_ = motion_qy_l_ = motion_qx_r_ = motion_qy_r_ = NAN;
-    onset_x_l_ = onset_y_l_ = onset_x_r_ = onset_y_r_ = NAN;
-    motion_nx_ = motion_ny_ = NAN;
-  }
-
   // First-order low-pass of the depths for the sub-state rule (our choice;
   // restarts when a whisker loses the wall).
   const double a = p_.depth_filter_tau_s > 0.0 ? dt / (p_.depth_filter_tau_s + dt) : 1.0;
@@ -484,13 +364,6 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
         break;
       case FsmState::kFlyForward:
       case FsmState::kResumeForward:
-        // resume_quiet_rms: a sum still moving is a whisker still on the wall;
-        // the margin counts from here (docs/tuning/tactile_fsm.md "Round 11"; our choice).
-        if (state_ == FsmState::kResumeForward && sum_moves(in, p_.resume_quiet_rms) &&
-            std::hypot(in.x - clear_x_, in.y - clear_y_) < p_.phantom_resume_max) {
-          margin_x_ = in.x;
-          margin_y_ = in.y;
-        }
         if (contact && state_ == FsmState::kResumeForward) {
           // Contact again while side-stepping past the edge: the same
           // obstacle's end (the contact flags dropped early). Keep the side and
@@ -530,7 +403,7 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
             enter(FsmState::kWallFollowing, "whisker contact", t);
           }
         } else if (state_ == FsmState::kResumeForward &&
-                   std::hypot(in.x - margin_x_, in.y - margin_y_) >= p_.clear_margin &&
+                   std::hypot(in.x - clear_x_, in.y - clear_y_) >= p_.clear_margin &&
                    (!(held_raw_l || held_raw_r) ||
                     std::hypot(in.x - clear_x_, in.y - clear_y_) >= p_.phantom_resume_max)) {
           // A whisker still held as a phantom: TDORC has not released it yet,
@@ -546,8 +419,8 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
         if (contact) last_contact_t_ = t;
         if (l_valid && r_valid) both_touched_ = true;
         if (!contact && t - last_contact_t_ >= p_.clear_confirm_s - kTimeEps) {
-          clear_x_ = margin_x_ = in.x;
-          clear_y_ = margin_y_ = in.y;
+          clear_x_ = in.x;
+          clear_y_ = in.y;
           enter(FsmState::kResumeForward, "obstacle cleared (both whiskers off the wall)", t);
         }
         break;
@@ -571,170 +444,71 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
   // Pressed past the depth model (issue 17, docs/whisker_fsm.md "Pressed whisker"): the
   // whisker's S_c sum bounds its depth by press_depth whatever depth is read.
   double d_left = f_left_, d_right = f_right_;
-  if (p_.press_sum_pa > 0.0 || p_.press_rms_pa > 0.0) {
-    const double sum_level = p_.press_sum_pa > 0.0 ? p_.press_sum_pa : INFINITY;
-    const double rms_level = p_.press_rms_pa > 0.0 ? p_.press_rms_pa : INFINITY;
-    // Pressed: the sum beyond the model's range, or its stick-slip changes as large
-    // as a whisker pressed to the depths the model cannot resolve (docs/tuning/tactile_fsm.md "Round 6").
-    if (l_valid && (in.input_sum_left >= sum_level || in.input_change_rms_left >= rms_level)) pressed_t_left_ = t;
-    if (r_valid && (in.input_sum_right >= sum_level || in.input_change_rms_right >= rms_level)) pressed_t_right_ = t;
+  if (p_.press_sum_pa > 0.0) {
+    // Pressed: the sum beyond the model's range.
+    if (l_valid && in.input_sum_left >= p_.press_sum_pa) pressed_t_left_ = t;
+    if (r_valid && in.input_sum_right >= p_.press_sum_pa) pressed_t_right_ = t;
     if (!l_valid) pressed_t_left_ = -INFINITY;
     if (!r_valid) pressed_t_right_ = -INFINITY;
     if (l_valid && t - pressed_t_left_ <= p_.press_hold_s + kTimeEps) d_left = std::fmin(d_left, p_.press_depth);
     if (r_valid && t - pressed_t_right_ <= p_.press_hold_s + kTimeEps) d_right = std::fmin(d_right, p_.press_depth);
   }
 
-  if (std::isfinite(motion_b_l_) && l_valid) d_left = std::fmin(d_left, motion_b_l_ + p_.motion_depth_margin);
-  if (std::isfinite(motion_b_r_) && r_valid) d_right = std::fmin(d_right, motion_b_r_ + p_.motion_depth_margin);
-
-  if (state_ != FsmState::kWallFollowing) {
-    anchor_ = NAN;  // a new wall following reads its own anchor
-    last_l_ = last_r_ = NAN;
-    lost_far_l_ = lost_far_r_ = false;
+  // The override rules (issue 33; docs/whisker_fsm.md "Override rules"), in
+  // order: first on the sub-state rule's result, then on the state's setpoint.
+  const bool top = state_ != state_before;
+  override_started_ = false;
+  TickSnapshot snap;
+  snap.in = in;
+  snap.dt = dt;
+  snap.state = state_;
+  snap.current = sub_;
+  snap.side = side_;
+  snap.l_valid = l_valid;
+  snap.r_valid = r_valid;
+  snap.d_left = d_left;
+  snap.d_right = d_right;
+  snap.theta = theta_;
+  snap.wall_heading = wall_heading_;
+  snap.origin_set = origin_set_;
+  snap.origin_x = origin_x_;
+  snap.origin_y = origin_y_;
+  snap.course_yaw = course_yaw_;
+  snap.after_clear = after_clear_;
+  snap.sub_state = state_ == FsmState::kWallFollowing
+                       ? wall_sub_state(d_left, l_valid, d_right, r_valid, side_, both_touched_, sub_, p_, theta_)
+                       : WallSubState::kNone;
+  const WallSubState rule_sub = snap.sub_state;
+  const char* sub_reason = nullptr;
+  run_rule(heading_limit_, OverrideRule::kHeadingLimit, snap, top);
+  if (snap.sub_state != rule_sub) sub_reason = HeadingLimitRule::kReason;
+  const WallSubState limited_sub = snap.sub_state;
+  run_rule(turn_anchor_, OverrideRule::kTurnAnchor, snap, top);
+  if (snap.sub_state != limited_sub) sub_reason = TurnAnchorRule::kReason;
+  if (snap.sub_state != sub_ && !top) {
+    // A sub-state change: the Fig. S4e rule's, or the override's that made it.
+    if (sub_reason == nullptr) {
+      reason_ = "sub-state rule (000 Fig. S4e)";
+      reason_composed_ = false;
+    } else if (!override_started_) {
+      reason_ = sub_reason;  // else run_rule named it
+      reason_composed_ = false;
+    }
   }
-  if (state_ == FsmState::kWallFollowing) {
-    // lost_far_depth: a whisker lost counts as out of reach only if it was
-    // beyond lost_far_depth and the other beyond T_max on the tick it was lost
-    // (both drifting off the wall). A whisker run off an end while the other
-    // is still in the band, and read far afterwards (held past the end), is
-    // round 7's case (mocap 1023, 1025, 1029), left to wall_end_depth.
-    if (l_valid) {
-      lost_far_l_ = false;
-    } else if (std::isfinite(last_l_) && !lost_far_l_ && prev_l_valid_) {
-      lost_far_l_ = last_l_ > p_.lost_far_depth && r_valid && d_right > p_.t_max;
-    }
-    if (r_valid) {
-      lost_far_r_ = false;
-    } else if (std::isfinite(last_r_) && !lost_far_r_ && prev_r_valid_) {
-      lost_far_r_ = last_r_ > p_.lost_far_depth && l_valid && d_left > p_.t_max;
-    }
-    WallSubState next = wall_sub_state(d_left, l_valid, d_right, r_valid, side_, both_touched_, sub_, p_, theta_,
-                                       lost_far_l_ ? last_l_ : NAN, lost_far_r_ ? last_r_ : NAN);
-    if (l_valid && std::isfinite(d_left)) last_l_ = d_left;
-    if (r_valid && std::isfinite(d_right)) last_r_ = d_right;
-    prev_l_valid_ = l_valid;
-    prev_r_valid_ = r_valid;
-    // A turn that a heading limit refuses becomes the translation the depths
-    // ask for.
-    auto translate_instead = [&] {
-      const double lo = std::fmin(l_valid ? d_left : INFINITY, r_valid ? d_right : INFINITY);
-      const double hi = std::fmax(l_valid ? d_left : -INFINITY, r_valid ? d_right : -INFINITY);
-      return (l_valid || r_valid) && lo < p_.t_min   ? WallSubState::kFlyBackward
-             : (l_valid || r_valid) && hi > p_.t_max ? WallSubState::kFlyForward
-                                                     : WallSubState::kFlySideways;
-    };
-    // True when `next` is a turn that goes on beyond `limit` from the heading `ref`.
-    auto turns_beyond = [&](double ref, double limit) {
-      const double off = std::remainder(in.yaw - ref, 2.0 * M_PI);
-      return (next == WallSubState::kTurnLeft && off >= limit) || (next == WallSubState::kTurnRight && off <= -limit);
-    };
-    // Heading limit about the course heading (issue 17; docs/whisker_fsm.md "Heading limit"): no turn beyond
-    // max_heading_offset; translate on the depths instead.
-    if (p_.max_heading_offset > 0.0 && origin_set_ && std::isfinite(in.yaw) &&
-        turns_beyond(course_yaw_, p_.max_heading_offset)) {
-      next = translate_instead();
-    }
-    // Turn anchor (issue 17, docs/tuning/tactile_fsm.md "Round 13"): the wall heading read at the
-    // first tick both whiskers touched (before the tips slide), replaced by a
-    // clear angle (|theta| >= turn_anchor_theta) read while not turning and
-    // crept toward the heading read while not turning (a tip dragged round by
-    // the yaw reads an angle toward the turn); small angles turn the heading at
-    // most turn_anchor_tolerance beyond it.
-    if (p_.turn_anchor_tolerance > 0.0 && l_valid && r_valid && std::isfinite(wall_heading_) &&
-        std::isfinite(theta_)) {
-      const bool clear_angle = std::fabs(theta_) >= p_.turn_anchor_theta;
-      const bool turning = sub_ == WallSubState::kTurnLeft || sub_ == WallSubState::kTurnRight;
-      if (!std::isfinite(anchor_) || (clear_angle && !turning)) {
-        anchor_ = wall_heading_;
-      } else if (p_.turn_anchor_rate > 0.0 && !turning) {
-        // Not turning: the anchor follows the wall heading read, at most
-        // turn_anchor_rate (a wall that turns away slowly).
-        const double step = p_.turn_anchor_rate * dt;
-        anchor_ += std::clamp(std::remainder(wall_heading_ - anchor_, 2.0 * M_PI), -step, step);
-      }
-      if (!clear_angle && std::isfinite(in.yaw) && turns_beyond(anchor_, p_.turn_anchor_tolerance)) {
-        next = translate_instead();
-      }
-    }
-    if (next != sub_ && state_ == state_before) reason_ = "sub-state rule (000 Fig. S4e)";
-    sub_ = next;
-  } else {
-    sub_ = WallSubState::kNone;
-  }
+  sub_ = snap.sub_state;
 
   WallFollowerOutput out;
   out.state = state_;
   out.sub_state = sub_;
   out.transitioned = state_ != state_before || sub_ != sub_before;
-  out.setpoint = saturate(command(in), p_);
-  if (p_.whisk_amplitude > 0.0 && state_ == FsmState::kFlyForward && origin_set_ && std::isfinite(in.yaw) &&
-      (after_clear_ || !p_.whisk_after_clear_only)) {
-    out.setpoint = whisk(in, out.setpoint, p_.whisk_amplitude, p_.whisk_period_s, p_.v_max);
-  }
   if (state_ == FsmState::kWallFollowing) contacted_ = true;
-  // Whisking on the first approach (docs/tuning/tactile_fsm.md "Round 10"): no clearing yet, the
-  // first baffle's end may lie in the blind band on either side.
-  if (p_.first_whisk_amplitude > 0.0 && state_ == FsmState::kFlyForward && !contacted_ && !after_clear_ &&
-      origin_set_ && std::isfinite(in.yaw) && std::isfinite(in.x) && std::isfinite(in.y)) {
-    out.setpoint = p_.first_scan_step > 0.0
-                       ? step_and_scan(in, out.setpoint, dt)
-                       : whisk(in, out.setpoint, p_.first_whisk_amplitude, p_.first_whisk_period_s,
-                               p_.first_whisk_speed > 0.0 ? p_.first_whisk_speed : p_.v_max,
-                               p_.first_whisk_pause_to_course);
-    // A wall ahead (docs/tuning/tactile_fsm.md "Round 10b", our choice): at a yaw toward one side a
-    // square wall is met first by the other side's whisker (its tip lies
-    // further ahead), an end beside the axis by the yaw side's whisker. The
-    // former turns the yaw back to the course before TDORC flags it, so the
-    // wall following starts as without the whisk.
-    if (p_.first_whisk_wall_rate > 0.0) {
-      const double rel = std::remainder(in.yaw - course_yaw_, 2.0 * M_PI);
-      const bool mv_l = moves(in.input_change_rms_left, p_.whisk_pause_rms);
-      const bool mv_r = moves(in.input_change_rms_right, p_.whisk_pause_rms);
-      if ((mv_l && mv_r) || (mv_l && rel < 0.0) || (mv_r && rel > 0.0)) first_whisk_wall_ = true;
-      if (first_whisk_wall_) {
-        out.setpoint.yaw_rate =
-            std::clamp(-8.0 * rel, -p_.first_whisk_wall_rate, p_.first_whisk_wall_rate);  // 8 1/s: our choice
-      }
-    }
-  } else {
-    first_whisk_wall_ = false;
-    scan_goal_ = NAN;  // step_and_scan starts afresh on the next first approach
-  }
-  const bool offset_on = p_.clear_yaw_offset > 0.0 && origin_set_ && std::isfinite(in.yaw) &&
-                         ((state_ == FsmState::kResumeForward && p_.clear_yaw_in_resume) ||
-                          (state_ == FsmState::kFlyForward && after_clear_));
-  if (offset_on) {
-    out.setpoint = offset_yaw(in, out.setpoint, dt);
-  } else {
-    track_yaw_ = NAN;
-    yaw_offset_released_ = false;
-  }
+  snap.contacted = contacted_;
+  snap.setpoint = saturate(command(in), p_);
+  run_rule(step_and_scan_, OverrideRule::kStepAndScan, snap, top);
+  run_rule(yaw_offset_, OverrideRule::kYawOffset, snap, top);
+  out.setpoint = snap.setpoint;
+  out.override_started = override_started_;
   return out;
-}
-
-Setpoint WhiskerWallFollower::offset_yaw(const WallFollowerInput& in, const Setpoint& s, double dt) {
-  // Yaw offset after a clearing (docs/tuning/tactile_fsm.md "Round 9"). track_yaw_ is the heading
-  // the drone flies without the rule: it starts at the yaw on entering
-  // RESUME_FORWARD and realigns to the course as realign() does (omega_max at
-  // most). The body is held clear_yaw_offset beyond it away from the
-  // side-step side; the body-frame velocity of s, meant for that
-  // heading, is rotated into the body's frame, so the track stays the same.
-  const double sign = side_ == Side::kLeft ? -1.0 : 1.0;  // away from the side-step (yaw > 0 is left)
-  if (!std::isfinite(track_yaw_)) track_yaw_ = in.yaw;
-  const double track_rate = std::clamp(realign_rate(track_yaw_), -p_.omega_max, p_.omega_max);
-  track_yaw_ = std::remainder(track_yaw_ + track_rate * dt, 2.0 * M_PI);
-  // A whisker's sum moving: a touch TDORC has not flagged yet; back to the
-  // track's heading (latched until the next clearing), so that the wall
-  // following starts as without the offset.
-  if (sum_moves(in, p_.clear_yaw_release_rms)) yaw_offset_released_ = true;
-  const double ref = track_yaw_ + (yaw_offset_released_ ? 0.0 : sign * p_.clear_yaw_offset);
-  Setpoint o = s;
-  o.yaw_rate = std::clamp(track_rate + tracking_gain(p_) * std::remainder(ref - in.yaw, 2.0 * M_PI), -p_.omega_max,
-                          p_.omega_max);
-  const double rel = std::remainder(track_yaw_ - in.yaw, 2.0 * M_PI);
-  o.vx = std::cos(rel) * s.vx - std::sin(rel) * s.vy;
-  o.vy = std::sin(rel) * s.vx + std::cos(rel) * s.vy;
-  return o;
 }
 
 double WhiskerWallFollower::end_contact_offset(const WallFollowerInput& in, bool contact_l, bool contact_r,
@@ -790,96 +564,215 @@ Setpoint WhiskerWallFollower::command(const WallFollowerInput& in) const {
   return s;
 }
 
-Setpoint WhiskerWallFollower::whisk(const WallFollowerInput& in, const Setpoint& s, double amplitude, double period,
-                                    double speed, bool pause_to_course) const {
-  // Active whisking (docs/tuning/tactile_fsm.md "Round 5"): yaw reference course + A sin(w t),
-  // tracked with the realignment gain plus the reference's rate; the phase
-  // starts at 0 on entering FLY_FORWARD (a continuous reference from the
-  // course heading). The velocity is the course direction in the world frame,
-  // expressed in the body-yaw frame.
-  Setpoint o = s;
-  const double w = 2.0 * M_PI / period;
-  const double ph = w * (in.t - entered_);
-  const double ref = course_yaw_ + amplitude * std::sin(ph);
-  const double ff = amplitude * w * std::cos(ph);
-  o.yaw_rate = std::clamp(ff + tracking_gain(p_) * std::remainder(ref - in.yaw, 2.0 * M_PI), -p_.whisk_rate_max,
-                          p_.whisk_rate_max);
-  // A whisker's sum moving: a touch TDORC has not flagged yet; hold the yaw.
-  if (sum_moves(in, p_.whisk_pause_rms)) {
-    o.yaw_rate = pause_to_course ? std::clamp(realign_rate(in.yaw), -p_.omega_max, p_.omega_max) : 0.0;
+// --- Override rules ---------------------------------------------------------
+
+const char* to_string(OverrideRule r) {
+  switch (r) {
+    case OverrideRule::kHeadingLimit: return HeadingLimitRule::kName;
+    case OverrideRule::kTurnAnchor: return TurnAnchorRule::kName;
+    case OverrideRule::kStepAndScan: return StepAndScanRule::kName;
+    case OverrideRule::kYawOffset: return YawOffsetRule::kName;
   }
-  const double rel = std::remainder(course_yaw_ - in.yaw, 2.0 * M_PI);
-  o.vx = speed * std::cos(rel);
-  o.vy = speed * std::sin(rel);
-  return o;
+  return "unknown";
 }
 
-Setpoint WhiskerWallFollower::step_and_scan(const WallFollowerInput& in, const Setpoint& s, double dt) {
-  // Step and scan (docs/tuning/tactile_fsm.md "Round 12", our choice). Along the course the
-  // drone flies to the step's end, v = (goal - progress) / kApproachTau
-  // (at most V_max), and holds it there while it scans; the velocity is the
-  // course direction in the world frame, expressed in the body-yaw frame.
+WallSubState translation_instead_of_turn(const TickSnapshot& s, const WallFollowerParams& p) {
+  const double lo = std::fmin(s.l_valid ? s.d_left : INFINITY, s.r_valid ? s.d_right : INFINITY);
+  const double hi = std::fmax(s.l_valid ? s.d_left : -INFINITY, s.r_valid ? s.d_right : -INFINITY);
+  return (s.l_valid || s.r_valid) && lo < p.t_min   ? WallSubState::kFlyBackward
+         : (s.l_valid || s.r_valid) && hi > p.t_max ? WallSubState::kFlyForward
+                                                    : WallSubState::kFlySideways;
+}
+
+bool turns_beyond(const TickSnapshot& s, double ref, double limit) {
+  const double off = std::remainder(s.in.yaw - ref, 2.0 * M_PI);
+  return (s.sub_state == WallSubState::kTurnLeft && off >= limit) ||
+         (s.sub_state == WallSubState::kTurnRight && off <= -limit);
+}
+
+bool HeadingLimitRule::applies(const TickSnapshot& s) const {
+  return s.state == FsmState::kWallFollowing && p_.max_heading_offset > 0.0 && s.origin_set &&
+         std::isfinite(s.in.yaw) && turns_beyond(s, s.course_yaw, p_.max_heading_offset);
+}
+
+bool TurnAnchorRule::tracks(const TickSnapshot& s) const {
+  return s.state == FsmState::kWallFollowing && p_.turn_anchor_tolerance > 0.0 && s.l_valid && s.r_valid &&
+         std::isfinite(s.wall_heading) && std::isfinite(s.theta);
+}
+
+void TurnAnchorRule::observe(const TickSnapshot& s) {
+  if (s.state != FsmState::kWallFollowing) {
+    anchor_ = NAN;  // a new wall following reads its own anchor
+    return;
+  }
+  if (!tracks(s)) return;
+  // Readings in a turn never move the anchor: a tip dragged round by the yaw
+  // reads an angle toward the turn.
+  const bool clear_angle = std::fabs(s.theta) >= p_.turn_anchor_theta;
+  const bool turning = s.current == WallSubState::kTurnLeft || s.current == WallSubState::kTurnRight;
+  if (!std::isfinite(anchor_) || (clear_angle && !turning)) {
+    anchor_ = s.wall_heading;
+  } else if (p_.turn_anchor_rate > 0.0 && !turning) {
+    // Not turning: the anchor follows the wall heading read, at most
+    // turn_anchor_rate (a wall that turns away slowly).
+    const double step = p_.turn_anchor_rate * s.dt;
+    anchor_ += std::clamp(std::remainder(s.wall_heading - anchor_, 2.0 * M_PI), -step, step);
+  }
+}
+
+bool TurnAnchorRule::applies(const TickSnapshot& s) const {
+  return tracks(s) && std::fabs(s.theta) < p_.turn_anchor_theta && std::isfinite(s.in.yaw) &&
+         turns_beyond(s, anchor_, p_.turn_anchor_tolerance);
+}
+
+bool StepAndScanRule::applies(const TickSnapshot& s) const {
+  // No clearing yet: the first baffle's end may lie in the blind band on either side.
+  return p_.first_whisk_amplitude > 0.0 && s.state == FsmState::kFlyForward && !s.contacted && !s.after_clear &&
+         s.origin_set && std::isfinite(s.in.yaw) && std::isfinite(s.in.x) && std::isfinite(s.in.y);
+}
+
+void StepAndScanRule::begin_scan(int leg) {
+  scanning_ = true;
+  ref_ = 0.0;
+  leg_ = leg;
+  hold_s_ = settle_s_ = 0.0;
+}
+
+void StepAndScanRule::apply(TickSnapshot& snap) {
+  // Along the course the drone flies to the step's end, v = (goal - progress)
+  // / kApproachTau (at most V_max), and holds it there while it scans; the
+  // velocity is the course direction in the world frame, expressed in the
+  // body-yaw frame.
   constexpr double kApproachTau = 0.3;  // [s], our choice: the vehicle's velocity lag is ~0.23 s
   constexpr double kAtGoal = 0.015;     // [m] the step is done this near its end
   constexpr double kSettled = 0.05;     // [rad] back on the course: the next step starts
   constexpr double kMaxHold = 1.0;      // [s] per scan: a moving sum no flag follows holds no longer
   constexpr double kMaxSettle = 2.0;    // [s] back toward the course at most this long, then step
-  const double c = std::cos(course_yaw_), sn = std::sin(course_yaw_);
-  const double progress = c * (in.x - origin_x_) + sn * (in.y - origin_y_);
-  const double off = std::remainder(in.yaw - course_yaw_, 2.0 * M_PI);
-  const auto begin_scan = [this](int leg) {
-    scanning_ = true;
-    scan_ref_ = 0.0;
-    scan_leg_ = leg;
-    scan_hold_s_ = scan_settle_s_ = 0.0;
-  };
-  if (!std::isfinite(scan_goal_)) {
+  const WallFollowerInput& in = snap.in;
+  const double dt = snap.dt;
+  const double c = std::cos(snap.course_yaw), sn = std::sin(snap.course_yaw);
+  const double progress = c * (in.x - snap.origin_x) + sn * (in.y - snap.origin_y);
+  const double off = std::remainder(in.yaw - snap.course_yaw, 2.0 * M_PI);
+  if (!std::isfinite(goal_)) {
     // (Re)entering the first approach, e.g. after a fail-safe hover in a
     // scan: off the course, settle first rather than step at a yawed heading.
     if (std::fabs(off) >= kSettled) {
-      scan_goal_ = progress;
+      goal_ = progress;
       begin_scan(3);
     } else {
-      scan_goal_ = progress + p_.first_scan_step;
+      goal_ = progress + p_.first_scan_step;
       scanning_ = false;
-      scan_ref_ = 0.0;  // a scan cut short (e.g. by a fail-safe hover) leaves no yaw offset
+      ref_ = 0.0;  // a scan cut short (e.g. by a fail-safe hover) leaves no yaw offset
     }
   }
   const double a = p_.first_whisk_amplitude;
   const double r = p_.first_scan_rate;
   double ff = 0.0;
-  if (!scanning_ && scan_goal_ - progress < kAtGoal) begin_scan(0);
+  if (!scanning_ && goal_ - progress < kAtGoal) begin_scan(0);
   // A whisker's sum moving: a touch TDORC has not flagged yet; hold the yaw
   // (up to kMaxHold per scan, so that a brush no flag follows cannot stop the
   // approach for good).
-  const bool held = scanning_ && sum_moves(in, p_.whisk_pause_rms) && scan_hold_s_ < kMaxHold;
-  if (held) scan_hold_s_ += dt;
+  const bool held = scanning_ && sum_moves(in, p_.whisk_pause_rms) && hold_s_ < kMaxHold;
+  if (held) hold_s_ += dt;
   if (scanning_) {
     if (!held) {
-      switch (scan_leg_) {
-        case 0: scan_ref_ = std::fmin(a, scan_ref_ + r * dt); ff = r; if (scan_ref_ >= a) scan_leg_ = 1; break;
-        case 1: scan_ref_ = std::fmax(-a, scan_ref_ - r * dt); ff = -r; if (scan_ref_ <= -a) scan_leg_ = 2; break;
-        case 2: scan_ref_ = std::fmin(0.0, scan_ref_ + r * dt); ff = r; if (scan_ref_ >= 0.0) scan_leg_ = 3; break;
-        default: scan_settle_s_ += dt; break;
+      switch (leg_) {
+        case 0: ref_ = std::fmin(a, ref_ + r * dt); ff = r; if (ref_ >= a) leg_ = 1; break;
+        case 1: ref_ = std::fmax(-a, ref_ - r * dt); ff = -r; if (ref_ <= -a) leg_ = 2; break;
+        case 2: ref_ = std::fmin(0.0, ref_ + r * dt); ff = r; if (ref_ >= 0.0) leg_ = 3; break;
+        default: settle_s_ += dt; break;
       }
     }
-    if (scan_leg_ == 3 && (std::fabs(off) < kSettled || scan_settle_s_ >= kMaxSettle)) {
+    if (leg_ == 3 && (std::fabs(off) < kSettled || settle_s_ >= kMaxSettle)) {
       scanning_ = false;
-      scan_goal_ += p_.first_scan_step;
+      goal_ += p_.first_scan_step;
     }
   }
-  Setpoint o = s;
+  Setpoint& o = snap.setpoint;
   if (held) {
     o.yaw_rate = 0.0;
   } else {
-    o.yaw_rate = std::clamp(ff + tracking_gain(p_) * std::remainder(course_yaw_ + scan_ref_ - in.yaw, 2.0 * M_PI),
+    o.yaw_rate = std::clamp(ff + tracking_gain(p_) * std::remainder(snap.course_yaw + ref_ - in.yaw, 2.0 * M_PI),
                             -p_.whisk_rate_max, p_.whisk_rate_max);
   }
-  const double v = std::clamp((scan_goal_ - progress) / kApproachTau, -p_.v_max, p_.v_max);
+  const double v = std::clamp((goal_ - progress) / kApproachTau, -p_.v_max, p_.v_max);
   o.vx = v * std::cos(off);
   o.vy = -v * std::sin(off);
-  return o;
 }
+
+bool YawOffsetRule::applies(const TickSnapshot& s) const {
+  return p_.clear_yaw_offset > 0.0 && s.origin_set && std::isfinite(s.in.yaw) && s.state == FsmState::kFlyForward &&
+         s.after_clear;
+}
+
+void YawOffsetRule::apply(TickSnapshot& snap) {
+  // track_yaw_ is the heading the drone flies without the rule: it starts at
+  // the yaw on entering the FLY_FORWARD after the clearing and realigns to the
+  // course as the realignment does (omega_max at most). The body is held
+  // clear_yaw_offset beyond it away from the side-step side; the body-frame
+  // velocity of the setpoint, meant for that heading, is rotated into the
+  // body's frame, so the track stays the same.
+  const WallFollowerInput& in = snap.in;
+  const double sign = snap.side == Side::kLeft ? -1.0 : 1.0;  // away from the side-step (yaw > 0 is left)
+  if (!std::isfinite(track_yaw_)) track_yaw_ = in.yaw;
+  const double track_rate =
+      std::clamp(p_.realign_gain * std::remainder(snap.course_yaw - track_yaw_, 2.0 * M_PI), -p_.omega_max,
+                 p_.omega_max);
+  track_yaw_ = std::remainder(track_yaw_ + track_rate * snap.dt, 2.0 * M_PI);
+  // A whisker's sum moving: a touch TDORC has not flagged yet; back to the
+  // track's heading (latched until the next clearing), so that the wall
+  // following starts as without the offset.
+  if (sum_moves(in, p_.clear_yaw_release_rms)) released_ = true;
+  const double ref = track_yaw_ + (released_ ? 0.0 : sign * p_.clear_yaw_offset);
+  const Setpoint s = snap.setpoint;
+  Setpoint& o = snap.setpoint;
+  o.yaw_rate = std::clamp(track_rate + tracking_gain(p_) * std::remainder(ref - in.yaw, 2.0 * M_PI), -p_.omega_max,
+                          p_.omega_max);
+  const double rel = std::remainder(track_yaw_ - in.yaw, 2.0 * M_PI);
+  o.vx = std::cos(rel) * s.vx - std::sin(rel) * s.vy;
+  o.vy = std::sin(rel) * s.vx + std::cos(rel) * s.vy;
+}
+
+template <typename Rule>
+void WhiskerWallFollower::run_rule(Rule& rule, OverrideRule id, TickSnapshot& s, bool top_transition) {
+  const auto k = static_cast<std::size_t>(id);
+  rule.observe(s);
+  if (!rule.applies(s)) {
+    rule.idle();
+    override_active_[k] = false;
+    return;
+  }
+  rule.apply(s);
+  ++override_count_[k];
+  if (!override_active_[k]) {
+    override_active_[k] = true;
+    override_started_ = true;
+    note_rule(Rule::kReason, top_transition);
+  }
+}
+
+void WhiskerWallFollower::note_rule(const char* rule_reason, bool top_transition) {
+  if (!top_transition) {
+    reason_ = rule_reason;
+    reason_composed_ = false;
+    return;
+  }
+  // A rule that begins on a transition's tick: both, the transition first
+  // (a second rule beginning on that tick appends to the first's).
+  // Truncated at the buffer's size (the reasons are short static texts).
+  std::array<char, 192> text{};
+  std::size_t n = 0;
+  const auto append = [&](const char* part) {
+    for (; *part != '\0' && n + 1 < text.size(); ++part) text[n++] = *part;
+  };
+  append(reason());
+  append("; ");
+  append(rule_reason);
+  text[n] = '\0';
+  reason_buf_ = text;
+  reason_composed_ = true;
+}
+
 
 double WhiskerWallFollower::realign(const WallFollowerInput& in) const {
   // Back to the course heading after a (tilted) obstacle; saturate() limits it to omega_max.

@@ -4,6 +4,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
 #include <string>
 #include <variant>
 #include <vector>
@@ -105,9 +108,7 @@ TEST(WhiskerFsmLogic, RepositoryConfigMatchesDefaults) {
   }
   const auto p = WhiskerFsmLogic::params_from(m);
   EXPECT_NEAR(p.fsm.omega_max, 25.0 * M_PI / 180.0, 1e-15);  // 000 Fig. S4e, 25 deg/s
-  EXPECT_EQ(p.fsm.whisk_amplitude, 0.0);                     // round 5: not kept
   EXPECT_TRUE(p.fsm.phantom_latch);                          // round 4b
-  EXPECT_EQ(p.fsm.press_rms_pa, 0.0);                        // round 6: not kept
   EXPECT_DOUBLE_EQ(p.fsm.wall_end_depth, 0.105);             // round 7
 }
 
@@ -192,8 +193,11 @@ TEST(WhiskerFsmLogic, FlightThroughMessages) {
   ASSERT_TRUE(o.state.has_value());
   EXPECT_EQ(o.state->state, "FLY_FORWARD");
   EXPECT_EQ(o.state->previous_state, "HOVER_INIT");
-  EXPECT_EQ(o.state->reason, "hover initialisation done");
+  // The step and scan (an override rule) begins on the same tick: both reasons.
+  EXPECT_EQ(o.state->reason,
+            "hover initialisation done; step and scan on the first approach (first_whisk_amplitude, first_scan_step)");
   EXPECT_EQ(o.state->transitions, 1u);
+  EXPECT_EQ(l.stats().rule_step_and_scan, 1u);
   EXPECT_DOUBLE_EQ(o.setpoint.vx, 0.2);
   tactile_common::to_stamp(100 * kStepNs, o.setpoint.header.stamp);
   // A TDORC contact on the right whisker alone triggers wall following.
@@ -374,4 +378,32 @@ TEST(WhiskerFsmLogic, StaleSignalContactIsIgnored) {
   l.on_left_signal(signal(0, 0, true));  // contact at t = 0, never updated
   for (int k = 0; k <= 120; ++k) tick(l, k * kStepNs);
   EXPECT_EQ(l.fsm().state(), tactile_fsm::FsmState::kFlyForward);
+}
+
+// One default per key (issue 33): params_from(default_parameters()) is the core
+// struct's defaults except the two keys gpis_explorer reads at their core default
+// through wall_sub_state() (hold_heading_trailing_lost, wall_end_depth).
+TEST(WhiskerFsmLogic, NodeDefaultsAreTheCoreDefaultsButTwo) {
+  const WhiskerFsmLogic::Params n = WhiskerFsmLogic::params_from(WhiskerFsmLogic::default_parameters());
+  const tactile_fsm::WallFollowerParams c;
+  const tactile_fsm::WallFollowerParams& f = n.fsm;
+  EXPECT_TRUE(f.hold_heading_trailing_lost && !c.hold_heading_trailing_lost);
+  EXPECT_DOUBLE_EQ(f.wall_end_depth, 0.105);
+  EXPECT_EQ(c.wall_end_depth, 0.0);
+  EXPECT_EQ(f.turn_anchor_tolerance, c.turn_anchor_tolerance);
+  EXPECT_EQ(f.turn_anchor_rate, c.turn_anchor_rate);
+  EXPECT_EQ(f.press_sum_pa, c.press_sum_pa);
+  EXPECT_EQ(f.press_hold_s, c.press_hold_s);
+  EXPECT_EQ(f.phantom_quiet_rms, c.phantom_quiet_rms);
+  EXPECT_EQ(f.phantom_travel, c.phantom_travel);
+  EXPECT_EQ(f.phantom_resume_max, c.phantom_resume_max);
+  EXPECT_EQ(f.phantom_latch, c.phantom_latch);
+  EXPECT_EQ(f.whisk_rate_max, c.whisk_rate_max);
+  EXPECT_EQ(f.whisk_pause_rms, c.whisk_pause_rms);
+  EXPECT_EQ(f.clear_yaw_offset, c.clear_yaw_offset);
+  EXPECT_EQ(f.clear_yaw_release_rms, c.clear_yaw_release_rms);
+  EXPECT_EQ(f.first_whisk_amplitude, c.first_whisk_amplitude);
+  EXPECT_EQ(f.first_scan_step, c.first_scan_step);
+  EXPECT_EQ(f.first_scan_rate, c.first_scan_rate);
+  EXPECT_EQ(f.end_contact_lateral, c.end_contact_lateral);
 }

@@ -27,6 +27,29 @@ using tactile_fsm::WhiskerWallFollower;
 
 namespace {
 
+/// The rules of issue 17 that the whisker FSM ships (and WallFollowerParams'
+/// defaults since issue 33) off: the FSM these tests were written against
+/// (000 Fig. S4e with the heading limit, the same-obstacle rule and the
+/// realignment). A test of one rule turns that rule on.
+WallFollowerParams rules_off() {
+  WallFollowerParams p;
+  p.turn_anchor_tolerance = 0.0;
+  p.turn_anchor_rate = 0.0;
+  p.press_sum_pa = 0.0;
+  p.press_hold_s = 0.2;
+  p.phantom_quiet_rms = 0.0;
+  p.phantom_travel = 0.05;
+  p.phantom_resume_max = 0.0;
+  p.phantom_latch = false;
+  p.whisk_rate_max = 2.0;
+  p.whisk_pause_rms = 0.0;
+  p.clear_yaw_offset = 0.0;
+  p.clear_yaw_release_rms = 0.0;
+  p.first_whisk_amplitude = 0.0;
+  p.end_contact_lateral = 0.0;
+  return p;
+}
+
 constexpr double kDt = 0.02;  // 50 Hz
 constexpr double kDeg = M_PI / 180.0;
 
@@ -65,7 +88,7 @@ WallSubState sub_with_left_lost(WhiskerWallFollower& fsm, double& t, double righ
 }
 
 WallSubState rule(double dl, double dr, WallSubState current = WallSubState::kFlySideways) {
-  return wall_sub_state(dl, true, dr, true, Side::kRight, true, current, WallFollowerParams{});
+  return wall_sub_state(dl, true, dr, true, Side::kRight, true, current, rules_off());
 }
 
 /// validate() rejects p with an error naming WallFollowerParams.<field>.
@@ -92,6 +115,31 @@ TEST(WallFollowerParams, DefaultsArePaperValuesAndValidate) {
   EXPECT_NO_THROW(p.validate());
 }
 
+// One default per key (issue 33): the core struct's defaults are the rules the
+// whisker FSM node ships (config/tactile_fsm.yaml), except the two rules
+// gpis_explorer's wall follows read through wall_sub_state() with the core
+// defaults (not measured there): hold_heading_trailing_lost and wall_end_depth.
+TEST(WallFollowerParams, DefaultsAreTheShippedRules) {
+  const WallFollowerParams p;
+  EXPECT_DOUBLE_EQ(p.turn_anchor_tolerance, 10.0 * kDeg);  // round 13
+  EXPECT_DOUBLE_EQ(p.turn_anchor_rate, 2.0 * kDeg);
+  EXPECT_DOUBLE_EQ(p.press_sum_pa, 900.0);                 // round 3
+  EXPECT_DOUBLE_EQ(p.press_hold_s, 0.0);
+  EXPECT_DOUBLE_EQ(p.phantom_quiet_rms, 6.5);              // rounds 4, 4b
+  EXPECT_DOUBLE_EQ(p.phantom_travel, 0.03);
+  EXPECT_DOUBLE_EQ(p.phantom_resume_max, 2.0);
+  EXPECT_TRUE(p.phantom_latch);
+  EXPECT_DOUBLE_EQ(p.clear_yaw_offset, 0.2443);            // round 9
+  EXPECT_DOUBLE_EQ(p.clear_yaw_release_rms, 13.0);
+  EXPECT_DOUBLE_EQ(p.first_whisk_amplitude, 0.44);         // round 12
+  EXPECT_DOUBLE_EQ(p.first_scan_step, 0.08);
+  EXPECT_DOUBLE_EQ(p.whisk_rate_max, 3.0);
+  EXPECT_DOUBLE_EQ(p.whisk_pause_rms, 13.0);
+  EXPECT_DOUBLE_EQ(p.end_contact_lateral, 0.045);          // round 10
+  EXPECT_FALSE(p.hold_heading_trailing_lost);              // gpis_explorer's rule
+  EXPECT_EQ(p.wall_end_depth, 0.0);
+}
+
 TEST(WallFollowerParams, ValidateNamesFieldAndReason) {
   auto message = [](WallFollowerParams p) -> std::string {
     try {
@@ -101,16 +149,16 @@ TEST(WallFollowerParams, ValidateNamesFieldAndReason) {
     }
     return "";
   };
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.t_max = 0.05;  // below t_min
   EXPECT_NE(message(p).find("WallFollowerParams.t_max: must be finite and > t_min"), std::string::npos) << message(p);
-  p = WallFollowerParams{};
+  p = rules_off();
   p.v_max = -1.0;
   EXPECT_NE(message(p).find("WallFollowerParams.v_max"), std::string::npos);
-  p = WallFollowerParams{};
+  p = rules_off();
   p.align_exit = 5.0 * kDeg;  // above align_enter (3 deg)
   EXPECT_NE(message(p).find("WallFollowerParams.align_exit"), std::string::npos);
-  p = WallFollowerParams{};
+  p = rules_off();
   p.max_input_age_s = std::nan("");
   EXPECT_NE(message(p).find("WallFollowerParams.max_input_age_s"), std::string::npos);
   EXPECT_THROW(WhiskerWallFollower{p}, std::invalid_argument);
@@ -158,7 +206,7 @@ TEST(WallSubStateRule, AlignedButStraddlingBandEdgeTranslates) {
 }
 
 TEST(WallSubStateRule, MissingDepth) {
-  const WallFollowerParams p;
+  const WallFollowerParams p = rules_off();
   // Approach: left not touching yet counts as beyond T_max -> turn right (toward the wall on the right).
   EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kRight, false, WallSubState::kNone, p),
             WallSubState::kTurnRight);
@@ -188,7 +236,7 @@ TEST(WallSubStateRule, MissingDepth) {
 // one; following left, the right one. The remaining depth decides the
 // translation (band 60-100 mm); the drone never turns toward the lost whisker.
 TEST(WallSubStateRule, TrailingWhiskerLostHoldsHeading) {
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.hold_heading_trailing_lost = true;  // the whisker FSM node's default
   const auto ws = WallSubState::kFlySideways;
   // Right side, left lost: remaining right depth in band / too close / too far.
@@ -214,7 +262,7 @@ TEST(WallSubStateRule, TrailingWhiskerLostHoldsHeading) {
 // with wall_end_depth the wall ends: FLY_SIDEWAYS. A remaining depth in the
 // band or below, and the approach (before both touched), are unchanged.
 TEST(WallSubStateRule, OneDepthBeyondWallEndDepthAfterBothTouchedPassesTheEdge) {
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.hold_heading_trailing_lost = true;  // the whisker FSM node's default
   const auto ws = WallSubState::kFlySideways;
   EXPECT_EQ(wall_sub_state(NAN, false, 0.115, true, Side::kRight, true, ws, p), WallSubState::kFlyForward);
@@ -244,7 +292,7 @@ TEST(WallSubStateRule, OneDepthBeyondWallEndDepthAfterBothTouchedPassesTheEdge) 
     }
     return sub_with_left_lost(fsm, t, 0.115);
   };
-  WallFollowerParams q;
+  WallFollowerParams q = rules_off();
   q.hold_heading_trailing_lost = true;
   EXPECT_EQ(sub_after_release(q), WallSubState::kFlyForward);  // off: the core default
   EXPECT_EQ(WallFollowerParams{}.wall_end_depth, 0.0);
@@ -266,7 +314,7 @@ TEST(WallSubStateRule, OneDepthBeyondWallEndDepthAfterBothTouchedPassesTheEdge) 
 // target is now clearly on the other side; further on, the side is re-chosen.
 TEST(WhiskerWallFollower, ContactJustAfterClearingKeepsTheSide) {
   auto run = [](double forward_after_resume) {
-    WhiskerWallFollower fsm{WallFollowerParams{}};
+    WhiskerWallFollower fsm{rules_off()};
     double t = 0.0;
     for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t));
     // Contact at x = 1, target (2, 0) straight ahead -> default side right.
@@ -309,7 +357,7 @@ TEST(WhiskerWallFollower, ContactJustAfterClearingKeepsTheSide) {
 // (back toward the course) is still allowed. Below T_min it backs off.
 TEST(WhiskerWallFollower, HeadingLimitAboutTheCourse) {
   auto sub_at = [](double yaw_deg, double dl, double dr) {
-    WhiskerWallFollower fsm{WallFollowerParams{}};
+    WhiskerWallFollower fsm{rules_off()};
     double t = 0.0;
     for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t));
     WallFollowerInput in = input(t, 1.0, 0.0, yaw_deg * kDeg);
@@ -325,7 +373,7 @@ TEST(WhiskerWallFollower, HeadingLimitAboutTheCourse) {
   EXPECT_EQ(sub_at(46.0, 0.07, 0.10), WallSubState::kFlySideways);
   EXPECT_EQ(sub_at(30.0, 0.07, 0.10), WallSubState::kTurnLeft);
   // Off (0): the turn is kept.
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.max_heading_offset = 0.0;
   WhiskerWallFollower fsm(p);
   double t = 0.0;
@@ -348,7 +396,7 @@ TEST(WhiskerWallFollower, HeadingLimitAboutTheCourse) {
 // heading read at turn_anchor_rate (1 deg/s here): the bias held at -11 deg
 // turns again after 2 s, not with the anchor fixed (rate 0). Off: it turns.
 TEST(WhiskerWallFollower, TurnAnchorHoldsTheFirstWallHeading) {
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.turn_anchor_tolerance = 10.0 * kDeg;
   p.turn_anchor_theta = 10.0 * kDeg;
   p.turn_anchor_rate = 0.0;
@@ -406,14 +454,13 @@ TEST(WhiskerWallFollower, TurnAnchorHoldsTheFirstWallHeading) {
 
 TEST(WhiskerWallFollower, TurnAnchorParametersAreValidated) {
   auto bad = [](double tol, double th) {
-    WallFollowerParams p;
+    WallFollowerParams p = rules_off();
     p.turn_anchor_tolerance = tol;
     p.turn_anchor_theta = th;
     return p;
   };
   EXPECT_NO_THROW(bad(0.0, 0.1).validate());
   EXPECT_NO_THROW(bad(0.2, 0.2).validate());
-  EXPECT_EQ(WallFollowerParams{}.turn_anchor_tolerance, 0.0);  // off in the core (the paper); on in the node
   EXPECT_THROW(bad(-0.1, 0.2).validate(), std::invalid_argument);
   EXPECT_THROW(bad(M_PI + 0.1, 0.2).validate(), std::invalid_argument);
   EXPECT_THROW(bad(NAN, 0.2).validate(), std::invalid_argument);
@@ -454,7 +501,7 @@ TEST(WhiskerWallFollower, PressedWhiskerCountsAsAtPressDepth) {
     }
     return s;
   };
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.press_sum_pa = 900.0;
   p.press_hold_s = 0.0;
   EXPECT_EQ(sub_at(p, 1200.0, 300.0), WallSubState::kFlyBackward);
@@ -470,8 +517,7 @@ TEST(WhiskerWallFollower, PressedWhiskerCountsAsAtPressDepth) {
   dark.t_min = 0.04;
   EXPECT_EQ(sub_at(dark, 1200.0, 1200.0), WallSubState::kFlySideways);
   // Off (the paper, the core default).
-  EXPECT_EQ(WallFollowerParams{}.press_sum_pa, 0.0);
-  EXPECT_EQ(sub_at(WallFollowerParams{}, 1200.0, 1200.0), WallSubState::kFlySideways);
+  EXPECT_EQ(sub_at(rules_off(), 1200.0, 1200.0), WallSubState::kFlySideways);
   // Bad values name the field.
   p.press_sum_pa = -1.0;
   expect_rejected(p, "press_sum_pa");
@@ -512,7 +558,7 @@ TEST(WhiskerWallFollower, QuietHeldContactWhileTravellingIsPhantom) {
     }
     return r;
   };
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.phantom_quiet_rms = 8.0;
   p.phantom_travel = 0.05;
   const Run quiet = fly(p, 3.0, 0.004);
@@ -522,8 +568,7 @@ TEST(WhiskerWallFollower, QuietHeldContactWhileTravellingIsPhantom) {
   EXPECT_EQ(fly(p, NAN, 0.004).cleared_tick, -1);   // unknown: kept
   EXPECT_EQ(fly(p, 3.0, 0.0).cleared_tick, -1);     // quiet but hovering: kept
   // Off (the paper, the core default).
-  EXPECT_EQ(WallFollowerParams{}.phantom_quiet_rms, 0.0);
-  EXPECT_EQ(fly(WallFollowerParams{}, 3.0, 0.004).cleared_tick, -1);
+  EXPECT_EQ(fly(rules_off(), 3.0, 0.004).cleared_tick, -1);
   // Bad values name the field.
   p.phantom_travel = -0.1;
   expect_rejected(p, "phantom_travel");
@@ -542,7 +587,7 @@ TEST(WhiskerWallFollower, QuietHeldContactWhileTravellingIsPhantom) {
 // hold ends at tick 120).
 TEST(WhiskerWallFollower, ResumeKeepsSideSteppingWhilePhantomHeld) {
   auto fly = [](double resume_max, int release_tick) {
-    WallFollowerParams p;
+    WallFollowerParams p = rules_off();
     p.phantom_quiet_rms = 8.0;
     p.phantom_travel = 0.05;
     p.phantom_resume_max = resume_max;
@@ -565,7 +610,7 @@ TEST(WhiskerWallFollower, ResumeKeepsSideSteppingWhilePhantomHeld) {
   EXPECT_EQ(fly(0.0, 1000), 97);
   EXPECT_EQ(fly(0.6, 1000), 172);
   EXPECT_EQ(fly(0.6, 120), 120);
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.phantom_resume_max = -1.0;
   EXPECT_THROW(p.validate(), std::invalid_argument);
 }
@@ -577,7 +622,7 @@ TEST(WhiskerWallFollower, ResumeKeepsSideSteppingWhilePhantomHeld) {
 // and an RMS of 20 Pa (>= 2 * 8 Pa, a new touch) brings it back.
 TEST(WhiskerWallFollower, PhantomLatch) {
   auto state_at_39 = [](bool latch, double later_rms) {
-    WallFollowerParams p;
+    WallFollowerParams p = rules_off();
     p.phantom_quiet_rms = 8.0;
     p.phantom_travel = 0.05;
     p.phantom_latch = latch;
@@ -602,11 +647,10 @@ TEST(WhiskerWallFollower, PhantomLatch) {
   EXPECT_EQ(state_at_39(false, 9.0), FsmState::kWallFollowing);
   EXPECT_EQ(state_at_39(true, 9.0), FsmState::kResumeForward);
   EXPECT_EQ(state_at_39(true, 20.0), FsmState::kWallFollowing);
-  EXPECT_FALSE(WallFollowerParams{}.phantom_latch);
 }
 
 TEST(Saturation, ScalesSpeedAndClampsYawRate) {
-  const WallFollowerParams p;
+  const WallFollowerParams p = rules_off();
   Setpoint s;
   s.vx = 0.3;
   s.vy = 0.4;  // |v| = 0.5 -> scaled by 0.4 to 0.2
@@ -625,7 +669,7 @@ TEST(Saturation, ScalesSpeedAndClampsYawRate) {
   EXPECT_DOUBLE_EQ(n.vy, 0.1);
   EXPECT_EQ(n.yaw_rate, 0.0);
   // A smaller V_max in the params scales the FSM's own commands too.
-  WallFollowerParams slow;
+  WallFollowerParams slow = rules_off();
   slow.v_max = 0.1;
   slow.omega_max = 0.2;
   WhiskerWallFollower fsm(slow);
@@ -637,7 +681,7 @@ TEST(Saturation, ScalesSpeedAndClampsYawRate) {
 // --- Scripted sequence: hover 2 s -> forward -> contact -> wall following ->
 // cleared -> resume -> forward -> target -> landing -> landed.
 TEST(WhiskerWallFollower, ScriptedStateSequence) {
-  const WallFollowerParams p;
+  const WallFollowerParams p = rules_off();
   WhiskerWallFollower fsm(p);
   double t = 0.0;
   WallFollowerOutput o;
@@ -722,7 +766,7 @@ TEST(WhiskerWallFollower, ScriptedStateSequence) {
 }
 
 TEST(WhiskerWallFollower, LandsWithinTargetRadius) {
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.land_past_target = false;
   WhiskerWallFollower fsm(p);
   for (int k = 0; k <= 100; ++k) fsm.step(input(k * kDt));
@@ -734,7 +778,7 @@ TEST(WhiskerWallFollower, LandsWithinTargetRadius) {
 
 TEST(WhiskerWallFollower, SideTowardTargetLateralOffset) {
   // Target (2, 0.5) from the origin heading +x: 0.5 m to the left -> follow left.
-  WhiskerWallFollower fsm{WallFollowerParams{}};
+  WhiskerWallFollower fsm{rules_off()};
   for (int k = 0; k <= 100; ++k) fsm.step(input(k * kDt));
   WallFollowerInput in = input(2.1);
   in.target_y = 0.5;
@@ -743,7 +787,7 @@ TEST(WhiskerWallFollower, SideTowardTargetLateralOffset) {
   ASSERT_EQ(fsm.state(), FsmState::kWallFollowing);
   EXPECT_EQ(fsm.active_side(), Side::kLeft);
   // Heading +y (yaw 90 deg): the same target is 2 m to the right.
-  WhiskerWallFollower fsm2{WallFollowerParams{}};
+  WhiskerWallFollower fsm2{rules_off()};
   for (int k = 0; k <= 100; ++k) fsm2.step(input(k * kDt, 0.0, 0.0, M_PI / 2));
   in = input(2.1, 0.0, 0.0, M_PI / 2);
   in.target_y = 0.5;
@@ -752,7 +796,7 @@ TEST(WhiskerWallFollower, SideTowardTargetLateralOffset) {
   EXPECT_EQ(fsm2.active_side(), Side::kRight);
   EXPECT_DOUBLE_EQ(o.setpoint.vy, -0.2);
   // With side_toward_target off the configured side is used.
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.side_toward_target = false;
   p.follow_side = Side::kLeft;
   WhiskerWallFollower fsm3(p);
@@ -765,7 +809,7 @@ TEST(WhiskerWallFollower, SideTowardTargetLateralOffset) {
 }
 
 TEST(WhiskerWallFollower, StaleDepthFailsafeHoverThenLand) {
-  WhiskerWallFollower fsm{WallFollowerParams{}};
+  WhiskerWallFollower fsm{rules_off()};
   for (int k = 0; k <= 125; ++k) fsm.step(input(k * kDt));
   ASSERT_EQ(fsm.state(), FsmState::kFlyForward);
   // Depth stops at t = 2.5 s; odometry continues. Stale after 0.2 s.
@@ -796,7 +840,7 @@ TEST(WhiskerWallFollower, StaleDepthFailsafeHoverThenLand) {
 }
 
 TEST(WhiskerWallFollower, StaleOdometryFailsafeAndRecovery) {
-  WhiskerWallFollower fsm{WallFollowerParams{}};
+  WhiskerWallFollower fsm{rules_off()};
   for (int k = 0; k <= 125; ++k) fsm.step(input(k * kDt));
   WallFollowerInput in = input(3.0);
   in.odom_stamp = 2.5;
@@ -808,7 +852,7 @@ TEST(WhiskerWallFollower, StaleOdometryFailsafeAndRecovery) {
 }
 
 TEST(WhiskerWallFollower, NoInputAtEndOfHoverIsFailsafe) {
-  WhiskerWallFollower fsm{WallFollowerParams{}};
+  WhiskerWallFollower fsm{rules_off()};
   WallFollowerInput in;  // never received anything
   for (int k = 0; k < 100; ++k) {
     in.t = k * kDt;
@@ -833,7 +877,7 @@ struct ClosedLoopResult {
 };
 
 ClosedLoopResult fly_to_wall(double wall_deg, unsigned seed) {
-  const WallFollowerParams p;
+  const WallFollowerParams p = rules_off();
   WhiskerWallFollower fsm(p);
   std::mt19937 rng(seed);
   std::normal_distribution<double> noise(0.0, 0.002);
@@ -965,7 +1009,7 @@ struct CourseResult {
 };
 
 CourseResult fly_course(const std::vector<Segment>& walls, double t_max) {
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.t_max = t_max;
   WhiskerWallFollower fsm(p);
   std::mt19937 rng(7);
@@ -1057,220 +1101,18 @@ TEST(BaffleCourse, TiltedBafflesReachTarget) {
   EXPECT_GT(r.min_frame_clearance, 0.06);
 }
 
-// Active whisking (issue 17, docs/tuning/tactile_fsm.md "Round 5"): in FLY_FORWARD the heading
-// oscillates about the course heading so the whisker tips (0.19 m ahead of
-// the centre, bases 25 mm off the axis) sweep the guard's 80 mm half-width,
-// while the track stays on the course. Kinematic drone integrating the
-// setpoint; without the rule the tips stay 25 mm off the axis.
-TEST(WhiskerWallFollower, ActiveWhiskingSweepsGuardWidthOnCourse) {
-  auto fly = [](double amplitude) {
-    WallFollowerParams p;
-    p.whisk_amplitude = amplitude;
-    p.whisk_period_s = 1.0;
-    WhiskerWallFollower fsm(p);
-    double t = 0.0, x = 0.0, y = 0.0, yaw = 0.0, max_tip = 0.0, max_y = 0.0, min_speed = 1.0;
-    for (; t < p.hover_init_s + 3.0; t += kDt) {
-      WallFollowerInput in = input(t, x, y, yaw);
-      in.target_x = 10.0;
-      const WallFollowerOutput o = fsm.step(in);
-      if (o.state != FsmState::kFlyForward) continue;
-      EXPECT_LE(std::fabs(o.setpoint.yaw_rate), p.whisk_rate_max + 1e-12);
-      // Body -> world velocity.
-      const double vx = std::cos(yaw) * o.setpoint.vx - std::sin(yaw) * o.setpoint.vy;
-      const double vy = std::sin(yaw) * o.setpoint.vx + std::cos(yaw) * o.setpoint.vy;
-      min_speed = std::min(min_speed, vx);
-      x += vx * kDt;
-      y += vy * kDt;
-      yaw += o.setpoint.yaw_rate * kDt;
-      // Lateral offset of the left whisker's tip (base (0.05, 0.025), reach 0.141 m).
-      max_tip = std::max(max_tip, 0.191 * std::sin(yaw) + 0.025 * std::cos(yaw));
-      max_y = std::max(max_y, std::fabs(y));
-    }
-    EXPECT_GT(x, 0.5);
-    return std::vector<double>{max_tip, max_y, min_speed};
-  };
-  const std::vector<double> off = fly(0.0);
-  EXPECT_NEAR(off[0], 0.025, 1e-9);
-  const std::vector<double> on = fly(20.0 * kDeg);
-  EXPECT_GT(on[0], 0.08);           // the tip reaches the guard's radius
-  EXPECT_LT(on[1], 0.005);          // track kept on the course (world frame)
-  EXPECT_NEAR(on[2], 0.2, 1e-9);    // full V_max along the course
-  WallFollowerParams bad;
-  bad.whisk_amplitude = 2.0;
-  EXPECT_THROW(bad.validate(), std::invalid_argument);
-  bad.whisk_amplitude = 0.2;
-  bad.whisk_period_s = 0.0;
-  EXPECT_THROW(bad.validate(), std::invalid_argument);
-}
-
-// Whisking only after a clearing (whisk_after_clear_only) and paused while a
-// whisker's S_c sum moves (whisk_pause_rms), docs/tuning/tactile_fsm.md "Round 5".
-TEST(WhiskerWallFollower, WhiskingAfterClearOnlyAndPausedOnMovingSum) {
-  WallFollowerParams p;
-  p.whisk_amplitude = 0.23;
-  p.whisk_period_s = 0.7;
-  p.whisk_rate_max = 3.0;
-  auto first_forward_rate = [&](const WallFollowerParams& q, double rms) {
-    WhiskerWallFollower fsm(q);
-    double t = 0.0;
-    for (; t < q.hover_init_s + 1e-9; t += kDt) fsm.step(input(t));
-    WallFollowerInput in = input(t + 0.05);
-    in.input_change_rms_left = rms;
-    in.input_change_rms_right = 5.0;
-    const WallFollowerOutput o = fsm.step(in);
-    EXPECT_EQ(o.state, FsmState::kFlyForward);
-    return o.setpoint.yaw_rate;
-  };
-  EXPECT_GT(first_forward_rate(p, 5.0), 1.0);  // whisking from the first FLY_FORWARD
-  WallFollowerParams q = p;
-  q.whisk_pause_rms = 13.0;
-  EXPECT_GT(first_forward_rate(q, 12.0), 1.0);       // quiet sum: whisking
-  EXPECT_EQ(first_forward_rate(q, 13.0), 0.0);       // moving sum: yaw held
-  q.whisk_pause_rms = 0.0;
-  q.whisk_after_clear_only = true;
-  EXPECT_EQ(first_forward_rate(q, 5.0), 0.0);        // before the first obstacle: no whisk
-  q.whisk_pause_rms = -1.0;
-  EXPECT_THROW(q.validate(), std::invalid_argument);
-}
-
-// Issue 17, docs/tuning/tactile_fsm.md "Round 6": both depths read 70 mm (in band, aligned:
-// FLY_SIDEWAYS) and both sums are 500 Pa (under press_sum_pa), but the left
-// whisker's S_c sum jumps by ~600 Pa from sample to sample (change RMS 600 Pa,
-// the stick-slip of a whisker pressed to 20-50 mm): with press_rms_pa 450 Pa
-// its depth counts as press_depth (50 mm) < T_min and the drone backs off;
-// at 300 Pa of RMS (70-100 mm), an unknown RMS or with the rule off it flies
-// sideways as before.
-TEST(WhiskerWallFollower, StickSlipAmplitudeCountsAsPressed) {
-  auto sub_at = [](WallFollowerParams p, double rms_l) {
-    WhiskerWallFollower fsm(p);
-    double t = 0.0;
-    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t));
-    WallFollowerInput in = input(t, 1.0, 0.0);
-    set_depths(in, 0.07, 0.07);
-    in.input_sum_left = in.input_sum_right = 500.0;
-    in.input_change_rms_left = rms_l;
-    in.input_change_rms_right = 300.0;
-    return fsm.step(in).sub_state;
-  };
-  WallFollowerParams p;
-  p.press_sum_pa = 900.0;
-  p.press_hold_s = 0.0;
-  EXPECT_EQ(sub_at(p, 600.0), WallSubState::kFlySideways);  // rule off: the sum alone is not pressed
-  p.press_rms_pa = 450.0;
-  EXPECT_EQ(sub_at(p, 600.0), WallSubState::kFlyBackward);
-  EXPECT_EQ(sub_at(p, 300.0), WallSubState::kFlySideways);
-  EXPECT_EQ(sub_at(p, NAN), WallSubState::kFlySideways);
-  // Works without the sum rule too.
-  p.press_sum_pa = 0.0;
-  EXPECT_EQ(sub_at(p, 600.0), WallSubState::kFlyBackward);
-  p.press_rms_pa = -1.0;
-  EXPECT_THROW(p.validate(), std::invalid_argument);
-}
-
-// Issue 17, round 8: the depth bounded by the drone's own motion. Hand case:
-// both whiskers touch a wall square to the heading at a published 100 mm
-// (tick 0, drone at x = 1.0), the drone then moves 3 mm per tick toward it
-// (+x) while the published depths stay at a saturated 75 / 75 mm (inside the
-// band: FLY_SIDEWAYS without the rule). With relax 0.02 m/s (0.4 mm per tick)
-// and margin 0.01 m: tick 1 carries 100 - 3 + 0.4 = 97.4 mm, the published
-// 75 mm is lower and becomes the bound; from there it falls by 2.6 mm per
-// tick, 75 - 2.6 (k - 1), and the rule reads it + 10 mm < T_min = 60 mm once
-// k - 1 > 9.6: FLY_BACKWARD from tick 11.
-TEST(WhiskerWallFollower, MotionTowardTheWallBoundsAPressedDepth) {
-  auto fly = [](WallFollowerParams p, double step_m, double dy_m) {
-    WhiskerWallFollower fsm(p);
-    double t = 0.0;
-    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t, 1.0, 0.0));
-    int first_backward = -1;
-    for (int k = 0; k < 40; ++k, t += kDt) {
-      WallFollowerInput in = input(t, 1.0 + step_m * k, dy_m * k);
-      if (k == 0) {
-        set_depths(in, 0.100, 0.100);
-      } else {
-        set_depths(in, 0.075, 0.075);
-      }
-      in.tdorc_contact_left = in.tdorc_contact_right = true;
-      const WallFollowerOutput o = fsm.step(in);
-      if (first_backward < 0 && o.sub_state == WallSubState::kFlyBackward) first_backward = k;
-    }
-    return first_backward;
-  };
-  WallFollowerParams p;
-  p.motion_depth_relax = 0.02;
-  p.motion_depth_margin = 0.01;
-  EXPECT_EQ(fly(p, 0.003, 0.0), 11);
-  // Off (the paper, the core default): the saturated 75 mm is flown sideways.
-  EXPECT_EQ(WallFollowerParams{}.motion_depth_relax, 0.0);
-  EXPECT_EQ(fly(WallFollowerParams{}, 0.003, 0.0), -1);
-  // Hovering, or sliding along a wall square to the heading: the bound only
-  // relaxes back to the published depth, no back-off.
-  EXPECT_EQ(fly(p, 0.0, 0.0), -1);
-  EXPECT_EQ(fly(p, 0.0, -0.004), -1);
-  // Bad values name the field.
-  p.motion_depth_relax = -0.1;
-  expect_rejected(p, "motion_depth_relax");
-  p.motion_depth_relax = 0.02;
-  p.motion_depth_margin = NAN;
-  EXPECT_THROW(p.validate(), std::invalid_argument);
-}
-
-// Round 8: the wall normal, fixed in the world for the contact. The drone
-// (heading 0) touches a wall tilted by 20 deg (nearer on the right): left at
-// 100 mm, right at 100 - 50 tan 20 deg = 81.8 mm (contact points 0.05 m
-// apart), then slides right (-y) by 4 mm per tick while the published depths
-// stay at 75 / 75 mm (the wall read square). Sliding right closes the wall by
-// 4 tan 20 deg = 1.456 mm per tick; with relax 0.4 mm per tick the right
-// bound is 75 - 1.056 (k - 1) mm from tick 1 (the published 75 mm is lower
-// than the carried 80.7 mm there), and it + 10 mm < 60 mm once k - 1 > 23.7:
-// tick 25. The same with the baseline off (eq. 21 on the depths of the tick
-// both touched gives the same 20 deg). A wall touched square (100 / 100 mm)
-// does not move the bound when sliding along it.
-TEST(WhiskerWallFollower, MotionBoundUsesTheWallFromTheContactPoints) {
-  auto fly = [](WallFollowerParams p, double dr0) {
-    WhiskerWallFollower fsm(p);
-    double t = 0.0;
-    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t, 1.0, 0.0));
-    int first = -1;
-    for (int k = 0; k < 45; ++k, t += kDt) {
-      WallFollowerInput in = input(t, 1.0, -0.004 * k);
-      if (k == 0) {
-        set_depths(in, 0.100, dr0);
-      } else {
-        set_depths(in, 0.075, 0.075);
-      }
-      in.tdorc_contact_left = in.tdorc_contact_right = true;
-      fsm.step(in);
-      if (k > 0 && first < 0 && std::isfinite(fsm.motion_bound_right()) &&
-          fsm.motion_bound_right() + p.motion_depth_margin < p.t_min) {
-        first = k;
-      }
-    }
-    return first;
-  };
-  const double tilted = 0.100 - 0.05 * std::tan(20.0 * kDeg);
-  WallFollowerParams p;
-  p.motion_depth_relax = 0.02;
-  p.motion_depth_margin = 0.01;
-  EXPECT_EQ(fly(p, tilted), 25);
-  EXPECT_EQ(fly(p, 0.100), -1);
-  p.motion_depth_baseline = 0.0;  // no contact-point line: eq. 21 at the onset
-  EXPECT_EQ(fly(p, tilted), 25);
-  EXPECT_EQ(fly(WallFollowerParams{}, tilted), -1);  // off: no bound
-}
-
 // Issue 17, docs/tuning/tactile_fsm.md "Round 9": after a clearing the body yaw is held
 // clear_yaw_offset away from the side-step side (left here: the target is
 // ahead, follow_side right, the drone side-steps right), in the FLY_FORWARD
-// after it (and with clear_yaw_in_resume during the side-step), while the
+// after it (not during the side-step), while the
 // track is the one flown without the offset (side-step along -y, then +x at
 // V_max). Kinematic drone: the left whisker's tip (base (0.05, 0.025), reach
 // 0.141 m) reaches beyond the guard's 80 mm on the left, where the next
 // baffle's outer end lies; off, it stays at 25 mm.
 TEST(WhiskerWallFollower, YawOffsetAfterClearingTurnsWhiskersNotTrack) {
-  auto fly = [](double offset, bool in_resume) {
-    WallFollowerParams p;
+  auto fly = [](double offset) {
+    WallFollowerParams p = rules_off();
     p.clear_yaw_offset = offset;
-    p.clear_yaw_in_resume = in_resume;
     WhiskerWallFollower fsm(p);
     double t = 0.0, x = 0.0, y = 0.0, yaw = 0.0;
     for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t, x, y, yaw));
@@ -1314,17 +1156,14 @@ TEST(WhiskerWallFollower, YawOffsetAfterClearingTurnsWhiskersNotTrack) {
     EXPECT_LT(y, resume_y0 - p.clear_margin + 1e-6);
     return std::vector<double>{tip_left, yaw, max_resume_yaw};
   };
-  const std::vector<double> off = fly(0.0, false);
+  const std::vector<double> off = fly(0.0);
   EXPECT_NEAR(off[0], 0.025, 1e-9);
   EXPECT_NEAR(off[1], 0.0, 1e-9);
-  const std::vector<double> on = fly(20.0 * kDeg, false);
+  const std::vector<double> on = fly(20.0 * kDeg);
   EXPECT_GT(on[0], 0.085);                       // beyond the guard's 80 mm
   EXPECT_NEAR(on[1], 20.0 * kDeg, 0.5 * kDeg);   // held to the left, away from the side-step
   EXPECT_NEAR(on[2], 0.0, 1e-9);                 // not during the side-step
-  const std::vector<double> resume = fly(20.0 * kDeg, true);
-  EXPECT_GT(resume[2], 15.0 * kDeg);             // already during the side-step
-  EXPECT_NEAR(resume[1], 20.0 * kDeg, 0.5 * kDeg);
-  WallFollowerParams bad;
+  WallFollowerParams bad = rules_off();
   bad.clear_yaw_offset = -0.1;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
   bad.clear_yaw_offset = 1.0;
@@ -1336,7 +1175,7 @@ TEST(WhiskerWallFollower, YawOffsetAfterClearingTurnsWhiskersNotTrack) {
 // clearing: the yaw goes back to the track's heading.
 TEST(WhiskerWallFollower, YawOffsetReleasedOnMovingSum) {
   auto final_yaw = [](double release_rms, double rms) {
-    WallFollowerParams p;
+    WallFollowerParams p = rules_off();
     p.clear_yaw_offset = 20.0 * kDeg;
     p.clear_yaw_release_rms = release_rms;
     WhiskerWallFollower fsm(p);
@@ -1367,64 +1206,9 @@ TEST(WhiskerWallFollower, YawOffsetReleasedOnMovingSum) {
   EXPECT_NEAR(final_yaw(0.0, 20.0), 20.0 * kDeg, 0.5 * kDeg);   // off: offset kept
   EXPECT_NEAR(final_yaw(13.0, 5.0), 20.0 * kDeg, 0.5 * kDeg);   // quiet sum: kept
   EXPECT_NEAR(final_yaw(13.0, 20.0), 0.0, 0.5 * kDeg);          // moving sum: back to the track
-  WallFollowerParams bad;
+  WallFollowerParams bad = rules_off();
   bad.clear_yaw_release_rms = -1.0;
   EXPECT_THROW(bad.validate(), std::invalid_argument);
-}
-
-// Issue 17, docs/tuning/tactile_fsm.md "Round 10": the first baffle of tuning course 1003, its end
-// 65 mm right of the course axis and the baffle receding to the right: flown
-// straight (the paper) the guard meets the end before either whisker touches
-// the baffle (the blind band); whisking on the first approach (0.35 rad,
-// 0.7 s, 0.14 m/s) puts the right whisker across it first. Kinematic drone
-// (the setpoint's velocity and yaw rate applied), whiskers as segments from
-// (0.05, +-0.025) to (0.191, +-0.025) in the body frame, guard circle 80 mm.
-TEST(WhiskerWallFollower, FirstApproachWhiskReachesAnEndInTheBlindBand) {
-  const double ax = 0.7141, ay = -0.0647, bx = 1.0361, by = -0.9199;  // baffle_1 of baffles_*_1003
-  const Segment baffle{ax, ay, bx, by};
-  // "whisker" or "guard": which meets the baffle first.
-  auto fly = [&](double amplitude) {
-    WallFollowerParams p;
-    p.first_whisk_amplitude = amplitude;
-    p.first_whisk_period_s = 0.7;
-    p.first_whisk_speed = 0.14;
-    p.whisk_rate_max = 3.0;
-    WhiskerWallFollower fsm(p);
-    double x = 0.0, y = 0.0, yaw = 0.0;
-    for (double t = 0.0; t < 30.0; t += kDt) {
-      WallFollowerInput in = input(t, x, y, yaw);
-      in.target_x = 3.0;
-      const WallFollowerOutput o = fsm.step(in);
-      EXPECT_LE(std::fabs(o.setpoint.yaw_rate), p.whisk_rate_max + 1e-12);
-      const double vx = std::cos(yaw) * o.setpoint.vx - std::sin(yaw) * o.setpoint.vy;
-      const double vy = std::sin(yaw) * o.setpoint.vx + std::cos(yaw) * o.setpoint.vy;
-      if (o.state == FsmState::kFlyForward) {
-        EXPECT_NEAR(vx, amplitude > 0.0 ? 0.14 : p.v_max, 1e-9);  // along the course
-        EXPECT_NEAR(vy, 0.0, 1e-9);
-      }
-      for (int k = 0; k < 10; ++k) {  // 2 ms sub-steps of the 20 ms tick
-        x += 0.1 * vx * kDt;
-        y += 0.1 * vy * kDt;
-        yaw += 0.1 * o.setpoint.yaw_rate * kDt;
-        const double c = std::cos(yaw), s = std::sin(yaw);
-        for (double side : {1.0, -1.0}) {
-          const double b0x = x + c * 0.05 - s * side * 0.025, b0y = y + s * 0.05 + c * side * 0.025;
-          const double t0x = x + c * 0.191 - s * side * 0.025, t0y = y + s * 0.191 + c * side * 0.025;
-          if (segments_cross({b0x, b0y, t0x, t0y}, baffle)) return std::string("whisker");
-        }
-        if (point_segment_distance(x, y, baffle) <= 0.08) return std::string("guard");
-      }
-    }
-    return std::string("none");
-  };
-  EXPECT_EQ(fly(0.0), "guard");     // the paper's straight approach: blind band
-  EXPECT_EQ(fly(0.35), "whisker");  // whisked: the right whisker crosses the baffle first
-  WallFollowerParams bad;
-  bad.first_whisk_amplitude = -0.1;
-  expect_rejected(bad, "first_whisk_amplitude");
-  bad.first_whisk_amplitude = 0.35;
-  bad.first_whisk_speed = 0.3;  // > v_max
-  expect_rejected(bad, "first_whisk_speed");
 }
 
 namespace {
@@ -1489,63 +1273,6 @@ double scan_cut_by_failsafe(WhiskerWallFollower& fsm, const WallFollowerParams& 
 
 }  // namespace
 
-// Only the first approach is whisked: after a contact and a clearing the
-// FLY_FORWARD flies as without the rule (yaw rate of the realignment only).
-TEST(WhiskerWallFollower, FirstApproachWhiskEndsAtTheFirstContact) {
-  WallFollowerParams p;
-  p.first_whisk_amplitude = 0.35;
-  p.first_whisk_period_s = 0.7;
-  p.whisk_rate_max = 3.0;
-  WhiskerWallFollower fsm(p);
-  double t = 0.0;
-  PointDrone d;
-  for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t));
-  double max_rate = 0.0;
-  for (int k = 0; k < 35; ++k, t += kDt) {  // one period
-    const WallFollowerOutput o = fsm.step(input(t, d.x, d.y, d.yaw));
-    max_rate = std::max(max_rate, std::fabs(o.setpoint.yaw_rate));
-    d.move(o);
-  }
-  EXPECT_GT(max_rate, 1.0);  // whisking before the first contact
-  const AfterClearing a = contact_then_clear(fsm, d, t);
-  EXPECT_GT(a.forward, 100);
-  EXPECT_LT(a.max_rate, p.omega_max + 1e-9);  // realignment only, no 3 rad/s whisk
-  EXPECT_LT(std::fabs(d.yaw), 5.0 * kDeg);    // and back on the course heading
-}
-
-// first_whisk_wall_rate (docs/tuning/tactile_fsm.md "Round 10b"): whisked left of the course, the
-// right whisker's sum moving (a square wall ahead is met first by the whisker
-// opposite the yaw) turns the yaw back to the course; the left one's (the yaw
-// side: a baffle's end beside the axis) holds it as the whisk pause does. Off,
-// the right one's holds it too.
-TEST(WhiskerWallFollower, FirstWhiskTurnsBackToTheCourseAtAWallAhead) {
-  auto run = [](double wall_rate, bool right_moves) {
-    WallFollowerParams p;
-    p.first_whisk_amplitude = 0.35;
-    p.first_whisk_period_s = 0.7;
-    p.whisk_rate_max = 3.0;
-    p.first_whisk_wall_rate = wall_rate;
-    p.whisk_pause_rms = 13.0;
-    WhiskerWallFollower fsm(p);
-    double t = 0.0, yaw = 0.0;
-    for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t));
-    for (int k = 0; k < 35 && yaw < 0.2; ++k, t += kDt) yaw += fsm.step(input(t, 0.0, 0.0, yaw)).setpoint.yaw_rate * kDt;
-    EXPECT_GT(yaw, 0.2);  // whisked left
-    for (int k = 0; k < 15; ++k, t += kDt) {  // 0.3 s of a moving sum, no contact flagged
-      WallFollowerInput in = input(t, 0.0, 0.0, yaw);
-      (right_moves ? in.input_change_rms_right : in.input_change_rms_left) = 30.0;
-      yaw += fsm.step(in).setpoint.yaw_rate * kDt;
-    }
-    return yaw;
-  };
-  EXPECT_LT(std::fabs(run(3.0, true)), 2.0 * kDeg);  // a wall ahead: back on the course
-  EXPECT_GT(run(3.0, false), 0.2);                    // an end on the yaw side: held
-  EXPECT_GT(run(0.0, true), 0.2);                     // off: held
-  WallFollowerParams bad;
-  bad.first_whisk_wall_rate = -1.0;
-  expect_rejected(bad, "first_whisk_wall_rate");
-}
-
 // end_contact_lateral (docs/tuning/tactile_fsm.md "Round 10"): a first touch by the right whisker
 // alone, depth 100 mm, at a yaw 20 deg right of the course puts the contact
 // point 0.15 sin 20 + 0.025 cos 20 = 75 mm right of the axis: a baffle's end
@@ -1554,7 +1281,7 @@ TEST(WhiskerWallFollower, FirstWhiskTurnsBackToTheCourseAtAWallAhead) {
 // off the contact is an approach on the default side (right).
 TEST(WhiskerWallFollower, EndContactBesideTheAxisIsPassedOnTheOtherSide) {
   auto first_touch = [](double lateral, double yaw) {
-    WallFollowerParams p;
+    WallFollowerParams p = rules_off();
     p.end_contact_lateral = lateral;
     p.side_toward_target = false;  // the default side (right) unless the rule picks
     WhiskerWallFollower fsm(p);
@@ -1579,123 +1306,9 @@ TEST(WhiskerWallFollower, EndContactBesideTheAxisIsPassedOnTheOtherSide) {
   const auto off = first_touch(0.0, -20.0 * kDeg);
   EXPECT_EQ(off.first, Side::kRight);
   EXPECT_NE(off.second, WallSubState::kFlySideways);
-  WallFollowerParams bad;
+  WallFollowerParams bad = rules_off();
   bad.end_contact_lateral = -0.01;
   expect_rejected(bad, "end_contact_lateral");
-}
-
-// lost_far_depth (docs/tuning/tactile_fsm.md "Round 11"): after both touched, a whisker lost while
-// it was already beyond lost_far_depth, the other beyond T_max: the drone
-// drifted off the wall (mocap 12007: sliding sideways 5-6 deg off the baffle's
-// line, true depths 99 -> 138 mm), not past an end. Without the rule the
-// leading whisker lost (or wall_end_depth) asks for FLY_SIDEWAYS, which slid
-// on until both flags dropped mid-wall; with it FLY_FORWARD back to the wall.
-// A lost whisker last read in the band (an end), a remaining depth in the
-// band, or the approach are unchanged.
-TEST(WallSubStateRule, WhiskerLostOutOfReachFliesBackToTheWall) {
-  WallFollowerParams p;
-  p.hold_heading_trailing_lost = true;  // the whisker FSM node's defaults
-  p.wall_end_depth = 0.105;
-  const auto ws = WallSubState::kFlySideways;
-  // Following left, the leading (left) whisker lost at 106 mm, the right at 128 mm.
-  EXPECT_EQ(wall_sub_state(NAN, false, 0.128, true, Side::kLeft, true, ws, p, NAN, 0.106, 0.12),
-            WallSubState::kFlySideways);  // off: the core default
-  EXPECT_EQ(WallFollowerParams{}.lost_far_depth, 0.0);
-  p.lost_far_depth = 0.095;
-  EXPECT_EQ(wall_sub_state(NAN, false, 0.128, true, Side::kLeft, true, ws, p, NAN, 0.106, 0.12),
-            WallSubState::kFlyForward);
-  // The trailing (right) one lost at 101 mm, the left at 121 mm (wall_end_depth's case).
-  EXPECT_EQ(wall_sub_state(0.121, true, NAN, false, Side::kLeft, true, ws, p, NAN, 0.12, 0.101),
-            WallSubState::kFlyForward);
-  // Lost whisker last read in the band (it ran off an end): wall_end_depth as before.
-  EXPECT_EQ(wall_sub_state(0.121, true, NAN, false, Side::kLeft, true, ws, p, NAN, 0.12, 0.08),
-            WallSubState::kFlySideways);
-  // Remaining depth in the band: the leading lost keeps passing the edge.
-  EXPECT_EQ(wall_sub_state(NAN, false, 0.09, true, Side::kLeft, true, ws, p, NAN, 0.106, 0.09),
-            WallSubState::kFlySideways);
-  // Unknown last depth, or the approach (before both touched): unchanged.
-  EXPECT_EQ(wall_sub_state(NAN, false, 0.128, true, Side::kLeft, true, ws, p), WallSubState::kFlySideways);
-  EXPECT_EQ(wall_sub_state(NAN, false, 0.128, true, Side::kLeft, false, ws, p, NAN, 0.106, 0.12),
-            WallSubState::kFlyForward);
-  EXPECT_EQ(wall_sub_state(NAN, false, 0.09, true, Side::kLeft, false, ws, p, NAN, 0.106, 0.09),
-            WallSubState::kTurnRight);
-  // Through step(): both on the wall drifting out (depths growing past T_max),
-  // then the left flag drops at 106 mm with the right read at 128 mm.
-  auto sub_after_loss = [](WallFollowerParams q) {
-    WhiskerWallFollower fsm(q);
-    double t = 0.0;
-    for (; t <= 2.0 + 1e-9; t += kDt) fsm.step(input(t, 1.0, 0.0));
-    for (int k = 0; k < 20; ++k, t += kDt) {
-      WallFollowerInput in = input(t, 1.0, 0.0);
-      set_depths(in, 0.09 + 0.0008 * k, 0.09 + 0.0015 * k);
-      fsm.step(in);
-    }
-    return sub_with_left_lost(fsm, t, 0.128);
-  };
-  WallFollowerParams q;
-  q.hold_heading_trailing_lost = true;
-  q.wall_end_depth = 0.105;
-  q.follow_side = Side::kLeft;
-  q.side_toward_target = false;
-  EXPECT_EQ(sub_after_loss(q), WallSubState::kFlySideways);
-  q.lost_far_depth = 0.095;
-  EXPECT_EQ(sub_after_loss(q), WallSubState::kFlyForward);
-  q.lost_far_depth = -0.01;
-  EXPECT_THROW(q.validate(), std::invalid_argument);
-  q.lost_far_depth = NAN;
-  EXPECT_THROW(q.validate(), std::invalid_argument);
-}
-
-// resume_quiet_rms (docs/tuning/tactile_fsm.md "Round 11"): the side-step after a clearing counts
-// clear_margin from where both sums went quiet. A sum still moving in the
-// first second of RESUME_FORWARD (a whisker still on the wall although its
-// flag dropped) lengthens the side-step by the distance flown meanwhile; a
-// quiet sum or the rule off leave it at clear_margin.
-TEST(WhiskerWallFollower, SideStepCountsFromWhereTheSumsWentQuiet) {
-  auto side_step = [](double quiet_rms, double rms) {
-    WallFollowerParams p;
-    p.resume_quiet_rms = quiet_rms;
-    p.phantom_resume_max = 2.0;
-    WhiskerWallFollower fsm(p);
-    double t = 0.0, x = 0.0, y = 0.0;
-    for (; t < p.hover_init_s + 1e-9; t += kDt) fsm.step(input(t, x, y));
-    for (int k = 0; k < 50; ++k, t += kDt) {
-      WallFollowerInput in = input(t, x, y);
-      set_depths(in, 0.08, 0.08);
-      fsm.step(in);
-    }
-    double resume_s = 0.0, y0 = NAN, y1 = NAN;
-    for (int k = 0; k < 600; ++k, t += kDt) {
-      WallFollowerInput in = input(t, x, y);
-      in.input_change_rms_left = resume_s < 1.0 ? rms : 3.0;
-      in.input_change_rms_right = 3.0;
-      const WallFollowerOutput o = fsm.step(in);
-      if (o.state == FsmState::kResumeForward) {
-        if (std::isnan(y0)) y0 = y;
-        resume_s += kDt;
-      } else if (o.state == FsmState::kFlyForward && std::isfinite(y0) && std::isnan(y1)) {
-        y1 = y;
-      }
-      x += o.setpoint.vx * kDt;
-      y += o.setpoint.vy * kDt;
-    }
-    EXPECT_TRUE(std::isfinite(y1));
-    return std::fabs(y1 - y0);
-  };
-  const double off = side_step(0.0, 30.0);
-  EXPECT_NEAR(off, 0.30, 0.03);                          // clear_margin
-  EXPECT_NEAR(side_step(20.0, 5.0), off, 1e-9);          // quiet sums: unchanged
-  EXPECT_GT(side_step(20.0, 30.0), off + 0.1);           // moving for 1 s: longer
-  WallFollowerParams bad;
-  bad.resume_quiet_rms = -1.0;
-  EXPECT_THROW(bad.validate(), std::invalid_argument);
-  // Set where it cannot act (the margin moves only within phantom_resume_max): rejected.
-  WallFollowerParams idle;
-  idle.resume_quiet_rms = 20.0;
-  idle.phantom_resume_max = 0.0;
-  expect_rejected(idle, "resume_quiet_rms");
-  idle.phantom_resume_max = 2.0;
-  EXPECT_NO_THROW(idle.validate());
 }
 
 namespace {
@@ -1741,12 +1354,11 @@ FirstMeet first_meet(const WallFollowerParams& p, double ax, double ay, double b
 }
 
 WallFollowerParams scan_params(double step) {
-  WallFollowerParams p;
+  WallFollowerParams p = rules_off();
   p.first_whisk_amplitude = 0.44;
   p.first_scan_step = step;
   p.first_scan_rate = 2.0;
   p.whisk_rate_max = 3.0;
-  p.first_whisk_speed = 0.14;  // the continuous whisk's (step 0)
   return p;
 }
 
@@ -1755,12 +1367,11 @@ WallFollowerParams scan_params(double step) {
 // Step and scan (docs/tuning/tactile_fsm.md "Round 12"): course 1003's first baffle, whose near end
 // lies 65 mm right of the axis, is met by the guard on the paper's straight
 // approach and by a whisker in a scan (yawed); a wall across the course is
-// mostly met in a step, at the course heading, where the continuous whisk
-// (first_scan_step 0) meets it at a whisked yaw, which is what the shipped
-// course tests refused (rounds 10, 10b).
+// mostly met in a step, at the course heading (round 10's continuous whisk
+// met it at a whisked yaw, which the shipped course tests refused).
 TEST(WhiskerWallFollower, StepAndScanFindsTheEndAndMeetsAWallAheadInAStep) {
   const double ax = 0.7141, ay = -0.0647, bx = 1.0361, by = -0.9199;  // baffle_1 of baffles_*_1003
-  WallFollowerParams straight;
+  WallFollowerParams straight = rules_off();
   EXPECT_EQ(first_meet(straight, ax, ay, bx, by).who, "guard");
   const FirstMeet end = first_meet(scan_params(0.08), ax, ay, bx, by);
   EXPECT_EQ(end.who, "whisker");
@@ -1768,20 +1379,16 @@ TEST(WhiskerWallFollower, StepAndScanFindsTheEndAndMeetsAWallAheadInAStep) {
   // Walls 11 mm apart: every phase of a step. Measured: the scan meets 7 of
   // the 10 within 0.9-1.5 deg of the course; the other 3 lay just beyond the
   // tips when a scan began and are met in it (6-19 deg) as the drone creeps on
-  // to the step's end. The continuous whisk meets 1 of 10 within 2 deg.
-  int scan_on_course = 0, whisk_on_course = 0;
+  // to the step's end.
+  int scan_on_course = 0;
   for (int k = 0; k < 10; ++k) {
     const double wall_x = 0.60 + 0.011 * k;
     SCOPED_TRACE("wall at x = " + std::to_string(wall_x));
     const FirstMeet m = first_meet(scan_params(0.08), wall_x, -2.0, wall_x, 2.0);
     EXPECT_EQ(m.who, "whisker");
     if (std::fabs(m.yaw) < 2.0 * kDeg) ++scan_on_course;
-    const FirstMeet w = first_meet(scan_params(0.0), wall_x, -2.0, wall_x, 2.0);
-    EXPECT_EQ(w.who, "whisker");
-    if (std::fabs(w.yaw) < 2.0 * kDeg) ++whisk_on_course;
   }
   EXPECT_GE(scan_on_course, 7);
-  EXPECT_LE(whisk_on_course, 2);
 }
 
 // The scan is held while a whisker's sum moves (a touch TDORC has not flagged
@@ -1837,10 +1444,8 @@ TEST(WhiskerWallFollower, StepAndScanHoldsTheYawOnAMovingSumAndValidates) {
   bad.first_scan_rate = 0.0;
   expect_rejected(bad, "first_scan_rate");
   bad = scan_params(0.08);
-  bad.first_whisk_pause_to_course = true;  // the continuous whisk's only
-  expect_rejected(bad, "first_whisk_pause_to_course");
-  bad.first_scan_step = 0.0;
-  EXPECT_NO_THROW(bad.validate());
+  bad.first_scan_step = 0.0;  // no continuous whisk any more: the scan needs a step
+  expect_rejected(bad, "first_scan_step");
 }
 
 // The scan ends at the first contact: after it and a clearing, FLY_FORWARD
@@ -1899,4 +1504,244 @@ TEST(WhiskerWallFollower, StepAndScanIgnoresANonFinitePosition) {
   EXPECT_TRUE(std::isfinite(o.setpoint.vx));
   EXPECT_TRUE(std::isfinite(o.setpoint.vy));
   EXPECT_TRUE(std::isfinite(o.setpoint.yaw_rate));
+}
+
+// --- Override rules (issue 33): each rule alone on a hand-made snapshot, in the
+// situation that fires it and just outside it; then the follower's counts and reasons.
+
+namespace {
+
+using tactile_fsm::HeadingLimitRule;
+using tactile_fsm::OverrideRule;
+using tactile_fsm::StepAndScanRule;
+using tactile_fsm::TickSnapshot;
+using tactile_fsm::TurnAnchorRule;
+using tactile_fsm::YawOffsetRule;
+
+/// Wall following on the course heading 0, both depths valid (80 mm, in the
+/// band), the drone at yaw `yaw`, the sub-state rule asking `asked`.
+TickSnapshot wall_snapshot(double yaw, WallSubState asked) {
+  TickSnapshot s;
+  s.in = input(10.0, 1.0, 0.0, yaw);
+  s.dt = kDt;
+  s.state = FsmState::kWallFollowing;
+  s.current = WallSubState::kFlySideways;
+  s.l_valid = s.r_valid = true;
+  s.d_left = s.d_right = 0.08;
+  s.theta = 0.0;
+  s.wall_heading = yaw;
+  s.origin_set = true;
+  s.contacted = true;
+  s.sub_state = asked;
+  return s;
+}
+
+/// FLY_FORWARD on the course heading 0 at (x, 0), state's setpoint V_max ahead.
+TickSnapshot forward_snapshot(double x, bool after_clear, bool contacted) {
+  TickSnapshot s;
+  s.in = input(10.0, x, 0.0, 0.0);
+  s.dt = kDt;
+  s.state = FsmState::kFlyForward;
+  s.origin_set = true;
+  s.after_clear = after_clear;
+  s.contacted = contacted;
+  s.setpoint.vx = 0.2;
+  s.setpoint.height = 0.4;
+  return s;
+}
+
+}  // namespace
+
+TEST(OverrideRules, NamesInRunOrder) {
+  EXPECT_STREQ(tactile_fsm::to_string(OverrideRule::kHeadingLimit), "heading_limit");
+  EXPECT_STREQ(tactile_fsm::to_string(OverrideRule::kTurnAnchor), "turn_anchor");
+  EXPECT_STREQ(tactile_fsm::to_string(OverrideRule::kStepAndScan), "step_and_scan");
+  EXPECT_STREQ(tactile_fsm::to_string(OverrideRule::kYawOffset), "yaw_offset");
+}
+
+// A left turn asked for at 50 deg left of the course (limit 45 deg) becomes
+// the translation the depths ask for: sideways in the band, forward with one
+// depth beyond T_max, backward with one below T_min.
+TEST(OverrideRules, HeadingLimitFiresOnATurnBeyondTheLimitOnly) {
+  const WallFollowerParams p;  // max_heading_offset 45 deg
+  HeadingLimitRule rule(p);
+  TickSnapshot s = wall_snapshot(50.0 * kDeg, WallSubState::kTurnLeft);
+  ASSERT_TRUE(rule.applies(s));
+  rule.apply(s);
+  EXPECT_EQ(s.sub_state, WallSubState::kFlySideways);
+  s = wall_snapshot(50.0 * kDeg, WallSubState::kTurnLeft);
+  s.d_right = 0.12;
+  rule.apply(s);
+  EXPECT_EQ(s.sub_state, WallSubState::kFlyForward);
+  s = wall_snapshot(50.0 * kDeg, WallSubState::kTurnLeft);
+  s.d_left = 0.05;
+  rule.apply(s);
+  EXPECT_EQ(s.sub_state, WallSubState::kFlyBackward);
+  // Outside it: within the limit, a turn back toward the course, no turn, not
+  // wall following, no course yet, the rule off.
+  EXPECT_FALSE(rule.applies(wall_snapshot(40.0 * kDeg, WallSubState::kTurnLeft)));
+  EXPECT_FALSE(rule.applies(wall_snapshot(50.0 * kDeg, WallSubState::kTurnRight)));
+  EXPECT_FALSE(rule.applies(wall_snapshot(50.0 * kDeg, WallSubState::kFlySideways)));
+  s = wall_snapshot(50.0 * kDeg, WallSubState::kTurnLeft);
+  s.state = FsmState::kResumeForward;
+  EXPECT_FALSE(rule.applies(s));
+  s = wall_snapshot(50.0 * kDeg, WallSubState::kTurnLeft);
+  s.origin_set = false;
+  EXPECT_FALSE(rule.applies(s));
+  WallFollowerParams off = p;
+  off.max_heading_offset = 0.0;
+  EXPECT_FALSE(HeadingLimitRule(off).applies(wall_snapshot(50.0 * kDeg, WallSubState::kTurnLeft)));
+}
+
+// The anchor is the wall heading first read (observe); a turn asked for by a
+// small angle that goes more than 10 deg beyond it is refused, one within 10
+// deg or asked for by a clear angle (>= 10 deg) is not; readings in a turn do
+// not move the anchor; outside wall following it is dropped.
+TEST(OverrideRules, TurnAnchorFiresOnASmallAngleTurnBeyondTheAnchorOnly) {
+  const WallFollowerParams p;  // 10 deg, 10 deg, 2 deg/s
+  TurnAnchorRule rule(p);
+  TickSnapshot first = wall_snapshot(0.0, WallSubState::kFlySideways);
+  rule.observe(first);
+  EXPECT_DOUBLE_EQ(rule.anchor(), 0.0);
+  // 15 deg left of the anchor, theta 3 deg (the tips dragged round): refused.
+  TickSnapshot s = wall_snapshot(15.0 * kDeg, WallSubState::kTurnLeft);
+  s.current = WallSubState::kTurnLeft;
+  s.theta = -3.0 * kDeg;
+  s.wall_heading = 18.0 * kDeg;
+  rule.observe(s);
+  EXPECT_DOUBLE_EQ(rule.anchor(), 0.0);  // read in a turn: not moved
+  ASSERT_TRUE(rule.applies(s));
+  rule.apply(s);
+  EXPECT_EQ(s.sub_state, WallSubState::kFlySideways);
+  // Within the tolerance, or a clear angle: the turn goes on.
+  TickSnapshot near = wall_snapshot(8.0 * kDeg, WallSubState::kTurnLeft);
+  near.theta = -3.0 * kDeg;
+  EXPECT_FALSE(rule.applies(near));
+  TickSnapshot clear = wall_snapshot(15.0 * kDeg, WallSubState::kTurnLeft);
+  clear.theta = -12.0 * kDeg;
+  EXPECT_FALSE(rule.applies(clear));
+  // One depth missing: no wall heading, the rule does not act.
+  TickSnapshot one = wall_snapshot(15.0 * kDeg, WallSubState::kTurnLeft);
+  one.theta = -3.0 * kDeg;
+  one.r_valid = false;
+  EXPECT_FALSE(rule.applies(one));
+  // Out of wall following the anchor is dropped; the next one reads its own.
+  TickSnapshot out = wall_snapshot(0.0, WallSubState::kNone);
+  out.state = FsmState::kResumeForward;
+  rule.observe(out);
+  EXPECT_TRUE(std::isnan(rule.anchor()));
+  EXPECT_FALSE(rule.applies(out));
+  WallFollowerParams off = p;
+  off.turn_anchor_tolerance = 0.0;
+  TurnAnchorRule none(off);
+  none.observe(first);
+  EXPECT_TRUE(std::isnan(none.anchor()));
+  EXPECT_FALSE(none.applies(s));
+}
+
+// Before the flight's first contact the step flies toward its end on the
+// course heading, then scans; after a contact, after a clearing, out of
+// FLY_FORWARD, without a position or with the amplitude 0 it does not act.
+TEST(OverrideRules, StepAndScanFiresOnTheFirstApproachOnly) {
+  const WallFollowerParams p;  // 0.44 rad, 0.08 m steps, 2 rad/s
+  StepAndScanRule rule(p);
+  TickSnapshot s = forward_snapshot(0.0, false, false);
+  ASSERT_TRUE(rule.applies(s));
+  rule.apply(s);
+  EXPECT_NEAR(s.setpoint.vx, p.v_max, 1e-12);  // (0.08 - 0) / 0.3 s, capped at V_max
+  EXPECT_NEAR(s.setpoint.vy, 0.0, 1e-12);
+  EXPECT_NEAR(s.setpoint.yaw_rate, 0.0, 1e-12);  // on the course while stepping
+  EXPECT_FALSE(rule.scanning());
+  TickSnapshot end = forward_snapshot(0.07, false, false);  // 10 mm before the step's end
+  rule.apply(end);
+  EXPECT_TRUE(rule.scanning());
+  EXPECT_GT(end.setpoint.yaw_rate, 1.0);  // the scan turns toward +A
+  EXPECT_LE(end.setpoint.yaw_rate, p.whisk_rate_max);
+  EXPECT_FALSE(rule.applies(forward_snapshot(0.0, false, true)));  // contacted
+  EXPECT_FALSE(rule.applies(forward_snapshot(0.0, true, false)));  // after a clearing
+  TickSnapshot resume = forward_snapshot(0.0, false, false);
+  resume.state = FsmState::kResumeForward;
+  EXPECT_FALSE(rule.applies(resume));
+  TickSnapshot lost = forward_snapshot(0.0, false, false);
+  lost.in.x = NAN;
+  EXPECT_FALSE(rule.applies(lost));
+  WallFollowerParams off = p;
+  off.first_whisk_amplitude = 0.0;
+  EXPECT_FALSE(StepAndScanRule(off).applies(forward_snapshot(0.0, false, false)));
+  // A tick it does not apply ends the scan: the next first approach steps afresh.
+  rule.idle();
+  TickSnapshot again = forward_snapshot(0.07, false, false);
+  rule.apply(again);
+  EXPECT_FALSE(rule.scanning());
+}
+
+// In the FLY_FORWARD after a clearing (side-step to the right) the body yaw
+// turns left toward the offset while the track stays along the course; a
+// moving sum releases it; before a clearing, in the side-step or with the
+// offset 0 it does not act.
+TEST(OverrideRules, YawOffsetFiresAfterAClearingOnly) {
+  const WallFollowerParams p;  // 0.2443 rad, released at 13 Pa
+  YawOffsetRule rule(p);
+  TickSnapshot s = forward_snapshot(1.0, true, true);
+  s.side = Side::kRight;
+  ASSERT_TRUE(rule.applies(s));
+  rule.apply(s);
+  EXPECT_GT(s.setpoint.yaw_rate, 0.0);             // toward the left, away from the side-step
+  EXPECT_NEAR(s.setpoint.vx, 0.2, 1e-12);          // track heading = yaw here: velocity unchanged
+  TickSnapshot yawed = forward_snapshot(1.0, true, true);  // body already at the offset
+  yawed.in.yaw = p.clear_yaw_offset;
+  rule.apply(yawed);
+  EXPECT_NEAR(std::cos(p.clear_yaw_offset) * yawed.setpoint.vx - std::sin(p.clear_yaw_offset) * yawed.setpoint.vy,
+              0.2, 1e-3);  // world velocity still along the course
+  TickSnapshot touch = forward_snapshot(1.0, true, true);
+  touch.in.yaw = p.clear_yaw_offset;
+  touch.in.input_change_rms_left = 20.0;
+  rule.apply(touch);
+  EXPECT_TRUE(rule.released());
+  EXPECT_LT(touch.setpoint.yaw_rate, 0.0);  // back toward the track's heading
+  EXPECT_FALSE(rule.applies(forward_snapshot(1.0, false, true)));  // no clearing before
+  TickSnapshot side_step = forward_snapshot(1.0, true, true);
+  side_step.state = FsmState::kResumeForward;
+  EXPECT_FALSE(rule.applies(side_step));
+  WallFollowerParams off = p;
+  off.clear_yaw_offset = 0.0;
+  EXPECT_FALSE(YawOffsetRule(off).applies(forward_snapshot(1.0, true, true)));
+  rule.idle();
+  EXPECT_FALSE(rule.released());
+}
+
+// The follower counts the ticks each rule fired and names a rule in reason()
+// when it begins: the step and scan from the first FLY_FORWARD tick (with the
+// transition's reason), ending at the first contact; the heading limit when it
+// turns the Fig. S4e rule's turn into a translation.
+TEST(OverrideRules, FollowerCountsEachRuleAndNamesItInTheReason) {
+  WhiskerWallFollower fsm{WallFollowerParams{}};
+  double t = 0.0;
+  for (; t < 2.0 - 1e-9; t += kDt) fsm.step(input(t));
+  WallFollowerOutput o = fsm.step(input(t));
+  t += kDt;
+  EXPECT_EQ(o.state, FsmState::kFlyForward);
+  EXPECT_TRUE(o.override_started);
+  EXPECT_STREQ(fsm.reason(), (std::string("hover initialisation done; ") + StepAndScanRule::kReason).c_str());
+  for (int k = 0; k < 9; ++k, t += kDt) EXPECT_FALSE(fsm.step(input(t)).override_started);
+  EXPECT_EQ(fsm.override_count(OverrideRule::kStepAndScan), 10u);
+  EXPECT_EQ(fsm.override_count(OverrideRule::kHeadingLimit), 0u);
+  // A contact at 50 deg left of the course, the depths asking for a left turn.
+  WallFollowerInput in = input(t, 0.0, 0.0, 50.0 * kDeg);
+  set_depths(in, 0.07, 0.09);
+  o = fsm.step(in);
+  t += kDt;
+  EXPECT_EQ(o.state, FsmState::kWallFollowing);
+  EXPECT_EQ(o.sub_state, WallSubState::kFlySideways);  // not TURN_LEFT
+  EXPECT_TRUE(o.override_started);
+  EXPECT_STREQ(fsm.reason(), (std::string("whisker contact; ") + HeadingLimitRule::kReason).c_str());
+  EXPECT_EQ(fsm.override_count(OverrideRule::kStepAndScan), 10u);  // ended at the contact
+  EXPECT_EQ(fsm.override_count(OverrideRule::kHeadingLimit), 1u);
+  in = input(t, 0.0, 0.0, 50.0 * kDeg);
+  set_depths(in, 0.07, 0.09);
+  o = fsm.step(in);
+  EXPECT_FALSE(o.override_started);  // still firing, not begun
+  EXPECT_EQ(fsm.override_count(OverrideRule::kHeadingLimit), 2u);
+  fsm.reset();
+  EXPECT_EQ(fsm.override_count(OverrideRule::kHeadingLimit), 0u);
 }

@@ -34,7 +34,8 @@ class WhiskerFsmLogic {
   static constexpr const char* kBodyFrame = "base_link";
   /// Control tick, 50 Hz as 000 ("at 50 Hz" onboard).
   static constexpr int64_t kTimerPeriodNs = 20000000;
-  /// FsmState is published on every transition and at least at 5 Hz.
+  /// FsmState is published on every transition, on the tick an override rule of the
+  /// FSM begins to fire (the reason names it) and at least at 5 Hz.
   static constexpr int64_t kStatePeriodNs = 200000000;
 
   struct Params {
@@ -61,6 +62,11 @@ class WhiskerFsmLogic {
     uint64_t dropped_wrong_whisker = 0; ///< WhiskerSignal.whisker_id not the side of its topic
     uint64_t ticks = 0;
     uint64_t state_messages = 0;
+    /// Ticks on which each override rule of the FSM fired (WhiskerWallFollower::override_count()).
+    uint64_t rule_heading_limit = 0;
+    uint64_t rule_turn_anchor = 0;
+    uint64_t rule_step_and_scan = 0;
+    uint64_t rule_yaw_offset = 0;
   };
 
   struct Outputs {
@@ -68,7 +74,7 @@ class WhiskerFsmLogic {
     std::optional<tactile_msgs::msg::FsmState> state;   ///< on transitions and at 5 Hz
   };
 
-  /// Every parameter the node reads, with the paper's defaults.
+  /// Every parameter the node reads, with the shipped defaults (WallFollowerParams' but two).
   static tactile_common::ParamMap default_parameters();
   /// Reads and validates; throws tactile_common::ParamError naming the source,
   /// the parameter and the reason.

@@ -7,7 +7,9 @@
 // velocity-mode hover setpoint (body vx, vy, yaw rate, height, land).
 #pragma once
 
+#include <array>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 namespace tactile_fsm {
@@ -44,6 +46,10 @@ const char* to_string(Side s);
 /// "right" / "left"; throws std::invalid_argument otherwise.
 Side side_from_string(const char* s);
 
+/// The defaults are what the whisker FSM node ships (config/tactile_fsm.yaml),
+/// one default per key, except hold_heading_trailing_lost and wall_end_depth:
+/// off here, on in the node (gpis_explorer's wall follows call
+/// wall_sub_state() with these defaults and were not measured with them).
 struct WallFollowerParams {
   // --- paper 000 values ---
   double v_max = 0.2;                          ///< V_max [m/s] (000 Results: "V_max = 20 cm/s")
@@ -83,10 +89,11 @@ struct WallFollowerParams {
   /// turning toward the lost whisker. On rigid baffles TDORC can drop a pressed
   /// whisker (stick-slip) and not see it again; turning toward it then yawed the
   /// drone 40-50 deg into the wall (seeds 1001, 1043 of the tuning block). false =
-  /// the previous rule (missing depth counts as beyond T_max, turn). Core
-  /// default false (gpis_explorer's wall follows call wall_sub_state() with
-  /// these params and were not re-measured); the whisker FSM node's default
-  /// and config/tactile_fsm.yaml turn it on.
+  /// the previous rule (missing depth counts as beyond T_max, turn). One of
+  /// the two keys whose core default differs from the whisker FSM node's
+  /// (with wall_end_depth): gpis_explorer's wall follows call wall_sub_state()
+  /// with the core defaults and were not re-measured with the rule; the node's
+  /// default and config/tactile_fsm.yaml turn it on.
   bool hold_heading_trailing_lost = false;
   /// One whisker left beyond this depth after both touched: the wall ends
   /// (issue 17, docs/tuning/tactile_fsm.md "Round 7"; our choice, 000 Fig. S4e has no case for a
@@ -100,30 +107,10 @@ struct WallFollowerParams {
   /// axis) before the phantom gate's RMS window had quietened. A wall
   /// the other whisker just lost is not ahead; if the drone had only drifted
   /// off, the next touch brings it back to the rule of both depths. 0 = off
-  /// (the previous rule); otherwise >= t_max. [m]
+  /// (the previous rule); otherwise >= t_max. Core default 0, the whisker
+  /// FSM node's 0.105 m, as for hold_heading_trailing_lost (gpis_explorer's
+  /// wall follows read the core default). [m]
   double wall_end_depth = 0.0;
-  /// A whisker lost out of reach, not off an end (issue 17, docs/tuning/tactile_fsm.md "Round 11";
-  /// our choice). After both touched, one whisker lost while its last depth
-  /// was > lost_far_depth and the other's depth was beyond T_max on that tick,
-  /// the other still beyond T_max: the drone has drifted away from the wall
-  /// (a sideways slide a few degrees off the wall's line), not reached an
-  /// end: FLY_FORWARD back to the wall (000 Fig. S4e: both beyond T_max)
-  /// instead of FLY_SIDEWAYS (leading whisker lost, or wall_end_depth), which
-  /// slid on until the other flag dropped too and the drone "cleared"
-  /// mid-wall (mocap 12007, 14026: whiskers truly on the wall at 130-140 mm,
-  /// the side-step ended short of the true end, which the guard then met in
-  /// the blind band). The other's depth at the loss keeps round 7's case (a
-  /// whisker run off an end while the other is in the band, then held past
-  /// it) with wall_end_depth. Checked before wall_end_depth. 0 = off;
-  /// otherwise > 0. [m]
-  double lost_far_depth = 0.0;
-  /// The side-step after a clearing counts clear_margin from where both
-  /// whiskers' S_c sums went quiet (RMS of their changes < this), not from
-  /// where the flags dropped (issue 17, docs/tuning/tactile_fsm.md "Round 11"; our choice): a
-  /// clearing declared while the whiskers still touch the wall (true 133-141
-  /// mm, flags dropped) ended the side-step short of the true end (mocap
-  /// 12007). Within phantom_resume_max of the clearing. 0 = off. [Pa]
-  double resume_quiet_rms = 0.0;
   /// A contact in FLY_FORWARD less than this far ahead (along the course
   /// heading) of where the side-step after a clearing ended is the same
   /// obstacle: keep the side (issue 17, docs/tuning/tactile_fsm.md "Random baffle courses": on rigid
@@ -161,10 +148,11 @@ struct WallFollowerParams {
   /// that bends by more than 20 deg within one turn (a concave corner met
   /// gradually) is aligned to at the creep rate (45 deg: ~12 s) unless a clear
   /// angle is read outside a turn (a whisker touching again).
-  /// turn_anchor_tolerance 0 = off.
-  double turn_anchor_tolerance = 0.0;              ///< [rad]
-  double turn_anchor_theta = 10.0 * M_PI / 180.0;  ///< [rad]
-  double turn_anchor_rate = 0.0;                   ///< [rad/s]
+  /// turn_anchor_tolerance 0 = off. 10 deg, 10 deg, 2 deg/s: held-out block
+  /// 27000-27299 857 -> 874 of 900 (docs/tuning/tactile_fsm.md "Round 13").
+  double turn_anchor_tolerance = 10.0 * M_PI / 180.0;  ///< [rad]
+  double turn_anchor_theta = 10.0 * M_PI / 180.0;      ///< [rad]
+  double turn_anchor_rate = 2.0 * M_PI / 180.0;        ///< [rad/s]
   /// Pressed past the depth model (issue 17, docs/whisker_fsm.md "Pressed whisker"): a
   /// whisker pressed and sliding along a baffle is friction-limited, its input
   /// (sum of the three S_c, 000 eq. 5) stops growing below ~70 mm and the
@@ -175,41 +163,12 @@ struct WallFollowerParams {
   /// come from in the SITL (20-50 mm). Below T_min (band 60-100 mm) the drone
   /// backs off or turns away until the load is in the range the model
   /// resolves; inside the band (darkness, 40-100 mm) the rule does nothing.
-  /// press_sum_pa 0 = off (the paper). [Pa]
-  double press_sum_pa = 0.0;
-  double press_hold_s = 0.2;   ///< [s]
-  /// Pressed by the stick-slip amplitude (issue 17, docs/tuning/tactile_fsm.md "Round 6"): the
-  /// mean load of a whisker sliding on a wall is friction-limited, but each
-  /// slip releases the bending stored since the last stick, which grows with
-  /// the deflection, so the sample-to-sample changes of the S_c sum grow
-  /// monotonically as the whisker is pressed (SITL bags of the tuning blocks'
-  /// failures, RMS over 0.5 s, median 650 / 530 / 540 Pa at 20-30 / 30-40 /
-  /// 40-50 mm true depth against 350 / 310 / 250 at 70-80 / 80-90 / 90-100
-  /// mm; the sum's own median is ~500 at 20-50 and at 70-80 mm). A whisker in
-  /// contact whose change RMS (the node's phantom window) is >= press_rms_pa
-  /// counts as pressed, as for press_sum_pa. Our choice, not in 000.
-  /// 0 = off. [Pa]
-  double press_rms_pa = 0.0;
+  /// press_sum_pa 0 = off (the paper). 900 Pa, no hold: tuning blocks
+  /// (docs/tuning/tactile_fsm.md "Round 3"). [Pa]
+  double press_sum_pa = 900.0;
+  double press_hold_s = 0.0;   ///< [s]
   double press_depth = 0.05;   ///< [m]
-  /// Depth bounded by the drone's own motion (issue 17, docs/tuning/tactile_fsm.md "Round 8"; our
-  /// choice, 000's depth is the pressure regression alone). The wall is fixed
-  /// in the world: from the whisker's first published depth of a contact, the
-  /// bound is carried with the odometry (the whisker base moved along the wall
-  /// normal, the heading turned), and at every tick it is the lower of that and
-  /// the published depth. It may rise by at most motion_depth_relax [m/s]
-  /// (odometry drift, wall-angle error, the depth model's own noise), so a
-  /// drone that closed 60 mm on the wall cannot read 30 mm further from it.
-  /// The rule takes min(filtered depth, bound + motion_depth_margin). The wall
-  /// normal is fixed in the world for the contact (until neither whisker is in
-  /// contact): the heading at the first onset, replaced once the other whisker
-  /// touches by the normal of the line through the two first contact points
-  /// when they are >= motion_depth_baseline apart, else by eq. 21 on the
-  /// depths of that tick. Tried on the tuning and seen blocks, not kept
-  /// (docs/tuning/tactile_fsm.md "Round 8"). motion_depth_relax 0 = off (core and node).
-  double motion_depth_relax = 0.0;     ///< [m/s]
-  double motion_depth_margin = 0.01;   ///< [m]
-  double motion_depth_baseline = 0.05; ///< [m]; 0 = never use the contact points
-  double whisker_base_x = 0.05;        ///< whisker bases ahead of the odometry origin [m] (000 frame, tactile_sim)
+  double whisker_base_x = 0.05;  ///< whisker bases ahead of the odometry origin [m] (000 frame, tactile_sim); end_contact_lateral
   /// Phantom hold gated by odometry (issue 17, docs/tuning/tactile_fsm.md "Round 4"): the gel
   /// hysteresis (000 eq. 1, N_h) can leave a whisker held "in contact" by
   /// TDORC after it left a baffle, its S_c frozen on a slowly decaying offset.
@@ -223,41 +182,27 @@ struct WallFollowerParams {
   /// and contact flag. Unlike tdorc_filter's hold_quiet_rms it does not end
   /// the filter's hold (no window learns pressed samples) and a pressed
   /// whisker of a hovering or turning drone is never dropped.
-  /// phantom_quiet_rms 0 = off (the paper). [Pa]
-  double phantom_quiet_rms = 0.0;
-  double phantom_travel = 0.05;  ///< [m]
+  /// phantom_quiet_rms 0 = off (the paper). 6.5 Pa over 25 samples, 0.03 m:
+  /// tuning blocks (docs/tuning/tactile_fsm.md "Round 4"). [Pa]
+  double phantom_quiet_rms = 6.5;
+  double phantom_travel = 0.03;  ///< [m]
   /// RESUME_FORWARD keeps side-stepping past clear_margin while a whisker is
   /// still held as a phantom, up to this distance from the clearing [m].
-  double phantom_resume_max = 0.0;
-  /// Latch (issue 17, docs/tuning/tactile_fsm.md "Round 4" and "4b"; off in the core struct, on in
-  /// the whisker FSM node with phantom_resume_max 2 m): a whisker taken for a
-  /// phantom stays one until its contact ends or the RMS of its sum's changes
-  /// reaches 2 * phantom_quiet_rms.
-  bool phantom_latch = false;
-  /// Active whisking (issue 17, docs/tuning/tactile_fsm.md "Round 5", choice): the two forward
-  /// whiskers (bases 25 mm off the axis, tips 0.19 m ahead) are blind to a
-  /// baffle tip 3-8 cm beside the axis, inside the guard's 80 mm. In
-  /// FLY_FORWARD the heading oscillates about the course heading,
-  /// yaw = course + whisk_amplitude * sin(2 pi t / whisk_period_s), so the
-  /// whisker tips sweep the guard's width (rats whisk); the velocity is then
-  /// set along the course heading in the world frame (body vx, vy rotated), so
-  /// the track stays straight while the yaw oscillates. The yaw rate of the
-  /// whisk is limited by whisk_rate_max, not omega_max (the wall-following
-  /// turn rate). whisk_amplitude 0 = off (the paper: fly forward, no whisking). [rad]
-  double whisk_amplitude = 0.0;
-  double whisk_period_s = 1.0;                 ///< [s]
-  double whisk_rate_max = 2.0;                 ///< [rad/s]
-  /// Whisk only in a FLY_FORWARD that follows a clearing (not on the way to
-  /// the first obstacle): the first contact is then met on the course heading,
-  /// as without whisking (docs/tuning/tactile_fsm.md "Round 5": whisking before the first contact
-  /// lowered the darkness sweeps' first-sweep in-band fraction).
-  bool whisk_after_clear_only = false;
-  /// Pause the whisk (hold the yaw, keep the course velocity) while either
-  /// whisker's S_c sum moves (RMS of its changes >= whisk_pause_rms, the
-  /// node's phantom window): a touch starts 0.2-0.3 s before TDORC flags it,
-  /// and a whisk continuing through that sweeps the whisker into the wall.
-  /// 0 = never pause. [Pa]
-  double whisk_pause_rms = 0.0;
+  double phantom_resume_max = 2.0;
+  /// Latch (issue 17, docs/tuning/tactile_fsm.md "Round 4" and "4b", with
+  /// phantom_resume_max 2 m: tuning 269 -> 279 of 300, held out 10000-10099
+  /// 252 -> 268): a whisker taken for a phantom stays one until its contact
+  /// ends or the RMS of its sum's changes reaches 2 * phantom_quiet_rms.
+  bool phantom_latch = true;
+  /// Yaw-rate limit of the first-approach scan (first_scan_step), not
+  /// omega_max (the wall-following turn rate). [rad/s]
+  double whisk_rate_max = 3.0;
+  /// Hold the scan's yaw (first_scan_step) while either whisker's S_c sum
+  /// moves (RMS of its changes >= whisk_pause_rms, the node's phantom
+  /// window): a touch starts 0.2-0.3 s before TDORC flags it, and a scan
+  /// continuing through that sweeps the whisker into the wall. 0 = never
+  /// hold. [Pa]
+  double whisk_pause_rms = 13.0;
   /// Yaw offset after a clearing (issue 17, docs/tuning/tactile_fsm.md "Round 9", choice): the
   /// two forward whiskers (bases 25 mm off the axis, tips 0.191 m ahead) leave
   /// a band 25-80 mm beside the axis, inside the guard's radius, where a
@@ -271,46 +216,36 @@ struct WallFollowerParams {
   /// velocity setpoint is turned back into that heading, so the track is
   /// unchanged and only the whiskers turn: that side's whisker tip then
   /// reaches 0.191 sin(a) + 0.025 cos(a) beside the axis (20 deg: 89 mm,
-  /// beyond the guard). 0 = off (the paper: no offset). [rad]
-  double clear_yaw_offset = 0.0;
-  /// Also hold the offset during RESUME_FORWARD's side-step (it is then
-  /// established when FLY_FORWARD begins).
-  bool clear_yaw_in_resume = false;
+  /// beyond the guard). 0 = off (the paper: no offset). 14 deg with the
+  /// release at 13 Pa: tuning 415 -> 433 of 450, seen 1088 -> 1123 of 1200
+  /// (docs/tuning/tactile_fsm.md "Round 9"). [rad]
+  double clear_yaw_offset = 0.2443;
   /// Back to the track's heading (until the next clearing) once either
   /// whisker's S_c sum moves (RMS of its changes >= this, the node's phantom
   /// window): a touch TDORC has not flagged yet, so that the wall following
   /// starts at the heading it has without the offset. 0 = never. [Pa]
-  double clear_yaw_release_rms = 0.0;
-  /// Whisking on the first approach (issue 17, docs/tuning/tactile_fsm.md "Round 10", choice): the
-  /// first baffle is met with no clearing before it, so clear_yaw_offset has
-  /// no side to turn to; its end can lie in the blind band (25-80 mm beside
-  /// the axis) on either side. In the FLY_FORWARD before the flight's first
-  /// contact the yaw whisks about the course heading by first_whisk_amplitude
-  /// with period first_whisk_period_s (rate limit whisk_rate_max, paused while
-  /// a whisker's sum moves, whisk_pause_rms), the track kept on the course at
-  /// first_whisk_speed (0 = V_max). 0 = off (the paper). [rad]
-  double first_whisk_amplitude = 0.0;
-  double first_whisk_period_s = 0.7;   ///< [s]
-  double first_whisk_speed = 0.0;      ///< [m/s]; 0 = v_max
-  /// While a whisker's sum moves (whisk_pause_rms) the first-approach whisk
-  /// turns back to the course heading (realign_gain) instead of holding the
-  /// yaw, so that the wall following starts nearer the course heading.
-  bool first_whisk_pause_to_course = false;
-  /// Our choice (docs/tuning/tactile_fsm.md "Round 10b"): in the first-approach whisk, a whisker's
-  /// S_c sum moving (whisk_pause_rms) on the side opposite the yaw (or both) is
-  /// a wall ahead, not an end beside the axis: the yaw is turned back to the
-  /// course at up to this rate for the rest of that FLY_FORWARD. 0 = off. [rad/s]
-  double first_whisk_wall_rate = 0.0;
+  double clear_yaw_release_rms = 13.0;
+  /// The first approach (issue 17, docs/tuning/tactile_fsm.md "Round 10",
+  /// "Round 12", choice): the first baffle is met with no clearing before it,
+  /// so clear_yaw_offset has no side to turn to; its end can lie in the blind
+  /// band (25-80 mm beside the axis) on either side. In the FLY_FORWARD before
+  /// the flight's first contact the whiskers are scanned by
+  /// first_whisk_amplitude about the course heading (step and scan, below).
+  /// 0 = off (the paper's straight approach at V_max; the darkness scenarios,
+  /// 000 Fig. 6). 0.44 rad: held out 16000-17299, docs/tuning/tactile_fsm.md
+  /// "Round 12". [rad]
+  double first_whisk_amplitude = 0.44;
   /// Step and scan on the first approach (issue 17, docs/tuning/tactile_fsm.md "Round 12", our
-  /// choice; first_whisk_amplitude 0 turns it off with the whisk): instead of whisking while
-  /// flying, the first approach alternates steps of first_scan_step along the
+  /// choice; first_whisk_amplitude 0 turns it off): the first approach alternates steps of first_scan_step along the
   /// course (yaw on the course, the speed brought down to 0 at the step's end)
   /// and scans in place (yaw course -> +A -> -A -> course at first_scan_rate,
   /// A = first_whisk_amplitude, held while a whisker's sum moves,
   /// whisk_pause_rms). Yawed in place the whisker tips lie nearer than when
   /// straight, so a wall ahead is met in a step at the course heading and only
-  /// an end beside the axis in a scan. 0 = off (the continuous whisk). [m]
-  double first_scan_step = 0.0;
+  /// an end beside the axis in a scan (round 10's continuous whisk while
+  /// flying met walls ahead at a whisked yaw; removed, see the tuning history).
+  /// >= 0.02 (the step ends 15 mm before its end). [m]
+  double first_scan_step = 0.08;
   double first_scan_rate = 2.0;  ///< [rad/s], at most whisk_rate_max
   /// A baffle's end met by one whisker (issue 17, docs/tuning/tactile_fsm.md "Round 10", choice):
   /// a first touch in FLY_FORWARD by exactly one whisker whose contact point
@@ -321,7 +256,7 @@ struct WallFollowerParams {
   /// starts as when passing an edge (both touched), side-stepping away from
   /// it, instead of approaching it (which drove the guard into the end 65-75
   /// mm beside the axis). 0 = off. [m]
-  double end_contact_lateral = 0.0;
+  double end_contact_lateral = 0.045;
   double target_radius = 0.15;                 ///< land within this distance of the target [m]
   bool land_past_target = true;                ///< also land once past the target along the course direction
   double landing_duration_s = 2.0;             ///< LANDING -> LANDED after this [s]
@@ -372,6 +307,8 @@ struct WallFollowerOutput {
   FsmState state = FsmState::kHoverInit;
   WallSubState sub_state = WallSubState::kNone;
   bool transitioned = false;  ///< the top-level state or sub-state changed this tick
+  /// An override rule (OverrideRules) began to fire this tick; reason() names it.
+  bool override_started = false;
 };
 
 /// The wall-following sub-state rule (000 Fig. S4e; the exact conditions are
@@ -397,11 +334,8 @@ struct WallFollowerOutput {
 ///  - none: FLY_SIDEWAYS (clearing is decided by the top level).
 /// theta: wall angle estimate to use when both depths are valid; NaN = compute
 /// it from the depths (000 eq. 21).
-/// last_l, last_r: the last depth each whisker had while valid in this
-/// episode (NaN = unknown), read only by lost_far_depth.
 WallSubState wall_sub_state(double d_l, bool l_valid, double d_r, bool r_valid, Side side, bool both_touched,
-                            WallSubState current, const WallFollowerParams& p, double theta = NAN,
-                            double last_l = NAN, double last_r = NAN);
+                            WallSubState current, const WallFollowerParams& p, double theta = NAN);
 
 /// The staleness rule of the behaviours that fly on whisker depth and
 /// odometry (this wall follower, gpis_explorer's sequencer): an input stamped
@@ -417,6 +351,157 @@ inline bool input_fresh(double t, double stamp, double max_age) {
 /// non-finite values -> 0.
 Setpoint saturate(const Setpoint& s, const WallFollowerParams& p);
 
+// --- Override rules --------------------------------------------------------
+//
+// After the state switch and the sub-state rule, an ordered list of named
+// rules may override what the state asked for (issue 33): first the two that
+// replace a turn of the sub-state rule by a translation (heading limit, turn
+// anchor), then, on the setpoint of the state, the two first-approach and
+// after-clearing yaw rules (step and scan, yaw offset). Each reads one
+// TickSnapshot, fires when applies() holds, then apply() changes the
+// snapshot's sub-state or setpoint; WhiskerWallFollower counts the ticks each
+// fired and, when one begins to fire (or its override changes the sub-state),
+// publishes its reason. A later rule sees what the earlier ones left.
+
+/// What the override rules read on one tick, and what they override.
+struct TickSnapshot {
+  WallFollowerInput in;  ///< this tick's input (t, pose, S_c change RMS)
+  double dt = 0.0;       ///< since the last tick [s]
+  FsmState state = FsmState::kHoverInit;  ///< after this tick's state switch
+  WallSubState current = WallSubState::kNone;  ///< sub-state of the last tick (turning or not)
+  Side side = Side::kRight;                    ///< the followed side
+  bool l_valid = false, r_valid = false;       ///< depths valid after the phantom gate
+  double d_left = NAN, d_right = NAN;          ///< depths of the sub-state rule (filtered, pressed-capped) [m]
+  double theta = NAN;         ///< wall angle of the rule (NaN unless both valid) [rad]
+  double wall_heading = NAN;  ///< filtered yaw - theta [rad]
+  bool origin_set = false;    ///< the course was set at the end of HOVER_INIT
+  double origin_x = 0.0, origin_y = 0.0, course_yaw = 0.0;
+  bool after_clear = false;  ///< FLY_FORWARD entered from RESUME_FORWARD
+  bool contacted = false;    ///< wall following entered in this flight
+  /// Overridden by the sub-state rules: the Fig. S4e rule's sub-state (kNone
+  /// outside WALL_FOLLOWING); by the setpoint rules: the state's setpoint
+  /// (after saturate()).
+  WallSubState sub_state = WallSubState::kNone;
+  Setpoint setpoint;
+};
+
+/// The translation the depths ask for when a turn is refused: FLY_BACKWARD
+/// if a valid depth is below T_min, FLY_FORWARD if one is above T_max, else
+/// FLY_SIDEWAYS.
+WallSubState translation_instead_of_turn(const TickSnapshot& s, const WallFollowerParams& p);
+/// s.sub_state is a turn that goes on beyond `limit` from the heading `ref`.
+bool turns_beyond(const TickSnapshot& s, double ref, double limit);
+
+/// Heading limit (issue 17; docs/whisker_fsm.md "Heading limit"): in wall
+/// following, a turn that would take the heading further than
+/// max_heading_offset from the course heading becomes the translation the
+/// depths ask for.
+class HeadingLimitRule {
+ public:
+  static constexpr const char* kName = "heading_limit";
+  static constexpr const char* kReason = "heading limit: a turn beyond max_heading_offset from the course, translating";
+  explicit HeadingLimitRule(const WallFollowerParams& p) : p_(p) {}
+  void observe(const TickSnapshot&) {}
+  bool applies(const TickSnapshot& s) const;
+  void apply(TickSnapshot& s) const { s.sub_state = translation_instead_of_turn(s, p_); }
+  void idle() {}
+  void reset() {}
+
+ private:
+  WallFollowerParams p_;
+};
+
+/// Turn anchor (issue 17, docs/tuning/tactile_fsm.md "Round 13"): the wall
+/// heading read at the first tick both whiskers touched, replaced by a clear
+/// angle (|theta| >= turn_anchor_theta) read while not turning and crept
+/// toward the heading read while not turning (turn_anchor_rate); a turn asked
+/// for by a small angle that goes on beyond turn_anchor_tolerance from it
+/// becomes the translation the depths ask for. observe() keeps the anchor
+/// (NaN outside wall following: each wall following reads its own).
+class TurnAnchorRule {
+ public:
+  static constexpr const char* kName = "turn_anchor";
+  static constexpr const char* kReason = "turn anchor: a turn beyond turn_anchor_tolerance from the wall heading, translating";
+  explicit TurnAnchorRule(const WallFollowerParams& p) : p_(p) {}
+  void observe(const TickSnapshot& s);
+  bool applies(const TickSnapshot& s) const;
+  void apply(TickSnapshot& s) const { s.sub_state = translation_instead_of_turn(s, p_); }
+  void idle() {}
+  void reset() { anchor_ = NAN; }
+  double anchor() const { return anchor_; }  ///< [rad]; NaN: none
+
+ private:
+  bool tracks(const TickSnapshot& s) const;  ///< the rule is on and both depths give a wall heading
+  WallFollowerParams p_;
+  double anchor_ = NAN;
+};
+
+/// Step and scan (issue 17, docs/tuning/tactile_fsm.md "Round 10", "Round
+/// 12"): in the FLY_FORWARD before the flight's first contact (no clearing
+/// yet), steps of first_scan_step along the course alternate with scans in
+/// place (course -> +A -> -A -> course at first_scan_rate, A =
+/// first_whisk_amplitude, held while a whisker's sum moves, whisk_pause_rms).
+/// A tick it does not apply ends the scan: the next first approach starts
+/// afresh.
+class StepAndScanRule {
+ public:
+  static constexpr const char* kName = "step_and_scan";
+  static constexpr const char* kReason = "step and scan on the first approach (first_whisk_amplitude, first_scan_step)";
+  explicit StepAndScanRule(const WallFollowerParams& p) : p_(p) {}
+  void observe(const TickSnapshot&) {}
+  bool applies(const TickSnapshot& s) const;
+  void apply(TickSnapshot& s);
+  void idle() { goal_ = NAN; }
+  void reset() { goal_ = NAN; }
+  bool scanning() const { return scanning_; }
+
+ private:
+  void begin_scan(int leg);
+  WallFollowerParams p_;
+  // The step's end along the course [m] (NaN: not started; the rest is set when
+  // it starts), scanning (else stepping), the scan's yaw reference off the
+  // course [rad] and its leg (0: to +A, 1: to -A, 2: back to the course, 3: settling).
+  double goal_ = NAN;
+  bool scanning_ = false;
+  double ref_ = 0.0;
+  int leg_ = 0;
+  double hold_s_ = 0.0;    ///< time this scan was held on a moving sum [s]
+  double settle_s_ = 0.0;  ///< time in this scan's last leg [s]
+};
+
+/// Yaw offset after a clearing (issue 17, docs/tuning/tactile_fsm.md "Round
+/// 9"): in the FLY_FORWARD after a clearing the body yaw is held
+/// clear_yaw_offset away from the side-step side of the heading the drone
+/// would otherwise fly (track unchanged); back to that heading once a
+/// whisker's sum moves (clear_yaw_release_rms). A tick it does not apply
+/// ends it.
+class YawOffsetRule {
+ public:
+  static constexpr const char* kName = "yaw_offset";
+  static constexpr const char* kReason = "yaw offset after a clearing (clear_yaw_offset)";
+  explicit YawOffsetRule(const WallFollowerParams& p) : p_(p) {}
+  void observe(const TickSnapshot&) {}
+  bool applies(const TickSnapshot& s) const;
+  void apply(TickSnapshot& s);
+  void idle() { reset(); }
+  void reset() {
+    track_yaw_ = NAN;
+    released_ = false;
+  }
+  bool released() const { return released_; }
+
+ private:
+  WallFollowerParams p_;
+  double track_yaw_ = NAN;  ///< the heading the drone would fly without the offset [rad]
+  bool released_ = false;   ///< clear_yaw_release_rms reached since the clearing
+};
+
+/// The override rules in the order they run.
+enum class OverrideRule : uint8_t { kHeadingLimit, kTurnAnchor, kStepAndScan, kYawOffset };
+constexpr std::size_t kOverrideRuleCount = 4;
+/// "heading_limit", "turn_anchor", "step_and_scan", "yaw_offset".
+const char* to_string(OverrideRule r);
+
 class WhiskerWallFollower {
  public:
   explicit WhiskerWallFollower(const WallFollowerParams& params);
@@ -428,8 +513,12 @@ class WhiskerWallFollower {
   FsmState state() const { return state_; }
   FsmState previous_state() const { return previous_; }
   WallSubState sub_state() const { return sub_; }
-  /// Why the last top-level transition (or sub-state change) happened; static text.
-  const char* reason() const { return reason_; }
+  /// Why the last top-level transition, sub-state change or override rule's
+  /// onset happened: a transition's or rule's text, or both ("<transition>;
+  /// <rule>") when a rule begins on a transition's tick. Valid until the next step().
+  const char* reason() const { return reason_composed_ ? reason_buf_.data() : reason_; }
+  /// Ticks on which each override rule fired (index: OverrideRule), since reset().
+  uint64_t override_count(OverrideRule r) const { return override_count_[static_cast<std::size_t>(r)]; }
   bool started() const { return started_; }
   double state_entered() const { return entered_; }
   uint32_t transitions() const { return transitions_; }
@@ -440,9 +529,6 @@ class WhiskerWallFollower {
   /// Whisker held in contact but taken for a phantom (phantom_quiet_rms) on the last tick.
   bool phantom_left() const { return phantom_l_; }
   bool phantom_right() const { return phantom_r_; }
-  /// Motion-carried depth bound of each whisker (motion_depth_relax; NaN when off or not in contact) [m].
-  double motion_bound_left() const { return motion_b_l_; }
-  double motion_bound_right() const { return motion_b_r_; }
   /// Wall angle in the body frame used by the rule [rad] (NaN unless both valid).
   double wall_angle() const { return theta_; }
   const WallFollowerParams& params() const { return p_; }
@@ -456,10 +542,11 @@ class WhiskerWallFollower {
                             bool r_valid) const;
   double realign(const WallFollowerInput& in) const;
   double realign_rate(double yaw) const;  ///< realign()'s rate toward the course from `yaw` (unsaturated)
-  Setpoint whisk(const WallFollowerInput& in, const Setpoint& s, double amplitude, double period, double speed,
-                 bool pause_to_course = false) const;
-  Setpoint offset_yaw(const WallFollowerInput& in, const Setpoint& s, double dt);
-  Setpoint step_and_scan(const WallFollowerInput& in, const Setpoint& s, double dt);
+  /// Runs one override rule on the snapshot: observe, then apply (counted) or idle.
+  template <typename Rule>
+  void run_rule(Rule& rule, OverrideRule id, TickSnapshot& s, bool top_transition);
+  /// reason_ for a rule that fired on a sub-state change or began to fire this tick.
+  void note_rule(const char* rule_reason, bool top_transition);
 
   WallFollowerParams p_;
   FsmState state_ = FsmState::kHoverInit;
@@ -474,43 +561,29 @@ class WhiskerWallFollower {
   bool both_touched_ = false;
   double last_contact_t_ = 0.0;
   double f_left_ = NAN, f_right_ = NAN;
-  double last_l_ = NAN, last_r_ = NAN;  ///< last valid depth of each whisker in this episode (lost_far_depth)
-  bool lost_far_l_ = false, lost_far_r_ = false;      ///< lost beyond lost_far_depth with the other beyond T_max
-  bool prev_l_valid_ = false, prev_r_valid_ = false;  ///< validity on the previous wall-following tick
   double pressed_t_left_ = -INFINITY, pressed_t_right_ = -INFINITY;  ///< last tick with sum >= press_sum_pa
   double live_x_l_ = NAN, live_y_l_ = NAN;  ///< where the left S_c sum last moved (or the whisker was free)
   double live_x_r_ = NAN, live_y_r_ = NAN;
   bool phantom_l_ = false, phantom_r_ = false;
-  double motion_b_l_ = NAN, motion_b_r_ = NAN;      ///< motion-carried depth bound [m] (NaN: no contact)
-  double motion_qx_l_ = NAN, motion_qy_l_ = NAN;    ///< world point of the bound on the wall
-  double motion_qx_r_ = NAN, motion_qy_r_ = NAN;
-  double onset_x_l_ = NAN, onset_y_l_ = NAN;        ///< first contact point of the current contact
-  double onset_x_r_ = NAN, onset_y_r_ = NAN;
-  double motion_nx_ = NAN, motion_ny_ = NAN;        ///< wall normal (world) of the current contact
   double wall_heading_ = NAN;  ///< filtered yaw - theta [rad]
   double theta_ = NAN;
-  double anchor_ = NAN;  ///< turn_anchor_tolerance: wall heading anchor of this wall following [rad]
   bool origin_set_ = false;
   double origin_x_ = 0.0, origin_y_ = 0.0;  ///< course start (end of hover)
   double course_yaw_ = 0.0;                   ///< heading at the course start [rad]
-  double margin_x_ = 0.0, margin_y_ = 0.0;  ///< where the side-step's clear_margin counts from (resume_quiet_rms)
   double clear_x_ = 0.0, clear_y_ = 0.0;    ///< where the obstacle was cleared
   bool after_clear_ = false;                 ///< FLY_FORWARD entered from RESUME_FORWARD
   double resume_x_ = 0.0, resume_y_ = 0.0;  ///< where that FLY_FORWARD began
-  double track_yaw_ = NAN;  ///< clear_yaw_offset: the heading the drone would fly without the offset [rad]
-  bool yaw_offset_released_ = false;  ///< clear_yaw_release_rms reached since the clearing
-  bool first_whisk_wall_ = false;  ///< first_whisk_wall_rate latched in this FLY_FORWARD
   bool contacted_ = false;  ///< wall following entered at least once in this flight (first_whisk_amplitude)
-  // first_scan_step: the step's end along the course [m] (NaN: not started;
-  // the rest is set when it starts), scanning (else stepping), the scan's yaw
-  // reference off the course [rad] and its leg (0: to +A, 1: to -A, 2: back to
-  // the course, 3: settling).
-  double scan_goal_ = NAN;
-  bool scanning_ = false;
-  double scan_ref_ = 0.0;
-  int scan_leg_ = 0;
-  double scan_hold_s_ = 0.0;    ///< time this scan was held on a moving sum [s]
-  double scan_settle_s_ = 0.0;  ///< time in this scan's last leg [s]
+  // The override rules, in the order they run, with their firing record.
+  HeadingLimitRule heading_limit_;
+  TurnAnchorRule turn_anchor_;
+  StepAndScanRule step_and_scan_;
+  YawOffsetRule yaw_offset_;
+  std::array<uint64_t, kOverrideRuleCount> override_count_{};
+  std::array<bool, kOverrideRuleCount> override_active_{};  ///< fired on the last tick
+  bool override_started_ = false;                           ///< a rule began to fire this tick
+  std::array<char, 192> reason_buf_{};                      ///< "<transition>; <rule>" (no allocation)
+  bool reason_composed_ = false;                            ///< reason() is reason_buf_, else reason_
 };
 
 }  // namespace tactile_fsm
