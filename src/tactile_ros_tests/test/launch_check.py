@@ -33,6 +33,19 @@ CONFIG_DIR = WORKSPACE / 'config'
 RATE_TOLERANCE = 0.25
 
 
+try:
+    import tf2_ros  # noqa: F401
+    HAVE_TF2 = True
+except ImportError:
+    HAVE_TF2 = False
+
+# The transforms need tf2_ros (the Kilted toolchain's extras overlay); without it the
+# components are built without /tf and /tf_static and the tests that look them up skip.
+needs_tf2 = pytest.mark.skipif(
+    not HAVE_TF2, reason='no tf2_ros in this ROS 2 installation (the Jazzy toolchain here): '
+                         'the components are built without /tf and /tf_static')
+
+
 def message_class(type_name: str):
     pkg, _, name = type_name.split('/')
     return getattr(importlib.import_module(f'{pkg}.msg'), name)

@@ -23,17 +23,7 @@ import xml.etree.ElementTree as ET
 import pytest
 import yaml
 
-from launch_check import CONFIG_DIR, Graph, Launch, unique_port
-
-try:
-    import tf2_ros  # noqa: F401
-    HAVE_TF2 = True
-except ImportError:
-    HAVE_TF2 = False
-
-needs_tf2 = pytest.mark.skipif(
-    not HAVE_TF2, reason='no tf2_ros in this ROS 2 installation (the Jazzy toolchain here): '
-                         'the components are built without /tf and /tf_static')
+from launch_check import CONFIG_DIR, Graph, Launch, unique_port, HAVE_TF2, needs_tf2
 
 WHISKER_LINKS = {'base_link', 'whisker_left', 'whisker_right', 'imu_link', 'tof_down', 'flow'}
 XPLORER_LINKS = {'base_link', 'imu_link'} | {f'{k}{i}' for i in range(4) for k in ('arm', 'rotor')} | {

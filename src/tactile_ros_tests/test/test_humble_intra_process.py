@@ -32,7 +32,7 @@ import re
 
 import pytest
 
-from launch_check import CONFIG_DIR, WORKSPACE, Graph, Launch, unique_port
+from launch_check import CONFIG_DIR, WORKSPACE, Graph, Launch, unique_port, HAVE_TF2
 
 PROBE_PLUGIN = 'tactile_ros_tests::IntraProcessQosProbe'
 
@@ -102,16 +102,11 @@ CASES = {
 
 # The vehicle's components also latch robot_description and, where tf2_ros is found (the
 # Kilted extras overlay; not the Jazzy toolchain here), /tf_static.
-try:
-    import tf2_ros  # noqa: F401
-    _HAVE_TF2 = True
-except ImportError:
-    _HAVE_TF2 = False
 for _case in CASES.values():
     for _vehicle in ('/tactile_sim', '/crazyflie_bridge'):
         if _vehicle in _case['nodes']:
             _case['latched']['/robot_description'] = _vehicle
-            if _HAVE_TF2:
+            if HAVE_TF2:
                 _case['latched']['/tf_static'] = _vehicle
 
 

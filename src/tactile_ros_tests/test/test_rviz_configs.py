@@ -29,17 +29,7 @@ import xml.etree.ElementTree as ET
 import pytest
 import yaml
 
-from launch_check import CONFIG_DIR, LAUNCH_DIR, Graph, Launch, message_class, unique_port
-
-try:
-    import tf2_ros  # noqa: F401
-    HAVE_TF2 = True
-except ImportError:
-    HAVE_TF2 = False
-
-needs_tf2 = pytest.mark.skipif(
-    not HAVE_TF2, reason='no tf2_ros in this ROS 2 installation (the Jazzy toolchain here): '
-                         'the components are built without /tf and /tf_static')
+from launch_check import CONFIG_DIR, LAUNCH_DIR, Graph, Launch, message_class, needs_tf2, unique_port
 
 RVIZ_DIR = CONFIG_DIR / 'rviz'
 FOXGLOVE_DIR = CONFIG_DIR / 'foxglove'

@@ -18,19 +18,13 @@ from __future__ import annotations
 
 import pytest
 
-from launch_check import Graph, Launch
+from launch_check import Graph, Launch, HAVE_TF2
 
 try:
     import visualization_msgs.msg  # noqa: F401
     HAVE_VIZ = True
 except ImportError:
     HAVE_VIZ = False
-
-try:
-    import tf2_ros  # noqa: F401
-    HAVE_TF2 = True
-except ImportError:
-    HAVE_TF2 = False
 
 needs_viz = pytest.mark.skipif(
     not HAVE_VIZ, reason='no visualization_msgs in this ROS 2 installation: no tactile_viz component, no sim/arena')
