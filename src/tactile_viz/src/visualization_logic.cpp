@@ -5,6 +5,8 @@
 #include <limits>
 #include <string>
 
+#include "tactile_common/time.hpp"
+
 namespace tactile_viz {
 namespace {
 
@@ -20,10 +22,6 @@ void positive_finite(const char* field, double v) {
 }
 
 bool finite(const Point& p) { return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z); }
-
-int64_t stamp_ns(const builtin_interfaces::msg::Time& t) {
-  return static_cast<int64_t>(t.sec) * 1000000000LL + static_cast<int64_t>(t.nanosec);
-}
 
 Point point(double x, double y, double z) {
   Point p;
@@ -151,18 +149,7 @@ VisualizationParams VisualizationLogic::params_from(const tactile_common::ParamM
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {
-    // "VisualizationParams.<key>: <reason>" -> ParamError naming file and key.
-    const std::string what = e.what();
-    const std::string prefix = "VisualizationParams.";
-    std::string key = "?", reason = what;
-    if (what.rfind(prefix, 0) == 0) {
-      const size_t colon = what.find(": ", prefix.size());
-      if (colon != std::string::npos) {
-        key = what.substr(prefix.size(), colon - prefix.size());
-        reason = what.substr(colon + 2);
-      }
-    }
-    throw m.error(key, reason);
+    throw m.error_from(e);  // "<Type>.<field>: <reason>" -> parameter <field>
   }
   return p;
 }
@@ -224,7 +211,7 @@ VisualizationLogic::MarkerArray VisualizationLogic::on_tactile_depth(const tacti
     added = true;
   }
   MarkerArray out;
-  if (!added || !due(depth_src_, stamp_ns(msg.header.stamp), false)) return out;
+  if (!added || !due(depth_src_, tactile_common::from_stamp(msg.header.stamp), false)) return out;
   start(depth_src_, kNsWhiskerContacts, out);
   for (int side = 0; side < 2; ++side) {
     const History& h = contacts_[side];
@@ -251,7 +238,7 @@ VisualizationLogic::MarkerArray VisualizationLogic::on_wall_estimate(const tacti
     }
     return out;
   }
-  if (!due(wall_src_, stamp_ns(msg.header.stamp), !wall_shown_)) return out;
+  if (!due(wall_src_, tactile_common::from_stamp(msg.header.stamp), !wall_shown_)) return out;
   start(wall_src_, kNsWallEstimate, out);
   // direction: from the vehicle centre to the wall in the body frame (wall_effect_ekf
   // README "Frames"); the wall is the line through the foot point, normal to it.
@@ -446,7 +433,7 @@ VisualizationLogic::MarkerArray VisualizationLogic::on_localization(const tactil
     out.markers.push_back(remove(msg.header.stamp, msg.header.frame_id, kNsLocalization, 0));
     localization_contact_shown_ = false;
   }
-  if (!due(localization_src_, stamp_ns(msg.header.stamp), contact && !localization_contact_shown_)) return out;
+  if (!due(localization_src_, tactile_common::from_stamp(msg.header.stamp), contact && !localization_contact_shown_)) return out;
   start(localization_src_, kNsLocalization, out);
   if (contact) {
     Marker c = make(msg.header.stamp, msg.contact_frame_id, kNsLocalization, 0, Marker::SPHERE);

@@ -113,18 +113,7 @@ WhiskerDriverParams WhiskerDriverLogic::params_from(const tactile_common::ParamM
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {
-    // "WhiskerDriverParams.<key>: <reason>" -> ParamError naming file and key.
-    std::string what = e.what();
-    const std::string prefix = "WhiskerDriverParams.";
-    std::string key = "?", reason = what;
-    if (what.rfind(prefix, 0) == 0) {
-      const size_t colon = what.find(": ", prefix.size());
-      if (colon != std::string::npos) {
-        key = what.substr(prefix.size(), colon - prefix.size());
-        reason = what.substr(colon + 2);
-      }
-    }
-    throw m.error(key, reason);
+    throw m.error_from(e);  // "<Type>.<field>: <reason>" -> parameter <field>
   }
   return p;
 }
