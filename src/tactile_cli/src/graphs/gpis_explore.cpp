@@ -22,6 +22,9 @@ using gpis_explorer::GpisExplorerLogic;
 class GpisExploreGraph : public SimGraph {
  public:
   explicit GpisExploreGraph(GraphContext& ctx) : sim_(ctx.sim) {
+    // The exploration's parameters against the nodes' files, written once
+    // (config/profiles/exploration.yaml; launch/sitl_explore.launch.py passes the same file).
+    ctx.host.use_profile("exploration", /*graph_default=*/true);
     add_tdorc_filter(ctx.host, "whisker/left", ctx.overrides("tdorc_filter"));
     add_tdorc_filter(ctx.host, "whisker/right", ctx.overrides("tdorc_filter"));
     add_tactile_depth(ctx.host, ctx.overrides("tactile_depth"));
