@@ -60,6 +60,63 @@ const char* to_string(Phase p) {
   return "UNKNOWN";
 }
 
+const char* to_string(Round r) {
+  switch (r) {
+    case Round::kProbes: return "probes";
+    case Round::kTargets: return "targets";
+  }
+  return "unknown";
+}
+
+const char* to_string(ProbeSet s) {
+  switch (s) {
+    case ProbeSet::kOrthogonal: return "orthogonal";
+    case ProbeSet::kDiagonal: return "diagonal";
+  }
+  return "unknown";
+}
+
+const char* to_string(CheckStage s) {
+  switch (s) {
+    case CheckStage::kWhiskBack: return "whisk_back";
+    case CheckStage::kDwell: return "dwell";
+  }
+  return "unknown";
+}
+
+const char* to_string(ReturnLeg l) {
+  switch (l) {
+    case ReturnLeg::kToProbeLine: return "to_probe_line";
+    case ReturnLeg::kAlongProbeLine: return "along_probe_line";
+  }
+  return "unknown";
+}
+
+const char* to_string(ReturnFor r) {
+  switch (r) {
+    case ReturnFor::kNextProbe: return "next_probe";
+    case ReturnFor::kOpenProbeExit: return "open_probe_exit";
+  }
+  return "unknown";
+}
+
+const char* to_string(RetreatKind k) {
+  switch (k) {
+    case RetreatKind::kAfterFollow: return "after_follow";
+    case RetreatKind::kBackOff: return "back_off";
+    case RetreatKind::kAfterProbes: return "after_probes";
+  }
+  return "unknown";
+}
+
+const char* to_string(ExitKind k) {
+  switch (k) {
+    case ExitKind::kAlongOpenProbe: return "along_open_probe";
+    case ExitKind::kBeyondTarget: return "beyond_target";
+  }
+  return "unknown";
+}
+
 const char* to_string(Outcome o) {
   switch (o) {
     case Outcome::kRunning: return "running";
@@ -128,11 +185,24 @@ void SequencerParams::validate() const {
 ExplorationSequencer::ExplorationSequencer(const SequencerParams& params)
     : p_(params), explorer_((params.validate(), params.explorer)) {}
 
+std::string ExplorationSequencer::sub_state() const {
+  switch (phase_) {
+    case Phase::kCheckAhead: return to_string(check_stage_);
+    case Phase::kReturn: return to_string(return_leg_);
+    case Phase::kRetreat: return to_string(retreat_kind_);
+    case Phase::kExitThrough: return to_string(exit_kind_);
+    case Phase::kFollowWall: return tactile_fsm::to_string(sub_);
+    case Phase::kTurn: return to_string(after_turn_);
+    default: return "";
+  }
+}
+
 void ExplorationSequencer::enter(Phase p, const char* reason, double t) {
   if (p == Phase::kRetreat) {
     retreat_held_ = false;
-    retreat_from_follow_ = phase_ == Phase::kFollowWall;
-    retreat_from_return_ = phase_ == Phase::kReturn;
+    retreat_kind_ = phase_ == Phase::kFollowWall ? RetreatKind::kAfterFollow
+                    : phase_ == Phase::kReturn   ? RetreatKind::kAfterProbes
+                                                 : RetreatKind::kBackOff;
   }
   previous_ = phase_;
   phase_ = p;
@@ -188,7 +258,7 @@ bool ExplorationSequencer::fly_leg(const SequencerInput& in, bool contact, tacti
   whisking_ = leg_motion(in, whisk_leg() ? p_.whisk_speed : forward_speed(in), whisk_leg(), sp);
   if (contact) {
     if (!whisking_) {
-      start_follow(in, false);
+      start_follow(in);
       return true;
     }
     if (whisk_blocked(in)) {
@@ -396,7 +466,7 @@ bool ExplorationSequencer::beyond_known_surface(const Eigen::Vector2d& pos) cons
 
 double ExplorationSequencer::retreat_lateral(const SequencerInput& in) const {
   // Body-y speed back toward where the wall follow began (retreat_toward_follow_start).
-  if (!p_.retreat_toward_follow_start || !retreat_from_follow_) return 0.0;
+  if (!p_.retreat_toward_follow_start || retreat_kind_ != RetreatKind::kAfterFollow) return 0.0;
   const double off = (Eigen::Vector2d(in.x, in.y) - follow_start_).dot(Eigen::Vector2d(-std::sin(in.yaw), std::cos(in.yaw)));
   return std::clamp(-off / p_.retreat_time_s, -p_.retreat_speed, p_.retreat_speed);
 }
@@ -426,7 +496,7 @@ bool ExplorationSequencer::whisk_leg() const {
     case Phase::kProbe:
     case Phase::kGoToStaging:
     case Phase::kGoToTarget: return true;
-    case Phase::kExitThrough: return exit_whisk_;
+    case Phase::kExitThrough: return exit_kind_ == ExitKind::kBeyondTarget;
     default: return false;
   }
 }
@@ -467,7 +537,7 @@ bool ExplorationSequencer::whisk_blocked(const SequencerInput& in) {
 
 void ExplorationSequencer::start_check(const SequencerInput& in) {
   check_from_ = phase_;
-  check_stage_ = 0;
+  check_stage_ = CheckStage::kWhiskBack;
   check_t_ = in.t;
   check_started_ = in.t;
   check_points_.clear();
@@ -494,10 +564,10 @@ void ExplorationSequencer::check_ahead(const SequencerInput& in, tactile_fsm::Se
     if (in.contact_right && in.point_right.allFinite()) check_points_.push_back(in.point_right);
   }
   const double err = wrap(heading_ - in.yaw);
-  if (check_stage_ == 0) {
+  if (check_stage_ == CheckStage::kWhiskBack) {
     sp->yaw_rate = fast_yaw_rate(err, p_.whisk_rate);  // the whisk back
     if (std::abs(err) < p_.yaw_tolerance) {
-      check_stage_ = 1;
+      check_stage_ = CheckStage::kDwell;
       check_t_ = in.t;
     }
     return;
@@ -511,7 +581,7 @@ void ExplorationSequencer::check_ahead(const SequencerInput& in, tactile_fsm::Se
   }
   if (check_points_.empty()) {  // contact without a position estimate: as an unwhisked leg
     ++whisk_walls_;
-    start_follow(in, check_from_ == Phase::kProbe);
+    start_follow(in);
     return;
   }
   if (!std::isfinite(nearest)) {
@@ -520,12 +590,11 @@ void ExplorationSequencer::check_ahead(const SequencerInput& in, tactile_fsm::Se
   }
   if (nearest >= p_.follow_min_forward) {
     ++whisk_walls_;
-    start_follow(in, check_from_ == Phase::kProbe);
+    start_follow(in);
     return;
   }
   ++whisk_jambs_;
-  probing_ = check_from_ == Phase::kProbe;
-  if (!probing_ && has_target_ && visited_.size() < 1000) visited_.push_back(target_);
+  if (round_ == Round::kTargets && has_target_ && visited_.size() < 1000) visited_.push_back(target_);
   follow_points_ = check_points_;
   both_touched_ = false;
   enter(Phase::kRetreat, "touched too near the guard: back off", in.t);
@@ -573,18 +642,20 @@ void ExplorationSequencer::align_to_wall(const SequencerInput& in) {
   aligned_ = true;
 }
 
-void ExplorationSequencer::begin_return(const Eigen::Vector2d& pos, const Eigen::Vector2d& to, const char* reason,
-                                        double t) {
+void ExplorationSequencer::begin_return(const Eigen::Vector2d& pos, const Eigen::Vector2d& to, ReturnFor what,
+                                        const char* reason, double t) {
   // First across to the probe's line (leg_start_ along heading_), then along it.
+  return_for_ = what;
   return_to_ = to;
   const Eigen::Vector2d h(std::cos(heading_), std::sin(heading_));
   return_via_ = leg_start_ + h * (pos - leg_start_).dot(h);
-  return_via_active_ = p_.return_via_probe_line && (pos - return_via_).norm() > kOnProbeLine;
+  return_leg_ = p_.return_via_probe_line && (pos - return_via_).norm() > kOnProbeLine ? ReturnLeg::kToProbeLine
+                                                                                       : ReturnLeg::kAlongProbeLine;
   enter(Phase::kReturn, reason, t);
 }
 
-void ExplorationSequencer::start_follow(const SequencerInput& in, bool probing) {
-  probing_ = probing;
+void ExplorationSequencer::start_follow(const SequencerInput& in) {
+  const bool probing = round_ == Round::kProbes;
   follow_points_.clear();
   both_touched_ = false;
   sub_ = tactile_fsm::WallSubState::kNone;
@@ -818,8 +889,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         // probe (that probe's own line, flown without contact).
         line_origin_ = pos;
         if (after_turn_ == Phase::kGoToTarget && has_staging_) line_origin_ = staging_;
-        if (after_turn_ == Phase::kExitThrough && line_from_probe_) line_origin_ = open_origin_;
-        line_from_probe_ = false;
+        if (after_turn_ == Phase::kExitThrough && exit_kind_ == ExitKind::kAlongOpenProbe) line_origin_ = open_origin_;
         beside_added_ = false;
         leg_blind_ = 0.0;
         enter(after_turn_, "aligned", in.t);
@@ -831,7 +901,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       whisking_ = leg_motion(in, whisk_leg() ? p_.whisk_speed : forward_speed(in), whisk_leg(), &sp);
       if (contact && (!whisking_ || whisk_blocked(in))) {
         if (whisking_) start_check(in);
-        else start_follow(in, true);
+        else start_follow(in);
       } else if ((pos - leg_start_).norm() - leg_blind_ >= p_.probe_max_distance) {
         add(pos, kInteriorLabel);  // free all the way (flown with fresh depth)
         if (open_probe_ < 0) {
@@ -839,32 +909,33 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
           open_heading_ = heading_;
           open_origin_ = leg_start_;
         }
-        begin_return(pos, leg_start_, "probe found no wall", in.t);  // back along the probe's own line
+        begin_return(pos, leg_start_, ReturnFor::kNextProbe, "probe found no wall", in.t);  // back along its own line
       }
       break;
     case Phase::kReturn: {
-      if (return_via_active_ && (return_via_ - pos).norm() < kOnProbeLine) return_via_active_ = false;
-      const Eigen::Vector2d d = (return_via_active_ ? return_via_ : return_to_) - pos;
-      if (!return_via_active_ && d.norm() < 0.5 * p_.target_radius) {  // tighter: the next leg starts here
+      if (return_leg_ == ReturnLeg::kToProbeLine && (return_via_ - pos).norm() < kOnProbeLine) {
+        return_leg_ = ReturnLeg::kAlongProbeLine;
+      }
+      const Eigen::Vector2d d = (return_leg_ == ReturnLeg::kToProbeLine ? return_via_ : return_to_) - pos;
+      if (return_leg_ == ReturnLeg::kAlongProbeLine && d.norm() < 0.5 * p_.target_radius) {  // tighter: the next leg starts here
         ++probe_;
-        if (exit_via_probe_) {
+        if (return_for_ == ReturnFor::kOpenProbeExit) {
           // Through the opening along the probe's own line (flown without
           // contact), not a parallel line from wherever the last probe ended.
-          exit_via_probe_ = false;
-          line_from_probe_ = true;
+          return_for_ = ReturnFor::kNextProbe;
           heading_ = open_heading_;
           exit_from_ = pos;
           leg_blind_ = 0.0;
           exit_distance_ = p_.probe_max_distance + p_.exit_confirm_distance;
           after_turn_ = Phase::kExitThrough;
-          exit_whisk_ = false;  // along the open probe's line: its corridor was whisked
+          exit_kind_ = ExitKind::kAlongOpenProbe;  // its corridor was whisked by the probe
           enter(Phase::kTurn, "a probe found the opening", in.t);
           break;
         }
-        if (probe_ >= p_.probe_directions && p_.diagonal_probes && !diagonal_round_ &&
+        if (probe_ >= p_.probe_directions && p_.diagonal_probes && probe_set_ == ProbeSet::kOrthogonal &&
             explorer_.gpis().surface_count() == 0) {
           // No wall in any direction: the diagonals before open_space.
-          diagonal_round_ = true;
+          probe_set_ = ProbeSet::kDiagonal;
           start_yaw_ += M_PI / p_.probe_directions;
           probe_ = 0;
           open_probe_ = -1;
@@ -933,19 +1004,20 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         sp.vy = retreat_lateral(in);
       }
       if (in.t - entered_ >= p_.retreat_time_s) {
-        if (p_.align_probes && probing_ && !aligned_ && !retreat_from_return_) align_to_wall(in);
-        if (!retreat_from_return_) commit_points(in);
-        if (probing_ && probe_ + 1 < p_.probe_directions && !retreat_from_return_) {
+        const bool probing = round_ == Round::kProbes, after_probes = retreat_kind_ == RetreatKind::kAfterProbes;
+        if (p_.align_probes && probing && !aligned_ && !after_probes) align_to_wall(in);
+        if (!after_probes) commit_points(in);
+        if (probing && probe_ + 1 < p_.probe_directions && !after_probes) {
           // Back to the start, then the next probe.
-          begin_return({in.x, in.y}, leg_start_, "retreated: next probe", in.t);
+          begin_return({in.x, in.y}, leg_start_, ReturnFor::kNextProbe, "retreated: next probe", in.t);
           break;
         }
-        probing_ = false;
+        round_ = Round::kTargets;
         if (open_probe_ >= 0 && explorer_.gpis().surface_count() > 0 && explorer_.updates() == 0) {
           // A probe flew 2 m without touching anything in a walled place: an opening.
           update_map();
-          exit_via_probe_ = true;
-          begin_return({in.x, in.y}, open_origin_, "a probe found the opening: back to the start", in.t);
+          begin_return({in.x, in.y}, open_origin_, ReturnFor::kOpenProbeExit,
+                       "a probe found the opening: back to the start", in.t);
           break;
         }
         if (explorer_.gpis().surface_count() == 0) {
@@ -977,7 +1049,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         exit_from_ = pos;
         leg_blind_ = 0.0;
         exit_distance_ = p_.exit_confirm_distance;
-        exit_whisk_ = true;  // beyond the target: unexplored
+        exit_kind_ = ExitKind::kBeyondTarget;  // beyond the target: unexplored, whisked
         enter(Phase::kExitThrough, "target reached without contact", in.t);
       }
       break;
@@ -986,7 +1058,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       whisking_ = leg_motion(in, whisk_leg() ? p_.whisk_speed : forward_speed(in), whisk_leg(), &sp);
       if (contact && (!whisking_ || whisk_blocked(in))) {
         if (whisking_) start_check(in);
-        else start_follow(in, false);
+        else start_follow(in);
       } else if ((pos - exit_from_).norm() - leg_blind_ >= exit_distance_ &&
                  (beyond_known_surface(pos) ||
                   (pos - exit_from_).norm() - leg_blind_ >= exit_distance_ + p_.probe_max_distance)) {

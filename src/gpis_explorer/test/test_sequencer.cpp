@@ -1,6 +1,7 @@
 // Exploration sequencing (000 Methods) in a kinematic test world: the four
 // probes, wall follow / retreat downsampling, GPIS refits, exit through an
 // opening, open space, parameter validation.
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <stdexcept>
@@ -441,6 +442,42 @@ FirstReturn first_return(bool via_line, bool retreat_back) {
 }
 
 }  // namespace
+
+// The sub-states are explicit and named (sub_state()): in the pillar world of
+// first_return the first RETREAT ends a wall follow (after_follow), the first
+// RETURN goes across to the probe's line and then along it, the first probe's
+// whisk stop whisks back and then dwells, and the round moves from the probes
+// to the targets.
+TEST(Sequencer, SubStatesAreNamedInTheOrderTheyAreFlown) {
+  SequencerParams p;
+  ExplorationSequencer seq(p);
+  std::vector<gpis_test::Segment> walls{{{1.0, -2.0}, {1.0, 2.0}}};
+  const std::vector<gpis_test::Segment> pillar = gpis_test::square({0.55, -0.25}, 0.05);
+  walls.insert(walls.end(), pillar.begin(), pillar.end());
+  std::vector<std::string> seen;  // "PHASE/sub" in the order first entered
+  bool targets = false;
+  gpis_test::fly(seq, walls, 0.0, 200.0, 100.0, 0.0, [&](const ExplorationSequencer& s, const Eigen::Vector2d&, double) {
+    const std::string now = std::string(to_string(s.phase())) + "/" + s.sub_state();
+    if (seen.empty() || seen.back() != now) seen.push_back(now);
+    targets = targets || s.round() == gpis_explorer::Round::kTargets;
+  });
+  auto first = [&](const std::string& what) {
+    return std::find(seen.begin(), seen.end(), what) - seen.begin();
+  };
+  const auto n = static_cast<std::ptrdiff_t>(seen.size());
+  ASSERT_LT(first("CHECK_AHEAD/whisk_back"), n);
+  EXPECT_LT(first("CHECK_AHEAD/whisk_back"), first("CHECK_AHEAD/dwell"));
+  ASSERT_LT(first("RETREAT/after_follow"), n);
+  ASSERT_LT(first("RETURN/to_probe_line"), n);
+  EXPECT_LT(first("RETREAT/after_follow"), first("RETURN/to_probe_line"));
+  EXPECT_LT(first("RETURN/to_probe_line"), first("RETURN/along_probe_line"));
+  EXPECT_LT(first("RETURN/along_probe_line"), n);
+  EXPECT_LT(first("TURN/PROBE"), n);
+  EXPECT_EQ(seq.probe_set(), gpis_explorer::ProbeSet::kOrthogonal);  // walls met: no diagonal probes
+  EXPECT_TRUE(targets);
+  EXPECT_EQ(std::string(gpis_explorer::to_string(gpis_explorer::RetreatKind::kBackOff)), "back_off");
+  EXPECT_EQ(std::string(gpis_explorer::to_string(gpis_explorer::ExitKind::kAlongOpenProbe)), "along_open_probe");
+}
 
 // return_via_probe_line: back across to the probe's line, then along it; the
 // straight return cuts past the pillar the probe passed 15 cm beside.

@@ -61,6 +61,61 @@ enum class Phase : uint8_t {
 };
 const char* to_string(Phase p);
 
+// The phases' sub-states, explicit (each a state of its own phase; to_string
+// gives the snake-case name ExplorationSequencer::sub_state() reports).
+
+/// Which round of the exploration the contact episodes belong to: the probes
+/// (000: four orthogonal directions) or the GPIS targets after the first refit.
+enum class Round : uint8_t {
+  kProbes,   ///< the probes (their follows return to the start for the next probe)
+  kTargets,  ///< GPIS targets (each follow / back-off ends in a refit)
+};
+const char* to_string(Round r);
+
+/// The set of probe headings flying (diagonal_probes).
+enum class ProbeSet : uint8_t {
+  kOrthogonal,  ///< start heading (or the first wall's normal) + k * 360 / probe_directions
+  kDiagonal,    ///< no wall in any of those: turned by half their spacing
+};
+const char* to_string(ProbeSet s);
+
+/// CHECK_AHEAD: first the whisk back to the leg's heading, then the dwell that decides.
+enum class CheckStage : uint8_t {
+  kWhiskBack,  ///< yaw back to the leg's heading at up to whisk_rate
+  kDwell,      ///< hover check_dwell_s on the heading, then decide
+};
+const char* to_string(CheckStage s);
+
+/// RETURN: across to the probe's line first (return_via_probe_line), then along it.
+enum class ReturnLeg : uint8_t {
+  kToProbeLine,     ///< to the foot of the perpendicular on the probe's line
+  kAlongProbeLine,  ///< to the probe's origin (straight there when already on the line)
+};
+const char* to_string(ReturnLeg l);
+
+/// What the RETURN is for (decided when it begins).
+enum class ReturnFor : uint8_t {
+  kNextProbe,      ///< the next probe (or, after the last one, the refit)
+  kOpenProbeExit,  ///< out through the opening along the probe that found no wall
+};
+const char* to_string(ReturnFor r);
+
+/// What the RETREAT ends (decided on entry from the phase it leaves).
+enum class RetreatKind : uint8_t {
+  kAfterFollow,  ///< after a wall follow: also sideways back toward its start (retreat_toward_follow_start)
+  kBackOff,      ///< after a touch too near the guard (CHECK_AHEAD) or a penalised corner ahead: straight back
+  kAfterProbes,  ///< zero length, entered 1 s in the past after the last probe's return: reaches the refit
+};
+const char* to_string(RetreatKind k);
+
+/// EXIT_THROUGH: along the open probe's line (its corridor whisked by the
+/// probe: V_max, no whisking) or beyond a contact-free GPIS target (unexplored: whisked).
+enum class ExitKind : uint8_t {
+  kAlongOpenProbe,
+  kBeyondTarget,
+};
+const char* to_string(ExitKind k);
+
 /// Why the exploration ended.
 enum class Outcome : uint8_t {
   kRunning,
@@ -347,6 +402,14 @@ class ExplorationSequencer {
   /// FAILSAFE_HOVER entries (stale depth or odometry) and the phase the last one interrupted.
   std::size_t failsafe_hovers() const { return failsafe_hovers_; }
   Phase failsafe_from() const { return failsafe_from_; }
+  /// The current phase's sub-state, snake case ("" for a phase without one):
+  /// CHECK_AHEAD whisk_back / dwell, RETURN to_probe_line / along_probe_line,
+  /// RETREAT after_follow / back_off / after_probes, EXIT_THROUGH
+  /// along_open_probe / beyond_target, FOLLOW_WALL the wall rule's
+  /// (tactile_fsm::to_string(WallSubState)), TURN the phase it turns for.
+  std::string sub_state() const;
+  Round round() const { return round_; }
+  ProbeSet probe_set() const { return probe_set_; }
   const SequencerParams& params() const { return p_; }
 
  private:
@@ -362,7 +425,8 @@ class ExplorationSequencer {
   /// back of CHECK_AHEAD at whisk_rate); marks the tick's rate as exceeding
   /// omega_max.
   double fast_yaw_rate(double err, double limit);
-  void start_follow(const SequencerInput& in, bool probing);
+  /// FOLLOW_WALL from a contact on a leg (the round decides the side and whether the target is visited).
+  void start_follow(const SequencerInput& in);
   void commit_points(const SequencerInput& in);
   /// GPIS update (000 eq. 31-46) and its corner centroids as corners_.
   void update_map();
@@ -409,14 +473,13 @@ class ExplorationSequencer {
   Eigen::Vector2d start_{0, 0};
   double start_yaw_ = 0.0;
   int probe_ = 0;  ///< index of the current probe direction
-  bool probing_ = true;
+  Round round_ = Round::kProbes;
   double heading_ = 0.0;  ///< heading of the current turn / leg [rad]
   Eigen::Vector2d leg_start_{0, 0};
   int open_probe_ = -1;  ///< a probe that found no wall
-  bool diagonal_round_ = false;         ///< the diagonal probes (diagonal_probes) are flying
+  ProbeSet probe_set_ = ProbeSet::kOrthogonal;
   Eigen::Vector2d follow_start_{0, 0};  ///< where the last wall follow began
-  bool retreat_from_follow_ = false;    ///< this retreat ends a wall follow
-  bool retreat_from_return_ = false;    ///< this (zero-length) retreat ends the probes: refit only
+  RetreatKind retreat_kind_ = RetreatKind::kBackOff;
   double retreat_lateral(const SequencerInput& in) const;
   tactile_fsm::Side side_ = tactile_fsm::Side::kRight;
   bool both_touched_ = false;
@@ -433,15 +496,15 @@ class ExplorationSequencer {
   Eigen::Vector2d staging_{0, 0};
   double approach_heading_ = 0.0;
   double open_heading_ = 0.0;  ///< heading of the probe that found no wall
-  bool exit_via_probe_ = false;   ///< RETURN to the start, then out along the open probe
-  bool line_from_probe_ = false;  ///< the next leg follows the open probe's line
+  ReturnFor return_for_ = ReturnFor::kNextProbe;
   Eigen::Vector2d open_origin_{0, 0};  ///< where the open probe started
   /// RETURN's first leg ends within this of the probe's line; a smaller
   /// offset goes straight (return_via_probe_line). [m]
   static constexpr double kOnProbeLine = 0.03;
   Eigen::Vector2d return_via_{0, 0};  ///< RETURN's first leg ends here (return_via_probe_line)
-  bool return_via_active_ = false;
-  void begin_return(const Eigen::Vector2d& pos, const Eigen::Vector2d& to, const char* reason, double t);
+  ReturnLeg return_leg_ = ReturnLeg::kAlongProbeLine;
+  void begin_return(const Eigen::Vector2d& pos, const Eigen::Vector2d& to, ReturnFor what, const char* reason,
+                    double t);
   Eigen::Vector2d return_to_{0, 0};    ///< RETURN goes here: the probe's origin (back along its line)
   Eigen::Vector2d line_origin_{0, 0};  ///< the current forward leg's line passes here along heading_
   Eigen::Vector2d target_{0, 0};
@@ -450,9 +513,9 @@ class ExplorationSequencer {
   double exit_distance_ = 0.8;  ///< contact-free distance from exit_from_ that confirms the exit
   int whisk_dir_ = 1;  ///< current whisk direction (+1 left, -1 right)
   bool whisking_ = false;  ///< this tick's yaw rate is a whisk
-  bool exit_whisk_ = false;  ///< EXIT_THROUGH crosses unexplored space (after a GPIS target, not along an open probe)
+  ExitKind exit_kind_ = ExitKind::kBeyondTarget;  ///< of the EXIT_THROUGH flying or turned to
   Phase check_from_ = Phase::kProbe;  ///< leg interrupted by the check
-  int check_stage_ = 0;  ///< 0 facing the heading, 1 dwelling
+  CheckStage check_stage_ = CheckStage::kWhiskBack;
   double check_t_ = 0.0;
   double check_started_ = 0.0;
   std::vector<Eigen::Vector2d> check_points_;
