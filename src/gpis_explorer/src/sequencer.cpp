@@ -53,6 +53,7 @@ const char* to_string(Phase p) {
     case Phase::kGoToTarget: return "GO_TO_TARGET";
     case Phase::kExitThrough: return "EXIT_THROUGH";
     case Phase::kCheckAhead: return "CHECK_AHEAD";
+    case Phase::kRefit: return "REFIT";
     case Phase::kFailsafeHover: return "FAILSAFE_HOVER";
     case Phase::kLanding: return "LANDING";
     case Phase::kDone: return "DONE";
@@ -104,7 +105,6 @@ const char* to_string(RetreatKind k) {
   switch (k) {
     case RetreatKind::kAfterFollow: return "after_follow";
     case RetreatKind::kBackOff: return "back_off";
-    case RetreatKind::kAfterProbes: return "after_probes";
   }
   return "unknown";
 }
@@ -200,9 +200,7 @@ std::string ExplorationSequencer::sub_state() const {
 void ExplorationSequencer::enter(Phase p, const char* reason, double t) {
   if (p == Phase::kRetreat) {
     retreat_held_ = false;
-    retreat_kind_ = phase_ == Phase::kFollowWall ? RetreatKind::kAfterFollow
-                    : phase_ == Phase::kReturn   ? RetreatKind::kAfterProbes
-                                                 : RetreatKind::kBackOff;
+    retreat_kind_ = phase_ == Phase::kFollowWall ? RetreatKind::kAfterFollow : RetreatKind::kBackOff;
   }
   previous_ = phase_;
   phase_ = p;
@@ -754,9 +752,47 @@ void ExplorationSequencer::update_map() {
   corners_ = explorer_.last().corners;
 }
 
+bool ExplorationSequencer::can_exit_via_open_probe() const {
+  // A probe flew probe_max_distance without touching anything where other
+  // probes met walls, and no target has been chosen yet: an opening.
+  return open_probe_ >= 0 && explorer_.gpis().surface_count() > 0 && explorer_.updates() == 0;
+}
+
+bool ExplorationSequencer::can_land_in_open_space() const { return explorer_.gpis().surface_count() == 0; }
+
+bool ExplorationSequencer::reached_update_limit() const {
+  return static_cast<int>(explorer_.updates()) >= p_.max_updates;
+}
+
+void ExplorationSequencer::enter_refit(const SequencerInput& in, const char* reason, SequencerOutput* out) {
+  enter(Phase::kRefit, reason, in.t);
+  // Entry action: the probes are over; update the GPIS, then the first
+  // transition whose guard holds:
+  //   open probe, walls elsewhere, first update -> RETURN to its origin, then out along it
+  //   no surface point at all                   -> LANDING (open_space)
+  //   max_updates reached                       -> LANDING (update_limit)
+  //   a target with a staging point              -> TURN toward the staging point
+  //   a target                                  -> TURN toward it (or its normal)
+  //   none                                      -> LANDING (no_target)
+  round_ = Round::kTargets;
+  if (can_exit_via_open_probe()) {
+    update_map();  // the map is not published: the exit is flown along the probe
+    begin_return({in.x, in.y}, open_origin_, ReturnFor::kOpenProbeExit, "a probe found the opening: back to the start",
+                 in.t);
+    return;
+  }
+  out->gpis_updated = true;
+  if (can_land_in_open_space()) {
+    update_map();
+    finish(Outcome::kOpenSpace, "no contact in any probe direction", in.t);
+    return;
+  }
+  refit_and_choose(in);
+}
+
 void ExplorationSequencer::refit_and_choose(const SequencerInput& in) {
   update_map();
-  if (static_cast<int>(explorer_.updates()) >= p_.max_updates) {
+  if (reached_update_limit()) {
     finish(Outcome::kUpdateLimit, "GPIS update limit", in.t);
     return;
   }
@@ -945,8 +981,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
           after_turn_ = Phase::kProbe;
           enter(Phase::kTurn, "next probe", in.t);
         } else {
-          enter(Phase::kRetreat, "probes done", in.t);  // zero-length retreat: refit below
-          entered_ = in.t - p_.retreat_time_s;
+          enter_refit(in, "probes done", &out);
         }
         break;
       }
@@ -1004,30 +1039,15 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         sp.vy = retreat_lateral(in);
       }
       if (in.t - entered_ >= p_.retreat_time_s) {
-        const bool probing = round_ == Round::kProbes, after_probes = retreat_kind_ == RetreatKind::kAfterProbes;
-        if (p_.align_probes && probing && !aligned_ && !after_probes) align_to_wall(in);
-        if (!after_probes) commit_points(in);
-        if (probing && probe_ + 1 < p_.probe_directions && !after_probes) {
+        const bool probing = round_ == Round::kProbes;
+        if (p_.align_probes && probing && !aligned_) align_to_wall(in);
+        commit_points(in);
+        if (probing && probe_ + 1 < p_.probe_directions) {
           // Back to the start, then the next probe.
           begin_return({in.x, in.y}, leg_start_, ReturnFor::kNextProbe, "retreated: next probe", in.t);
           break;
         }
-        round_ = Round::kTargets;
-        if (open_probe_ >= 0 && explorer_.gpis().surface_count() > 0 && explorer_.updates() == 0) {
-          // A probe flew 2 m without touching anything in a walled place: an opening.
-          update_map();
-          begin_return({in.x, in.y}, open_origin_, ReturnFor::kOpenProbeExit,
-                       "a probe found the opening: back to the start", in.t);
-          break;
-        }
-        if (explorer_.gpis().surface_count() == 0) {
-          update_map();
-          out.gpis_updated = true;
-          finish(Outcome::kOpenSpace, "no contact in any probe direction", in.t);
-          break;
-        }
-        refit_and_choose(in);
-        out.gpis_updated = true;
+        enter_refit(in, "retreated: refit", &out);
       }
       break;
     case Phase::kGoToStaging: {
@@ -1069,6 +1089,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
     case Phase::kCheckAhead:
       check_ahead(in, &sp);
       break;
+    case Phase::kRefit:          // left in the tick it is entered (enter_refit)
     case Phase::kFailsafeHover:  // handled above
     case Phase::kLanding:
     case Phase::kDone:

@@ -479,6 +479,46 @@ TEST(Sequencer, SubStatesAreNamedInTheOrderTheyAreFlown) {
   EXPECT_EQ(std::string(gpis_explorer::to_string(gpis_explorer::ExitKind::kAlongOpenProbe)), "along_open_probe");
 }
 
+// REFIT is a phase of its own: with the last probe open (a U of walls open
+// toward -y), the first refit runs on the tick that probe's return reaches
+// the start (RETURN -> REFIT -> RETURN to fly out along the open probe), and
+// every RETREAT lasts retreat_time_s. Before, the return entered a RETREAT
+// dated retreat_time_s in the past to reach the refit code on the next tick:
+// a one-tick retreat that commanded retreat_speed backward, blind.
+TEST(Sequencer, RefitIsAPhaseEnteredWhenTheLastProbeReturns) {
+  SequencerParams p;
+  ExplorationSequencer seq(p);
+  const std::vector<gpis_test::Segment> walls{{{1.0, -3.0}, {1.0, 1.0}}, {{1.0, 1.0}, {-1.0, 1.0}}, {{-1.0, 1.0}, {-1.0, -3.0}}};
+  Phase before_first_refit = Phase::kDone, after_first_refit_prev = Phase::kDone, last = Phase::kHoverInit;
+  std::size_t updates = 0;
+  int retreat_ticks = 0, shortest_retreat = 1 << 30, refits = 0;
+  uint32_t transitions = 0;
+  const auto r = gpis_test::fly(seq, walls, 0.0, 400.0, 100.0, 0.0, [&](const ExplorationSequencer& s, const Eigen::Vector2d&, double) {
+    if (s.explorer().updates() != updates && updates == 0) {
+      before_first_refit = last;
+      after_first_refit_prev = s.previous_phase();
+    }
+    if (s.previous_phase() == Phase::kRefit && s.transitions() != transitions) ++refits;
+    transitions = s.transitions();
+    updates = s.explorer().updates();
+    if (s.phase() == Phase::kRetreat) {
+      ++retreat_ticks;
+    } else if (last == Phase::kRetreat) {
+      shortest_retreat = std::min(shortest_retreat, retreat_ticks);
+      retreat_ticks = 0;
+    }
+    EXPECT_NE(s.phase(), Phase::kRefit) << "REFIT is left in the tick it is entered";
+    last = s.phase();
+  });
+  EXPECT_EQ(before_first_refit, Phase::kReturn);
+  EXPECT_EQ(after_first_refit_prev, Phase::kRefit);
+  EXPECT_EQ(refits, 1);
+  EXPECT_EQ(r.outcome, Outcome::kExitFound);
+  // retreat_time_s at 50 Hz, less the tick a phase ends on.
+  EXPECT_GE(shortest_retreat, static_cast<int>(p.retreat_time_s / 0.02) - 1);
+  EXPECT_EQ(std::string(gpis_explorer::to_string(Phase::kRefit)), "REFIT");
+}
+
 // return_via_probe_line: back across to the probe's line, then along it; the
 // straight return cuts past the pillar the probe passed 15 cm beside.
 TEST(Sequencer, ReturnGoesBackAcrossToTheProbesLine) {

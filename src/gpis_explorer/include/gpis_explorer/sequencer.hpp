@@ -51,6 +51,11 @@ enum class Phase : uint8_t {
   kGoToTarget,  ///< forward toward the GPIS target
   kExitThrough, ///< target reached without contact: keep going through the opening
   kCheckAhead,  ///< a whisk touched the corridor: stop, face the leg's heading: wall to follow, or back off?
+  /// GPIS update (000 eq. 31-46) and the next target: its entry action
+  /// decides and leaves it in the same tick (the state a program sees after
+  /// a step is never REFIT; FsmState's previous_state is). Entered after the
+  /// last probe's return and after every retreat of the target round.
+  kRefit,
   /// Tactile depth or odometry stale: hover (zero velocity, flight height),
   /// record nothing; inputs fresh again -> the interrupted phase (its timers
   /// paused), stale for wall.failsafe_land_after_s -> LANDING (inputs_stale).
@@ -104,7 +109,6 @@ const char* to_string(ReturnFor r);
 enum class RetreatKind : uint8_t {
   kAfterFollow,  ///< after a wall follow: also sideways back toward its start (retreat_toward_follow_start)
   kBackOff,      ///< after a touch too near the guard (CHECK_AHEAD) or a penalised corner ahead: straight back
-  kAfterProbes,  ///< zero length, entered 1 s in the past after the last probe's return: reaches the refit
 };
 const char* to_string(RetreatKind k);
 
@@ -404,7 +408,7 @@ class ExplorationSequencer {
   Phase failsafe_from() const { return failsafe_from_; }
   /// The current phase's sub-state, snake case ("" for a phase without one):
   /// CHECK_AHEAD whisk_back / dwell, RETURN to_probe_line / along_probe_line,
-  /// RETREAT after_follow / back_off / after_probes, EXIT_THROUGH
+  /// RETREAT after_follow / back_off, EXIT_THROUGH
   /// along_open_probe / beyond_target, FOLLOW_WALL the wall rule's
   /// (tactile_fsm::to_string(WallSubState)), TURN the phase it turns for.
   std::string sub_state() const;
@@ -430,6 +434,12 @@ class ExplorationSequencer {
   void commit_points(const SequencerInput& in);
   /// GPIS update (000 eq. 31-46) and its corner centroids as corners_.
   void update_map();
+  /// REFIT: enter it and run its entry action (transition table in sequencer.cpp).
+  void enter_refit(const SequencerInput& in, const char* reason, SequencerOutput* out);
+  /// REFIT's guards, in the order its table tries them.
+  bool can_exit_via_open_probe() const;
+  bool can_land_in_open_space() const;
+  bool reached_update_limit() const;
   void refit_and_choose(const SequencerInput& in);
   bool choose_target(const Eigen::Vector2d& from);
   /// Staging point for a head-on approach of candidate q, or false when no
