@@ -117,6 +117,82 @@ const char* to_string(ExitKind k) {
   return "unknown";
 }
 
+const char* to_string(SequencerReason r) {
+  switch (r) {
+    case SequencerReason::kNone: return "none";
+    case SequencerReason::kHoverDone: return "hover_done";
+    case SequencerReason::kAligned: return "aligned";
+    case SequencerReason::kProbeFoundNoWall: return "probe_found_no_wall";
+    case SequencerReason::kWhiskContact: return "whisk_contact";
+    case SequencerReason::kContact: return "contact";
+    case SequencerReason::kBesideCorridor: return "beside_corridor";
+    case SequencerReason::kTooNearTheGuard: return "too_near_the_guard";
+    case SequencerReason::kCornerAhead: return "corner_ahead";
+    case SequencerReason::kWallFollowed: return "wall_followed";
+    case SequencerReason::kSurfaceBeside: return "surface_beside";
+    case SequencerReason::kRetreatedNextProbe: return "retreated_next_probe";
+    case SequencerReason::kNextProbe: return "next_probe";
+    case SequencerReason::kProbesDone: return "probes_done";
+    case SequencerReason::kRetreatedRefit: return "retreated_refit";
+    case SequencerReason::kOpenProbeReturn: return "open_probe_return";
+    case SequencerReason::kOpenProbeExit: return "open_probe_exit";
+    case SequencerReason::kTargetViaStaging: return "target_via_staging";
+    case SequencerReason::kTargetChosen: return "target_chosen";
+    case SequencerReason::kAtStaging: return "at_staging";
+    case SequencerReason::kTargetReached: return "target_reached";
+    case SequencerReason::kDepthStale: return "depth_stale";
+    case SequencerReason::kOdometryStale: return "odometry_stale";
+    case SequencerReason::kInputsFreshAgain: return "inputs_fresh_again";
+    case SequencerReason::kInputsStaleLand: return "inputs_stale_land";
+    case SequencerReason::kUpdateLimit: return "update_limit";
+    case SequencerReason::kNoTarget: return "no_target";
+    case SequencerReason::kOpenSpace: return "open_space";
+    case SequencerReason::kExitFlownThrough: return "exit_flown_through";
+    case SequencerReason::kTimeLimit: return "time_limit";
+    case SequencerReason::kLanded: return "landed";
+  }
+  return "unknown";
+}
+
+const char* reason_text(SequencerReason r, Phase from) {
+  switch (r) {
+    case SequencerReason::kNone: return "start";
+    case SequencerReason::kHoverDone: return "hover done: first probe";
+    case SequencerReason::kAligned: return "aligned";
+    case SequencerReason::kProbeFoundNoWall: return "probe found no wall";
+    case SequencerReason::kWhiskContact: return "whisk contact";
+    case SequencerReason::kContact: return "contact";
+    case SequencerReason::kBesideCorridor: return "whisk contact beside the corridor: leg goes on";
+    case SequencerReason::kTooNearTheGuard: return "touched too near the guard: back off";
+    case SequencerReason::kCornerAhead: return "approaching a penalised corner";
+    case SequencerReason::kWallFollowed: return "wall followed";
+    case SequencerReason::kSurfaceBeside: return "known surface beside: end of wall follow";
+    case SequencerReason::kRetreatedNextProbe: return "retreated: next probe";
+    case SequencerReason::kNextProbe: return "next probe";
+    case SequencerReason::kProbesDone: return "probes done";
+    case SequencerReason::kRetreatedRefit: return "retreated: refit";
+    case SequencerReason::kOpenProbeReturn: return "a probe found the opening: back to the start";
+    case SequencerReason::kOpenProbeExit: return "a probe found the opening";
+    case SequencerReason::kTargetViaStaging: return "target chosen: to its staging point";
+    case SequencerReason::kTargetChosen: return "target chosen";
+    case SequencerReason::kAtStaging: return "at the staging point: face the wall";
+    case SequencerReason::kTargetReached: return "target reached without contact";
+    case SequencerReason::kDepthStale:
+      return from == Phase::kHoverInit ? "tactile depth stale at end of hover" : "tactile depth stale";
+    case SequencerReason::kOdometryStale:
+      return from == Phase::kHoverInit ? "odometry stale at end of hover" : "odometry stale";
+    case SequencerReason::kInputsFreshAgain: return "inputs fresh again";
+    case SequencerReason::kInputsStaleLand: return "inputs stale for failsafe_land_after_s";
+    case SequencerReason::kUpdateLimit: return "GPIS update limit";
+    case SequencerReason::kNoTarget: return "no reachable target";
+    case SequencerReason::kOpenSpace: return "no contact in any probe direction";
+    case SequencerReason::kExitFlownThrough: return "flew through the opening";
+    case SequencerReason::kTimeLimit: return "time limit";
+    case SequencerReason::kLanded: return "landed";
+  }
+  return "unknown";
+}
+
 const char* to_string(Outcome o) {
   switch (o) {
     case Outcome::kRunning: return "running";
@@ -197,23 +273,23 @@ std::string ExplorationSequencer::sub_state() const {
   }
 }
 
-void ExplorationSequencer::enter(Phase p, const char* reason, double t) {
+void ExplorationSequencer::enter(Phase p, SequencerReason why, double t) {
   if (p == Phase::kRetreat) {
     retreat_held_ = false;
     retreat_kind_ = phase_ == Phase::kFollowWall ? RetreatKind::kAfterFollow : RetreatKind::kBackOff;
   }
   previous_ = phase_;
   phase_ = p;
-  reason_ = reason;
+  reason_code_ = why;
   entered_ = t;
   ++transitions_;
 }
 
-void ExplorationSequencer::enter_failsafe(const char* reason, double t) {
+void ExplorationSequencer::enter_failsafe(SequencerReason why, double t) {
   failsafe_from_ = phase_;
   failsafe_from_entered_ = entered_;
   ++failsafe_hovers_;
-  enter(Phase::kFailsafeHover, reason, t);
+  enter(Phase::kFailsafeHover, why, t);
 }
 
 void ExplorationSequencer::resume_after_failsafe(double t) {
@@ -223,16 +299,16 @@ void ExplorationSequencer::resume_after_failsafe(double t) {
   const double held = t - entered_;
   previous_ = phase_;
   phase_ = failsafe_from_;
-  reason_ = "inputs fresh again";
+  reason_code_ = SequencerReason::kInputsFreshAgain;
   entered_ = failsafe_from_entered_ + held;
   check_t_ += held;
   check_started_ += held;
   ++transitions_;
 }
 
-void ExplorationSequencer::finish(Outcome o, const char* reason, double t) {
+void ExplorationSequencer::finish(Outcome o, SequencerReason why, double t) {
   outcome_ = o;
-  enter(Phase::kLanding, reason, t);
+  enter(Phase::kLanding, why, t);
 }
 
 tactile_fsm::Setpoint ExplorationSequencer::hover() const {
@@ -268,7 +344,7 @@ bool ExplorationSequencer::fly_leg(const SequencerInput& in, bool contact, tacti
   if (near_corner(pos + Eigen::Vector2d(std::cos(in.yaw), std::sin(in.yaw)) * 0.1)) {
     ++corner_aborts_;
     follow_points_.clear();
-    enter(Phase::kRetreat, "approaching a penalised corner", in.t);
+    enter(Phase::kRetreat, SequencerReason::kCornerAhead, in.t);
     return true;
   }
   return false;
@@ -542,7 +618,7 @@ void ExplorationSequencer::start_check(const SequencerInput& in) {
   if (in.contact_left && in.point_left.allFinite()) check_points_.push_back(in.point_left);
   if (in.contact_right && in.point_right.allFinite()) check_points_.push_back(in.point_right);
   ++whisk_contacts_;
-  enter(Phase::kCheckAhead, "whisk contact", in.t);
+  enter(Phase::kCheckAhead, SequencerReason::kWhiskContact, in.t);
 }
 
 void ExplorationSequencer::check_ahead(const SequencerInput& in, tactile_fsm::Setpoint* sp) {
@@ -583,7 +659,7 @@ void ExplorationSequencer::check_ahead(const SequencerInput& in, tactile_fsm::Se
     return;
   }
   if (!std::isfinite(nearest)) {
-    enter(check_from_, "whisk contact beside the corridor: leg goes on", in.t);
+    enter(check_from_, SequencerReason::kBesideCorridor, in.t);
     return;
   }
   if (nearest >= p_.follow_min_forward) {
@@ -595,7 +671,7 @@ void ExplorationSequencer::check_ahead(const SequencerInput& in, tactile_fsm::Se
   if (round_ == Round::kTargets && has_target_ && visited_.size() < 1000) visited_.push_back(target_);
   follow_points_ = check_points_;
   both_touched_ = false;
-  enter(Phase::kRetreat, "touched too near the guard: back off", in.t);
+  enter(Phase::kRetreat, SequencerReason::kTooNearTheGuard, in.t);
 }
 
 bool ExplorationSequencer::leg_motion(const SequencerInput& in, double speed, bool whisk, tactile_fsm::Setpoint* sp) {
@@ -641,7 +717,7 @@ void ExplorationSequencer::align_to_wall(const SequencerInput& in) {
 }
 
 void ExplorationSequencer::begin_return(const Eigen::Vector2d& pos, const Eigen::Vector2d& to, ReturnFor what,
-                                        const char* reason, double t) {
+                                        SequencerReason why, double t) {
   // First across to the probe's line (leg_start_ along heading_), then along it.
   return_for_ = what;
   return_to_ = to;
@@ -649,7 +725,7 @@ void ExplorationSequencer::begin_return(const Eigen::Vector2d& pos, const Eigen:
   return_via_ = leg_start_ + h * (pos - leg_start_).dot(h);
   return_leg_ = p_.return_via_probe_line && (pos - return_via_).norm() > kOnProbeLine ? ReturnLeg::kToProbeLine
                                                                                        : ReturnLeg::kAlongProbeLine;
-  enter(Phase::kReturn, reason, t);
+  enter(Phase::kReturn, why, t);
 }
 
 void ExplorationSequencer::start_follow(const SequencerInput& in) {
@@ -675,7 +751,7 @@ void ExplorationSequencer::start_follow(const SequencerInput& in) {
   }
   if (!probing && has_target_ && visited_.size() < 1000) visited_.push_back(target_);
   follow_start_ = Eigen::Vector2d(in.x, in.y);
-  enter(Phase::kFollowWall, "contact", in.t);
+  enter(Phase::kFollowWall, SequencerReason::kContact, in.t);
 }
 
 void ExplorationSequencer::commit_points(const SequencerInput& in) {
@@ -764,8 +840,8 @@ bool ExplorationSequencer::reached_update_limit() const {
   return static_cast<int>(explorer_.updates()) >= p_.max_updates;
 }
 
-void ExplorationSequencer::enter_refit(const SequencerInput& in, const char* reason, SequencerOutput* out) {
-  enter(Phase::kRefit, reason, in.t);
+void ExplorationSequencer::enter_refit(const SequencerInput& in, SequencerReason why, SequencerOutput* out) {
+  enter(Phase::kRefit, why, in.t);
   // Entry action: the probes are over; update the GPIS, then the first
   // transition whose guard holds:
   //   open probe, walls elsewhere, first update -> RETURN to its origin, then out along it
@@ -777,14 +853,14 @@ void ExplorationSequencer::enter_refit(const SequencerInput& in, const char* rea
   round_ = Round::kTargets;
   if (can_exit_via_open_probe()) {
     update_map();  // the map is not published: the exit is flown along the probe
-    begin_return({in.x, in.y}, open_origin_, ReturnFor::kOpenProbeExit, "a probe found the opening: back to the start",
+    begin_return({in.x, in.y}, open_origin_, ReturnFor::kOpenProbeExit, SequencerReason::kOpenProbeReturn,
                  in.t);
     return;
   }
   out->gpis_updated = true;
   if (can_land_in_open_space()) {
     update_map();
-    finish(Outcome::kOpenSpace, "no contact in any probe direction", in.t);
+    finish(Outcome::kOpenSpace, SequencerReason::kOpenSpace, in.t);
     return;
   }
   refit_and_choose(in);
@@ -793,7 +869,7 @@ void ExplorationSequencer::enter_refit(const SequencerInput& in, const char* rea
 void ExplorationSequencer::refit_and_choose(const SequencerInput& in) {
   update_map();
   if (reached_update_limit()) {
-    finish(Outcome::kUpdateLimit, "GPIS update limit", in.t);
+    finish(Outcome::kUpdateLimit, SequencerReason::kUpdateLimit, in.t);
     return;
   }
   bool chosen = choose_target({in.x, in.y});
@@ -810,18 +886,18 @@ void ExplorationSequencer::refit_and_choose(const SequencerInput& in) {
     }
   }
   if (!chosen) {
-    finish(Outcome::kNoTarget, "no reachable target", in.t);
+    finish(Outcome::kNoTarget, SequencerReason::kNoTarget, in.t);
     return;
   }
   if (has_staging_ && (staging_ - Eigen::Vector2d(in.x, in.y)).norm() > p_.target_radius) {
     heading_ = std::atan2(staging_.y() - in.y, staging_.x() - in.x);
     after_turn_ = Phase::kGoToStaging;
-    enter(Phase::kTurn, "target chosen: to its staging point", in.t);
+    enter(Phase::kTurn, SequencerReason::kTargetViaStaging, in.t);
     return;
   }
   heading_ = has_staging_ ? approach_heading_ : std::atan2(target_.y() - in.y, target_.x() - in.x);
   after_turn_ = Phase::kGoToTarget;
-  enter(Phase::kTurn, "target chosen", in.t);
+  enter(Phase::kTurn, SequencerReason::kTargetChosen, in.t);
 }
 
 SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
@@ -841,7 +917,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
   if (phase_ == Phase::kLanding) {
     out.setpoint.height = 0.0;
     out.setpoint.land = true;
-    if (in.t - entered_ >= p_.landing_duration_s) enter(Phase::kDone, "landed", in.t);
+    if (in.t - entered_ >= p_.landing_duration_s) enter(Phase::kDone, SequencerReason::kLanded, in.t);
     out.transitioned = transitions_ != tr;
     return out;
   }
@@ -864,7 +940,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         have_last_pose_ = true;
       }
       if (in.t - entered_ >= p_.wall.failsafe_land_after_s - 1e-9) {
-        finish(Outcome::kInputsStale, "inputs stale for failsafe_land_after_s", in.t);
+        finish(Outcome::kInputsStale, SequencerReason::kInputsStaleLand, in.t);
         out.setpoint.height = 0.0;  // landing from this tick (as the wall follower's FAILSAFE_LAND)
         out.setpoint.land = true;
       }
@@ -876,9 +952,8 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
     if (have_last_pose_) leg_blind_ += (Eigen::Vector2d(in.x, in.y) - last_pose_).norm();
     resume_after_failsafe(in.t);
   } else if (!fresh && (phase_ != Phase::kHoverInit || in.t - entered_ >= p_.wall.hover_init_s)) {
-    const bool init = phase_ == Phase::kHoverInit;
-    if (!in.depth_valid) enter_failsafe(init ? "tactile depth stale at end of hover" : "tactile depth stale", in.t);
-    else enter_failsafe(init ? "odometry stale at end of hover" : "odometry stale", in.t);
+    // reason_text() adds "at end of hover" when the phase left is HOVER_INIT.
+    enter_failsafe(in.depth_valid ? SequencerReason::kOdometryStale : SequencerReason::kDepthStale, in.t);
     out.transitioned = true;
     return out;
   }
@@ -897,7 +972,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
     if (in.contact_right && in.point_right.allFinite()) contacts_.push_back({in.t, in.point_right});
   }
   if (phase_ != Phase::kHoverInit && in.t - entered_ >= 0.0 && in.t >= p_.max_time_s) {
-    finish(Outcome::kTimeLimit, "time limit", in.t);
+    finish(Outcome::kTimeLimit, SequencerReason::kTimeLimit, in.t);
     out.transitioned = true;
     return out;
   }
@@ -912,7 +987,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         probe_ = 0;
         heading_ = start_yaw_;
         after_turn_ = Phase::kProbe;
-        enter(Phase::kTurn, "hover done: first probe", in.t);
+        enter(Phase::kTurn, SequencerReason::kHoverDone, in.t);
       }
       break;
     case Phase::kTurn: {
@@ -928,7 +1003,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         if (after_turn_ == Phase::kExitThrough && exit_kind_ == ExitKind::kAlongOpenProbe) line_origin_ = open_origin_;
         beside_added_ = false;
         leg_blind_ = 0.0;
-        enter(after_turn_, "aligned", in.t);
+        enter(after_turn_, SequencerReason::kAligned, in.t);
       }
       break;
     }
@@ -945,7 +1020,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
           open_heading_ = heading_;
           open_origin_ = leg_start_;
         }
-        begin_return(pos, leg_start_, ReturnFor::kNextProbe, "probe found no wall", in.t);  // back along its own line
+        begin_return(pos, leg_start_, ReturnFor::kNextProbe, SequencerReason::kProbeFoundNoWall, in.t);  // back along its own line
       }
       break;
     case Phase::kReturn: {
@@ -965,7 +1040,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
           exit_distance_ = p_.probe_max_distance + p_.exit_confirm_distance;
           after_turn_ = Phase::kExitThrough;
           exit_kind_ = ExitKind::kAlongOpenProbe;  // its corridor was whisked by the probe
-          enter(Phase::kTurn, "a probe found the opening", in.t);
+          enter(Phase::kTurn, SequencerReason::kOpenProbeExit, in.t);
           break;
         }
         if (probe_ >= p_.probe_directions && p_.diagonal_probes && probe_set_ == ProbeSet::kOrthogonal &&
@@ -979,9 +1054,9 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         if (probe_ < p_.probe_directions) {
           heading_ = start_yaw_ + 2.0 * M_PI * probe_ / p_.probe_directions;
           after_turn_ = Phase::kProbe;
-          enter(Phase::kTurn, "next probe", in.t);
+          enter(Phase::kTurn, SequencerReason::kNextProbe, in.t);
         } else {
-          enter_refit(in, "probes done", &out);
+          enter_refit(in, SequencerReason::kProbesDone, &out);
         }
         break;
       }
@@ -1020,11 +1095,11 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       }
       }
       if (in.t - entered_ >= p_.follow_time_s) {
-        enter(Phase::kRetreat, "wall followed", in.t);
+        enter(Phase::kRetreat, SequencerReason::kWallFollowed, in.t);
       } else if (sub_ == tactile_fsm::WallSubState::kFlySideways && side_blocked(in)) {
         ++side_stops_;
         sp.vy = 0.0;
-        enter(Phase::kRetreat, "known surface beside: end of wall follow", in.t);
+        enter(Phase::kRetreat, SequencerReason::kSurfaceBeside, in.t);
       }
       break;
     }
@@ -1044,10 +1119,10 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         commit_points(in);
         if (probing && probe_ + 1 < p_.probe_directions) {
           // Back to the start, then the next probe.
-          begin_return({in.x, in.y}, leg_start_, ReturnFor::kNextProbe, "retreated: next probe", in.t);
+          begin_return({in.x, in.y}, leg_start_, ReturnFor::kNextProbe, SequencerReason::kRetreatedNextProbe, in.t);
           break;
         }
-        enter_refit(in, "retreated: refit", &out);
+        enter_refit(in, SequencerReason::kRetreatedRefit, &out);
       }
       break;
     case Phase::kGoToStaging: {
@@ -1056,7 +1131,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       if ((staging_ - pos).norm() < p_.target_radius || (staging_ - pos).dot(dir) < 0.0) {
         heading_ = approach_heading_;  // face the wall along its normal: head-on
         after_turn_ = Phase::kGoToTarget;
-        enter(Phase::kTurn, "at the staging point: face the wall", in.t);
+        enter(Phase::kTurn, SequencerReason::kAtStaging, in.t);
       }
       break;
     }
@@ -1070,7 +1145,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         leg_blind_ = 0.0;
         exit_distance_ = p_.exit_confirm_distance;
         exit_kind_ = ExitKind::kBeyondTarget;  // beyond the target: unexplored, whisked
-        enter(Phase::kExitThrough, "target reached without contact", in.t);
+        enter(Phase::kExitThrough, SequencerReason::kTargetReached, in.t);
       }
       break;
     }
@@ -1082,7 +1157,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       } else if ((pos - exit_from_).norm() - leg_blind_ >= exit_distance_ &&
                  (beyond_known_surface(pos) ||
                   (pos - exit_from_).norm() - leg_blind_ >= exit_distance_ + p_.probe_max_distance)) {
-        finish(Outcome::kExitFound, "flew through the opening", in.t);
+        finish(Outcome::kExitFound, SequencerReason::kExitFlownThrough, in.t);
         out.gpis_updated = true;  // publish the final target with exit_found
       }
       break;

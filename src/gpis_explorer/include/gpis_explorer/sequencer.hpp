@@ -120,6 +120,47 @@ enum class ExitKind : uint8_t {
 };
 const char* to_string(ExitKind k);
 
+/// Why the last transition happened (reason() is the text for people; this is
+/// what programs key on). The values are tactile_msgs/msg/FsmState's
+/// REASON_GPIS_* (block 50-79; the node logic checks that at compile time).
+enum class SequencerReason : uint8_t {
+  kNone = 0,  ///< no transition yet
+  kHoverDone = 50,  ///< HOVER_INIT -> TURN: hover_init_s hovered, the first probe
+  kAligned = 51,  ///< TURN -> PROBE / GO_TO_STAGING / GO_TO_TARGET / EXIT_THROUGH: heading within yaw_tolerance
+  kProbeFoundNoWall = 52,  ///< PROBE -> RETURN: probe_max_distance flown with fresh depth, no contact
+  kWhiskContact = 53,  ///< PROBE / GO_TO_* / EXIT_THROUGH -> CHECK_AHEAD: a whisk contact in the guard's corridor
+  kContact = 54,  ///< a leg or CHECK_AHEAD -> FOLLOW_WALL: a wall ahead to follow
+  kBesideCorridor = 55,  ///< CHECK_AHEAD -> the leg it stopped: no touched point in the corridor
+  kTooNearTheGuard = 56,  ///< CHECK_AHEAD -> RETREAT: nearest point in the corridor < follow_min_forward ahead
+  kCornerAhead = 57,  ///< GO_TO_STAGING / GO_TO_TARGET -> RETREAT: a corner centroid 0.1 m ahead (000 eq. 45)
+  kWallFollowed = 58,  ///< FOLLOW_WALL -> RETREAT: follow_time_s (000: 2 s)
+  kSurfaceBeside = 59,  ///< FOLLOW_WALL -> RETREAT: a known surface point or wall line across the slide
+  kRetreatedNextProbe = 60,  ///< RETREAT -> RETURN: probes left
+  kNextProbe = 61,  ///< RETURN -> TURN: at the start, the next probe heading
+  kProbesDone = 62,  ///< RETURN -> REFIT: the last probe (no wall) back at the start
+  kRetreatedRefit = 63,  ///< RETREAT -> REFIT: retreat_time_s, no probe left
+  kOpenProbeReturn = 64,  ///< REFIT -> RETURN: a probe found no wall where others met walls
+  kOpenProbeExit = 65,  ///< RETURN -> TURN: back at the open probe's origin, out along it
+  kTargetViaStaging = 66,  ///< REFIT -> TURN: a target approached head-on through its staging point
+  kTargetChosen = 67,  ///< REFIT -> TURN: a target flown at directly (or from its staging point)
+  kAtStaging = 68,  ///< GO_TO_STAGING -> TURN: at the staging point, face the target's normal
+  kTargetReached = 69,  ///< GO_TO_TARGET -> EXIT_THROUGH: target reached or passed, no contact
+  kDepthStale = 70,  ///< -> FAILSAFE_HOVER: tactile depth older than wall.max_input_age_s
+  kOdometryStale = 71,  ///< -> FAILSAFE_HOVER: odometry older than wall.max_input_age_s
+  kInputsFreshAgain = 72,  ///< FAILSAFE_HOVER -> the interrupted phase (resumed, its clocks paused)
+  kInputsStaleLand = 73,  ///< FAILSAFE_HOVER -> LANDING (inputs_stale)
+  kUpdateLimit = 74,  ///< REFIT -> LANDING (update_limit): max_updates
+  kNoTarget = 75,  ///< REFIT -> LANDING (no_target)
+  kOpenSpace = 76,  ///< REFIT -> LANDING (open_space)
+  kExitFlownThrough = 77,  ///< EXIT_THROUGH -> LANDING (exit_found)
+  kTimeLimit = 78,  ///< any moving phase -> LANDING (time_limit): max_time_s
+  kLanded = 79,  ///< LANDING -> DONE: landing_duration_s
+};
+const char* to_string(SequencerReason r);  ///< snake case: "hover_done", "probe_found_no_wall", ...
+/// reason()'s text: the code's, and for a stale input at the end of
+/// HOVER_INIT (`from`) "... at end of hover".
+const char* reason_text(SequencerReason r, Phase from);
+
 /// Why the exploration ended.
 enum class Outcome : uint8_t {
   kRunning,
@@ -366,7 +407,10 @@ class ExplorationSequencer {
 
   Phase phase() const { return phase_; }
   Phase previous_phase() const { return previous_; }
-  const char* reason() const { return reason_; }
+  /// Why the last transition happened: text for people (may be reworded) ...
+  const char* reason() const { return reason_text(reason_code_, previous_); }
+  /// ... and the code programs key on (FsmState.reason_code).
+  SequencerReason reason_code() const { return reason_code_; }
   double phase_entered() const { return entered_; }
   uint32_t transitions() const { return transitions_; }
   Outcome outcome() const { return outcome_; }
@@ -417,12 +461,12 @@ class ExplorationSequencer {
   const SequencerParams& params() const { return p_; }
 
  private:
-  void enter(Phase p, const char* reason, double t);
+  void enter(Phase p, SequencerReason why, double t);
   /// FAILSAFE_HOVER from the current phase; resume_after_failsafe() returns to
   /// it with its timers shifted by the time held (the hover does not count).
-  void enter_failsafe(const char* reason, double t);
+  void enter_failsafe(SequencerReason why, double t);
   void resume_after_failsafe(double t);
-  void finish(Outcome o, const char* reason, double t);
+  void finish(Outcome o, SequencerReason why, double t);
   tactile_fsm::Setpoint hover() const;
   double yaw_rate_to(double heading, double yaw) const;
   /// Yaw rate 4 * yaw_gain * err within +-limit (TURN at turn_rate, the whisk
@@ -435,7 +479,7 @@ class ExplorationSequencer {
   /// GPIS update (000 eq. 31-46) and its corner centroids as corners_.
   void update_map();
   /// REFIT: enter it and run its entry action (transition table in sequencer.cpp).
-  void enter_refit(const SequencerInput& in, const char* reason, SequencerOutput* out);
+  void enter_refit(const SequencerInput& in, SequencerReason why, SequencerOutput* out);
   /// REFIT's guards, in the order its table tries them.
   bool can_exit_via_open_probe() const;
   bool can_land_in_open_space() const;
@@ -475,7 +519,7 @@ class ExplorationSequencer {
   Phase phase_ = Phase::kHoverInit;
   Phase previous_ = Phase::kHoverInit;
   Phase after_turn_ = Phase::kProbe;
-  const char* reason_ = "start";
+  SequencerReason reason_code_ = SequencerReason::kNone;
   Outcome outcome_ = Outcome::kRunning;
   bool started_ = false;
   double entered_ = 0.0;
@@ -513,7 +557,7 @@ class ExplorationSequencer {
   static constexpr double kOnProbeLine = 0.03;
   Eigen::Vector2d return_via_{0, 0};  ///< RETURN's first leg ends here (return_via_probe_line)
   ReturnLeg return_leg_ = ReturnLeg::kAlongProbeLine;
-  void begin_return(const Eigen::Vector2d& pos, const Eigen::Vector2d& to, ReturnFor what, const char* reason,
+  void begin_return(const Eigen::Vector2d& pos, const Eigen::Vector2d& to, ReturnFor what, SequencerReason why,
                     double t);
   Eigen::Vector2d return_to_{0, 0};    ///< RETURN goes here: the probe's origin (back along its line)
   Eigen::Vector2d line_origin_{0, 0};  ///< the current forward leg's line passes here along heading_
