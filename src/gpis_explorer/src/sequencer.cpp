@@ -18,24 +18,6 @@ void positive(const char* field, double v) {
 }
 double wrap(double a) { return std::remainder(a, 2.0 * M_PI); }
 
-/// Distance from c to the segment a-b.
-double segment_distance(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
-  const Eigen::Vector2d ab = b - a;
-  const double l2 = ab.squaredNorm();
-  const double t = l2 > 0.0 ? std::clamp((c - a).dot(ab) / l2, 0.0, 1.0) : 0.0;
-  return (a + t * ab - c).norm();
-}
-
-/// Distance from the segment a-b to the nearest surface training point (label 0);
-/// infinity without one.
-double surface_distance(const Gpis& g, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-  double best = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < g.size(); ++i) {
-    if (g.label(i) == kSurfaceLabel) best = std::min(best, segment_distance(a, b, g.point(i)));
-  }
-  return best;
-}
-
 constexpr std::size_t kMaxContacts = 200000;     ///< bound on the stored contact history
 constexpr std::size_t kMaxTrajectory = 200000;
 
@@ -341,36 +323,11 @@ bool ExplorationSequencer::fly_leg(const SequencerInput& in, bool contact, tacti
     }
   }
   const Eigen::Vector2d pos(in.x, in.y);
-  if (near_corner(pos + Eigen::Vector2d(std::cos(in.yaw), std::sin(in.yaw)) * 0.1)) {
+  if (rules().near_corner(pos + Eigen::Vector2d(std::cos(in.yaw), std::sin(in.yaw)) * 0.1)) {
     ++corner_aborts_;
     follow_points_.clear();
     enter(Phase::kRetreat, SequencerReason::kCornerAhead, in.t);
     return true;
-  }
-  return false;
-}
-
-bool ExplorationSequencer::near_corner(const Eigen::Vector2d& q) const {
-  for (const auto& c : corners_) {
-    if ((q - c).norm() < p_.explorer.corner_exclusion) return true;
-  }
-  return false;
-}
-
-bool ExplorationSequencer::side_blocked(const SequencerInput& in) const {
-  const double s = side_ == tactile_fsm::Side::kLeft ? 1.0 : -1.0;
-  const Eigen::Vector2d fx(std::cos(in.yaw), std::sin(in.yaw)), fy(-std::sin(in.yaw), std::cos(in.yaw));
-  const Eigen::Vector2d pos(in.x, in.y);
-  const Gpis& g = explorer_.gpis();
-  for (std::size_t i = 0; i < g.size(); ++i) {
-    if (g.label(i) != kSurfaceLabel) continue;
-    const Eigen::Vector2d d = g.point(i) - pos;
-    const double lateral = s * d.dot(fy), forward = d.dot(fx);
-    if (lateral > 0.0 && lateral < p_.side_clearance && std::abs(forward) < p_.side_clearance) return true;
-  }
-  if (p_.wall_extension <= 0.0) return false;
-  for (const auto& w : wall_lines_) {
-    if (ray_to_wall_line(pos, s * fy, w.a, w.b, p_.wall_extension) < p_.side_clearance) return true;
   }
   return false;
 }
@@ -472,49 +429,6 @@ void ExplorationSequencer::add(const Eigen::Vector2d& q, double label) {
   if (explorer_.add_point(q, label) != AddStatus::kAdded) ++points_rejected_;
 }
 
-double ExplorationSequencer::surface_clearance(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
-  return surface_distance(explorer_.gpis(), a, b);
-}
-
-bool ExplorationSequencer::corner_clear(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
-  // Keep corner_exclusion from every corner centroid (000 eq. 45 region); from
-  // a start already closer than that, do not get any closer.
-  for (const auto& c : corners_) {
-    const double limit = std::min(p_.explorer.corner_exclusion, (a - c).norm() - 1e-3);
-    if (segment_distance(a, b, c) < limit) return false;
-  }
-  return true;
-}
-
-bool ExplorationSequencer::staging_for(const Eigen::Vector2d& from, const Eigen::Vector2d& q, Eigen::Vector2d* staging,
-                                       double* approach_heading) const {
-  // Outward normal of the implicit surface at the target: the mean grows from
-  // -1 (interior) to 0 (surface), so grad f (000 eq. 36) points out of the room.
-  const GpisExplorer& g = explorer_;  // the solver's mean and gradient (exact or local)
-  const Eigen::Vector2d grad = g.gradient(q);
-  if (!(grad.allFinite() && grad.norm() > 1e-9)) return false;
-  const Eigen::Vector2d n = grad.normalized();
-  const Eigen::Vector2d s = q - p_.approach_standoff * n;
-  if (!explorer_.grid().contains(s) || near_corner(s)) return false;
-  if (!(g.mean(s) < 0.0)) return false;  // the staging point must be on the interior side
-  // Leg 1 (from -> staging): clear of known surface points and corners, and
-  // not through the predicted surface (mean < 0 along it).
-  const double d0 = surface_clearance(from, from);
-  if (surface_clearance(from, s) < std::min(p_.path_clearance, d0 - 1e-3)) return false;
-  if (!corner_clear(from, s)) return false;
-  const int samples = std::max(2, static_cast<int>(std::ceil((s - from).norm() / 0.1)));
-  for (int k = 1; k <= samples; ++k) {
-    if (!(g.mean(from + (s - from) * (static_cast<double>(k) / samples)) < 0.0)) return false;
-  }
-  // Leg 2 (staging -> target, head-on): no known surface point beside it.
-  const Eigen::Vector2d q_short = q - std::min(p_.approach_clearance, p_.approach_standoff) * n;
-  if (surface_clearance(s, q_short) < p_.approach_clearance) return false;
-  if (!corner_clear(s, q)) return false;
-  *staging = s;
-  *approach_heading = std::atan2(n.y(), n.x());
-  return true;
-}
-
 double ExplorationSequencer::line_correction(const SequencerInput& in) const {
   // Lateral (body y) velocity back onto the leg's line: a probe's line is
   // known free of walls, a head-on leg is the one checked for clearance.
@@ -524,44 +438,11 @@ double ExplorationSequencer::line_correction(const SequencerInput& in) const {
   return std::clamp(-p_.line_gain * e, -lim, lim);
 }
 
-bool ExplorationSequencer::beyond_known_surface(const Eigen::Vector2d& pos) const {
-  // Flown through an opening: every known surface point lies at least
-  // exit_beyond behind the drone along the leg's heading (a convex room's
-  // walls all end at the exit's wall line). A contour point inside a large
-  // room (few points, the GPIS contour well inside the walls) followed by
-  // exit_confirm_distance of free flight is not yet an exit.
-  const Eigen::Vector2d h(std::cos(heading_), std::sin(heading_));
-  const Gpis& g = explorer_.gpis();
-  for (std::size_t i = 0; i < g.size(); ++i) {
-    if (g.label(i) == kSurfaceLabel && (g.point(i) - pos).dot(h) > -p_.exit_beyond) return false;
-  }
-  return true;
-}
-
 double ExplorationSequencer::retreat_lateral(const SequencerInput& in) const {
   // Body-y speed back toward where the wall follow began (retreat_toward_follow_start).
   if (!p_.retreat_toward_follow_start || retreat_kind_ != RetreatKind::kAfterFollow) return 0.0;
   const double off = (Eigen::Vector2d(in.x, in.y) - follow_start_).dot(Eigen::Vector2d(-std::sin(in.yaw), std::cos(in.yaw)));
   return std::clamp(-off / p_.retreat_time_s, -p_.retreat_speed, p_.retreat_speed);
-}
-
-bool ExplorationSequencer::retreat_blocked(const SequencerInput& in) const {
-  // The backward leg (retreat_speed for what is left of retreat_time_s plus a
-  // margin) must not bring the centre closer than retreat_clearance to a known
-  // surface point it is not already that close to.
-  const Eigen::Vector2d pos(in.x, in.y), back(-std::cos(in.yaw), -std::sin(in.yaw));
-  const Eigen::Vector2d side(-std::sin(in.yaw), std::cos(in.yaw));
-  // ... and sideways as far as the retreat would move (retreat_toward_follow_start).
-  const Eigen::Vector2d end =
-      pos + back * (p_.retreat_speed * p_.retreat_time_s + 0.05) + side * (retreat_lateral(in) * p_.retreat_time_s);
-  const Gpis& g = explorer_.gpis();
-  for (std::size_t i = 0; i < g.size(); ++i) {
-    if (g.label(i) != kSurfaceLabel) continue;
-    const Eigen::Vector2d q = g.point(i);
-    const double now = (q - pos).norm();
-    if (segment_distance(pos, end, q) < std::min(p_.retreat_clearance, now - 1e-3)) return true;
-  }
-  return false;
 }
 
 bool ExplorationSequencer::whisk_leg() const {
@@ -575,12 +456,6 @@ bool ExplorationSequencer::whisk_leg() const {
   }
 }
 
-bool ExplorationSequencer::in_corridor(const Eigen::Vector2d& q, const Eigen::Vector2d& pos) const {
-  const Eigen::Vector2d h(std::cos(heading_), std::sin(heading_)), n(-h.y(), h.x());
-  const Eigen::Vector2d d = q - pos;
-  return d.dot(h) > -0.05 && std::abs(d.dot(n)) < p_.corridor_half_width;
-}
-
 bool ExplorationSequencer::whisk_blocked(const SequencerInput& in) {
   // A whisk contact blocks the leg when a touched point lies in the guard's
   // corridor ahead (or its position is unknown); a point beside the corridor
@@ -592,7 +467,7 @@ bool ExplorationSequencer::whisk_blocked(const SequencerInput& in) {
   Eigen::Vector2d q_beside{0, 0};
   auto look = [&](bool c, const Eigen::Vector2d& q) {
     if (!c) return;
-    if (!q.allFinite() || in_corridor(q, pos)) {
+    if (!q.allFinite() || rules().in_corridor(q, pos, heading_)) {
       blocked = true;
     } else {
       beside = true;
@@ -651,7 +526,7 @@ void ExplorationSequencer::check_ahead(const SequencerInput& in, tactile_fsm::Se
   const Eigen::Vector2d h(std::cos(heading_), std::sin(heading_));
   double nearest = std::numeric_limits<double>::infinity();
   for (const auto& q : check_points_) {
-    if (in_corridor(q, pos)) nearest = std::min(nearest, (q - pos).dot(h));
+    if (rules().in_corridor(q, pos, heading_)) nearest = std::min(nearest, (q - pos).dot(h));
   }
   if (check_points_.empty()) {  // contact without a position estimate: as an unwhisked leg
     ++whisk_walls_;
@@ -696,7 +571,7 @@ bool ExplorationSequencer::leg_motion(const SequencerInput& in, double speed, bo
 
 double ExplorationSequencer::forward_speed(const SequencerInput& in) const {
   const Eigen::Vector2d tips = Eigen::Vector2d(in.x, in.y) + 0.19 * Eigen::Vector2d(std::cos(in.yaw), std::sin(in.yaw));
-  return surface_clearance(tips, tips) < p_.slow_distance ? p_.slow_fraction * p_.wall.v_max : p_.wall.v_max;
+  return rules().surface_clearance(tips, tips) < p_.slow_distance ? p_.slow_fraction * p_.wall.v_max : p_.wall.v_max;
 }
 
 void ExplorationSequencer::align_to_wall(const SequencerInput& in) {
@@ -772,6 +647,7 @@ void ExplorationSequencer::commit_points(const SequencerInput& in) {
 
 bool ExplorationSequencer::choose_target(const Eigen::Vector2d& from) {
   const UpdateResult& r = explorer_.last();
+  const PathRules rules = this->rules();
   has_target_ = false;
   has_staging_ = false;
   const GridSpec& g = explorer_.grid();
@@ -787,7 +663,7 @@ bool ExplorationSequencer::choose_target(const Eigen::Vector2d& from) {
       if (!std::isfinite(info.acquisition[i])) continue;
       if ((P[i] - from).norm() < p_.min_target_distance) continue;
       if (!g.contains(P[i])) continue;
-      if (near_corner(P[i])) continue;  // never into a penalised corner
+      if (rules.near_corner(P[i])) continue;  // never into a penalised corner
       bool visited = false;  // a target already touched (its points may not fit in the budget)
       for (const auto& v : visited_) visited = visited || (P[i] - v).norm() < p_.visited_radius;
       if (visited) continue;
@@ -805,7 +681,7 @@ bool ExplorationSequencer::choose_target(const Eigen::Vector2d& from) {
   //    point with clear legs (workspace rule, see SequencerParams).
   if (p_.approach_standoff > 0.0) {
     for (const auto& c : cands) {
-      if (staging_for(from, c.q, &staging_, &approach_heading_)) {
+      if (rules.staging_for(from, c.q, &staging_, &approach_heading_)) {
         take(c);
         has_staging_ = true;
         ++staged_targets_;
@@ -815,7 +691,7 @@ bool ExplorationSequencer::choose_target(const Eigen::Vector2d& from) {
   }
   // 2. Otherwise the best target whose straight path keeps away from corners.
   for (const auto& c : cands) {
-    if (!corner_clear(from, c.q)) continue;
+    if (!rules.corner_clear(from, c.q)) continue;
     take(c);
     ++direct_targets_;
     return true;
@@ -1096,7 +972,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       }
       if (in.t - entered_ >= p_.follow_time_s) {
         enter(Phase::kRetreat, SequencerReason::kWallFollowed, in.t);
-      } else if (sub_ == tactile_fsm::WallSubState::kFlySideways && side_blocked(in)) {
+      } else if (sub_ == tactile_fsm::WallSubState::kFlySideways && rules().side_blocked(pos, in.yaw, side_)) {
         ++side_stops_;
         sp.vy = 0.0;
         enter(Phase::kRetreat, SequencerReason::kSurfaceBeside, in.t);
@@ -1106,7 +982,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
     case Phase::kRetreat:
       // 000: "flies backward for 1 second"; hover instead where that would
       // bring the frame near a known surface point behind it (a corner).
-      if (retreat_blocked(in)) {
+      if (rules().retreat_blocked(pos, in.yaw, retreat_lateral(in))) {
         if (!retreat_held_) ++retreats_held_;
         retreat_held_ = true;
       } else {
@@ -1155,7 +1031,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         if (whisking_) start_check(in);
         else start_follow(in);
       } else if ((pos - exit_from_).norm() - leg_blind_ >= exit_distance_ &&
-                 (beyond_known_surface(pos) ||
+                 (rules().beyond_known_surface(pos, heading_) ||
                   (pos - exit_from_).norm() - leg_blind_ >= exit_distance_ + p_.probe_max_distance)) {
         finish(Outcome::kExitFound, SequencerReason::kExitFlownThrough, in.t);
         out.gpis_updated = true;  // publish the final target with exit_found

@@ -36,6 +36,7 @@
 #include <Eigen/Core>
 
 #include "gpis_explorer/explorer.hpp"
+#include "gpis_explorer/path_rules.hpp"
 #include "tactile_fsm/whisker_wall_follower.hpp"
 
 namespace gpis_explorer {
@@ -486,20 +487,14 @@ class ExplorationSequencer {
   bool reached_update_limit() const;
   void refit_and_choose(const SequencerInput& in);
   bool choose_target(const Eigen::Vector2d& from);
-  /// Staging point for a head-on approach of candidate q, or false when no
-  /// collision-free staging point / legs exist (clearance rules above).
-  bool staging_for(const Eigen::Vector2d& from, const Eigen::Vector2d& q, Eigen::Vector2d* staging,
-                   double* approach_heading) const;
-  double surface_clearance(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
-  bool corner_clear(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
+  /// The path rules on the current map (training points, corners_, wall_lines_).
+  PathRules rules() const { return PathRules(p_, explorer_, corners_, wall_lines_); }
   double forward_speed(const SequencerInput& in) const;
   double line_correction(const SequencerInput& in) const;
   void align_to_wall(const SequencerInput& in);
-  bool near_corner(const Eigen::Vector2d& p) const;
   /// One step of a forward leg (target or staging point): setpoint into *sp;
   /// true when a contact or a penalised corner ahead changed the phase.
   bool fly_leg(const SequencerInput& in, bool contact, tactile_fsm::Setpoint* sp);
-  bool side_blocked(const SequencerInput& in) const;
   /// Forward motion along heading_ (its line held); whisking when asked and
   /// enabled. Returns true when the yaw rate is a whisk (beyond omega_max).
   bool leg_motion(const SequencerInput& in, double speed, bool whisk, tactile_fsm::Setpoint* sp);
@@ -507,11 +502,8 @@ class ExplorationSequencer {
   bool whisk_leg() const;
   void start_check(const SequencerInput& in);
   void check_ahead(const SequencerInput& in, tactile_fsm::Setpoint* sp);
-  bool in_corridor(const Eigen::Vector2d& q, const Eigen::Vector2d& pos) const;
   /// A whisk contact in the guard's corridor (see corridor_half_width).
   bool whisk_blocked(const SequencerInput& in);
-  bool retreat_blocked(const SequencerInput& in) const;
-  bool beyond_known_surface(const Eigen::Vector2d& pos) const;
   void add(const Eigen::Vector2d& p, double label);
 
   SequencerParams p_;
@@ -539,9 +531,6 @@ class ExplorationSequencer {
   bool both_touched_ = false;
   tactile_fsm::WallSubState sub_ = tactile_fsm::WallSubState::kNone;
   std::vector<Eigen::Vector2d> follow_points_;
-  struct WallLine {
-    Eigen::Vector2d a, b;  ///< the touched span's ends on the fitted line
-  };
   std::vector<WallLine> wall_lines_;  ///< at most 64 (the oldest dropped)
   void add_wall_line();
   bool has_target_ = false;
