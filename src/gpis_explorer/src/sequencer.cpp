@@ -18,6 +18,14 @@ void positive(const char* field, double v) {
 }
 double wrap(double a) { return std::remainder(a, 2.0 * M_PI); }
 
+/// The tick's touched points, left then right: each whisker in contact whose
+/// contact point is known (the one contact collection of every phase).
+template <class F>
+void each_touched_point(const SequencerInput& in, F&& f) {
+  if (in.contact_left && in.point_left.allFinite()) f(in.point_left);
+  if (in.contact_right && in.point_right.allFinite()) f(in.point_right);
+}
+
 constexpr std::size_t kMaxContacts = 200000;     ///< bound on the stored contact history
 constexpr std::size_t kMaxTrajectory = 200000;
 
@@ -308,10 +316,21 @@ double ExplorationSequencer::fast_yaw_rate(double err, double limit) {
   return std::clamp(p_.yaw_gain * 4.0 * err, -limit, limit);
 }
 
+ExplorationSequencer::Leg ExplorationSequencer::leg() const {
+  Leg l;
+  l.whisk = whisk_leg();
+  l.corner_abort = phase_ == Phase::kGoToStaging || phase_ == Phase::kGoToTarget;
+  return l;
+}
+
 bool ExplorationSequencer::fly_leg(const SequencerInput& in, bool contact, tactile_fsm::Setpoint* sp) {
-  // Forward along heading_ on its line; a contact starts a wall follow, a
-  // penalised corner 0.1 m ahead a retreat (000: never fly into a corner).
-  whisking_ = leg_motion(in, whisk_leg() ? p_.whisk_speed : forward_speed(in), whisk_leg(), sp);
+  // Forward along heading_ on its line (000 Methods "Flying Forward" at V_max;
+  // whisked at whisk_speed); a contact ends every leg the same way: unwhisked
+  // a wall follow, whisked a stop to check (a whisk beside the corridor lets
+  // the leg go on); on the GPIS legs a penalised corner 0.1 m ahead a retreat
+  // (000: never fly into a corner).
+  const Leg l = leg();
+  whisking_ = leg_motion(in, l.whisk ? p_.whisk_speed : forward_speed(in), l.whisk, sp);
   if (contact) {
     if (!whisking_) {
       start_follow(in);
@@ -323,7 +342,7 @@ bool ExplorationSequencer::fly_leg(const SequencerInput& in, bool contact, tacti
     }
   }
   const Eigen::Vector2d pos(in.x, in.y);
-  if (rules().near_corner(pos + Eigen::Vector2d(std::cos(in.yaw), std::sin(in.yaw)) * 0.1)) {
+  if (l.corner_abort && rules().near_corner(pos + Eigen::Vector2d(std::cos(in.yaw), std::sin(in.yaw)) * 0.1)) {
     ++corner_aborts_;
     follow_points_.clear();
     enter(Phase::kRetreat, SequencerReason::kCornerAhead, in.t);
@@ -490,8 +509,7 @@ void ExplorationSequencer::start_check(const SequencerInput& in) {
   check_t_ = in.t;
   check_started_ = in.t;
   check_points_.clear();
-  if (in.contact_left && in.point_left.allFinite()) check_points_.push_back(in.point_left);
-  if (in.contact_right && in.point_right.allFinite()) check_points_.push_back(in.point_right);
+  each_touched_point(in, [&](const Eigen::Vector2d& q) { check_points_.push_back(q); });
   ++whisk_contacts_;
   enter(Phase::kCheckAhead, SequencerReason::kWhiskContact, in.t);
 }
@@ -509,8 +527,7 @@ void ExplorationSequencer::check_ahead(const SequencerInput& in, tactile_fsm::Se
   // open; 000: the exit "emerges").
   const Eigen::Vector2d pos(in.x, in.y);
   if (in.depth_valid && in.t - check_started_ <= p_.check_sample_s && check_points_.size() < 64) {
-    if (in.contact_left && in.point_left.allFinite()) check_points_.push_back(in.point_left);
-    if (in.contact_right && in.point_right.allFinite()) check_points_.push_back(in.point_right);
+    each_touched_point(in, [&](const Eigen::Vector2d& q) { check_points_.push_back(q); });
   }
   const double err = wrap(heading_ - in.yaw);
   if (check_stage_ == CheckStage::kWhiskBack) {
@@ -844,8 +861,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
   }
   const bool contact = in.depth_valid && (in.contact_left || in.contact_right);
   if (in.depth_valid && contacts_.size() < kMaxContacts) {
-    if (in.contact_left && in.point_left.allFinite()) contacts_.push_back({in.t, in.point_left});
-    if (in.contact_right && in.point_right.allFinite()) contacts_.push_back({in.t, in.point_right});
+    each_touched_point(in, [&](const Eigen::Vector2d& q) { contacts_.push_back({in.t, q}); });
   }
   if (phase_ != Phase::kHoverInit && in.t - entered_ >= 0.0 && in.t >= p_.max_time_s) {
     finish(Outcome::kTimeLimit, SequencerReason::kTimeLimit, in.t);
@@ -884,12 +900,9 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       break;
     }
     case Phase::kProbe:
-      // 000 Methods "Flying Forward" at V_max; whisking at whisk_speed when enabled.
-      whisking_ = leg_motion(in, whisk_leg() ? p_.whisk_speed : forward_speed(in), whisk_leg(), &sp);
-      if (contact && (!whisking_ || whisk_blocked(in))) {
-        if (whisking_) start_check(in);
-        else start_follow(in);
-      } else if ((pos - leg_start_).norm() - leg_blind_ >= p_.probe_max_distance) {
+      if (fly_leg(in, contact, &sp)) break;
+      // The end: probe_max_distance flown with fresh depth and no contact.
+      if ((pos - leg_start_).norm() - leg_blind_ >= p_.probe_max_distance) {
         add(pos, kInteriorLabel);  // free all the way (flown with fresh depth)
         if (open_probe_ < 0) {
           open_probe_ = probe_;
@@ -943,8 +956,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
     }
     case Phase::kFollowWall: {
       if (in.depth_valid) {
-        if (in.contact_left && in.point_left.allFinite()) follow_points_.push_back(in.point_left);
-        if (in.contact_right && in.point_right.allFinite()) follow_points_.push_back(in.point_right);
+        each_touched_point(in, [&](const Eigen::Vector2d& q) { follow_points_.push_back(q); });
       }
       const bool lv = in.depth_valid && in.contact_left && std::isfinite(in.depth_left);
       const bool rv = in.depth_valid && in.contact_right && std::isfinite(in.depth_right);
@@ -1026,11 +1038,9 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       break;
     }
     case Phase::kExitThrough:
-      whisking_ = leg_motion(in, whisk_leg() ? p_.whisk_speed : forward_speed(in), whisk_leg(), &sp);
-      if (contact && (!whisking_ || whisk_blocked(in))) {
-        if (whisking_) start_check(in);
-        else start_follow(in);
-      } else if ((pos - exit_from_).norm() - leg_blind_ >= exit_distance_ &&
+      if (fly_leg(in, contact, &sp)) break;
+      // The end: the exit's contact-free distance, past every known wall.
+      if ((pos - exit_from_).norm() - leg_blind_ >= exit_distance_ &&
                  (rules().beyond_known_surface(pos, heading_) ||
                   (pos - exit_from_).norm() - leg_blind_ >= exit_distance_ + p_.probe_max_distance)) {
         finish(Outcome::kExitFound, SequencerReason::kExitFlownThrough, in.t);

@@ -492,8 +492,19 @@ class ExplorationSequencer {
   double forward_speed(const SequencerInput& in) const;
   double line_correction(const SequencerInput& in) const;
   void align_to_wall(const SequencerInput& in);
-  /// One step of a forward leg (target or staging point): setpoint into *sp;
-  /// true when a contact or a penalised corner ahead changed the phase.
+  /// The forward leg being flown (PROBE, GO_TO_STAGING, GO_TO_TARGET,
+  /// EXIT_THROUGH): its line passes line_origin_ along heading_ (from
+  /// leg_start_ / exit_from_); whether it is whisked and whether a penalised
+  /// corner ahead aborts it; its end is the phase's (probe_max_distance, the
+  /// staging point, the target, the exit's confirmation distance).
+  struct Leg {
+    bool whisk = false;         ///< whisk_leg(): probes, GPIS legs, the exit beyond a target
+    bool corner_abort = false;  ///< GO_TO_STAGING / GO_TO_TARGET: a corner centroid 0.1 m ahead -> RETREAT
+  };
+  Leg leg() const;
+  /// One tick of the current forward leg, the same for every leg: setpoint
+  /// into *sp; true when a contact (or, corner_abort, a penalised corner
+  /// ahead) left the leg's phase. The caller then checks the leg's end.
   bool fly_leg(const SequencerInput& in, bool contact, tactile_fsm::Setpoint* sp);
   /// Forward motion along heading_ (its line held); whisking when asked and
   /// enabled. Returns true when the yaw rate is a whisk (beyond omega_max).
