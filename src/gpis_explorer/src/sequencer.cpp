@@ -183,6 +183,28 @@ const char* reason_text(SequencerReason r, Phase from) {
   return "unknown";
 }
 
+const char* to_string(CheckDecision d) {
+  switch (d) {
+    case CheckDecision::kFollowUnknown: return "follow_unknown";
+    case CheckDecision::kLegGoesOn: return "leg_goes_on";
+    case CheckDecision::kFollowWall: return "follow_wall";
+    case CheckDecision::kBackOff: return "back_off";
+  }
+  return "unknown";
+}
+
+CheckDecision check_ahead_decision(const std::vector<Eigen::Vector2d>& touched, const Eigen::Vector2d& pos,
+                                   double heading, const PathRules& rules, double follow_min_forward) {
+  if (touched.empty()) return CheckDecision::kFollowUnknown;
+  const Eigen::Vector2d h(std::cos(heading), std::sin(heading));
+  double nearest = std::numeric_limits<double>::infinity();
+  for (const auto& q : touched) {
+    if (rules.in_corridor(q, pos, heading)) nearest = std::min(nearest, (q - pos).dot(h));
+  }
+  if (!std::isfinite(nearest)) return CheckDecision::kLegGoesOn;
+  return nearest >= follow_min_forward ? CheckDecision::kFollowWall : CheckDecision::kBackOff;
+}
+
 const char* to_string(Outcome o) {
   switch (o) {
     case Outcome::kRunning: return "running";
@@ -540,24 +562,17 @@ void ExplorationSequencer::check_ahead(const SequencerInput& in, tactile_fsm::Se
   }
   sp->yaw_rate = yaw_rate_to(heading_, in.yaw);
   if (in.t - check_t_ < p_.check_dwell_s) return;
-  const Eigen::Vector2d h(std::cos(heading_), std::sin(heading_));
-  double nearest = std::numeric_limits<double>::infinity();
-  for (const auto& q : check_points_) {
-    if (rules().in_corridor(q, pos, heading_)) nearest = std::min(nearest, (q - pos).dot(h));
-  }
-  if (check_points_.empty()) {  // contact without a position estimate: as an unwhisked leg
-    ++whisk_walls_;
-    start_follow(in);
-    return;
-  }
-  if (!std::isfinite(nearest)) {
-    enter(check_from_, SequencerReason::kBesideCorridor, in.t);
-    return;
-  }
-  if (nearest >= p_.follow_min_forward) {
-    ++whisk_walls_;
-    start_follow(in);
-    return;
+  switch (check_ahead_decision(check_points_, pos, heading_, rules(), p_.follow_min_forward)) {
+    case CheckDecision::kFollowUnknown:  // contact without a position estimate: as an unwhisked leg
+    case CheckDecision::kFollowWall:
+      ++whisk_walls_;
+      start_follow(in);
+      return;
+    case CheckDecision::kLegGoesOn:
+      enter(check_from_, SequencerReason::kBesideCorridor, in.t);
+      return;
+    case CheckDecision::kBackOff:
+      break;
   }
   ++whisk_jambs_;
   if (round_ == Round::kTargets && has_target_ && visited_.size() < 1000) visited_.push_back(target_);

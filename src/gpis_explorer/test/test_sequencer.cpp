@@ -519,6 +519,33 @@ TEST(Sequencer, RefitIsAPhaseEnteredWhenTheLastProbeReturns) {
   EXPECT_EQ(std::string(gpis_explorer::to_string(Phase::kRefit)), "REFIT");
 }
 
+// CHECK_AHEAD's guards, each on hand-made touched points (heading +x from the
+// origin, corridor +-0.11 m, follow_min_forward 0.11 m): no point -> follow as
+// an unwhisked leg; all beside the corridor -> the leg goes on; the nearest in
+// the corridor at or beyond follow_min_forward -> wall follow; nearer -> back off.
+TEST(SequencerGuards, CheckAheadDecisionTable) {
+  using gpis_explorer::CheckDecision;
+  const SequencerParams p;
+  const gpis_explorer::GpisExplorer ex(p.explorer);
+  const std::vector<Eigen::Vector2d> corners;
+  const std::vector<gpis_explorer::WallLine> walls;
+  const gpis_explorer::PathRules rules(p, ex, corners, walls);
+  auto decide = [&](const std::vector<Eigen::Vector2d>& pts) {
+    return gpis_explorer::check_ahead_decision(pts, {0, 0}, 0.0, rules, p.follow_min_forward);
+  };
+  EXPECT_EQ(decide({}), CheckDecision::kFollowUnknown);
+  EXPECT_EQ(decide({{0.3, 0.2}, {0.3, -0.15}}), CheckDecision::kLegGoesOn);
+  EXPECT_EQ(decide({{0.3, 0.05}}), CheckDecision::kFollowWall);
+  EXPECT_EQ(decide({{0.11, 0.0}}), CheckDecision::kFollowWall);  // at follow_min_forward
+  EXPECT_EQ(decide({{0.08, 0.05}}), CheckDecision::kBackOff);
+  EXPECT_EQ(decide({{0.3, 0.05}, {0.08, 0.05}}), CheckDecision::kBackOff);  // the nearest decides
+  EXPECT_EQ(decide({{0.08, 0.2}, {0.3, 0.0}}), CheckDecision::kFollowWall);  // the near one is beside
+  // Turned: heading +y, the corridor along y.
+  EXPECT_EQ(gpis_explorer::check_ahead_decision({{0.05, 0.3}}, {0, 0}, M_PI / 2, rules, p.follow_min_forward),
+            CheckDecision::kFollowWall);
+  EXPECT_STREQ(gpis_explorer::to_string(CheckDecision::kLegGoesOn), "leg_goes_on");
+}
+
 // return_via_probe_line: back across to the probe's line, then along it; the
 // straight return cuts past the pillar the probe passed 15 cm beside.
 TEST(Sequencer, ReturnGoesBackAcrossToTheProbesLine) {

@@ -375,6 +375,17 @@ LineFit fit_line(const std::vector<Eigen::Vector2d>& pts);
 double ray_to_wall_line(const Eigen::Vector2d& from, const Eigen::Vector2d& dir, const Eigen::Vector2d& a,
                         const Eigen::Vector2d& b, double extension);
 
+/// CHECK_AHEAD's transition table after the dwell, on the points `touched`
+/// in its first check_sample_s, the first guard that holds:
+///   no touched point with a known position            -> kFollowUnknown (FOLLOW_WALL, as an unwhisked leg)
+///   none of them in the guard's corridor              -> kLegGoesOn (the leg it stopped)
+///   the nearest in the corridor >= follow_min_forward -> kFollowWall (FOLLOW_WALL)
+///   else (a wall end close to the guard)              -> kBackOff (RETREAT, the points become surface points)
+enum class CheckDecision : uint8_t { kFollowUnknown, kLegGoesOn, kFollowWall, kBackOff };
+const char* to_string(CheckDecision d);
+CheckDecision check_ahead_decision(const std::vector<Eigen::Vector2d>& touched, const Eigen::Vector2d& pos,
+                                   double heading, const PathRules& rules, double follow_min_forward);
+
 /// One control tick of input (odometry frame). Fresh: tactile_fsm::input_fresh
 /// with wall.max_input_age_s (the node logic decides it from the stamps).
 struct SequencerInput {
@@ -451,11 +462,13 @@ class ExplorationSequencer {
   /// FAILSAFE_HOVER entries (stale depth or odometry) and the phase the last one interrupted.
   std::size_t failsafe_hovers() const { return failsafe_hovers_; }
   Phase failsafe_from() const { return failsafe_from_; }
-  /// The current phase's sub-state, snake case ("" for a phase without one):
+  /// The current phase's sub-state ("" for a phase without one), the
+  /// sequencer's own in snake case:
   /// CHECK_AHEAD whisk_back / dwell, RETURN to_probe_line / along_probe_line,
   /// RETREAT after_follow / back_off, EXIT_THROUGH
-  /// along_open_probe / beyond_target, FOLLOW_WALL the wall rule's
-  /// (tactile_fsm::to_string(WallSubState)), TURN the phase it turns for.
+  /// along_open_probe / beyond_target; FOLLOW_WALL the wall rule's
+  /// (tactile_fsm::to_string(WallSubState), "FLY_SIDEWAYS", ...), TURN the
+  /// phase it turns for ("PROBE", ...).
   std::string sub_state() const;
   Round round() const { return round_; }
   ProbeSet probe_set() const { return probe_set_; }
