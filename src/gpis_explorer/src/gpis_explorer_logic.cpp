@@ -12,6 +12,40 @@
 
 namespace gpis_explorer {
 
+// The sequencer's reason codes are FsmState's REASON_GPIS_* (block 50-79).
+using tactile_msgs::msg::FsmState;
+static_assert(static_cast<uint8_t>(SequencerReason::kNone) == FsmState::REASON_NONE);
+static_assert(static_cast<uint8_t>(SequencerReason::kHoverDone) == FsmState::REASON_GPIS_HOVER_DONE);
+static_assert(static_cast<uint8_t>(SequencerReason::kAligned) == FsmState::REASON_GPIS_ALIGNED);
+static_assert(static_cast<uint8_t>(SequencerReason::kProbeFoundNoWall) == FsmState::REASON_GPIS_PROBE_FOUND_NO_WALL);
+static_assert(static_cast<uint8_t>(SequencerReason::kWhiskContact) == FsmState::REASON_GPIS_WHISK_CONTACT);
+static_assert(static_cast<uint8_t>(SequencerReason::kContact) == FsmState::REASON_GPIS_CONTACT);
+static_assert(static_cast<uint8_t>(SequencerReason::kBesideCorridor) == FsmState::REASON_GPIS_BESIDE_CORRIDOR);
+static_assert(static_cast<uint8_t>(SequencerReason::kTooNearTheGuard) == FsmState::REASON_GPIS_TOO_NEAR_THE_GUARD);
+static_assert(static_cast<uint8_t>(SequencerReason::kCornerAhead) == FsmState::REASON_GPIS_CORNER_AHEAD);
+static_assert(static_cast<uint8_t>(SequencerReason::kWallFollowed) == FsmState::REASON_GPIS_WALL_FOLLOWED);
+static_assert(static_cast<uint8_t>(SequencerReason::kSurfaceBeside) == FsmState::REASON_GPIS_SURFACE_BESIDE);
+static_assert(static_cast<uint8_t>(SequencerReason::kRetreatedNextProbe) == FsmState::REASON_GPIS_RETREATED_NEXT_PROBE);
+static_assert(static_cast<uint8_t>(SequencerReason::kNextProbe) == FsmState::REASON_GPIS_NEXT_PROBE);
+static_assert(static_cast<uint8_t>(SequencerReason::kProbesDone) == FsmState::REASON_GPIS_PROBES_DONE);
+static_assert(static_cast<uint8_t>(SequencerReason::kRetreatedRefit) == FsmState::REASON_GPIS_RETREATED_REFIT);
+static_assert(static_cast<uint8_t>(SequencerReason::kOpenProbeReturn) == FsmState::REASON_GPIS_OPEN_PROBE_RETURN);
+static_assert(static_cast<uint8_t>(SequencerReason::kOpenProbeExit) == FsmState::REASON_GPIS_OPEN_PROBE_EXIT);
+static_assert(static_cast<uint8_t>(SequencerReason::kTargetViaStaging) == FsmState::REASON_GPIS_TARGET_VIA_STAGING);
+static_assert(static_cast<uint8_t>(SequencerReason::kTargetChosen) == FsmState::REASON_GPIS_TARGET_CHOSEN);
+static_assert(static_cast<uint8_t>(SequencerReason::kAtStaging) == FsmState::REASON_GPIS_AT_STAGING);
+static_assert(static_cast<uint8_t>(SequencerReason::kTargetReached) == FsmState::REASON_GPIS_TARGET_REACHED);
+static_assert(static_cast<uint8_t>(SequencerReason::kDepthStale) == FsmState::REASON_GPIS_DEPTH_STALE);
+static_assert(static_cast<uint8_t>(SequencerReason::kOdometryStale) == FsmState::REASON_GPIS_ODOMETRY_STALE);
+static_assert(static_cast<uint8_t>(SequencerReason::kInputsFreshAgain) == FsmState::REASON_GPIS_INPUTS_FRESH_AGAIN);
+static_assert(static_cast<uint8_t>(SequencerReason::kInputsStaleLand) == FsmState::REASON_GPIS_INPUTS_STALE_LAND);
+static_assert(static_cast<uint8_t>(SequencerReason::kUpdateLimit) == FsmState::REASON_GPIS_UPDATE_LIMIT);
+static_assert(static_cast<uint8_t>(SequencerReason::kNoTarget) == FsmState::REASON_GPIS_NO_TARGET);
+static_assert(static_cast<uint8_t>(SequencerReason::kOpenSpace) == FsmState::REASON_GPIS_OPEN_SPACE);
+static_assert(static_cast<uint8_t>(SequencerReason::kExitFlownThrough) == FsmState::REASON_GPIS_EXIT_FLOWN_THROUGH);
+static_assert(static_cast<uint8_t>(SequencerReason::kTimeLimit) == FsmState::REASON_GPIS_TIME_LIMIT);
+static_assert(static_cast<uint8_t>(SequencerReason::kLanded) == FsmState::REASON_GPIS_LANDED);
+
 using tactile_common::ParamMap;
 
 void GpisExplorerLogic::Params::validate() const {
@@ -404,6 +438,7 @@ GpisExplorerLogic::Outputs GpisExplorerLogic::on_timer(int64_t now_ns) {
     st.state = to_string(seq_.phase());
     st.previous_state = to_string(seq_.previous_phase());
     st.reason = seq_.reason();
+    st.reason_code = static_cast<uint8_t>(seq_.reason_code());
     st.time_in_state = in_.t - seq_.phase_entered();
     st.transitions = seq_.transitions();
     out.state = st;

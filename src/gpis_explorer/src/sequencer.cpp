@@ -18,22 +18,12 @@ void positive(const char* field, double v) {
 }
 double wrap(double a) { return std::remainder(a, 2.0 * M_PI); }
 
-/// Distance from c to the segment a-b.
-double segment_distance(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
-  const Eigen::Vector2d ab = b - a;
-  const double l2 = ab.squaredNorm();
-  const double t = l2 > 0.0 ? std::clamp((c - a).dot(ab) / l2, 0.0, 1.0) : 0.0;
-  return (a + t * ab - c).norm();
-}
-
-/// Distance from the segment a-b to the nearest surface training point (label 0);
-/// infinity without one.
-double surface_distance(const Gpis& g, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-  double best = std::numeric_limits<double>::infinity();
-  for (std::size_t i = 0; i < g.size(); ++i) {
-    if (g.label(i) == kSurfaceLabel) best = std::min(best, segment_distance(a, b, g.point(i)));
-  }
-  return best;
+/// The tick's touched points, left then right: each whisker in contact whose
+/// contact point is known (the one contact collection of every phase).
+template <class F>
+void each_touched_point(const SequencerInput& in, F&& f) {
+  if (in.contact_left && in.point_left.allFinite()) f(in.point_left);
+  if (in.contact_right && in.point_right.allFinite()) f(in.point_right);
 }
 
 constexpr std::size_t kMaxContacts = 200000;     ///< bound on the stored contact history
@@ -53,11 +43,166 @@ const char* to_string(Phase p) {
     case Phase::kGoToTarget: return "GO_TO_TARGET";
     case Phase::kExitThrough: return "EXIT_THROUGH";
     case Phase::kCheckAhead: return "CHECK_AHEAD";
+    case Phase::kRefit: return "REFIT";
     case Phase::kFailsafeHover: return "FAILSAFE_HOVER";
     case Phase::kLanding: return "LANDING";
     case Phase::kDone: return "DONE";
   }
   return "UNKNOWN";
+}
+
+const char* to_string(Round r) {
+  switch (r) {
+    case Round::kProbes: return "probes";
+    case Round::kTargets: return "targets";
+  }
+  return "unknown";
+}
+
+const char* to_string(ProbeSet s) {
+  switch (s) {
+    case ProbeSet::kOrthogonal: return "orthogonal";
+    case ProbeSet::kDiagonal: return "diagonal";
+  }
+  return "unknown";
+}
+
+const char* to_string(CheckStage s) {
+  switch (s) {
+    case CheckStage::kWhiskBack: return "whisk_back";
+    case CheckStage::kDwell: return "dwell";
+  }
+  return "unknown";
+}
+
+const char* to_string(ReturnLeg l) {
+  switch (l) {
+    case ReturnLeg::kToProbeLine: return "to_probe_line";
+    case ReturnLeg::kAlongProbeLine: return "along_probe_line";
+  }
+  return "unknown";
+}
+
+const char* to_string(ReturnFor r) {
+  switch (r) {
+    case ReturnFor::kNextProbe: return "next_probe";
+    case ReturnFor::kOpenProbeExit: return "open_probe_exit";
+  }
+  return "unknown";
+}
+
+const char* to_string(RetreatKind k) {
+  switch (k) {
+    case RetreatKind::kAfterFollow: return "after_follow";
+    case RetreatKind::kBackOff: return "back_off";
+  }
+  return "unknown";
+}
+
+const char* to_string(ExitKind k) {
+  switch (k) {
+    case ExitKind::kAlongOpenProbe: return "along_open_probe";
+    case ExitKind::kBeyondTarget: return "beyond_target";
+  }
+  return "unknown";
+}
+
+const char* to_string(SequencerReason r) {
+  switch (r) {
+    case SequencerReason::kNone: return "none";
+    case SequencerReason::kHoverDone: return "hover_done";
+    case SequencerReason::kAligned: return "aligned";
+    case SequencerReason::kProbeFoundNoWall: return "probe_found_no_wall";
+    case SequencerReason::kWhiskContact: return "whisk_contact";
+    case SequencerReason::kContact: return "contact";
+    case SequencerReason::kBesideCorridor: return "beside_corridor";
+    case SequencerReason::kTooNearTheGuard: return "too_near_the_guard";
+    case SequencerReason::kCornerAhead: return "corner_ahead";
+    case SequencerReason::kWallFollowed: return "wall_followed";
+    case SequencerReason::kSurfaceBeside: return "surface_beside";
+    case SequencerReason::kRetreatedNextProbe: return "retreated_next_probe";
+    case SequencerReason::kNextProbe: return "next_probe";
+    case SequencerReason::kProbesDone: return "probes_done";
+    case SequencerReason::kRetreatedRefit: return "retreated_refit";
+    case SequencerReason::kOpenProbeReturn: return "open_probe_return";
+    case SequencerReason::kOpenProbeExit: return "open_probe_exit";
+    case SequencerReason::kTargetViaStaging: return "target_via_staging";
+    case SequencerReason::kTargetChosen: return "target_chosen";
+    case SequencerReason::kAtStaging: return "at_staging";
+    case SequencerReason::kTargetReached: return "target_reached";
+    case SequencerReason::kDepthStale: return "depth_stale";
+    case SequencerReason::kOdometryStale: return "odometry_stale";
+    case SequencerReason::kInputsFreshAgain: return "inputs_fresh_again";
+    case SequencerReason::kInputsStaleLand: return "inputs_stale_land";
+    case SequencerReason::kUpdateLimit: return "update_limit";
+    case SequencerReason::kNoTarget: return "no_target";
+    case SequencerReason::kOpenSpace: return "open_space";
+    case SequencerReason::kExitFlownThrough: return "exit_flown_through";
+    case SequencerReason::kTimeLimit: return "time_limit";
+    case SequencerReason::kLanded: return "landed";
+  }
+  return "unknown";
+}
+
+const char* reason_text(SequencerReason r, Phase from) {
+  switch (r) {
+    case SequencerReason::kNone: return "start";
+    case SequencerReason::kHoverDone: return "hover done: first probe";
+    case SequencerReason::kAligned: return "aligned";
+    case SequencerReason::kProbeFoundNoWall: return "probe found no wall";
+    case SequencerReason::kWhiskContact: return "whisk contact";
+    case SequencerReason::kContact: return "contact";
+    case SequencerReason::kBesideCorridor: return "whisk contact beside the corridor: leg goes on";
+    case SequencerReason::kTooNearTheGuard: return "touched too near the guard: back off";
+    case SequencerReason::kCornerAhead: return "approaching a penalised corner";
+    case SequencerReason::kWallFollowed: return "wall followed";
+    case SequencerReason::kSurfaceBeside: return "known surface beside: end of wall follow";
+    case SequencerReason::kRetreatedNextProbe: return "retreated: next probe";
+    case SequencerReason::kNextProbe: return "next probe";
+    case SequencerReason::kProbesDone: return "probes done";
+    case SequencerReason::kRetreatedRefit: return "retreated: refit";
+    case SequencerReason::kOpenProbeReturn: return "a probe found the opening: back to the start";
+    case SequencerReason::kOpenProbeExit: return "a probe found the opening";
+    case SequencerReason::kTargetViaStaging: return "target chosen: to its staging point";
+    case SequencerReason::kTargetChosen: return "target chosen";
+    case SequencerReason::kAtStaging: return "at the staging point: face the wall";
+    case SequencerReason::kTargetReached: return "target reached without contact";
+    case SequencerReason::kDepthStale:
+      return from == Phase::kHoverInit ? "tactile depth stale at end of hover" : "tactile depth stale";
+    case SequencerReason::kOdometryStale:
+      return from == Phase::kHoverInit ? "odometry stale at end of hover" : "odometry stale";
+    case SequencerReason::kInputsFreshAgain: return "inputs fresh again";
+    case SequencerReason::kInputsStaleLand: return "inputs stale for failsafe_land_after_s";
+    case SequencerReason::kUpdateLimit: return "GPIS update limit";
+    case SequencerReason::kNoTarget: return "no reachable target";
+    case SequencerReason::kOpenSpace: return "no contact in any probe direction";
+    case SequencerReason::kExitFlownThrough: return "flew through the opening";
+    case SequencerReason::kTimeLimit: return "time limit";
+    case SequencerReason::kLanded: return "landed";
+  }
+  return "unknown";
+}
+
+const char* to_string(CheckDecision d) {
+  switch (d) {
+    case CheckDecision::kFollowUnknown: return "follow_unknown";
+    case CheckDecision::kLegGoesOn: return "leg_goes_on";
+    case CheckDecision::kFollowWall: return "follow_wall";
+    case CheckDecision::kBackOff: return "back_off";
+  }
+  return "unknown";
+}
+
+CheckDecision check_ahead_decision(const std::vector<Eigen::Vector2d>& touched, const Eigen::Vector2d& pos,
+                                   double heading, const PathRules& rules, double follow_min_forward) {
+  if (touched.empty()) return CheckDecision::kFollowUnknown;
+  const Eigen::Vector2d h(std::cos(heading), std::sin(heading));
+  double nearest = std::numeric_limits<double>::infinity();
+  for (const auto& q : touched) {
+    if (rules.in_corridor(q, pos, heading)) nearest = std::min(nearest, (q - pos).dot(h));
+  }
+  if (!std::isfinite(nearest)) return CheckDecision::kLegGoesOn;
+  return nearest >= follow_min_forward ? CheckDecision::kFollowWall : CheckDecision::kBackOff;
 }
 
 const char* to_string(Outcome o) {
@@ -128,24 +273,35 @@ void SequencerParams::validate() const {
 ExplorationSequencer::ExplorationSequencer(const SequencerParams& params)
     : p_(params), explorer_((params.validate(), params.explorer)) {}
 
-void ExplorationSequencer::enter(Phase p, const char* reason, double t) {
+std::string ExplorationSequencer::sub_state() const {
+  switch (phase_) {
+    case Phase::kCheckAhead: return to_string(check_stage_);
+    case Phase::kReturn: return to_string(return_leg_);
+    case Phase::kRetreat: return to_string(retreat_kind_);
+    case Phase::kExitThrough: return to_string(exit_kind_);
+    case Phase::kFollowWall: return tactile_fsm::to_string(sub_);
+    case Phase::kTurn: return to_string(after_turn_);
+    default: return "";
+  }
+}
+
+void ExplorationSequencer::enter(Phase p, SequencerReason why, double t) {
   if (p == Phase::kRetreat) {
     retreat_held_ = false;
-    retreat_from_follow_ = phase_ == Phase::kFollowWall;
-    retreat_from_return_ = phase_ == Phase::kReturn;
+    retreat_kind_ = phase_ == Phase::kFollowWall ? RetreatKind::kAfterFollow : RetreatKind::kBackOff;
   }
   previous_ = phase_;
   phase_ = p;
-  reason_ = reason;
+  reason_code_ = why;
   entered_ = t;
   ++transitions_;
 }
 
-void ExplorationSequencer::enter_failsafe(const char* reason, double t) {
+void ExplorationSequencer::enter_failsafe(SequencerReason why, double t) {
   failsafe_from_ = phase_;
   failsafe_from_entered_ = entered_;
   ++failsafe_hovers_;
-  enter(Phase::kFailsafeHover, reason, t);
+  enter(Phase::kFailsafeHover, why, t);
 }
 
 void ExplorationSequencer::resume_after_failsafe(double t) {
@@ -155,16 +311,16 @@ void ExplorationSequencer::resume_after_failsafe(double t) {
   const double held = t - entered_;
   previous_ = phase_;
   phase_ = failsafe_from_;
-  reason_ = "inputs fresh again";
+  reason_code_ = SequencerReason::kInputsFreshAgain;
   entered_ = failsafe_from_entered_ + held;
   check_t_ += held;
   check_started_ += held;
   ++transitions_;
 }
 
-void ExplorationSequencer::finish(Outcome o, const char* reason, double t) {
+void ExplorationSequencer::finish(Outcome o, SequencerReason why, double t) {
   outcome_ = o;
-  enter(Phase::kLanding, reason, t);
+  enter(Phase::kLanding, why, t);
 }
 
 tactile_fsm::Setpoint ExplorationSequencer::hover() const {
@@ -182,13 +338,24 @@ double ExplorationSequencer::fast_yaw_rate(double err, double limit) {
   return std::clamp(p_.yaw_gain * 4.0 * err, -limit, limit);
 }
 
+ExplorationSequencer::Leg ExplorationSequencer::leg() const {
+  Leg l;
+  l.whisk = whisk_leg();
+  l.corner_abort = phase_ == Phase::kGoToStaging || phase_ == Phase::kGoToTarget;
+  return l;
+}
+
 bool ExplorationSequencer::fly_leg(const SequencerInput& in, bool contact, tactile_fsm::Setpoint* sp) {
-  // Forward along heading_ on its line; a contact starts a wall follow, a
-  // penalised corner 0.1 m ahead a retreat (000: never fly into a corner).
-  whisking_ = leg_motion(in, whisk_leg() ? p_.whisk_speed : forward_speed(in), whisk_leg(), sp);
+  // Forward along heading_ on its line (000 Methods "Flying Forward" at V_max;
+  // whisked at whisk_speed); a contact ends every leg the same way: unwhisked
+  // a wall follow, whisked a stop to check (a whisk beside the corridor lets
+  // the leg go on); on the GPIS legs a penalised corner 0.1 m ahead a retreat
+  // (000: never fly into a corner).
+  const Leg l = leg();
+  whisking_ = leg_motion(in, l.whisk ? p_.whisk_speed : forward_speed(in), l.whisk, sp);
   if (contact) {
     if (!whisking_) {
-      start_follow(in, false);
+      start_follow(in);
       return true;
     }
     if (whisk_blocked(in)) {
@@ -197,36 +364,11 @@ bool ExplorationSequencer::fly_leg(const SequencerInput& in, bool contact, tacti
     }
   }
   const Eigen::Vector2d pos(in.x, in.y);
-  if (near_corner(pos + Eigen::Vector2d(std::cos(in.yaw), std::sin(in.yaw)) * 0.1)) {
+  if (l.corner_abort && rules().near_corner(pos + Eigen::Vector2d(std::cos(in.yaw), std::sin(in.yaw)) * 0.1)) {
     ++corner_aborts_;
     follow_points_.clear();
-    enter(Phase::kRetreat, "approaching a penalised corner", in.t);
+    enter(Phase::kRetreat, SequencerReason::kCornerAhead, in.t);
     return true;
-  }
-  return false;
-}
-
-bool ExplorationSequencer::near_corner(const Eigen::Vector2d& q) const {
-  for (const auto& c : corners_) {
-    if ((q - c).norm() < p_.explorer.corner_exclusion) return true;
-  }
-  return false;
-}
-
-bool ExplorationSequencer::side_blocked(const SequencerInput& in) const {
-  const double s = side_ == tactile_fsm::Side::kLeft ? 1.0 : -1.0;
-  const Eigen::Vector2d fx(std::cos(in.yaw), std::sin(in.yaw)), fy(-std::sin(in.yaw), std::cos(in.yaw));
-  const Eigen::Vector2d pos(in.x, in.y);
-  const Gpis& g = explorer_.gpis();
-  for (std::size_t i = 0; i < g.size(); ++i) {
-    if (g.label(i) != kSurfaceLabel) continue;
-    const Eigen::Vector2d d = g.point(i) - pos;
-    const double lateral = s * d.dot(fy), forward = d.dot(fx);
-    if (lateral > 0.0 && lateral < p_.side_clearance && std::abs(forward) < p_.side_clearance) return true;
-  }
-  if (p_.wall_extension <= 0.0) return false;
-  for (const auto& w : wall_lines_) {
-    if (ray_to_wall_line(pos, s * fy, w.a, w.b, p_.wall_extension) < p_.side_clearance) return true;
   }
   return false;
 }
@@ -328,49 +470,6 @@ void ExplorationSequencer::add(const Eigen::Vector2d& q, double label) {
   if (explorer_.add_point(q, label) != AddStatus::kAdded) ++points_rejected_;
 }
 
-double ExplorationSequencer::surface_clearance(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
-  return surface_distance(explorer_.gpis(), a, b);
-}
-
-bool ExplorationSequencer::corner_clear(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
-  // Keep corner_exclusion from every corner centroid (000 eq. 45 region); from
-  // a start already closer than that, do not get any closer.
-  for (const auto& c : corners_) {
-    const double limit = std::min(p_.explorer.corner_exclusion, (a - c).norm() - 1e-3);
-    if (segment_distance(a, b, c) < limit) return false;
-  }
-  return true;
-}
-
-bool ExplorationSequencer::staging_for(const Eigen::Vector2d& from, const Eigen::Vector2d& q, Eigen::Vector2d* staging,
-                                       double* approach_heading) const {
-  // Outward normal of the implicit surface at the target: the mean grows from
-  // -1 (interior) to 0 (surface), so grad f (000 eq. 36) points out of the room.
-  const GpisExplorer& g = explorer_;  // the solver's mean and gradient (exact or local)
-  const Eigen::Vector2d grad = g.gradient(q);
-  if (!(grad.allFinite() && grad.norm() > 1e-9)) return false;
-  const Eigen::Vector2d n = grad.normalized();
-  const Eigen::Vector2d s = q - p_.approach_standoff * n;
-  if (!explorer_.grid().contains(s) || near_corner(s)) return false;
-  if (!(g.mean(s) < 0.0)) return false;  // the staging point must be on the interior side
-  // Leg 1 (from -> staging): clear of known surface points and corners, and
-  // not through the predicted surface (mean < 0 along it).
-  const double d0 = surface_clearance(from, from);
-  if (surface_clearance(from, s) < std::min(p_.path_clearance, d0 - 1e-3)) return false;
-  if (!corner_clear(from, s)) return false;
-  const int samples = std::max(2, static_cast<int>(std::ceil((s - from).norm() / 0.1)));
-  for (int k = 1; k <= samples; ++k) {
-    if (!(g.mean(from + (s - from) * (static_cast<double>(k) / samples)) < 0.0)) return false;
-  }
-  // Leg 2 (staging -> target, head-on): no known surface point beside it.
-  const Eigen::Vector2d q_short = q - std::min(p_.approach_clearance, p_.approach_standoff) * n;
-  if (surface_clearance(s, q_short) < p_.approach_clearance) return false;
-  if (!corner_clear(s, q)) return false;
-  *staging = s;
-  *approach_heading = std::atan2(n.y(), n.x());
-  return true;
-}
-
 double ExplorationSequencer::line_correction(const SequencerInput& in) const {
   // Lateral (body y) velocity back onto the leg's line: a probe's line is
   // known free of walls, a head-on leg is the one checked for clearance.
@@ -380,44 +479,11 @@ double ExplorationSequencer::line_correction(const SequencerInput& in) const {
   return std::clamp(-p_.line_gain * e, -lim, lim);
 }
 
-bool ExplorationSequencer::beyond_known_surface(const Eigen::Vector2d& pos) const {
-  // Flown through an opening: every known surface point lies at least
-  // exit_beyond behind the drone along the leg's heading (a convex room's
-  // walls all end at the exit's wall line). A contour point inside a large
-  // room (few points, the GPIS contour well inside the walls) followed by
-  // exit_confirm_distance of free flight is not yet an exit.
-  const Eigen::Vector2d h(std::cos(heading_), std::sin(heading_));
-  const Gpis& g = explorer_.gpis();
-  for (std::size_t i = 0; i < g.size(); ++i) {
-    if (g.label(i) == kSurfaceLabel && (g.point(i) - pos).dot(h) > -p_.exit_beyond) return false;
-  }
-  return true;
-}
-
 double ExplorationSequencer::retreat_lateral(const SequencerInput& in) const {
   // Body-y speed back toward where the wall follow began (retreat_toward_follow_start).
-  if (!p_.retreat_toward_follow_start || !retreat_from_follow_) return 0.0;
+  if (!p_.retreat_toward_follow_start || retreat_kind_ != RetreatKind::kAfterFollow) return 0.0;
   const double off = (Eigen::Vector2d(in.x, in.y) - follow_start_).dot(Eigen::Vector2d(-std::sin(in.yaw), std::cos(in.yaw)));
   return std::clamp(-off / p_.retreat_time_s, -p_.retreat_speed, p_.retreat_speed);
-}
-
-bool ExplorationSequencer::retreat_blocked(const SequencerInput& in) const {
-  // The backward leg (retreat_speed for what is left of retreat_time_s plus a
-  // margin) must not bring the centre closer than retreat_clearance to a known
-  // surface point it is not already that close to.
-  const Eigen::Vector2d pos(in.x, in.y), back(-std::cos(in.yaw), -std::sin(in.yaw));
-  const Eigen::Vector2d side(-std::sin(in.yaw), std::cos(in.yaw));
-  // ... and sideways as far as the retreat would move (retreat_toward_follow_start).
-  const Eigen::Vector2d end =
-      pos + back * (p_.retreat_speed * p_.retreat_time_s + 0.05) + side * (retreat_lateral(in) * p_.retreat_time_s);
-  const Gpis& g = explorer_.gpis();
-  for (std::size_t i = 0; i < g.size(); ++i) {
-    if (g.label(i) != kSurfaceLabel) continue;
-    const Eigen::Vector2d q = g.point(i);
-    const double now = (q - pos).norm();
-    if (segment_distance(pos, end, q) < std::min(p_.retreat_clearance, now - 1e-3)) return true;
-  }
-  return false;
 }
 
 bool ExplorationSequencer::whisk_leg() const {
@@ -426,15 +492,9 @@ bool ExplorationSequencer::whisk_leg() const {
     case Phase::kProbe:
     case Phase::kGoToStaging:
     case Phase::kGoToTarget: return true;
-    case Phase::kExitThrough: return exit_whisk_;
+    case Phase::kExitThrough: return exit_kind_ == ExitKind::kBeyondTarget;
     default: return false;
   }
-}
-
-bool ExplorationSequencer::in_corridor(const Eigen::Vector2d& q, const Eigen::Vector2d& pos) const {
-  const Eigen::Vector2d h(std::cos(heading_), std::sin(heading_)), n(-h.y(), h.x());
-  const Eigen::Vector2d d = q - pos;
-  return d.dot(h) > -0.05 && std::abs(d.dot(n)) < p_.corridor_half_width;
 }
 
 bool ExplorationSequencer::whisk_blocked(const SequencerInput& in) {
@@ -448,7 +508,7 @@ bool ExplorationSequencer::whisk_blocked(const SequencerInput& in) {
   Eigen::Vector2d q_beside{0, 0};
   auto look = [&](bool c, const Eigen::Vector2d& q) {
     if (!c) return;
-    if (!q.allFinite() || in_corridor(q, pos)) {
+    if (!q.allFinite() || rules().in_corridor(q, pos, heading_)) {
       blocked = true;
     } else {
       beside = true;
@@ -467,14 +527,13 @@ bool ExplorationSequencer::whisk_blocked(const SequencerInput& in) {
 
 void ExplorationSequencer::start_check(const SequencerInput& in) {
   check_from_ = phase_;
-  check_stage_ = 0;
+  check_stage_ = CheckStage::kWhiskBack;
   check_t_ = in.t;
   check_started_ = in.t;
   check_points_.clear();
-  if (in.contact_left && in.point_left.allFinite()) check_points_.push_back(in.point_left);
-  if (in.contact_right && in.point_right.allFinite()) check_points_.push_back(in.point_right);
+  each_touched_point(in, [&](const Eigen::Vector2d& q) { check_points_.push_back(q); });
   ++whisk_contacts_;
-  enter(Phase::kCheckAhead, "whisk contact", in.t);
+  enter(Phase::kCheckAhead, SequencerReason::kWhiskContact, in.t);
 }
 
 void ExplorationSequencer::check_ahead(const SequencerInput& in, tactile_fsm::Setpoint* sp) {
@@ -490,45 +549,36 @@ void ExplorationSequencer::check_ahead(const SequencerInput& in, tactile_fsm::Se
   // open; 000: the exit "emerges").
   const Eigen::Vector2d pos(in.x, in.y);
   if (in.depth_valid && in.t - check_started_ <= p_.check_sample_s && check_points_.size() < 64) {
-    if (in.contact_left && in.point_left.allFinite()) check_points_.push_back(in.point_left);
-    if (in.contact_right && in.point_right.allFinite()) check_points_.push_back(in.point_right);
+    each_touched_point(in, [&](const Eigen::Vector2d& q) { check_points_.push_back(q); });
   }
   const double err = wrap(heading_ - in.yaw);
-  if (check_stage_ == 0) {
+  if (check_stage_ == CheckStage::kWhiskBack) {
     sp->yaw_rate = fast_yaw_rate(err, p_.whisk_rate);  // the whisk back
     if (std::abs(err) < p_.yaw_tolerance) {
-      check_stage_ = 1;
+      check_stage_ = CheckStage::kDwell;
       check_t_ = in.t;
     }
     return;
   }
   sp->yaw_rate = yaw_rate_to(heading_, in.yaw);
   if (in.t - check_t_ < p_.check_dwell_s) return;
-  const Eigen::Vector2d h(std::cos(heading_), std::sin(heading_));
-  double nearest = std::numeric_limits<double>::infinity();
-  for (const auto& q : check_points_) {
-    if (in_corridor(q, pos)) nearest = std::min(nearest, (q - pos).dot(h));
-  }
-  if (check_points_.empty()) {  // contact without a position estimate: as an unwhisked leg
-    ++whisk_walls_;
-    start_follow(in, check_from_ == Phase::kProbe);
-    return;
-  }
-  if (!std::isfinite(nearest)) {
-    enter(check_from_, "whisk contact beside the corridor: leg goes on", in.t);
-    return;
-  }
-  if (nearest >= p_.follow_min_forward) {
-    ++whisk_walls_;
-    start_follow(in, check_from_ == Phase::kProbe);
-    return;
+  switch (check_ahead_decision(check_points_, pos, heading_, rules(), p_.follow_min_forward)) {
+    case CheckDecision::kFollowUnknown:  // contact without a position estimate: as an unwhisked leg
+    case CheckDecision::kFollowWall:
+      ++whisk_walls_;
+      start_follow(in);
+      return;
+    case CheckDecision::kLegGoesOn:
+      enter(check_from_, SequencerReason::kBesideCorridor, in.t);
+      return;
+    case CheckDecision::kBackOff:
+      break;
   }
   ++whisk_jambs_;
-  probing_ = check_from_ == Phase::kProbe;
-  if (!probing_ && has_target_ && visited_.size() < 1000) visited_.push_back(target_);
+  if (round_ == Round::kTargets && has_target_ && visited_.size() < 1000) visited_.push_back(target_);
   follow_points_ = check_points_;
   both_touched_ = false;
-  enter(Phase::kRetreat, "touched too near the guard: back off", in.t);
+  enter(Phase::kRetreat, SequencerReason::kTooNearTheGuard, in.t);
 }
 
 bool ExplorationSequencer::leg_motion(const SequencerInput& in, double speed, bool whisk, tactile_fsm::Setpoint* sp) {
@@ -553,7 +603,7 @@ bool ExplorationSequencer::leg_motion(const SequencerInput& in, double speed, bo
 
 double ExplorationSequencer::forward_speed(const SequencerInput& in) const {
   const Eigen::Vector2d tips = Eigen::Vector2d(in.x, in.y) + 0.19 * Eigen::Vector2d(std::cos(in.yaw), std::sin(in.yaw));
-  return surface_clearance(tips, tips) < p_.slow_distance ? p_.slow_fraction * p_.wall.v_max : p_.wall.v_max;
+  return rules().surface_clearance(tips, tips) < p_.slow_distance ? p_.slow_fraction * p_.wall.v_max : p_.wall.v_max;
 }
 
 void ExplorationSequencer::align_to_wall(const SequencerInput& in) {
@@ -573,18 +623,20 @@ void ExplorationSequencer::align_to_wall(const SequencerInput& in) {
   aligned_ = true;
 }
 
-void ExplorationSequencer::begin_return(const Eigen::Vector2d& pos, const Eigen::Vector2d& to, const char* reason,
-                                        double t) {
+void ExplorationSequencer::begin_return(const Eigen::Vector2d& pos, const Eigen::Vector2d& to, ReturnFor what,
+                                        SequencerReason why, double t) {
   // First across to the probe's line (leg_start_ along heading_), then along it.
+  return_for_ = what;
   return_to_ = to;
   const Eigen::Vector2d h(std::cos(heading_), std::sin(heading_));
   return_via_ = leg_start_ + h * (pos - leg_start_).dot(h);
-  return_via_active_ = p_.return_via_probe_line && (pos - return_via_).norm() > kOnProbeLine;
-  enter(Phase::kReturn, reason, t);
+  return_leg_ = p_.return_via_probe_line && (pos - return_via_).norm() > kOnProbeLine ? ReturnLeg::kToProbeLine
+                                                                                       : ReturnLeg::kAlongProbeLine;
+  enter(Phase::kReturn, why, t);
 }
 
-void ExplorationSequencer::start_follow(const SequencerInput& in, bool probing) {
-  probing_ = probing;
+void ExplorationSequencer::start_follow(const SequencerInput& in) {
+  const bool probing = round_ == Round::kProbes;
   follow_points_.clear();
   both_touched_ = false;
   sub_ = tactile_fsm::WallSubState::kNone;
@@ -606,7 +658,7 @@ void ExplorationSequencer::start_follow(const SequencerInput& in, bool probing) 
   }
   if (!probing && has_target_ && visited_.size() < 1000) visited_.push_back(target_);
   follow_start_ = Eigen::Vector2d(in.x, in.y);
-  enter(Phase::kFollowWall, "contact", in.t);
+  enter(Phase::kFollowWall, SequencerReason::kContact, in.t);
 }
 
 void ExplorationSequencer::commit_points(const SequencerInput& in) {
@@ -627,6 +679,7 @@ void ExplorationSequencer::commit_points(const SequencerInput& in) {
 
 bool ExplorationSequencer::choose_target(const Eigen::Vector2d& from) {
   const UpdateResult& r = explorer_.last();
+  const PathRules rules = this->rules();
   has_target_ = false;
   has_staging_ = false;
   const GridSpec& g = explorer_.grid();
@@ -642,7 +695,7 @@ bool ExplorationSequencer::choose_target(const Eigen::Vector2d& from) {
       if (!std::isfinite(info.acquisition[i])) continue;
       if ((P[i] - from).norm() < p_.min_target_distance) continue;
       if (!g.contains(P[i])) continue;
-      if (near_corner(P[i])) continue;  // never into a penalised corner
+      if (rules.near_corner(P[i])) continue;  // never into a penalised corner
       bool visited = false;  // a target already touched (its points may not fit in the budget)
       for (const auto& v : visited_) visited = visited || (P[i] - v).norm() < p_.visited_radius;
       if (visited) continue;
@@ -660,7 +713,7 @@ bool ExplorationSequencer::choose_target(const Eigen::Vector2d& from) {
   //    point with clear legs (workspace rule, see SequencerParams).
   if (p_.approach_standoff > 0.0) {
     for (const auto& c : cands) {
-      if (staging_for(from, c.q, &staging_, &approach_heading_)) {
+      if (rules.staging_for(from, c.q, &staging_, &approach_heading_)) {
         take(c);
         has_staging_ = true;
         ++staged_targets_;
@@ -670,7 +723,7 @@ bool ExplorationSequencer::choose_target(const Eigen::Vector2d& from) {
   }
   // 2. Otherwise the best target whose straight path keeps away from corners.
   for (const auto& c : cands) {
-    if (!corner_clear(from, c.q)) continue;
+    if (!rules.corner_clear(from, c.q)) continue;
     take(c);
     ++direct_targets_;
     return true;
@@ -683,10 +736,48 @@ void ExplorationSequencer::update_map() {
   corners_ = explorer_.last().corners;
 }
 
+bool ExplorationSequencer::can_exit_via_open_probe() const {
+  // A probe flew probe_max_distance without touching anything where other
+  // probes met walls, and no target has been chosen yet: an opening.
+  return open_probe_ >= 0 && explorer_.gpis().surface_count() > 0 && explorer_.updates() == 0;
+}
+
+bool ExplorationSequencer::can_land_in_open_space() const { return explorer_.gpis().surface_count() == 0; }
+
+bool ExplorationSequencer::reached_update_limit() const {
+  return static_cast<int>(explorer_.updates()) >= p_.max_updates;
+}
+
+void ExplorationSequencer::enter_refit(const SequencerInput& in, SequencerReason why, SequencerOutput* out) {
+  enter(Phase::kRefit, why, in.t);
+  // Entry action: the probes are over; update the GPIS, then the first
+  // transition whose guard holds:
+  //   open probe, walls elsewhere, first update -> RETURN to its origin, then out along it
+  //   no surface point at all                   -> LANDING (open_space)
+  //   max_updates reached                       -> LANDING (update_limit)
+  //   a target with a staging point              -> TURN toward the staging point
+  //   a target                                  -> TURN toward it (or its normal)
+  //   none                                      -> LANDING (no_target)
+  round_ = Round::kTargets;
+  if (can_exit_via_open_probe()) {
+    update_map();  // the map is not published: the exit is flown along the probe
+    begin_return({in.x, in.y}, open_origin_, ReturnFor::kOpenProbeExit, SequencerReason::kOpenProbeReturn,
+                 in.t);
+    return;
+  }
+  out->gpis_updated = true;
+  if (can_land_in_open_space()) {
+    update_map();
+    finish(Outcome::kOpenSpace, SequencerReason::kOpenSpace, in.t);
+    return;
+  }
+  refit_and_choose(in);
+}
+
 void ExplorationSequencer::refit_and_choose(const SequencerInput& in) {
   update_map();
-  if (static_cast<int>(explorer_.updates()) >= p_.max_updates) {
-    finish(Outcome::kUpdateLimit, "GPIS update limit", in.t);
+  if (reached_update_limit()) {
+    finish(Outcome::kUpdateLimit, SequencerReason::kUpdateLimit, in.t);
     return;
   }
   bool chosen = choose_target({in.x, in.y});
@@ -703,18 +794,18 @@ void ExplorationSequencer::refit_and_choose(const SequencerInput& in) {
     }
   }
   if (!chosen) {
-    finish(Outcome::kNoTarget, "no reachable target", in.t);
+    finish(Outcome::kNoTarget, SequencerReason::kNoTarget, in.t);
     return;
   }
   if (has_staging_ && (staging_ - Eigen::Vector2d(in.x, in.y)).norm() > p_.target_radius) {
     heading_ = std::atan2(staging_.y() - in.y, staging_.x() - in.x);
     after_turn_ = Phase::kGoToStaging;
-    enter(Phase::kTurn, "target chosen: to its staging point", in.t);
+    enter(Phase::kTurn, SequencerReason::kTargetViaStaging, in.t);
     return;
   }
   heading_ = has_staging_ ? approach_heading_ : std::atan2(target_.y() - in.y, target_.x() - in.x);
   after_turn_ = Phase::kGoToTarget;
-  enter(Phase::kTurn, "target chosen", in.t);
+  enter(Phase::kTurn, SequencerReason::kTargetChosen, in.t);
 }
 
 SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
@@ -734,7 +825,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
   if (phase_ == Phase::kLanding) {
     out.setpoint.height = 0.0;
     out.setpoint.land = true;
-    if (in.t - entered_ >= p_.landing_duration_s) enter(Phase::kDone, "landed", in.t);
+    if (in.t - entered_ >= p_.landing_duration_s) enter(Phase::kDone, SequencerReason::kLanded, in.t);
     out.transitioned = transitions_ != tr;
     return out;
   }
@@ -757,7 +848,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         have_last_pose_ = true;
       }
       if (in.t - entered_ >= p_.wall.failsafe_land_after_s - 1e-9) {
-        finish(Outcome::kInputsStale, "inputs stale for failsafe_land_after_s", in.t);
+        finish(Outcome::kInputsStale, SequencerReason::kInputsStaleLand, in.t);
         out.setpoint.height = 0.0;  // landing from this tick (as the wall follower's FAILSAFE_LAND)
         out.setpoint.land = true;
       }
@@ -769,9 +860,8 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
     if (have_last_pose_) leg_blind_ += (Eigen::Vector2d(in.x, in.y) - last_pose_).norm();
     resume_after_failsafe(in.t);
   } else if (!fresh && (phase_ != Phase::kHoverInit || in.t - entered_ >= p_.wall.hover_init_s)) {
-    const bool init = phase_ == Phase::kHoverInit;
-    if (!in.depth_valid) enter_failsafe(init ? "tactile depth stale at end of hover" : "tactile depth stale", in.t);
-    else enter_failsafe(init ? "odometry stale at end of hover" : "odometry stale", in.t);
+    // reason_text() adds "at end of hover" when the phase left is HOVER_INIT.
+    enter_failsafe(in.depth_valid ? SequencerReason::kOdometryStale : SequencerReason::kDepthStale, in.t);
     out.transitioned = true;
     return out;
   }
@@ -786,11 +876,10 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
   }
   const bool contact = in.depth_valid && (in.contact_left || in.contact_right);
   if (in.depth_valid && contacts_.size() < kMaxContacts) {
-    if (in.contact_left && in.point_left.allFinite()) contacts_.push_back({in.t, in.point_left});
-    if (in.contact_right && in.point_right.allFinite()) contacts_.push_back({in.t, in.point_right});
+    each_touched_point(in, [&](const Eigen::Vector2d& q) { contacts_.push_back({in.t, q}); });
   }
   if (phase_ != Phase::kHoverInit && in.t - entered_ >= 0.0 && in.t >= p_.max_time_s) {
-    finish(Outcome::kTimeLimit, "time limit", in.t);
+    finish(Outcome::kTimeLimit, SequencerReason::kTimeLimit, in.t);
     out.transitioned = true;
     return out;
   }
@@ -805,7 +894,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         probe_ = 0;
         heading_ = start_yaw_;
         after_turn_ = Phase::kProbe;
-        enter(Phase::kTurn, "hover done: first probe", in.t);
+        enter(Phase::kTurn, SequencerReason::kHoverDone, in.t);
       }
       break;
     case Phase::kTurn: {
@@ -818,53 +907,50 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         // probe (that probe's own line, flown without contact).
         line_origin_ = pos;
         if (after_turn_ == Phase::kGoToTarget && has_staging_) line_origin_ = staging_;
-        if (after_turn_ == Phase::kExitThrough && line_from_probe_) line_origin_ = open_origin_;
-        line_from_probe_ = false;
+        if (after_turn_ == Phase::kExitThrough && exit_kind_ == ExitKind::kAlongOpenProbe) line_origin_ = open_origin_;
         beside_added_ = false;
         leg_blind_ = 0.0;
-        enter(after_turn_, "aligned", in.t);
+        enter(after_turn_, SequencerReason::kAligned, in.t);
       }
       break;
     }
     case Phase::kProbe:
-      // 000 Methods "Flying Forward" at V_max; whisking at whisk_speed when enabled.
-      whisking_ = leg_motion(in, whisk_leg() ? p_.whisk_speed : forward_speed(in), whisk_leg(), &sp);
-      if (contact && (!whisking_ || whisk_blocked(in))) {
-        if (whisking_) start_check(in);
-        else start_follow(in, true);
-      } else if ((pos - leg_start_).norm() - leg_blind_ >= p_.probe_max_distance) {
+      if (fly_leg(in, contact, &sp)) break;
+      // The end: probe_max_distance flown with fresh depth and no contact.
+      if ((pos - leg_start_).norm() - leg_blind_ >= p_.probe_max_distance) {
         add(pos, kInteriorLabel);  // free all the way (flown with fresh depth)
         if (open_probe_ < 0) {
           open_probe_ = probe_;
           open_heading_ = heading_;
           open_origin_ = leg_start_;
         }
-        begin_return(pos, leg_start_, "probe found no wall", in.t);  // back along the probe's own line
+        begin_return(pos, leg_start_, ReturnFor::kNextProbe, SequencerReason::kProbeFoundNoWall, in.t);  // back along its own line
       }
       break;
     case Phase::kReturn: {
-      if (return_via_active_ && (return_via_ - pos).norm() < kOnProbeLine) return_via_active_ = false;
-      const Eigen::Vector2d d = (return_via_active_ ? return_via_ : return_to_) - pos;
-      if (!return_via_active_ && d.norm() < 0.5 * p_.target_radius) {  // tighter: the next leg starts here
+      if (return_leg_ == ReturnLeg::kToProbeLine && (return_via_ - pos).norm() < kOnProbeLine) {
+        return_leg_ = ReturnLeg::kAlongProbeLine;
+      }
+      const Eigen::Vector2d d = (return_leg_ == ReturnLeg::kToProbeLine ? return_via_ : return_to_) - pos;
+      if (return_leg_ == ReturnLeg::kAlongProbeLine && d.norm() < 0.5 * p_.target_radius) {  // tighter: the next leg starts here
         ++probe_;
-        if (exit_via_probe_) {
+        if (return_for_ == ReturnFor::kOpenProbeExit) {
           // Through the opening along the probe's own line (flown without
           // contact), not a parallel line from wherever the last probe ended.
-          exit_via_probe_ = false;
-          line_from_probe_ = true;
+          return_for_ = ReturnFor::kNextProbe;
           heading_ = open_heading_;
           exit_from_ = pos;
           leg_blind_ = 0.0;
           exit_distance_ = p_.probe_max_distance + p_.exit_confirm_distance;
           after_turn_ = Phase::kExitThrough;
-          exit_whisk_ = false;  // along the open probe's line: its corridor was whisked
-          enter(Phase::kTurn, "a probe found the opening", in.t);
+          exit_kind_ = ExitKind::kAlongOpenProbe;  // its corridor was whisked by the probe
+          enter(Phase::kTurn, SequencerReason::kOpenProbeExit, in.t);
           break;
         }
-        if (probe_ >= p_.probe_directions && p_.diagonal_probes && !diagonal_round_ &&
+        if (probe_ >= p_.probe_directions && p_.diagonal_probes && probe_set_ == ProbeSet::kOrthogonal &&
             explorer_.gpis().surface_count() == 0) {
           // No wall in any direction: the diagonals before open_space.
-          diagonal_round_ = true;
+          probe_set_ = ProbeSet::kDiagonal;
           start_yaw_ += M_PI / p_.probe_directions;
           probe_ = 0;
           open_probe_ = -1;
@@ -872,10 +958,9 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         if (probe_ < p_.probe_directions) {
           heading_ = start_yaw_ + 2.0 * M_PI * probe_ / p_.probe_directions;
           after_turn_ = Phase::kProbe;
-          enter(Phase::kTurn, "next probe", in.t);
+          enter(Phase::kTurn, SequencerReason::kNextProbe, in.t);
         } else {
-          enter(Phase::kRetreat, "probes done", in.t);  // zero-length retreat: refit below
-          entered_ = in.t - p_.retreat_time_s;
+          enter_refit(in, SequencerReason::kProbesDone, &out);
         }
         break;
       }
@@ -886,8 +971,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
     }
     case Phase::kFollowWall: {
       if (in.depth_valid) {
-        if (in.contact_left && in.point_left.allFinite()) follow_points_.push_back(in.point_left);
-        if (in.contact_right && in.point_right.allFinite()) follow_points_.push_back(in.point_right);
+        each_touched_point(in, [&](const Eigen::Vector2d& q) { follow_points_.push_back(q); });
       }
       const bool lv = in.depth_valid && in.contact_left && std::isfinite(in.depth_left);
       const bool rv = in.depth_valid && in.contact_right && std::isfinite(in.depth_right);
@@ -914,18 +998,18 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       }
       }
       if (in.t - entered_ >= p_.follow_time_s) {
-        enter(Phase::kRetreat, "wall followed", in.t);
-      } else if (sub_ == tactile_fsm::WallSubState::kFlySideways && side_blocked(in)) {
+        enter(Phase::kRetreat, SequencerReason::kWallFollowed, in.t);
+      } else if (sub_ == tactile_fsm::WallSubState::kFlySideways && rules().side_blocked(pos, in.yaw, side_)) {
         ++side_stops_;
         sp.vy = 0.0;
-        enter(Phase::kRetreat, "known surface beside: end of wall follow", in.t);
+        enter(Phase::kRetreat, SequencerReason::kSurfaceBeside, in.t);
       }
       break;
     }
     case Phase::kRetreat:
       // 000: "flies backward for 1 second"; hover instead where that would
       // bring the frame near a known surface point behind it (a corner).
-      if (retreat_blocked(in)) {
+      if (rules().retreat_blocked(pos, in.yaw, retreat_lateral(in))) {
         if (!retreat_held_) ++retreats_held_;
         retreat_held_ = true;
       } else {
@@ -933,29 +1017,15 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         sp.vy = retreat_lateral(in);
       }
       if (in.t - entered_ >= p_.retreat_time_s) {
-        if (p_.align_probes && probing_ && !aligned_ && !retreat_from_return_) align_to_wall(in);
-        if (!retreat_from_return_) commit_points(in);
-        if (probing_ && probe_ + 1 < p_.probe_directions && !retreat_from_return_) {
+        const bool probing = round_ == Round::kProbes;
+        if (p_.align_probes && probing && !aligned_) align_to_wall(in);
+        commit_points(in);
+        if (probing && probe_ + 1 < p_.probe_directions) {
           // Back to the start, then the next probe.
-          begin_return({in.x, in.y}, leg_start_, "retreated: next probe", in.t);
+          begin_return({in.x, in.y}, leg_start_, ReturnFor::kNextProbe, SequencerReason::kRetreatedNextProbe, in.t);
           break;
         }
-        probing_ = false;
-        if (open_probe_ >= 0 && explorer_.gpis().surface_count() > 0 && explorer_.updates() == 0) {
-          // A probe flew 2 m without touching anything in a walled place: an opening.
-          update_map();
-          exit_via_probe_ = true;
-          begin_return({in.x, in.y}, open_origin_, "a probe found the opening: back to the start", in.t);
-          break;
-        }
-        if (explorer_.gpis().surface_count() == 0) {
-          update_map();
-          out.gpis_updated = true;
-          finish(Outcome::kOpenSpace, "no contact in any probe direction", in.t);
-          break;
-        }
-        refit_and_choose(in);
-        out.gpis_updated = true;
+        enter_refit(in, SequencerReason::kRetreatedRefit, &out);
       }
       break;
     case Phase::kGoToStaging: {
@@ -964,7 +1034,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       if ((staging_ - pos).norm() < p_.target_radius || (staging_ - pos).dot(dir) < 0.0) {
         heading_ = approach_heading_;  // face the wall along its normal: head-on
         after_turn_ = Phase::kGoToTarget;
-        enter(Phase::kTurn, "at the staging point: face the wall", in.t);
+        enter(Phase::kTurn, SequencerReason::kAtStaging, in.t);
       }
       break;
     }
@@ -977,26 +1047,25 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         exit_from_ = pos;
         leg_blind_ = 0.0;
         exit_distance_ = p_.exit_confirm_distance;
-        exit_whisk_ = true;  // beyond the target: unexplored
-        enter(Phase::kExitThrough, "target reached without contact", in.t);
+        exit_kind_ = ExitKind::kBeyondTarget;  // beyond the target: unexplored, whisked
+        enter(Phase::kExitThrough, SequencerReason::kTargetReached, in.t);
       }
       break;
     }
     case Phase::kExitThrough:
-      whisking_ = leg_motion(in, whisk_leg() ? p_.whisk_speed : forward_speed(in), whisk_leg(), &sp);
-      if (contact && (!whisking_ || whisk_blocked(in))) {
-        if (whisking_) start_check(in);
-        else start_follow(in, false);
-      } else if ((pos - exit_from_).norm() - leg_blind_ >= exit_distance_ &&
-                 (beyond_known_surface(pos) ||
+      if (fly_leg(in, contact, &sp)) break;
+      // The end: the exit's contact-free distance, past every known wall.
+      if ((pos - exit_from_).norm() - leg_blind_ >= exit_distance_ &&
+                 (rules().beyond_known_surface(pos, heading_) ||
                   (pos - exit_from_).norm() - leg_blind_ >= exit_distance_ + p_.probe_max_distance)) {
-        finish(Outcome::kExitFound, "flew through the opening", in.t);
+        finish(Outcome::kExitFound, SequencerReason::kExitFlownThrough, in.t);
         out.gpis_updated = true;  // publish the final target with exit_found
       }
       break;
     case Phase::kCheckAhead:
       check_ahead(in, &sp);
       break;
+    case Phase::kRefit:          // left in the tick it is entered (enter_refit)
     case Phase::kFailsafeHover:  // handled above
     case Phase::kLanding:
     case Phase::kDone:

@@ -215,6 +215,45 @@ void fly_free(GpisExplorerLogic& logic, double max_t, DepthOn depth_on, OnTick o
 }
 }  // namespace
 
+// FsmState.reason_code carries the sequencer's SequencerReason (REASON_GPIS_*,
+// 50-79): free flight (every probe open, then the diagonals, open space) and
+// depth stopping in the first probe (FAILSAFE_HOVER, then landing). The codes
+// are published in the order of the transitions, 0 only before the first.
+TEST(GpisExplorerLogic, PublishesTheSequencersReasonCodes) {
+  using tactile_msgs::msg::FsmState;
+  auto codes_of = [](double depth_until) {
+    GpisExplorerLogic logic(GpisExplorerLogic::params_from(GpisExplorerLogic::default_parameters()));
+    std::vector<uint8_t> codes;  // one per transition (consecutive duplicates dropped)
+    uint32_t transitions = 0;
+    fly_free(
+        logic, 600.0, [&](double t) { return t < depth_until; },
+        [&](double, const GpisExplorerLogic::Outputs& out) {
+          if (!out.state) return;
+          EXPECT_EQ(out.state->reason_code, static_cast<uint8_t>(logic.sequencer().reason_code()));
+          if (codes.empty() || out.state->transitions != transitions) codes.push_back(out.state->reason_code);
+          transitions = out.state->transitions;
+        });
+    return codes;
+  };
+  const std::vector<uint8_t> open = codes_of(1e9);
+  ASSERT_GE(open.size(), 5u);
+  EXPECT_EQ(open.front(), FsmState::REASON_NONE);
+  EXPECT_EQ(open[1], FsmState::REASON_GPIS_HOVER_DONE);
+  EXPECT_EQ(open[2], FsmState::REASON_GPIS_ALIGNED);
+  EXPECT_EQ(open[3], FsmState::REASON_GPIS_PROBE_FOUND_NO_WALL);
+  EXPECT_EQ(open[4], FsmState::REASON_GPIS_NEXT_PROBE);
+  EXPECT_EQ(open.back(), FsmState::REASON_GPIS_OPEN_SPACE);
+  for (std::size_t i = 1; i < open.size(); ++i) {
+    EXPECT_GE(open[i], 50u) << i;
+    EXPECT_LE(open[i], 79u) << i;
+  }
+  const std::vector<uint8_t> stale = codes_of(3.0);
+  ASSERT_GE(stale.size(), 3u);
+  EXPECT_EQ(stale[stale.size() - 2], FsmState::REASON_GPIS_DEPTH_STALE);
+  EXPECT_EQ(stale.back(), FsmState::REASON_GPIS_INPUTS_STALE_LAND);
+  EXPECT_STREQ(gpis_explorer::to_string(gpis_explorer::SequencerReason::kInputsStaleLand), "inputs_stale_land");
+}
+
 // Issue 33: odometry fresh, tactile depth stopped at t = 3 s in the first
 // probe. The whisker wall follower hovers 0.2 s later (max_input_age_s);
 // gpis_explorer flew its 2 m probe on blind and recorded it as "no wall".

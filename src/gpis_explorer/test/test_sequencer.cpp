@@ -1,6 +1,7 @@
 // Exploration sequencing (000 Methods) in a kinematic test world: the four
 // probes, wall follow / retreat downsampling, GPIS refits, exit through an
 // opening, open space, parameter validation.
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <stdexcept>
@@ -441,6 +442,109 @@ FirstReturn first_return(bool via_line, bool retreat_back) {
 }
 
 }  // namespace
+
+// The sub-states are explicit and named (sub_state()): in the pillar world of
+// first_return the first RETREAT ends a wall follow (after_follow), the first
+// RETURN goes across to the probe's line and then along it, the first probe's
+// whisk stop whisks back and then dwells, and the round moves from the probes
+// to the targets.
+TEST(Sequencer, SubStatesAreNamedInTheOrderTheyAreFlown) {
+  SequencerParams p;
+  ExplorationSequencer seq(p);
+  std::vector<gpis_test::Segment> walls{{{1.0, -2.0}, {1.0, 2.0}}};
+  const std::vector<gpis_test::Segment> pillar = gpis_test::square({0.55, -0.25}, 0.05);
+  walls.insert(walls.end(), pillar.begin(), pillar.end());
+  std::vector<std::string> seen;  // "PHASE/sub" in the order first entered
+  bool targets = false;
+  gpis_test::fly(seq, walls, 0.0, 200.0, 100.0, 0.0, [&](const ExplorationSequencer& s, const Eigen::Vector2d&, double) {
+    const std::string now = std::string(to_string(s.phase())) + "/" + s.sub_state();
+    if (seen.empty() || seen.back() != now) seen.push_back(now);
+    targets = targets || s.round() == gpis_explorer::Round::kTargets;
+  });
+  auto first = [&](const std::string& what) {
+    return std::find(seen.begin(), seen.end(), what) - seen.begin();
+  };
+  const auto n = static_cast<std::ptrdiff_t>(seen.size());
+  ASSERT_LT(first("CHECK_AHEAD/whisk_back"), n);
+  EXPECT_LT(first("CHECK_AHEAD/whisk_back"), first("CHECK_AHEAD/dwell"));
+  ASSERT_LT(first("RETREAT/after_follow"), n);
+  ASSERT_LT(first("RETURN/to_probe_line"), n);
+  EXPECT_LT(first("RETREAT/after_follow"), first("RETURN/to_probe_line"));
+  EXPECT_LT(first("RETURN/to_probe_line"), first("RETURN/along_probe_line"));
+  EXPECT_LT(first("RETURN/along_probe_line"), n);
+  EXPECT_LT(first("TURN/PROBE"), n);
+  EXPECT_EQ(seq.probe_set(), gpis_explorer::ProbeSet::kOrthogonal);  // walls met: no diagonal probes
+  EXPECT_TRUE(targets);
+  EXPECT_EQ(std::string(gpis_explorer::to_string(gpis_explorer::RetreatKind::kBackOff)), "back_off");
+  EXPECT_EQ(std::string(gpis_explorer::to_string(gpis_explorer::ExitKind::kAlongOpenProbe)), "along_open_probe");
+}
+
+// REFIT is a phase of its own: with the last probe open (a U of walls open
+// toward -y), the first refit runs on the tick that probe's return reaches
+// the start (RETURN -> REFIT -> RETURN to fly out along the open probe), and
+// every RETREAT lasts retreat_time_s. Before, the return entered a RETREAT
+// dated retreat_time_s in the past to reach the refit code on the next tick:
+// a one-tick retreat that commanded retreat_speed backward, blind.
+TEST(Sequencer, RefitIsAPhaseEnteredWhenTheLastProbeReturns) {
+  SequencerParams p;
+  ExplorationSequencer seq(p);
+  const std::vector<gpis_test::Segment> walls{{{1.0, -3.0}, {1.0, 1.0}}, {{1.0, 1.0}, {-1.0, 1.0}}, {{-1.0, 1.0}, {-1.0, -3.0}}};
+  Phase before_first_refit = Phase::kDone, after_first_refit_prev = Phase::kDone, last = Phase::kHoverInit;
+  std::size_t updates = 0;
+  int retreat_ticks = 0, shortest_retreat = 1 << 30, refits = 0;
+  uint32_t transitions = 0;
+  const auto r = gpis_test::fly(seq, walls, 0.0, 400.0, 100.0, 0.0, [&](const ExplorationSequencer& s, const Eigen::Vector2d&, double) {
+    if (s.explorer().updates() != updates && updates == 0) {
+      before_first_refit = last;
+      after_first_refit_prev = s.previous_phase();
+    }
+    if (s.previous_phase() == Phase::kRefit && s.transitions() != transitions) ++refits;
+    transitions = s.transitions();
+    updates = s.explorer().updates();
+    if (s.phase() == Phase::kRetreat) {
+      ++retreat_ticks;
+    } else if (last == Phase::kRetreat) {
+      shortest_retreat = std::min(shortest_retreat, retreat_ticks);
+      retreat_ticks = 0;
+    }
+    EXPECT_NE(s.phase(), Phase::kRefit) << "REFIT is left in the tick it is entered";
+    last = s.phase();
+  });
+  EXPECT_EQ(before_first_refit, Phase::kReturn);
+  EXPECT_EQ(after_first_refit_prev, Phase::kRefit);
+  EXPECT_EQ(refits, 1);
+  EXPECT_EQ(r.outcome, Outcome::kExitFound);
+  // retreat_time_s at 50 Hz, less the tick a phase ends on.
+  EXPECT_GE(shortest_retreat, static_cast<int>(p.retreat_time_s / 0.02) - 1);
+  EXPECT_EQ(std::string(gpis_explorer::to_string(Phase::kRefit)), "REFIT");
+}
+
+// CHECK_AHEAD's guards, each on hand-made touched points (heading +x from the
+// origin, corridor +-0.11 m, follow_min_forward 0.11 m): no point -> follow as
+// an unwhisked leg; all beside the corridor -> the leg goes on; the nearest in
+// the corridor at or beyond follow_min_forward -> wall follow; nearer -> back off.
+TEST(SequencerGuards, CheckAheadDecisionTable) {
+  using gpis_explorer::CheckDecision;
+  const SequencerParams p;
+  const gpis_explorer::GpisExplorer ex(p.explorer);
+  const std::vector<Eigen::Vector2d> corners;
+  const std::vector<gpis_explorer::WallLine> walls;
+  const gpis_explorer::PathRules rules(p, ex, corners, walls);
+  auto decide = [&](const std::vector<Eigen::Vector2d>& pts) {
+    return gpis_explorer::check_ahead_decision(pts, {0, 0}, 0.0, rules, p.follow_min_forward);
+  };
+  EXPECT_EQ(decide({}), CheckDecision::kFollowUnknown);
+  EXPECT_EQ(decide({{0.3, 0.2}, {0.3, -0.15}}), CheckDecision::kLegGoesOn);
+  EXPECT_EQ(decide({{0.3, 0.05}}), CheckDecision::kFollowWall);
+  EXPECT_EQ(decide({{0.11, 0.0}}), CheckDecision::kFollowWall);  // at follow_min_forward
+  EXPECT_EQ(decide({{0.08, 0.05}}), CheckDecision::kBackOff);
+  EXPECT_EQ(decide({{0.3, 0.05}, {0.08, 0.05}}), CheckDecision::kBackOff);  // the nearest decides
+  EXPECT_EQ(decide({{0.08, 0.2}, {0.3, 0.0}}), CheckDecision::kFollowWall);  // the near one is beside
+  // Turned: heading +y, the corridor along y.
+  EXPECT_EQ(gpis_explorer::check_ahead_decision({{0.05, 0.3}}, {0, 0}, M_PI / 2, rules, p.follow_min_forward),
+            CheckDecision::kFollowWall);
+  EXPECT_STREQ(gpis_explorer::to_string(CheckDecision::kLegGoesOn), "leg_goes_on");
+}
 
 // return_via_probe_line: back across to the probe's line, then along it; the
 // straight return cuts past the pillar the probe passed 15 cm beside.

@@ -36,6 +36,7 @@
 #include <Eigen/Core>
 
 #include "gpis_explorer/explorer.hpp"
+#include "gpis_explorer/path_rules.hpp"
 #include "tactile_fsm/whisker_wall_follower.hpp"
 
 namespace gpis_explorer {
@@ -51,6 +52,11 @@ enum class Phase : uint8_t {
   kGoToTarget,  ///< forward toward the GPIS target
   kExitThrough, ///< target reached without contact: keep going through the opening
   kCheckAhead,  ///< a whisk touched the corridor: stop, face the leg's heading: wall to follow, or back off?
+  /// GPIS update (000 eq. 31-46) and the next target: its entry action
+  /// decides and leaves it in the same tick (the state a program sees after
+  /// a step is never REFIT; FsmState's previous_state is). Entered after the
+  /// last probe's return and after every retreat of the target round.
+  kRefit,
   /// Tactile depth or odometry stale: hover (zero velocity, flight height),
   /// record nothing; inputs fresh again -> the interrupted phase (its timers
   /// paused), stale for wall.failsafe_land_after_s -> LANDING (inputs_stale).
@@ -60,6 +66,101 @@ enum class Phase : uint8_t {
   kDone,        ///< terminal
 };
 const char* to_string(Phase p);
+
+// The phases' sub-states, explicit (each a state of its own phase; to_string
+// gives the snake-case name ExplorationSequencer::sub_state() reports).
+
+/// Which round of the exploration the contact episodes belong to: the probes
+/// (000: four orthogonal directions) or the GPIS targets after the first refit.
+enum class Round : uint8_t {
+  kProbes,   ///< the probes (their follows return to the start for the next probe)
+  kTargets,  ///< GPIS targets (each follow / back-off ends in a refit)
+};
+const char* to_string(Round r);
+
+/// The set of probe headings flying (diagonal_probes).
+enum class ProbeSet : uint8_t {
+  kOrthogonal,  ///< start heading (or the first wall's normal) + k * 360 / probe_directions
+  kDiagonal,    ///< no wall in any of those: turned by half their spacing
+};
+const char* to_string(ProbeSet s);
+
+/// CHECK_AHEAD: first the whisk back to the leg's heading, then the dwell that decides.
+enum class CheckStage : uint8_t {
+  kWhiskBack,  ///< yaw back to the leg's heading at up to whisk_rate
+  kDwell,      ///< hover check_dwell_s on the heading, then decide
+};
+const char* to_string(CheckStage s);
+
+/// RETURN: across to the probe's line first (return_via_probe_line), then along it.
+enum class ReturnLeg : uint8_t {
+  kToProbeLine,     ///< to the foot of the perpendicular on the probe's line
+  kAlongProbeLine,  ///< to the probe's origin (straight there when already on the line)
+};
+const char* to_string(ReturnLeg l);
+
+/// What the RETURN is for (decided when it begins).
+enum class ReturnFor : uint8_t {
+  kNextProbe,      ///< the next probe (or, after the last one, the refit)
+  kOpenProbeExit,  ///< out through the opening along the probe that found no wall
+};
+const char* to_string(ReturnFor r);
+
+/// What the RETREAT ends (decided on entry from the phase it leaves).
+enum class RetreatKind : uint8_t {
+  kAfterFollow,  ///< after a wall follow: also sideways back toward its start (retreat_toward_follow_start)
+  kBackOff,      ///< after a touch too near the guard (CHECK_AHEAD) or a penalised corner ahead: straight back
+};
+const char* to_string(RetreatKind k);
+
+/// EXIT_THROUGH: along the open probe's line (its corridor whisked by the
+/// probe: V_max, no whisking) or beyond a contact-free GPIS target (unexplored: whisked).
+enum class ExitKind : uint8_t {
+  kAlongOpenProbe,
+  kBeyondTarget,
+};
+const char* to_string(ExitKind k);
+
+/// Why the last transition happened (reason() is the text for people; this is
+/// what programs key on). The values are tactile_msgs/msg/FsmState's
+/// REASON_GPIS_* (block 50-79; the node logic checks that at compile time).
+enum class SequencerReason : uint8_t {
+  kNone = 0,  ///< no transition yet
+  kHoverDone = 50,  ///< HOVER_INIT -> TURN: hover_init_s hovered, the first probe
+  kAligned = 51,  ///< TURN -> PROBE / GO_TO_STAGING / GO_TO_TARGET / EXIT_THROUGH: heading within yaw_tolerance
+  kProbeFoundNoWall = 52,  ///< PROBE -> RETURN: probe_max_distance flown with fresh depth, no contact
+  kWhiskContact = 53,  ///< PROBE / GO_TO_* / EXIT_THROUGH -> CHECK_AHEAD: a whisk contact in the guard's corridor
+  kContact = 54,  ///< a leg or CHECK_AHEAD -> FOLLOW_WALL: a wall ahead to follow
+  kBesideCorridor = 55,  ///< CHECK_AHEAD -> the leg it stopped: no touched point in the corridor
+  kTooNearTheGuard = 56,  ///< CHECK_AHEAD -> RETREAT: nearest point in the corridor < follow_min_forward ahead
+  kCornerAhead = 57,  ///< GO_TO_STAGING / GO_TO_TARGET -> RETREAT: a corner centroid 0.1 m ahead (000 eq. 45)
+  kWallFollowed = 58,  ///< FOLLOW_WALL -> RETREAT: follow_time_s (000: 2 s)
+  kSurfaceBeside = 59,  ///< FOLLOW_WALL -> RETREAT: a known surface point or wall line across the slide
+  kRetreatedNextProbe = 60,  ///< RETREAT -> RETURN: probes left
+  kNextProbe = 61,  ///< RETURN -> TURN: at the start, the next probe heading
+  kProbesDone = 62,  ///< RETURN -> REFIT: the last probe (no wall) back at the start
+  kRetreatedRefit = 63,  ///< RETREAT -> REFIT: retreat_time_s, no probe left
+  kOpenProbeReturn = 64,  ///< REFIT -> RETURN: a probe found no wall where others met walls
+  kOpenProbeExit = 65,  ///< RETURN -> TURN: back at the open probe's origin, out along it
+  kTargetViaStaging = 66,  ///< REFIT -> TURN: a target approached head-on through its staging point
+  kTargetChosen = 67,  ///< REFIT -> TURN: a target flown at directly (or from its staging point)
+  kAtStaging = 68,  ///< GO_TO_STAGING -> TURN: at the staging point, face the target's normal
+  kTargetReached = 69,  ///< GO_TO_TARGET -> EXIT_THROUGH: target reached or passed, no contact
+  kDepthStale = 70,  ///< -> FAILSAFE_HOVER: tactile depth older than wall.max_input_age_s
+  kOdometryStale = 71,  ///< -> FAILSAFE_HOVER: odometry older than wall.max_input_age_s
+  kInputsFreshAgain = 72,  ///< FAILSAFE_HOVER -> the interrupted phase (resumed, its clocks paused)
+  kInputsStaleLand = 73,  ///< FAILSAFE_HOVER -> LANDING (inputs_stale)
+  kUpdateLimit = 74,  ///< REFIT -> LANDING (update_limit): max_updates
+  kNoTarget = 75,  ///< REFIT -> LANDING (no_target)
+  kOpenSpace = 76,  ///< REFIT -> LANDING (open_space)
+  kExitFlownThrough = 77,  ///< EXIT_THROUGH -> LANDING (exit_found)
+  kTimeLimit = 78,  ///< any moving phase -> LANDING (time_limit): max_time_s
+  kLanded = 79,  ///< LANDING -> DONE: landing_duration_s
+};
+const char* to_string(SequencerReason r);  ///< snake case: "hover_done", "probe_found_no_wall", ...
+/// reason()'s text: the code's, and for a stale input at the end of
+/// HOVER_INIT (`from`) "... at end of hover".
+const char* reason_text(SequencerReason r, Phase from);
 
 /// Why the exploration ended.
 enum class Outcome : uint8_t {
@@ -274,6 +375,17 @@ LineFit fit_line(const std::vector<Eigen::Vector2d>& pts);
 double ray_to_wall_line(const Eigen::Vector2d& from, const Eigen::Vector2d& dir, const Eigen::Vector2d& a,
                         const Eigen::Vector2d& b, double extension);
 
+/// CHECK_AHEAD's transition table after the dwell, on the points `touched`
+/// in its first check_sample_s, the first guard that holds:
+///   no touched point with a known position            -> kFollowUnknown (FOLLOW_WALL, as an unwhisked leg)
+///   none of them in the guard's corridor              -> kLegGoesOn (the leg it stopped)
+///   the nearest in the corridor >= follow_min_forward -> kFollowWall (FOLLOW_WALL)
+///   else (a wall end close to the guard)              -> kBackOff (RETREAT, the points become surface points)
+enum class CheckDecision : uint8_t { kFollowUnknown, kLegGoesOn, kFollowWall, kBackOff };
+const char* to_string(CheckDecision d);
+CheckDecision check_ahead_decision(const std::vector<Eigen::Vector2d>& touched, const Eigen::Vector2d& pos,
+                                   double heading, const PathRules& rules, double follow_min_forward);
+
 /// One control tick of input (odometry frame). Fresh: tactile_fsm::input_fresh
 /// with wall.max_input_age_s (the node logic decides it from the stamps).
 struct SequencerInput {
@@ -307,7 +419,10 @@ class ExplorationSequencer {
 
   Phase phase() const { return phase_; }
   Phase previous_phase() const { return previous_; }
-  const char* reason() const { return reason_; }
+  /// Why the last transition happened: text for people (may be reworded) ...
+  const char* reason() const { return reason_text(reason_code_, previous_); }
+  /// ... and the code programs key on (FsmState.reason_code).
+  SequencerReason reason_code() const { return reason_code_; }
   double phase_entered() const { return entered_; }
   uint32_t transitions() const { return transitions_; }
   Outcome outcome() const { return outcome_; }
@@ -347,41 +462,63 @@ class ExplorationSequencer {
   /// FAILSAFE_HOVER entries (stale depth or odometry) and the phase the last one interrupted.
   std::size_t failsafe_hovers() const { return failsafe_hovers_; }
   Phase failsafe_from() const { return failsafe_from_; }
+  /// The current phase's sub-state ("" for a phase without one), the
+  /// sequencer's own in snake case:
+  /// CHECK_AHEAD whisk_back / dwell, RETURN to_probe_line / along_probe_line,
+  /// RETREAT after_follow / back_off, EXIT_THROUGH
+  /// along_open_probe / beyond_target; FOLLOW_WALL the wall rule's
+  /// (tactile_fsm::to_string(WallSubState), "FLY_SIDEWAYS", ...), TURN the
+  /// phase it turns for ("PROBE", ...).
+  std::string sub_state() const;
+  Round round() const { return round_; }
+  ProbeSet probe_set() const { return probe_set_; }
   const SequencerParams& params() const { return p_; }
 
  private:
-  void enter(Phase p, const char* reason, double t);
+  void enter(Phase p, SequencerReason why, double t);
   /// FAILSAFE_HOVER from the current phase; resume_after_failsafe() returns to
   /// it with its timers shifted by the time held (the hover does not count).
-  void enter_failsafe(const char* reason, double t);
+  void enter_failsafe(SequencerReason why, double t);
   void resume_after_failsafe(double t);
-  void finish(Outcome o, const char* reason, double t);
+  void finish(Outcome o, SequencerReason why, double t);
   tactile_fsm::Setpoint hover() const;
   double yaw_rate_to(double heading, double yaw) const;
   /// Yaw rate 4 * yaw_gain * err within +-limit (TURN at turn_rate, the whisk
   /// back of CHECK_AHEAD at whisk_rate); marks the tick's rate as exceeding
   /// omega_max.
   double fast_yaw_rate(double err, double limit);
-  void start_follow(const SequencerInput& in, bool probing);
+  /// FOLLOW_WALL from a contact on a leg (the round decides the side and whether the target is visited).
+  void start_follow(const SequencerInput& in);
   void commit_points(const SequencerInput& in);
   /// GPIS update (000 eq. 31-46) and its corner centroids as corners_.
   void update_map();
+  /// REFIT: enter it and run its entry action (transition table in sequencer.cpp).
+  void enter_refit(const SequencerInput& in, SequencerReason why, SequencerOutput* out);
+  /// REFIT's guards, in the order its table tries them.
+  bool can_exit_via_open_probe() const;
+  bool can_land_in_open_space() const;
+  bool reached_update_limit() const;
   void refit_and_choose(const SequencerInput& in);
   bool choose_target(const Eigen::Vector2d& from);
-  /// Staging point for a head-on approach of candidate q, or false when no
-  /// collision-free staging point / legs exist (clearance rules above).
-  bool staging_for(const Eigen::Vector2d& from, const Eigen::Vector2d& q, Eigen::Vector2d* staging,
-                   double* approach_heading) const;
-  double surface_clearance(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
-  bool corner_clear(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
+  /// The path rules on the current map (training points, corners_, wall_lines_).
+  PathRules rules() const { return PathRules(p_, explorer_, corners_, wall_lines_); }
   double forward_speed(const SequencerInput& in) const;
   double line_correction(const SequencerInput& in) const;
   void align_to_wall(const SequencerInput& in);
-  bool near_corner(const Eigen::Vector2d& p) const;
-  /// One step of a forward leg (target or staging point): setpoint into *sp;
-  /// true when a contact or a penalised corner ahead changed the phase.
+  /// The forward leg being flown (PROBE, GO_TO_STAGING, GO_TO_TARGET,
+  /// EXIT_THROUGH): its line passes line_origin_ along heading_ (from
+  /// leg_start_ / exit_from_); whether it is whisked and whether a penalised
+  /// corner ahead aborts it; its end is the phase's (probe_max_distance, the
+  /// staging point, the target, the exit's confirmation distance).
+  struct Leg {
+    bool whisk = false;         ///< whisk_leg(): probes, GPIS legs, the exit beyond a target
+    bool corner_abort = false;  ///< GO_TO_STAGING / GO_TO_TARGET: a corner centroid 0.1 m ahead -> RETREAT
+  };
+  Leg leg() const;
+  /// One tick of the current forward leg, the same for every leg: setpoint
+  /// into *sp; true when a contact (or, corner_abort, a penalised corner
+  /// ahead) left the leg's phase. The caller then checks the leg's end.
   bool fly_leg(const SequencerInput& in, bool contact, tactile_fsm::Setpoint* sp);
-  bool side_blocked(const SequencerInput& in) const;
   /// Forward motion along heading_ (its line held); whisking when asked and
   /// enabled. Returns true when the yaw rate is a whisk (beyond omega_max).
   bool leg_motion(const SequencerInput& in, double speed, bool whisk, tactile_fsm::Setpoint* sp);
@@ -389,11 +526,8 @@ class ExplorationSequencer {
   bool whisk_leg() const;
   void start_check(const SequencerInput& in);
   void check_ahead(const SequencerInput& in, tactile_fsm::Setpoint* sp);
-  bool in_corridor(const Eigen::Vector2d& q, const Eigen::Vector2d& pos) const;
   /// A whisk contact in the guard's corridor (see corridor_half_width).
   bool whisk_blocked(const SequencerInput& in);
-  bool retreat_blocked(const SequencerInput& in) const;
-  bool beyond_known_surface(const Eigen::Vector2d& pos) const;
   void add(const Eigen::Vector2d& p, double label);
 
   SequencerParams p_;
@@ -401,7 +535,7 @@ class ExplorationSequencer {
   Phase phase_ = Phase::kHoverInit;
   Phase previous_ = Phase::kHoverInit;
   Phase after_turn_ = Phase::kProbe;
-  const char* reason_ = "start";
+  SequencerReason reason_code_ = SequencerReason::kNone;
   Outcome outcome_ = Outcome::kRunning;
   bool started_ = false;
   double entered_ = 0.0;
@@ -409,22 +543,18 @@ class ExplorationSequencer {
   Eigen::Vector2d start_{0, 0};
   double start_yaw_ = 0.0;
   int probe_ = 0;  ///< index of the current probe direction
-  bool probing_ = true;
+  Round round_ = Round::kProbes;
   double heading_ = 0.0;  ///< heading of the current turn / leg [rad]
   Eigen::Vector2d leg_start_{0, 0};
   int open_probe_ = -1;  ///< a probe that found no wall
-  bool diagonal_round_ = false;         ///< the diagonal probes (diagonal_probes) are flying
+  ProbeSet probe_set_ = ProbeSet::kOrthogonal;
   Eigen::Vector2d follow_start_{0, 0};  ///< where the last wall follow began
-  bool retreat_from_follow_ = false;    ///< this retreat ends a wall follow
-  bool retreat_from_return_ = false;    ///< this (zero-length) retreat ends the probes: refit only
+  RetreatKind retreat_kind_ = RetreatKind::kBackOff;
   double retreat_lateral(const SequencerInput& in) const;
   tactile_fsm::Side side_ = tactile_fsm::Side::kRight;
   bool both_touched_ = false;
   tactile_fsm::WallSubState sub_ = tactile_fsm::WallSubState::kNone;
   std::vector<Eigen::Vector2d> follow_points_;
-  struct WallLine {
-    Eigen::Vector2d a, b;  ///< the touched span's ends on the fitted line
-  };
   std::vector<WallLine> wall_lines_;  ///< at most 64 (the oldest dropped)
   void add_wall_line();
   bool has_target_ = false;
@@ -433,15 +563,15 @@ class ExplorationSequencer {
   Eigen::Vector2d staging_{0, 0};
   double approach_heading_ = 0.0;
   double open_heading_ = 0.0;  ///< heading of the probe that found no wall
-  bool exit_via_probe_ = false;   ///< RETURN to the start, then out along the open probe
-  bool line_from_probe_ = false;  ///< the next leg follows the open probe's line
+  ReturnFor return_for_ = ReturnFor::kNextProbe;
   Eigen::Vector2d open_origin_{0, 0};  ///< where the open probe started
   /// RETURN's first leg ends within this of the probe's line; a smaller
   /// offset goes straight (return_via_probe_line). [m]
   static constexpr double kOnProbeLine = 0.03;
   Eigen::Vector2d return_via_{0, 0};  ///< RETURN's first leg ends here (return_via_probe_line)
-  bool return_via_active_ = false;
-  void begin_return(const Eigen::Vector2d& pos, const Eigen::Vector2d& to, const char* reason, double t);
+  ReturnLeg return_leg_ = ReturnLeg::kAlongProbeLine;
+  void begin_return(const Eigen::Vector2d& pos, const Eigen::Vector2d& to, ReturnFor what, SequencerReason why,
+                    double t);
   Eigen::Vector2d return_to_{0, 0};    ///< RETURN goes here: the probe's origin (back along its line)
   Eigen::Vector2d line_origin_{0, 0};  ///< the current forward leg's line passes here along heading_
   Eigen::Vector2d target_{0, 0};
@@ -450,9 +580,9 @@ class ExplorationSequencer {
   double exit_distance_ = 0.8;  ///< contact-free distance from exit_from_ that confirms the exit
   int whisk_dir_ = 1;  ///< current whisk direction (+1 left, -1 right)
   bool whisking_ = false;  ///< this tick's yaw rate is a whisk
-  bool exit_whisk_ = false;  ///< EXIT_THROUGH crosses unexplored space (after a GPIS target, not along an open probe)
+  ExitKind exit_kind_ = ExitKind::kBeyondTarget;  ///< of the EXIT_THROUGH flying or turned to
   Phase check_from_ = Phase::kProbe;  ///< leg interrupted by the check
-  int check_stage_ = 0;  ///< 0 facing the heading, 1 dwelling
+  CheckStage check_stage_ = CheckStage::kWhiskBack;
   double check_t_ = 0.0;
   double check_started_ = 0.0;
   std::vector<Eigen::Vector2d> check_points_;
