@@ -438,7 +438,10 @@ Setpoint saturate(const Setpoint& s, const WallFollowerParams& p);
 // fired and, when one begins to fire (or its override changes the sub-state),
 // publishes its reason. A later rule sees what the earlier ones left.
 
-/// What the override rules read on one tick, and what they override.
+/// What the guards of the transition tables (before the state switch) and the
+/// override rules (after it) read on one tick, and what the rules override.
+/// l_valid / d_left (and the right ones) repeat left.valid / left.rule_depth
+/// for the rules.
 struct TickSnapshot {
   WallFollowerInput in;  ///< this tick's input (t, pose, S_c change RMS)
   double dt = 0.0;       ///< since the last tick [s]
@@ -673,9 +676,10 @@ class WhiskerWallFollower {
   bool phantom_right() const { return right().phantom; }
   /// The shared fail-safe (depth, then odometry).
   const SafetyRunner& safety() const { return safety_; }
-  /// Tests: puts a started follower into `s` at in.t (course set from `in`),
-  /// running the state's entry action as for an entry with `code`. Not the
-  /// fail-safe states (the SafetyRunner's): std::invalid_argument.
+  /// Tests: puts a started follower into `s` at in.t (course set from `in` if
+  /// not yet), running the state's entry action as for an entry with `code`;
+  /// counted as a transition, reason "test". Not the fail-safe states (the
+  /// SafetyRunner's, entered by a stale input): std::invalid_argument.
   void for_test_enter(FsmState s, const WallFollowerInput& in, WhiskerReason code = WhiskerReason::kNone);
   /// Wall angle in the body frame used by the rule [rad] (NaN unless both valid).
   double wall_angle() const { return theta_; }
