@@ -13,6 +13,27 @@ namespace tactile_fsm {
 
 using tactile_common::ParamMap;
 
+// WhiskerReason (core layer, no messages) has the values of tactile_msgs/FsmState's
+// REASON_WHISKER_* codes: checked here, where both are seen.
+using FsmStateMsg = tactile_msgs::msg::FsmState;
+static_assert(static_cast<uint8_t>(WhiskerReason::kNone) == FsmStateMsg::REASON_NONE);
+static_assert(static_cast<uint8_t>(WhiskerReason::kHoverDone) == FsmStateMsg::REASON_WHISKER_HOVER_DONE);
+static_assert(static_cast<uint8_t>(WhiskerReason::kContact) == FsmStateMsg::REASON_WHISKER_CONTACT);
+static_assert(static_cast<uint8_t>(WhiskerReason::kContactSameObstacle) ==
+              FsmStateMsg::REASON_WHISKER_CONTACT_SAME_OBSTACLE);
+static_assert(static_cast<uint8_t>(WhiskerReason::kContactBaffleEnd) == FsmStateMsg::REASON_WHISKER_CONTACT_BAFFLE_END);
+static_assert(static_cast<uint8_t>(WhiskerReason::kContactWhileClearing) ==
+              FsmStateMsg::REASON_WHISKER_CONTACT_WHILE_CLEARING);
+static_assert(static_cast<uint8_t>(WhiskerReason::kObstacleCleared) == FsmStateMsg::REASON_WHISKER_OBSTACLE_CLEARED);
+static_assert(static_cast<uint8_t>(WhiskerReason::kClearedByMargin) == FsmStateMsg::REASON_WHISKER_CLEARED_BY_MARGIN);
+static_assert(static_cast<uint8_t>(WhiskerReason::kTargetReached) == FsmStateMsg::REASON_WHISKER_TARGET_REACHED);
+static_assert(static_cast<uint8_t>(WhiskerReason::kLandingDone) == FsmStateMsg::REASON_WHISKER_LANDING_DONE);
+static_assert(static_cast<uint8_t>(WhiskerReason::kSubStateRule) == FsmStateMsg::REASON_WHISKER_SUB_STATE_RULE);
+static_assert(static_cast<uint8_t>(WhiskerReason::kHeadingLimit) == FsmStateMsg::REASON_WHISKER_HEADING_LIMIT);
+static_assert(static_cast<uint8_t>(WhiskerReason::kTurnAnchor) == FsmStateMsg::REASON_WHISKER_TURN_ANCHOR);
+static_assert(static_cast<uint8_t>(WhiskerReason::kStepAndScan) == FsmStateMsg::REASON_WHISKER_STEP_AND_SCAN);
+static_assert(static_cast<uint8_t>(WhiskerReason::kYawOffset) == FsmStateMsg::REASON_WHISKER_YAW_OFFSET);
+
 void WhiskerFsmLogic::Params::validate() const {
   fsm.validate();
   if (!std::isfinite(target_x)) throw std::invalid_argument("WhiskerFsmLogic.target_x: must be finite");
@@ -382,6 +403,7 @@ WhiskerFsmLogic::Outputs WhiskerFsmLogic::on_timer(int64_t now_ns) {
     s.state = current_state_name_;
     s.previous_state = previous_state_name_;
     s.reason = fsm_.reason();
+    s.reason_code = fsm_.reason_code();
     s.time_in_state = in_.t - fsm_.state_entered();
     s.transitions = fsm_.transitions();
     last_state_pub_ns_ = now_ns;

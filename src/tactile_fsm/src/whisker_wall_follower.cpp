@@ -201,9 +201,278 @@ Setpoint saturate(const Setpoint& s, const WallFollowerParams& p) {
   return o;
 }
 
+const char* to_string(WhiskerReason r) {
+  switch (r) {
+    case WhiskerReason::kNone: return "none";
+    case WhiskerReason::kHoverDone: return "hover_done";
+    case WhiskerReason::kContact: return "contact";
+    case WhiskerReason::kContactSameObstacle: return "contact_same_obstacle";
+    case WhiskerReason::kContactBaffleEnd: return "contact_at_baffle_end";
+    case WhiskerReason::kContactWhileClearing: return "contact_while_clearing";
+    case WhiskerReason::kObstacleCleared: return "obstacle_cleared";
+    case WhiskerReason::kClearedByMargin: return "cleared_by_margin";
+    case WhiskerReason::kTargetReached: return "target_reached";
+    case WhiskerReason::kLandingDone: return "landing_done";
+    case WhiskerReason::kSubStateRule: return "sub_state_rule";
+    case WhiskerReason::kHeadingLimit: return HeadingLimitRule::kName;
+    case WhiskerReason::kTurnAnchor: return TurnAnchorRule::kName;
+    case WhiskerReason::kStepAndScan: return StepAndScanRule::kName;
+    case WhiskerReason::kYawOffset: return YawOffsetRule::kName;
+  }
+  return "unknown";
+}
+
+// --- Whisker ----------------------------------------------------------------
+
+void Whisker::reset() {
+  filtered_ = NAN;
+  pressed_t_ = -INFINITY;
+  live_x_ = live_y_ = NAN;
+  phantom_ = false;
+  reading_ = WhiskerReading{};
+}
+
+const WhiskerReading& Whisker::update(const WhiskerSample& s, double t, double dt, bool pose_ok, double x,
+                                      double y) {
+  WhiskerReading r;
+  r.valid = s.depth_fresh && s.valid && std::isfinite(s.depth);
+  bool tdorc = s.tdorc_contact;
+  r.held_raw = r.valid || tdorc;  // contact as reported, before the phantom gate
+
+  // Phantom hold gated by odometry (issue 17, docs/tuning/tactile_fsm.md "Round 4"): a held
+  // contact whose S_c sum (000 eq. 5) stays quiet while the drone travels
+  // more than phantom_travel is the gel-hysteresis offset (000 eq. 1, N_h) of
+  // a whisker that left the wall, not a wall: ignore it.
+  if (p_.phantom_quiet_rms > 0.0 && pose_ok) {
+    // Free, unknown or moving: the contact (if any) is live here.
+    // phantom_latch: once taken for a phantom, a whisker stays one until its
+    // contact ends or its sum moves clearly (RMS >= twice the quiet level, a
+    // new touch); without it the free whisker's noise, which crosses the
+    // quiet level itself, lets the phantom back in for a moment.
+    const double rms = s.input_change_rms;
+    const double live_rms = (p_.phantom_latch && phantom_) ? 2.0 * p_.phantom_quiet_rms : p_.phantom_quiet_rms;
+    if (!r.held_raw || !std::isfinite(rms) || rms >= live_rms || !std::isfinite(live_x_)) {
+      live_x_ = x;
+      live_y_ = y;
+      phantom_ = false;
+    } else {
+      phantom_ = (p_.phantom_latch && phantom_) || std::hypot(x - live_x_, y - live_y_) > p_.phantom_travel;
+      if (phantom_) {
+        r.valid = false;
+        tdorc = false;
+      }
+    }
+  } else {
+    phantom_ = false;
+  }
+  r.phantom = phantom_;
+  r.contact = r.valid || tdorc;
+  r.depth = r.valid ? s.depth : NAN;
+
+  // First-order low-pass of the depth for the sub-state rule (our choice;
+  // restarts when the whisker loses the wall).
+  const double a = p_.depth_filter_tau_s > 0.0 ? dt / (p_.depth_filter_tau_s + dt) : 1.0;
+  filtered_ = !r.valid ? NAN : (std::isfinite(filtered_) ? filtered_ + a * (s.depth - filtered_) : s.depth);
+  r.filtered = filtered_;
+  r.rule_depth = filtered_;
+
+  // Pressed past the depth model (issue 17, docs/whisker_fsm.md "Pressed whisker"): the
+  // whisker's S_c sum bounds its depth by press_depth whatever depth is read.
+  if (p_.press_sum_pa > 0.0) {
+    if (r.valid && s.input_sum >= p_.press_sum_pa) pressed_t_ = t;
+    if (!r.valid) pressed_t_ = -INFINITY;
+    if (r.valid && t - pressed_t_ <= p_.press_hold_s + kTimeEps) {
+      r.pressed = true;
+      r.rule_depth = std::fmin(r.rule_depth, p_.press_depth);
+    }
+  }
+  reading_ = r;
+  return reading_;
+}
+
+// --- Guards -------------------------------------------------------------------
+
+namespace guards {
+
+bool hover_done(const TickSnapshot& s, const WallFollowerParams& p) {
+  return s.in.t - s.entered >= p.hover_init_s - kTimeEps;
+}
+
+bool contact(const TickSnapshot& s, const WallFollowerParams&) { return s.left.contact || s.right.contact; }
+
+bool contact_while_clearing(const TickSnapshot& s, const WallFollowerParams& p) {
+  // Contact again while side-stepping past the edge: the same obstacle's end
+  // (the contact flags dropped early). Kept side, passing the edge (rule 2),
+  // not a new approach, which would turn toward the touching whisker and wrap the tip.
+  return contact(s, p);
+}
+
+bool contact_same_obstacle(const TickSnapshot& s, const WallFollowerParams& p) {
+  // Contact right after a clearing: the same obstacle (its contact flags
+  // dropped mid-wall). Keep the side instead of re-choosing it, which went
+  // back along the baffle (issue 17; docs/whisker_fsm.md "Same obstacle").
+  return contact(s, p) && s.after_clear &&
+         std::cos(s.course_yaw) * (s.in.x - s.resume_x) + std::sin(s.course_yaw) * (s.in.y - s.resume_y) <
+             p.same_obstacle_distance;
+}
+
+double end_contact_offset(const TickSnapshot& s, const WallFollowerParams& p) {
+  // Lateral offset (left > 0) of the touching whisker's contact point from the
+  // course axis through the drone: the point (whisker_base_x + d, +-s/2) of the
+  // body frame turned by the yaw off the course heading. Exactly one whisker,
+  // with its depth.
+  if (s.left.contact == s.right.contact || !s.origin_set || !std::isfinite(s.in.yaw)) return 0.0;
+  const WhiskerReading& w = s.left.contact ? s.left : s.right;
+  if (!w.valid) return 0.0;
+  const double side = s.left.contact ? 1.0 : -1.0;
+  const double rel = std::remainder(s.in.yaw - s.course_yaw, 2.0 * M_PI);
+  const double lat = std::sin(rel) * (p.whisker_base_x + w.depth) + std::cos(rel) * side * 0.5 * p.whisker_spacing;
+  // Only on that whisker's side (the end lies where its baffle is).
+  return lat * side > 0.0 ? lat : 0.0;
+}
+
+bool contact_at_baffle_end(const TickSnapshot& s, const WallFollowerParams& p) {
+  // A baffle's end met by one whisker beside the axis (docs/tuning/tactile_fsm.md "Round 10").
+  return contact(s, p) && p.end_contact_lateral > 0.0 && std::fabs(end_contact_offset(s, p)) > p.end_contact_lateral;
+}
+
+bool cleared_by_margin(const TickSnapshot& s, const WallFollowerParams& p) {
+  // A whisker still held as a phantom: TDORC has not released it yet, and its
+  // window learns what follows the release (a new contact would go unseen);
+  // keep side-stepping, up to phantom_resume_max.
+  const double moved = std::hypot(s.in.x - s.clear_x, s.in.y - s.clear_y);
+  return moved >= p.clear_margin && (!(s.left.held_raw || s.right.held_raw) || moved >= p.phantom_resume_max);
+}
+
+bool obstacle_cleared(const TickSnapshot& s, const WallFollowerParams& p) {
+  return !contact(s, p) && s.in.t - s.last_contact_t >= p.clear_confirm_s - kTimeEps;
+}
+
+bool target_reached(const TickSnapshot& s, const WallFollowerParams& p) {
+  const WallFollowerInput& in = s.in;
+  if (!in.has_target) return false;
+  const double ex = in.x - in.target_x, ey = in.y - in.target_y;
+  if (std::hypot(ex, ey) <= p.target_radius) return true;
+  if (!p.land_past_target) return false;
+  // Past the target along the course direction (course start -> target).
+  const double cx = in.target_x - s.origin_x, cy = in.target_y - s.origin_y;
+  const double n = std::hypot(cx, cy);
+  if (n < 1e-6) return false;
+  return (ex * cx + ey * cy) / n >= 0.0;
+}
+
+bool landing_done(const TickSnapshot& s, const WallFollowerParams& p) {
+  return s.in.t - s.entered >= p.landing_duration_s - kTimeEps;
+}
+
+}  // namespace guards
+
+// --- Transition tables ----------------------------------------------------------
+
+namespace {
+
+#define TACTILE_GUARD(g) #g, &guards::g
+constexpr Transition kHoverInitTable[] = {
+    {TACTILE_GUARD(hover_done), FsmState::kFlyForward, WhiskerReason::kHoverDone, "hover initialisation done"},
+};
+constexpr Transition kFlyForwardTable[] = {
+    {TACTILE_GUARD(target_reached), FsmState::kLanding, WhiskerReason::kTargetReached, "target reached"},
+    {TACTILE_GUARD(contact_same_obstacle), FsmState::kWallFollowing, WhiskerReason::kContactSameObstacle,
+     "whisker contact, same obstacle (just cleared)"},
+    {TACTILE_GUARD(contact_at_baffle_end), FsmState::kWallFollowing, WhiskerReason::kContactBaffleEnd,
+     "whisker contact at a baffle's end beside the axis"},
+    {TACTILE_GUARD(contact), FsmState::kWallFollowing, WhiskerReason::kContact, "whisker contact"},
+};
+constexpr Transition kWallFollowingTable[] = {
+    {TACTILE_GUARD(target_reached), FsmState::kLanding, WhiskerReason::kTargetReached, "target reached"},
+    {TACTILE_GUARD(obstacle_cleared), FsmState::kResumeForward, WhiskerReason::kObstacleCleared,
+     "obstacle cleared (both whiskers off the wall)"},
+};
+constexpr Transition kResumeForwardTable[] = {
+    {TACTILE_GUARD(target_reached), FsmState::kLanding, WhiskerReason::kTargetReached, "target reached"},
+    {TACTILE_GUARD(contact_while_clearing), FsmState::kWallFollowing, WhiskerReason::kContactWhileClearing,
+     "whisker contact while clearing"},
+    {TACTILE_GUARD(cleared_by_margin), FsmState::kFlyForward, WhiskerReason::kClearedByMargin,
+     "cleared the obstacle by the margin"},
+};
+constexpr Transition kLandingTable[] = {
+    {TACTILE_GUARD(landing_done), FsmState::kLanded, WhiskerReason::kLandingDone, "landing complete"},
+};
+#undef TACTILE_GUARD
+
+template <std::size_t N>
+TransitionTable table_of(const Transition (&rows)[N]) {
+  return TransitionTable{rows, N};
+}
+
+bool flying(FsmState s) {
+  return s == FsmState::kFlyForward || s == FsmState::kWallFollowing || s == FsmState::kResumeForward;
+}
+
+WhiskerSample sample_of(const WallFollowerInput& in, bool depth_fresh, bool left) {
+  WhiskerSample w;
+  w.depth_fresh = depth_fresh;
+  w.valid = left ? in.left_valid : in.right_valid;
+  w.depth = left ? in.depth_left : in.depth_right;
+  w.tdorc_contact = left ? in.tdorc_contact_left : in.tdorc_contact_right;
+  w.input_sum = left ? in.input_sum_left : in.input_sum_right;
+  w.input_change_rms = left ? in.input_change_rms_left : in.input_change_rms_right;
+  return w;
+}
+
+SafetyParams safety_params(const WallFollowerParams& p) {
+  SafetyParams s;
+  s.max_input_age_s = p.max_input_age_s;
+  s.failsafe_land_after_s = p.failsafe_land_after_s;
+  // No time limit: the follower lands at the target (time_limit_s infinite).
+  return s;
+}
+
+const WallFollowerParams& validated(const WallFollowerParams& p) {
+  p.validate();  // before the members built from it (the SafetyRunner validates its own copy)
+  return p;
+}
+
+uint8_t code_of(WhiskerReason r) { return static_cast<uint8_t>(r); }
+
+WhiskerReason reason_of(OverrideRule r) {
+  switch (r) {
+    case OverrideRule::kHeadingLimit: return WhiskerReason::kHeadingLimit;
+    case OverrideRule::kTurnAnchor: return WhiskerReason::kTurnAnchor;
+    case OverrideRule::kStepAndScan: return WhiskerReason::kStepAndScan;
+    case OverrideRule::kYawOffset: return WhiskerReason::kYawOffset;
+  }
+  return WhiskerReason::kNone;
+}
+
+}  // namespace
+
+TransitionTable transition_table(FsmState s) {
+  switch (s) {
+    case FsmState::kHoverInit: return table_of(kHoverInitTable);
+    case FsmState::kFlyForward: return table_of(kFlyForwardTable);
+    case FsmState::kWallFollowing: return table_of(kWallFollowingTable);
+    case FsmState::kResumeForward: return table_of(kResumeForwardTable);
+    case FsmState::kLanding: return table_of(kLandingTable);
+    case FsmState::kLanded:
+    case FsmState::kFailsafeHover:
+    case FsmState::kFailsafeLand:
+      break;
+  }
+  return TransitionTable{};
+}
+
+// --- The follower ------------------------------------------------------------
+
 WhiskerWallFollower::WhiskerWallFollower(const WallFollowerParams& params)
-    : p_(params), heading_limit_(params), turn_anchor_(params), step_and_scan_(params), yaw_offset_(params) {
-  p_.validate();
+    : p_(validated(params)),
+      left_(params),
+      right_(params),
+      safety_(safety_params(params), {SafetyInput::kDepth, SafetyInput::kOdometry}),
+      heading_limit_(params),
+      turn_anchor_(params),
+      step_and_scan_(params),
+      yaw_offset_(params) {
   reset();
 }
 
@@ -211,6 +480,7 @@ void WhiskerWallFollower::reset() {
   state_ = previous_ = FsmState::kHoverInit;
   sub_ = WallSubState::kNone;
   reason_ = "start";
+  reason_code_ = code_of(WhiskerReason::kNone);
   reason_composed_ = false;
   started_ = false;
   entered_ = last_t_ = 0.0;
@@ -218,10 +488,9 @@ void WhiskerWallFollower::reset() {
   side_ = p_.follow_side;
   both_touched_ = false;
   last_contact_t_ = 0.0;
-  f_left_ = f_right_ = NAN;
-  pressed_t_left_ = pressed_t_right_ = -INFINITY;
-  live_x_l_ = live_y_l_ = live_x_r_ = live_y_r_ = NAN;
-  phantom_l_ = phantom_r_ = false;
+  left_.reset();
+  right_.reset();
+  safety_.reset();
   wall_heading_ = theta_ = NAN;
   origin_set_ = false;
   origin_x_ = origin_y_ = clear_x_ = clear_y_ = 0.0;
@@ -238,10 +507,11 @@ void WhiskerWallFollower::reset() {
   override_started_ = false;
 }
 
-void WhiskerWallFollower::enter(FsmState s, const char* reason, double t) {
+void WhiskerWallFollower::enter(FsmState s, const char* reason, uint8_t code, double t) {
   previous_ = state_;
   state_ = s;
   reason_ = reason;
+  reason_code_ = code;
   reason_composed_ = false;
   entered_ = t;
   ++transitions_;
@@ -255,16 +525,102 @@ void WhiskerWallFollower::set_origin(const WallFollowerInput& in) {
   course_yaw_ = std::isfinite(in.yaw) ? in.yaw : 0.0;
 }
 
-bool WhiskerWallFollower::target_reached(const WallFollowerInput& in) const {
-  if (!in.has_target) return false;
-  const double ex = in.x - in.target_x, ey = in.y - in.target_y;
-  if (std::hypot(ex, ey) <= p_.target_radius) return true;
-  if (!p_.land_past_target) return false;
-  // Past the target along the course direction (course start -> target).
-  const double cx = in.target_x - origin_x_, cy = in.target_y - origin_y_;
-  const double n = std::hypot(cx, cy);
-  if (n < 1e-6) return false;
-  return (ex * cx + ey * cy) / n >= 0.0;
+void WhiskerWallFollower::fill_snapshot(TickSnapshot& snap) const {
+  snap.state = state_;
+  snap.current = sub_;
+  snap.side = side_;
+  snap.left = left_.reading();
+  snap.right = right_.reading();
+  snap.l_valid = snap.left.valid;
+  snap.r_valid = snap.right.valid;
+  snap.d_left = snap.left.rule_depth;
+  snap.d_right = snap.right.rule_depth;
+  snap.theta = theta_;
+  snap.wall_heading = wall_heading_;
+  snap.origin_set = origin_set_;
+  snap.origin_x = origin_x_;
+  snap.origin_y = origin_y_;
+  snap.course_yaw = course_yaw_;
+  snap.after_clear = after_clear_;
+  snap.contacted = contacted_;
+  snap.entered = entered_;
+  snap.last_contact_t = last_contact_t_;
+  snap.clear_x = clear_x_;
+  snap.clear_y = clear_y_;
+  snap.resume_x = resume_x_;
+  snap.resume_y = resume_y_;
+}
+
+void WhiskerWallFollower::on_entry(FsmState s, const TickSnapshot& snap, uint8_t code) {
+  const WallFollowerInput& in = snap.in;
+  switch (s) {
+    case FsmState::kFlyForward:
+      // The course (heading and start) is set when the flight first goes
+      // forward: at the end of HOVER_INIT, or on resuming from a fail-safe
+      // hover that began there.
+      if (!origin_set_) set_origin(in);
+      if (code == code_of(WhiskerReason::kClearedByMargin)) {
+        after_clear_ = true;
+        resume_x_ = in.x;
+        resume_y_ = in.y;
+      }
+      break;
+    case FsmState::kWallFollowing:
+      last_contact_t_ = in.t;
+      if (code == code_of(WhiskerReason::kContactWhileClearing)) {
+        both_touched_ = true;  // the same obstacle's end: passing the edge (rule 2)
+      } else if (code == code_of(WhiskerReason::kContactSameObstacle)) {
+        both_touched_ = false;  // the side kept
+      } else if (code == code_of(WhiskerReason::kContactBaffleEnd)) {
+        // Pass the end on the other side, as an edge (rule 2).
+        side_ = guards::end_contact_offset(snap, p_) > 0.0 ? Side::kRight : Side::kLeft;
+        both_touched_ = true;
+      } else {
+        // A new obstacle. Side: toward the target's lateral offset in the body
+        // frame when it is clear, else the configured side.
+        side_ = p_.follow_side;
+        if (p_.side_toward_target && in.has_target) {
+          const double lateral = -std::sin(in.yaw) * (in.target_x - in.x) + std::cos(in.yaw) * (in.target_y - in.y);
+          if (lateral > p_.side_deadband) side_ = Side::kLeft;
+          if (lateral < -p_.side_deadband) side_ = Side::kRight;
+        }
+        both_touched_ = false;
+      }
+      break;
+    case FsmState::kResumeForward:
+      clear_x_ = in.x;
+      clear_y_ = in.y;
+      break;
+    case FsmState::kHoverInit:
+    case FsmState::kLanding:
+    case FsmState::kLanded:
+    case FsmState::kFailsafeHover:
+    case FsmState::kFailsafeLand:
+      break;
+  }
+}
+
+void WhiskerWallFollower::on_tick(const TickSnapshot& snap) {
+  if (state_ != FsmState::kWallFollowing) return;
+  if (guards::contact(snap, p_)) last_contact_t_ = snap.in.t;
+  if (snap.left.valid && snap.right.valid) both_touched_ = true;
+}
+
+void WhiskerWallFollower::for_test_enter(FsmState s, const WallFollowerInput& in, WhiskerReason code) {
+  if (s == FsmState::kFailsafeHover || s == FsmState::kFailsafeLand) {
+    throw std::invalid_argument(std::string("WhiskerWallFollower::for_test_enter: ") + to_string(s) +
+                                " is the SafetyRunner's state, entered by a stale input");
+  }
+  if (!started_) {
+    started_ = true;
+    last_t_ = in.t;
+  }
+  if (!origin_set_) set_origin(in);
+  TickSnapshot snap;
+  snap.in = in;
+  fill_snapshot(snap);
+  enter(s, "test", code_of(code), in.t);
+  on_entry(s, snap, code_of(code));
 }
 
 WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
@@ -279,224 +635,105 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
   const double dt = std::max(0.0, t - last_t_);
   last_t_ = t;
 
+  // 1. Input gates: each Whisker's reading (validity, phantom gate, low-pass,
+  // pressed cap), then the wall angle from the two.
   const bool depth_fresh = input_fresh(t, in.depth_stamp, p_.max_input_age_s);
-  const bool odom_fresh = input_fresh(t, in.odom_stamp, p_.max_input_age_s);
-  bool l_valid = depth_fresh && in.left_valid && std::isfinite(in.depth_left);
-  bool r_valid = depth_fresh && in.right_valid && std::isfinite(in.depth_right);
-  bool tdorc_l = in.tdorc_contact_left, tdorc_r = in.tdorc_contact_right;
-  // Contact as reported, before the phantom gate below.
-  const bool held_raw_l = l_valid || tdorc_l, held_raw_r = r_valid || tdorc_r;
-
-  // Phantom hold gated by odometry (issue 17, docs/tuning/tactile_fsm.md "Round 4"): a held
-  // contact whose S_c sum (000 eq. 5) stays quiet while the drone travels
-  // more than phantom_travel is the gel-hysteresis offset (000 eq. 1, N_h) of
-  // a whisker that left the wall, not a wall: ignore it.
-  if (p_.phantom_quiet_rms > 0.0 && odom_fresh && std::isfinite(in.x) && std::isfinite(in.y)) {
-    auto gate = [&](bool& valid, bool& tdorc, double rms, double& lx, double& ly, bool& phantom) {
-      const bool held = valid || tdorc;
-      // Free, unknown or moving: the contact (if any) is live here.
-      // phantom_latch: once taken for a phantom, a whisker stays one until its
-      // contact ends or its sum moves clearly (RMS >= twice the quiet level, a
-      // new touch); without it the free whisker's noise, which crosses the
-      // quiet level itself, lets the phantom back in for a moment.
-      const double live_rms = (p_.phantom_latch && phantom) ? 2.0 * p_.phantom_quiet_rms : p_.phantom_quiet_rms;
-      if (!held || !std::isfinite(rms) || rms >= live_rms || !std::isfinite(lx)) {
-        lx = in.x;
-        ly = in.y;
-        phantom = false;
-        return;
-      }
-      phantom = (p_.phantom_latch && phantom) || std::hypot(in.x - lx, in.y - ly) > p_.phantom_travel;
-      if (!phantom) return;
-      valid = false;
-      tdorc = false;
-    };
-    gate(l_valid, tdorc_l, in.input_change_rms_left, live_x_l_, live_y_l_, phantom_l_);
-    gate(r_valid, tdorc_r, in.input_change_rms_right, live_x_r_, live_y_r_, phantom_r_);
-  } else {
-    phantom_l_ = phantom_r_ = false;
-  }
-
-  // First-order low-pass of the depths for the sub-state rule (our choice;
-  // restarts when a whisker loses the wall).
-  const double a = p_.depth_filter_tau_s > 0.0 ? dt / (p_.depth_filter_tau_s + dt) : 1.0;
-  f_left_ = !l_valid ? NAN : (std::isfinite(f_left_) ? f_left_ + a * (in.depth_left - f_left_) : in.depth_left);
-  f_right_ = !r_valid ? NAN : (std::isfinite(f_right_) ? f_right_ + a * (in.depth_right - f_right_) : in.depth_right);
+  const bool pose_ok =
+      input_fresh(t, in.odom_stamp, p_.max_input_age_s) && std::isfinite(in.x) && std::isfinite(in.y);
+  const WhiskerReading& wl = left_.update(sample_of(in, depth_fresh, true), t, dt, pose_ok, in.x, in.y);
+  const WhiskerReading& wr = right_.update(sample_of(in, depth_fresh, false), t, dt, pose_ok, in.x, in.y);
   // Wall angle, 000 eq. 21: theta = atan((d_l - d_r) / s), filtered as the
   // world-frame heading of the wall normal yaw - theta (our choice: a straight
   // wall keeps it constant while the drone turns, so the filter adds no lag
   // to the turn and the turn stops on time).
-  if (l_valid && r_valid && std::isfinite(in.yaw)) {
-    const double w = in.yaw - std::atan((in.depth_left - in.depth_right) / p_.whisker_spacing);
+  if (wl.valid && wr.valid && std::isfinite(in.yaw)) {
+    const double a = p_.depth_filter_tau_s > 0.0 ? dt / (p_.depth_filter_tau_s + dt) : 1.0;
+    const double w = in.yaw - std::atan((wl.depth - wr.depth) / p_.whisker_spacing);
     wall_heading_ = std::isfinite(wall_heading_) ? wall_heading_ + a * std::remainder(w - wall_heading_, 2.0 * M_PI) : w;
     theta_ = std::remainder(in.yaw - wall_heading_, 2.0 * M_PI);
   } else {
     wall_heading_ = theta_ = NAN;
   }
 
-  // 000 Methods: wall following is triggered when either whisker's S_p
-  // exceeds T_c (TDORC flags); the depth node's contact flags count too.
-  const bool contact_l = l_valid || tdorc_l;
-  const bool contact_r = r_valid || tdorc_r;
-  const bool contact = contact_l || contact_r;
-  const bool flying =
-      state_ == FsmState::kFlyForward || state_ == FsmState::kWallFollowing || state_ == FsmState::kResumeForward;
-
-  if (flying && !depth_fresh) {
-    enter(FsmState::kFailsafeHover, "tactile depth stale", t);
-  } else if (flying && !odom_fresh) {
-    enter(FsmState::kFailsafeHover, "odometry stale", t);
-  } else if (flying && target_reached(in)) {
-    enter(FsmState::kLanding, "target reached", t);
-  } else {
-    switch (state_) {
-      case FsmState::kHoverInit:
-        if (t - entered_ >= p_.hover_init_s - kTimeEps) {
-          if (!depth_fresh) {
-            enter(FsmState::kFailsafeHover, "tactile depth stale at end of hover", t);
-          } else if (!odom_fresh) {
-            enter(FsmState::kFailsafeHover, "odometry stale at end of hover", t);
-          } else {
-            set_origin(in);
-            enter(FsmState::kFlyForward, "hover initialisation done", t);
-          }
-        }
-        break;
-      case FsmState::kFlyForward:
-      case FsmState::kResumeForward:
-        if (contact && state_ == FsmState::kResumeForward) {
-          // Contact again while side-stepping past the edge: the same
-          // obstacle's end (the contact flags dropped early). Keep the side and
-          // treat it as passing the edge (rule 2), not as a new approach,
-          // which would turn toward the touching whisker and wrap the tip.
-          both_touched_ = true;
-          last_contact_t_ = t;
-          enter(FsmState::kWallFollowing, "whisker contact while clearing", t);
-        } else if (contact && after_clear_ &&
-                   std::cos(course_yaw_) * (in.x - resume_x_) + std::sin(course_yaw_) * (in.y - resume_y_) <
-                       p_.same_obstacle_distance) {
-          // Contact right after a clearing: the same obstacle (its contact
-          // flags dropped mid-wall). Keep the side instead of re-choosing it,
-          // which went back along the baffle (issue 17; docs/whisker_fsm.md "Same obstacle").
-          both_touched_ = false;
-          last_contact_t_ = t;
-          enter(FsmState::kWallFollowing, "whisker contact, same obstacle (just cleared)", t);
-        } else if (contact) {
-          // Side: toward the target's lateral offset in the body frame when it
-          // is clear, else the configured side.
-          side_ = p_.follow_side;
-          if (p_.side_toward_target && in.has_target) {
-            const double lateral = -std::sin(in.yaw) * (in.target_x - in.x) + std::cos(in.yaw) * (in.target_y - in.y);
-            if (lateral > p_.side_deadband) side_ = Side::kLeft;
-            if (lateral < -p_.side_deadband) side_ = Side::kRight;
-          }
-          both_touched_ = false;
-          last_contact_t_ = t;
-          // A baffle's end met by one whisker beside the axis (docs/tuning/tactile_fsm.md "Round
-          // 10"): pass it on the other side, as an edge (rule 2).
-          const double end_lat = end_contact_offset(in, contact_l, contact_r, l_valid, r_valid);
-          if (p_.end_contact_lateral > 0.0 && std::fabs(end_lat) > p_.end_contact_lateral) {
-            side_ = end_lat > 0.0 ? Side::kRight : Side::kLeft;
-            both_touched_ = true;
-            enter(FsmState::kWallFollowing, "whisker contact at a baffle's end beside the axis", t);
-          } else {
-            enter(FsmState::kWallFollowing, "whisker contact", t);
-          }
-        } else if (state_ == FsmState::kResumeForward &&
-                   std::hypot(in.x - clear_x_, in.y - clear_y_) >= p_.clear_margin &&
-                   (!(held_raw_l || held_raw_r) ||
-                    std::hypot(in.x - clear_x_, in.y - clear_y_) >= p_.phantom_resume_max)) {
-          // A whisker still held as a phantom: TDORC has not released it yet,
-          // and its window learns what follows the release (a new contact
-          // would go unseen); keep side-stepping, up to phantom_resume_max.
-          after_clear_ = true;
-          resume_x_ = in.x;
-          resume_y_ = in.y;
-          enter(FsmState::kFlyForward, "cleared the obstacle by the margin", t);
-        }
-        break;
-      case FsmState::kWallFollowing:
-        if (contact) last_contact_t_ = t;
-        if (l_valid && r_valid) both_touched_ = true;
-        if (!contact && t - last_contact_t_ >= p_.clear_confirm_s - kTimeEps) {
-          clear_x_ = in.x;
-          clear_y_ = in.y;
-          enter(FsmState::kResumeForward, "obstacle cleared (both whiskers off the wall)", t);
-        }
-        break;
-      case FsmState::kFailsafeHover:
-        if (depth_fresh && odom_fresh) {
-          if (!origin_set_) set_origin(in);
-          enter(FsmState::kFlyForward, "inputs fresh again", t);
-        } else if (t - entered_ >= p_.failsafe_land_after_s - kTimeEps) {
-          enter(FsmState::kFailsafeLand, "inputs stale for failsafe_land_after_s", t);
-        }
-        break;
-      case FsmState::kLanding:
-        if (t - entered_ >= p_.landing_duration_s - kTimeEps) enter(FsmState::kLanded, "landing complete", t);
-        break;
-      case FsmState::kLanded:
-      case FsmState::kFailsafeLand:
-        break;
-    }
-  }
-
-  // Pressed past the depth model (issue 17, docs/whisker_fsm.md "Pressed whisker"): the
-  // whisker's S_c sum bounds its depth by press_depth whatever depth is read.
-  double d_left = f_left_, d_right = f_right_;
-  if (p_.press_sum_pa > 0.0) {
-    // Pressed: the sum beyond the model's range.
-    if (l_valid && in.input_sum_left >= p_.press_sum_pa) pressed_t_left_ = t;
-    if (r_valid && in.input_sum_right >= p_.press_sum_pa) pressed_t_right_ = t;
-    if (!l_valid) pressed_t_left_ = -INFINITY;
-    if (!r_valid) pressed_t_right_ = -INFINITY;
-    if (l_valid && t - pressed_t_left_ <= p_.press_hold_s + kTimeEps) d_left = std::fmin(d_left, p_.press_depth);
-    if (r_valid && t - pressed_t_right_ <= p_.press_hold_s + kTimeEps) d_right = std::fmin(d_right, p_.press_depth);
-  }
-
-  // The override rules (issue 33; docs/whisker_fsm.md "Override rules"), in
-  // order: first on the sub-state rule's result, then on the state's setpoint.
-  const bool top = state_ != state_before;
-  override_started_ = false;
+  // 2. The state switch: the shared fail-safe first (a flying state, or the
+  // end of HOVER_INIT, with stale depth or odometry), then the state's tick
+  // and its transition table.
   TickSnapshot snap;
   snap.in = in;
   snap.dt = dt;
-  snap.state = state_;
-  snap.current = sub_;
-  snap.side = side_;
-  snap.l_valid = l_valid;
-  snap.r_valid = r_valid;
-  snap.d_left = d_left;
-  snap.d_right = d_right;
-  snap.theta = theta_;
-  snap.wall_heading = wall_heading_;
-  snap.origin_set = origin_set_;
-  snap.origin_x = origin_x_;
-  snap.origin_y = origin_y_;
-  snap.course_yaw = course_yaw_;
-  snap.after_clear = after_clear_;
+  fill_snapshot(snap);
+  const bool guarded = flying(state_) || (state_ == FsmState::kHoverInit && guards::hover_done(snap, p_));
+  const SafetyVerdict v = safety_.step(t, {in.depth_stamp, in.odom_stamp}, guarded);
+  const uint8_t safety_code = static_cast<uint8_t>(v.reason);
+  if (v.entered) {
+    switch (v.state) {
+      case SafetyState::kFailsafeHover: {
+        const bool depth = safety_.stale_input() == SafetyInput::kDepth;
+        const char* text = state_ != FsmState::kHoverInit ? v.text
+                           : depth                         ? "tactile depth stale at end of hover"
+                                                           : "odometry stale at end of hover";
+        enter(FsmState::kFailsafeHover, text, safety_code, t);
+        break;
+      }
+      case SafetyState::kNominal:  // inputs fresh again: forward
+        enter(FsmState::kFlyForward, v.text, safety_code, t);
+        on_entry(FsmState::kFlyForward, snap, safety_code);
+        break;
+      case SafetyState::kFailsafeLand:
+      case SafetyState::kTimeLimitLand:  // not reached: no time limit (safety_params)
+        enter(FsmState::kFailsafeLand, v.text, safety_code, t);
+        break;
+    }
+  } else if (v.nominal()) {
+    on_tick(snap);
+    snap.last_contact_t = last_contact_t_;
+    for (const Transition& row : transition_table(state_)) {
+      if (!row.guard(snap, p_)) continue;
+      enter(row.next, row.text, code_of(row.code), t);
+      on_entry(row.next, snap, code_of(row.code));
+      break;
+    }
+  }
+
+  // 3. The sub-state rule (000 Fig. S4e) and the override rules (issue 33;
+  // docs/whisker_fsm.md "Override rules"), in order: first on the sub-state
+  // rule's result, then on the state's setpoint.
+  const bool top = state_ != state_before;
+  override_started_ = false;
+  fill_snapshot(snap);
   snap.sub_state = state_ == FsmState::kWallFollowing
-                       ? wall_sub_state(d_left, l_valid, d_right, r_valid, side_, both_touched_, sub_, p_, theta_)
+                       ? wall_sub_state(snap.d_left, snap.l_valid, snap.d_right, snap.r_valid, side_, both_touched_,
+                                        sub_, p_, theta_)
                        : WallSubState::kNone;
   const WallSubState rule_sub = snap.sub_state;
   const char* sub_reason = nullptr;
+  WhiskerReason sub_code = WhiskerReason::kSubStateRule;
   run_rule(heading_limit_, OverrideRule::kHeadingLimit, snap, top);
-  if (snap.sub_state != rule_sub) sub_reason = HeadingLimitRule::kReason;
+  if (snap.sub_state != rule_sub) {
+    sub_reason = HeadingLimitRule::kReason;
+    sub_code = WhiskerReason::kHeadingLimit;
+  }
   const WallSubState limited_sub = snap.sub_state;
   run_rule(turn_anchor_, OverrideRule::kTurnAnchor, snap, top);
-  if (snap.sub_state != limited_sub) sub_reason = TurnAnchorRule::kReason;
+  if (snap.sub_state != limited_sub) {
+    sub_reason = TurnAnchorRule::kReason;
+    sub_code = WhiskerReason::kTurnAnchor;
+  }
   if (snap.sub_state != sub_ && !top) {
     // A sub-state change: the Fig. S4e rule's, or the override's that made it.
     if (sub_reason == nullptr) {
       reason_ = "sub-state rule (000 Fig. S4e)";
+      reason_code_ = code_of(sub_code);
       reason_composed_ = false;
     } else if (!override_started_) {
       reason_ = sub_reason;  // else run_rule named it
+      reason_code_ = code_of(sub_code);
       reason_composed_ = false;
     }
   }
   sub_ = snap.sub_state;
 
+  // 4. The state's setpoint and the setpoint rules.
   WallFollowerOutput out;
   out.state = state_;
   out.sub_state = sub_;
@@ -509,23 +746,6 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
   out.setpoint = snap.setpoint;
   out.override_started = override_started_;
   return out;
-}
-
-double WhiskerWallFollower::end_contact_offset(const WallFollowerInput& in, bool contact_l, bool contact_r,
-                                               bool l_valid, bool r_valid) const {
-  // Lateral offset (left > 0) of the touching whisker's contact point from the
-  // course axis through the drone: the point (whisker_base_x + d, +-s/2) of the
-  // body frame turned by the yaw off the course heading. Exactly one whisker,
-  // with its depth.
-  if (contact_l == contact_r || !origin_set_ || !std::isfinite(in.yaw)) return 0.0;
-  const bool left = contact_l;
-  if (left ? !l_valid : !r_valid) return 0.0;
-  const double d = left ? in.depth_left : in.depth_right;
-  const double side = left ? 1.0 : -1.0;
-  const double rel = std::remainder(in.yaw - course_yaw_, 2.0 * M_PI);
-  const double lat = std::sin(rel) * (p_.whisker_base_x + d) + std::cos(rel) * side * 0.5 * p_.whisker_spacing;
-  // Only on that whisker's side (the end lies where its baffle is).
-  return lat * side > 0.0 ? lat : 0.0;
 }
 
 Setpoint WhiskerWallFollower::command(const WallFollowerInput& in) const {
@@ -747,18 +967,20 @@ void WhiskerWallFollower::run_rule(Rule& rule, OverrideRule id, TickSnapshot& s,
   if (!override_active_[k]) {
     override_active_[k] = true;
     override_started_ = true;
-    note_rule(Rule::kReason, top_transition);
+    note_rule(Rule::kReason, reason_of(id), top_transition);
   }
 }
 
-void WhiskerWallFollower::note_rule(const char* rule_reason, bool top_transition) {
+void WhiskerWallFollower::note_rule(const char* rule_reason, WhiskerReason code, bool top_transition) {
   if (!top_transition) {
     reason_ = rule_reason;
+    reason_code_ = code_of(code);
     reason_composed_ = false;
     return;
   }
   // A rule that begins on a transition's tick: both, the transition first
-  // (a second rule beginning on that tick appends to the first's).
+  // (a second rule beginning on that tick appends to the first's); the code
+  // stays the transition's.
   // Truncated at the buffer's size (the reasons are short static texts).
   std::array<char, 192> text{};
   std::size_t n = 0;

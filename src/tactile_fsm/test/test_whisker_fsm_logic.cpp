@@ -19,6 +19,7 @@
 using tactile_common::ParamError;
 using tactile_common::ParamMap;
 using tactile_fsm::WhiskerFsmLogic;
+using FsmState = tactile_msgs::msg::FsmState;
 
 namespace {
 
@@ -176,6 +177,7 @@ TEST(WhiskerFsmLogic, FlightThroughMessages) {
   EXPECT_EQ(o.state->behaviour, "whisker_wall_following");
   EXPECT_EQ(o.state->state, "HOVER_INIT");
   EXPECT_EQ(o.state->previous_state, "");
+  EXPECT_EQ(o.state->reason_code, FsmState::REASON_NONE);
   EXPECT_DOUBLE_EQ(o.setpoint.height, 0.4);
   EXPECT_EQ(o.setpoint.header.frame_id, "base_link");
   // 5 Hz state messages while hovering: ticks 10, 20, ..., none in between.
@@ -197,6 +199,7 @@ TEST(WhiskerFsmLogic, FlightThroughMessages) {
   EXPECT_EQ(o.state->reason,
             "hover initialisation done; step and scan on the first approach (first_whisk_amplitude, first_scan_step)");
   EXPECT_EQ(o.state->transitions, 1u);
+  EXPECT_EQ(o.state->reason_code, FsmState::REASON_WHISKER_HOVER_DONE);  // the transition's code
   EXPECT_EQ(l.stats().rule_step_and_scan, 1u);
   EXPECT_DOUBLE_EQ(o.setpoint.vx, 0.2);
   tactile_common::to_stamp(100 * kStepNs, o.setpoint.header.stamp);
@@ -209,6 +212,7 @@ TEST(WhiskerFsmLogic, FlightThroughMessages) {
   ASSERT_TRUE(o.state.has_value());
   EXPECT_EQ(o.state->state, "WALL_FOLLOWING/FLY_SIDEWAYS");  // no depth yet
   EXPECT_EQ(o.state->reason, "whisker contact");
+  EXPECT_EQ(o.state->reason_code, FsmState::REASON_WHISKER_CONTACT);
   EXPECT_DOUBLE_EQ(o.setpoint.vy, -0.2);
   // Depths in the band, tilted: d_l = 90 mm, d_r = 70 mm -> turn right at omega_max.
   ns = 102 * kStepNs;
@@ -218,6 +222,7 @@ TEST(WhiskerFsmLogic, FlightThroughMessages) {
   ASSERT_TRUE(o.state.has_value());
   EXPECT_EQ(o.state->state, "WALL_FOLLOWING/TURN_RIGHT");
   EXPECT_EQ(o.state->previous_state, "WALL_FOLLOWING/FLY_SIDEWAYS");
+  EXPECT_EQ(o.state->reason_code, FsmState::REASON_WHISKER_SUB_STATE_RULE);
   EXPECT_NEAR(o.setpoint.yaw_rate, -25.0 * M_PI / 180.0, 1e-12);
   // Odometry past the target (2, 0) -> landing.
   ns = 103 * kStepNs;
@@ -226,6 +231,7 @@ TEST(WhiskerFsmLogic, FlightThroughMessages) {
   o = l.on_timer(ns);
   ASSERT_TRUE(o.state.has_value());
   EXPECT_EQ(o.state->state, "LANDING");
+  EXPECT_EQ(o.state->reason_code, FsmState::REASON_WHISKER_TARGET_REACHED);
   EXPECT_TRUE(o.setpoint.land);
   EXPECT_EQ(o.setpoint.height, 0.0);
 }
@@ -367,8 +373,14 @@ TEST(WhiskerFsmLogic, StaleInputsFailsafe) {
   ASSERT_TRUE(o.state.has_value());
   EXPECT_EQ(o.state->state, "FAILSAFE_HOVER");
   EXPECT_EQ(o.state->reason, "tactile depth stale");
+  EXPECT_EQ(o.state->reason_code, FsmState::REASON_FAILSAFE_DEPTH_STALE);  // the SafetyRunner's code
   EXPECT_EQ(o.setpoint.vx, 0.0);
-  for (++k; k <= 211; ++k) o = l.on_timer(k * kStepNs);
+  for (++k; k <= 211; ++k) {
+    o = l.on_timer(k * kStepNs);
+    if (l.fsm().state() == tactile_fsm::FsmState::kFailsafeLand) break;
+  }
+  ASSERT_TRUE(o.state.has_value());  // published on the transition
+  EXPECT_EQ(o.state->reason_code, FsmState::REASON_FAILSAFE_STALE_TOO_LONG);
   EXPECT_EQ(l.fsm().state(), tactile_fsm::FsmState::kFailsafeLand);
   EXPECT_TRUE(o.setpoint.land);
 }

@@ -12,6 +12,8 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "tactile_fsm/safety_runner.hpp"
+
 namespace tactile_fsm {
 
 /// Top-level states (000 Methods: hover -> fly forward -> wall following ->
@@ -39,6 +41,30 @@ enum class WallSubState : uint8_t {
 
 /// Side the wall is followed to (direction of the sideways flight).
 enum class Side : uint8_t { kRight, kLeft };
+
+/// Why the follower's last transition, sub-state change or override rule's
+/// onset happened: the values of tactile_msgs/FsmState's REASON_WHISKER_*
+/// codes (block 30-49, static_asserts in whisker_fsm_logic.cpp). The
+/// fail-safe's transitions carry the SafetyRunner's SafetyReason (1-7).
+enum class WhiskerReason : uint8_t {
+  kNone = 0,                  ///< REASON_NONE: no transition yet
+  kHoverDone = 30,            ///< HOVER_INIT -> FLY_FORWARD (hover_done)
+  kContact = 31,              ///< FLY_FORWARD -> WALL_FOLLOWING (contact), side chosen
+  kContactSameObstacle = 32,  ///< FLY_FORWARD -> WALL_FOLLOWING (contact_same_obstacle), side kept
+  kContactBaffleEnd = 33,     ///< FLY_FORWARD -> WALL_FOLLOWING (contact_at_baffle_end), passing it as an edge
+  kContactWhileClearing = 34, ///< RESUME_FORWARD -> WALL_FOLLOWING (contact_while_clearing)
+  kObstacleCleared = 35,      ///< WALL_FOLLOWING -> RESUME_FORWARD (obstacle_cleared)
+  kClearedByMargin = 36,      ///< RESUME_FORWARD -> FLY_FORWARD (cleared_by_margin)
+  kTargetReached = 37,        ///< a flying state -> LANDING (target_reached)
+  kLandingDone = 38,          ///< LANDING -> LANDED (landing_done)
+  kSubStateRule = 39,         ///< inside WALL_FOLLOWING: the Fig. S4e rule changed the sub-state
+  kHeadingLimit = 40,         ///< override rule HeadingLimitRule began (or changed the sub-state)
+  kTurnAnchor = 41,           ///< override rule TurnAnchorRule began (or changed the sub-state)
+  kStepAndScan = 42,          ///< override rule StepAndScanRule began
+  kYawOffset = 43,            ///< override rule YawOffsetRule began
+};
+/// "hover_done", "contact", ... (the guard's or rule's name; "none").
+const char* to_string(WhiskerReason r);
 
 const char* to_string(FsmState s);
 const char* to_string(WallSubState s);
@@ -302,6 +328,56 @@ struct Setpoint {
   bool land = false;
 };
 
+// --- Whisker ----------------------------------------------------------------
+//
+// One per side (issue 33): the per-whisker perception of the follower, in the
+// order it runs on each tick: validity (fresh depth message, flagged valid,
+// finite), the phantom gate, the low-pass of the depth and the pressed cap. It
+// produces one WhiskerReading per tick, which the guards, the sub-state rule
+// and the override rules read.
+
+/// One whisker's side of a WallFollowerInput.
+struct WhiskerSample {
+  bool depth_fresh = false;       ///< the TactileDepth message is fresh (input_fresh)
+  bool valid = false;             ///< its depth measured (whisker in contact)
+  double depth = NAN;             ///< [m]
+  bool tdorc_contact = false;     ///< TDORC contact flag (000 eq. 4-11)
+  double input_sum = NAN;         ///< sum of the three S_c (000 eq. 5) [Pa]; NaN = unknown
+  double input_change_rms = NAN;  ///< RMS of its sample-to-sample changes [Pa]; NaN = unknown
+};
+
+/// What one whisker reads on one tick.
+struct WhiskerReading {
+  bool held_raw = false;    ///< in contact as reported (valid depth or TDORC flag), before the phantom gate
+  bool phantom = false;     ///< held but taken for a phantom: its depth and flag ignored
+  bool valid = false;       ///< depth valid: fresh, flagged, finite and not a phantom
+  bool contact = false;     ///< valid or TDORC-flagged, not a phantom (000 Methods: triggers wall following)
+  double depth = NAN;       ///< the depth read, when valid (000 eq. 21's d) [m]
+  double filtered = NAN;    ///< low-passed depth (depth_filter_tau_s), NaN when not valid [m]
+  bool pressed = false;     ///< valid and its S_c sum >= press_sum_pa within press_hold_s
+  double rule_depth = NAN;  ///< the sub-state rule's depth: filtered, at most press_depth when pressed [m]
+};
+
+/// One whisker's perception (the left or the right one; both run the same code).
+class Whisker {
+ public:
+  explicit Whisker(const WallFollowerParams& p) : p_(p) {}
+  /// One tick at time t, dt after the last. (x, y): the odometry position,
+  /// `pose_ok` when it is fresh and finite (else the phantom gate is off
+  /// this tick and no whisker is a phantom).
+  const WhiskerReading& update(const WhiskerSample& s, double t, double dt, bool pose_ok, double x, double y);
+  void reset();
+  const WhiskerReading& reading() const { return reading_; }
+
+ private:
+  WallFollowerParams p_;
+  double filtered_ = NAN;
+  double pressed_t_ = -INFINITY;  ///< last tick with the sum >= press_sum_pa
+  double live_x_ = NAN, live_y_ = NAN;  ///< where the S_c sum last moved (or the whisker was free)
+  bool phantom_ = false;
+  WhiskerReading reading_;
+};
+
 struct WallFollowerOutput {
   Setpoint setpoint;
   FsmState state = FsmState::kHoverInit;
@@ -343,9 +419,8 @@ WallSubState wall_sub_state(double d_l, bool l_valid, double d_r, bool r_valid, 
 /// max_age old (WallFollowerParams::max_input_age_s), 1 ns of tolerance for
 /// stamps converted from integer nanoseconds. A flying state with a stale
 /// input goes to its fail-safe hover.
-inline bool input_fresh(double t, double stamp, double max_age) {
-  return std::isfinite(stamp) && t - stamp <= max_age + 1e-9;
-}
+/// The SafetyRunner's rule (input_is_fresh), kept under this name for its callers.
+inline bool input_fresh(double t, double stamp, double max_age) { return input_is_fresh(t, stamp, max_age); }
 
 /// |(vx, vy)| <= v_max (scaled, direction kept), |yaw_rate| <= omega_max,
 /// non-finite values -> 0.
@@ -363,7 +438,10 @@ Setpoint saturate(const Setpoint& s, const WallFollowerParams& p);
 // fired and, when one begins to fire (or its override changes the sub-state),
 // publishes its reason. A later rule sees what the earlier ones left.
 
-/// What the override rules read on one tick, and what they override.
+/// What the guards of the transition tables (before the state switch) and the
+/// override rules (after it) read on one tick, and what the rules override.
+/// l_valid / d_left (and the right ones) repeat left.valid / left.rule_depth
+/// for the rules.
 struct TickSnapshot {
   WallFollowerInput in;  ///< this tick's input (t, pose, S_c change RMS)
   double dt = 0.0;       ///< since the last tick [s]
@@ -378,6 +456,12 @@ struct TickSnapshot {
   double origin_x = 0.0, origin_y = 0.0, course_yaw = 0.0;
   bool after_clear = false;  ///< FLY_FORWARD entered from RESUME_FORWARD
   bool contacted = false;    ///< wall following entered in this flight
+  // Read by the guards of the transition table (before this tick's switch).
+  WhiskerReading left, right;  ///< this tick's readings of the two Whiskers
+  double entered = 0.0;        ///< when `state` was entered [s]
+  double last_contact_t = 0.0; ///< last tick with a contact in WALL_FOLLOWING [s]
+  double clear_x = 0.0, clear_y = 0.0;    ///< where the obstacle was cleared (RESUME_FORWARD's start)
+  double resume_x = 0.0, resume_y = 0.0;  ///< where the FLY_FORWARD after the clearing began
   /// Overridden by the sub-state rules: the Fig. S4e rule's sub-state (kNone
   /// outside WALL_FOLLOWING); by the setpoint rules: the state's setpoint
   /// (after saturate()).
@@ -502,6 +586,60 @@ constexpr std::size_t kOverrideRuleCount = 4;
 /// "heading_limit", "turn_anchor", "step_and_scan", "yaw_offset".
 const char* to_string(OverrideRule r);
 
+// --- States and their transition tables ---------------------------------------
+//
+// Each state has an entry action (WhiskerWallFollower::on_entry), a tick
+// (on_tick: what it keeps up to date) and an ordered table of {guard, next
+// state, reason code, reason text}: the first row whose guard holds is taken,
+// at most one transition per tick. The guards are named predicates on the
+// tick's snapshot (before the switch). The fail-safe (stale depth or
+// odometry in a flying state or at the end of HOVER_INIT -> FAILSAFE_HOVER,
+// fresh again -> FLY_FORWARD, failsafe_land_after_s -> FAILSAFE_LAND) is the
+// shared SafetyRunner's and runs before the tables.
+namespace guards {
+/// HOVER_INIT lasted hover_init_s (000 Methods "Hovering").
+bool hover_done(const TickSnapshot& s, const WallFollowerParams& p);
+/// Either whisker in contact after the phantom gate (000 Methods: S_p > T_c triggers wall following).
+bool contact(const TickSnapshot& s, const WallFollowerParams& p);
+/// A contact in RESUME_FORWARD: the same obstacle's end (its flags dropped early).
+bool contact_while_clearing(const TickSnapshot& s, const WallFollowerParams& p);
+/// A contact in the FLY_FORWARD after a clearing less than same_obstacle_distance
+/// (along the course) from where it began: the same obstacle.
+bool contact_same_obstacle(const TickSnapshot& s, const WallFollowerParams& p);
+/// Lateral offset (left > 0) from the course axis of the contact point of the one
+/// whisker in contact, on that whisker's side; 0 otherwise [m].
+double end_contact_offset(const TickSnapshot& s, const WallFollowerParams& p);
+/// A contact by one whisker more than end_contact_lateral beside the course axis: a baffle's end.
+bool contact_at_baffle_end(const TickSnapshot& s, const WallFollowerParams& p);
+/// RESUME_FORWARD side-stepped clear_margin from the clearing, and no whisker is
+/// held (not even as a phantom) or phantom_resume_max is reached.
+bool cleared_by_margin(const TickSnapshot& s, const WallFollowerParams& p);
+/// No contact for clear_confirm_s in WALL_FOLLOWING.
+bool obstacle_cleared(const TickSnapshot& s, const WallFollowerParams& p);
+/// Within target_radius of the target or (land_past_target) past it along the course.
+bool target_reached(const TickSnapshot& s, const WallFollowerParams& p);
+/// LANDING lasted landing_duration_s.
+bool landing_done(const TickSnapshot& s, const WallFollowerParams& p);
+}  // namespace guards
+
+/// One row of a state's transition table.
+struct Transition {
+  const char* guard_name;  ///< the guard's name (docs, tests)
+  bool (*guard)(const TickSnapshot&, const WallFollowerParams&);
+  FsmState next;
+  WhiskerReason code;
+  const char* text;  ///< reason() of the transition
+};
+/// A state's transition table, in the order the rows are tried.
+struct TransitionTable {
+  const Transition* rows = nullptr;
+  std::size_t size = 0;
+  const Transition* begin() const { return rows; }
+  const Transition* end() const { return rows + size; }
+};
+/// The table of `s` (empty for LANDED and the fail-safe states, which the SafetyRunner drives).
+TransitionTable transition_table(FsmState s);
+
 class WhiskerWallFollower {
  public:
   explicit WhiskerWallFollower(const WallFollowerParams& params);
@@ -517,42 +655,60 @@ class WhiskerWallFollower {
   /// onset happened: a transition's or rule's text, or both ("<transition>;
   /// <rule>") when a rule begins on a transition's tick. Valid until the next step().
   const char* reason() const { return reason_composed_ ? reason_buf_.data() : reason_; }
+  /// The same as a tactile_msgs/FsmState REASON_* code: a WhiskerReason (30-49)
+  /// or, for the fail-safe's transitions, the SafetyRunner's SafetyReason (1-7).
+  /// When a rule begins on a transition's tick the transition's code stays.
+  uint8_t reason_code() const { return reason_code_; }
   /// Ticks on which each override rule fired (index: OverrideRule), since reset().
   uint64_t override_count(OverrideRule r) const { return override_count_[static_cast<std::size_t>(r)]; }
   bool started() const { return started_; }
   double state_entered() const { return entered_; }
   uint32_t transitions() const { return transitions_; }
   Side active_side() const { return side_; }
+  /// The two Whiskers' readings of the last tick.
+  const WhiskerReading& left() const { return left_.reading(); }
+  const WhiskerReading& right() const { return right_.reading(); }
   /// Low-pass filtered depths used by the rule (NaN when invalid).
-  double filtered_left() const { return f_left_; }
-  double filtered_right() const { return f_right_; }
+  double filtered_left() const { return left().filtered; }
+  double filtered_right() const { return right().filtered; }
   /// Whisker held in contact but taken for a phantom (phantom_quiet_rms) on the last tick.
-  bool phantom_left() const { return phantom_l_; }
-  bool phantom_right() const { return phantom_r_; }
+  bool phantom_left() const { return left().phantom; }
+  bool phantom_right() const { return right().phantom; }
+  /// The shared fail-safe (depth, then odometry).
+  const SafetyRunner& safety() const { return safety_; }
+  /// Tests: puts a started follower into `s` at in.t (course set from `in` if
+  /// not yet), running the state's entry action as for an entry with `code`;
+  /// counted as a transition, reason "test". Not the fail-safe states (the
+  /// SafetyRunner's, entered by a stale input): std::invalid_argument.
+  void for_test_enter(FsmState s, const WallFollowerInput& in, WhiskerReason code = WhiskerReason::kNone);
   /// Wall angle in the body frame used by the rule [rad] (NaN unless both valid).
   double wall_angle() const { return theta_; }
   const WallFollowerParams& params() const { return p_; }
 
  private:
-  void enter(FsmState s, const char* reason, double t);
-  bool target_reached(const WallFollowerInput& in) const;
+  void enter(FsmState s, const char* reason, uint8_t code, double t);
+  /// Entry action of `s`, entered for `code` (some depend on the transition taken).
+  void on_entry(FsmState s, const TickSnapshot& snap, uint8_t code);
+  /// What a state keeps up to date on each tick, before its table.
+  void on_tick(const TickSnapshot& snap);
+  /// The snapshot's copy of the follower's state (the guards' and rules' view).
+  void fill_snapshot(TickSnapshot& snap) const;
   void set_origin(const WallFollowerInput& in);
   Setpoint command(const WallFollowerInput& in) const;
-  double end_contact_offset(const WallFollowerInput& in, bool contact_l, bool contact_r, bool l_valid,
-                            bool r_valid) const;
   double realign(const WallFollowerInput& in) const;
   double realign_rate(double yaw) const;  ///< realign()'s rate toward the course from `yaw` (unsaturated)
   /// Runs one override rule on the snapshot: observe, then apply (counted) or idle.
   template <typename Rule>
   void run_rule(Rule& rule, OverrideRule id, TickSnapshot& s, bool top_transition);
   /// reason_ for a rule that fired on a sub-state change or began to fire this tick.
-  void note_rule(const char* rule_reason, bool top_transition);
+  void note_rule(const char* rule_reason, WhiskerReason code, bool top_transition);
 
   WallFollowerParams p_;
   FsmState state_ = FsmState::kHoverInit;
   FsmState previous_ = FsmState::kHoverInit;
   WallSubState sub_ = WallSubState::kNone;
   const char* reason_ = "start";
+  uint8_t reason_code_ = 0;
   bool started_ = false;
   double entered_ = 0.0;
   double last_t_ = 0.0;
@@ -560,11 +716,8 @@ class WhiskerWallFollower {
   Side side_ = Side::kRight;
   bool both_touched_ = false;
   double last_contact_t_ = 0.0;
-  double f_left_ = NAN, f_right_ = NAN;
-  double pressed_t_left_ = -INFINITY, pressed_t_right_ = -INFINITY;  ///< last tick with sum >= press_sum_pa
-  double live_x_l_ = NAN, live_y_l_ = NAN;  ///< where the left S_c sum last moved (or the whisker was free)
-  double live_x_r_ = NAN, live_y_r_ = NAN;
-  bool phantom_l_ = false, phantom_r_ = false;
+  Whisker left_, right_;
+  SafetyRunner safety_;
   double wall_heading_ = NAN;  ///< filtered yaw - theta [rad]
   double theta_ = NAN;
   bool origin_set_ = false;
