@@ -151,3 +151,27 @@ TEST(WallEffectSitl, CornerConvexObstacleAndVectorFieldScenesReachTheGoal) {
     EXPECT_TRUE(m["success"].get<bool>());
   }
 }
+
+// Issue 33, the shared fail-safe: the reported rotor thrusts stop 12 s into the
+// 004 wall tracking, so the EKF stops and the wall estimate goes stale while the
+// INDI controller still flies on odometry and IMU. wall_effect_nav hovered in
+// place forever; now FAILSAFE_HOVER 0.2 s later, FAILSAFE_LAND 2 s after that
+// (z velocity-only at -0.25 m/s), and the vehicle ends on the floor with INDI's
+// thrust wound down to zero, without touching the wall.
+TEST(WallEffectSitl, StaleWallEstimateLands) {
+  const auto m = tactile_cli::test::run_edited_scenario(
+      "ducted_track_0.yaml", {{"duration_s: 30.0", "duration_s: 22.0"}},
+      "faults:\n  - {type: dropout, topic: /thrust_command, start_s: 12.0, duration_s: 100.0}\n");
+  const auto& w = m["wall_effect_nav"];
+  EXPECT_EQ(w["failsafe_state"], "FAILSAFE_LAND");
+  EXPECT_GT(m["faults_injected"]["dropout"].get<int>(), 0);
+  const auto& n = m["nodes"]["/wall_effect_nav"];
+  EXPECT_GT(n["ticks_wall_stale"].get<int>(), 0);
+  EXPECT_EQ(n["ticks_without_odometry"].get<int>(), 0);
+  EXPECT_EQ(m["collisions"].get<int>(), 0);
+  const auto& g = m["ground_truth"];
+  std::printf("stale wall estimate: final z %.4f m, INDI thrust %.3f N\n", g["final_z_m"].get<double>(),
+              w["final_commanded_thrust_n"].get<double>());
+  EXPECT_LT(g["final_z_m"].get<double>(), 0.01);  // on the floor, not hovering at 1 m
+  EXPECT_LT(w["final_commanded_thrust_n"].get<double>(), 0.05);  // motors idle (hover: 0.28 kg g = 2.7 N)
+}

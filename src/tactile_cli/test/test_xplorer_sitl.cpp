@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 #include <map>
 #include <filesystem>
 #include <set>
@@ -266,4 +267,33 @@ TEST(XplorerSitl, BagCarriesTheReasonCodesOfTheTransitions) {
   for (const auto& [name, code] : mapping_pcl::XplorerMapLogic::turning_reasons())
     EXPECT_EQ(name, tactile_fsm::to_string(static_cast<tactile_fsm::XplorerReason>(code)));
   fs::remove_all(out);
+}
+
+// Issue 33, the shared fail-safe: the odometry stops for good 8 s into the box
+// traversal (in contact, pushing the face). xplorer_fsm held its last setpoint
+// forever; now FAILSAFE_HOVER (the last setpoint) 0.2 s later, FAILSAFE_LAND
+// failsafe_land_after_s (2 s) after that, the height setpoint descending at
+// 0.25 m/s with no odometry read, and the vehicle ends on the floor with its
+// thrust below hover.
+TEST(XplorerSitl, StaleOdometryLands) {
+  const auto m = tactile_cli::test::run_edited_scenario(
+      "xplorer_box_traversal.yaml", {{"duration_s: 150.0", "duration_s: 20.0"}},
+      "faults:\n  - {type: dropout, topic: /odom, start_s: 8.0, duration_s: 100.0}\n");
+  const auto& x = m["xplorer"];
+  EXPECT_EQ(x["failsafe_state"], "FAILSAFE_LAND");
+  std::map<std::string, double> entered;
+  for (const auto& s : x["state_log"]) entered.emplace(s["state"].get<std::string>(), s["t"].get<double>());
+  ASSERT_TRUE(entered.count("FAILSAFE_HOVER"));
+  ASSERT_TRUE(entered.count("FAILSAFE_LAND"));
+  EXPECT_NEAR(entered["FAILSAFE_HOVER"], 8.2, 0.05);  // max_input_age_s after the last odometry
+  EXPECT_NEAR(entered["FAILSAFE_LAND"] - entered["FAILSAFE_HOVER"], 2.0, 0.03);
+  EXPECT_EQ(m["nodes"]["/xplorer_fsm"]["failsafe_hovers"].get<int>(), 1);
+  EXPECT_EQ(m["nodes"]["/xplorer_fsm"]["failsafe_landings"].get<int>(), 1);
+  const auto& g = m["ground_truth"];
+  std::printf("stale odometry: FAILSAFE_HOVER %.2f s, FAILSAFE_LAND %.2f s, final z %.4f m, thrust %.2f N\n",
+              entered["FAILSAFE_HOVER"], entered["FAILSAFE_LAND"], g["final_z_m"].get<double>(),
+              x["final_thrust_n"].get<double>());
+  EXPECT_LT(g["final_z_m"].get<double>(), 0.01);  // on the floor (z = 0), not hovering at 0.7 m
+  const double hover_thrust = 1.12 * 9.81;        // XplorerParams mass (001 Sec. V-A1)
+  EXPECT_LT(x["final_thrust_n"].get<double>(), 0.8 * hover_thrust);
 }

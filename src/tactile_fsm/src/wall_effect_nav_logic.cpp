@@ -34,10 +34,10 @@ void WallEffectNavLogic::Params::validate() const {
     throw std::invalid_argument("WallEffectNavLogic.goal_mode: must be 'position', 'gps' or 'direction', got '" + goal_mode + "'");
   if (!std::isfinite(goal_x) || !std::isfinite(goal_y) || !std::isfinite(direction_deg))
     throw std::invalid_argument("WallEffectNavLogic.goal_x: goal_x, goal_y and direction_deg must be finite");
-  // Finite: an infinite age would never call an input stale (FAILSAFE_HOVER off).
-  if (!(max_input_age_s > 0.0) || !std::isfinite(max_input_age_s)) {
-    throw std::invalid_argument("WallEffectNavLogic.max_input_age_s: must be finite and > 0, got " +
-                                std::to_string(max_input_age_s));
+  safety.validate("WallEffectNavLogic");  // max_input_age_s finite > 0, failsafe_land_after_s finite >= 0
+  if (!(failsafe_land_speed > 0.0) || !std::isfinite(failsafe_land_speed)) {
+    throw std::invalid_argument("WallEffectNavLogic.failsafe_land_speed: must be finite and > 0, got " +
+                                std::to_string(failsafe_land_speed));
   }
   if (goal_mode == "gps") (void)goal();  // throws naming origin/point and the field
 }
@@ -94,9 +94,14 @@ ParamMap WallEffectNavLogic::default_parameters() {
         {"[lat, lon, alt] of the goal (goal_mode gps; WGS84)", "deg, deg, m", {}, false});
   m.set("direction_deg", d.direction_deg,
         {"pilot heading direction in the world (goal_mode direction); finite", "deg", {}, false});
-  m.set("max_input_age_s", d.max_input_age_s,
-        {"older odometry: hold position (no new setpoint); an older wall estimate: FAILSAFE_HOVER at the current "
-         "position until fresh (choice)", "s", positive(), false});
+  m.set("max_input_age_s", d.safety.max_input_age_s,
+        {"older odometry or wall estimate: FAILSAFE_HOVER where the drone was last known, until both are fresh "
+         "again (choice)", "s", positive(), false});
+  m.set("failsafe_land_after_s", d.safety.failsafe_land_after_s,
+        {"FAILSAFE_HOVER this long -> FAILSAFE_LAND (choice: the whisker FSM's 2 s)", "s", at_least(0.0), false});
+  m.set("failsafe_land_speed", d.failsafe_land_speed,
+        {"FAILSAFE_LAND: z velocity-only at minus this, x, y held; the INDI controller's thrust winds down on the "
+         "floor (choice: the Crazyflie bridge's land_speed)", "m/s", positive(), false});
   return m;
 }
 
@@ -129,7 +134,9 @@ WallEffectNavLogic::Params WallEffectNavLogic::params_from(const ParamMap& m) {
   p.gps_origin = triple("gps_origin");
   p.gps_goal = triple("gps_goal");
   p.direction_deg = m.get_double("direction_deg");
-  p.max_input_age_s = m.get_double("max_input_age_s");
+  p.safety.max_input_age_s = m.get_double("max_input_age_s");
+  p.safety.failsafe_land_after_s = m.get_double("failsafe_land_after_s");
+  p.failsafe_land_speed = m.get_double("failsafe_land_speed");
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {
@@ -151,7 +158,10 @@ WallEffectNavLogic::Params WallEffectNavLogic::params_from(const ParamMap& m) {
 }
 
 WallEffectNavLogic::WallEffectNavLogic(const Params& params)
-    : params_((params.validate(), params)), nav_(params.nav), last_state_(nav_.state()) {
+    : params_((params.validate(), params)),
+      nav_(params.nav),
+      safety_(params.safety, {SafetyInput::kOdometry, SafetyInput::kWallEstimate}),
+      last_state_(nav_.state()) {
   nav_.set_goal(params_.goal());
 }
 
@@ -183,56 +193,87 @@ void WallEffectNavLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
   have_odom_ = true;
 }
 
+std::string WallEffectNavLogic::behaviour_name() const {
+  return params_.nav.behaviour == "vector_field" ? "wall_effect_vector_field" : "wall_effect_following";
+}
+
+nav_msgs::msg::Odometry WallEffectNavLogic::failsafe_setpoint(int64_t now_ns, bool landing) const {
+  nav_msgs::msg::Odometry m;
+  tactile_common::to_stamp(now_ns, m.header.stamp);
+  m.header.frame_id = odom_frame_;  // the frame of the odometry's positions
+  m.child_frame_id = odom_frame_;   // the twist is a world velocity too
+  m.pose.pose.position.x = hover_.x();
+  m.pose.pose.position.y = hover_.y();
+  m.pose.pose.orientation.z = std::sin(0.5 * params_.nav.yaw);
+  m.pose.pose.orientation.w = std::cos(0.5 * params_.nav.yaw);
+  if (landing) {
+    // z velocity-only (NaN position: IndiControlLogic's velocity-only axis): the
+    // descent needs no height, and on the floor the measured acceleration stays above
+    // the commanded one, so INDI's incremental thrust (004 eq. 34) winds down to zero.
+    m.pose.pose.position.z = std::numeric_limits<double>::quiet_NaN();
+    m.twist.twist.linear.z = -params_.failsafe_land_speed;
+  } else {
+    m.pose.pose.position.z = params_.nav.height;  // zero velocity: hover
+  }
+  return m;
+}
+
 WallEffectNavLogic::Outputs WallEffectNavLogic::on_timer(int64_t now_ns) {
   Outputs out;
   ++stats_.ticks;
-  if (!have_odom_ || now_ns - odom_ns_ > tactile_common::from_seconds(params_.max_input_age_s)) {
-    ++stats_.ticks_without_odometry;
-    return out;
-  }
-  // A wall estimate that stopped coming (the EKF's own inputs stale, the node
-  // gone): the navigator would steer by the last distance forever (wall
-  // following commands position + (d - d*) u every tick, so the drone keeps
-  // closing on the real wall). Hover where the drone is until it is fresh
-  // again, as the whisker behaviours do on stale depth (FAILSAFE_HOVER).
-  const bool wall_stale = have_wall_ && now_ns - wall_ns_ > tactile_common::from_seconds(params_.max_input_age_s);
-  if (wall_stale) {
-    ++stats_.ticks_wall_stale;
-    nav_msgs::msg::Odometry m;
-    tactile_common::to_stamp(now_ns, m.header.stamp);
-    m.header.frame_id = odom_frame_;  // the frame of the odometry's positions (was map)
-    m.child_frame_id = odom_frame_;   // the twist (zero here) is a world velocity too
-    m.pose.pose.position.x = position_.x();
-    m.pose.pose.position.y = position_.y();
-    m.pose.pose.position.z = params_.nav.height;
-    m.pose.pose.orientation.z = std::sin(0.5 * params_.nav.yaw);
-    m.pose.pose.orientation.w = std::cos(0.5 * params_.nav.yaw);
-    out.setpoint = m;  // zero velocity
-    if (!wall_stale_ || now_ns - last_state_pub_ns_ >= 500'000'000) {
+  const double t = tactile_common::to_seconds(now_ns);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double odom_stamp = have_odom_ ? tactile_common::to_seconds(odom_ns_) : nan;
+  const double wall_stamp = have_wall_ ? tactile_common::to_seconds(wall_ns_) : nan;
+  const double max_age = params_.safety.max_input_age_s;
+  const bool odom_fresh = input_is_fresh(t, odom_stamp, max_age);
+  if (!odom_fresh) ++stats_.ticks_without_odometry;
+  if (have_wall_ && !input_is_fresh(t, wall_stamp, max_age)) ++stats_.ticks_wall_stale;
+  // Guarded once both inputs have come: before the first wall estimate the navigator
+  // flies without one (wall_valid false, as the EKF starts), before the first odometry
+  // nothing is published (the INDI controller holds where it started).
+  const SafetyVerdict v = safety_.step(t, {odom_stamp, wall_stamp}, have_odom_ && have_wall_);
+  if (!v.nominal()) {
+    if (v.entered) {
+      ++safety_transitions_;
+      if (v.state == SafetyState::kFailsafeHover) {
+        ++stats_.failsafe_hovers;
+        hover_ = position_;  // where the drone was last known (the odometry may be the stale input)
+        previous_state_ = to_string(nav_.state());
+      } else {
+        ++stats_.failsafe_landings;
+        previous_state_ = "FAILSAFE_HOVER";
+      }
+      reason_ = v.text;
+      reason_code_ = static_cast<uint8_t>(v.reason);
+      state_since_ns_ = now_ns;
+    }
+    out.setpoint = failsafe_setpoint(now_ns, v.landing());
+    if (v.entered || now_ns - last_state_pub_ns_ >= 500'000'000) {
       tactile_msgs::msg::FsmState s;
       tactile_common::to_stamp(now_ns, s.header.stamp);
-      s.behaviour = params_.nav.behaviour == "vector_field" ? "wall_effect_vector_field" : "wall_effect_following";
-      s.state = "FAILSAFE_HOVER";
-      s.previous_state = to_string(nav_.state());
-      s.reason = "wall estimate stale";
-      if (!wall_stale_) state_since_ns_ = now_ns;
+      s.behaviour = behaviour_name();
+      s.state = to_string(v.state);
+      s.previous_state = previous_state_;
+      s.reason = reason_;
+      s.reason_code = reason_code_;
       s.time_in_state = tactile_common::to_seconds(now_ns - state_since_ns_);
-      s.transitions = nav_.transitions();
+      s.transitions = nav_.transitions() + safety_transitions_;
       out.state = s;
       last_state_pub_ns_ = now_ns;
     }
-    wall_stale_ = true;
     return out;
   }
-  const bool resumed = wall_stale_;
-  if (resumed) {
-    wall_stale_ = false;
+  if (!odom_fresh) return out;  // not guarded yet (no wall estimate so far): nothing to steer by
+  if (v.resumed) {
+    ++safety_transitions_;
     previous_state_ = "FAILSAFE_HOVER";
-    reason_ = "wall estimate fresh again";
+    reason_ = v.text;
+    reason_code_ = static_cast<uint8_t>(v.reason);
     state_since_ns_ = now_ns;
   }
   NavInput in;
-  in.t = tactile_common::to_seconds(now_ns);
+  in.t = t;
   in.wall_valid = have_wall_;
   in.wall_distance = wall_distance_;
   in.wall_direction = wall_direction_;
@@ -243,7 +284,6 @@ WallEffectNavLogic::Outputs WallEffectNavLogic::on_timer(int64_t now_ns) {
   tactile_common::to_stamp(now_ns, m.header.stamp);
   m.header.frame_id = odom_frame_;  // positions from the odometry's (was map)
   m.child_frame_id = odom_frame_;   // the twist is a world velocity, not a body one
-  const double nan = std::numeric_limits<double>::quiet_NaN();
   m.pose.pose.position.x = sp.position_valid ? sp.position.x() : nan;
   m.pose.pose.position.y = sp.position_valid ? sp.position.y() : nan;
   m.pose.pose.position.z = sp.height;
@@ -258,18 +298,20 @@ WallEffectNavLogic::Outputs WallEffectNavLogic::on_timer(int64_t now_ns) {
     reason_ = nav_.state() == NavState::kWallFollowing ? "y_bar below d_dagger"
               : nav_.state() == NavState::kGoalReached ? "goal reached"
                                                        : "y_bar above d_dagger or goal away from the wall";
+    reason_code_ = tactile_msgs::msg::FsmState::REASON_NONE;  // the navigator's transitions have no codes
     last_state_ = nav_.state();
     state_since_ns_ = now_ns;
   }
-  if (changed || resumed || last_state_pub_ns_ < 0 || now_ns - last_state_pub_ns_ >= 500'000'000) {
+  if (changed || v.resumed || last_state_pub_ns_ < 0 || now_ns - last_state_pub_ns_ >= 500'000'000) {
     tactile_msgs::msg::FsmState s;
     tactile_common::to_stamp(now_ns, s.header.stamp);
-    s.behaviour = params_.nav.behaviour == "vector_field" ? "wall_effect_vector_field" : "wall_effect_following";
+    s.behaviour = behaviour_name();
     s.state = to_string(nav_.state());
     s.previous_state = previous_state_;
     s.reason = reason_;
+    s.reason_code = reason_code_;
     s.time_in_state = tactile_common::to_seconds(now_ns - state_since_ns_);
-    s.transitions = nav_.transitions();
+    s.transitions = nav_.transitions() + safety_transitions_;
     out.state = s;
     last_state_pub_ns_ = now_ns;
   }

@@ -1,5 +1,6 @@
 #include "tactile_fsm/xplorer_fsm_logic.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -37,10 +38,10 @@ static_assert(static_cast<uint8_t>(BodyDirection::kMinusY) == FsmState::DIRECTIO
 void XplorerFsmLogic::Params::validate() const {
   fsm.validate();
   if (frame_id.empty()) throw std::invalid_argument("XplorerFsmLogic.frame_id: must not be empty");
-  // Finite: an infinite age would never call an input stale (the hold on stale input off).
-  if (!(max_input_age_s > 0.0) || !std::isfinite(max_input_age_s)) {
-    throw std::invalid_argument("XplorerFsmLogic.max_input_age_s: must be finite and > 0, got " +
-                                std::to_string(max_input_age_s));
+  safety.validate("XplorerFsmLogic");  // max_input_age_s finite > 0, failsafe_land_after_s finite >= 0
+  if (!(failsafe_land_speed > 0.0) || !std::isfinite(failsafe_land_speed)) {
+    throw std::invalid_argument("XplorerFsmLogic.failsafe_land_speed: must be finite and > 0, got " +
+                                std::to_string(failsafe_land_speed));
   }
 }
 
@@ -181,8 +182,14 @@ ParamMap XplorerFsmLogic::default_parameters() {
   m.set("frame_id", d.frame_id,
         {"world frame of the setpoints and of the wrench taken (the odometry's frame, REP 105); not empty", "", {},
          false});
-  m.set("max_input_age_s", d.max_input_age_s,
-        {"older odometry or wrench: the last setpoint is held (choice)", "s", positive(), false});
+  m.set("max_input_age_s", d.safety.max_input_age_s,
+        {"older odometry or wrench: FAILSAFE_HOVER, the last setpoint held, until both are fresh again (choice)",
+         "s", positive(), false});
+  m.set("failsafe_land_after_s", d.safety.failsafe_land_after_s,
+        {"FAILSAFE_HOVER this long -> FAILSAFE_LAND (choice: the whisker FSM's 2 s)", "s", at_least(0.0), false});
+  m.set("failsafe_land_speed", d.failsafe_land_speed,
+        {"FAILSAFE_LAND: the height setpoint descends from the last setpoint at this speed, x, y and yaw held "
+         "(choice: the Crazyflie bridge's land_speed)", "m/s", positive(), false});
   return m;
 }
 
@@ -255,7 +262,9 @@ XplorerFsmLogic::Params XplorerFsmLogic::params_from(const ParamMap& m) {
     for (size_t i = 0; i < 4; ++i) dst[i] = v[i];
   }
   p.frame_id = m.get_string("frame_id");
-  p.max_input_age_s = m.get_double("max_input_age_s");
+  p.safety.max_input_age_s = m.get_double("max_input_age_s");
+  p.safety.failsafe_land_after_s = m.get_double("failsafe_land_after_s");
+  p.failsafe_land_speed = m.get_double("failsafe_land_speed");
   try {
     p.validate();
   } catch (const std::invalid_argument& e) {
@@ -264,7 +273,10 @@ XplorerFsmLogic::Params XplorerFsmLogic::params_from(const ParamMap& m) {
   return p;
 }
 
-XplorerFsmLogic::XplorerFsmLogic(const Params& params) : params_((params.validate(), params)), fsm_(params.fsm) {}
+XplorerFsmLogic::XplorerFsmLogic(const Params& params)
+    : params_((params.validate(), params)),
+      fsm_(params.fsm),
+      safety_(params.safety, {SafetyInput::kOdometry, SafetyInput::kForce}) {}
 
 void XplorerFsmLogic::on_wrench(const geometry_msgs::msg::WrenchStamped& msg) {
   ++stats_.received_wrench;
@@ -304,56 +316,115 @@ void XplorerFsmLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
   odom_ = msg;
 }
 
+tactile_msgs::msg::FsmState XplorerFsmLogic::state_message(int64_t now_ns) const {
+  FsmState s;
+  tactile_common::to_stamp(now_ns, s.header.stamp);
+  s.header.frame_id = params_.frame_id;
+  s.behaviour = kBehaviour;
+  s.contact_direction = static_cast<uint8_t>(fsm_.contact());
+  s.move_direction = static_cast<uint8_t>(fsm_.move());
+  s.transitions = fsm_.transitions() + safety_transitions_;
+  return s;
+}
+
 XplorerFsmLogic::Outputs XplorerFsmLogic::on_timer(int64_t now_ns) {
   ++stats_.ticks;
   Outputs out;
   const double dt = last_tick_ns_ < 0 ? tactile_common::to_seconds(kTimerPeriodNs)
                                       : tactile_common::to_seconds(now_ns - last_tick_ns_);
   last_tick_ns_ = now_ns;
-  const double max_age = params_.max_input_age_s;
-  const bool odom_ok = odom_ && tactile_common::to_seconds(now_ns - tactile_common::from_stamp(odom_->header.stamp)) <= max_age;
-  const bool wrench_ok =
-      wrench_ && tactile_common::to_seconds(now_ns - tactile_common::from_stamp(wrench_->header.stamp)) <= max_age;
+  const double t = tactile_common::to_seconds(now_ns);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double odom_stamp = odom_ ? tactile_common::to_seconds(tactile_common::from_stamp(odom_->header.stamp)) : nan;
+  const double wrench_stamp =
+      wrench_ ? tactile_common::to_seconds(tactile_common::from_stamp(wrench_->header.stamp)) : nan;
+  // Guarded from the first tick the FSM flew on (before it nothing is commanded and the
+  // vehicle stays where it is): every state moves the vehicle on the odometry and the wrench.
+  const SafetyVerdict v = safety_.step(t, {odom_stamp, wrench_stamp}, have_hold_);
   geometry_msgs::msg::PoseStamped sp;
   tactile_common::to_stamp(now_ns, sp.header.stamp);
   sp.header.frame_id = params_.frame_id;
-  if (!odom_ok || !wrench_ok) {
-    // Stale input: hold the last setpoint (or nothing before the first one).
+  if (!v.nominal()) {
+    // FAILSAFE_HOVER: the last setpoint held; FAILSAFE_LAND: its height descends. Neither
+    // reads the odometry (it may be the stale input): the vehicle's position loop flies them.
     ++stats_.ticks_stale;
-    if (!have_hold_) return out;
-  } else {
-    const auto& o = *odom_;
-    XplorerInput in;
-    in.t = tactile_common::to_seconds(now_ns);
-    in.position = XVec3(o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z);
-    in.yaw = tactile_common::yaw_of(o.pose.pose.orientation);
-    in.yaw_rate = o.twist.twist.angular.z;  // body z rate ~ yaw rate near hover
-    in.force = XVec3(wrench_->wrench.force.x, wrench_->wrench.force.y, wrench_->wrench.force.z);
-    in.torque_z = wrench_->wrench.torque.z;
-    const XplorerOutput r = fsm_.update(in, dt);
-    hold_ = r.position;
-    hold_yaw_ = r.yaw;
-    have_hold_ = true;
-    if (r.transitioned || last_state_ns_ < 0 || now_ns - last_state_ns_ >= kStatePeriodNs) {
-      FsmState s;
-      s.header.stamp = sp.header.stamp;
-      s.header.frame_id = params_.frame_id;
-      s.behaviour = kBehaviour;
-      s.state = to_string(r.state);
-      if (r.transitioned) previous_state_ = to_string(last_state_);
+    double z = hold_.z();
+    if (v.landing()) {
+      z = std::max(kLandFloorZ, hold_.z() - params_.failsafe_land_speed * (t - safety_.entered()));
+    }
+    if (v.entered) {
+      ++safety_transitions_;
+      if (v.state == SafetyState::kFailsafeHover) ++stats_.failsafe_hovers;
+      if (v.landing()) ++stats_.failsafe_landings;
+    }
+    if (v.entered || now_ns - last_state_ns_ >= kStatePeriodNs) {
+      FsmState s = state_message(now_ns);
+      s.state = to_string(v.state);
+      if (v.entered) previous_state_ = v.state == SafetyState::kFailsafeHover ? to_string(last_state_) : "FAILSAFE_HOVER";
       s.previous_state = previous_state_;
-      s.reason = fsm_.reason();
-      s.reason_code = static_cast<uint8_t>(fsm_.reason_code());
-      s.contact_direction = static_cast<uint8_t>(fsm_.contact());
-      s.move_direction = static_cast<uint8_t>(fsm_.move());
-      s.time_in_state = fsm_.time_in_state(in.t);
-      s.transitions = fsm_.transitions();
+      s.reason = v.text;
+      s.reason_code = static_cast<uint8_t>(v.reason);
+      s.time_in_state = t - safety_.entered();
       out.state = s;
       last_state_ns_ = now_ns;
       ++stats_.state_messages;
     }
-    last_state_ = r.state;
+    sp.pose.position.x = hold_.x();
+    sp.pose.position.y = hold_.y();
+    sp.pose.position.z = z;
+    sp.pose.orientation.w = std::cos(0.5 * hold_yaw_);
+    sp.pose.orientation.z = std::sin(0.5 * hold_yaw_);
+    out.setpoint = sp;
+    return out;
   }
+  const double max_age = params_.safety.max_input_age_s;
+  if (!input_is_fresh(t, odom_stamp, max_age) || !input_is_fresh(t, wrench_stamp, max_age)) {
+    // Before the first flown tick (not guarded yet): nothing to hold.
+    ++stats_.ticks_stale;
+    return out;
+  }
+  if (v.resumed) {
+    ++safety_transitions_;
+    show_resume_ = true;
+    resume_transitions_ = fsm_.transitions();
+    resume_reason_ = fsm_.reason_code();
+    resume_t_ = t;
+  }
+  const auto& o = *odom_;
+  XplorerInput in;
+  in.t = t;
+  in.position = XVec3(o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z);
+  in.yaw = tactile_common::yaw_of(o.pose.pose.orientation);
+  in.yaw_rate = o.twist.twist.angular.z;  // body z rate ~ yaw rate near hover
+  in.force = XVec3(wrench_->wrench.force.x, wrench_->wrench.force.y, wrench_->wrench.force.z);
+  in.torque_z = wrench_->wrench.torque.z;
+  const XplorerOutput r = fsm_.update(in, dt);
+  hold_ = r.position;
+  hold_yaw_ = r.yaw;
+  have_hold_ = true;
+  if (show_resume_ && (fsm_.transitions() != resume_transitions_ || fsm_.reason_code() != resume_reason_)) {
+    show_resume_ = false;  // the FSM's own transition (or new contact) since the resume
+  }
+  if (v.resumed || r.transitioned || last_state_ns_ < 0 || now_ns - last_state_ns_ >= kStatePeriodNs) {
+    FsmState s = state_message(now_ns);
+    s.state = to_string(r.state);
+    if (r.transitioned) previous_state_ = to_string(last_state_);
+    if (v.resumed && !r.transitioned) previous_state_ = "FAILSAFE_HOVER";
+    s.previous_state = previous_state_;
+    if (show_resume_) {
+      s.reason = v.text;  // the runner's last change: "inputs fresh again"
+      s.reason_code = static_cast<uint8_t>(SafetyReason::kInputsFresh);
+      s.time_in_state = t - resume_t_;
+    } else {
+      s.reason = fsm_.reason();
+      s.reason_code = static_cast<uint8_t>(fsm_.reason_code());
+      s.time_in_state = fsm_.time_in_state(in.t);
+    }
+    out.state = s;
+    last_state_ns_ = now_ns;
+    ++stats_.state_messages;
+  }
+  last_state_ = r.state;
   sp.pose.position.x = hold_.x();
   sp.pose.position.y = hold_.y();
   sp.pose.position.z = hold_.z();

@@ -7,7 +7,9 @@
 
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "tactile_common/parameter_testing.hpp"
@@ -295,7 +297,7 @@ TEST(WallEffectNavLogic, EveryParameterIsDescribedWithTheRangeValidateAccepts) {
 // when estimates come again.
 TEST(WallEffectNavLogic, StaleWallEstimateHoversAndResumes) {
   WallEffectNavLogic logic(WallEffectNavLogic::params_from(WallEffectNavLogic::default_parameters()));
-  const double age = logic.params().max_input_age_s;
+  const double age = logic.params().safety.max_input_age_s;
   const int64_t last_wall_ns = 500'000'000, resume_ns = 1'000'000'000;
   bool moved_when_stale = false, normal_before = true, saw_failsafe = false, resumed = false;
   std::string failsafe_reason;
@@ -325,9 +327,19 @@ TEST(WallEffectNavLogic, StaleWallEstimateHoversAndResumes) {
     if (out.state && out.state->state == "FAILSAFE_HOVER" && !saw_failsafe) {
       saw_failsafe = true;
       failsafe_reason = out.state->reason;
+      EXPECT_EQ(out.state->reason_code, tactile_msgs::msg::FsmState::REASON_FAILSAFE_WALL_ESTIMATE_STALE);
+      EXPECT_EQ(out.state->previous_state, "FREE_FLIGHT");
       EXPECT_EQ(ns, last_wall_ns + tactile_common::from_seconds(age) + WallEffectNavLogic::kTimerPeriodNs);
     }
-    if (ns >= resume_ns && out.state && out.state->reason == "wall estimate fresh again") resumed = true;
+    if (ns == resume_ns) {  // the shared fail-safe's resume, published on the tick
+      ASSERT_TRUE(out.state.has_value());
+      EXPECT_EQ(out.state->state, "FREE_FLIGHT");
+      EXPECT_EQ(out.state->previous_state, "FAILSAFE_HOVER");
+      EXPECT_EQ(out.state->reason, "inputs fresh again");
+      EXPECT_EQ(out.state->reason_code, tactile_msgs::msg::FsmState::REASON_FAILSAFE_INPUTS_FRESH);
+      resumed = true;
+    }
+    EXPECT_FALSE(out.state && out.state->state == "FAILSAFE_LAND") << "0.5 s of stale input is no landing";
     if (ns >= resume_ns) {
       EXPECT_GT(v, 0.0);
     }
@@ -339,4 +351,174 @@ TEST(WallEffectNavLogic, StaleWallEstimateHoversAndResumes) {
   EXPECT_EQ(failsafe_reason, "wall estimate stale");
   EXPECT_TRUE(resumed);
   EXPECT_GT(logic.stats().ticks_wall_stale, 0u);
+}
+
+namespace {
+constexpr int64_t kNavTick = WallEffectNavLogic::kTimerPeriodNs;
+
+nav_msgs::msg::Odometry nav_odom(int64_t ns, double x, double y) {
+  nav_msgs::msg::Odometry o;
+  tactile_common::to_stamp(ns, o.header.stamp);
+  o.header.frame_id = "odom";
+  o.pose.pose.orientation.w = 1.0;
+  o.pose.pose.position.x = x;
+  o.pose.pose.position.y = y;
+  return o;
+}
+tactile_msgs::msg::WallEstimate nav_wall(int64_t ns) {
+  tactile_msgs::msg::WallEstimate w;
+  tactile_common::to_stamp(ns, w.header.stamp);
+  w.distance = 0.6;  // a wall 0.6 m ahead: free flight toward the goal at the origin
+  w.direction = 0.0;
+  return w;
+}
+
+/// One input stops at `stop_ns` for good (odometry if `odometry`, else the wall estimate);
+/// returns every tick's setpoint and state message from the start to `end_ns`, the
+/// drone at x = -1 + the integrated setpoint velocity while the odometry comes.
+struct NavTick {
+  int64_t ns;
+  nav_msgs::msg::Odometry sp;
+  std::optional<tactile_msgs::msg::FsmState> state;
+};
+std::vector<NavTick> fly_until_stale(WallEffectNavLogic& logic, bool odometry, int64_t stop_ns, int64_t end_ns,
+                                     int64_t resume_ns = -1) {
+  std::vector<NavTick> ticks;
+  double x = -1.0;
+  for (int64_t ns = 0; ns <= end_ns; ns += kNavTick) {
+    const bool on = ns <= stop_ns || (resume_ns >= 0 && ns >= resume_ns);
+    if (on || !odometry) logic.on_odometry(nav_odom(ns, x, 0.0));
+    if (on || odometry) logic.on_wall(nav_wall(ns));
+    const auto out = logic.on_timer(ns);
+    if (!out.setpoint) {
+      ADD_FAILURE() << "no setpoint at " << ns << " ns";
+      return ticks;
+    }
+    ticks.push_back({ns, *out.setpoint, out.state});
+    if (std::isfinite(out.setpoint->pose.pose.position.x)) x += 0.01 * out.setpoint->twist.twist.linear.x;
+  }
+  return ticks;
+}
+}  // namespace
+
+// Issue 33, the shared fail-safe (SafetyRunner). Odometry stopped: the node published
+// nothing, so the INDI controller kept flying the last setpoint (its velocity too) for as
+// long as its own odometry came. Now: FAILSAFE_HOVER (REASON_FAILSAFE_ODOMETRY_STALE) at
+// the last known position, zero velocity; after failsafe_land_after_s FAILSAFE_LAND
+// (REASON_FAILSAFE_STALE_TOO_LONG): that x, y held, z velocity-only (NaN) descending at
+// failsafe_land_speed, no height needed.
+TEST(WallEffectNavLogic, StaleOdometryHoversWhereLastKnownThenLands) {
+  WallEffectNavLogic logic(WallEffectNavLogic::params_from(WallEffectNavLogic::default_parameters()));
+  const auto& p = logic.params();
+  const int64_t stop = 500'000'000;
+  const int64_t hover_ns = stop + tactile_common::from_seconds(p.safety.max_input_age_s) + kNavTick;
+  const int64_t land_ns = hover_ns + tactile_common::from_seconds(p.safety.failsafe_land_after_s);
+  const auto ticks = fly_until_stale(logic, true, stop, land_ns + 1'000'000'000);
+  ASSERT_EQ(ticks.back().ns, land_ns + 1'000'000'000);
+  double last_known = 0.0;
+  int hovers = 0, landings = 0;
+  for (const auto& k : ticks) {
+    const auto& pos = k.sp.pose.pose.position;
+    const auto& vel = k.sp.twist.twist.linear;
+    if (k.ns <= stop) last_known = -1.0 + 0.01 * 0.10 * static_cast<double>(k.ns / kNavTick);
+    if (k.ns < hover_ns) {
+      EXPECT_FALSE(k.state && k.state->state.rfind("FAILSAFE", 0) == 0) << k.ns;
+      continue;
+    }
+    EXPECT_NEAR(pos.x, last_known, 1e-9) << k.ns;  // where the drone was last known
+    EXPECT_DOUBLE_EQ(pos.y, 0.0);
+    EXPECT_EQ(vel.x, 0.0);
+    EXPECT_EQ(vel.y, 0.0);
+    if (k.ns < land_ns) {
+      EXPECT_DOUBLE_EQ(pos.z, p.nav.height) << k.ns;
+      EXPECT_EQ(vel.z, 0.0);
+    } else {
+      EXPECT_TRUE(std::isnan(pos.z)) << k.ns << ": the landing flies no height";
+      EXPECT_DOUBLE_EQ(vel.z, -p.failsafe_land_speed);
+    }
+    if (!k.state) continue;
+    if (k.ns < land_ns) {
+      ++hovers;
+      EXPECT_EQ(k.state->state, "FAILSAFE_HOVER");
+      EXPECT_EQ(k.state->reason, "odometry stale");
+      EXPECT_EQ(k.state->reason_code, tactile_msgs::msg::FsmState::REASON_FAILSAFE_ODOMETRY_STALE);
+      EXPECT_EQ(k.state->previous_state, "FREE_FLIGHT");
+      if (hovers == 1) { EXPECT_EQ(k.ns, hover_ns); }
+    } else {
+      ++landings;
+      EXPECT_EQ(k.state->state, "FAILSAFE_LAND");
+      EXPECT_EQ(k.state->reason_code, tactile_msgs::msg::FsmState::REASON_FAILSAFE_STALE_TOO_LONG);
+      EXPECT_EQ(k.state->previous_state, "FAILSAFE_HOVER");
+      if (landings == 1) { EXPECT_EQ(k.ns, land_ns); }
+    }
+  }
+  EXPECT_EQ(hovers, 4);  // on entry and at 2 Hz for 2 s
+  EXPECT_EQ(landings, 3);
+  EXPECT_EQ(logic.stats().failsafe_hovers, 1u);
+  EXPECT_EQ(logic.stats().failsafe_landings, 1u);
+}
+
+// The wall estimate stops for good (the odometry goes on): FAILSAFE_HOVER
+// (REASON_FAILSAFE_WALL_ESTIMATE_STALE) at the position on entry, then FAILSAFE_LAND after
+// failsafe_land_after_s, terminal: estimates coming again do not resume the navigator.
+TEST(WallEffectNavLogic, StaleWallEstimateLandsAfterFailsafeLandAfterS) {
+  auto m = WallEffectNavLogic::default_parameters();
+  m.set("failsafe_land_after_s", 1.0);
+  WallEffectNavLogic logic(WallEffectNavLogic::params_from(m));
+  const int64_t stop = 500'000'000, resume = 2'500'000'000;
+  const auto ticks = fly_until_stale(logic, false, stop, 3'000'000'000, resume);
+  std::vector<std::pair<int64_t, std::string>> states;
+  for (const auto& k : ticks) {
+    if (k.state && (states.empty() || states.back().second != k.state->state))
+      states.emplace_back(k.ns, k.state->state);
+  }
+  ASSERT_EQ(states.size(), 3u);
+  EXPECT_EQ(states[0].second, "FREE_FLIGHT");
+  EXPECT_EQ(states[1], std::make_pair(int64_t{710'000'000}, std::string("FAILSAFE_HOVER")));
+  EXPECT_EQ(states[2], std::make_pair(int64_t{1'710'000'000}, std::string("FAILSAFE_LAND")));
+  const auto& last = ticks.back().sp;  // 0.5 s after the estimates came back
+  EXPECT_TRUE(std::isnan(last.pose.pose.position.z));
+  EXPECT_DOUBLE_EQ(last.twist.twist.linear.z, -logic.params().failsafe_land_speed);
+  EXPECT_EQ(logic.safety().state(), SafetyState::kFailsafeLand);
+  EXPECT_EQ(logic.navigator().state(), NavState::kFreeFlight);
+}
+
+// Odometry stale for 0.5 s, then fresh: FAILSAFE_HOVER (odometry), then the navigator
+// resumes with REASON_FAILSAFE_INPUTS_FRESH; nothing lands.
+TEST(WallEffectNavLogic, StaleOdometryResumesWhenFresh) {
+  WallEffectNavLogic logic(WallEffectNavLogic::params_from(WallEffectNavLogic::default_parameters()));
+  const int64_t stop = 500'000'000, resume = 1'000'000'000;
+  const auto ticks = fly_until_stale(logic, true, stop, 1'500'000'000, resume);
+  bool hovered = false, resumed = false;
+  for (const auto& k : ticks) {
+    if (!k.state) continue;
+    EXPECT_NE(k.state->state, "FAILSAFE_LAND");
+    if (k.state->state == "FAILSAFE_HOVER") {
+      hovered = true;
+      EXPECT_EQ(k.state->reason_code, tactile_msgs::msg::FsmState::REASON_FAILSAFE_ODOMETRY_STALE);
+    }
+    if (k.ns == resume) {
+      EXPECT_EQ(k.state->state, "FREE_FLIGHT");
+      EXPECT_EQ(k.state->reason_code, tactile_msgs::msg::FsmState::REASON_FAILSAFE_INPUTS_FRESH);
+      resumed = true;
+    }
+  }
+  EXPECT_TRUE(hovered);
+  EXPECT_TRUE(resumed);
+  EXPECT_GT(std::hypot(ticks.back().sp.twist.twist.linear.x, ticks.back().sp.twist.twist.linear.y), 0.0);
+  EXPECT_EQ(logic.stats().failsafe_landings, 0u);
+}
+
+TEST(WallEffectNavLogic, FailsafeParametersAreValidated) {
+  for (const auto& [key, value] : std::vector<std::pair<std::string, double>>{
+           {"failsafe_land_after_s", -1.0}, {"failsafe_land_speed", 0.0}, {"max_input_age_s", 0.0}}) {
+    auto m = WallEffectNavLogic::default_parameters();
+    m.set(key, value);
+    try {
+      WallEffectNavLogic::params_from(m);
+      ADD_FAILURE() << key << " = " << value << " accepted";
+    } catch (const tactile_common::ParamError& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
+  }
 }

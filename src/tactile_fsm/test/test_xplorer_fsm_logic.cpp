@@ -1,8 +1,10 @@
 // Node logic of the XPLORER behaviours: parameters, messages, stale and bad input.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "tactile_common/parameter_testing.hpp"
@@ -121,4 +123,171 @@ TEST(XplorerFsmLogic, SetpointsStateMessagesAndBadInput) {
   out = logic.on_timer(1040000000);
   ASSERT_TRUE(out.setpoint);
   EXPECT_EQ(logic.stats().ticks_stale, 2u);
+}
+
+// Issue 33, the shared fail-safe (SafetyRunner). XPLORER held the last setpoint
+// forever on stale odometry or wrench, said nothing in FsmState and never landed.
+namespace {
+constexpr int64_t kTick = XplorerFsmLogic::kTimerPeriodNs;
+
+/// Flies the logic to Exploration with fresh odometry and a zero wrench up to `until_ns`;
+/// returns the last setpoint.
+geometry_msgs::msg::PoseStamped fly_to_exploration(XplorerFsmLogic& logic, int64_t until_ns) {
+  geometry_msgs::msg::PoseStamped last;
+  for (int64_t ns = 0; ns <= until_ns; ns += kTick) {
+    logic.on_odometry(odom(ns, 0.0, 0.0, ns == 0 ? 0.0 : 0.7));
+    logic.on_wrench(wrench(ns, 0.0));
+    const auto out = logic.on_timer(ns);
+    if (out.setpoint) last = *out.setpoint;
+  }
+  EXPECT_EQ(logic.fsm().state(), XplorerState::kExploration);
+  return last;
+}
+double yaw_of(const geometry_msgs::msg::PoseStamped& p) {
+  return 2.0 * std::atan2(p.pose.orientation.z, p.pose.orientation.w);
+}
+}  // namespace
+
+// Odometry stops (the wrench goes on): FAILSAFE_HOVER with REASON_FAILSAFE_ODOMETRY_STALE
+// from the first tick it is older than max_input_age_s, the last setpoint held; after
+// failsafe_land_after_s FAILSAFE_LAND (REASON_FAILSAFE_STALE_TOO_LONG): x, y and yaw of the
+// last setpoint, its height descending at failsafe_land_speed to kLandFloorZ, no odometry
+// read. FsmState on each entry and at 5 Hz.
+TEST(XplorerFsmLogic, StaleOdometryHoldsTheLastSetpointThenLands) {
+  XplorerFsmLogic logic(XplorerFsmLogic::params_from(XplorerFsmLogic::default_parameters()));
+  const auto& p = logic.params();
+  const int64_t last_odom = 1'000'000'000;
+  const auto held = fly_to_exploration(logic, last_odom);
+  const int64_t age_ns = tactile_common::from_seconds(p.safety.max_input_age_s);
+  const int64_t hover_ns = last_odom + age_ns + kTick;  // the first tick the odometry is stale
+  const int64_t land_ns = hover_ns + tactile_common::from_seconds(p.safety.failsafe_land_after_s);
+  int hover_states = 0, land_states = 0;
+  double last_z = held.pose.position.z;
+  for (int64_t ns = last_odom + kTick; ns <= land_ns + 5'000'000'000; ns += kTick) {
+    logic.on_wrench(wrench(ns, 0.0));
+    const auto out = logic.on_timer(ns);
+    ASSERT_TRUE(out.setpoint) << ns;
+    const auto& sp = *out.setpoint;
+    EXPECT_DOUBLE_EQ(sp.pose.position.x, held.pose.position.x) << ns;
+    EXPECT_DOUBLE_EQ(sp.pose.position.y, held.pose.position.y) << ns;
+    EXPECT_NEAR(yaw_of(sp), yaw_of(held), 1e-12) << ns;
+    if (ns < land_ns) {
+      EXPECT_DOUBLE_EQ(sp.pose.position.z, held.pose.position.z) << ns;
+    } else {
+      const double want = std::max(XplorerFsmLogic::kLandFloorZ,
+                                   held.pose.position.z - p.failsafe_land_speed * tactile_common::to_seconds(ns - land_ns));
+      EXPECT_NEAR(sp.pose.position.z, want, 1e-9) << ns;
+      EXPECT_LE(sp.pose.position.z, last_z);
+    }
+    last_z = sp.pose.position.z;
+    if (!out.state) continue;
+    const auto& s = *out.state;
+    if (ns < hover_ns) {
+      EXPECT_EQ(s.state, "exploration") << ns;  // the odometry still fresh
+    } else if (ns < land_ns) {
+      EXPECT_EQ(s.state, "FAILSAFE_HOVER");
+      EXPECT_EQ(s.reason_code, tactile_msgs::msg::FsmState::REASON_FAILSAFE_ODOMETRY_STALE);
+      EXPECT_EQ(s.reason, "odometry stale");
+      EXPECT_EQ(s.previous_state, "exploration");
+      if (hover_states++ == 0) { EXPECT_EQ(ns, hover_ns); }
+    } else {
+      EXPECT_EQ(s.state, "FAILSAFE_LAND");
+      EXPECT_EQ(s.reason_code, tactile_msgs::msg::FsmState::REASON_FAILSAFE_STALE_TOO_LONG);
+      EXPECT_EQ(s.previous_state, "FAILSAFE_HOVER");
+      if (land_states++ == 0) { EXPECT_EQ(ns, land_ns); }
+    }
+  }
+  EXPECT_EQ(hover_states, 10);  // on entry and at 5 Hz for 2 s
+  EXPECT_GE(land_states, 25);
+  EXPECT_DOUBLE_EQ(last_z, XplorerFsmLogic::kLandFloorZ);  // 0.7 m at 0.25 m/s: down within 3.2 s
+  EXPECT_EQ(logic.stats().failsafe_hovers, 1u);
+  EXPECT_EQ(logic.stats().failsafe_landings, 1u);
+  // Terminal: fresh inputs again do not resume the exploration.
+  const int64_t ns = land_ns + 5'020'000'000;
+  logic.on_odometry(odom(ns, 0.0, 0.0, 0.0));
+  logic.on_wrench(wrench(ns, 0.0));
+  const auto out = logic.on_timer(ns);
+  ASSERT_TRUE(out.setpoint);
+  EXPECT_DOUBLE_EQ(out.setpoint->pose.position.z, XplorerFsmLogic::kLandFloorZ);
+  EXPECT_EQ(logic.safety().state(), SafetyState::kFailsafeLand);
+}
+
+// The wrench stops for 0.5 s (the odometry goes on): FAILSAFE_HOVER with
+// REASON_FAILSAFE_FORCE_STALE, the FSM not stepped; fresh again: the FSM resumes in its
+// state, FsmState previous_state FAILSAFE_HOVER and REASON_FAILSAFE_INPUTS_FRESH, never a
+// landing.
+TEST(XplorerFsmLogic, StaleForceHoversThenResumes) {
+  XplorerFsmLogic logic(XplorerFsmLogic::params_from(XplorerFsmLogic::default_parameters()));
+  const int64_t last_wrench = 1'000'000'000, back = 1'500'000'000;
+  const auto held = fly_to_exploration(logic, last_wrench);
+  const uint64_t transitions = logic.fsm().transitions();
+  bool hovered = false, resumed = false;
+  for (int64_t ns = last_wrench + kTick; ns <= 2'000'000'000; ns += kTick) {
+    logic.on_odometry(odom(ns, 0.0, 0.0, 0.7));
+    if (ns >= back) logic.on_wrench(wrench(ns, 0.0));
+    const auto out = logic.on_timer(ns);
+    ASSERT_TRUE(out.setpoint);
+    const bool stale = ns > last_wrench + 200'000'000 && ns < back;
+    if (stale) { EXPECT_DOUBLE_EQ(out.setpoint->pose.position.x, held.pose.position.x) << ns; }
+    if (!out.state) continue;
+    if (out.state->state == "FAILSAFE_HOVER") {
+      EXPECT_TRUE(stale) << ns;
+      EXPECT_EQ(out.state->reason_code, tactile_msgs::msg::FsmState::REASON_FAILSAFE_FORCE_STALE);
+      EXPECT_EQ(out.state->reason, "force stale");
+      hovered = true;
+    }
+    if (ns == back) {
+      EXPECT_EQ(out.state->state, "exploration");
+      EXPECT_EQ(out.state->previous_state, "FAILSAFE_HOVER");
+      EXPECT_EQ(out.state->reason_code, tactile_msgs::msg::FsmState::REASON_FAILSAFE_INPUTS_FRESH);
+      resumed = true;
+    }
+    EXPECT_NE(out.state->state, "FAILSAFE_LAND");
+  }
+  EXPECT_TRUE(hovered);
+  EXPECT_TRUE(resumed);
+  EXPECT_EQ(logic.fsm().state(), XplorerState::kExploration);
+  EXPECT_EQ(logic.fsm().transitions(), transitions);  // the hold is no FSM transition
+  EXPECT_EQ(logic.stats().failsafe_hovers, 1u);
+  EXPECT_EQ(logic.stats().failsafe_landings, 0u);
+  EXPECT_EQ(logic.safety().state(), SafetyState::kNominal);
+}
+
+// The wrench stops for good: FAILSAFE_HOVER (force) then FAILSAFE_LAND exactly
+// failsafe_land_after_s later (here set to 0.5 s), the descent from the held setpoint.
+TEST(XplorerFsmLogic, StaleForceLandsAfterFailsafeLandAfterS) {
+  ParamMap m = XplorerFsmLogic::default_parameters();
+  m.set("failsafe_land_after_s", 0.5);
+  XplorerFsmLogic logic(XplorerFsmLogic::params_from(m));
+  const int64_t last_wrench = 1'000'000'000;
+  const auto held = fly_to_exploration(logic, last_wrench);
+  std::vector<std::pair<int64_t, std::string>> states;
+  geometry_msgs::msg::PoseStamped last;
+  for (int64_t ns = last_wrench + kTick; ns <= 3'000'000'000; ns += kTick) {
+    logic.on_odometry(odom(ns, 0.0, 0.0, 0.7));
+    const auto out = logic.on_timer(ns);
+    ASSERT_TRUE(out.setpoint);
+    last = *out.setpoint;
+    if (out.state && out.state->state != "exploration" && (states.empty() || states.back().second != out.state->state))
+      states.emplace_back(ns, out.state->state);
+  }
+  ASSERT_EQ(states.size(), 2u);
+  EXPECT_EQ(states[0], std::make_pair(int64_t{1'220'000'000}, std::string("FAILSAFE_HOVER")));
+  EXPECT_EQ(states[1], std::make_pair(int64_t{1'720'000'000}, std::string("FAILSAFE_LAND")));
+  // 1.28 s of descent at 0.25 m/s from 0.7 m.
+  EXPECT_NEAR(last.pose.position.z, held.pose.position.z - 0.25 * 1.28, 1e-9);
+}
+
+TEST(XplorerFsmLogic, FailsafeParametersAreValidated) {
+  for (const auto& [key, value] : std::vector<std::pair<std::string, double>>{
+           {"failsafe_land_after_s", -1.0}, {"failsafe_land_speed", 0.0}, {"max_input_age_s", 0.0}}) {
+    ParamMap m = XplorerFsmLogic::default_parameters();
+    m.set(key, value);
+    try {
+      XplorerFsmLogic::params_from(m);
+      ADD_FAILURE() << key << " = " << value << " accepted";
+    } catch (const tactile_common::ParamError& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
+  }
 }

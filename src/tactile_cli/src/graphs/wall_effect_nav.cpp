@@ -54,6 +54,10 @@ class WallEffectNavGraph : public SimGraph {
         ++speed_n_;
       }
     });
+    bus.subscribe<tactile_msgs::msg::ThrustCommand>(wall_effect_ekf::IndiControlLogic::kOutputTopic,
+                                                    [this](const tactile_msgs::msg::ThrustCommand& t) {
+                                                      last_commanded_thrust_ = t.total_thrust;
+                                                    });
     bus.subscribe<tactile_msgs::msg::WallEstimate>(wall_effect_ekf::WallEffectEkfLogic::kOutputTopic,
                                                    [this](const tactile_msgs::msg::WallEstimate& est) {
       if (!have_truth_ || !truth_.wall_detected || truth_.distance >= 0.20) return;
@@ -71,6 +75,10 @@ class WallEffectNavGraph : public SimGraph {
     m["final_state"] = tactile_fsm::to_string(nav_->navigator().state());
     m["goal_reached"] = nav_->navigator().state() == tactile_fsm::NavState::kGoalReached;
     m["transitions"] = nav_->navigator().transitions();
+    // The shared fail-safe (NOMINAL unless an input went stale) and INDI's last total
+    // thrust command: ~0 after a FAILSAFE_LAND has reached the floor.
+    m["failsafe_state"] = tactile_fsm::to_string(nav_->safety().state());
+    m["final_commanded_thrust_n"] = finite_or_null(last_commanded_thrust_);
     m["min_wall_distance_m"] = finite_or_null(min_distance_);
     m["wall_following_time_s"] = follow_time_;
     m["rms_tracking_error_cm"] = track_n_ ? finite_or_null(100.0 * std::sqrt(track_sum2_ / static_cast<double>(track_n_))) : nullptr;
@@ -100,7 +108,7 @@ class WallEffectNavGraph : public SimGraph {
   std::shared_ptr<tactile_fsm::WallEffectNavLogic> nav_;
   tactile_msgs::msg::WallEstimate truth_;
   bool have_truth_ = false;
-  double min_distance_ = INFINITY, follow_start_ = NAN, follow_time_ = 0.0;
+  double min_distance_ = INFINITY, follow_start_ = NAN, follow_time_ = 0.0, last_commanded_thrust_ = NAN;
   double track_sum2_ = 0.0, speed_sum_ = 0.0, est_d2_ = 0.0, est_a2_ = 0.0;
   size_t track_n_ = 0, speed_n_ = 0, est_n_ = 0;
 };

@@ -64,6 +64,9 @@ class XplorerGraph : public SimGraph {
                              Eigen::Vector3d(m.wrench.force.x, m.wrench.force.y, m.wrench.force.z),
                              force_->estimate().com_world});
         });
+    ctx.host.bus().subscribe<tactile_msgs::msg::ThrustCommand>(
+        xplorer_force_est::XplorerForceEstLogic::kThrustTopic,
+        [this](const tactile_msgs::msg::ThrustCommand& t) { last_thrust_ = t.total_thrust; });
     ctx.host.bus().subscribe<tactile_msgs::msg::FsmState>(
         tactile_fsm::XplorerFsmLogic::kStateTopic, [this, h](const tactile_msgs::msg::FsmState& m) {
           if (states_.empty() || states_.back().second != m.state)
@@ -78,6 +81,10 @@ class XplorerGraph : public SimGraph {
     m["mission"] = tactile_fsm::to_string(mission);
     m["final_state"] = tactile_fsm::to_string(f.state());
     m["transitions"] = f.transitions();
+    // The shared fail-safe (NOMINAL unless an input went stale) and the vehicle's last
+    // reported collective thrust: below hover once a FAILSAFE_LAND rests on the floor.
+    m["failsafe_state"] = tactile_fsm::to_string(fsm_->safety().state());
+    m["final_thrust_n"] = num(last_thrust_);
     for (const auto& [t, s] : states_) m["state_log"].push_back({{"t", t}, {"state", s}});
     if (mission == XplorerMission::kStaticWrench) static_wrench_metrics(m);
     if (mission == XplorerMission::kExplore) explore_metrics(m);
@@ -303,6 +310,7 @@ class XplorerGraph : public SimGraph {
   std::vector<ForceSample> forces_;
   std::vector<TruthSample> truth_;
   std::vector<std::pair<double, std::string>> states_;
+  double last_thrust_ = std::numeric_limits<double>::quiet_NaN();
 };
 
 }  // namespace

@@ -59,6 +59,8 @@ std::shared_ptr<tactile_fsm::XplorerFsmLogic> add_xplorer_fsm(Host& host, const 
     return NodeReport{std::string("/") + Logic::kNodeName,
                       {{"ticks", s.ticks},
                        {"ticks_stale", s.ticks_stale},
+                       {"failsafe_hovers", s.failsafe_hovers},
+                       {"failsafe_landings", s.failsafe_landings},
                        {"dropped_nonfinite", s.dropped_nonfinite},
                        {"dropped_wrong_frame", s.dropped_wrong_frame},
                        {"dropped_out_of_order", s.dropped_out_of_order},

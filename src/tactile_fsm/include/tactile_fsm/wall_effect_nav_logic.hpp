@@ -1,6 +1,15 @@
 // Node logic of the wall-effect behaviours (004 wall following and vector
 // field, wall_effect_navigation.hpp): the wall estimate and odometry in, the
 // INDI controller's setpoint and the behaviour state out at 100 Hz.
+//
+// Stale input goes through the shared SafetyRunner (safety_runner.hpp), once
+// both inputs have come: odometry or wall estimate older than max_input_age_s
+// -> FAILSAFE_HOVER at the position the drone was last known at, fresh again
+// -> the navigator resumes, stale for failsafe_land_after_s -> FAILSAFE_LAND:
+// that x, y held, z velocity-only at -failsafe_land_speed. The landing reads no
+// odometry (it may be the stale input) and needs no height: the INDI
+// controller flies the descent on its own odometry, and on the floor its
+// incremental thrust (004 eq. 34) winds down to zero.
 #pragma once
 
 #include <cstdint>
@@ -10,6 +19,7 @@
 
 #include "nav_msgs/msg/odometry.hpp"
 #include "tactile_common/parameters.hpp"
+#include "tactile_fsm/safety_runner.hpp"
 #include "tactile_fsm/wall_effect_navigation.hpp"
 #include "tactile_msgs/msg/fsm_state.hpp"
 #include "tactile_msgs/msg/wall_estimate.hpp"
@@ -34,11 +44,13 @@ class WallEffectNavLogic {
     std::array<double, 3> gps_origin{{0.0, 0.0, 0.0}};  ///< lat, lon [deg], alt [m]
     std::array<double, 3> gps_goal{{0.0, 0.0, 0.0}};
     double direction_deg = 0.0;
-    /// Older odometry: hold position (no new setpoint). A wall estimate older
-    /// than this (the EKF stopped publishing after one) is stale too: hover
-    /// at the current position (FAILSAFE_HOVER in the state message) until it
-    /// is fresh again, instead of steering by the last distance. [s]
-    double max_input_age_s = 0.2;
+    /// The shared fail-safe: max_input_age_s (older odometry or wall estimate:
+    /// FAILSAFE_HOVER instead of steering by the last distance) and
+    /// failsafe_land_after_s (-> FAILSAFE_LAND); no time limit (time_limit_s infinite).
+    SafetyParams safety;
+    /// FAILSAFE_LAND: descent speed, a velocity-only z setpoint [m/s] (choice: the
+    /// land_speed of the Crazyflie bridge and of the simulated Crazyflie, 0.25 m/s).
+    double failsafe_land_speed = 0.25;
     NavGoal goal() const;          ///< resolved goal (GPS -> ENU)
     void validate() const;
   };
@@ -46,8 +58,10 @@ class WallEffectNavLogic {
   struct Stats {
     uint64_t ticks = 0, walls = 0, odometry = 0;
     uint64_t dropped_nonfinite = 0;
-    uint64_t ticks_without_odometry = 0;  ///< nothing published
-    uint64_t ticks_wall_stale = 0;        ///< wall estimate stale: hover setpoint at the current position
+    uint64_t ticks_without_odometry = 0;  ///< odometry missing or stale (before both inputs came: nothing published)
+    uint64_t ticks_wall_stale = 0;        ///< wall estimate stale (FAILSAFE_HOVER / FAILSAFE_LAND)
+    uint64_t failsafe_hovers = 0;         ///< entries of FAILSAFE_HOVER
+    uint64_t failsafe_landings = 0;       ///< entries of FAILSAFE_LAND
   };
 
   struct Outputs {
@@ -64,12 +78,14 @@ class WallEffectNavLogic {
   Outputs on_timer(int64_t now_ns);
 
   const WallEffectNavigator& navigator() const { return nav_; }
+  const SafetyRunner& safety() const { return safety_; }
   const Params& params() const { return params_; }
   const Stats& stats() const { return stats_; }
 
  private:
   Params params_;
   WallEffectNavigator nav_;
+  SafetyRunner safety_;
   Stats stats_;
   bool have_wall_ = false, have_odom_ = false;
   /// Frame of the setpoints: the odometry's header frame (odom, or cf1/odom with a
@@ -79,9 +95,14 @@ class WallEffectNavLogic {
   Vec2 position_ = Vec2::Zero();
   double yaw_ = 0.0;
   int64_t odom_ns_ = 0, wall_ns_ = 0, state_since_ns_ = 0, last_state_pub_ns_ = -1;
-  bool wall_stale_ = false;  ///< FAILSAFE_HOVER: the last tick's wall estimate was stale
+  Vec2 hover_ = Vec2::Zero();  ///< FAILSAFE_HOVER / FAILSAFE_LAND: x, y held (last known on entry)
   NavState last_state_;
   std::string previous_state_, reason_ = "start";
+  uint8_t reason_code_ = 0;          ///< FsmState.reason_code: the fail-safe's codes; the navigator has none
+  uint32_t safety_transitions_ = 0;  ///< fail-safe entries and resumes (FsmState.transitions)
+
+  std::string behaviour_name() const;
+  nav_msgs::msg::Odometry failsafe_setpoint(int64_t now_ns, bool landing) const;
 };
 
 }  // namespace tactile_fsm

@@ -668,7 +668,8 @@ struct SimLogic::FaultSet {
   template <class T>
   using Map = std::map<std::string, TopicFaults<T>, std::less<>>;  // found by string_view
   std::tuple<Map<tactile_msgs::msg::WhiskerPressure>, Map<sensor_msgs::msg::Imu>, Map<sensor_msgs::msg::Range>,
-             Map<nav_msgs::msg::Odometry>, Map<tactile_msgs::msg::OpticalFlow>, Map<tactile_msgs::msg::ArmImuArray>>
+             Map<nav_msgs::msg::Odometry>, Map<tactile_msgs::msg::OpticalFlow>, Map<tactile_msgs::msg::ArmImuArray>,
+             Map<tactile_msgs::msg::ThrustCommand>>
       maps;
 
   /// Message types faults can be injected on (those with FaultChannels).
@@ -677,7 +678,8 @@ struct SimLogic::FaultSet {
       std::disjunction_v<std::is_same<T, tactile_msgs::msg::WhiskerPressure>, std::is_same<T, sensor_msgs::msg::Imu>,
                          std::is_same<T, sensor_msgs::msg::Range>, std::is_same<T, nav_msgs::msg::Odometry>,
                          std::is_same<T, tactile_msgs::msg::OpticalFlow>,
-                         std::is_same<T, tactile_msgs::msg::ArmImuArray>>;
+                         std::is_same<T, tactile_msgs::msg::ArmImuArray>,
+                         std::is_same<T, tactile_msgs::msg::ThrustCommand>>;
 
   template <class T>
   TopicFaults<T>* find(std::string_view topic) {
@@ -768,16 +770,19 @@ SimLogic::SimLogic(const Scenario& scenario, uint64_t seed, double extra_arena_y
       throw ScenarioError(where + "the " + std::string(to_string(scenario.vehicle)) + " simulator publishes no '" +
                           f.topic + "' (it publishes " + list + ")");
     }
+    // ThrustCommand: the reported rotor thrusts the wall-effect EKF and xplorer_force_est
+    // take; a dropout there stops the wall estimate while the INDI controller, on
+    // odometry and IMU, still flies (test_wall_effect_sitl).
     static const std::set<std::string> supported = {kPressure, kImuType, kRangeType, kFlowType, kArmType,
-                                                    "nav_msgs/msg/Odometry"};
+                                                    kThrustType, "nav_msgs/msg/Odometry"};
     if (!supported.count(it->second)) {
       throw ScenarioError(where + "faults are supported on sensor topics (WhiskerPressure, Imu, Range, "
-                                  "OpticalFlow, ArmImuArray, Odometry), not on " + it->second);
+                                  "OpticalFlow, ArmImuArray, ThrustCommand, Odometry), not on " + it->second);
     }
     // A channel the message does not have would corrupt nothing while the fault counts
     // its injections (FaultChannels in faults.hpp numbers the channels).
     static const std::map<std::string, size_t> channels = {{kPressure, 3}, {kImuType, 6}, {kRangeType, 1},
-                                                           {kFlowType, 2}, {kArmType, 4},
+                                                           {kFlowType, 2}, {kArmType, 4}, {kThrustType, 4},
                                                            {"nav_msgs/msg/Odometry", 3}};
     const size_t n = channels.at(it->second);
     if (f.channel >= 0 && static_cast<size_t>(f.channel) >= n) {
@@ -800,6 +805,7 @@ SimLogic::SimLogic(const Scenario& scenario, uint64_t seed, double extra_arena_y
     if (type == kRangeType) faults_->add<sensor_msgs::msg::Range>(topic, rules, s);
     if (type == kFlowType) faults_->add<tactile_msgs::msg::OpticalFlow>(topic, rules, s);
     if (type == kArmType) faults_->add<tactile_msgs::msg::ArmImuArray>(topic, rules, s);
+    if (type == kThrustType) faults_->add<tactile_msgs::msg::ThrustCommand>(topic, rules, s);
     if (type == "nav_msgs/msg/Odometry") faults_->add<nav_msgs::msg::Odometry>(topic, rules, s);
   }
 }

@@ -16,6 +16,7 @@
 #include "tactile_common/time.hpp"
 #include "tactile_msgs/msg/arm_imu_array.hpp"
 #include "tactile_msgs/msg/optical_flow.hpp"
+#include "tactile_msgs/msg/thrust_command.hpp"
 #include "tactile_msgs/msg/whisker_pressure.hpp"
 #include "tactile_sim/scenario.hpp"
 #include "tactile_sim/types.hpp"
@@ -26,7 +27,7 @@ namespace tactile_sim {
 /// WhiskerPressure is pressure[i]; of an Imu: 0-2 angular velocity x,y,z,
 /// 3-5 linear acceleration x,y,z; of a Range: 0 = range; of an Odometry: 0-2
 /// position x,y,z; of an OpticalFlow: 0 = flow_x, 1 = flow_y; of an
-/// ArmImuArray: arms[i].arm_angle.
+/// ArmImuArray: arms[i].arm_angle; of a ThrustCommand: rotor_thrust[i].
 template <class T>
 struct FaultChannels;
 
@@ -66,6 +67,12 @@ template <>
 struct FaultChannels<tactile_msgs::msg::ArmImuArray> {
   static size_t count(const tactile_msgs::msg::ArmImuArray& m) { return m.arms.size(); }
   static double& at(tactile_msgs::msg::ArmImuArray& m, size_t i) { return m.arms[i].arm_angle; }
+};
+
+template <>
+struct FaultChannels<tactile_msgs::msg::ThrustCommand> {
+  static size_t count(const tactile_msgs::msg::ThrustCommand& m) { return m.rotor_thrust.size(); }
+  static double& at(tactile_msgs::msg::ThrustCommand& m, size_t i) { return m.rotor_thrust[i]; }
 };
 
 /// Counters of injected faults, by type name.
