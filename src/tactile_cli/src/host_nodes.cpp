@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <limits>
 
+#include "tactile_cli/host_ports.hpp"
 #include "tactile_common/event_tick.hpp"
 #include "tactile_common/time.hpp"
 
@@ -47,15 +48,8 @@ std::shared_ptr<tdorc_filter::TdorcFilterLogic> add_tdorc_filter(
     Host& host, const std::string& ns, const tactile_common::ParamMap& over) {
   using Logic = tdorc_filter::TdorcFilterLogic;
   auto logic = add_logic<Logic>(host, ns, over);
-  const std::string out = resolve_topic(ns, Logic::kOutputTopic);
-  Host* h = &host;
+  wire(host, ns, *logic);
   Logic* l = logic.get();
-  host.bus().subscribe<tactile_msgs::msg::WhiskerPressure>(
-      resolve_topic(ns, Logic::kInputTopic), [h, l, out](const tactile_msgs::msg::WhiskerPressure& msg) {
-        // Receive time: the host's clock when the message is delivered.
-        const int64_t now = h->executor().now_ns();
-        if (auto sig = l->on_pressure(msg, now)) h->bus().publish(out, *sig, now);
-      });
   host.add_reporter([l, name = resolve_topic(ns, Logic::kNodeName)] {
     const auto& s = l->stats();
     return NodeReport{name,
@@ -83,17 +77,10 @@ std::shared_ptr<tactile_depth::TactileDepthLogic> add_tactile_depth(Host& host,
                                                                    const std::string& output_topic) {
   using Logic = tactile_depth::TactileDepthLogic;
   auto logic = add_logic<Logic>(host, "", over);
-  Host* h = &host;
+  const std::string own = resolve_topic("", Logic::kOutputTopic);
+  const std::string out = resolve_topic("", output_topic);
+  wire(host, "", *logic, out == own ? HostPorts::Remap{} : HostPorts::Remap{{own, out}});
   Logic* l = logic.get();
-  auto publish = [h, output_topic](const std::optional<tactile_msgs::msg::TactileDepth>& d) {
-    if (d) h->bus().publish(output_topic, *d, h->executor().now_ns());
-  };
-  host.bus().subscribe<tactile_msgs::msg::WhiskerSignal>(
-      Logic::kLeftSignalTopic, [l, publish](const tactile_msgs::msg::WhiskerSignal& m) { publish(l->on_left_signal(m)); });
-  host.bus().subscribe<tactile_msgs::msg::WhiskerSignal>(
-      Logic::kRightSignalTopic, [l, publish](const tactile_msgs::msg::WhiskerSignal& m) { publish(l->on_right_signal(m)); });
-  host.bus().subscribe<nav_msgs::msg::Odometry>(Logic::kOdometryTopic,
-                                                [l](const nav_msgs::msg::Odometry& m) { l->on_odometry(m); });
   host.add_reporter([l, output_topic] {
     const auto& s = l->stats();
     return NodeReport{std::string("/") + Logic::kNodeName + (output_topic == Logic::kOutputTopic ? "" : output_topic),
@@ -107,6 +94,15 @@ std::shared_ptr<tactile_depth::TactileDepthLogic> add_tactile_depth(Host& host,
                        {"prediction_skipped", s.prediction_skipped}}};
   });
   return logic;
+}
+
+WhiskerFrontEnd add_whisker_front_end(Host& host, const tactile_common::ParamMap& tdorc_overrides,
+                                      const std::optional<tactile_common::ParamMap>& depth_overrides) {
+  WhiskerFrontEnd f;
+  f.left = add_tdorc_filter(host, "whisker/left", tdorc_overrides);
+  f.right = add_tdorc_filter(host, "whisker/right", tdorc_overrides);
+  if (depth_overrides) f.depth = add_tactile_depth(host, *depth_overrides);
+  return f;
 }
 
 std::shared_ptr<tactile_fsm::WhiskerFsmLogic> add_whisker_fsm(Host& host, const tactile_common::ParamMap& over,

@@ -22,9 +22,7 @@ using gpis_explorer::GpisExplorerLogic;
 class GpisExploreGraph : public SimGraph {
  public:
   explicit GpisExploreGraph(GraphContext& ctx) : sim_(ctx.sim) {
-    add_tdorc_filter(ctx.host, "whisker/left", ctx.overrides("tdorc_filter"));
-    add_tdorc_filter(ctx.host, "whisker/right", ctx.overrides("tdorc_filter"));
-    add_tactile_depth(ctx.host, ctx.overrides("tactile_depth"));
+    add_whisker_front_end(ctx.host, ctx.overrides("tdorc_filter"), ctx.overrides("tactile_depth"));
     explorer_ = add_gpis_explorer(ctx.host, ctx.overrides("gpis_explorer"));
     GpisExplorerLogic* l = explorer_.get();
     ctx.host.bus().subscribe<tactile_msgs::msg::GpisMap>(
