@@ -193,17 +193,8 @@ std::shared_ptr<whisker_localization::WhiskerLocalizationLogic> add_whisker_loca
     Host& host, const tactile_common::ParamMap& over) {
   using Logic = whisker_localization::WhiskerLocalizationLogic;
   auto logic = add_logic<Logic>(host, "", over);
-  Host* h = &host;
+  wire(host, "", *logic);
   Logic* l = logic.get();
-  host.bus().subscribe<nav_msgs::msg::Odometry>(Logic::kOdomTopic,
-                                                [l](const nav_msgs::msg::Odometry& m) { l->on_odometry(m); });
-  host.bus().subscribe<geometry_msgs::msg::WrenchStamped>(
-      Logic::kMomentTopic, [h, l](const geometry_msgs::msg::WrenchStamped& m) {
-        auto out = l->on_moment(m);
-        const int64_t now = h->executor().now_ns();
-        if (out.result) h->bus().publish(Logic::kResultTopic, *out.result, now);
-        if (out.pose_set) h->bus().publish(Logic::kPoseSetTopic, *out.pose_set, now);
-      });
   host.add_reporter([l] {
     const auto& s = l->stats();
     return NodeReport{std::string("/") + Logic::kNodeName,
@@ -297,21 +288,8 @@ void add_scenario_pilot(Host& host, std::shared_ptr<tactile_sim::ScriptedPilotLo
 std::shared_ptr<wall_effect_ekf::WallEffectEkfLogic> add_wall_effect_ekf(Host& host, const tactile_common::ParamMap& over) {
   using Logic = wall_effect_ekf::WallEffectEkfLogic;
   auto logic = add_logic<Logic>(host, "", over);
-  Host* h = &host;
+  wire(host, "", *logic);
   Logic* l = logic.get();
-  host.bus().subscribe<sensor_msgs::msg::Imu>(Logic::kImuTopic, [l](const sensor_msgs::msg::Imu& m) { l->on_imu(m); });
-  host.bus().subscribe<tactile_msgs::msg::OpticalFlow>(
-      Logic::kFlowTopic, [l](const tactile_msgs::msg::OpticalFlow& m) { l->on_flow(m); });
-  host.bus().subscribe<sensor_msgs::msg::Range>(Logic::kRangeTopic,
-                                                [l](const sensor_msgs::msg::Range& m) { l->on_range(m); });
-  host.bus().subscribe<tactile_msgs::msg::ThrustCommand>(
-      Logic::kThrustTopic, [l](const tactile_msgs::msg::ThrustCommand& m) { l->on_thrust(m); });
-  host.executor().add_timer(
-      l->period_ns(),
-      [h, l](int64_t now_ns) {
-        if (auto out = l->on_timer(now_ns)) h->bus().publish(Logic::kOutputTopic, *out, now_ns);
-      },
-      host.executor().now_ns());
   host.add_reporter([l] {
     const auto& s = l->stats();
     return NodeReport{std::string("/") + Logic::kNodeName,
@@ -332,21 +310,8 @@ std::shared_ptr<wall_effect_ekf::WallEffectEkfLogic> add_wall_effect_ekf(Host& h
 std::shared_ptr<wall_effect_ekf::IndiControlLogic> add_indi_controller(Host& host, const tactile_common::ParamMap& over) {
   using Logic = wall_effect_ekf::IndiControlLogic;
   auto logic = add_logic<Logic>(host, "", over);
-  Host* h = &host;
+  wire(host, "", *logic);
   Logic* l = logic.get();
-  host.bus().subscribe<nav_msgs::msg::Odometry>(Logic::kSetpointTopic,
-                                                [l](const nav_msgs::msg::Odometry& m) { l->on_setpoint(m); });
-  host.bus().subscribe<nav_msgs::msg::Odometry>(Logic::kOdometryTopic,
-                                                [l](const nav_msgs::msg::Odometry& m) { l->on_odometry(m); });
-  host.bus().subscribe<sensor_msgs::msg::Imu>(Logic::kImuTopic, [l](const sensor_msgs::msg::Imu& m) { l->on_imu(m); });
-  host.bus().subscribe<tactile_msgs::msg::WallEstimate>(
-      Logic::kWallTopic, [l](const tactile_msgs::msg::WallEstimate& m) { l->on_wall(m); });
-  host.executor().add_timer(
-      l->period_ns(),
-      [h, l](int64_t now_ns) {
-        if (auto out = l->on_timer(now_ns)) h->bus().publish(Logic::kOutputTopic, *out, now_ns);
-      },
-      host.executor().now_ns());
   host.add_reporter([l] {
     const auto& s = l->stats();
     return NodeReport{std::string("/") + Logic::kNodeName,
@@ -361,31 +326,15 @@ std::shared_ptr<wall_effect_ekf::WallTrajectoryLogic> add_wall_trajectory(Host& 
                                                                           const tactile_common::ParamMap& over) {
   using Logic = wall_effect_ekf::WallTrajectoryLogic;
   auto logic = add_logic<Logic>(host, "", over);
-  Host* h = &host;
-  Logic* l = logic.get();
-  host.executor().add_timer(
-      Logic::kPeriodNs, [h, l](int64_t now_ns) { h->bus().publish(Logic::kOutputTopic, l->on_timer(now_ns), now_ns); },
-      host.executor().now_ns());
+  wire(host, "", *logic);
   return logic;
 }
 
 std::shared_ptr<tactile_fsm::WallEffectNavLogic> add_wall_effect_nav(Host& host, const tactile_common::ParamMap& over) {
   using Logic = tactile_fsm::WallEffectNavLogic;
   auto logic = add_logic<Logic>(host, "", over);
-  Host* h = &host;
+  wire(host, "", *logic);
   Logic* l = logic.get();
-  host.bus().subscribe<tactile_msgs::msg::WallEstimate>(Logic::kWallTopic,
-                                                        [l](const tactile_msgs::msg::WallEstimate& m) { l->on_wall(m); });
-  host.bus().subscribe<nav_msgs::msg::Odometry>(Logic::kOdomTopic,
-                                                [l](const nav_msgs::msg::Odometry& m) { l->on_odometry(m); });
-  host.executor().add_timer(
-      Logic::kTimerPeriodNs,
-      [h, l](int64_t now_ns) {
-        auto out = l->on_timer(now_ns);
-        if (out.setpoint) h->bus().publish(Logic::kSetpointTopic, *out.setpoint, now_ns);
-        if (out.state) h->bus().publish(Logic::kStateTopic, *out.state, now_ns);
-      },
-      host.executor().now_ns());
   host.add_reporter([l] {
     const auto& s = l->stats();
     return NodeReport{std::string("/") + Logic::kNodeName,
