@@ -13,15 +13,8 @@ std::shared_ptr<whisker_driver::WhiskerDriverLogic> add_whisker_driver(
     Host& host, const std::string& ns, const tactile_common::ParamMap& over) {
   using Logic = whisker_driver::WhiskerDriverLogic;
   auto logic = add_logic<Logic>(host, ns, over);
-  const std::string out = resolve_topic(ns, Logic::kOutputTopic);
-  Host* h = &host;
+  wire(host, ns, *logic);
   Logic* l = logic.get();
-  host.executor().add_timer(
-      logic->period_ns(),
-      [h, l, out](int64_t now_ns) {
-        for (const auto& msg : l->on_timer(now_ns).pressure) h->bus().publish(out, msg, now_ns);
-      },
-      host.executor().now_ns());
   host.add_reporter([l, name = resolve_topic(ns, Logic::kNodeName)] {
     const auto s = l->stats();
     return NodeReport{name,

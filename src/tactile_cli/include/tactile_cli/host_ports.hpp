@@ -46,7 +46,7 @@ class HostPorts {
   template <class Msg, class Handler>
   void subscribe(std::string_view topic, tactile_common::ports::Sub /*qos*/, Handler handler) {
     Executor* ex = executor_;
-    bus_->subscribe<Msg>(name(topic), [ex, handler = std::move(handler)](const Msg& msg) mutable {
+    bus_->subscribe<Msg>(name(topic), [ex, handler = std::move(handler)](const Msg& msg) {
       // Receive time: the host's clock when the message is delivered.
       tactile_common::ports::deliver(handler, msg, [ex] { return ex->now_ns(); });
     });

@@ -36,7 +36,7 @@ class RosPorts {
   template <class Msg, class Handler>
   void subscribe(const std::string& topic, ports::Sub qos, Handler handler) {
     NodeT* node = &node_;
-    auto callback = [node, handler = std::move(handler)](const Msg& msg) mutable {
+    auto callback = [node, handler = std::move(handler)](const Msg& msg) {
       // Receive time: this node's clock (sim time under ros2 bag play --clock).
       ports::deliver(handler, msg, [node] { return node->now().nanoseconds(); });
     };
@@ -82,7 +82,7 @@ class RosPorts {
   template <class Handler>
   void timer(int64_t period_ns, Handler handler, ports::Clock clock = ports::Clock::kNode) {
     NodeT* node = &node_;
-    auto callback = [node, handler = std::move(handler)]() mutable { handler(node->now().nanoseconds()); };
+    auto callback = [node, handler = std::move(handler)]() { handler(node->now().nanoseconds()); };
     const std::chrono::nanoseconds period(period_ns);
     if (clock == ports::Clock::kSteady) {
       timers_.push_back(node_.create_wall_timer(period, std::move(callback)));
