@@ -154,22 +154,8 @@ std::shared_ptr<tactile_fsm::WhiskerFsmLogic> add_whisker_fsm(Host& host, const 
 std::shared_ptr<gpis_explorer::GpisExplorerLogic> add_gpis_explorer(Host& host, const tactile_common::ParamMap& over) {
   using Logic = gpis_explorer::GpisExplorerLogic;
   auto logic = add_logic<Logic>(host, "", over);
-  Host* h = &host;
+  wire(host, "", *logic);
   Logic* l = logic.get();
-  host.bus().subscribe<tactile_msgs::msg::TactileDepth>(
-      Logic::kDepthTopic, [l](const tactile_msgs::msg::TactileDepth& m) { l->on_depth(m); });
-  host.bus().subscribe<nav_msgs::msg::Odometry>(Logic::kOdomTopic,
-                                                [l](const nav_msgs::msg::Odometry& m) { l->on_odometry(m); });
-  host.executor().add_timer(
-      Logic::kTimerPeriodNs,
-      [h, l](int64_t now_ns) {
-        auto out = l->on_timer(now_ns);
-        h->bus().publish(Logic::kSetpointTopic, out.setpoint, now_ns);
-        if (out.state) h->bus().publish(Logic::kStateTopic, *out.state, now_ns);
-        if (out.map) h->bus().publish(Logic::kMapTopic, *out.map, now_ns);
-        if (out.target) h->bus().publish(Logic::kTargetTopic, *out.target, now_ns);
-      },
-      host.executor().now_ns());
   host.add_reporter([l] {
     const auto& s = l->stats();
     return NodeReport{std::string("/") + Logic::kNodeName,
