@@ -37,9 +37,9 @@ def generate_launch_description():
         nodes.append(ComposableNode(
             package='tdorc_filter', plugin='tdorc_filter::TdorcFilterComponent', name='tdorc_filter',
             namespace='whisker/' + side,
-            # Probing: a held contact also ends at 1/4 of its peak S_c (tdorc_filter README).
+            # The exploration profile after the node's file (as the `tactile` graph gpis_explore).
             parameters=launch_common.parameters(
-                config('tdorc_filter'), {'hold_release_fraction': 0.25}, sim_time),
+                config('tdorc_filter'), config('profiles/exploration'), sim_time),
             extra_arguments=intra))
     nodes.append(ComposableNode(
         package='tactile_depth', plugin='tactile_depth::TactileDepthComponent', name='tactile_depth',

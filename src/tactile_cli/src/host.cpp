@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <stdexcept>
 
 #include "tactile_bag/typed.hpp"
 
@@ -64,10 +65,27 @@ tactile_common::ParamMap Host::load_parameters(const std::string& ns, const std:
   // course ended in a collision with exit 0). No node has a file-less default.
   tactile_common::ParamMap params =
       tactile_common::load_node_parameters(path, resolve_topic(ns, node_name), defaults);
+  for (const auto& profile : profiles_) {
+    params.merge_from(tactile_common::load_profile_overlay(profile, resolve_topic(ns, node_name), params));
+  }
   tactile_common::ParamMap o(node_name, "overrides of " + node_name + " in the standalone host");
   for (const auto& [k, v] : over.values()) o.set(k, v);
   params.merge_from(o);
   return params;
+}
+
+void Host::use_profile(const std::string& name, bool graph_default) {
+  const auto path = std::filesystem::path(config_dir_) / "profiles" / (name + ".yaml");
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    throw std::runtime_error(path.string() + ": no such parameter profile (profiles are the files in " +
+                             (std::filesystem::path(config_dir_) / "profiles").string() + ")");
+  }
+  if (graph_default) {
+    profiles_.insert(profiles_.begin() + static_cast<std::ptrdiff_t>(graph_profiles_++), path.string());
+  } else {
+    profiles_.push_back(path.string());
+  }
 }
 
 std::vector<NodeReport> Host::reports() const {

@@ -100,6 +100,10 @@ int main(int argc, char** argv) {
   std::string config_dir = "config";
   app.add_option("--config", config_dir, "directory of the <node>.yaml parameter files")
       ->capture_default_str();
+  std::vector<std::string> profiles;
+  app.add_option("--profile", profiles,
+                 "sim, sweep: apply the parameter profile <config>/profiles/NAME.yaml (e.g. paper: the papers' "
+                 "values where the workspace ships others) after each node's file; repeatable, later ones win");
 
   tactile_cli::ReplayOptions replay;
   auto* replay_cmd = app.add_subcommand(
@@ -357,6 +361,7 @@ int main(int argc, char** argv) {
     check_config_dir(config_dir);
     if (*sim_cmd) {
       sim.config_dir = config_dir;
+      sim.profiles = profiles;
       if (*seed_opt) sim.seed = sim_seed;
       const tactile_cli::InterruptScope signals;  // Ctrl-C: stop, write what was flown, exit 130
       const tactile_cli::OutputDir out_dir(sim.out_dir, "sim");
@@ -397,6 +402,7 @@ int main(int argc, char** argv) {
       }
       if (!sweep_shard.empty()) tactile_cli::parse_shard(sweep_shard, sweep.shard, sweep.shards);
       sweep.config_dir = config_dir;
+      sweep.profiles = profiles;
       const tactile_cli::InterruptScope signals;  // Ctrl-C: no new environment, table/summary kept, exit 130
       const tactile_cli::OutputDir out_dir(sweep.out_dir, "sweep");
       const auto m = tactile_cli::run_sweep(sweep);

@@ -118,6 +118,7 @@ nlohmann::json run_once(const Scenario& scenario, const SimOptions& options, uin
   }
   fs::create_directories(dir);
   Host host(options.config_dir);
+  for (const auto& profile : options.profiles) host.use_profile(profile);
   std::unique_ptr<BagRecorder> recorder;
   if (options.write_bag) {
     recorder = std::make_unique<BagRecorder>((dir / "bag").string(), BagRecorder::Commit::kReproducible);
@@ -164,6 +165,7 @@ nlohmann::json run_once(const Scenario& scenario, const SimOptions& options, uin
 
   nlohmann::json m;
   m["scenario"] = scenario.name;
+  m["profiles"] = host.profiles();  // the parameter profiles applied (files), the graph's first
   m["scenario_file"] = scenario.source;
   m["vehicle"] = tactile_sim::to_string(scenario.vehicle);
   m["seed"] = seed;

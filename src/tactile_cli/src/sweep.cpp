@@ -182,6 +182,7 @@ Row fly_one(const std::string& file, const SweepOptions& options, const fs::path
     so.scenario = file;
     so.out_dir = dir.string();
     so.config_dir = options.config_dir;
+    so.profiles = options.profiles;
     so.trials = 1;
     so.progress = false;
     so.write_bag = options.write_bags;

@@ -169,6 +169,54 @@ TEST(Host, LoadsTheWhiskerFsmFromTactileFsmYaml) {
   fs::remove_all(dir);
 }
 
+// Parameter profiles (config/profiles/): between the node's file and the overrides; the
+// graph's own profile before the user's, so the user's wins.
+TEST(Host, ProfilesApplyBetweenTheFileAndTheOverridesTheUsersLast) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("host_profiles_" + std::to_string(::getpid()));
+  fs::create_directories(dir / "profiles");
+  std::ofstream(dir / "tactile_fsm.yaml") << "/**/whisker_fsm:\n  ros__parameters:\n    v_max: 0.123\n    t_min: 0.06\n";
+  std::ofstream(dir / "profiles" / "graph.yaml") << "/**/whisker_fsm:\n  ros__parameters: {v_max: 0.3, t_min: 0.05}\n";
+  std::ofstream(dir / "profiles" / "user.yaml") << "/**/whisker_fsm:\n  ros__parameters: {v_max: 0.25}\n";
+  tactile_common::ParamMap defaults("whisker_fsm", "defaults");
+  defaults.set("v_max", 0.2);
+  defaults.set("t_min", 0.07);
+  tactile_cli::Host host(dir.string());
+  host.use_profile("user");
+  host.use_profile("graph", /*graph_default=*/true);  // as gpis_explore does, after the user's was given
+  ASSERT_EQ(host.profiles().size(), 2u);
+  EXPECT_EQ(fs::path(host.profiles()[0]).filename(), "graph.yaml");
+  auto p = host.load_parameters("", "whisker_fsm", defaults, tactile_common::ParamMap("", "none"));
+  EXPECT_DOUBLE_EQ(p.get_double("v_max"), 0.25);  // the user's profile wins
+  EXPECT_DOUBLE_EQ(p.get_double("t_min"), 0.05);  // the graph's profile over the file
+  EXPECT_EQ(fs::path(p.origin("t_min")).filename(), "graph.yaml");
+  tactile_common::ParamMap over("whisker_fsm", "overrides");
+  over.set("v_max", 0.1);
+  p = host.load_parameters("", "whisker_fsm", defaults, over);
+  EXPECT_DOUBLE_EQ(p.get_double("v_max"), 0.1);  // overrides (a scenario's node_parameters) last
+  try {
+    host.use_profile("papr");
+    ADD_FAILURE() << "a missing profile accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("papr.yaml: no such parameter profile"), std::string::npos) << e.what();
+  }
+  fs::remove_all(dir);
+}
+
+// The shipped exploration profile reaches the TDORC filters of the gpis_explore graph.
+TEST(Host, TheExplorationProfileSetsTheProbingRelease) {
+  tactile_cli::Host host(TACTILE_CONFIG_DIR);
+  const auto without = host.load_parameters("whisker/left", tdorc_filter::TdorcFilterLogic::kNodeName,
+                                            tdorc_filter::TdorcFilterLogic::default_parameters(),
+                                            tactile_common::ParamMap("", "none"));
+  host.use_profile("exploration", true);
+  const auto with = host.load_parameters("whisker/left", tdorc_filter::TdorcFilterLogic::kNodeName,
+                                         tdorc_filter::TdorcFilterLogic::default_parameters(),
+                                         tactile_common::ParamMap("", "none"));
+  EXPECT_DOUBLE_EQ(without.get_double("hold_release_fraction"), 0.1);
+  EXPECT_DOUBLE_EQ(with.get_double("hold_release_fraction"), 0.25);
+}
+
 // Issue 32: the host loads every node from its file and has no file-less
 // default (a missing, empty, directory or misnamed file is an error). So every
 // node logic the `tactile` commands run must find its file in the repository's

@@ -284,4 +284,72 @@ TEST(ShippedConfig, EachFileShipsExactlyItsNodesKeysAtTheirDefaults) {
   }
 }
 
+// ---- parameter profiles (config/profiles/) -------------------------------------------------
+
+// The sections of a profile file and the keys under each (top-level "/**/<node>:" lines and
+// the "    key: value" lines of their ros__parameters).
+std::map<std::string, std::vector<std::string>> profile_sections(const fs::path& file) {
+  std::map<std::string, std::vector<std::string>> out;
+  std::istringstream in(read(file));
+  std::string line, section;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    if (line[0] != ' ') {
+      section = line.substr(0, line.find(':'));
+      section = section.substr(section.rfind('/') + 1);
+      out[section];
+    } else if (line.rfind("    ", 0) == 0 && line[4] != ' ' && line[4] != '#') {
+      out[section].push_back(line.substr(4, line.find(':') - 4));
+    }
+  }
+  return out;
+}
+
+// Every profile names existing nodes, and each of its keys changes what ships (a value equal
+// to the node's file would be a stale line: the profile no longer says what differs). The
+// keys and types are checked by load_profile_overlay (an unknown key throws).
+TEST(ParameterProfiles, EachKeyOfEachProfileChangesAShippedValueOfAnExistingNode) {
+  const fs::path dir = fs::path(TACTILE_CONFIG_DIR) / "profiles";
+  std::set<std::string> files;
+  for (const auto& e : fs::directory_iterator(dir)) files.insert(e.path().filename().string());
+  EXPECT_EQ(files, (std::set<std::string>{"exploration.yaml", "paper.yaml"}));
+  for (const auto& name : files) {
+    const fs::path file = dir / name;
+    for (const auto& [node, keys] : profile_sections(file)) {
+      SCOPED_TRACE(file.string() + ": " + node);
+      const NodeSchema* schema = nullptr;
+      for (const auto& s : node_schemas()) {
+        if (s.name == node) schema = &s;
+      }
+      ASSERT_NE(schema, nullptr) << "no node named " << node;
+      ASSERT_FALSE(keys.empty());
+      for (const auto& instance : schema->instances) {
+        ParamMap shipped = schema->parameters();
+        for (const auto& f : schema->config_files) {
+          shipped = tactile_common::load_node_parameters((fs::path(TACTILE_CONFIG_DIR) / f).string(), instance, shipped);
+        }
+        const ParamMap overlay = tactile_common::load_profile_overlay(file.string(), instance, shipped);
+        for (const auto& k : keys) {
+          EXPECT_TRUE(overlay.has(k)) << instance << "." << k << ": the profile sets what the node's file ships";
+        }
+        EXPECT_EQ(overlay.values().size(), keys.size()) << instance;
+      }
+    }
+  }
+}
+
+// The exploration's values are written once: no scenario repeats them (the gpis_explore
+// graph applies config/profiles/exploration.yaml; so does launch/sitl_explore.launch.py).
+TEST(ParameterProfiles, TheExplorationProfileIsNotRepeatedInScenariosOrLaunches) {
+  const fs::path config(TACTILE_CONFIG_DIR);
+  for (const auto& dir : {config / "scenarios", config / ".." / "launch"}) {
+    for (const auto& e : fs::directory_iterator(dir)) {
+      if (!e.is_regular_file() || e.path().extension() == ".md") continue;
+      EXPECT_EQ(read(e.path()).find("hold_release_fraction"), std::string::npos) << e.path();
+    }
+  }
+  EXPECT_NE(read(config / ".." / "launch" / "sitl_explore.launch.py").find("config('profiles/exploration')"),
+            std::string::npos);
+}
+
 }  // namespace

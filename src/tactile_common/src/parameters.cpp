@@ -358,8 +358,12 @@ void ParamMap::merge_from(const ParamMap& other) {
   }
 }
 
-ParamMap load_node_parameters_from_string(const std::string& yaml, const std::string& source,
-                                          const std::string& node_name, const ParamMap& defaults) {
+namespace {
+
+// load_node_parameters_from_string, and with require_section false the profile overlay
+// (load_profile_overlay): a file without a section naming the node is no error then.
+ParamMap load_sections(const std::string& yaml, const std::string& source, const std::string& node_name,
+                       const ParamMap& defaults, bool require_section) {
   YAML::Node root;
   try {
     root = YAML::Load(yaml);
@@ -403,7 +407,7 @@ ParamMap load_node_parameters_from_string(const std::string& yaml, const std::st
   std::sort(sections.begin(), sections.end(), [](const auto& a, const auto& b) {
     return std::tie(std::get<0>(a), std::get<1>(a)) < std::tie(std::get<0>(b), std::get<1>(b));
   });
-  if (!named) {
+  if (!named && require_section) {
     throw ParamError(source + ": no section for node " + fqn + ": " + expected + "; sections in the file: " +
                      (found.empty() ? "none" : found));
   }
@@ -428,6 +432,13 @@ ParamMap load_node_parameters_from_string(const std::string& yaml, const std::st
   return result;
 }
 
+}  // namespace
+
+ParamMap load_node_parameters_from_string(const std::string& yaml, const std::string& source,
+                                          const std::string& node_name, const ParamMap& defaults) {
+  return load_sections(yaml, source, node_name, defaults, true);
+}
+
 ParamMap load_node_parameters(const std::string& path, const std::string& node_name,
                               const ParamMap& defaults) {
   // Missing, a directory (which std::ifstream opens and reads as empty) or
@@ -446,6 +457,25 @@ ParamMap load_node_parameters(const std::string& path, const std::string& node_n
   std::stringstream ss;
   ss << in.rdbuf();
   return load_node_parameters_from_string(ss.str(), path, node_name, defaults);
+}
+
+ParamMap load_profile_overlay(const std::string& path, const std::string& node_name, const ParamMap& params) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(std::filesystem::status(path, ec))) {
+    throw ParamError(path + ": parameter profile missing or not a regular file");
+  }
+  std::ifstream in(path);
+  if (!in) throw ParamError(path + ": cannot open parameter profile");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const ParamMap merged = load_sections(ss.str(), path, node_name, params, false);
+  const std::string fqn = fully_qualified(node_name);
+  ParamMap overlay(fqn.substr(fqn.rfind('/') + 1), path);
+  // The keys the profile changes (a key it sets to the value the node has already changes nothing).
+  for (const auto& [k, v] : merged.values()) {
+    if (!(params.values().at(k) == v)) overlay.set(k, v);
+  }
+  return overlay;
 }
 
 }  // namespace tactile_common

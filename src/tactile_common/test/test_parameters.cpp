@@ -458,3 +458,47 @@ TEST(ParamInfo, InfinitiesAcceptedFindsAnInfiniteEndTheCheckTakes) {
   EXPECT_EQ(accepted[0].key, "age");
   EXPECT_EQ(accepted[0].value, std::numeric_limits<double>::infinity());
 }
+
+// Parameter profiles (config/profiles/): a file naming only the nodes it changes.
+namespace {
+std::filesystem::path write_profile(const std::string& text) {
+  const auto path = std::filesystem::temp_directory_path() / ("profile_" + std::to_string(::getpid()) + ".yaml");
+  std::ofstream(path) << text;
+  return path;
+}
+}  // namespace
+
+TEST(ParameterProfiles, OverlayHoldsOnlyTheKeysTheProfileChangesForTheNode) {
+  const auto path = write_profile(
+      "/**/tdorc_filter:\n  ros__parameters: {window: 50, contact_threshold: 20.0}\n"
+      "/**/tactile_depth:\n  ros__parameters: {other: 1}\n");
+  const ParamMap o = tactile_common::load_profile_overlay(path.string(), "/whisker/left/tdorc_filter", defaults());
+  // window changes; contact_threshold is set to the value the node has: no change.
+  ASSERT_EQ(o.values().size(), 1u);
+  EXPECT_EQ(o.get_int64("window", 0, 1000), 50);
+  EXPECT_EQ(o.source(), path.string());
+  ParamMap merged = defaults();
+  merged.merge_from(o);
+  EXPECT_EQ(merged.get_int64("window", 0, 1000), 50);
+  EXPECT_EQ(merged.origin("window"), path.string());
+  std::filesystem::remove(path);
+}
+
+TEST(ParameterProfiles, ANodeTheProfileDoesNotNameGetsNothing) {
+  const auto path = write_profile("/**/tactile_depth:\n  ros__parameters: {kf.q: 0.5}\n");
+  EXPECT_TRUE(tactile_common::load_profile_overlay(path.string(), "tdorc_filter", defaults()).values().empty());
+  std::filesystem::remove(path);
+}
+
+TEST(ParameterProfiles, ATypoOrAMissingProfileIsAnErrorNamingTheFile) {
+  const auto path = write_profile("/**/tdorc_filter:\n  ros__parameters: {windw: 50}\n");
+  try {
+    tactile_common::load_profile_overlay(path.string(), "tdorc_filter", defaults());
+    ADD_FAILURE() << "a misspelt key accepted";
+  } catch (const ParamError& e) {
+    EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("windw"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove(path);
+  EXPECT_THROW(tactile_common::load_profile_overlay(path.string(), "tdorc_filter", defaults()), ParamError);
+}

@@ -523,14 +523,22 @@ XPLORER_TOPICS = {'/odom': 'nav_msgs/msg/Odometry', '/xplorer/wrench_body': 'geo
 XPLORER_SECONDS = 10.0  # the wall traversal follows the wall from ~5 s: ~8000 map points by 10 s
 # The graph's own mapper (xplorer_mapping, ply_file, written at shutdown) and `tactile
 # export` of the recording map the same flight. The live graph is not deterministic: whether
-# the mapper stamps one more slab as contact ends depends on the DDS timing of the run, and
-# its map's extent along the wall was 0.286 m in five runs and 0.323 m in a sixth
-# (2026-11-29, the same scenario; the exports at receive times gave 0.286 or 0.324 m),
-# while the exports of one recording are deterministic.
+# the mapper stamps one more contact slab (~300-400 points, ~3.7 cm along the wall) as a
+# contact ends depends on the DDS timing of the run, while the exports of one recording are
+# deterministic. Measured (2026-11-29, the same scenario, 6 runs, 5 of them with both cores
+# kept busy): the live map had 8034-8814 points, the exports 8267-8710, up to 8.1 % apart
+# (the count tolerance of 6 % used before failed once in those 6, and once in CI); the
+# extents along the wall differed by up to 3.9 cm; and in every run one map lay inside the
+# other: all of its points within 1 cm of the other's, and >= 95 % of the other's within
+# 1 cm of it (the rest: the slabs at the ends).
 # Hence: the export at the stamps equals the export of the header-stamped copy point for
-# point, and every export is within the live graph's spread of its map (extent 5 cm,
-# points 6 %: measured, the export has up to 4.5 % more or 4.1 % fewer points).
-POINT_TOLERANCE = 0.06
+# point; and every export and the live map are the same surface: one inside the other
+# (NEAR_INSIDE of its points within NEAR_RADIUS_M of the other's), differing by a few slabs
+# at most (NEAR_OVERLAP of the other's points near it), their extents within one slab and a
+# third (EXTENT_TOLERANCE_M).
+NEAR_RADIUS_M = 0.01
+NEAR_INSIDE = 0.99
+NEAR_OVERLAP = 0.90
 EXTENT_TOLERANCE_M = 0.05
 
 
@@ -585,9 +593,26 @@ def xplorer_recording(tmp_path_factory):
     return out
 
 
+def fraction_near(points, others, radius):
+    """The fraction of `points` within `radius` of some point of `others` (brute force in
+    blocks: ~9000 x 9000 points)."""
+    import numpy as np
+    a, b = np.asarray(points, dtype=float), np.asarray(others, dtype=float)
+    near = 0
+    for i in range(0, len(a), 512):
+        d2 = ((a[i:i + 512, None, :] - b[None, :, :]) ** 2).sum(axis=-1).min(axis=1)
+        near += int((d2 <= radius * radius).sum())
+    return near / len(a)
+
+
 def assert_same_map(exported, live, what):
-    assert abs(len(exported) - len(live)) <= POINT_TOLERANCE * len(live), (
-        f'{what}: {len(exported)} points, the graph\'s mapper {len(live)}')
+    """One map inside the other, differing by a few contact slabs (see NEAR_*)."""
+    to_live = fraction_near(exported, live, NEAR_RADIUS_M)
+    to_export = fraction_near(live, exported, NEAR_RADIUS_M)
+    summary = (f'{what}: {len(exported)} points, {100 * to_live:.1f} % within {NEAR_RADIUS_M} m of the '
+               f'graph\'s mapper\'s {len(live)}, {100 * to_export:.1f} % of those within {NEAR_RADIUS_M} m of it')
+    assert max(to_live, to_export) >= NEAR_INSIDE, f'neither map lies inside the other: {summary}'
+    assert min(to_live, to_export) >= NEAR_OVERLAP, f'the maps differ by more than a few slabs: {summary}'
     for axis, (a, b) in enumerate(zip(extent(exported), extent(live))):
         assert abs(a - b) <= EXTENT_TOLERANCE_M, f'{what}: extent along axis {axis} {a:.4f} m, the graph\'s mapper {b:.4f} m'
 

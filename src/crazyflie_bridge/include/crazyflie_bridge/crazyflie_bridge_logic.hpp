@@ -71,7 +71,7 @@ class CrazyflieBridgeLogic {
     int64_t whisker_period_ms = 20;  ///< 000: 50 Hz
     /// 100 Hz: the rate of the state estimate the pipeline was tuned with (SITL
   /// /odom); at 50 Hz the darkness wall-following FSM reached its target in
-  /// 6/10 seeded trials instead of 10/10 (crazyflie_bridge/README.md).
+  /// 6/10 seeded trials instead of 10/10 (docs/crazyflie_bridge_results.md).
   int64_t state_period_ms = 10;
     double setpoint_rate_hz = 50.0;  ///< commander packets (firmware expects >= 2 Hz: 500 ms watchdog)
     double max_velocity = 0.5;       ///< |vx|, |vy| clamp [m/s]

@@ -73,6 +73,16 @@ class Host {
                                            const tactile_common::ParamMap& defaults,
                                            const tactile_common::ParamMap& overrides) const;
 
+  /// Applies the parameter profile <config_dir>/profiles/<name>.yaml to every node loaded
+  /// after this call, between the node's file and the overrides (a launch file passes the
+  /// same file after the node's: launch/sitl_explore.launch.py). A profile names only the
+  /// nodes and keys it changes (tactile_common::load_profile_overlay). Throws
+  /// std::runtime_error naming the file if it is missing; later profiles win, except that
+  /// `graph_default` ones (a graph's own, e.g. gpis_explore's exploration) go before the
+  /// user's (`tactile sim --profile`), so the user's win.
+  void use_profile(const std::string& name, bool graph_default = false);
+  const std::vector<std::string>& profiles() const { return profiles_; }
+
   /// Keeps an object alive for the lifetime of the host.
   template <class T>
   T* keep(std::shared_ptr<T> object) {
@@ -87,6 +97,8 @@ class Host {
 
  private:
   std::string config_dir_;
+  std::vector<std::string> profiles_;  ///< paths of the profiles in use, in order
+  std::size_t graph_profiles_ = 0;     ///< the first ones are the graph's (use_profile(name, true))
   Bus bus_;
   Executor executor_;
   std::vector<std::shared_ptr<void>> objects_;

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -17,6 +18,9 @@ struct SimOptions {
   std::string scenario;                 ///< scenario file
   std::string out_dir;
   std::string config_dir;               ///< node parameter files (config/)
+  /// Parameter profiles (<config_dir>/profiles/<name>.yaml) after the nodes' files, in
+  /// order, after the graph's own (gpis_explore: exploration); Host::use_profile.
+  std::vector<std::string> profiles;
   std::optional<uint64_t> seed;         ///< default: the scenario's seed
   int trials = 1;                       ///< > 1: out_dir/trial_<k>/ per trial + aggregate
   int jobs = 0;                         ///< trials run at once (parallel.hpp); 0: all cores

@@ -31,6 +31,7 @@ struct SweepOptions {
   uint64_t seed = 1;       ///< first generator seed (family)
   std::string out_dir;
   std::string config_dir;  ///< node parameter files (config/)
+  std::vector<std::string> profiles;  ///< parameter profiles (SimOptions::profiles)
   int jobs = 0;            ///< environments flown at once (0: all cores)
   bool write_bags = true;  ///< record bags (kept for failures)
   bool keep_bags = false;  ///< keep the bags of successes too

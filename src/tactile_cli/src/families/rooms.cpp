@@ -164,9 +164,7 @@ FamilyEnvironment draw_room(FamilyDraw& d, const std::string& family) {
     << "  type: whisker_crazyflie\n"
     << "  initial: {x: 0.0, y: 0.0, z: 0.0, yaw_deg: 0.0}\n"
     << "  state_estimate: mocap\n"
-    << "graph: gpis_explore\n"
-    << "node_parameters:\n"
-    << "  tdorc_filter: {hold_release_fraction: 0.25}   # probing: end a held contact at 1/4 of its peak\n";
+    << "graph: gpis_explore\n";  // the graph applies config/profiles/exploration.yaml
   FamilyEnvironment env;
   env.name = name;
   env.yaml = y.str();

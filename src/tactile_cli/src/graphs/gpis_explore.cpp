@@ -22,6 +22,9 @@ using gpis_explorer::GpisExplorerLogic;
 class GpisExploreGraph : public SimGraph {
  public:
   explicit GpisExploreGraph(GraphContext& ctx) : sim_(ctx.sim) {
+    // The exploration's parameters against the nodes' files, written once
+    // (config/profiles/exploration.yaml; launch/sitl_explore.launch.py passes the same file).
+    ctx.host.use_profile("exploration", /*graph_default=*/true);
     add_whisker_front_end(ctx.host, ctx.overrides("tdorc_filter"), ctx.overrides("tactile_depth"));
     explorer_ = add_gpis_explorer(ctx.host, ctx.overrides("gpis_explorer"));
     GpisExplorerLogic* l = explorer_.get();

@@ -201,6 +201,15 @@ T ParamMap::get_integer(const std::string& key, T lo, T hi) const {
 ParamMap load_node_parameters(const std::string& path, const std::string& node_name,
                               const ParamMap& defaults);
 
+/// The values a parameter *profile* sets for the node: a ROS 2 parameter file (same
+/// sections and checks as above: unknown keys, wrong types and syntax are errors naming the
+/// file) that names only the nodes it changes, so a file without a section for the node
+/// gives an empty overlay. `params` are the node's parameters so far (their keys and types
+/// check the profile's); the overlay holds the keys whose value the profile changes. Its
+/// source is `path`; merge it with
+/// ParamMap::merge_from (config/profiles/, tactile_cli Host::use_profile).
+ParamMap load_profile_overlay(const std::string& path, const std::string& node_name, const ParamMap& params);
+
 /// Same, from YAML text (for tests and embedded configs), with the same rules
 /// for an empty text and a missing section. `source` names it in errors.
 ParamMap load_node_parameters_from_string(const std::string& yaml, const std::string& source,
