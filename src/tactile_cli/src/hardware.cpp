@@ -148,9 +148,7 @@ nlohmann::json run_fly(const FlyOptions& o) {
     GraphContext ctx{*scenario, host, nullptr, scenario->seed, 0.0, dir, nullptr};
     return ctx.overrides(node, extra);
   };
-  add_tdorc_filter(host, "whisker/left", overrides("tdorc_filter"));
-  add_tdorc_filter(host, "whisker/right", overrides("tdorc_filter"));
-  add_tactile_depth(host, overrides("tactile_depth"));
+  add_whisker_front_end(host, overrides("tdorc_filter"), overrides("tactile_depth"));
   tactile_common::ParamMap fsm_extra;
   if (scenario) {
     GraphContext ctx{*scenario, host, nullptr, scenario->seed, 0.0, dir, nullptr};

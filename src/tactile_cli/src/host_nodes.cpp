@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <limits>
 
+#include "tactile_cli/host_ports.hpp"
 #include "tactile_common/event_tick.hpp"
 #include "tactile_common/time.hpp"
 
@@ -12,15 +13,8 @@ std::shared_ptr<whisker_driver::WhiskerDriverLogic> add_whisker_driver(
     Host& host, const std::string& ns, const tactile_common::ParamMap& over) {
   using Logic = whisker_driver::WhiskerDriverLogic;
   auto logic = add_logic<Logic>(host, ns, over);
-  const std::string out = resolve_topic(ns, Logic::kOutputTopic);
-  Host* h = &host;
+  wire(host, ns, *logic);
   Logic* l = logic.get();
-  host.executor().add_timer(
-      logic->period_ns(),
-      [h, l, out](int64_t now_ns) {
-        for (const auto& msg : l->on_timer(now_ns).pressure) h->bus().publish(out, msg, now_ns);
-      },
-      host.executor().now_ns());
   host.add_reporter([l, name = resolve_topic(ns, Logic::kNodeName)] {
     const auto s = l->stats();
     return NodeReport{name,
@@ -47,15 +41,8 @@ std::shared_ptr<tdorc_filter::TdorcFilterLogic> add_tdorc_filter(
     Host& host, const std::string& ns, const tactile_common::ParamMap& over) {
   using Logic = tdorc_filter::TdorcFilterLogic;
   auto logic = add_logic<Logic>(host, ns, over);
-  const std::string out = resolve_topic(ns, Logic::kOutputTopic);
-  Host* h = &host;
+  wire(host, ns, *logic);
   Logic* l = logic.get();
-  host.bus().subscribe<tactile_msgs::msg::WhiskerPressure>(
-      resolve_topic(ns, Logic::kInputTopic), [h, l, out](const tactile_msgs::msg::WhiskerPressure& msg) {
-        // Receive time: the host's clock when the message is delivered.
-        const int64_t now = h->executor().now_ns();
-        if (auto sig = l->on_pressure(msg, now)) h->bus().publish(out, *sig, now);
-      });
   host.add_reporter([l, name = resolve_topic(ns, Logic::kNodeName)] {
     const auto& s = l->stats();
     return NodeReport{name,
@@ -83,17 +70,10 @@ std::shared_ptr<tactile_depth::TactileDepthLogic> add_tactile_depth(Host& host,
                                                                    const std::string& output_topic) {
   using Logic = tactile_depth::TactileDepthLogic;
   auto logic = add_logic<Logic>(host, "", over);
-  Host* h = &host;
+  const std::string own = resolve_topic("", Logic::kOutputTopic);
+  const std::string out = resolve_topic("", output_topic);
+  wire(host, "", *logic, out == own ? HostPorts::Remap{} : HostPorts::Remap{{own, out}});
   Logic* l = logic.get();
-  auto publish = [h, output_topic](const std::optional<tactile_msgs::msg::TactileDepth>& d) {
-    if (d) h->bus().publish(output_topic, *d, h->executor().now_ns());
-  };
-  host.bus().subscribe<tactile_msgs::msg::WhiskerSignal>(
-      Logic::kLeftSignalTopic, [l, publish](const tactile_msgs::msg::WhiskerSignal& m) { publish(l->on_left_signal(m)); });
-  host.bus().subscribe<tactile_msgs::msg::WhiskerSignal>(
-      Logic::kRightSignalTopic, [l, publish](const tactile_msgs::msg::WhiskerSignal& m) { publish(l->on_right_signal(m)); });
-  host.bus().subscribe<nav_msgs::msg::Odometry>(Logic::kOdometryTopic,
-                                                [l](const nav_msgs::msg::Odometry& m) { l->on_odometry(m); });
   host.add_reporter([l, output_topic] {
     const auto& s = l->stats();
     return NodeReport{std::string("/") + Logic::kNodeName + (output_topic == Logic::kOutputTopic ? "" : output_topic),
@@ -107,6 +87,15 @@ std::shared_ptr<tactile_depth::TactileDepthLogic> add_tactile_depth(Host& host,
                        {"prediction_skipped", s.prediction_skipped}}};
   });
   return logic;
+}
+
+WhiskerFrontEnd add_whisker_front_end(Host& host, const tactile_common::ParamMap& tdorc_overrides,
+                                      const std::optional<tactile_common::ParamMap>& depth_overrides) {
+  WhiskerFrontEnd f;
+  f.left = add_tdorc_filter(host, "whisker/left", tdorc_overrides);
+  f.right = add_tdorc_filter(host, "whisker/right", tdorc_overrides);
+  if (depth_overrides) f.depth = add_tactile_depth(host, *depth_overrides);
+  return f;
 }
 
 std::shared_ptr<tactile_fsm::WhiskerFsmLogic> add_whisker_fsm(Host& host, const tactile_common::ParamMap& over,
@@ -165,22 +154,8 @@ std::shared_ptr<tactile_fsm::WhiskerFsmLogic> add_whisker_fsm(Host& host, const 
 std::shared_ptr<gpis_explorer::GpisExplorerLogic> add_gpis_explorer(Host& host, const tactile_common::ParamMap& over) {
   using Logic = gpis_explorer::GpisExplorerLogic;
   auto logic = add_logic<Logic>(host, "", over);
-  Host* h = &host;
+  wire(host, "", *logic);
   Logic* l = logic.get();
-  host.bus().subscribe<tactile_msgs::msg::TactileDepth>(
-      Logic::kDepthTopic, [l](const tactile_msgs::msg::TactileDepth& m) { l->on_depth(m); });
-  host.bus().subscribe<nav_msgs::msg::Odometry>(Logic::kOdomTopic,
-                                                [l](const nav_msgs::msg::Odometry& m) { l->on_odometry(m); });
-  host.executor().add_timer(
-      Logic::kTimerPeriodNs,
-      [h, l](int64_t now_ns) {
-        auto out = l->on_timer(now_ns);
-        h->bus().publish(Logic::kSetpointTopic, out.setpoint, now_ns);
-        if (out.state) h->bus().publish(Logic::kStateTopic, *out.state, now_ns);
-        if (out.map) h->bus().publish(Logic::kMapTopic, *out.map, now_ns);
-        if (out.target) h->bus().publish(Logic::kTargetTopic, *out.target, now_ns);
-      },
-      host.executor().now_ns());
   host.add_reporter([l] {
     const auto& s = l->stats();
     return NodeReport{std::string("/") + Logic::kNodeName,
@@ -197,17 +172,8 @@ std::shared_ptr<whisker_localization::WhiskerLocalizationLogic> add_whisker_loca
     Host& host, const tactile_common::ParamMap& over) {
   using Logic = whisker_localization::WhiskerLocalizationLogic;
   auto logic = add_logic<Logic>(host, "", over);
-  Host* h = &host;
+  wire(host, "", *logic);
   Logic* l = logic.get();
-  host.bus().subscribe<nav_msgs::msg::Odometry>(Logic::kOdomTopic,
-                                                [l](const nav_msgs::msg::Odometry& m) { l->on_odometry(m); });
-  host.bus().subscribe<geometry_msgs::msg::WrenchStamped>(
-      Logic::kMomentTopic, [h, l](const geometry_msgs::msg::WrenchStamped& m) {
-        auto out = l->on_moment(m);
-        const int64_t now = h->executor().now_ns();
-        if (out.result) h->bus().publish(Logic::kResultTopic, *out.result, now);
-        if (out.pose_set) h->bus().publish(Logic::kPoseSetTopic, *out.pose_set, now);
-      });
   host.add_reporter([l] {
     const auto& s = l->stats();
     return NodeReport{std::string("/") + Logic::kNodeName,
@@ -301,21 +267,8 @@ void add_scenario_pilot(Host& host, std::shared_ptr<tactile_sim::ScriptedPilotLo
 std::shared_ptr<wall_effect_ekf::WallEffectEkfLogic> add_wall_effect_ekf(Host& host, const tactile_common::ParamMap& over) {
   using Logic = wall_effect_ekf::WallEffectEkfLogic;
   auto logic = add_logic<Logic>(host, "", over);
-  Host* h = &host;
+  wire(host, "", *logic);
   Logic* l = logic.get();
-  host.bus().subscribe<sensor_msgs::msg::Imu>(Logic::kImuTopic, [l](const sensor_msgs::msg::Imu& m) { l->on_imu(m); });
-  host.bus().subscribe<tactile_msgs::msg::OpticalFlow>(
-      Logic::kFlowTopic, [l](const tactile_msgs::msg::OpticalFlow& m) { l->on_flow(m); });
-  host.bus().subscribe<sensor_msgs::msg::Range>(Logic::kRangeTopic,
-                                                [l](const sensor_msgs::msg::Range& m) { l->on_range(m); });
-  host.bus().subscribe<tactile_msgs::msg::ThrustCommand>(
-      Logic::kThrustTopic, [l](const tactile_msgs::msg::ThrustCommand& m) { l->on_thrust(m); });
-  host.executor().add_timer(
-      l->period_ns(),
-      [h, l](int64_t now_ns) {
-        if (auto out = l->on_timer(now_ns)) h->bus().publish(Logic::kOutputTopic, *out, now_ns);
-      },
-      host.executor().now_ns());
   host.add_reporter([l] {
     const auto& s = l->stats();
     return NodeReport{std::string("/") + Logic::kNodeName,
@@ -336,21 +289,8 @@ std::shared_ptr<wall_effect_ekf::WallEffectEkfLogic> add_wall_effect_ekf(Host& h
 std::shared_ptr<wall_effect_ekf::IndiControlLogic> add_indi_controller(Host& host, const tactile_common::ParamMap& over) {
   using Logic = wall_effect_ekf::IndiControlLogic;
   auto logic = add_logic<Logic>(host, "", over);
-  Host* h = &host;
+  wire(host, "", *logic);
   Logic* l = logic.get();
-  host.bus().subscribe<nav_msgs::msg::Odometry>(Logic::kSetpointTopic,
-                                                [l](const nav_msgs::msg::Odometry& m) { l->on_setpoint(m); });
-  host.bus().subscribe<nav_msgs::msg::Odometry>(Logic::kOdometryTopic,
-                                                [l](const nav_msgs::msg::Odometry& m) { l->on_odometry(m); });
-  host.bus().subscribe<sensor_msgs::msg::Imu>(Logic::kImuTopic, [l](const sensor_msgs::msg::Imu& m) { l->on_imu(m); });
-  host.bus().subscribe<tactile_msgs::msg::WallEstimate>(
-      Logic::kWallTopic, [l](const tactile_msgs::msg::WallEstimate& m) { l->on_wall(m); });
-  host.executor().add_timer(
-      l->period_ns(),
-      [h, l](int64_t now_ns) {
-        if (auto out = l->on_timer(now_ns)) h->bus().publish(Logic::kOutputTopic, *out, now_ns);
-      },
-      host.executor().now_ns());
   host.add_reporter([l] {
     const auto& s = l->stats();
     return NodeReport{std::string("/") + Logic::kNodeName,
@@ -365,31 +305,15 @@ std::shared_ptr<wall_effect_ekf::WallTrajectoryLogic> add_wall_trajectory(Host& 
                                                                           const tactile_common::ParamMap& over) {
   using Logic = wall_effect_ekf::WallTrajectoryLogic;
   auto logic = add_logic<Logic>(host, "", over);
-  Host* h = &host;
-  Logic* l = logic.get();
-  host.executor().add_timer(
-      Logic::kPeriodNs, [h, l](int64_t now_ns) { h->bus().publish(Logic::kOutputTopic, l->on_timer(now_ns), now_ns); },
-      host.executor().now_ns());
+  wire(host, "", *logic);
   return logic;
 }
 
 std::shared_ptr<tactile_fsm::WallEffectNavLogic> add_wall_effect_nav(Host& host, const tactile_common::ParamMap& over) {
   using Logic = tactile_fsm::WallEffectNavLogic;
   auto logic = add_logic<Logic>(host, "", over);
-  Host* h = &host;
+  wire(host, "", *logic);
   Logic* l = logic.get();
-  host.bus().subscribe<tactile_msgs::msg::WallEstimate>(Logic::kWallTopic,
-                                                        [l](const tactile_msgs::msg::WallEstimate& m) { l->on_wall(m); });
-  host.bus().subscribe<nav_msgs::msg::Odometry>(Logic::kOdomTopic,
-                                                [l](const nav_msgs::msg::Odometry& m) { l->on_odometry(m); });
-  host.executor().add_timer(
-      Logic::kTimerPeriodNs,
-      [h, l](int64_t now_ns) {
-        auto out = l->on_timer(now_ns);
-        if (out.setpoint) h->bus().publish(Logic::kSetpointTopic, *out.setpoint, now_ns);
-        if (out.state) h->bus().publish(Logic::kStateTopic, *out.state, now_ns);
-      },
-      host.executor().now_ns());
   host.add_reporter([l] {
     const auto& s = l->stats();
     return NodeReport{std::string("/") + Logic::kNodeName,

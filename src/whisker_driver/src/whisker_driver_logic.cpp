@@ -206,6 +206,7 @@ WhiskerDriverLogic::Outputs WhiskerDriverLogic::on_timer(int64_t now_ns) {
     out.pressure.push_back(std::move(m));
   }
   stats_.published += out.pressure.size();
+  if (!out.pressure.empty()) last_output_ns_ = now_ns;
   return out;
 }
 

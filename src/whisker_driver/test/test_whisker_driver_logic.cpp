@@ -164,6 +164,18 @@ TEST(SimSource, FiftyHertzStampsAndDeterminism) {
   EXPECT_NE(mc[5].pressure[0], ma[5].pressure[0]);
 }
 
+// The bench rig's stall diagnostics read the age of the stream from it.
+TEST(WhiskerDriverLogic, LastOutputTimeIsTheLastTickThatPublished) {
+  WhiskerDriverLogic logic(sim_params());
+  EXPECT_FALSE(logic.last_output_ns());
+  ASSERT_EQ(logic.on_timer(1000).pressure.size(), 1u);
+  EXPECT_EQ(logic.last_output_ns(), 1000);
+  ASSERT_TRUE(logic.on_timer(2000).pressure.empty());  // the next sample is 20 ms later
+  EXPECT_EQ(logic.last_output_ns(), 1000);
+  ASSERT_EQ(logic.on_timer(20'001'000).pressure.size(), 1u);
+  EXPECT_EQ(logic.last_output_ns(), 20'001'000);
+}
+
 TEST(SimSource, LateTimerCatchesUpWithExactStamps) {
   WhiskerDriverLogic logic(sim_params());
   auto out = logic.on_timer(0);

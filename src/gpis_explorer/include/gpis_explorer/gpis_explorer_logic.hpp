@@ -9,10 +9,12 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "gpis_explorer/sequencer.hpp"
 #include "nav_msgs/msg/odometry.hpp"
 #include "tactile_common/parameters.hpp"
+#include "tactile_common/ports.hpp"
 #include "tactile_msgs/msg/exploration_target.hpp"
 #include "tactile_msgs/msg/fsm_state.hpp"
 #include "tactile_msgs/msg/gpis_map.hpp"
@@ -75,6 +77,31 @@ class GpisExplorerLogic {
   void on_depth(const tactile_msgs::msg::TactileDepth& msg);
   void on_odometry(const nav_msgs::msg::Odometry& msg);
   Outputs on_timer(int64_t now_ns);
+
+  /// The node's ports (tactile_common/ports.hpp), for its rclcpp component and the
+  /// `tactile` host: depth and odometry in (sensor data); every kTimerPeriodNs on the
+  /// node's clock the setpoint and the state out, the map and the target latched (a late
+  /// subscriber, RViz or a recorder, still gets the last ones).
+  template <class Ports>
+  static void wire(Ports& p, GpisExplorerLogic& l) {
+    using tactile_common::ports::Pub;
+    using tactile_common::ports::Sub;
+    auto setpoint = p.template publisher<tactile_msgs::msg::HoverSetpoint>(kSetpointTopic, Pub::kData);
+    auto state = p.template publisher<tactile_msgs::msg::FsmState>(kStateTopic, Pub::kData);
+    auto gpis_map = p.template publisher<tactile_msgs::msg::GpisMap>(kMapTopic, Pub::kLatched);
+    auto target = p.template publisher<tactile_msgs::msg::ExplorationTarget>(kTargetTopic, Pub::kLatched);
+    p.template subscribe<tactile_msgs::msg::TactileDepth>(kDepthTopic, Sub::kSensorData,
+                                                          [&l](const tactile_msgs::msg::TactileDepth& m) { l.on_depth(m); });
+    p.template subscribe<nav_msgs::msg::Odometry>(kOdomTopic, Sub::kSensorData,
+                                                  [&l](const nav_msgs::msg::Odometry& m) { l.on_odometry(m); });
+    p.timer(kTimerPeriodNs, [&l, setpoint, state, gpis_map, target](int64_t now_ns) {
+      auto out = l.on_timer(now_ns);
+      setpoint(std::move(out.setpoint));
+      if (out.state) state(std::move(*out.state));
+      if (out.map) gpis_map(std::move(*out.map));
+      if (out.target) target(std::move(*out.target));
+    });
+  }
 
   const Stats& stats() const { return stats_; }
   const Params& params() const { return params_; }

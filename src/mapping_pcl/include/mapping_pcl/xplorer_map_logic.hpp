@@ -20,6 +20,7 @@
 #include "nav_msgs/msg/odometry.hpp"
 #include "sensor_msgs/msg/point_cloud2.hpp"
 #include "tactile_common/parameters.hpp"
+#include "tactile_common/ports.hpp"
 #include "tactile_msgs/msg/arm_imu_array.hpp"
 #include "tactile_msgs/msg/fsm_state.hpp"
 
@@ -152,6 +153,28 @@ class XplorerMapLogic {
   const Stats& stats() const { return stats_; }
   const Params& params() const { return params_; }
   int64_t period_ns() const;
+
+  /// The node's ports (tactile_common/ports.hpp), for its rclcpp component and the
+  /// `tactile` host: body wrench, odometry and arm IMU in (sensor data), the FSM state in
+  /// reliable (a state change is an event, not a stream); the contact cloud out latched (a
+  /// late subscriber still gets the map) every period_ns() on the node's clock.
+  template <class Ports>
+  static void wire(Ports& p, XplorerMapLogic& l) {
+    using tactile_common::ports::Pub;
+    using tactile_common::ports::Sub;
+    auto cloud = p.template publisher<sensor_msgs::msg::PointCloud2>(kCloudTopic, Pub::kLatched);
+    p.template subscribe<geometry_msgs::msg::WrenchStamped>(
+        kWrenchBodyTopic, Sub::kSensorData, [&l](const geometry_msgs::msg::WrenchStamped& m) { l.on_wrench_body(m); });
+    p.template subscribe<nav_msgs::msg::Odometry>(kOdometryTopic, Sub::kSensorData,
+                                                  [&l](const nav_msgs::msg::Odometry& m) { l.on_odometry(m); });
+    p.template subscribe<tactile_msgs::msg::FsmState>(kFsmStateTopic, Sub::kReliable,
+                                                      [&l](const tactile_msgs::msg::FsmState& m) { l.on_fsm_state(m); });
+    p.template subscribe<tactile_msgs::msg::ArmImuArray>(
+        kArmImuTopic, Sub::kSensorData, [&l](const tactile_msgs::msg::ArmImuArray& m) { l.on_arm_imu(m); });
+    p.timer(l.period_ns(), [&l, cloud](int64_t now_ns) {
+      if (auto out = l.on_timer(now_ns)) cloud(std::move(*out));
+    });
+  }
 
  private:
   Params params_;

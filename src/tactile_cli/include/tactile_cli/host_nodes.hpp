@@ -5,6 +5,7 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "gpis_explorer/gpis_explorer_logic.hpp"
@@ -30,6 +31,18 @@ std::shared_ptr<whisker_driver::WhiskerDriverLogic> add_whisker_driver(
 /// tdorc_filter in namespace `ns`: <ns>/pressure -> <ns>/signal.
 std::shared_ptr<tdorc_filter::TdorcFilterLogic> add_tdorc_filter(
     Host& host, const std::string& ns, const tactile_common::ParamMap& overrides);
+
+/// The whisker front end of the whiskered Crazyflie's graphs (launch/sitl_whisker.launch.py,
+/// sitl_explore.launch.py and radio.launch.py compose the same): tdorc_filter in whisker/left and whisker/right, both with
+/// `tdorc_overrides`, then tactile_depth with `*depth_overrides` (none without them: a
+/// graph that needs the compensated signals only, e.g. the scripted pilot's `until: contact`).
+struct WhiskerFrontEnd {
+  std::shared_ptr<tdorc_filter::TdorcFilterLogic> left;
+  std::shared_ptr<tdorc_filter::TdorcFilterLogic> right;
+  std::shared_ptr<tactile_depth::TactileDepthLogic> depth;  ///< null without depth_overrides
+};
+WhiskerFrontEnd add_whisker_front_end(Host& host, const tactile_common::ParamMap& tdorc_overrides,
+                                      const std::optional<tactile_common::ParamMap>& depth_overrides);
 
 /// tactile_depth: /whisker/{left,right}/signal + /odom -> `output_topic`
 /// (the node's own /whisker/depth unless an evaluator renames it).

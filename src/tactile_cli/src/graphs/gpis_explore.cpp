@@ -25,9 +25,7 @@ class GpisExploreGraph : public SimGraph {
     // The exploration's parameters against the nodes' files, written once
     // (config/profiles/exploration.yaml; launch/sitl_explore.launch.py passes the same file).
     ctx.host.use_profile("exploration", /*graph_default=*/true);
-    add_tdorc_filter(ctx.host, "whisker/left", ctx.overrides("tdorc_filter"));
-    add_tdorc_filter(ctx.host, "whisker/right", ctx.overrides("tdorc_filter"));
-    add_tactile_depth(ctx.host, ctx.overrides("tactile_depth"));
+    add_whisker_front_end(ctx.host, ctx.overrides("tdorc_filter"), ctx.overrides("tactile_depth"));
     explorer_ = add_gpis_explorer(ctx.host, ctx.overrides("gpis_explorer"));
     GpisExplorerLogic* l = explorer_.get();
     ctx.host.bus().subscribe<tactile_msgs::msg::GpisMap>(

@@ -15,8 +15,7 @@ class PilotGraph : public SimGraph {
  public:
   PilotGraph(GraphContext& ctx) : steps_(ctx.scenario.pilot.size()) {
     if (ctx.scenario.vehicle == tactile_sim::VehicleType::kWhiskerCrazyflie) {
-      add_tdorc_filter(ctx.host, "whisker/left", ctx.overrides("tdorc_filter"));
-      add_tdorc_filter(ctx.host, "whisker/right", ctx.overrides("tdorc_filter"));
+      add_whisker_front_end(ctx.host, ctx.overrides("tdorc_filter"), std::nullopt);  // no depth: signals only
     }
     pilot_ = std::make_shared<tactile_sim::ScriptedPilotLogic>(ctx.scenario.pilot, ctx.scenario.vehicle,
                                                                 ctx.scenario.initial_position, ctx.scenario.initial_yaw);

@@ -13,9 +13,7 @@ namespace {
 class WhiskerFsmGraph : public SimGraph {
  public:
   explicit WhiskerFsmGraph(GraphContext& ctx) {
-    add_tdorc_filter(ctx.host, "whisker/left", ctx.overrides("tdorc_filter"));
-    add_tdorc_filter(ctx.host, "whisker/right", ctx.overrides("tdorc_filter"));
-    add_tactile_depth(ctx.host, ctx.overrides("tactile_depth"));
+    add_whisker_front_end(ctx.host, ctx.overrides("tdorc_filter"), ctx.overrides("tactile_depth"));
     tactile_common::ParamMap extra;
     if (auto t = ctx.target()) {
       extra.set("target_x", t->x());

@@ -66,9 +66,7 @@ class WhiskerFsmCrtpGraph : public SimGraph {
     link_ = link.get();
 
     // Pipeline on its own host (same nodes and topics as whisker_fsm).
-    add_tdorc_filter(inner_, "whisker/left", ctx.overrides("tdorc_filter"));
-    add_tdorc_filter(inner_, "whisker/right", ctx.overrides("tdorc_filter"));
-    add_tactile_depth(inner_, ctx.overrides("tactile_depth"));
+    add_whisker_front_end(inner_, ctx.overrides("tdorc_filter"), ctx.overrides("tactile_depth"));
     tactile_common::ParamMap extra;
     if (auto t = ctx.target()) {
       extra.set("target_x", t->x());

@@ -6,9 +6,11 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "nav_msgs/msg/odometry.hpp"
 #include "tactile_common/parameters.hpp"
+#include "tactile_common/ports.hpp"
 #include "tactile_depth/depth_estimator.hpp"
 #include "tactile_msgs/msg/tactile_depth.hpp"
 #include "tactile_msgs/msg/whisker_signal.hpp"
@@ -70,6 +72,25 @@ class TactileDepthLogic {
   std::optional<tactile_msgs::msg::TactileDepth> on_left_signal(const tactile_msgs::msg::WhiskerSignal& msg);
   std::optional<tactile_msgs::msg::TactileDepth> on_right_signal(const tactile_msgs::msg::WhiskerSignal& msg);
   void on_odometry(const nav_msgs::msg::Odometry& msg);
+
+  /// The node's ports (tactile_common/ports.hpp), for its rclcpp component and the
+  /// `tactile` host: both whiskers' signals and the odometry in (sensor data), the depth
+  /// out after each signal that completes a pair.
+  template <class Ports>
+  static void wire(Ports& p, TactileDepthLogic& l) {
+    using tactile_common::ports::Pub;
+    using tactile_common::ports::Sub;
+    using tactile_msgs::msg::WhiskerSignal;
+    auto depth = p.template publisher<tactile_msgs::msg::TactileDepth>(kOutputTopic, Pub::kData);
+    p.template subscribe<WhiskerSignal>(kLeftSignalTopic, Sub::kSensorData, [&l, depth](const WhiskerSignal& msg) {
+      if (auto out = l.on_left_signal(msg)) depth(std::move(*out));
+    });
+    p.template subscribe<WhiskerSignal>(kRightSignalTopic, Sub::kSensorData, [&l, depth](const WhiskerSignal& msg) {
+      if (auto out = l.on_right_signal(msg)) depth(std::move(*out));
+    });
+    p.template subscribe<nav_msgs::msg::Odometry>(kOdometryTopic, Sub::kSensorData,
+                                                  [&l](const nav_msgs::msg::Odometry& msg) { l.on_odometry(msg); });
+  }
 
   const Stats& stats() const { return stats_; }
   /// New parameters while running (`ros2 param set`): only the live keys of

@@ -16,9 +16,11 @@
 #include <array>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "nav_msgs/msg/odometry.hpp"
 #include "tactile_common/parameters.hpp"
+#include "tactile_common/ports.hpp"
 #include "tactile_fsm/safety_runner.hpp"
 #include "tactile_fsm/wall_effect_navigation.hpp"
 #include "tactile_msgs/msg/fsm_state.hpp"
@@ -76,6 +78,26 @@ class WallEffectNavLogic {
   void on_wall(const tactile_msgs::msg::WallEstimate& msg);
   void on_odometry(const nav_msgs::msg::Odometry& msg);
   Outputs on_timer(int64_t now_ns);
+
+  /// The node's ports (tactile_common/ports.hpp), for its rclcpp component and the
+  /// `tactile` host: wall estimate and odometry in (sensor data), the setpoint and the
+  /// state out every kTimerPeriodNs on the node's clock.
+  template <class Ports>
+  static void wire(Ports& p, WallEffectNavLogic& l) {
+    using tactile_common::ports::Pub;
+    using tactile_common::ports::Sub;
+    auto setpoint = p.template publisher<nav_msgs::msg::Odometry>(kSetpointTopic, Pub::kData);
+    auto state = p.template publisher<tactile_msgs::msg::FsmState>(kStateTopic, Pub::kData);
+    p.template subscribe<tactile_msgs::msg::WallEstimate>(kWallTopic, Sub::kSensorData,
+                                                          [&l](const tactile_msgs::msg::WallEstimate& m) { l.on_wall(m); });
+    p.template subscribe<nav_msgs::msg::Odometry>(kOdomTopic, Sub::kSensorData,
+                                                  [&l](const nav_msgs::msg::Odometry& m) { l.on_odometry(m); });
+    p.timer(kTimerPeriodNs, [&l, setpoint, state](int64_t now_ns) {
+      auto out = l.on_timer(now_ns);
+      if (out.setpoint) setpoint(std::move(*out.setpoint));
+      if (out.state) state(std::move(*out.state));
+    });
+  }
 
   const WallEffectNavigator& navigator() const { return nav_; }
   const SafetyRunner& safety() const { return safety_; }

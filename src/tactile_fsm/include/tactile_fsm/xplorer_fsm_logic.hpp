@@ -14,11 +14,13 @@
 
 #include <cstdint>
 #include <optional>
+#include <utility>
 
 #include "geometry_msgs/msg/pose_stamped.hpp"
 #include "geometry_msgs/msg/wrench_stamped.hpp"
 #include "nav_msgs/msg/odometry.hpp"
 #include "tactile_common/parameters.hpp"
+#include "tactile_common/ports.hpp"
 #include "tactile_fsm/safety_runner.hpp"
 #include "tactile_fsm/xplorer_explorer.hpp"
 #include "tactile_msgs/msg/fsm_state.hpp"
@@ -81,6 +83,26 @@ class XplorerFsmLogic {
   void on_wrench(const geometry_msgs::msg::WrenchStamped& msg);
   void on_odometry(const nav_msgs::msg::Odometry& msg);
   Outputs on_timer(int64_t now_ns);
+
+  /// The node's ports (tactile_common/ports.hpp), for its rclcpp component and the
+  /// `tactile` host: wrench and odometry in (sensor data), the position setpoint and the
+  /// state out every kTimerPeriodNs on the node's clock (sim time under use_sim_time).
+  template <class Ports>
+  static void wire(Ports& p, XplorerFsmLogic& l) {
+    using tactile_common::ports::Pub;
+    using tactile_common::ports::Sub;
+    auto setpoint = p.template publisher<geometry_msgs::msg::PoseStamped>(kSetpointTopic, Pub::kData);
+    auto state = p.template publisher<tactile_msgs::msg::FsmState>(kStateTopic, Pub::kData);
+    p.template subscribe<geometry_msgs::msg::WrenchStamped>(
+        kWrenchTopic, Sub::kSensorData, [&l](const geometry_msgs::msg::WrenchStamped& m) { l.on_wrench(m); });
+    p.template subscribe<nav_msgs::msg::Odometry>(kOdomTopic, Sub::kSensorData,
+                                                  [&l](const nav_msgs::msg::Odometry& m) { l.on_odometry(m); });
+    p.timer(kTimerPeriodNs, [&l, setpoint, state](int64_t now_ns) {
+      auto out = l.on_timer(now_ns);
+      if (out.setpoint) setpoint(std::move(*out.setpoint));
+      if (out.state) state(std::move(*out.state));
+    });
+  }
 
   const XplorerExplorer& fsm() const { return fsm_; }
   const SafetyRunner& safety() const { return safety_; }

@@ -5,8 +5,10 @@
 
 #include <cstdint>
 #include <optional>
+#include <utility>
 
 #include "tactile_common/parameters.hpp"
+#include "tactile_common/ports.hpp"
 #include "tactile_common/sample_clock.hpp"
 #include "tactile_msgs/msg/whisker_pressure.hpp"
 #include "tactile_msgs/msg/whisker_signal.hpp"
@@ -79,6 +81,19 @@ class TdorcFilterLogic {
                                                               std::optional<int64_t> receive_ns);
   std::optional<tactile_msgs::msg::WhiskerSignal> on_pressure(const tactile_msgs::msg::WhiskerPressure& msg) {
     return on_pressure(msg, std::nullopt);
+  }
+
+  /// The node's ports (tactile_common/ports.hpp), for its rclcpp component and the
+  /// `tactile` host: pressure in (sensor data; the receive time checks its stamp), signal out.
+  template <class Ports>
+  static void wire(Ports& p, TdorcFilterLogic& l) {
+    using tactile_common::ports::Pub;
+    using tactile_common::ports::Sub;
+    auto signal = p.template publisher<tactile_msgs::msg::WhiskerSignal>(kOutputTopic, Pub::kData);
+    p.template subscribe<tactile_msgs::msg::WhiskerPressure>(
+        kInputTopic, Sub::kSensorData, [&l, signal](const tactile_msgs::msg::WhiskerPressure& msg, int64_t receive_ns) {
+          if (auto out = l.on_pressure(msg, receive_ns)) signal(std::move(*out));
+        });
   }
 
   const Stats& stats() const { return stats_; }

@@ -12,10 +12,12 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "nav_msgs/msg/odometry.hpp"
 #include "sensor_msgs/msg/imu.hpp"
 #include "tactile_common/parameters.hpp"
+#include "tactile_common/ports.hpp"
 #include "tactile_msgs/msg/thrust_command.hpp"
 #include "tactile_msgs/msg/wall_estimate.hpp"
 #include "wall_effect_ekf/indi_controller.hpp"
@@ -61,6 +63,27 @@ class IndiControlLogic {
   std::optional<tactile_msgs::msg::ThrustCommand> on_timer(int64_t now_ns);
 
   int64_t period_ns() const;
+
+  /// The node's ports (tactile_common/ports.hpp), for its rclcpp component and the
+  /// `tactile` host: the setpoint in reliable (a command, never dropped), odometry, IMU and
+  /// wall estimate in as sensor data; the rotor thrusts out at period_ns() on the node's clock.
+  template <class Ports>
+  static void wire(Ports& p, IndiControlLogic& l) {
+    using tactile_common::ports::Pub;
+    using tactile_common::ports::Sub;
+    auto thrust = p.template publisher<tactile_msgs::msg::ThrustCommand>(kOutputTopic, Pub::kData);
+    p.template subscribe<nav_msgs::msg::Odometry>(kSetpointTopic, Sub::kReliable,
+                                                  [&l](const nav_msgs::msg::Odometry& m) { l.on_setpoint(m); });
+    p.template subscribe<nav_msgs::msg::Odometry>(kOdometryTopic, Sub::kSensorData,
+                                                  [&l](const nav_msgs::msg::Odometry& m) { l.on_odometry(m); });
+    p.template subscribe<sensor_msgs::msg::Imu>(kImuTopic, Sub::kSensorData,
+                                                [&l](const sensor_msgs::msg::Imu& m) { l.on_imu(m); });
+    p.template subscribe<tactile_msgs::msg::WallEstimate>(kWallTopic, Sub::kSensorData,
+                                                          [&l](const tactile_msgs::msg::WallEstimate& m) { l.on_wall(m); });
+    p.timer(l.period_ns(), [&l, thrust](int64_t now_ns) {
+      if (auto out = l.on_timer(now_ns)) thrust(std::move(*out));
+    });
+  }
   const Stats& stats() const { return stats_; }
   const Params& params() const { return params_; }
   const IndiController& controller() const { return ctl_; }

@@ -7,10 +7,12 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "sensor_msgs/msg/imu.hpp"
 #include "sensor_msgs/msg/range.hpp"
 #include "tactile_common/parameters.hpp"
+#include "tactile_common/ports.hpp"
 #include "tactile_msgs/msg/optical_flow.hpp"
 #include "tactile_msgs/msg/thrust_command.hpp"
 #include "tactile_msgs/msg/wall_estimate.hpp"
@@ -67,6 +69,27 @@ class WallEffectEkfLogic {
   std::optional<tactile_msgs::msg::WallEstimate> on_timer(int64_t now_ns);
 
   int64_t period_ns() const;
+
+  /// The node's ports (tactile_common/ports.hpp), for its rclcpp component and the
+  /// `tactile` host: IMU, flow, ToF and thrust in (sensor data), the estimate out at
+  /// period_ns() on the node's clock.
+  template <class Ports>
+  static void wire(Ports& p, WallEffectEkfLogic& l) {
+    using tactile_common::ports::Pub;
+    using tactile_common::ports::Sub;
+    auto estimate = p.template publisher<tactile_msgs::msg::WallEstimate>(kOutputTopic, Pub::kData);
+    p.template subscribe<sensor_msgs::msg::Imu>(kImuTopic, Sub::kSensorData,
+                                                [&l](const sensor_msgs::msg::Imu& m) { l.on_imu(m); });
+    p.template subscribe<tactile_msgs::msg::OpticalFlow>(kFlowTopic, Sub::kSensorData,
+                                                         [&l](const tactile_msgs::msg::OpticalFlow& m) { l.on_flow(m); });
+    p.template subscribe<sensor_msgs::msg::Range>(kRangeTopic, Sub::kSensorData,
+                                                  [&l](const sensor_msgs::msg::Range& m) { l.on_range(m); });
+    p.template subscribe<tactile_msgs::msg::ThrustCommand>(
+        kThrustTopic, Sub::kSensorData, [&l](const tactile_msgs::msg::ThrustCommand& m) { l.on_thrust(m); });
+    p.timer(l.period_ns(), [&l, estimate](int64_t now_ns) {
+      if (auto out = l.on_timer(now_ns)) estimate(std::move(*out));
+    });
+  }
   const Stats& stats() const { return stats_; }
   const Params& params() const { return params_; }
   const WallEkf& ekf() const { return ekf_; }

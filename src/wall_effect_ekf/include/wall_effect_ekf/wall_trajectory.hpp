@@ -22,6 +22,7 @@
 
 #include "nav_msgs/msg/odometry.hpp"
 #include "tactile_common/parameters.hpp"
+#include "tactile_common/ports.hpp"
 #include "wall_effect_ekf/wall_effect_model.hpp"
 
 namespace wall_effect_ekf {
@@ -71,6 +72,14 @@ class WallTrajectoryLogic {
   static TrajectoryParams params_from(const tactile_common::ParamMap& map);
   explicit WallTrajectoryLogic(const TrajectoryParams& p);
   nav_msgs::msg::Odometry on_timer(int64_t now_ns) const;
+
+  /// The node's ports (tactile_common/ports.hpp), for its rclcpp component and the
+  /// `tactile` host: the setpoint out every kPeriodNs on the node's clock.
+  template <class Ports>
+  static void wire(Ports& p, WallTrajectoryLogic& l) {
+    auto setpoint = p.template publisher<nav_msgs::msg::Odometry>(kOutputTopic, tactile_common::ports::Pub::kData);
+    p.timer(kPeriodNs, [&l, setpoint](int64_t now_ns) { setpoint(l.on_timer(now_ns)); });
+  }
   const TrajectoryParams& params() const { return p_; }
 
  private:

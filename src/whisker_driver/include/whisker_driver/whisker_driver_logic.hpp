@@ -6,10 +6,13 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "tactile_common/parameters.hpp"
+#include "tactile_common/ports.hpp"
 #include "tactile_common/sample_clock.hpp"
 #include "tactile_msgs/msg/whisker_pressure.hpp"
 #include "whisker_driver/frame_parser.hpp"
@@ -82,6 +85,23 @@ class WhiskerDriverLogic {
   WhiskerDriverLogic(const Params& params, std::unique_ptr<WhiskerSource> source);
 
   Outputs on_timer(int64_t now_ns);
+  /// now_ns of the last on_timer() that returned samples (nothing before the first): the
+  /// age of the stream, which the bench rig's diagnostics report as a stall.
+  std::optional<int64_t> last_output_ns() const { return last_output_ns_; }
+
+  /// The node's ports (tactile_common/ports.hpp), for its rclcpp component and the
+  /// `tactile` host: every period_ns() of wall time (the device streams in real time
+  /// whatever the ROS clock does) the samples read are published on `pressure`.
+  template <class Ports>
+  static void wire(Ports& p, WhiskerDriverLogic& l) {
+    auto pressure = p.template publisher<WhiskerPressure>(kOutputTopic, tactile_common::ports::Pub::kData);
+    p.timer(
+        l.period_ns(),
+        [&l, pressure](int64_t now_ns) {
+          for (auto& msg : l.on_timer(now_ns).pressure) pressure(std::move(msg));
+        },
+        tactile_common::ports::Clock::kSteady);
+  }
 
   Stats stats() const;
   const Params& params() const { return params_; }
@@ -96,6 +116,7 @@ class WhiskerDriverLogic {
   tactile_common::SampleClock clock_;
   bool have_last_seq_ = false;
   uint32_t last_seq_ = 0;
+  std::optional<int64_t> last_output_ns_;
 };
 
 }  // namespace whisker_driver

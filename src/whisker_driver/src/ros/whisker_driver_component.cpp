@@ -10,8 +10,8 @@
 //   the device;
 // - elsewhere a plain rclcpp::Node that opens and streams from its constructor (a device
 //   that cannot be opened throws: the container's load fails).
+#include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -20,7 +20,7 @@
 #include "rclcpp/rclcpp.hpp"
 #include "rclcpp_components/register_node_macro.hpp"
 #include "tactile_common/ros_parameters.hpp"
-#include "tactile_common/ros_qos.hpp"
+#include "tactile_common/ros_ports.hpp"
 #include "whisker_driver/driver_health.hpp"
 #include "whisker_driver/whisker_driver_logic.hpp"
 #ifdef WHISKER_DRIVER_HAVE_DIAGNOSTIC_UPDATER
@@ -38,15 +38,14 @@ namespace whisker_driver {
 template <class NodeT>
 class DriverRosFace {
 public:
-  /// Parameters (a bad value throws: the container's load fails, naming file and key),
-  /// the publisher and diagnostics. No device yet: open().
+  /// Parameters (a bad value throws: the container's load fails, naming file and key)
+  /// and diagnostics. No device yet: open().
   explicit DriverRosFace(NodeT & node)
   : node_(node),
     parameters_(node, {WhiskerDriverLogic::default_parameters(), DriverHealth::default_parameters()}),
     params_(WhiskerDriverLogic::params_from(parameters_.values())),  // every key read-only
     health_(DriverHealth::params_from(parameters_.values()))
   {
-    publisher_ = tactile_common::data_publisher<tactile_msgs::msg::WhiskerPressure>(node_, WhiskerDriverLogic::kOutputTopic);
 #ifdef WHISKER_DRIVER_HAVE_DIAGNOSTIC_UPDATER
     updater_ = std::make_unique<diagnostic_updater::Updater>(&node_, health_.params().diagnostics_period_s);
     updater_->setHardwareID(device_name());
@@ -59,7 +58,9 @@ public:
                        std::string("not streaming: the driver is ") + (logic_ ? "inactive" : "unconfigured"));
           return;
         }
-        const double age = 1e-9 * static_cast<double>(node_.now().nanoseconds() - last_sample_ns_);
+        // Since the last sample, or since start() (a device that never sends stalls from the start).
+        const int64_t last = std::max(started_ns_, logic_->last_output_ns().value_or(started_ns_));
+        const double age = 1e-9 * static_cast<double>(node_.now().nanoseconds() - last);
         const auto c = health_.update(logic_->stats(), age);
         stat.summary(static_cast<unsigned char>(c.level), c.message);
         for (const auto & [key, value] : c.values) {stat.add(key, value);}
@@ -73,11 +74,16 @@ public:
   /// The serial device, else the source's name.
   std::string device_name() const {return params_.source == "serial" ? params_.device : params_.source;}
 
-  /// Opens the source (serial device, bag). Throws SerialError / std::runtime_error
-  /// naming the device or path and the reason.
+  /// Opens the source (serial device, bag) and creates the node's ports
+  /// (WhiskerDriverLogic::wire(): the publisher, a lifecycle one activated with the node,
+  /// and the timer, stopped until start()). Throws SerialError / std::runtime_error naming
+  /// the device or path and the reason.
   void open()
   {
     logic_ = std::make_unique<WhiskerDriverLogic>(params_);
+    ports_ = std::make_unique<tactile_common::RosPorts<NodeT>>(node_);
+    WhiskerDriverLogic::wire(*ports_, *logic_);
+    ports_->cancel_timers();
     RCLCPP_INFO(node_.get_logger(), "opened %s (source %s)", device_name().c_str(), params_.source.c_str());
   }
 
@@ -85,17 +91,8 @@ public:
   void start()
   {
     if (!logic_) {throw std::runtime_error("no device open: configure first");}
-    last_sample_ns_ = node_.now().nanoseconds();  // a device that never sends stalls from the start
-    timer_ = node_.create_wall_timer(
-      std::chrono::nanoseconds(logic_->period_ns()),
-      [this]() {
-        const int64_t t = node_.now().nanoseconds();
-        auto out = logic_->on_timer(t);
-        if (!out.pressure.empty()) {last_sample_ns_ = t;}
-        for (auto & msg : out.pressure) {
-          publisher_->publish(std::make_unique<tactile_msgs::msg::WhiskerPressure>(std::move(msg)));
-        }
-      });
+    started_ns_ = node_.now().nanoseconds();
+    ports_->start_timers();
     active_ = true;
   }
 
@@ -103,7 +100,7 @@ public:
   void stop()
   {
     active_ = false;
-    timer_.reset();
+    if (ports_) {ports_->cancel_timers();}
   }
 
   /// Closes the device.
@@ -111,16 +108,13 @@ public:
   {
     stop();
     if (logic_) {
+      ports_.reset();  // its timer calls the logic: gone first
       logic_.reset();
       RCLCPP_INFO(node_.get_logger(), "closed %s", device_name().c_str());
     }
   }
 
 private:
-  template <class Msg>
-  using PublisherPtr = decltype(std::declval<NodeT &>().template create_publisher<Msg>(
-      std::string(), rclcpp::QoS(1)));
-
   NodeT & node_;
   /// Declared first: its values configure the driver; `ros2 param set` is refused (read-only).
   tactile_common::NodeParameters parameters_;
@@ -128,9 +122,9 @@ private:
   DriverHealth health_;
   std::unique_ptr<WhiskerDriverLogic> logic_;  ///< the open source (configured)
   std::atomic<bool> active_{false};
-  int64_t last_sample_ns_ = 0;
-  PublisherPtr<tactile_msgs::msg::WhiskerPressure> publisher_;
-  rclcpp::TimerBase::SharedPtr timer_;
+  int64_t started_ns_ = 0;
+  /// The logic's publisher and timer (open() to close()); declared after logic_.
+  std::unique_ptr<tactile_common::RosPorts<NodeT>> ports_;
 #ifdef WHISKER_DRIVER_HAVE_DIAGNOSTIC_UPDATER
   std::unique_ptr<diagnostic_updater::Updater> updater_;
 #endif

@@ -9,12 +9,14 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "geometry_msgs/msg/pose_array.hpp"
 #include "geometry_msgs/msg/wrench_stamped.hpp"
 #include "nav_msgs/msg/odometry.hpp"
 #include "tactile_common/parameters.hpp"
+#include "tactile_common/ports.hpp"
 #include "tactile_msgs/msg/localization_result.hpp"
 #include "whisker_localization/contact_estimation.hpp"
 #include "whisker_localization/elastica.hpp"
@@ -88,6 +90,25 @@ class WhiskerLocalizationLogic {
   /// One base-moment sample: forward-projects the pose set by the odometry
   /// motion since the previous sample and intersects it with the preimage.
   Outputs on_moment(const geometry_msgs::msg::WrenchStamped& msg);
+
+  /// The node's ports (tactile_common/ports.hpp), for its rclcpp component and the
+  /// `tactile` host: odometry and base moment in (sensor data), the result and the pose
+  /// set out after each moment sample.
+  template <class Ports>
+  static void wire(Ports& p, WhiskerLocalizationLogic& l) {
+    using tactile_common::ports::Pub;
+    using tactile_common::ports::Sub;
+    auto result = p.template publisher<tactile_msgs::msg::LocalizationResult>(kResultTopic, Pub::kData);
+    auto pose_set = p.template publisher<geometry_msgs::msg::PoseArray>(kPoseSetTopic, Pub::kData);
+    p.template subscribe<nav_msgs::msg::Odometry>(kOdomTopic, Sub::kSensorData,
+                                                  [&l](const nav_msgs::msg::Odometry& m) { l.on_odometry(m); });
+    p.template subscribe<geometry_msgs::msg::WrenchStamped>(
+        kMomentTopic, Sub::kSensorData, [&l, result, pose_set](const geometry_msgs::msg::WrenchStamped& m) {
+          auto out = l.on_moment(m);
+          if (out.result) result(std::move(*out.result));
+          if (out.pose_set) pose_set(std::move(*out.pose_set));
+        });
+  }
 
   /// Starts over (a new sweep): empties the pose set and the contact
   /// history; with `prior`, the new known start (002 Sec. VII-D).

@@ -8,10 +8,12 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 
 #include "geometry_msgs/msg/wrench_stamped.hpp"
 #include "sensor_msgs/msg/imu.hpp"
 #include "tactile_common/parameters.hpp"
+#include "tactile_common/ports.hpp"
 #include "tactile_msgs/msg/arm_imu_array.hpp"
 #include "tactile_msgs/msg/thrust_command.hpp"
 #include "xplorer_force_est/force_estimator.hpp"
@@ -73,6 +75,12 @@ class XplorerForceEstLogic {
 
   /// Arm IMU set (50 Hz): runs eq. 2-4, 6, 7 and publishes the wrench.
   Outputs on_arm_imu(const tactile_msgs::msg::ArmImuArray& msg);
+
+  /// The node's ports (tactile_common/ports.hpp), for its rclcpp component and the
+  /// `tactile` host: arm IMU set, flight-controller IMU and thrust in (sensor data); the
+  /// world and body wrenches out after each arm IMU set.
+  template <class Ports>
+  static void wire(Ports& p, XplorerForceEstLogic& l);
   /// Flight-controller IMU: eq. 5 and the yaw-torque observer.
   void on_imu(const sensor_msgs::msg::Imu& msg);
   /// Thrust command: f = normalised x thrust_scale (001 Sec. V-A3), or the
@@ -93,5 +101,24 @@ class XplorerForceEstLogic {
   bool have_arm_stamp_ = false, have_imu_stamp_ = false;
   int64_t last_arm_ns_ = 0, last_imu_ns_ = 0;
 };
+
+template <class Ports>
+void XplorerForceEstLogic::wire(Ports& p, XplorerForceEstLogic& l) {
+  using geometry_msgs::msg::WrenchStamped;
+  using tactile_common::ports::Pub;
+  using tactile_common::ports::Sub;
+  auto world = p.template publisher<WrenchStamped>(kWrenchWorldTopic, Pub::kData);
+  auto body = p.template publisher<WrenchStamped>(kWrenchBodyTopic, Pub::kData);
+  p.template subscribe<tactile_msgs::msg::ArmImuArray>(
+      kArmImuTopic, Sub::kSensorData, [&l, world, body](const tactile_msgs::msg::ArmImuArray& m) {
+        auto out = l.on_arm_imu(m);
+        if (out.world) world(std::move(*out.world));
+        if (out.body) body(std::move(*out.body));
+      });
+  p.template subscribe<sensor_msgs::msg::Imu>(kImuTopic, Sub::kSensorData,
+                                              [&l](const sensor_msgs::msg::Imu& m) { l.on_imu(m); });
+  p.template subscribe<tactile_msgs::msg::ThrustCommand>(
+      kThrustTopic, Sub::kSensorData, [&l](const tactile_msgs::msg::ThrustCommand& m) { l.on_thrust(m); });
+}
 
 }  // namespace xplorer_force_est

@@ -1,0 +1,118 @@
+// HostPorts: a logic's ports, declared once in its wire(), on the host's Bus and Executor.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "std_msgs/msg/float64.hpp"
+#include "tactile_cli/host.hpp"
+#include "tactile_cli/host_ports.hpp"
+#include "tactile_common/ports.hpp"
+
+namespace {
+
+using std_msgs::msg::Float64;
+using tactile_common::ports::Clock;
+using tactile_common::ports::Pub;
+using tactile_common::ports::Sub;
+
+Float64 value(double v) {
+  Float64 m;
+  m.data = v;
+  return m;
+}
+
+/// A node logic with the three kinds of port: doubles what arrives on "in" (remembering
+/// the receive time), counts "tick" messages without a receive time, publishes -1 every 10 ms.
+struct EchoLogic {
+  static constexpr int64_t kPeriodNs = 10'000'000;
+  std::vector<int64_t> receive_ns;
+  int ticks_seen = 0;
+
+  template <class Ports>
+  static void wire(Ports& p, EchoLogic& l) {
+    auto out = p.template publisher<Float64>("out", Pub::kData);
+    p.template subscribe<Float64>("in", Sub::kSensorData, [&l, out](const Float64& m, int64_t receive_ns) {
+      l.receive_ns.push_back(receive_ns);
+      out(value(2.0 * m.data));
+    });
+    p.template subscribe<Float64>("/tick", Sub::kReliable, [&l](const Float64&) { ++l.ticks_seen; });
+    p.timer(kPeriodNs, [out](int64_t) { out(value(-1.0)); }, Clock::kNode);
+  }
+};
+
+/// Every message on `topic`, with the bus timestamp it was published at.
+struct Recorded {
+  std::vector<double> data;
+  std::vector<int64_t> stamp_ns;
+};
+Recorded* record(tactile_cli::Host& host, const std::string& topic) {
+  auto r = std::make_shared<Recorded>();
+  Recorded* raw = host.keep(r);
+  const tactile_cli::Executor* ex = &host.executor();
+  host.bus().subscribe<Float64>(topic, [raw, ex](const Float64& m) {
+    raw->data.push_back(m.data);
+    raw->stamp_ns.push_back(ex->now_ns());
+  });
+  return raw;
+}
+
+TEST(HostPorts, LogicReceivesAndPublishesOnItsDeclaredTopicsInItsNamespace) {
+  tactile_cli::Host host(TACTILE_CONFIG_DIR);
+  host.executor().set_time(1'000'000'000);
+  EchoLogic logic;
+  tactile_cli::wire(host, "whisker/left", logic);
+  Recorded* out = record(host, "/whisker/left/out");
+
+  // The timer: first call at wiring time, then every period.
+  host.executor().run_until(1'025'000'000);
+  EXPECT_EQ(out->data, (std::vector<double>{-1.0, -1.0, -1.0}));
+  EXPECT_EQ(out->stamp_ns, (std::vector<int64_t>{1'000'000'000, 1'010'000'000, 1'020'000'000}));
+
+  // The subscription: in the namespace only, receive time = the host's clock.
+  host.bus().publish("/in", value(7.0), host.executor().now_ns());
+  EXPECT_TRUE(logic.receive_ns.empty());
+  host.bus().publish("/whisker/left/in", value(3.0), 0);  // the bag stamp is not the receive time
+  ASSERT_EQ(logic.receive_ns.size(), 1u);
+  EXPECT_EQ(logic.receive_ns[0], 1'025'000'000);
+  EXPECT_EQ(out->data.back(), 6.0);
+  EXPECT_EQ(out->stamp_ns.back(), 1'025'000'000);
+
+  // An absolute topic stays absolute; a handler without a receive time works too.
+  host.bus().publish("/tick", value(0.0), 0);
+  host.bus().publish("/whisker/left/tick", value(0.0), 0);
+  EXPECT_EQ(logic.ticks_seen, 1);
+
+  const auto counts = host.bus().published_counts();
+  EXPECT_EQ(counts.at("/whisker/left/out"), 4u);
+  EXPECT_EQ(counts.count("/out"), 0u);
+}
+
+TEST(HostPorts, RemapMovesADeclaredTopic) {
+  tactile_cli::Host host(TACTILE_CONFIG_DIR);
+  EchoLogic logic;
+  tactile_cli::wire(host, "", logic, {{"/out", "/evaluation/out"}});
+  Recorded* own = record(host, "/out");
+  Recorded* moved = record(host, "/evaluation/out");
+  host.bus().publish("/in", value(1.5), 0);
+  EXPECT_TRUE(own->data.empty());
+  EXPECT_EQ(moved->data, (std::vector<double>{3.0}));
+}
+
+TEST(HostPorts, RemapOfATopicTheNodeDoesNotDeclareIsAnError) {
+  tactile_cli::Host host(TACTILE_CONFIG_DIR);
+  EchoLogic logic;
+  try {
+    tactile_cli::wire(host, "whisker/left", logic, {{"/out", "/evaluation/out"}});  // the node's is /whisker/left/out
+    FAIL() << "expected std::logic_error";
+  } catch (const std::logic_error& e) {
+    EXPECT_NE(std::string(e.what()).find("remapping /out -> /evaluation/out in namespace 'whisker/left'"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
