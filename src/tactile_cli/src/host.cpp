@@ -78,7 +78,8 @@ void Host::use_profile(const std::string& name, bool graph_default) {
   const auto path = std::filesystem::path(config_dir_) / "profiles" / (name + ".yaml");
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) {
-    throw std::runtime_error(path.string() + ": no such parameter profile (profiles are the files in " +
+    // A configuration error, as a missing node file: a sweep stops on it (exit 1).
+    throw tactile_common::ParamError(path.string() + ": no such parameter profile (profiles are the files in " +
                              (std::filesystem::path(config_dir_) / "profiles").string() + ")");
   }
   if (graph_default) {

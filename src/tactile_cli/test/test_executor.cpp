@@ -197,7 +197,7 @@ TEST(Host, ProfilesApplyBetweenTheFileAndTheOverridesTheUsersLast) {
   try {
     host.use_profile("papr");
     ADD_FAILURE() << "a missing profile accepted";
-  } catch (const std::runtime_error& e) {
+  } catch (const tactile_common::ParamError& e) {
     EXPECT_NE(std::string(e.what()).find("papr.yaml: no such parameter profile"), std::string::npos) << e.what();
   }
   fs::remove_all(dir);

@@ -77,7 +77,7 @@ class Host {
   /// after this call, between the node's file and the overrides (a launch file passes the
   /// same file after the node's: launch/sitl_explore.launch.py). A profile names only the
   /// nodes and keys it changes (tactile_common::load_profile_overlay). Throws
-  /// std::runtime_error naming the file if it is missing; later profiles win, except that
+  /// tactile_common::ParamError naming the file if it is missing; later profiles win, except that
   /// `graph_default` ones (a graph's own, e.g. gpis_explore's exploration) go before the
   /// user's (`tactile sim --profile`), so the user's win.
   void use_profile(const std::string& name, bool graph_default = false);

@@ -19,11 +19,13 @@ SCENARIO = CONFIG / "scenarios" / "whisker_three_baffles_fsm.yaml"
 
 
 def config_copy(tmp_path):
-    """The repository's node parameter files (not the scenarios) in a temporary directory."""
+    """The repository's node parameter files and parameter profiles (not the scenarios) in a
+    temporary directory."""
     d = tmp_path / "config"
     d.mkdir()
     for f in CONFIG.glob("*.yaml"):
         shutil.copy(f, d / f.name)
+    shutil.copytree(CONFIG / "profiles", d / "profiles")
     return d
 
 
