@@ -157,9 +157,8 @@ TEST(ParamSchema, YamlOfEveryNodeReadsBackToItsDefaults) {
 // fails for a node listed here that has no unclassified key left, and for any other node with
 // one, so a gap is visible and cannot grow.
 const std::set<std::string> kNodesWithoutSources = {"crazyflie_bridge", "gpis_explorer", "indi_controller",
-                                                    "tactile_depth", "tactile_sim", "visualization",
-                                                    "wall_effect_ekf", "wall_effect_nav", "wall_trajectory",
-                                                    "whisker_driver", "whisker_fsm", "whisker_localization",
+                                                    "tactile_sim", "visualization", "wall_effect_ekf",
+                                                    "wall_effect_nav", "wall_trajectory", "whisker_fsm",
                                                     "xplorer_force_est", "xplorer_fsm", "xplorer_mapping"};
 
 // "000", "001", "002", "004" as a word of `text`: the paper a value comes from.
