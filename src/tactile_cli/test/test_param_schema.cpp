@@ -159,7 +159,7 @@ TEST(ParamSchema, YamlOfEveryNodeReadsBackToItsDefaults) {
 const std::set<std::string> kNodesWithoutSources = {"crazyflie_bridge", "gpis_explorer", "indi_controller",
                                                     "tactile_sim", "visualization", "wall_effect_ekf",
                                                     "wall_effect_nav", "wall_trajectory", "whisker_fsm",
-                                                    "xplorer_force_est", "xplorer_fsm", "xplorer_mapping"};
+                                                    "xplorer_fsm"};
 
 // "000", "001", "002", "004" as a word of `text`: the paper a value comes from.
 bool names_a_paper(const std::string& text) {
