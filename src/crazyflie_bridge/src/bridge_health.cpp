@@ -41,6 +41,7 @@ void BridgeHealth::Params::validate() const {
 }
 
 ParamMap BridgeHealth::default_parameters() {
+  using tactile_common::choice;
   using tactile_common::closed;
   using tactile_common::ParamRange;
   using tactile_common::positive;
@@ -50,25 +51,26 @@ ParamMap BridgeHealth::default_parameters() {
   // unit, the range validate() accepts (the warn/error order is checked there), and live:
   // the six thresholds are compared per evaluation, so they apply while running; the two
   // rates set up timers at start.
-  m.set("status_rate_hz", d.status_rate_hz, {"rate of the `status` topic", "Hz", positive(), false});
+  m.set("status_rate_hz", d.status_rate_hz, {"rate of the `status` topic", "Hz", positive(), false, choice()});
   m.set("diagnostics_period_s", d.diagnostics_period_s,
-        {"/diagnostics period (diagnostic_updater's default 1 s)", "s", positive(), false});
+        {"/diagnostics period (diagnostic_updater's default 1 s)", "s", positive(), false,
+         choice("diagnostic_updater's default")});
   m.set("battery_warn_v", d.battery_warn_v,
         {"battery WARN below this (crazyflie-firmware pm.h PM_BAT_LOW_VOLTAGE 3.2 V); above battery_error_v", "V",
-         positive(), true});
+         positive(), true, choice("crazyflie-firmware pm.h PM_BAT_LOW_VOLTAGE 3.2 V")});
   m.set("battery_error_v", d.battery_error_v,
         {"battery ERROR below this (crazyflie-firmware pm.h PM_BAT_CRITICAL_LOW_VOLTAGE 3.0 V)", "V", positive(),
-         true});
+         true, choice("crazyflie-firmware pm.h PM_BAT_CRITICAL_LOW_VOLTAGE 3.0 V")});
   m.set("link_quality_warn", d.link_quality_warn,
-        {"link WARN below this ACK rate (our choice, README)", "", ParamRange{0.0, 1.0, true, false}, true});
+        {"link WARN below this ACK rate (our choice, README)", "", ParamRange{0.0, 1.0, true, false}, true, choice()});
   m.set("link_quality_error", d.link_quality_error,
-        {"link ERROR below this ACK rate; below link_quality_warn", "", positive(), true});
+        {"link ERROR below this ACK rate; below link_quality_warn", "", positive(), true, choice()});
   m.set("log_age_warn_s", d.log_age_warn_s,
         {"log stream WARN when the newest log packet is older (5 log periods); below log_age_error_s", "s",
-         positive(), true});
+         positive(), true, choice("5 log periods")});
   m.set("log_age_error_s", d.log_age_error_s,
         {"log stream ERROR when it is older (the bridge's log_timeout_s default, where it holds hover)", "s",
-         positive(), true});
+         positive(), true, choice("the bridge's log_timeout_s")});
   return m;
 }
 

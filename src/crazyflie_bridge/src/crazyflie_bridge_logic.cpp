@@ -163,7 +163,9 @@ void CrazyflieBridgeLogic::Params::validate() const {
 ParamMap CrazyflieBridgeLogic::default_parameters() {
   const Params d;
   using tactile_common::at_least;
+  using tactile_common::choice;
   using tactile_common::closed;
+  using tactile_common::paper;
   using tactile_common::ParamRange;
   using tactile_common::positive;
   ParamMap m(kNodeName, "defaults");
@@ -172,75 +174,86 @@ ParamMap CrazyflieBridgeLogic::default_parameters() {
   // are validate()'s). None is live: the link, log blocks, clamps and the safety chain
   // are set up at configure; `ros2 param set` refuses them (read-only).
   m.set("uri", d.uri,
-        {"cflib URI of the Crazyflie (radio://, usb://, udp:// for the simulated one)", "", {}, false});
+        {"cflib URI of the Crazyflie (radio://, usb://, udp:// for the simulated one)", "", {}, false, choice()});
   m.set("left_pressure_vars", d.left_pressure_vars,
-        {"log variables of the left whisker's 3 barometers (whisker deck driver)", "", {}, false});
+        {"log variables of the left whisker's 3 barometers (whisker deck driver)", "", {}, false,
+         choice("the whisker deck driver's log variables")});
   m.set("right_pressure_vars", d.right_pressure_vars,
-        {"log variables of the right whisker's 3 barometers", "", {}, false});
+        {"log variables of the right whisker's 3 barometers", "", {}, false,
+         choice("the whisker deck driver's log variables")});
   m.set("pressure_scale", d.pressure_scale,
-        {"log unit -> Pa (100 for a deck logging hPa)", "Pa/unit", positive(), false});
+        {"log unit -> Pa (100 for a deck logging hPa)", "Pa/unit", positive(), false, choice()});
   m.set("state_vars", d.state_vars,
-        {"state estimate log variables: x, y, z, yaw, vx, vy (6)", "", {}, false});
+        {"state estimate log variables: x, y, z, yaw, vx, vy (6)", "", {}, false, choice()});
   m.set("whisker_period_ms", d.whisker_period_ms,
-        {"whisker log block period (000: barometers at 50 Hz); u16", "ms", closed(1, 65535), false});
+        {"whisker log block period (000: barometers at 50 Hz); u16", "ms", closed(1, 65535), false,
+         paper("000 Methods: barometers at 50 Hz")});
   m.set("state_period_ms", d.state_period_ms,
-        {"state log block period (100 Hz, as the SITL /odom); u16", "ms", closed(1, 65535), false});
+        {"state log block period (100 Hz, as the SITL /odom); u16", "ms", closed(1, 65535), false,
+         choice("100 Hz, as the SITL /odom")});
   m.set("setpoint_rate_hz", d.setpoint_rate_hz,
-        {"setpoint send rate; >= 2 Hz (firmware commander watchdog 500 ms)", "Hz", at_least(2.0), false});
+        {"setpoint send rate; >= 2 Hz (firmware commander watchdog 500 ms)", "Hz", at_least(2.0), false,
+         choice("crazyflie-firmware commander watchdog 500 ms")});
   m.set("max_velocity", d.max_velocity,
-        {"setpoint clamp, also the go-to limit (choice)", "m/s", positive(), false});
+        {"setpoint clamp, also the go-to limit (choice)", "m/s", positive(), false, choice()});
   m.set("max_yaw_rate", d.max_yaw_rate,
-        {"yaw-rate clamp (choice)", "rad/s", positive(), false});
+        {"yaw-rate clamp (choice)", "rad/s", positive(), false, choice()});
   m.set("min_height", d.min_height,
-        {"height clamp, in [0, max_height)", "m", at_least(0.0), false});
+        {"height clamp, in [0, max_height)", "m", at_least(0.0), false, choice()});
   m.set("max_height", d.max_height,
-        {"height clamp (choice)", "m", positive(), false});
+        {"height clamp (choice)", "m", positive(), false, choice()});
   m.set("setpoint_timeout_s", d.setpoint_timeout_s,
-        {"behaviour setpoints older than this are stale: hover hold (10 ticks at 50 Hz)", "s", positive(), false});
+        {"behaviour setpoints older than this are stale: hover hold (10 ticks at 50 Hz)", "s", positive(), false,
+         choice("10 ticks at 50 Hz")});
   m.set("log_timeout_s", d.log_timeout_s,
-        {"log data older than this is a degraded link: hover hold", "s", positive(), false});
+        {"log data older than this is a degraded link: hover hold", "s", positive(), false, choice()});
   m.set("hover_hold_s", d.hover_hold_s,
-        {"hover in place this long before the safety landing", "s", positive(), false});
+        {"hover in place this long before the safety landing", "s", positive(), false, choice()});
   m.set("land_speed", d.land_speed,
-        {"safety-chain landing descent speed (as the SITL's)", "m/s", positive(), false});
+        {"safety-chain landing descent speed (as the SITL's)", "m/s", positive(), false, choice("as the SITL's")});
   m.set("land_height", d.land_height,
-        {"motors off below this height; < max_height", "m", positive(), false});
+        {"motors off below this height; < max_height", "m", positive(), false, choice()});
   m.set("touchdown_timeout_s", d.touchdown_timeout_s,
-        {"motors stop when the measured height is down, or after this long (choice)", "s", ParamRange{0.0, 10.0, true, false}, false});
+        {"motors stop when the measured height is down, or after this long (choice)", "s", ParamRange{0.0, 10.0, true, false}, false,
+         choice()});
   m.set("position_variance", d.position_variance,
-        {"odometry position covariance diagonal where the firmware logs none", "m^2", positive(), false});
+        {"odometry position covariance diagonal where the firmware logs none", "m^2", positive(), false, choice()});
   m.set("orientation_variance", d.orientation_variance,
-        {"odometry orientation covariance diagonal", "rad^2", positive(), false});
+        {"odometry orientation covariance diagonal", "rad^2", positive(), false, choice()});
   m.set("linear_velocity_variance", d.linear_velocity_variance,
-        {"odometry linear velocity covariance diagonal", "(m/s)^2", positive(), false});
+        {"odometry linear velocity covariance diagonal", "(m/s)^2", positive(), false, choice()});
   m.set("angular_velocity_variance", d.angular_velocity_variance,
-        {"odometry angular velocity covariance diagonal", "(rad/s)^2", positive(), false});
+        {"odometry angular velocity covariance diagonal", "(rad/s)^2", positive(), false, choice()});
   m.set("autostart", d.autostart,
-        {"forward the behaviour as soon as setpoints and log are fresh (lockstep SITL only)", "", {}, false});
+        {"forward the behaviour as soon as setpoints and log are fresh (lockstep SITL only)", "", {}, false, choice()});
   m.set("takeoff_height", d.takeoff_height,
-        {"default take-off height; in (land_height, max_height]", "m", {}, false});
+        {"default take-off height; in (land_height, max_height]", "m", {}, false, choice()});
   m.set("takeoff_duration_s", d.takeoff_duration_s,
-        {"default take-off duration; height / duration <= max_vertical_speed", "s", positive(), false});
+        {"default take-off duration; height / duration <= max_vertical_speed", "s", positive(), false, choice()});
   m.set("land_duration_s", d.land_duration_s,
-        {"default operator and shutdown land duration; max_height / duration <= max_vertical_speed", "s", positive(), false});
+        {"default operator and shutdown land duration; max_height / duration <= max_vertical_speed", "s", positive(), false,
+         choice()});
   m.set("max_vertical_speed", d.max_vertical_speed,
-        {"take-off / land / go-to ramps faster than this are refused (choice)", "m/s", positive(), false});
+        {"take-off / land / go-to ramps faster than this are refused (choice)", "m/s", positive(), false, choice()});
   m.set("status_vars", d.status_vars,
-        {"status log block variables (at most 6; missing ones skipped with a warning)", "", {}, false});
+        {"status log block variables (at most 6; missing ones skipped with a warning)", "", {}, false, choice()});
   m.set("status_period_ms", d.status_period_ms,
-        {"status log block period", "ms", closed(10, 65535), false});
+        {"status log block period", "ms", closed(10, 65535), false, choice()});
   m.set("low_battery_v", d.low_battery_v,
-        {"land at this battery voltage (firmware PM_BAT_LOW_VOLTAGE 3.2 V); 0 disables", "V", closed(0.0, 5.0), false});
+        {"land at this battery voltage (firmware PM_BAT_LOW_VOLTAGE 3.2 V); 0 disables", "V", closed(0.0, 5.0), false,
+         choice("crazyflie-firmware pm.h PM_BAT_LOW_VOLTAGE 3.2 V")});
   m.set("low_battery_hold_s", d.low_battery_hold_s,
-        {"below low_battery_v this long: land", "s", positive(), false});
+        {"below low_battery_v this long: land", "s", positive(), false, choice()});
   m.set("shutdown_land_timeout_s", d.shutdown_land_timeout_s,
-        {"bound of the Ctrl-C / SIGTERM land, then emergency stop; >= land_duration_s", "s", positive(), false});
+        {"bound of the Ctrl-C / SIGTERM land, then emergency stop; >= land_duration_s", "s", positive(), false,
+         choice()});
   m.set("frame_prefix", d.frame_prefix,
-        {"prefix of every frame but map, for several vehicles (cf1/: cf1/odom, cf1/base_link)", "", {}, false});
+        {"prefix of every frame but map, for several vehicles (cf1/: cf1/odom, cf1/base_link)", "", {}, false,
+         choice("REP 105 frames per vehicle")});
   m.set("initial_position", d.initial_position,
         {"where the Crazyflie stands at take-off in map, [x, y, z] finite (robots file); map -> odom is this "
          "translation",
-         "m", {}, false});
+         "m", {}, false, choice("robots file")});
   return m;
 }
 

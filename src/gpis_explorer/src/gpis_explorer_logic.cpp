@@ -75,171 +75,211 @@ ParamMap GpisExplorerLogic::default_parameters() {
   // read-only): the GPIS, its factor and the sequencing state are built from them.
   // GPIS (000 eq. 33-35; public onboard code values)
   m.set("gpis.beta", s.explorer.gpis.beta,
-        {"beta, exponent of the IMQ kernel (000 eq. 33; 0.5 in the public onboard code)", "", positive(), false});
+        {"beta, exponent of the IMQ kernel (000 eq. 33; 0.5 in the public onboard code)", "", positive(), false,
+         tactile_common::choice("0.5 as in 000's public onboard code")});
   m.set("gpis.c", s.explorer.gpis.c,
-        {"c, scale of the IMQ kernel (000 eq. 33; 1.0 in the public onboard code)", "m", positive(), false});
+        {"c, scale of the IMQ kernel (000 eq. 33; 1.0 in the public onboard code)", "m", positive(), false,
+         tactile_common::choice("1.0 as in 000's public onboard code")});
   m.set("gpis.noise", s.explorer.gpis.noise,
         {"sigma^2, observation noise variance added to K (000 eq. 34-35; 1e-2 in the public onboard code)", "",
-         positive(), false});
+         positive(), false, tactile_common::choice("1e-2 as in 000's public onboard code")});
   m.set("gpis.max_points", static_cast<int64_t>(s.explorer.gpis.max_points),
         {"training budget (000 Supplementary \"Memory usage\": 50 onboard; the ground station uses thousands)", "",
-         closed(1, 100000), false});
+         closed(1, 100000), false, tactile_common::paper("000 Supplementary \"Memory usage\": 50 onboard")});
   // Solver: exact (000) or local GPs over a quadtree (GPisMap; README "Local solver")
   m.set("gpis.solver", std::string(to_string(s.explorer.solver)),
         {"exact: one GP over every point (000 eq. 33-40); local: local GPs over a quadtree, blended "
-         "(GPisMap, Lee et al. ICRA 2019; README \"Local solver\")", "", {}, false});
+         "(GPisMap, Lee et al. ICRA 2019; README \"Local solver\")", "", {}, false,
+         tactile_common::paper("000 eq. 33-40 (exact); local: GPisMap, README \"Local solver\"")});
   m.set("gpis.leaf_points", static_cast<int64_t>(s.explorer.local.leaf_points),
         {"local solver: a leaf holding more training points splits into four (GPisMap's leaf capacity; our value)",
-         "", closed(1, 100000), false});
+         "", closed(1, 100000), false, tactile_common::choice()});
   m.set("gpis.overlap", s.explorer.local.overlap,
         {"local solver: margin of a leaf's GP points and blending ramp (GPisMap's overlap; our value); "
-         "<= min_leaf_size / 2", "m", positive(), false});
+         "<= min_leaf_size / 2", "m", positive(), false, tactile_common::choice()});
   m.set("gpis.min_leaf_size", s.explorer.local.min_leaf_size,
         {"local solver: leaves are not split below this side (our choice); >= 2 overlap so a weight's ramps "
-         "never meet", "m", positive(), false});
+         "never meet", "m", positive(), false, tactile_common::choice()});
   m.set("gpis.label_neighbours", static_cast<int64_t>(s.explorer.local.label_neighbours),
         {"local solver: points of each label nearest to a leaf's centre added to its GP (our choice)", "",
-         closed(0, 100000), false});
+         closed(0, 100000), false, tactile_common::choice()});
   m.set("grid_size", s.explorer.grid_size,
-        {"side of the prediction grid, centred on the start (our choice: twice the 2 m room)", "m", positive(), false});
+        {"side of the prediction grid, centred on the start (our choice: twice the 2 m room)", "m", positive(), false,
+         tactile_common::choice("twice the 2 m room")});
   m.set("grid_cells", static_cast<int64_t>(s.explorer.grid_cells),  // 000: 10 x 10 onboard
         {"prediction grid nodes per side (000 Supplementary \"Memory usage\": 10 x 10 onboard)", "",
-         closed(2, 5000), false});
+         closed(2, 5000), false, tactile_common::paper("000 Supplementary \"Memory usage\": 10 x 10 onboard")});
   m.set("grid_variance", s.explorer.grid_variance,
         {"predict the variance on the whole grid (the uncertainty map of 000 Fig. 5); false: only at the "
-         "contour points the target needs", "", {}, false});
+         "contour points the target needs", "", {}, false, tactile_common::choice()});
   m.set("variance_cells", static_cast<int64_t>(s.explorer.variance_cells),
         {"nodes per side of the variance map: 0 every grid node; 2-5000 that many, interpolated (picture only; "
-         "our choice); 1 is refused", "", closed(0, 5000), false});
+         "our choice); 1 is refused", "", closed(0, 5000), false, tactile_common::choice()});
   m.set("corner_curvature", s.explorer.corner_curvature,  // 000 eq. 41, q
         {"q, curvature threshold of a corner point, kappa < q < 0 (000 eq. 41; -1 our value: radius below 1 m)",
-         "1/m", ParamRange{-inf, 0.0, true, true}, false});
+         "1/m", ParamRange{-inf, 0.0, true, true}, false,
+         tactile_common::choice("000 eq. 41 gives the rule, not q: radius below 1 m")});
   m.set("penalty_scale", s.explorer.penalty_scale,  // 000 eq. 45, c
-        {"c of the corner potential P (000 eq. 45)", "m", positive(), false});
+        {"c of the corner potential P (000 eq. 45)", "m", positive(), false,
+         tactile_common::choice("000 eq. 45 gives the rule, not c")});
   m.set("corner_exclusion", s.explorer.corner_exclusion,
         {"candidate targets closer than this to a corner centroid are never chosen (our choice: = penalty_scale)",
-         "m", at_least(0.0), false});
+         "m", at_least(0.0), false, tactile_common::choice("= penalty_scale")});
   // Wall following (000 Fig. S4e; tactile_fsm's values)
-  m.set("v_max", s.wall.v_max, {"V_max, wall-following forward speed (000 Results: 20 cm/s)", "m/s", positive(), false});
+  m.set("v_max", s.wall.v_max, {"V_max, wall-following forward speed (000 Results: 20 cm/s)", "m/s", positive(), false,
+        tactile_common::paper("000 Results: 20 cm/s")});
   m.set("omega_max", s.wall.omega_max,
-        {"omega_max, wall-following turn rate (000 Fig. S4e; 25 deg/s our value)", "rad/s", positive(), false});
-  m.set("t_min", s.wall.t_min, {"T_min, near edge of the depth band (000 Fig. 4c: 60 mm)", "m", positive(), false});
-  m.set("t_max", s.wall.t_max, {"T_max, far edge of the depth band (000 Fig. 4c: 100 mm); > t_min", "m", {}, false});
+        {"omega_max, wall-following turn rate (000 Fig. S4e; 25 deg/s our value)", "rad/s", positive(), false,
+         tactile_common::choice("000 Fig. S4e names omega_max, not its value")});
+  m.set("t_min", s.wall.t_min, {"T_min, near edge of the depth band (000 Fig. 4c: 60 mm)", "m", positive(), false,
+        tactile_common::paper("000 Fig. 4c: 60 mm")});
+  m.set("t_max", s.wall.t_max, {"T_max, far edge of the depth band (000 Fig. 4c: 100 mm); > t_min", "m", {}, false,
+        tactile_common::paper("000 Fig. 4c: 100 mm")});
   m.set("whisker_spacing", s.wall.whisker_spacing,
-        {"s, lateral distance of the whisker bases (000 eq. 21)", "m", positive(), false});
+        {"s, lateral distance of the whisker bases (000 eq. 21)", "m", positive(), false,
+         tactile_common::paper("000 Methods: whiskers 5 cm apart; eq. 21")});
   m.set("hover_init_s", s.wall.hover_init_s,
-        {"hover before exploring, for TDORC initialisation (000 Methods \"Hovering\")", "s", at_least(0.0), false});
-  m.set("flight_height", s.wall.flight_height, {"height setpoint", "m", positive(), false});
+        {"hover before exploring, for TDORC initialisation (000 Methods \"Hovering\")", "s", at_least(0.0), false,
+         tactile_common::paper("000 Methods \"Hovering\": TDORC initialisation")});
+  m.set("flight_height", s.wall.flight_height, {"height setpoint", "m", positive(), false, tactile_common::choice()});
   m.set("follow_side", std::string(tactile_fsm::to_string(s.wall.follow_side)),
-        {"wall-following direction of the probes: right or left", "", {}, false});
+        {"wall-following direction of the probes: right or left", "", {}, false, tactile_common::choice()});
   // Sequencing (000 Methods)
   m.set("probe_directions", static_cast<int64_t>(s.probe_directions),
-        {"probe directions (000 Methods: \"four orthogonal directions (90 deg apart)\")", "", closed(1, 16), false});
+        {"probe directions (000 Methods: \"four orthogonal directions (90 deg apart)\")", "", closed(1, 16), false,
+         tactile_common::paper("000 Methods: four orthogonal directions (90 deg apart)")});
   m.set("follow_time_s", s.follow_time_s,
-        {"wall follow after a probe's contact (000 Methods: \"follows the wall for 2 seconds\")", "s", positive(), false});
+        {"wall follow after a probe's contact (000 Methods: \"follows the wall for 2 seconds\")", "s", positive(), false,
+         tactile_common::paper("000 Methods: follows the wall for 2 seconds")});
   m.set("retreat_time_s", s.retreat_time_s,
-        {"retreat after a wall follow (000 Methods: \"flies backward for 1 second\")", "s", positive(), false});
+        {"retreat after a wall follow (000 Methods: \"flies backward for 1 second\")", "s", positive(), false,
+         tactile_common::paper("000 Methods: flies backward for 1 second")});
   m.set("surface_points_per_follow", static_cast<int64_t>(s.surface_points_per_follow),
         {"surface points stored per wall follow (000 Methods: \"four data points per wall-follow\")", "",
-         closed(1, 1000), false});
+         closed(1, 1000), false, tactile_common::paper("000 Methods: four data points per wall-follow")});
   m.set("interior_points_per_retreat", static_cast<int64_t>(s.interior_points_per_retreat),
         {"interior points stored per retreat (000 Methods: \"and one per retreat\"): 0 or 1 (its end point)",
-         "", closed(0, 1), false});
+         "", closed(0, 1), false, tactile_common::paper("000 Methods: one per retreat")});
   m.set("retreat_speed", s.retreat_speed,
         {"backward speed of the retreat (our choice: V_max / 2 as the FSM's FLY_BACKWARD, 000 Fig. S4e)", "m/s",
-         positive(), false});
+         positive(), false, tactile_common::choice("V_max / 2 as the whisker FSM's FLY_BACKWARD")});
   m.set("probe_max_distance", s.probe_max_distance,
-        {"a probe with no contact after this distance found an opening (our choice)", "m", positive(), false});
+        {"a probe with no contact after this distance found an opening (our choice)", "m", positive(), false,
+         tactile_common::choice()});
   m.set("yaw_gain", s.yaw_gain, {"yaw control: rate = gain * error, |rate| <= omega_max (our choice)", "1/s",
-                                 positive(), false});
-  m.set("yaw_tolerance", s.yaw_tolerance, {"aligned below this yaw error (our choice, ~3 deg)", "rad", positive(), false});
-  m.set("target_radius", s.target_radius, {"target reached within this (our choice)", "m", positive(), false});
+                                 positive(), false, tactile_common::choice()});
+  m.set("yaw_tolerance", s.yaw_tolerance, {"aligned below this yaw error (our choice, ~3 deg)", "rad", positive(), false,
+        tactile_common::choice()});
+  m.set("target_radius", s.target_radius, {"target reached within this (our choice)", "m", positive(), false,
+        tactile_common::choice()});
   m.set("exit_confirm_distance", s.exit_confirm_distance,
         {"beyond a contact-free target, this much more contact-free flight = exit flown through (our choice)", "m",
-         positive(), false});
+         positive(), false,
+         tactile_common::tuned("README \"issue 17, rooms round 2\": tuning rooms 1000-1599, held out 19000-20299 555 of 600; 0.8 -> 1.2 m")});
   m.set("min_target_distance", s.min_target_distance,
-        {"targets closer than this to the drone are skipped (our choice)", "m", at_least(0.0), false});
+        {"targets closer than this to the drone are skipped (our choice)", "m", at_least(0.0), false,
+         tactile_common::choice()});
   m.set("side_clearance", s.side_clearance,
         {"a sideways wall follow ends early at a known surface point this near ahead of the frame sideways "
-         "(our choice; 000 Results: corners \"risk collisions\")", "m", at_least(0.0), false});
+         "(our choice; 000 Results: corners \"risk collisions\")", "m", at_least(0.0), false,
+         tactile_common::choice("README collision-avoidance rules: diagnosed SITL collisions")});
   m.set("wall_extension", s.wall_extension,
         {"... or at a wall line touched before, extended this far beyond its touched span, across the sideways "
-         "path (our choice); 0: off", "m", at_least(0.0), false});
+         "path (our choice); 0: off", "m", at_least(0.0), false,
+         tactile_common::tuned("README \"issue 17, rooms round 2\": tuning rooms 1000-1599, held out 19000-20299 555 of 600")});
   m.set("approach_standoff", s.approach_standoff,
         {"approach a target head-on from a staging point this far inside along the GPIS normal (000 eq. 36; our "
-         "choice); 0: straight to the target", "m", at_least(0.0), false});
+         "choice); 0: straight to the target", "m", at_least(0.0), false,
+         tactile_common::choice("README collision-avoidance rules: diagnosed SITL collisions")});
   m.set("path_clearance", s.path_clearance,
-        {"legs to a staging point keep this from every known surface point (our choice)", "m", at_least(0.0), false});
+        {"legs to a staging point keep this from every known surface point (our choice)", "m", at_least(0.0), false,
+         tactile_common::choice("README collision-avoidance rules: diagnosed SITL collisions")});
   m.set("approach_clearance", s.approach_clearance,
         {"the head-on leg keeps this from known surface points: a wall end beside it (our choice)", "m", at_least(0.0),
-         false});
+         false, tactile_common::choice("README collision-avoidance rules: diagnosed SITL collisions")});
   m.set("slow_distance", s.slow_distance,
         {"forward legs at slow_fraction * V_max while a known surface point is this near the whisker tips "
-         "(our choice)", "m", at_least(0.0), false});
+         "(our choice)", "m", at_least(0.0), false,
+         tactile_common::choice("README collision-avoidance rules: diagnosed SITL collisions")});
   m.set("slow_fraction", s.slow_fraction,
-        {"fraction of V_max within slow_distance (our choice)", "", ParamRange{0.0, 1.0, true, false}, false});
+        {"fraction of V_max within slow_distance (our choice)", "", ParamRange{0.0, 1.0, true, false}, false,
+         tactile_common::choice("README collision-avoidance rules: diagnosed SITL collisions")});
   m.set("align_probes", s.align_probes,
         {"probes after the first wall follow turned orthogonal to that wall (000's four orthogonal directions, "
-         "aligned; our choice); false: the start heading", "", {}, false});
+         "aligned; our choice); false: the start heading", "", {}, false,
+         tactile_common::choice("README collision-avoidance rules: diagnosed SITL collisions")});
   m.set("retreat_toward_follow_start", s.retreat_toward_follow_start,
         {"the retreat after a wall follow also moves sideways back toward where the follow started (our choice)", "",
-         {}, false});
+         {}, false,
+          tactile_common::tuned("README \"issue 17, rooms round 2\": tuning rooms 1000-1599, held out 19000-20299 555 of 600")});
   m.set("diagonal_probes", s.diagonal_probes,
         {"no wall within probe_max_distance in any probe direction: probe the diagonals before landing with "
-         "open_space (our choice)", "", {}, false});
+         "open_space (our choice)", "", {}, false,
+         tactile_common::tuned("README \"issue 17, rooms round 2\": tuning rooms 1000-1599, held out 19000-20299 555 of 600")});
   m.set("corner_confirm_radius", s.corner_confirm_radius,
         {"no target left: corner centroids (000 eq. 42-43) with no surface point this near are set aside and the "
-         "choice made again (our choice); 0: off", "m", at_least(0.0), false});
+         "choice made again (our choice); 0: off", "m", at_least(0.0), false,
+         tactile_common::tuned("docs/gpis_explorer_results.md Round 3: held out 22000-22299 280 -> 283 of 300")});
   m.set("line_gain", s.line_gain,
         {"forward legs hold their line: body-y velocity = -gain * lateral offset, <= V_max / 2 (our choice)", "1/s",
-         at_least(0.0), false});
+         at_least(0.0), false, tactile_common::choice("README collision-avoidance rules: diagnosed SITL collisions")});
   m.set("return_via_probe_line", s.return_via_probe_line,
         {"RETURN after a probe's wall follow goes across to the probe's line first, then along it (our choice)", "",
-         {}, false});
+         {}, false,
+          tactile_common::tuned("README \"issue 17, rooms round 2\": tuning rooms 1000-1599, held out 19000-20299 555 of 600")});
   m.set("visited_radius", s.visited_radius,
         {"a target whose leg ended in a contact is visited: contour points this near it are not chosen again "
-         "(our choice)", "m", at_least(0.0), false});
+         "(our choice)", "m", at_least(0.0), false,
+         tactile_common::choice("README collision-avoidance rules: diagnosed SITL collisions")});
   m.set("whisk_amplitude", s.whisk_amplitude,
         {"whisking on legs into unexplored space: yaw +- this about the leg's heading (000 Fig. 1d; our choice); "
-         "0: straight legs at V_max", "rad", ParamRange{0.0, M_PI / 2, false, true}, false});
+         "0: straight legs at V_max", "rad", ParamRange{0.0, M_PI / 2, false, true}, false,
+         tactile_common::choice("README collision-avoidance rules: diagnosed SITL collisions")});
   m.set("whisk_rate", s.whisk_rate, {"whisking yaw rate (our choice; 000 gives none); >= turn_rate", "rad/s",
-                                     positive(), false});
+                                     positive(), false,
+                                     tactile_common::choice("README collision-avoidance rules: diagnosed SITL collisions")});
   m.set("turn_rate", s.turn_rate,
         {"TURN in place at most this yaw rate, gain 4 * yaw_gain (our choice); <= whisk_rate; 0: omega_max at "
-         "yaw_gain", "rad/s", at_least(0.0), false});
-  m.set("whisk_speed", s.whisk_speed, {"speed along a whisking leg (our choice: V_max / 2)", "m/s", positive(), false});
+         "yaw_gain", "rad/s", at_least(0.0), false,
+         tactile_common::tuned("docs/gpis_explorer_results.md Round 2: held out 19000-19299 248 -> 269 of 300 with replace_when_full")});
+  m.set("whisk_speed", s.whisk_speed, {"speed along a whisking leg (our choice: V_max / 2)", "m/s", positive(), false,
+        tactile_common::choice("README collision-avoidance rules: diagnosed SITL collisions")});
   m.set("corridor_half_width", s.corridor_half_width,
         {"a whisk contact stops the leg only within this of its axis (guard 8 cm + 3 cm; our choice)", "m", positive(),
-         false});
+         false, tactile_common::choice("guard 8 cm + 3 cm")});
   m.set("exit_beyond", s.exit_beyond,
         {"... with every known surface point at least this far behind the drone along the leg (our choice)", "m",
-         at_least(0.0), false});
+         at_least(0.0), false, tactile_common::choice("README collision-avoidance rules: diagnosed SITL collisions")});
   m.set("retreat_clearance", s.retreat_clearance,
         {"a retreat hovers instead when it would bring the centre this near a known surface point (guard 8 cm + "
-         "6 cm; our choice)", "m", at_least(0.0), false});
+         "6 cm; our choice)", "m", at_least(0.0), false, tactile_common::choice("guard 8 cm + 6 cm")});
   m.set("check_dwell_s", s.check_dwell_s,
-        {"after a whisk stop: whisk back to the leg's heading and hover this long (our choice)", "s", positive(), false});
+        {"after a whisk stop: whisk back to the leg's heading and hover this long (our choice)", "s", positive(), false,
+         tactile_common::choice("README collision-avoidance rules: diagnosed SITL collisions")});
   m.set("check_sample_s", s.check_sample_s,
         {"the points touched this long after the whisk contact decide wall follow or retreat (our choice)", "s",
-         at_least(0.0), false});
+         at_least(0.0), false, tactile_common::choice("README collision-avoidance rules: diagnosed SITL collisions")});
   m.set("follow_min_forward", s.follow_min_forward,
         {"nearest touched point in the corridor at least this far ahead: wall follow; nearer: retreat (whisker base "
-         "5 cm + t_min 6 cm)", "m", at_least(0.0), false});
+         "5 cm + t_min 6 cm)", "m", at_least(0.0), false, tactile_common::choice("whisker base 5 cm + t_min 6 cm")});
 
   m.set("replace_when_full", s.replace_when_full,
         {"budget full: a new point replaces the older of the closest same-label pair, or is dropped when it is the "
-         "redundant one (our choice; 000 gives the budget only)", "", {}, false});
+         "redundant one (our choice; 000 gives the budget only)", "", {}, false,
+         tactile_common::tuned("docs/gpis_explorer_results.md Round 2: held out 19000-19299 248 -> 269 of 300 with turn_rate")});
   m.set("max_updates", static_cast<int64_t>(s.max_updates),
-        {"give up after this many GPIS updates (our choice)", "", closed(1, 1000000), false});
-  m.set("max_time_s", s.max_time_s, {"give up after this long (our choice)", "s", positive(), false});
-  m.set("landing_duration_s", s.landing_duration_s, {"LANDING -> DONE after this", "s", positive(), false});
+        {"give up after this many GPIS updates (our choice)", "", closed(1, 1000000), false, tactile_common::choice()});
+  m.set("max_time_s", s.max_time_s, {"give up after this long (our choice)", "s", positive(), false,
+        tactile_common::choice()});
+  m.set("landing_duration_s", s.landing_duration_s, {"LANDING -> DONE after this", "s", positive(), false,
+        tactile_common::choice()});
   // Stale depth / odometry -> FAILSAFE_HOVER, landing after failsafe_land_after_s
   // (the wall follower's keys, defaults and rule).
   m.set("max_input_age_s", s.wall.max_input_age_s,
         {"depth / odometry older than this is stale: FAILSAFE_HOVER (10 ticks at 50 Hz; the whisker FSM's rule)", "s",
-         positive(), false});
+         positive(), false, tactile_common::choice("10 ticks at 50 Hz, the whisker FSM's rule")});
   m.set("failsafe_land_after_s", s.wall.failsafe_land_after_s,
-        {"stale this long: LANDING, outcome inputs_stale", "s", at_least(0.0), false});
+        {"stale this long: LANDING, outcome inputs_stale", "s", at_least(0.0), false, tactile_common::choice()});
   return m;
 }
 

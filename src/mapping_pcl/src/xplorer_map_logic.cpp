@@ -62,9 +62,12 @@ void XplorerMapLogic::Params::validate() const {
 
 ParamMap XplorerMapLogic::default_parameters() {
   using tactile_common::at_least;
+  using tactile_common::choice;
   using tactile_common::closed;
+  using tactile_common::paper;
   using tactile_common::ParamRange;
   using tactile_common::positive;
+  using tactile_common::tuned;
   constexpr double kInf = std::numeric_limits<double>::infinity();
   constexpr int kIntMax = std::numeric_limits<int>::max();
   const ParamRange up_to_inf{0.0, kInf, true, false};  // "> 0" without a finite check: inf = never stale
@@ -77,161 +80,199 @@ ParamMap XplorerMapLogic::default_parameters() {
   // the map, the stamping state and the FSM gates are built at start, so `ros2 param set`
   // refuses every key (read-only).
   m.set("delta_map", s.delta_map,
-        {"|b_delta_f| that initiates the mapping (001 Sec. V-D)", "N", positive(), false});
+        {"|b_delta_f| that initiates the mapping (001 Sec. V-D)", "N", positive(), false,
+         paper("001 Sec. V-D: delta_map = 1.51 N")});
   m.set("delta_map_hold", s.delta_map_hold,
         {"once initiated, the mapping goes on while the force stays at least this; <= delta_map "
-         "(choice; README \"Mapping is initiated\")", "N", positive(), false});
+         "(choice; README \"Mapping is initiated\")", "N", positive(), false,
+         tuned("README rule 1: 0.5 N, block 1000 8 -> 22 of 50")});
   m.set("hold_in_traversal", s.hold_in_traversal,
         {"an initiation inside a traversal (stamp_states) holds until the traversal ends (choice; rule 14, "
-         "README \"Hold through a traversal\")", "", {}, false});
+         "README \"Hold through a traversal\")", "", {}, false,
+         tuned("README rule 14: block 12700 +8, held out 13000-13299 284 of 300 with rule 15")});
   m.set("slab_size", std::vector<double>{s.slab_size.x(), s.slab_size.y(), s.slab_size.z()},
-        {"slab along the face, along C_n, height; 3 values, each finite and > 0 (001 Sec. IV-B)", "m", {}, false});
+        {"slab along the face, along C_n, height; 3 values, each finite and > 0 (001 Sec. IV-B)", "m", {}, false,
+         paper("001 Sec. IV-B: 0.25 x 0.08 x 0.5 m boxes")});
   m.set("slab_offset", s.slab_offset,
-        {"vehicle centre -> slab's near face along C_n (001 Sec. IV-B)", "m", at_least(0.0), false});
+        {"vehicle centre -> slab's near face along C_n (001 Sec. IV-B)", "m", at_least(0.0), false,
+         paper("001 Sec. IV-B: 0.21 m")});
   m.set("corner_offset", s.corner_offset,
-        {"vehicle centre -> corner slab centre, along the diagonal (001 Sec. IV-B)", "m", at_least(0.0), false});
-  m.set("rate_hz", s.rate_hz, {"stamping rate (001 Sec. IV-B: 30 Hz)", "Hz", positive(), false});
+        {"vehicle centre -> corner slab centre, along the diagonal (001 Sec. IV-B)", "m", at_least(0.0), false,
+         paper("001 Sec. IV-B: 0.417 m")});
+  m.set("rate_hz", s.rate_hz, {"stamping rate (001 Sec. IV-B: 30 Hz)", "Hz", positive(), false,
+        paper("001 Sec. IV-B: 30 Hz")});
   m.set("corner_release_s", s.corner_release_s,
         {"slabs are held back this long; a corner release drops those stamped within it (choice; README "
-         "\"Corner release\"); 0: every slab enters at once", "s", at_least(0.0), false});
+         "\"Corner release\"); 0: every slab enters at once", "s", at_least(0.0), false,
+         tuned("README rule 2: 0.6 s, block 1000 boxes 0 -> 13 of 17")});
   m.set("slab_spacing", s.slab_spacing,
-        {"point spacing inside a slab (choice; the map is voxel-filtered at 1 cm)", "m", positive(), false});
+        {"point spacing inside a slab (choice; the map is voxel-filtered at 1 cm)", "m", positive(), false,
+         choice("2 cm: the map is voxel-filtered at 1 cm")});
   m.set("min_flight_height", s.min_flight_height,
-        {"\"mapping only when flying\": height above floor_z (choice); finite", "m", {}, false});
+        {"\"mapping only when flying\": height above floor_z (choice); finite", "m", {}, false, choice()});
   m.set("normal_from_force", s.normal_from_force,
         {"false: slab along the contact axis C_n (001); true: opposite to the measured force (choice, not kept)",
-         "", {}, false});
-  m.set("voxel_leaf", d.map.voxel_leaf, {"voxel-grid leaf of the map (issue 6: 1 cm)", "m", positive(), false});
+         "", {}, false, tuned("README \"Rules off\": true 37 -> 22 of 50; false is 001's C_n")});
+  m.set("voxel_leaf", d.map.voxel_leaf, {"voxel-grid leaf of the map (issue 6: 1 cm)", "m", positive(), false,
+        choice("issue 6: 1 cm")});
   m.set("outlier_mean_k", static_cast<int64_t>(d.map.outlier_mean_k),
-        {"neighbours of the statistical outlier removal (choice)", "", closed(1, kIntMax), false});
+        {"neighbours of the statistical outlier removal (choice)", "", closed(1, kIntMax), false, choice()});
   m.set("outlier_stddev", d.map.outlier_stddev,
-        {"std-dev multiplier of the statistical outlier removal (choice)", "", positive(), false});
+        {"std-dev multiplier of the statistical outlier removal (choice)", "", positive(), false, choice()});
   m.set("outlier_leaf", d.map.outlier_leaf,
         {"> 0: the outlier removal judges the map voxelised at this leaf; 0: on the map's own points (choice; "
-         "rule 17, README \"Outlier removal at the slab spacing\", not kept)", "m", at_least(0.0), false});
+         "rule 17, README \"Outlier removal at the slab spacing\", not kept)", "m", at_least(0.0), false,
+         tuned("README rule 17, not kept: 0.02 m blocks 13300 / 13000 283 -> 279, 286 -> 281")});
   m.set("outlier_face_length", d.map.outlier_face_length,
         {"faces: supported hull edges at least this long; removed points near them are put back (choice; "
-         "rule 18, README \"Face ends kept by the faces' lines\"); 0: off", "m", at_least(0.0), false});
+         "rule 18, README \"Face ends kept by the faces' lines\"); 0: off", "m", at_least(0.0), false,
+         tuned("README rule 18: blocks 13000 / 12700 / 13300 +1 / +1 / +2, held out 293 of 300")});
   m.set("outlier_face_tolerance", d.map.outlier_face_tolerance,
         {"support and height tolerance of the faces (rule 18); >= 1e-4 m: one byte per bin per face", "m",
-         at_least(1e-4), false});
+         at_least(1e-4), false, choice("rule 18")});
   m.set("outlier_face_outside", d.map.outlier_face_outside,
         {"a removed point is put back at most this far outside every face's line (rule 18); finite", "m", {},
-         false});
+         false, choice("rule 18")});
   m.set("outlier_face_bound_length", d.map.outlier_face_bound_length,
         {"shorter supported hull edges at least this long bound without extending (rule 18)", "m", positive(),
-         false});
+         false, choice("rule 18")});
   m.set("outlier_face_depth", d.map.outlier_face_depth,
         {"a removed point is put back within this depth inside a face's line (rule 18: slab depth 0.08 m and a "
-         "margin)", "m", at_least(0.0), false});
+         "margin)", "m", at_least(0.0), false, choice("rule 18: slab depth 0.08 m and a margin")});
   m.set("outlier_face_reach", d.map.outlier_face_reach,
-        {"... and at most this far beyond that face's ends (rule 18)", "m", at_least(0.0), false});
+        {"... and at most this far beyond that face's ends (rule 18)", "m", at_least(0.0), false, choice("rule 18")});
   m.set("outlier_face_support", d.map.outlier_face_support,
         {"fraction of a hull edge's length that must hold kept points to make it a face (rule 18)", "",
-         ParamRange{0.0, 1.0, true, false}, false});
+         ParamRange{0.0, 1.0, true, false}, false, choice("rule 18")});
   m.set("force_average_samples", static_cast<int64_t>(d.force_average_samples),
         {"moving average of the body force (001 Sec. V-C: 50 samples); >= force_now_samples", "samples",
-         closed(1, kIntMax), false});
-  m.set("floor_z", d.floor_z, {"floor height for the flying check; finite", "m", {}, false});
+         closed(1, kIntMax), false, paper("001 Sec. V-C: 50 samples")});
+  m.set("floor_z", d.floor_z, {"floor height for the flying check; finite", "m", {}, false, choice()});
   m.set("publish_rate_hz", d.publish_rate_hz,
-        {"PointCloud2 rate (choice: the full map is large); 0: never", "Hz", at_least(0.0), false});
+        {"PointCloud2 rate (choice: the full map is large); 0: never", "Hz", at_least(0.0), false, choice()});
   m.set("max_odometry_age_s", d.max_odometry_age_s,
-        {"older odometry pauses the stamping (choice)", "s", up_to_inf, false});
+        {"older odometry pauses the stamping (choice)", "s", up_to_inf, false, choice()});
   m.set("frame_id", d.frame_id,
-        {"frame of the cloud: the odometry poses' frame (REP 105); not empty", "", {}, false});
-  m.set("ply_file", d.ply_file, {"PLY written by save_ply(); \"\": none", "", {}, false});
-  m.set("ply_binary", d.ply_binary, {"false: ASCII PLY as 001; true: binary little endian", "", {}, false});
+        {"frame of the cloud: the odometry poses' frame (REP 105); not empty", "", {}, false, choice("REP 105")});
+  m.set("ply_file", d.ply_file, {"PLY written by save_ply(); \"\": none", "", {}, false, choice()});
+  m.set("ply_binary", d.ply_binary, {"false: ASCII PLY as 001; true: binary little endian", "", {}, false,
+        paper("001 Sec. IV-B: PLY in the ASCII format")});
   m.set("stamp_states", d.stamp_states,
         {"stamp only while the FSM is in one of these states (once an FsmState is heard); empty: always "
-         "(choice; 001 gates on force only)", "", {}, false});
+         "(choice; 001 gates on force only)", "", {}, false,
+         choice("001 gates on force only; README \"Initiation and the stamp's gates\"")});
   m.set("min_state_time_s", d.min_state_time_s,
         {"... and has been in it this long (choice: the 1 s force average still holds the turn)", "s",
-         at_least(0.0), false});
+         at_least(0.0), false, tuned("README rule 4: 1 s (2 s: polygons 5 -> 9 of 18 with 1 s)")});
   m.set("min_state_time_after_turn_s", d.min_state_time_after_turn_s,
         {"... or this long in a traversal entered from Tactile-turning (choice; README \"Recent axis\")", "s",
-         at_least(0.0), false});
+         at_least(0.0), false, tuned("README rule 8: blocks 1000 / 2000 38 -> 44, 39 -> 42 of 50")});
   m.set("edge_from_arms", s.edge_from_arms,
         {"face-slab offset from the vehicle CAD with the arms as the arm IMUs measure them, not the fixed "
-         "slab_offset (choice; 001 Sec. IV-B maps with the CAD model)", "", {}, false});
+         "slab_offset (choice; 001 Sec. IV-B maps with the CAD model)", "", {}, false,
+         tuned("README \"Offset from the deflected arms\": faces 4.5-5.5 mm inside with the fixed offset (SITL)")});
   m.set("min_arm_deflection", s.min_arm_deflection,
         {"stamp only if both arms on the C_n side are deflected at least this much (choice; 001 Sec. V-C1, "
-         "README \"Two arms in contact\"); 0: no check", "rad", at_least(0.0), false});
+         "README \"Two arms in contact\"); 0: no check", "rad", at_least(0.0), false,
+         tuned("README rule 3: 0.002 rad (0.005 cut the 0.4 m pipe's loop); 001 Sec. V-C1")});
   m.set("arm_hinge_offset", s.arm_hinge_offset,
-        {"vehicle centre -> arm hinge along the diagonal (vehicle CAD)", "m", at_least(0.0), false});
-  m.set("arm_length", s.arm_length, {"arm hinge -> motor (vehicle CAD)", "m", positive(), false});
+        {"vehicle centre -> arm hinge along the diagonal (vehicle CAD)", "m", at_least(0.0), false,
+         choice("vehicle CAD")});
+  m.set("arm_length", s.arm_length, {"arm hinge -> motor (vehicle CAD)", "m", positive(), false,
+        choice("vehicle CAD")});
   m.set("guard_radius", s.guard_radius, {"propeller guard radius round the motor (vehicle CAD)", "m",
-                                         at_least(0.0), false});
+                                         at_least(0.0), false, choice("vehicle CAD")});
   m.set("max_arm_age_s", d.max_arm_age_s,
-        {"older arm angles: the fixed slab_offset is used (choice; arm IMUs at 50 Hz)", "s", up_to_inf, false});
+        {"older arm angles: the fixed slab_offset is used (choice; arm IMUs at 50 Hz)", "s", up_to_inf, false,
+         choice("arm IMUs at 50 Hz")});
   m.set("min_force_now", s.min_force_now,
         {"stamp only if the mean of the latest force_now_samples wrench samples is at least this (choice; "
-         "README \"Contact now\"); 0: no check", "N", at_least(0.0), false});
+         "README \"Contact now\"); 0: no check", "N", at_least(0.0), false,
+         tuned("README rule 5: block 1000 34 -> 38 of 50, held out 41 -> 42 with rules 6-7")});
   m.set("force_now_samples", static_cast<int64_t>(d.force_now_samples),
         {"latest wrench samples of the contact-now force (choice: 0.2 s at 50 Hz); <= force_average_samples; "
-         "0: not used", "samples", closed(0, kIntMax), false});
+         "0: not used", "samples", closed(0, kIntMax), false,
+         tuned("README rule 5: 10 samples = 0.2 s, block 1000 34 -> 38 of 50")});
   m.set("corner_angle_tolerance", s.corner_angle_tolerance,
         {"corner slab only when C_n turned by 90 deg within this (choice; README \"Right-angle corners\"); "
-         ">= pi/2: every lambda change (001)", "rad", closed(0.0, M_PI), false});
+         ">= pi/2: every lambda change (001)", "rad", closed(0.0, M_PI), false,
+         tuned("README rule 6: 10 deg (SITL box turns 83-84 deg), 37 -> 38 of 50")});
   m.set("release_states", d.release_states,
         {"entering one of these FSM states releases the held-back slabs (choice; README \"Corner release\", "
-         "\"Release on every end of a traversal\")", "", {}, false});
+         "\"Release on every end of a traversal\")", "", {}, false,
+         tuned("README rule 7: no change on the tuning block")});
   m.set("contact_now_after", d.contact_now_after,
         {"the contact-now check applies only in a state entered from one of these (empty: always) (choice; "
-         "README \"Contact now\")", "", {}, false});
+         "README \"Contact now\")", "", {}, false,
+         tuned("README rule 5: applied always it cost the polygons' short faces")});
   m.set("impact_turn_reasons", d.impact_turn_reasons,
         {"a Tactile-turning entered for one of these reasons (FsmState.reason_code by name: contact_lost_turn, "
          "yaw_rate_peak) counts as an impact (choice; rule 10, README \"Re-contact after a contact-lost turn\"); "
-         "empty: off", "", {}, false});
+         "empty: off", "", {}, false,
+         tuned("README rule 10: blocks 1000 / 3000 +1, held out 9000-9049 46 -> 47 of 50")});
   m.set("impact_turn_rules", d.impact_turn_rules,
         {"first-contact rules after such a turn: any of contact_now, steady, gate (choice; rule 10)", "", {},
-         false});
+         false, tuned("README rule 10: blocks 1000 / 3000 +1, held out 9000-9049 46 -> 47 of 50")});
   m.set("recent_axis", s.recent_axis,
         {"stamp only if the force average's contact axis is also the latest samples' (choice; README "
-         "\"Recent axis\")", "", {}, false});
+         "\"Recent axis\")", "", {}, false, tuned("README rule 8: blocks 1000 / 2000 38 -> 44, 39 -> 42 of 50")});
   m.set("corner_fill_max_gap", s.corner_fill_max_gap,
         {"corner fill when the corner lies at most this beyond both mapped face ends (choice; README \"Corner "
-         "fill\", not kept); 0: off", "m", at_least(0.0), false});
+         "fill\", not kept); 0: off", "m", at_least(0.0), false,
+         tuned("README \"Rules off\": 0.4 m blocks 1000 / 2000 43 and 42, 44 and 42 without")});
   m.set("corner_fill_min_turn", s.corner_fill_min_turn,
-        {"corner fill only if C_n turned by at least this (choice)", "rad", closed(0.0, 0.75 * M_PI), false});
+        {"corner fill only if C_n turned by at least this (choice)", "rad", closed(0.0, 0.75 * M_PI), false,
+         choice("corner fill, off")});
   m.set("corner_fill_fit_length", s.corner_fill_fit_length,
-        {"face length fitted for each line of the corner fill (choice)", "m", positive(), false});
+        {"face length fitted for each line of the corner fill (choice)", "m", positive(), false,
+         choice("corner fill, off")});
   m.set("steady_distance", s.steady_distance,
         {"after an impact, slabs are held until they lay on one face over this path (choice; rule 9, README "
-         "\"Steady first contact\"); 0: off", "m", at_least(0.0), false});
+         "\"Steady first contact\"); 0: off", "m", at_least(0.0), false,
+         tuned("README rule 9: blocks 1000 / 2000 44 -> 46, 42 -> 43; fresh 7000-7049 47 of 50")});
   m.set("steady_angle", s.steady_angle,
         {"... world C_n within this of the first held slab's (choice)", "rad",
-         ParamRange{0.0, M_PI / 2, true, false}, false});
+         ParamRange{0.0, M_PI / 2, true, false}, false,
+         tuned("README rule 9: 0.35 rad (0.1 rad took every cylinder's map)")});
   m.set("steady_offset", s.steady_offset,
-        {"... near faces within this of its line (choice)", "m", positive(), false});
+        {"... near faces within this of its line (choice)", "m", positive(), false,
+         tuned("README rule 9: 2 cm, blocks 1000 / 2000 44 -> 46, 42 -> 43")});
   m.set("touching_half_ratio", s.touching_half_ratio,
         {"only the slab half on the touching guard's side when the other facing arm deflects less than this "
          "fraction (choice; rule 11, README \"Touching-guard half\", not kept); 0: off", "", closed(0.0, 1.0),
-         false});
+         false, tuned("README rule 11, not kept: tuning +3 of 200, held out 46 -> 44 of 50")});
   m.set("touching_half_s", s.touching_half_s,
-        {"... only within this long of the state's entry (choice)", "s", at_least(0.0), false});
+        {"... only within this long of the state's entry (choice)", "s", at_least(0.0), false, choice("rule 11, off")});
   m.set("face_clip_min_length", s.face_clip_min_length,
         {"face clip: a traversal's fitted line spanning at least this is a face; map points outside it are "
-         "removed (choice; rule 12, README \"Face clip\"); 0: off", "m", at_least(0.0), false});
+         "removed (choice; rule 12, README \"Face clip\"); 0: off", "m", at_least(0.0), false,
+         tuned("README rule 12: tuning 129 -> 134 of 150, block 12400 263 -> 276 of 300")});
   m.set("face_clip_max_residual", s.face_clip_max_residual,
-        {"face clip: slabs within this of the fitted line (choice)", "m", positive(), false});
+        {"face clip: slabs within this of the fitted line (choice)", "m", positive(), false,
+         tuned("README rule 12: tuning 129 -> 134 of 150")});
   m.set("face_clip_tolerance", s.face_clip_tolerance,
-        {"face clip: points more than this outside the face are removed (choice)", "m", at_least(0.0), false});
+        {"face clip: points more than this outside the face are removed (choice)", "m", at_least(0.0), false,
+         tuned("README rule 12: tuning 129 -> 134 of 150")});
   m.set("face_clip_margin", s.face_clip_margin,
-        {"face clip: the face's span extended by this (choice)", "m", at_least(0.0), false});
+        {"face clip: the face's span extended by this (choice)", "m", at_least(0.0), false,
+         tuned("README rule 12: tuning 129 -> 134 of 150")});
   m.set("face_clip_angle_tolerance", s.face_clip_angle_tolerance,
         {"face clip: slab C_n and the right angle to the next face within this (choice); >= pi/2: every line "
-         "clips", "rad", closed(0.0, M_PI), false});
+         "clips", "rad", closed(0.0, M_PI), false, tuned("README rule 12: tuning 129 -> 134 of 150")});
   m.set("face_clip_corner_reach", s.face_clip_corner_reach,
         {"face clip span extended to the corner within this (choice; rule 13, README \"Face clip to the "
-         "corner\"); 0: off", "m", at_least(0.0), false});
+         "corner\"); 0: off", "m", at_least(0.0), false,
+         tuned("README rule 13, off: 0.6 m changed no seed of block 12700")});
   m.set("face_clip_tilted", s.face_clip_tilted,
         {"every fitted face line removes the tilted slabs outside it (choice; rule 15, README \"Tilted "
-         "slabs\")", "", {}, false});
+         "slabs\")", "", {}, false,
+         tuned("README rule 15: block 12700 +4; held out 13000-13299 284 of 300 with rule 14")});
   m.set("face_clip_tilted_reach", s.face_clip_tilted_reach,
-        {"... within its span extended by this (choice)", "m", at_least(0.0), false});
+        {"... within its span extended by this (choice)", "m", at_least(0.0), false,
+         tuned("README rule 15: 0.6 m, block 12700 +4")});
   m.set("corner_fan_clip", s.corner_fan_clip,
         {"remove the fan past a right-angled corner (choice; rule 16, README \"Fan past a right-angled "
-         "corner\")", "", {}, false});
+         "corner\")", "", {}, false, tuned("README rule 16: blocks 13300 / 13000 283 -> 286, 286 -> 289")});
   return m;
 }
 

@@ -247,14 +247,15 @@ std::string schema_markdown(const NodeSchema& node) {
   out << "`" << node.name << "`: " << m.values().size()
       << " parameters, generated from `default_parameters()` by `tactile params " << node.name
       << "` (regenerate: `scripts/param_tables.sh`).\n\n";
-  out << "| key | type | default | range | unit | live | description |\n";
-  out << "| --- | --- | --- | --- | --- | --- | --- |\n";
+  out << "| key | type | default | range | unit | live | source | description |\n";
+  out << "| --- | --- | --- | --- | --- | --- | --- | --- |\n";
   for (const auto& [key, value] : m.values()) {
     const ParamInfo& info = info_of(m, key);
     const std::string range = range_text(info);
     out << "| `" << key << "` | " << tactile_common::type_name(value) << " | `" << cell(yaml_value(value)) << "` | "
         << (range.empty() ? "" : cell(range)) << " | " << cell(info.unit) << " | "
-        << (info.live ? "live" : "read-only") << " | " << cell(info.description) << " |\n";
+        << (info.live ? "live" : "read-only") << " | " << cell(info.source.text()) << " | " << cell(info.description)
+        << " |\n";
   }
   return out.str();
 }
@@ -280,6 +281,12 @@ std::string schema_yaml(const NodeSchema& node) {
     if (info.range) facts += ", range " + info.range->text();
     facts += info.live ? ", live (ros2 param set applies it)" : ", read-only";
     out << "    # " << facts << "\n";
+    if (info.source.kind != tactile_common::ParamSource::kUnset) {
+      out << "    # source: " << tactile_common::to_string(info.source.kind) << "\n";
+      if (!info.source.evidence.empty()) {
+        for (const auto& line : wrap("evidence: " + info.source.evidence, 88)) out << "    # " << line << "\n";
+      }
+    }
     out << "    " << key << ": " << yaml_value(value) << "\n";
   }
   return out.str();

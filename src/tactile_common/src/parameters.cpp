@@ -237,6 +237,21 @@ std::string bound_text(double v) {
 
 }  // namespace
 
+const char* to_string(ParamSource s) {
+  switch (s) {
+    case ParamSource::kPaper: return "paper";
+    case ParamSource::kChoice: return "choice";
+    case ParamSource::kTuned: return "tuned";
+    case ParamSource::kUnset: break;
+  }
+  return "unset";
+}
+
+std::string ParamOrigin::text() const {
+  if (kind == ParamSource::kUnset) return "";
+  return std::string(to_string(kind)) + (evidence.empty() ? "" : ": " + evidence);
+}
+
 std::string ParamRange::text() const {
   return std::string(open_lo ? "(" : "[") + bound_text(lo) + ", " + bound_text(hi) + (open_hi ? ")" : "]");
 }

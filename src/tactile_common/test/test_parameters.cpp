@@ -399,6 +399,28 @@ TEST(ParamInfo, RangesPrintAndContainAsDescribed) {
   EXPECT_THROW(m.set("bad", 1.0, {"empty", "", tactile_common::closed(2, 1), false}), std::logic_error);
 }
 
+// Where a value comes from (issue 33 item 4): the last argument of a ParamInfo, kept with it,
+// printed as `tactile params` and `ros2 param describe` show it; without it a key is "unset".
+TEST(ParamInfo, SourceIsKeptAndPrintsWithItsEvidence) {
+  using tactile_common::ParamSource;
+  tactile_common::ParamMap m("n", "defaults");
+  m.set("window", int64_t{100}, {"n", "samples", tactile_common::closed(2, 1000), false,
+                                 tactile_common::paper("000 eq. 6-7, n = 100")});
+  m.set("frame", std::string("odom"), {"frame", "", {}, false, tactile_common::choice()});
+  m.set("hold", 0.1, {"hold", "", {}, false, tactile_common::tuned("docs/tuning/x.md Round 4: 251 -> 269")});
+  m.set("old", 1.0, {"not classified yet", "", {}, false});
+  const tactile_common::ParamMap copy = m;
+  EXPECT_EQ(copy.info("window")->source.kind, ParamSource::kPaper);
+  EXPECT_EQ(copy.info("window")->source.evidence, "000 eq. 6-7, n = 100");
+  EXPECT_EQ(copy.info("window")->source.text(), "paper: 000 eq. 6-7, n = 100");
+  EXPECT_EQ(copy.info("frame")->source.text(), "choice");
+  EXPECT_EQ(copy.info("hold")->source.text(), "tuned: docs/tuning/x.md Round 4: 251 -> 269");
+  EXPECT_EQ(copy.info("old")->source.kind, ParamSource::kUnset);
+  EXPECT_EQ(copy.info("old")->source.text(), "");
+  EXPECT_STREQ(tactile_common::to_string(ParamSource::kTuned), "tuned");
+  EXPECT_STREQ(tactile_common::to_string(ParamSource::kUnset), "unset");
+}
+
 // Integer-valued bounds print exactly, as the integer a get_int() range or an IntegerRange
 // descriptor holds: INT_MAX is "2147483647", not the stream's six digits "2.14748e+09"
 // (ros2 param describe of whisker_driver's baud showed that, and a refused value's reason

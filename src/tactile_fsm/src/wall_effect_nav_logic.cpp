@@ -56,52 +56,70 @@ ParamMap WallEffectNavLogic::default_parameters() {
   // key is read at start (ros2 param set: read-only): the y_hat average window and the
   // navigator's state are built from them.
   m.set("behaviour", n.behaviour,
-        {"wall_following (004 \"Reactive navigation\", Fig. 3b) or vector_field (004 eq. 12)", "", {}, false});
+        {"wall_following (004 \"Reactive navigation\", Fig. 3b) or vector_field (004 eq. 12)", "", {}, false,
+         tactile_common::paper("004 \"Reactive navigation\", Fig. 3b; eq. 12")});
   m.set("average_window_s", n.average_window_s,
-        {"Delta t, window of the average y_bar of y_hat (004: 1.5 s)", "s", positive(), false});
+        {"Delta t, window of the average y_bar of y_hat (004: 1.5 s)", "s", positive(), false,
+         tactile_common::paper("004 \"Collision avoidance flight\": Delta t = 1.5 s")});
   m.set("enter_distance", n.enter_distance,
-        {"d_dagger, y_bar below this enters wall following (004: 20 cm); > follow_distance", "m", positive(), false});
+        {"d_dagger, y_bar below this enters wall following (004: 20 cm); > follow_distance", "m", positive(), false,
+         tactile_common::paper("004 \"Collision avoidance flight\": d = 20 cm")});
   m.set("follow_distance", n.follow_distance,
-        {"d*, wall tracking distance (004: 17 cm); < enter_distance", "m", positive(), false});
-  m.set("follow_speed", n.follow_speed, {"v*, speed along the wall (004: 10 or 25 cm/s)", "m/s", positive(), false});
+        {"d*, wall tracking distance (004: 17 cm); < enter_distance", "m", positive(), false,
+         tactile_common::paper("004 \"Collision avoidance flight\": d* = 17 cm")});
+  m.set("follow_speed", n.follow_speed, {"v*, speed along the wall (004: 10 or 25 cm/s)", "m/s", positive(), false,
+        tactile_common::paper("004 \"Collision avoidance flight\": 10 or 25 cm/s")});
   m.set("free_speed", n.free_speed,
-        {"free-flight speed towards the goal (004: approach at 10 cm/s)", "m/s", positive(), false});
+        {"free-flight speed towards the goal (004: approach at 10 cm/s)", "m/s", positive(), false,
+         tactile_common::paper("004: approach at 10 cm/s")});
   m.set("safety_distance", n.safety_distance,
         {"also enter wall following at once when the raw y_hat is below this, without waiting for the average "
-         "(choice: d_dagger); 0: off", "m", at_least(0.0), false});
+         "(choice: d_dagger); 0: off", "m", at_least(0.0), false, tactile_common::choice("d_dagger")});
   m.set("attract_speed", n.attract_speed, {"v_plus, attraction to the goal (004 eq. 12: 10 cm/s)", "m/s", positive(),
-                                           false});
+                                           false, tactile_common::paper("004 eq. 12: 10 cm/s")});
   m.set("repulse_gain", n.repulse_gain,
-        {"v_minus = gain * base^y_hat (004 eq. 12: 9e5 m/s)", "m/s", positive(), false});
+        {"v_minus = gain * base^y_hat (004 eq. 12: 9e5 m/s)", "m/s", positive(), false,
+         tactile_common::paper("004 eq. 12: 9e5 m/s")});
   m.set("repulse_base", n.repulse_base,
-        {"base of v_minus (004 eq. 12: 1.8e-35 per metre of y_hat)", "", ParamRange{0.0, 1.0, true, true}, false});
+        {"base of v_minus (004 eq. 12: 1.8e-35 per metre of y_hat)", "", ParamRange{0.0, 1.0, true, true}, false,
+         tactile_common::paper("004 eq. 12: 1.8e-35")});
   m.set("repulse_max", n.repulse_max,
-        {"saturation of v_minus (choice: eq. 12 tends to 9e5 m/s at the wall)", "m/s", positive(), false});
+        {"saturation of v_minus (choice: eq. 12 tends to 9e5 m/s at the wall)", "m/s", positive(), false,
+         tactile_common::choice()});
   m.set("repulse_distance", n.repulse_distance,
-        {"the position term repulses only below this (004: 19 cm)", "m", positive(), false});
+        {"the position term repulses only below this (004: 19 cm)", "m", positive(), false,
+         tactile_common::paper("004 Fig. 9d: minimum y_hat of 19 cm")});
   m.set("goal_tolerance", n.goal_tolerance,
-        {"goal reached within this horizontal distance (choice)", "m", positive(), false});
-  m.set("height", n.height, {"flight height (004: 1.0 m)", "m", positive(), false});
-  m.set("yaw_deg", n.yaw * 180.0 / M_PI, {"psi_d, heading kept constant (004: 0); finite", "deg", {}, false});
+        {"goal reached within this horizontal distance (choice)", "m", positive(), false, tactile_common::choice()});
+  m.set("height", n.height, {"flight height (004: 1.0 m)", "m", positive(), false,
+        tactile_common::paper("004: 1.0 m")});
+  m.set("yaw_deg", n.yaw * 180.0 / M_PI, {"psi_d, heading kept constant (004: 0); finite", "deg", {}, false,
+        tactile_common::paper("004: psi_d = 0")});
   m.set("goal_mode", d.goal_mode,
         {"position (goal_x, goal_y in the world), gps (gps_goal as ENU of gps_origin, GeographicLib) or direction "
-         "(pilot heading direction_deg)", "", {}, false});
-  m.set("goal_x", d.goal_x, {"goal x in the world frame (goal_mode position); finite", "m", {}, false});
-  m.set("goal_y", d.goal_y, {"goal y in the world frame (goal_mode position); finite", "m", {}, false});
+         "(pilot heading direction_deg)", "", {}, false, tactile_common::choice()});
+  m.set("goal_x", d.goal_x, {"goal x in the world frame (goal_mode position); finite", "m", {}, false,
+        tactile_common::choice()});
+  m.set("goal_y", d.goal_y, {"goal y in the world frame (goal_mode position); finite", "m", {}, false,
+        tactile_common::choice()});
   m.set("gps_origin", std::vector<double>(d.gps_origin.begin(), d.gps_origin.end()),
-        {"[lat, lon, alt] of the local ENU origin (goal_mode gps; WGS84)", "deg, deg, m", {}, false});
+        {"[lat, lon, alt] of the local ENU origin (goal_mode gps; WGS84)", "deg, deg, m", {}, false,
+         tactile_common::choice()});
   m.set("gps_goal", std::vector<double>(d.gps_goal.begin(), d.gps_goal.end()),
-        {"[lat, lon, alt] of the goal (goal_mode gps; WGS84)", "deg, deg, m", {}, false});
+        {"[lat, lon, alt] of the goal (goal_mode gps; WGS84)", "deg, deg, m", {}, false, tactile_common::choice()});
   m.set("direction_deg", d.direction_deg,
-        {"pilot heading direction in the world (goal_mode direction); finite", "deg", {}, false});
+        {"pilot heading direction in the world (goal_mode direction); finite", "deg", {}, false,
+         tactile_common::choice()});
   m.set("max_input_age_s", d.safety.max_input_age_s,
         {"older odometry or wall estimate: FAILSAFE_HOVER where the drone was last known, until both are fresh "
-         "again (choice)", "s", positive(), false});
+         "again (choice)", "s", positive(), false, tactile_common::choice("10 ticks of the 50 Hz whisker FSM")});
   m.set("failsafe_land_after_s", d.safety.failsafe_land_after_s,
-        {"FAILSAFE_HOVER this long -> FAILSAFE_LAND (choice: the whisker FSM's 2 s)", "s", at_least(0.0), false});
+        {"FAILSAFE_HOVER this long -> FAILSAFE_LAND (choice: the whisker FSM's 2 s)", "s", at_least(0.0), false,
+         tactile_common::choice("the whisker FSM's 2 s")});
   m.set("failsafe_land_speed", d.failsafe_land_speed,
         {"FAILSAFE_LAND: z velocity-only at minus this, x, y held; the INDI controller's thrust winds down on the "
-         "floor (choice: the Crazyflie bridge's land_speed)", "m/s", positive(), false});
+         "floor (choice: the Crazyflie bridge's land_speed)", "m/s", positive(), false,
+         tactile_common::choice("the Crazyflie bridge's land_speed")});
   return m;
 }
 

@@ -61,135 +61,177 @@ ParamMap XplorerFsmLogic::default_parameters() {
   // contact bookkeeping are built from them.
   m.set("mission", std::string(to_string(f.mission)),
         {"explore (001 Sec. IV-A), static_wrench (Sec. III-B1 / V-B), ricochet (Sec. IV-C / V-E) or waypoint "
-         "(the comparison)", "", {}, false});
-  m.set("hover_height", f.hover_height, {"take-off and hover height (001 Sec. V-C: 0.7 m)", "m", positive(), false});
+         "(the comparison)", "", {}, false,
+         tactile_common::paper("001 Sec. IV-A (explore), III-B1 / V-B (static_wrench), IV-C / V-E (ricochet)")});
+  m.set("hover_height", f.hover_height, {"take-off and hover height (001 Sec. V-C: 0.7 m)", "m", positive(), false,
+        tactile_common::paper("001 Sec. V-C: 0.7 m")});
   m.set("takeoff_tolerance", f.takeoff_tolerance, {"take-off done within this of hover_height (choice)", "m",
-                                                   positive(), false});
-  m.set("explore_speed", f.explore_speed, {"Exploration speed along body +x (choice)", "m/s", positive(), false});
+                                                   positive(), false, tactile_common::choice()});
+  m.set("explore_speed", f.explore_speed, {"Exploration speed along body +x (choice)", "m/s", positive(), false,
+        tactile_common::choice()});
   m.set("traverse_speed", f.traverse_speed,
-        {"Tactile-traversal speed along lambda (choice)", "m/s", positive(), false});
+        {"Tactile-traversal speed along lambda (choice)", "m/s", positive(), false, tactile_common::choice()});
   m.set("position_gain", f.position_gain,
         {"P gain of the vehicle's position loop: turns speeds into setpoint leads (choice, SITL controller)", "1/s",
-         positive(), false});
+         positive(), false, tactile_common::choice("the SITL controller")});
   m.set("force_average_samples", static_cast<int64_t>(f.force_average_samples),
-        {"moving average of the body force (001 Sec. V-C: 50)", "", closed(1, std::numeric_limits<int>::max()), false});
+        {"moving average of the body force (001 Sec. V-C: 50)", "", closed(1, std::numeric_limits<int>::max()), false,
+         tactile_common::paper("001 Sec. V-C: 50 samples")});
   m.set("delta_0", f.delta_0, {"delta_0, contact threshold on the averaged body force (001 Sec. V-C: 1.5 N)", "N",
-                               positive(), false});
+                               positive(), false, tactile_common::paper("001 Sec. V-C: 1.5 N")});
   m.set("delta_psi0", f.delta_psi0,
         {"delta_psi0, re-contact threshold ending Tactile-turning (001 Sec. IV-A; value a choice); > delta_0", "N",
-         positive(), false});
+         positive(), false, tactile_common::choice("001 Sec. IV-A names delta_psi0, not its value")});
   m.set("yaw_rate_trigger", f.yaw_rate_trigger,
         {"psi_dot_0, low-passed yaw rate that starts Tactile-turning at a convex corner (001 Sec. V-C: 0.4 rad/s)",
-         "rad/s", positive(), false});
+         "rad/s", positive(), false, tactile_common::paper("001 Sec. V-C: 0.4 rad/s")});
   m.set("yaw_rate_lowpass_hz", f.yaw_rate_lowpass_hz,
-        {"cut-off of the yaw-rate low-pass (choice; 001 Sec. V-C)", "Hz", positive(), false});
+        {"cut-off of the yaw-rate low-pass (choice; 001 Sec. V-C)", "Hz", positive(), false, tactile_common::choice()});
   m.set("turn_rate", f.turn_rate,
-        {"controlled yaw rate in Tactile-turning (001 Sec. V-C: 0.26 rad/s)", "rad/s", positive(), false});
+        {"controlled yaw rate in Tactile-turning (001 Sec. V-C: 0.26 rad/s)", "rad/s", positive(), false,
+         tactile_common::paper("001 Sec. V-C: 0.26 rad/s")});
   m.set("turn_limit", f.turn_limit,
-        {"|yaw change| limit of one turn (001 Sec. IV-A: 180 deg)", "rad", ParamRange{0.0, M_PI, true, false}, false});
+        {"|yaw change| limit of one turn (001 Sec. IV-A: 180 deg)", "rad", ParamRange{0.0, M_PI, true, false}, false,
+         tactile_common::paper("001 Sec. IV-A: 180 deg")});
   m.set("turn_push", f.turn_push,
-        {"setpoint lead towards C_n while turning, with turn_pivot false (choice)", "m", positive(), false});
+        {"setpoint lead towards C_n while turning, with turn_pivot false (choice)", "m", positive(), false,
+         tactile_common::choice("with turn_pivot false")});
   m.set("turn_pivot", f.turn_pivot,
         {"Tactile-turning orbits a pivot on the corner (001 Sec. IV-A \"turning around a point\"; choice); false: "
-         "push turn_push along C_n", "", {}, false});
+         "push turn_push along C_n", "", {}, false,
+         tactile_common::tuned("docs/xplorer_fsm.md \"Rules beyond 001\": corner pivot, the paper's box 4/5 -> 5/5 loops")});
   m.set("contact_reach", f.contact_reach,
-        {"centre -> edge of the vehicle along a body axis (001 Sec. IV-B: 0.21 m)", "m", positive(), false});
+        {"centre -> edge of the vehicle along a body axis (001 Sec. IV-B: 0.21 m)", "m", positive(), false,
+         tactile_common::paper("001 Sec. IV-B: 0.21 m")});
   m.set("turn_radius", f.turn_radius,
         {"orbit radius about the corner pivot, < contact_reach so the guards meet the next face (choice)", "m",
-         positive(), false});
+         positive(), false,
+         tactile_common::tuned("docs/xplorer_fsm.md \"Rules beyond 001\": corner pivot, the paper's box 4/5 -> 5/5 loops")});
   m.set("turn_slide", f.turn_slide,
-        {"while turning, move along lambda to this far past the pivot (choice)", "m", at_least(0.0), false});
+        {"while turning, move along lambda to this far past the pivot (choice)", "m", at_least(0.0), false,
+         tactile_common::tuned("docs/xplorer_fsm.md \"Rules beyond 001\": corner pivot, the paper's box 4/5 -> 5/5 loops")});
   m.set("turn_backoff", f.turn_backoff,
         {"the orbit starts this much further out, releasing the push stored against the face (choice)", "m",
-         at_least(0.0), false});
+         at_least(0.0), false,
+         tactile_common::tuned("docs/xplorer_fsm.md \"Rules beyond 001\": corner pivot, the paper's box 4/5 -> 5/5 loops")});
   m.set("turn_backoff_tau", f.turn_backoff_tau,
-        {"... and closes to turn_radius with this time constant (choice)", "s", positive(), false});
+        {"... and closes to turn_radius with this time constant (choice)", "s", positive(), false,
+         tactile_common::choice()});
   m.set("corner_lookback", f.corner_lookback,
-        {"the face pose is taken this long before the yaw-rate trigger (choice)", "s", at_least(0.0), false});
+        {"the face pose is taken this long before the yaw-rate trigger (choice)", "s", at_least(0.0), false,
+         tactile_common::tuned("docs/xplorer_fsm.md \"Rules beyond 001\": corner pivot, the paper's box 4/5 -> 5/5 loops")});
   m.set("contact_force", f.contact_force,
-        {"|delta_f_des|, desired contact force in Tactile-traversal (001: 1.25 N)", "N", positive(), false});
+        {"|delta_f_des|, desired contact force in Tactile-traversal (001: 1.25 N)", "N", positive(), false,
+         tactile_common::choice("001 takes delta_map slightly above f_des, gives no value")});
   m.set("reshape_gain", f.reshape_gain,
         {"r* along C_n reshaped by the force error, r*_n += gain (delta_f - delta_f_des).n dt (001 Sec. III-B1; "
-         "value a choice)", "m/(N s)", at_least(0.0), false});
-  m.set("reshape_limit", f.reshape_limit, {"|r*_n - p_n| limit (choice)", "m", positive(), false});
+         "value a choice)", "m/(N s)", at_least(0.0), false,
+         tactile_common::choice("001 Sec. III-B1 gives the rule, not the gain")});
+  m.set("reshape_limit", f.reshape_limit, {"|r*_n - p_n| limit (choice)", "m", positive(), false,
+        tactile_common::choice()});
   m.set("reshape_follows_contact", f.reshape_follows_contact,
         {"keep only r*'s offset along C_n and carry it with the vehicle as C_n turns (curved surfaces; choice)", "", {},
-         false});
+         false, tactile_common::choice("curved surfaces")});
   m.set("release_force", f.release_force,
-        {"averaged |force| below which contact is lost (choice)", "N", positive(), false});
-  m.set("release_time", f.release_time, {"... for this long -> Exploration (choice)", "s", positive(), false});
+        {"averaged |force| below which contact is lost (choice)", "N", positive(), false, tactile_common::choice()});
+  m.set("release_time", f.release_time, {"... for this long -> Exploration (choice)", "s", positive(), false,
+        tactile_common::choice()});
   m.set("settle_time", f.settle_time,
-        {"no turning trigger this long after a contact or a turn (choice)", "s", at_least(0.0), false});
+        {"no turning trigger this long after a contact or a turn (choice)", "s", at_least(0.0), false,
+         tactile_common::choice()});
   m.set("loop_closure_radius", f.loop_closure_radius,
-        {"back within this of the first contact point -> loop closed (choice)", "m", positive(), false});
+        {"back within this of the first contact point -> loop closed (choice)", "m", positive(), false,
+         tactile_common::choice()});
   m.set("loop_min_path", f.loop_min_path, {"... after at least this much traversed path (choice)", "m", positive(),
-                                           false});
+                                           false, tactile_common::choice()});
   m.set("loop_min_winding", f.loop_min_winding,
         {"... and the heading wound counter-clockwise by at least this since the first contact (choice); 0: off",
-         "rad", closed(0.0, 2.0 * M_PI), false});
+         "rad", closed(0.0, 2.0 * M_PI), false,
+         tactile_common::tuned("docs/xplorer_fsm.md \"Rules beyond 001\": loop closes once round, false closures 1 -> 0 on blocks 1000/2000")});
   m.set("loop_turn_min_winding", f.loop_turn_min_winding,
         {"loop closure also inside Tactile-turning once wound by this much (choice, 315 deg); 0: off", "rad",
-         closed(0.0, 2.0 * M_PI), false});
+         closed(0.0, 2.0 * M_PI), false,
+         tactile_common::tuned("docs/xplorer_fsm.md \"Rules beyond 001\": closure inside the last turn, held out 13300-13599 280 -> 283")});
   m.set("max_clockwise_turns_in_a_row", static_cast<int64_t>(f.max_clockwise_turns_in_a_row),
         {"a clockwise yaw-rate peak starts a turn only while fewer clockwise turns came since the last "
-         "counter-clockwise one (choice); 0: never", "", closed(0, 1000), false});
+         "counter-clockwise one (choice); 0: never", "", closed(0, 1000), false,
+         tactile_common::tuned("docs/xplorer_fsm.md \"Rules beyond 001\": one clockwise turn in a row, 46/50 and 43/50")});
   m.set("turn_on_contact_lost", f.turn_on_contact_lost,
         {"contact lost in a long traversal: turn counter-clockwise about the face's end instead of Exploration "
-         "(choice; needs turn_pivot)", "", {}, false});
+         "(choice; needs turn_pivot)", "", {}, false,
+         tactile_common::tuned("docs/xplorer_fsm.md \"Rules beyond 001\": turn on contact lost, loops 49 -> 50, 48 -> 49 of 50")});
   m.set("contact_lost_turn_min_s", f.contact_lost_turn_min_s,
-        {"... when the traversal lasted at least this long (choice)", "s", at_least(0.0), false});
+        {"... when the traversal lasted at least this long (choice)", "s", at_least(0.0), false,
+         tactile_common::tuned("docs/xplorer_fsm.md \"Rules beyond 001\": turn on contact lost, 4 s (2 s: 43 and 42 of 50)")});
   m.set("contact_backoff_gain", f.contact_backoff_gain,
         {"back-off on contact from Exploration: setpoint this far per N of force, along the force (001 Sec. III-B3 "
-         "collision recovery; choice, tuned)", "m/N", at_least(0.0), false});
-  m.set("contact_backoff_max", f.contact_backoff_max, {"... at most this far (choice)", "m", closed(0.0, 0.5), false});
+         "collision recovery; choice, tuned)", "m/N", at_least(0.0), false,
+         tactile_common::tuned("docs/xplorer_fsm.md \"Rules beyond 001\": contact back-off, tuning 128 -> 136 of 150")});
+  m.set("contact_backoff_max", f.contact_backoff_max, {"... at most this far (choice)", "m", closed(0.0, 0.5), false,
+        tactile_common::tuned("docs/xplorer_fsm.md \"Rules beyond 001\": contact back-off, tuning 128 -> 136 of 150")});
   m.set("contact_backoff_time", f.contact_backoff_time,
-        {"... held this long, then the traversal or wrench starts (choice); 0: off", "s", closed(0.0, 2.0), false});
+        {"... held this long, then the traversal or wrench starts (choice); 0: off", "s", closed(0.0, 2.0), false,
+         tactile_common::tuned("docs/xplorer_fsm.md \"Rules beyond 001\": contact back-off, tuning 128 -> 136 of 150")});
   m.set("square_min_deflection", f.square_min_deflection,
         {"square up to a face slid along in Exploration: path deflected by at least this from the Exploration "
-         "direction (choice, 20 deg); 0: off", "rad", ParamRange{0.0, M_PI / 2, false, true}, false});
+         "direction (choice, 20 deg); 0: off", "rad", ParamRange{0.0, M_PI / 2, false, true}, false,
+         tactile_common::tuned("docs/xplorer_fsm.md \"Rules beyond 001\": square up, 13000 286 -> 290, 12700 288 -> 290 of 300")});
   m.set("square_window", f.square_window,
-        {"... path over this long before the contact (choice)", "s", positive(), false});
-  m.set("square_min_path", f.square_min_path, {"... at least this long (choice)", "m", at_least(0.0), false});
+        {"... path over this long before the contact (choice)", "s", positive(), false,
+         tactile_common::tuned("docs/xplorer_fsm.md \"Rules beyond 001\": square up, 13000 286 -> 290, 12700 288 -> 290 of 300")});
+  m.set("square_min_path", f.square_min_path, {"... at least this long (choice)", "m", at_least(0.0), false,
+        tactile_common::tuned("docs/xplorer_fsm.md \"Rules beyond 001\": square up, 13000 286 -> 290, 12700 288 -> 290 of 300")});
   m.set("square_hold", f.square_hold,
         {"... after the yaw ramp at turn_rate, hold the squared yaw this long before traversing (choice)", "s",
-         closed(0.0, 10.0), false});
+         closed(0.0, 10.0), false,
+         tactile_common::tuned("docs/xplorer_fsm.md \"Rules beyond 001\": square up, 13000 286 -> 290, 12700 288 -> 290 of 300")});
   m.set("square_to_x", f.square_to_x,
         {"... C_n = body +X, the Exploration axis (001 Sec. V-C2); false: the body axis nearest to the face normal "
-         "(choice)", "", {}, false});
+         "(choice)", "", {}, false,
+         tactile_common::tuned("docs/xplorer_fsm.md \"Rules beyond 001\": square up, 13000 286 -> 290, 12700 288 -> 290 of 300")});
   m.set("static_force", f.static_force,
-        {"|delta_f_ref|, static-wrench reference (001 Sec. V-B: 1 N)", "N", positive(), false});
+        {"|delta_f_ref|, static-wrench reference (001 Sec. V-B: 1 N)", "N", positive(), false,
+         tactile_common::paper("001 Sec. V-B: 1 N")});
   m.set("goal", std::vector<double>{f.goal.x(), f.goal.y()},
-        {"ricochet / waypoint goal [x, y] in the world frame; finite", "m", {}, false});
+        {"ricochet / waypoint goal [x, y] in the world frame; finite", "m", {}, false, tactile_common::choice()});
   m.set("ricochet_speed", f.ricochet_speed,
         {"ricochet approach speed (001 Sec. IV-C \"maximum velocity\": the SITL controller's limit)", "m/s", positive(),
-         false});
-  m.set("collision_force", f.collision_force, {"|delta_f| that marks a collision (choice)", "N", positive(), false});
+         false, tactile_common::choice("001 Sec. IV-C: the maximum velocity, here the SITL controller's limit")});
+  m.set("collision_force", f.collision_force, {"|delta_f| that marks a collision (choice)", "N", positive(), false,
+        tactile_common::choice()});
   m.set("restitution", f.restitution,
-        {"post-collision normal speed / pre-collision (001 Fig. 7; choice)", "", closed(0.0, 1.0), false});
+        {"post-collision normal speed / pre-collision (001 Fig. 7; choice)", "", closed(0.0, 1.0), false,
+         tactile_common::choice("001 Fig. 7 shows the rebound, not a coefficient")});
   m.set("recovery_gain", f.recovery_gain,
         {"recovery setpoint distance per N of collision peak (choice, after 001 ref. [12])", "m/N", at_least(0.0),
-         false});
-  m.set("recovery_time", f.recovery_time, {"hold the recovery setpoint this long (choice)", "s", at_least(0.0), false});
+         false, tactile_common::choice("after 001 ref. [12]")});
+  m.set("recovery_time", f.recovery_time, {"hold the recovery setpoint this long (choice)", "s", at_least(0.0), false,
+        tactile_common::choice()});
   m.set("virtual_mass", f.admittance.virtual_mass,
-        {"m_v of the admittance controller (001 eq. 8, Sec. V-A3: 1)", "kg", positive(), false});
+        {"m_v of the admittance controller (001 eq. 8, Sec. V-A3: 1)", "kg", positive(), false,
+         tactile_common::paper("001 eq. 8, Sec. V-A3: 1")});
   m.set("virtual_inertia", f.admittance.virtual_inertia,
-        {"I_v,z of the admittance controller (001 eq. 8, Sec. V-A3: 1)", "kg m^2", positive(), false});
+        {"I_v,z of the admittance controller (001 eq. 8, Sec. V-A3: 1)", "kg m^2", positive(), false,
+         tactile_common::paper("001 eq. 8, Sec. V-A3: 1")});
   m.set("damping", std::vector<double>(f.admittance.damping.begin(), f.admittance.damping.end()),
         {"diag(D) over x, y, z, yaw (001 Sec. V-A3: 24.5, 24.5, 0, 1); each >= 0, D = K = 0: axis not in "
-         "admittance", "N s/m (yaw: N m s/rad)", {}, false});
+         "admittance", "N s/m (yaw: N m s/rad)", {}, false, tactile_common::paper("001 Sec. V-A3: 24.5, 24.5, 0, 1")});
   m.set("stiffness", std::vector<double>(f.admittance.stiffness.begin(), f.admittance.stiffness.end()),
-        {"diag(K) over x, y, z, yaw (001 Sec. V-A3: 24.5, 24.5, 0, 1); each >= 0", "N/m (yaw: N m/rad)", {}, false});
+        {"diag(K) over x, y, z, yaw (001 Sec. V-A3: 24.5, 24.5, 0, 1); each >= 0", "N/m (yaw: N m/rad)", {}, false,
+         tactile_common::paper("001 Sec. V-A3: 24.5, 24.5, 0, 1")});
   m.set("frame_id", d.frame_id,
         {"world frame of the setpoints and of the wrench taken (the odometry's frame, REP 105); not empty", "", {},
-         false});
+         false, tactile_common::choice("REP 105")});
   m.set("max_input_age_s", d.safety.max_input_age_s,
         {"older odometry or wrench: FAILSAFE_HOVER, the last setpoint held, until both are fresh again (choice)",
-         "s", positive(), false});
+         "s", positive(), false, tactile_common::choice("10 ticks of the 50 Hz whisker FSM")});
   m.set("failsafe_land_after_s", d.safety.failsafe_land_after_s,
-        {"FAILSAFE_HOVER this long -> FAILSAFE_LAND (choice: the whisker FSM's 2 s)", "s", at_least(0.0), false});
+        {"FAILSAFE_HOVER this long -> FAILSAFE_LAND (choice: the whisker FSM's 2 s)", "s", at_least(0.0), false,
+         tactile_common::choice("the whisker FSM's 2 s")});
   m.set("failsafe_land_speed", d.failsafe_land_speed,
         {"FAILSAFE_LAND: the height setpoint descends from the last setpoint at this speed, x, y and yaw held "
-         "(choice: the Crazyflie bridge's land_speed)", "m/s", positive(), false});
+         "(choice: the Crazyflie bridge's land_speed)", "m/s", positive(), false,
+         tactile_common::choice("the Crazyflie bridge's land_speed")});
   return m;
 }
 

@@ -174,11 +174,15 @@ TEST_F(RosParameters, LaunchValueWithoutSourcesIsAnOverride) {
 
 // --- NodeParameters: descriptors and the on-set callback (`ros2 param set`) ----------------
 
-/// The probe's spec: gain live in (0, 10], window read at start in [1, 100], frame_id undescribed.
+/// The probe's spec: gain live in (0, 10], window read at start in [1, 100], label without a
+/// source, frame_id undescribed.
 ParamMap described() {
   ParamMap d("probe", "defaults");
-  d.set("gain", 1.0, {"controller gain (our choice)", "1/s", tactile_common::ParamRange{0.0, 10.0, true, false}, true});
-  d.set("window", int64_t{5}, {"samples averaged", "samples", tactile_common::closed(1, 100), false});
+  d.set("gain", 1.0, {"controller gain", "1/s", tactile_common::ParamRange{0.0, 10.0, true, false}, true,
+                      tactile_common::choice()});
+  d.set("window", int64_t{5}, {"samples averaged", "samples", tactile_common::closed(1, 100), false,
+                               tactile_common::paper("000 Methods, n = 5")});
+  d.set("label", std::string("x"), {"a key not classified yet"});
   d.set("frame_id", std::string("base"));
   return d;
 }
@@ -205,7 +209,8 @@ TEST_F(RosParameters, DescriptorsCarryDescriptionUnitRangeAndReadOnly) {
   ProbeLogic logic;
   tactile_common::NodeParameters params(node, described(), [&](const ParamMap& m) { logic.apply(m); });
   const auto gain = node.describe_parameter("gain");
-  EXPECT_EQ(gain.description, "controller gain (our choice) [1/s]");
+  // The description, its unit and where the value comes from (paper / choice / tuned).
+  EXPECT_EQ(gain.description, "controller gain [1/s] [choice]");
   ASSERT_EQ(gain.floating_point_range.size(), 1u);
   EXPECT_EQ(gain.floating_point_range[0].from_value, 0.0);
   EXPECT_EQ(gain.floating_point_range[0].to_value, 10.0);
@@ -213,6 +218,8 @@ TEST_F(RosParameters, DescriptorsCarryDescriptionUnitRangeAndReadOnly) {
   EXPECT_EQ(gain.additional_constraints,
             "range (0, 10]; live: a new value is applied while running, after the node's validation");
   const auto window = node.describe_parameter("window");
+  EXPECT_EQ(window.description, "samples averaged [samples] [paper: 000 Methods, n = 5]");
+  EXPECT_EQ(node.describe_parameter("label").description, "a key not classified yet");
   ASSERT_EQ(window.integer_range.size(), 1u);
   EXPECT_EQ(window.integer_range[0].from_value, 1);
   EXPECT_EQ(window.integer_range[0].to_value, 100);

@@ -106,30 +106,31 @@ tactile_common::ParamMap VisualizationLogic::default_parameters() {
   const Params d;
   tactile_common::ParamMap m(kNodeName, "defaults");
   using tactile_common::at_least;
+  using tactile_common::choice;
   using tactile_common::closed;
   using tactile_common::positive;
   // None is live: the histories are sized at start (read-only in ROS).
   m.set("max_markers", d.max_markers,
         {"length of each contact history (whisker contacts per whisker, collisions): a ring buffer", "points",
-         closed(1, 100000), false});
+         closed(1, 100000), false, choice()});
   m.set("min_interval_s", d.min_interval_s,
         {"whisker contacts, wall estimate and localization markers at most once per this interval of input "
          "stamps (a marker that disappears is deleted at once); 0: every input",
-         "s", at_least(0.0), false});
-  m.set("contact_diameter", d.contact_diameter, {"whisker contact spheres", "m", positive(), false});
-  m.set("collision_diameter", d.collision_diameter, {"collision spheres", "m", positive(), false});
-  m.set("normal_length", d.normal_length, {"collision normal lines", "m", positive(), false});
-  m.set("wall_length", d.wall_length, {"drawn length of the estimated wall", "m", positive(), false});
-  m.set("line_width", d.line_width, {"width of line markers", "m", positive(), false});
-  m.set("point_size", d.point_size, {"GPIS training points and corners", "m", positive(), false});
-  m.set("target_diameter", d.target_diameter, {"exploration target sphere", "m", positive(), false});
+         "s", at_least(0.0), false, choice()});
+  m.set("contact_diameter", d.contact_diameter, {"whisker contact spheres", "m", positive(), false, choice()});
+  m.set("collision_diameter", d.collision_diameter, {"collision spheres", "m", positive(), false, choice()});
+  m.set("normal_length", d.normal_length, {"collision normal lines", "m", positive(), false, choice()});
+  m.set("wall_length", d.wall_length, {"drawn length of the estimated wall", "m", positive(), false, choice()});
+  m.set("line_width", d.line_width, {"width of line markers", "m", positive(), false, choice()});
+  m.set("point_size", d.point_size, {"GPIS training points and corners", "m", positive(), false, choice()});
+  m.set("target_diameter", d.target_diameter, {"exploration target sphere", "m", positive(), false, choice()});
   m.set("mean_range", d.mean_range,
         {"GPIS mean grid: cell = round(50 + 50 clamp(mean / mean_range, -1, 1)) (50: the surface)", "m",
-         positive(), false});
+         positive(), false, choice()});
   m.set("variance_max", d.variance_max,
         {"GPIS variance grid: cell = round(100 clamp(variance / variance_max, 0, 1)) (1: the IMQ prior "
          "variance, 000 eq. 33)",
-         "m^2", positive(), false});
+         "m^2", positive(), false, choice("the IMQ prior variance k(x, x), 000 eq. 33, 35")});
   return m;
 }
 

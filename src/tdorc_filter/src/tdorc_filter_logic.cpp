@@ -28,10 +28,11 @@ void TdorcFilterLogic::Params::validate() const {
 }
 
 ParamMap TdorcFilterLogic::default_parameters() {
-  using tactile_common::at_least;
+  using tactile_common::choice;
   using tactile_common::closed;
-  using tactile_common::ParamInfo;
+  using tactile_common::paper;
   using tactile_common::positive;
+  using tactile_common::tuned;
   const tdorc_filter::Params d;
   const Params n;
   ParamMap m(kNodeName, "defaults");
@@ -41,57 +42,73 @@ ParamMap TdorcFilterLogic::default_parameters() {
   // sample; everything else shapes the drift window and the filter state.
   m.set("mode", std::string(to_string(d.mode)),
         {"compensation: tdorc (re-fit the drift on free-flight samples, 000 eq. 8), tdoc (fit once), "
-         "bandpass (band-pass only)", "", {}, false});
+         "bandpass (band-pass only)", "", {}, false,
+         paper("000 eq. 4-11, Methods (TDORC: eq. 8 re-fit per free sample)")});
   m.set("window", static_cast<int64_t>(d.window),
-        {"n, samples in the least-squares drift window (000 Methods, n = 100)", "samples", closed(2, 100000), false});
+        {"n, samples in the least-squares drift window (000 Methods, n = 100)", "samples", closed(2, 100000), false,
+         paper("000 eq. 6-7, Methods: sliding window n = 100")});
   m.set("contact_threshold", d.contact_threshold,
         {"T_c, contact threshold on the band-passed S_p (000 Results: 20); >= 0 with absolute_threshold",
-         "Pa", {}, true});
+         "Pa", {}, true, paper("000 Results: a threshold of 20")});
   m.set("absolute_threshold", d.absolute_threshold,
-        {"false: contact when S_p > T_c (the paper's rule); true: when |S_p| > T_c", "", {}, false});
+        {"false: contact when S_p > T_c (the paper's rule); true: when |S_p| > T_c", "", {}, false,
+         paper("000 Methods: contact when S_p > T")});
   m.set("learn_delay", static_cast<int64_t>(d.learn_delay),
         {"a free sample enters the drift window only after this many further free samples "
-         "(workspace extension, README); 0: eq. 8 as written", "samples", closed(0, 10000), false});
+         "(workspace extension, README); 0: eq. 8 as written", "samples", closed(0, 10000), false,
+         choice("shipped 10 = 0.2 s keeps a contact's rising edge out of the window (README \"Sustained contact\")")});
   m.set("contact_hold", d.contact_hold,
-        {"hold a contact while any channel's S_c exceeds T_c (workspace extension, README)", "", {}, false});
+        {"hold a contact while any channel's S_c exceeds T_c (workspace extension, README)", "", {}, false,
+         choice("README \"Sustained contact\": the band-pass forgets a held push after ~7 s")});
   m.set("max_contact_hold", static_cast<int64_t>(d.max_contact_hold),
-        {"limit of a held contact (1000 = 20 s at 50 Hz)", "samples", closed(1, 100000000), false});
+        {"limit of a held contact (1000 = 20 s at 50 Hz)", "samples", closed(1, 100000000), false,
+         choice("a bound, so a frozen line never holds a contact for ever")});
   m.set("hold_release_fraction", d.hold_release_fraction,
         {"a held contact ends when no channel's S_c is above this fraction of its peak in the contact; 0: off",
-         "", ParamRange{0.0, 1.0, false, true}, false});
+         "", ParamRange{0.0, 1.0, false, true}, false,
+         tuned("README \"Sustained contact\": 8 wall-following scenarios, seeds 1-10, (0.1, 3) 39/40")});
   m.set("hold_release_samples", static_cast<int64_t>(d.hold_release_samples),
-        {"consecutive samples below the hold condition that end a held contact", "samples", closed(1, 10000), false});
+        {"consecutive samples below the hold condition that end a held contact", "samples", closed(1, 10000), false,
+         tuned("README \"Sustained contact\": 8 wall-following scenarios, seeds 1-10, (0.1, 3) 39/40")});
   m.set("hold_release_drop", d.hold_release_drop,
         {"a held contact ends when the whisker's S_c falls below this fraction of its recent level; 0: off",
-         "", ParamRange{0.0, 1.0, false, true}, false});
+         "", ParamRange{0.0, 1.0, false, true}, false,
+         tuned("README \"Sustained contact\": 6 baffle layouts, seeds 1-10, (0.25, 50) 58/60, seeds 11-20 59/60")});
   m.set("hold_level_samples", static_cast<int64_t>(d.hold_level_samples),
-        {"time constant of that recent level (25 = 0.5 s at 50 Hz)", "samples", closed(1, 100000), false});
+        {"time constant of that recent level (25 = 0.5 s at 50 Hz)", "samples", closed(1, 100000), false,
+         tuned("README \"Sustained contact\": 6 baffle layouts, seeds 1-10, (0.25, 50) 58/60")});
   m.set("max_drift_slope", d.max_drift_slope,
         {"largest drift slope a re-fit may have (workspace extension, README); 0: off", "Pa/sample",
-         ParamRange{0.0, std::numeric_limits<double>::infinity(), false, true}, false});
+         ParamRange{0.0, std::numeric_limits<double>::infinity(), false, true}, false,
+         tuned("README \"Sustained contact\": 2x the SITL free-flight drift; 6 layouts 59/60, seeds 11-30 117/120")});
   m.set("hold_quiet_rms", d.hold_quiet_rms,
         {"a held contact ends when the RMS of S_c's sample-to-sample changes is below this (issue 17); 0: off",
-         "Pa", ParamRange{0.0, std::numeric_limits<double>::infinity(), false, true}, false});
+         "Pa", ParamRange{0.0, std::numeric_limits<double>::infinity(), false, true}, false,
+         tuned("README \"Sustained contact\": off; 8 Pa ends phantom holds (mocap block 2000-2049) but loses sweeps")});
   m.set("hold_quiet_samples", static_cast<int64_t>(d.hold_quiet_samples),
-        {"samples over which that RMS is taken (25 = 0.5 s at 50 Hz)", "samples", closed(2, 10000), false});
+        {"samples over which that RMS is taken (25 = 0.5 s at 50 Hz)", "samples", closed(2, 10000), false,
+         choice("25 = 0.5 s at 50 Hz")});
   m.set("bandpass_b", std::vector<double>(d.bandpass_b.begin(), d.bandpass_b.end()),
-        {"band-pass numerator b0, b1, b2 (000 eq. 9-11: first-order Butterworth 0.05-1 Hz at 50 Hz)", "", {}, false});
+        {"band-pass numerator b0, b1, b2 (000 eq. 9-11: first-order Butterworth 0.05-1 Hz at 50 Hz)", "", {}, false,
+         paper("000 eq. 9-11")});
   m.set("bandpass_a", std::vector<double>(d.bandpass_a.begin(), d.bandpass_a.end()),
-        {"band-pass denominator a0 = 1, a1, a2 (000 eq. 9-11); poles inside the unit circle", "", {}, false});
+        {"band-pass denominator a0 = 1, a1, a2 (000 eq. 9-11); poles inside the unit circle", "", {}, false,
+         paper("000 eq. 9-11")});
   m.set("max_sample_gap_s", n.max_sample_gap_s,
         {"a gap up to this is bridged (drift extrapolated), a longer one resets the filter (README \"Time\")", "s",
-         positive(), false});
+         positive(), false, choice()});
   m.set("sample_period_s", n.clock.nominal_period_s,
-        {"nominal sample period of the whisker deck (000: 50 Hz)", "s", ParamRange{0.0, 10.0, true, false}, false});
+        {"nominal sample period of the whisker deck (000: 50 Hz)", "s", ParamRange{0.0, 10.0, true, false}, false,
+         paper("000 Methods: whisker deck sampled at 50 Hz")});
   m.set("stamp_tolerance_s", n.clock.tolerance_s,
         {"how far a stamp may disagree with sequence and receive time before it is repaired (README \"Time\")",
-         "s", ParamRange{0.0, 60.0, true, false}, false});
+         "s", ParamRange{0.0, 60.0, true, false}, false, choice()});
   m.set("max_late_samples", n.clock.max_late_samples,
         {"a sequence further back than this is a restart, not a late sample (README \"Time\")", "samples",
-         closed(1, 1000000), false});
+         closed(1, 1000000), false, choice()});
   m.set("clock_step_samples", n.clock.step_samples,
         {"consecutive samples with one stamp offset taken as a new time base (README \"Time\")", "samples",
-         closed(2, 1000000), false});
+         closed(2, 1000000), false, choice()});
   return m;
 }
 

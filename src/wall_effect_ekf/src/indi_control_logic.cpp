@@ -41,6 +41,8 @@ void IndiControlLogic::Params::validate() const {
 
 ParamMap IndiControlLogic::default_parameters() {
   using tactile_common::at_least;
+  using tactile_common::choice;
+  using tactile_common::paper;
   using tactile_common::ParamRange;
   using tactile_common::positive;
   const Params d;
@@ -52,47 +54,56 @@ ParamMap IndiControlLogic::default_parameters() {
   // set by another key is named in the description), and none live: gains, limits and the
   // vehicle model are read at start, so `ros2 param set` refuses every key (read-only).
   m.set("rate_hz", d.rate_hz,
-        {"inner-loop rate (choice: the simulated vehicle's IMU rate)", "Hz", positive(), false});
+        {"inner-loop rate (choice: the simulated vehicle's IMU rate)", "Hz", positive(), false,
+         choice("the simulated vehicle's IMU rate")});
   m.set("outer_rate_hz", d.outer_rate_hz,
-        {"outer-loop rate (004: 100 Hz ground station); <= rate_hz", "Hz", positive(), false});
+        {"outer-loop rate (004: 100 Hz ground station); <= rate_hz", "Hz", positive(), false,
+         paper("004 Methods: 100 Hz on the ground station")});
   m.set("use_wall_in_allocation", d.use_wall_in_allocation,
-        {"control effectiveness B with the wall estimate when a wall is detected (004 eq. 36)", "", {}, false});
+        {"control effectiveness B with the wall estimate when a wall is detected (004 eq. 36)", "", {}, false,
+         paper("004 eq. 36: wall effect integrated into B")});
   m.set("max_input_age_s", d.max_input_age_s,
         {"odometry / IMU older than this: no thrust command is sent, the vehicle keeps its last one (choice)", "s",
-         positive(), false});
-  m.set("k_p", v3(i.k_p), {"K_p of 004 eq. 26 per axis, each finite and >= 0 (choice)", "1/s^2", {}, false});
-  m.set("k_d", v3(i.k_d), {"K_d of 004 eq. 26 per axis, each finite and >= 0 (choice)", "1/s", {}, false});
+         positive(), false, choice()});
+  m.set("k_p", v3(i.k_p), {"K_p of 004 eq. 26 per axis, each finite and >= 0 (choice)", "1/s^2", {}, false,
+        choice("004 gives no gains")});
+  m.set("k_d", v3(i.k_d), {"K_d of 004 eq. 26 per axis, each finite and >= 0 (choice)", "1/s", {}, false,
+        choice("004 gives no gains")});
   m.set("k_i", v3(i.k_i), {"K_i of the position integral per axis, each finite and >= 0 (choice)", "1/s^3", {},
-                           false});
+                           false, choice("004 gives no gains")});
   m.set("integral_limit", i.integral_limit,
-        {"|K_i int e| limit per axis (choice)", "m/s^2", at_least(0.0), false});
+        {"|K_i int e| limit per axis (choice)", "m/s^2", at_least(0.0), false, choice()});
   m.set("integral_zone", i.integral_zone,
         {"the integral runs only while |p_d - p| is below this on that axis (anti-windup; choice)", "m",
-         positive(), false});
+         positive(), false, choice()});
   m.set("max_accel_xy", i.max_accel_xy, {"horizontal limit of the target acceleration of 004 eq. 26", "m/s^2",
-                                         positive(), false});
+                                         positive(), false, choice()});
   m.set("attitude_time_constant", i.attitude_time_constant,
         {"tau of 004 eq. 32-33 (choice: 0.05-0.1 s is stable on the simulated vehicle); 0: the outer-loop period "
-         "(004's Delta t)", "s", at_least(0.0), false});
-  m.set("max_rate_xy", i.max_rate_xy, {"|w_d,x|, |w_d,y| limit", "rad/s", positive(), false});
+         "(004's Delta t)", "s", at_least(0.0), false,
+         choice("004's Delta t oscillates with a first-order rate loop (README)")});
+  m.set("max_rate_xy", i.max_rate_xy, {"|w_d,x|, |w_d,y| limit", "rad/s", positive(), false, choice()});
   m.set("max_tilt", i.max_tilt, {"no rate setpoint tilts further than this", "rad", ParamRange{0.0, 1.4, true, true},
-                                 false});
+                                 false, choice()});
   m.set("kappa_d", v3(i.kappa_d), {"kappa_d of 004 eq. 35 per axis, each finite and >= 0 (choice)", "1/s", {},
-                                   false});
-  m.set("kappa_p_yaw", i.kappa_p_yaw, {"kappa_p of 004 eq. 35 (choice)", "1/s^2", at_least(0.0), false});
-  m.set("max_yaw_accel", i.max_yaw_accel, {"|w_dot_d,z| limit", "rad/s^2", positive(), false});
+                                   false, choice("004 gives no gains")});
+  m.set("kappa_p_yaw", i.kappa_p_yaw, {"kappa_p of 004 eq. 35 (choice)", "1/s^2", at_least(0.0), false,
+        choice("004 gives no gains")});
+  m.set("max_yaw_accel", i.max_yaw_accel, {"|w_dot_d,z| limit", "rad/s^2", positive(), false, choice()});
   m.set("vehicle.mass", i.vehicle.mass,
         {"m (004: 280 g); the four rotors must carry it: mass g < 4 vehicle.max_rotor_thrust", "kg", positive(),
-         false});
+         false, paper("004: 280 g")});
   m.set("vehicle.inertia_diag", v3(i.vehicle.inertia_diag),
-        {"J diagonal, each finite and > 0 (choice: the simulated vehicle's estimate)", "kg m^2", {}, false});
+        {"J diagonal, each finite and > 0 (choice: the simulated vehicle's estimate)", "kg m^2", {}, false,
+         choice("the simulated vehicle's estimate")});
   m.set("vehicle.rotor_offset", i.vehicle.rotor_offset,
         {"L of the rotor positions (+-L, +-L, 0) (004: d* = 17 cm with a 5 cm gap gives 0.082 m)", "m",
-         positive(), false});
+         positive(), false, paper("004: d* = 17 cm with a 5 cm duct gap, d_bar = 2.1 at 0.2 m")});
   m.set("vehicle.torque_coefficient", i.vehicle.torque_coefficient,
-        {"c_tau of 004 eq. 7 (choice)", "m", at_least(0.0), false});
+        {"c_tau of 004 eq. 7 (choice)", "m", at_least(0.0), false, choice("004 eq. 7 gives no value")});
   m.set("vehicle.max_rotor_thrust", i.vehicle.max_rotor_thrust,
-        {"per rotor (004: over 440 g of thrust in total); > vehicle.mass g / 4", "N", positive(), false});
+        {"per rotor (004: over 440 g of thrust in total); > vehicle.mass g / 4", "N", positive(), false,
+         paper("004: over 440 g of thrust in total")});
   return m;
 }
 

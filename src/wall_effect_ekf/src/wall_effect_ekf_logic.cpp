@@ -15,10 +15,13 @@ using tactile_common::ParamMap;
 namespace {
 
 using tactile_common::at_least;
+using tactile_common::choice;
 using tactile_common::closed;
+using tactile_common::paper;
 using tactile_common::ParamInfo;
 using tactile_common::ParamRange;
 using tactile_common::positive;
+using tactile_common::tuned;
 
 /// A double parameter of the node: its key, where it lives in Params and its description
 /// (from the Params comments; config/wall_effect_ekf.yaml gives the same sources), unit and
@@ -37,95 +40,109 @@ std::vector<DoubleKey> doubles(WallEffectEkfLogic::Params& p) {
   VehicleParams& v = e.vehicle;
   const ParamRange below_one{0.0, 1.0, true, true};  // b1, b2: (0, 1) (004 eq. 4)
   return {
-      {"rate_hz", &p.rate_hz, {"filter rate; ekf.dt = 1 / rate_hz (004: 100 Hz)", "Hz", positive(), false}},
+      {"rate_hz", &p.rate_hz, {"filter rate; ekf.dt = 1 / rate_hz (004: 100 Hz)", "Hz", positive(), false,
+       paper("004 Methods: estimator sample rate 100 Hz")}},
       {"detection_range", &p.detection_range,
        {"wall_detected: y_hat below this and sqrt(P_yy) below detection_sigma (choice, a little beyond 004's "
         "d_dagger = 20 cm, within which its estimates are reliable)",
-        "m", positive(), false}},
+        "m", positive(), false, choice("a little beyond 004's d_dagger = 20 cm")}},
       {"detection_sigma", &p.detection_sigma,
-       {"wall_detected: sqrt(P_yy) below this and y_hat below detection_range (choice)", "m", positive(), false}},
+       {"wall_detected: sqrt(P_yy) below this and y_hat below detection_range (choice)", "m", positive(), false,
+        choice()}},
       {"max_input_age_s", &p.max_input_age_s,
        {"thrust command / IMU older than this: no filter step, nothing published (choice)", "s", positive(),
-        false}},
+        false, choice()}},
       {"vehicle.mass", &v.mass,
        {"m (004: 280 g); the four rotors must carry it: vehicle.mass g < 4 vehicle.max_rotor_thrust", "kg",
-        positive(), false}},
+        positive(), false, paper("004: 280 g")}},
       {"vehicle.rotor_offset", &v.rotor_offset,
        {"L of the rotor positions (+-L, +-L, 0) (004: d* = 17 cm with a 5 cm duct gap, and d_bar = 2.1 at "
         "0.2 m, give 0.082 m)",
-        "m", positive(), false}},
-      {"vehicle.torque_coefficient", &v.torque_coefficient, {"c_tau of 004 eq. 7 (choice)", "m", at_least(0.0), false}},
+        "m", positive(), false, paper("004: d* = 17 cm with a 5 cm duct gap, d_bar = 2.1 at 0.2 m")}},
+      {"vehicle.torque_coefficient", &v.torque_coefficient, {"c_tau of 004 eq. 7 (choice)", "m", at_least(0.0), false,
+       choice("004 eq. 7 gives no value")}},
       {"vehicle.linear_drag", &v.linear_drag,
        {"linear drag k subtracted from the wall-frame thrust in 004 eq. 6 (choice; 004 has none: 0 is the "
         "paper's model)",
-        "N s/m", at_least(0.0), false}},
+        "N s/m", at_least(0.0), false, paper("004 eq. 6 has no drag: 0")}},
       {"vehicle.max_rotor_thrust", &v.max_rotor_thrust,
-       {"per rotor (004: over 440 g of thrust in total); > vehicle.mass g / 4", "N", positive(), false}},
+       {"per rotor (004: over 440 g of thrust in total); > vehicle.mass g / 4", "N", positive(), false,
+        paper("004: over 440 g of thrust in total")}},
       {"proximity.rotor_radius", &v.proximity.rotor_radius,
-       {"R of d_bar = y_i / R (004: AVAN 3024, R = 38 mm)", "m", positive(), false}},
+       {"R of d_bar = y_i / R (004: AVAN 3024, R = 38 mm)", "m", positive(), false,
+        paper("004: AVAN 3024, R = 38 mm")}},
       {"proximity.a1", &v.proximity.a1,
-       {"a1 of gamma_h = a1 b1^d_bar (004 eq. 4 least-squares fit: 0.21)", "", positive(), false}},
-      {"proximity.b1", &v.proximity.b1, {"b1 of gamma_h = a1 b1^d_bar (004 eq. 4: 0.34)", "", below_one, false}},
+       {"a1 of gamma_h = a1 b1^d_bar (004 eq. 4 least-squares fit: 0.21)", "", positive(), false,
+        paper("004 eq. 4: 0.21")}},
+      {"proximity.b1", &v.proximity.b1, {"b1 of gamma_h = a1 b1^d_bar (004 eq. 4: 0.34)", "", below_one, false,
+       paper("004 eq. 4: 0.34")}},
       {"proximity.a2", &v.proximity.a2,
-       {"a2 of gamma_v = 1 + a2 b2^d_bar (004 eq. 4 least-squares fit: 0.06)", "", positive(), false}},
-      {"proximity.b2", &v.proximity.b2, {"b2 of gamma_v = 1 + a2 b2^d_bar (004 eq. 4: 0.54)", "", below_one, false}},
+       {"a2 of gamma_v = 1 + a2 b2^d_bar (004 eq. 4 least-squares fit: 0.06)", "", positive(), false,
+        paper("004 eq. 4: 0.06")}},
+      {"proximity.b2", &v.proximity.b2, {"b2 of gamma_v = 1 + a2 b2^d_bar (004 eq. 4: 0.54)", "", below_one, false,
+       paper("004 eq. 4: 0.54")}},
       {"ekf.q_distance", &e.q_distance,
        {"process noise: random walk of y, the wall geometry changing (choice, 004 gives none: tuned for a "
         "consistent NEES on ducted_estimation)",
-        "m/sqrt(s)", at_least(0.0), false}},
+        "m/sqrt(s)", at_least(0.0), false, tuned("README Results: NEES 6.5 of 11 on ducted_estimation, seeds 1-4")}},
       {"ekf.q_height", &e.q_height,
        {"process noise: random walk of z, the floor changing (choice, NEES-tuned)", "m/sqrt(s)", at_least(0.0),
-        false}},
+        false, tuned("README Results: NEES 6.5 of 11 on ducted_estimation, seeds 1-4")}},
       {"ekf.q_velocity", &e.q_velocity,
-       {"process noise of the velocity: unmodelled force (choice)", "m/s^2/sqrt(Hz)", at_least(0.0), false}},
+       {"process noise of the velocity: unmodelled force (choice)", "m/s^2/sqrt(Hz)", at_least(0.0), false, choice()}},
       {"ekf.q_attitude", &e.q_attitude,
-       {"process noise of the attitude (choice, NEES-tuned)", "rad/sqrt(s)", at_least(0.0), false}},
+       {"process noise of the attitude (choice, NEES-tuned)", "rad/sqrt(s)", at_least(0.0), false,
+        tuned("README Results: NEES 6.5 of 11 on ducted_estimation, seeds 1-4")}},
       {"ekf.q_rate", &e.q_rate,
        {"process noise of the body rates: unmodelled torque, motor lag (choice)", "rad/s^2/sqrt(Hz)", at_least(0.0),
-        false}},
+        false, choice()}},
       {"ekf.r_accel", &e.r_accel,
        {"accelerometer noise std, body x and y (004 eq. 23; choice for a BMI088, NEES-tuned)", "m/s^2", positive(),
-        false}},
+        false, tuned("BMI088; README Results: NEES 6.5 of 11 on ducted_estimation, seeds 1-4")}},
       {"ekf.r_accel_z", &e.r_accel_z,
        {"accelerometer noise std, body z: larger, it also absorbs the thrust-magnitude error (motor lag, thrust "
         "constant) that would leak into y through gamma_v (choice)",
-        "m/s^2", positive(), false}},
+        "m/s^2", positive(), false, choice()}},
       {"motor_time_constant", &p.motor_time_constant,
        {"first-order lag of the commanded thrusts before the prediction, the motors' response; 0: none (choice: "
         "the simulated motors' 20 ms)",
-        "s", at_least(0.0), false}},
-      {"ekf.r_gyro", &e.r_gyro, {"gyro noise std (choice, NEES-tuned)", "rad/s", positive(), false}},
+        "s", at_least(0.0), false, choice("the simulated motors' 20 ms")}},
+      {"ekf.r_gyro", &e.r_gyro, {"gyro noise std (choice, NEES-tuned)", "rad/s", positive(), false,
+       tuned("README Results: NEES 6.5 of 11 on ducted_estimation, seeds 1-4")}},
       {"ekf.r_flow", &e.r_flow,
-       {"optical-flow noise std (004 eq. 9-10; choice for a PMW3901, NEES-tuned)", "rad/s", positive(), false}},
-      {"ekf.r_tof", &e.r_tof, {"ToF noise std (choice: a VL53L1x at 1 m, 2 mm + 0.5 %)", "m", positive(), false}},
+       {"optical-flow noise std (004 eq. 9-10; choice for a PMW3901, NEES-tuned)", "rad/s", positive(), false,
+        tuned("PMW3901; README Results: NEES 6.5 of 11 on ducted_estimation, seeds 1-4")}},
+      {"ekf.r_tof", &e.r_tof, {"ToF noise std (choice: a VL53L1x at 1 m, 2 mm + 0.5 %)", "m", positive(), false,
+       choice("VL53L1x at 1 m: 2 mm + 0.5 %")}},
       {"ekf.gate_chi2", &e.gate_chi2,
        {"chi-square gate of the flow (2 dof) and ToF (1 dof) innovations: beyond it the sample is dropped and "
         "counted (choice)",
-        "", positive(), false}},
+        "", positive(), false, choice()}},
       {"ekf.y_min", &e.y_min,
-       {"lower bound of y_hat, the centre-to-wall distance (choice); < ekf.y_max", "m", positive(), false}},
+       {"lower bound of y_hat, the centre-to-wall distance (choice); < ekf.y_max", "m", positive(), false, choice()}},
       {"ekf.y_max", &e.y_max,
        {"upper bound of y_hat and its start, \"no wall nearby\": beyond it the wall effect is below the sensor "
         "noise (choice); > ekf.y_min",
-        "m", positive(), false}},
-      {"ekf.sigma_y_init", &e.sigma_y_init, {"initial std of y (choice)", "m", positive(), false}},
+        "m", positive(), false, choice()}},
+      {"ekf.sigma_y_init", &e.sigma_y_init, {"initial std of y (choice)", "m", positive(), false, choice()}},
       {"ekf.sigma_yaw_init", &e.sigma_yaw_init,
-       {"initial std of the yaw, i.e. of the wall direction (choice)", "rad", positive(), false}},
-      {"ekf.sigma_y_max", &e.sigma_y_max, {"cap of sqrt(P_yy) (choice)", "m", positive(), false}},
-      {"ekf.sigma_attitude_max", &e.sigma_attitude_max, {"cap of the attitude std (choice)", "rad", positive(), false}},
+       {"initial std of the yaw, i.e. of the wall direction (choice)", "rad", positive(), false, choice()}},
+      {"ekf.sigma_y_max", &e.sigma_y_max, {"cap of sqrt(P_yy) (choice)", "m", positive(), false, choice()}},
+      {"ekf.sigma_attitude_max", &e.sigma_attitude_max, {"cap of the attitude std (choice)", "rad", positive(), false,
+       choice()}},
       {"ekf.min_height", &e.min_height,
-       {"flow and ToF are used above this height (choice)", "m", at_least(0.0), false}},
+       {"flow and ToF are used above this height (choice)", "m", at_least(0.0), false, choice()}},
       {"ekf.reacquire_accel", &e.reacquire_accel,
        {"re-acquisition: a low-passed horizontal specific force beyond this that the estimate does not explain "
         "re-initialises the wall direction and distance (choice)",
-        "m/s^2", positive(), false}},
+        "m/s^2", positive(), false, choice()}},
       {"ekf.reacquire_angle", &e.reacquire_angle,
        {"re-acquisition: the mismatch between that force's direction and the estimated wall direction that "
         "triggers it (choice)",
-        "rad", positive(), false}},
+        "rad", positive(), false, choice()}},
       {"ekf.reacquire_time_constant", &e.reacquire_time_constant,
        {"re-acquisition: low-pass time constant of the horizontal specific force (choice)", "s", positive(),
-        false}},
+        false, choice()}},
   };
 }
 
@@ -152,10 +169,11 @@ ParamMap WallEffectEkfLogic::default_parameters() {
   for (const auto& k : doubles(d)) m.set(k.key, *k.field, k.info);
   const Vec3& J = d.ekf.vehicle.inertia_diag;
   m.set("vehicle.inertia_diag", std::vector<double>{J.x(), J.y(), J.z()},
-        {"J diagonal, each finite and > 0 (choice: the simulated vehicle's estimate)", "kg m^2", {}, false});
+        {"J diagonal, each finite and > 0 (choice: the simulated vehicle's estimate)", "kg m^2", {}, false,
+         choice("the simulated vehicle's estimate")});
   m.set("min_flow_quality", static_cast<int64_t>(d.min_flow_quality),
         {"flow samples below this quality (the OpticalFlow quality byte) are dropped (choice)", "",
-         closed(0, 255), false});
+         closed(0, 255), false, choice()});
   return m;
 }
 

@@ -87,6 +87,8 @@ TrajectorySetpoint trajectory_setpoint(const TrajectoryParams& p, double t) {
 
 tactile_common::ParamMap WallTrajectoryLogic::default_parameters() {
   using tactile_common::at_least;
+  using tactile_common::choice;
+  using tactile_common::paper;
   using tactile_common::positive;
   const TrajectoryParams d;
   const double inf = std::numeric_limits<double>::infinity();
@@ -99,40 +101,49 @@ tactile_common::ParamMap WallTrajectoryLogic::default_parameters() {
   // every key (read-only). x, angular_frequency and yaw_deg are not range-checked, only
   // finite: (-inf, inf).
   m.set("mode", d.mode,
-        {"setpoint script: estimation_flight (004 Fig. 4a), hold or sweep (004 Fig. 5)", "", {}, false});
-  m.set("x", d.x, {"position along the wall; finite", "m", any_finite, false});
-  m.set("start_y", d.start_y, {"take-off distance from the wall (004: ~40 cm)", "m", positive(), false});
-  m.set("height", d.height, {"flight height (004: 1.0 m)", "m", positive(), false});
-  m.set("wall_distance", d.wall_distance, {"y_d from t_start (004: 18 cm)", "m", positive(), false});
+        {"setpoint script: estimation_flight (004 Fig. 4a), hold or sweep (004 Fig. 5)", "", {}, false,
+         paper("004 Fig. 4a (estimation_flight), Fig. 5 (sweep)")});
+  m.set("x", d.x, {"position along the wall; finite", "m", any_finite, false, choice()});
+  m.set("start_y", d.start_y, {"take-off distance from the wall (004: ~40 cm)", "m", positive(), false,
+        paper("004 Fig. 4a: ~40 cm")});
+  m.set("height", d.height, {"flight height (004: 1.0 m)", "m", positive(), false, paper("004 Fig. 4a: 1.0 m")});
+  m.set("wall_distance", d.wall_distance, {"y_d from t_start (004: 18 cm)", "m", positive(), false,
+        paper("004 Fig. 4a: 18 cm")});
   m.set("amplitude", d.amplitude,
-        {"amplitude of the sinusoid in y_d (004: 0.03 m); < wall_distance", "m", at_least(0.0), false});
+        {"amplitude of the sinusoid in y_d (004: 0.03 m); < wall_distance", "m", at_least(0.0), false,
+         paper("004 Fig. 4a: 0.18 - 0.03 sin(t - 25)")});
   m.set("angular_frequency", d.angular_frequency,
-        {"w of the sinusoid sin(w (t - t0)) (004: sin(t - 25)); finite", "rad/s", any_finite, false});
+        {"w of the sinusoid sin(w (t - t0)) (004: sin(t - 25)); finite", "rad/s", any_finite, false,
+         paper("004 Fig. 4a: sin(t - 25)")});
   m.set("t_start", d.t_start,
         {"take-off until then, then y_d = wall_distance (004: 5 s); t_start <= t_sine, t_start <= t_yaw1", "s",
-         at_least(0.0), false});
+         at_least(0.0), false, paper("004 Fig. 4a: 5 s")});
   m.set("t_sine", d.t_sine, {"the sinusoid starts (004: 25 s); t_start <= t_sine <= t_sine_end", "s",
-                             at_least(0.0), false});
+                             at_least(0.0), false, paper("004 Fig. 4a: 25 s")});
   // validate() takes an infinite t_sine_end or t_yaw2 (never: the sinusoid does not end, there
   // is no second ramp); their ranges keep it: [0, inf].
   const tactile_common::ParamRange up_to_inf{0.0, inf, false, false};
   m.set("t_sine_end", d.t_sine_end,
-        {"the sinusoid ends (004: 41 s); >= t_sine; inf: never", "s", up_to_inf, false});
+        {"the sinusoid ends (004: 41 s); >= t_sine; inf: never", "s", up_to_inf, false, paper("004 Fig. 4a: 41 s")});
   m.set("t_yaw1", d.t_yaw1, {"the first -90 deg yaw ramp starts (004: 41 s); t_start <= t_yaw1 <= t_yaw2", "s",
-                             at_least(0.0), false});
+                             at_least(0.0), false, paper("004 Fig. 4a: 41 s")});
   m.set("t_yaw2", d.t_yaw2,
-        {"the second -90 deg yaw ramp starts (004: 66 s); >= t_yaw1; inf: no second ramp", "s", up_to_inf, false});
+        {"the second -90 deg yaw ramp starts (004: 66 s); >= t_yaw1; inf: no second ramp", "s", up_to_inf, false,
+         paper("004 Fig. 4a: 66 s")});
   m.set("yaw_ramp_s", d.yaw_ramp_s,
         {"duration of each 90 deg yaw ramp (choice: 004's \"90 deg in 30 s\" would overlap the ramps)", "s",
-         positive(), false});
+         positive(), false, choice()});
   m.set("yaw_deg", d.yaw_deg,
-        {"psi_d of hold and sweep, and before the ramps (004: 0); finite", "deg", any_finite, false});
+        {"psi_d of hold and sweep, and before the ramps (004: 0); finite", "deg", any_finite, false,
+         paper("004 Fig. 4a: 0")});
   m.set("sweep_distances", d.sweep_distances,
-        {"y_d of the sweep segments, not empty, each finite and > 0 (004 Fig. 5: 13 to 23 cm)", "m", {}, false});
-  m.set("sweep_hold_s", d.sweep_hold_s, {"hold of each sweep segment (004: 60 s)", "s", positive(), false});
+        {"y_d of the sweep segments, not empty, each finite and > 0 (004 Fig. 5: 13 to 23 cm)", "m", {}, false,
+         paper("004 Fig. 5: 13 to 23 cm")});
+  m.set("sweep_hold_s", d.sweep_hold_s, {"hold of each sweep segment (004: 60 s)", "s", positive(), false,
+        paper("004 Fig. 5: 60 s per setpoint")});
   m.set("frame_prefix", d.frame_prefix,
         {"the setpoints are in <prefix>odom (REP 105): \"\" or a relative name ending in '/' (cf1/)", "", {},
-         false});
+         false, choice("REP 105")});
   return m;
 }
 

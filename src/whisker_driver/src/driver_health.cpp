@@ -39,19 +39,23 @@ void DriverHealth::Params::validate() const {
 ParamMap DriverHealth::default_parameters() {
   const Params d;
   ParamMap m(kNodeName, "defaults");
+  using tactile_common::choice;
   using tactile_common::ParamRange;
   using tactile_common::positive;
   // The health thresholds' spec (README): read at start like the driver's keys.
   m.set("diagnostics_period_s", d.diagnostics_period_s,
-        {"/diagnostics period (diagnostic_updater's default 1 s)", "s", positive(), false});
+        {"/diagnostics period (diagnostic_updater's default 1 s)", "s", positive(), false,
+         choice("diagnostic_updater's default")});
   m.set("stall_warn_s", d.stall_warn_s,
-        {"stream WARN when no sample came for this long (5 frames at 50 Hz, 000 Methods); below stall_error_s", "s", positive(), false});
+        {"stream WARN when no sample came for this long (5 frames at 50 Hz, 000 Methods); below stall_error_s", "s", positive(), false,
+         choice("5 frames at 50 Hz (000 Methods)")});
   m.set("stall_error_s", d.stall_error_s,
-        {"stream ERROR after this long (the serial source's reopen interval)", "s", positive(), false});
+        {"stream ERROR after this long (the serial source's reopen interval)", "s", positive(), false, choice()});
   m.set("frame_error_warn", d.frame_error_warn,
-        {"WARN above this fraction of dropped lines in a period (choice); below frame_error_error", "", positive(), false});
+        {"WARN above this fraction of dropped lines in a period (choice); below frame_error_error", "", positive(), false,
+         choice()});
   m.set("frame_error_error", d.frame_error_error,
-        {"ERROR above this fraction (choice)", "", ParamRange{0.0, 1.0, true, false}, false});
+        {"ERROR above this fraction (choice)", "", ParamRange{0.0, 1.0, true, false}, false, choice()});
   return m;
 }
 

@@ -54,41 +54,48 @@ tactile_common::ParamMap WhiskerDriverLogic::default_parameters() {
   const Params d;
   tactile_common::ParamMap m(kNodeName, "defaults");
   using tactile_common::at_least;
+  using tactile_common::choice;
   using tactile_common::closed;
+  using tactile_common::paper;
   using tactile_common::ParamRange;
   // The driver's spec (README): value, description, unit, the range validate() accepts
   // alone. None is live: the source (device, protocol, bag, synthetic whisker) is opened at
   // configure; `ros2 param set` refuses every key (read-only).
   m.set("source", d.source,
-        {"where samples come from: serial (the whisker deck), sim (a synthetic whisker) or bag", "", {}, false});
+        {"where samples come from: serial (the whisker deck), sim (a synthetic whisker) or bag", "", {}, false,
+         choice()});
   m.set("device", d.device,
-        {"serial device of the whisker deck (source serial)", "", {}, false});
+        {"serial device of the whisker deck (source serial)", "", {}, false, choice()});
   m.set("baud", d.baud,
-        {"UART baud rate of the whisker deck (000 hardware)", "baud", closed(1, std::numeric_limits<int>::max()), false});
+        {"UART baud rate of the whisker deck (000 hardware)", "baud", closed(1, std::numeric_limits<int>::max()), false,
+         choice("115200 8N1, as the deck firmware; 000 gives UART, not the rate")});
   m.set("protocol", d.protocol,
-        {"line format: text (whisker 1) or csv (whisker 2)", "", {}, false});
+        {"line format: text (whisker 1) or csv (whisker 2)", "", {}, false,
+         choice("the deck firmware's line formats")});
   m.set("whisker_id", d.whisker_id,
-        {"WhiskerPressure whisker_id: 0 left, 1 right", "", closed(0, 1), false});
+        {"WhiskerPressure whisker_id: 0 left, 1 right", "", closed(0, 1), false, choice()});
   m.set("frame_id", d.frame_id,
-        {"header frame of the pressures", "", {}, false});
+        {"header frame of the pressures", "", {}, false, choice()});
   m.set("rate_hz", d.rate_hz,
-        {"sample rate (000: 50 Hz)", "Hz", ParamRange{0.0, 1000.0, true, false}, false});
+        {"sample rate (000: 50 Hz)", "Hz", ParamRange{0.0, 1000.0, true, false}, false,
+         paper("000 Methods: whisker deck on UART at 50 Hz")});
   m.set("sim_seed", d.sim_seed,
-        {"seed of the synthetic whisker (source sim)", "", {}, false});
+        {"seed of the synthetic whisker (source sim)", "", {}, false, choice()});
   m.set("sim_takeoff_s", d.sim_takeoff_s,
-        {"synthetic take-off time", "s", at_least(0.0), false});
+        {"synthetic take-off time", "s", at_least(0.0), false, choice()});
   m.set("sim_hover_s", d.sim_hover_s,
-        {"synthetic hover duration", "s", at_least(0.0), false});
+        {"synthetic hover duration", "s", at_least(0.0), false, choice()});
   m.set("sim_contact_start_s", d.sim_contact_start_s,
-        {"synthetic contacts: start times (>= 0)", "s", {}, false});
+        {"synthetic contacts: start times (>= 0)", "s", {}, false, choice()});
   m.set("sim_contact_duration_s", d.sim_contact_duration_s,
-        {"synthetic contacts: durations (>= 0), one per start", "s", {}, false});
+        {"synthetic contacts: durations (>= 0), one per start", "s", {}, false, choice()});
   m.set("sim_contact_peak_nm", d.sim_contact_peak_nm,
-        {"synthetic contacts: peak base moments (>= 0), one per start", "N m", {}, false});
+        {"synthetic contacts: peak base moments (>= 0), one per start", "N m", {}, false,
+         choice("2e-4 N m gives ~200 Pa (tactile_sim docs/whisker_signal_model.md)")});
   m.set("bag_path", d.bag_path,
-        {"bag to replay (source bag)", "", {}, false});
+        {"bag to replay (source bag)", "", {}, false, choice()});
   m.set("bag_topic", d.bag_topic,
-        {"WhiskerPressure topic in that bag", "", {}, false});
+        {"WhiskerPressure topic in that bag", "", {}, false, choice()});
   return m;
 }
 

@@ -60,7 +60,9 @@ void WhiskerLocalizationLogic::Params::validate() const {
 
 ParamMap WhiskerLocalizationLogic::default_parameters() {
   using tactile_common::at_least;
+  using tactile_common::choice;
   using tactile_common::closed;
+  using tactile_common::paper;
   using tactile_common::ParamRange;
   using tactile_common::positive;
   constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -74,73 +76,81 @@ ParamMap WhiskerLocalizationLogic::default_parameters() {
   // "Parameters"), unit, the range params_from()/validate() take for the key alone, and none
   // live: the beam model, the map and the pose set are built at start, so `ros2 param set`
   // refuses every key (read-only).
-  m.set("beam.length", d.beam.length, {"L, whisker length (002 Sec. V-A: 75 mm)", "m", positive(), false});
+  m.set("beam.length", d.beam.length, {"L, whisker length (002 Sec. V-A: 75 mm)", "m", positive(), false,
+        paper("002 Sec. V-A: L = 75 mm")});
   m.set("beam.youngs_modulus", d.beam.youngs_modulus,
-        {"E, Young's modulus (002 Sec. V-A: nitinol, 52 GPa)", "Pa", positive(), false});
+        {"E, Young's modulus (002 Sec. V-A: nitinol, 52 GPa)", "Pa", positive(), false,
+         paper("002 Sec. V-A: nitinol, E = 52 GPa")});
   m.set("beam.moment_of_inertia", d.beam.moment_of_inertia,
-        {"I at the base (002 Sec. V-A: pi d^4 / 64, d = 0.58 mm)", "m^4", positive(), false});
+        {"I at the base (002 Sec. V-A: pi d^4 / 64, d = 0.58 mm)", "m^4", positive(), false,
+         paper("002 Sec. V-A: pi d^4 / 64, d = 0.58 mm")});
   m.set("beam.taper_ratio", d.beam.taper_ratio,
         {"tip-to-base diameter ratio of a linear taper; 1: uniform wire", "", ParamRange{0.0, 1.0, true, false},
-         false});
+         false, paper("002 Sec. V-A: a uniform wire")});
   m.set("beam.n_segments", static_cast<int64_t>(d.beam.n_segments),
         {"RK4 steps over the loaded part of the beam (choice; 16 already within 1 um)", "", closed(4, 100000),
-         false});
+         false, choice()});
   m.set("contact_tolerance", d.localizer.contact_tolerance,
         {"a projected contact point must lie this close to the map boundary (choice: best of 0.2-0.5 mm in the "
-         "Table II SITL)", "m", positive(), false});
+         "Table II SITL)", "m", positive(), false, choice("best of 0.2-0.5 mm in the Table II SITL")});
   m.set("match_angle", d.localizer.match_angle,
-        {"boundary-slope tolerance of the set intersection (choice: 3 deg)", "rad", positive(), false});
+        {"boundary-slope tolerance of the set intersection (choice: 3 deg)", "rad", positive(), false, choice()});
   m.set("epsilon", d.localizer.epsilon,
         {"possibilistic bound as a fraction of the observation (002 eq. 24: 5 %)", "",
-         ParamRange{0.0, 1.0, false, true}, false});
+         ParamRange{0.0, 1.0, false, true}, false, paper("002 eq. 24: 5 %")});
   m.set("epsilon_samples", static_cast<int64_t>(d.localizer.epsilon_samples),
         {"samples across the possibilistic bounds of the observation and of phi_E (choice)", "",
-         closed(1, 1000), false});
+         closed(1, 1000), false, choice()});
   m.set("possibilistic", d.localizer.possibilistic,
         {"false: deterministic preimages (002 Sec. VII-B); true: possibilistic (002 Sec. VII-C, eq. 23-25)", "",
-         {}, false});
+         {}, false, paper("002 Sec. VII-B deterministic; Sec. VII-C, eq. 23-25")});
   m.set("slope_samples", static_cast<int64_t>(d.localizer.slope_samples),
         {"contact points that estimate the boundary slope phi_E (002 Sec. VII-A/D: 2 to 5)", "", closed(2, 50),
-         false});
+         false, paper("002 Sec. VII-A/D: 2 to 5")});
   m.set("min_clearance", d.localizer.min_clearance,
-        {"the base must lie at least this far on the free side of the boundary (choice)", "m", from_zero, false});
+        {"the base must lie at least this far on the free side of the boundary (choice)", "m", from_zero, false,
+         choice()});
   m.set("heading_samples", static_cast<int64_t>(d.localizer.heading_samples),
-        {"heading hypotheses per aligned pose when a set is (re)built (choice)", "", closed(1, 101), false});
+        {"heading hypotheses per aligned pose when a set is (re)built (choice)", "", closed(1, 101), false, choice()});
   m.set("heading_spread", d.localizer.heading_spread,
         {"... over +- this about the contact point (choice: about 3 sigma of phi_E at 0.5 % noise)", "rad",
-         ParamRange{0.0, 0.5, false, true}, false});
+         ParamRange{0.0, 0.5, false, true}, false, choice()});
   m.set("prior_radius", d.localizer.prior_radius,
         {"only poses within this of the prior start the set (002 Sec. VII-D; choice: 30 mm); <= 0: the whole "
-         "map; finite", "m", {}, false});
+         "map; finite", "m", {}, false, choice()});
   m.set("mode_radius", d.localizer.mode_radius,
-        {"neighbourhood of the mode used as the best estimate (choice: 2 mm)", "m", above_zero, false});
+        {"neighbourhood of the mode used as the best estimate (choice: 2 mm)", "m", above_zero, false, choice()});
   m.set("refine_passes", static_cast<int64_t>(d.localizer.refine_passes),
-        {"shape refinement passes, force along the estimated boundary normal (choice)", "", closed(0, 10), false});
+        {"shape refinement passes, force along the estimated boundary normal (choice)", "", closed(0, 10), false,
+         choice()});
   m.set("map_file", d.map_file,
         {"known map: YAML polylines: [[[x, y], ...], ...], free space on the left; \"\": the Table II concave "
-         "corner (fillet_radius, leg)", "", {}, false});
+         "corner (fillet_radius, leg)", "", {}, false, paper("002 Table II: concave corner by default")});
   m.set("map_spacing", d.map_spacing,
-        {"boundary discretisation (002 Sec. VII-B: 1 mm)", "m", positive(), false});
+        {"boundary discretisation (002 Sec. VII-B: 1 mm)", "m", positive(), false, paper("002 Sec. VII-B: 1 mm")});
   m.set("fillet_radius", d.fillet_radius,
-        {"default map: radius of the concave arc (choice)", "m", above_zero, false});
-  m.set("leg", d.leg, {"default map: length of the straight floor and wall (choice)", "m", above_zero, false});
-  m.set("use_prior", d.use_prior, {"start from a known pose prior_x/y/yaw (002 Sec. VII-D)", "", {}, false});
-  m.set("prior_x", d.prior_x, {"known start x (use_prior); finite", "m", any_finite, false});
-  m.set("prior_y", d.prior_y, {"known start y (use_prior); finite", "m", any_finite, false});
-  m.set("prior_yaw", d.prior_yaw, {"known start heading (use_prior); finite", "rad", any_finite, false});
+        {"default map: radius of the concave arc (choice)", "m", above_zero, false, choice()});
+  m.set("leg", d.leg, {"default map: length of the straight floor and wall (choice)", "m", above_zero, false,
+        choice()});
+  m.set("use_prior", d.use_prior, {"start from a known pose prior_x/y/yaw (002 Sec. VII-D)", "", {}, false,
+        paper("002 Sec. VII-D: sweeps start at a known location")});
+  m.set("prior_x", d.prior_x, {"known start x (use_prior); finite", "m", any_finite, false, choice()});
+  m.set("prior_y", d.prior_y, {"known start y (use_prior); finite", "m", any_finite, false, choice()});
+  m.set("prior_yaw", d.prior_yaw, {"known start heading (use_prior); finite", "rad", any_finite, false, choice()});
   m.set("input", d.input,
         {"what torque.z carries: moment (M(0) [N m]) or flux (Hall flux density B [mT], 002 Sec. V-B)", "", {},
-         false});
+         false, paper("002 Sec. V-B: Hall flux density or M(0)")});
   m.set("hall_coefficients", d.hall_coefficients,
         {"M(0) = c0 + c1 B + c2 B^2 + ... [N m, B in mT] (002 Sec. V-B, HallCalibration); 1 to 10 finite "
-         "values", "", {}, false});
+         "values", "", {}, false, choice("identity until fitted with HallCalibration (002 Sec. V-B)")});
   m.set("contact_threshold", d.contact_threshold,
-        {"|M(0)| below this is no contact (choice: 5x a 0.2 uN m noise floor)", "N m", from_zero, false});
+        {"|M(0)| below this is no contact (choice: 5x a 0.2 uN m noise floor)", "N m", from_zero, false, choice()});
   m.set("max_odom_age_s", d.max_odom_age_s,
-        {"odometry older than this at a moment sample is stale (choice)", "s", above_zero, false});
+        {"odometry older than this at a moment sample is stale (choice)", "s", above_zero, false, choice()});
   m.set("min_step", d.min_step,
         {"a contact sample is localized only after this much base travel since the previous one (002 Sec. "
-         "VII-D: steps below 1 mm; choice); 0: every sample", "m", at_least(0.0), false});
+         "VII-D: steps below 1 mm; choice); 0: every sample", "m", at_least(0.0), false,
+         choice("002 Sec. VII-D steps below 1 mm; 0: every sample")});
   return m;
 }
 

@@ -49,7 +49,9 @@ void XplorerForceEstLogic::Params::validate() const {
 
 ParamMap XplorerForceEstLogic::default_parameters() {
   using tactile_common::at_least;
+  using tactile_common::choice;
   using tactile_common::closed;
+  using tactile_common::paper;
   using tactile_common::positive;
   const xplorer_force_est::Params d;
   const Params n;
@@ -58,69 +60,83 @@ ParamMap XplorerForceEstLogic::default_parameters() {
   // "Parameters"), unit, the range params_from()/validate() take for the key alone (a bound
   // set by another key is named in the description), and none live: the filters and
   // observers are built at start, so `ros2 param set` refuses every key (read-only).
-  m.set("arm_rate_hz", d.arm_rate_hz, {"arm IMU rate (001 Sec. V-A2: BNO055 at 50 Hz)", "Hz", positive(), false});
+  m.set("arm_rate_hz", d.arm_rate_hz, {"arm IMU rate (001 Sec. V-A2: BNO055 at 50 Hz)", "Hz", positive(), false,
+        paper("001 Sec. V-A2: BNO055 at 50 Hz")});
   m.set("imu_rate_hz", d.imu_rate_hz,
-        {"flight-controller IMU rate (choice: the SITL IMU rate)", "Hz", positive(), false});
+        {"flight-controller IMU rate (choice: the SITL IMU rate)", "Hz", positive(), false,
+         choice("the SITL IMU rate")});
   m.set("arm_median_window", static_cast<int64_t>(d.arm_median_window),
         {"median filter of the arm angles, odd (001 Sec. V-A2 median low-pass; choice: removes single-sample "
-         "spikes)", "samples", closed(1, MedianFilter::kMaxWindow), false});
+         "spikes)", "samples", closed(1, MedianFilter::kMaxWindow), false,
+         choice("001 Sec. V-A2 names the filter, not its window")});
   m.set("arm_lowpass_hz", d.arm_lowpass_hz,
         {"first-order low-pass cut-off of the arm angles (001 Sec. V-A2; choice); < arm_rate_hz / 2", "Hz",
-         positive(), false});
-  m.set("arm_bandstop", d.arm_bandstop, {"band-stop the arm angles at arm_bandstop_hz (001 Sec. V-A2)", "", {}, false});
+         positive(), false, choice("001 Sec. V-A2 names the filter, not its band")});
+  m.set("arm_bandstop", d.arm_bandstop, {"band-stop the arm angles at arm_bandstop_hz (001 Sec. V-A2)", "", {}, false,
+        paper("001 Sec. V-A2: band-stop filter of the arm angles")});
   m.set("arm_bandstop_hz", d.arm_bandstop_hz,
         {"band-stop centre: the arm's damped natural frequency sqrt(k/J - (b/2J)^2) / 2pi (choice); "
-         "< arm_rate_hz / 2", "Hz", positive(), false});
-  m.set("arm_bandstop_q", d.arm_bandstop_q, {"band-stop quality factor (choice)", "", positive(), false});
+         "< arm_rate_hz / 2", "Hz", positive(), false,
+         choice("the arm's damped natural frequency from 001 eq. 2 J, b, k")});
+  m.set("arm_bandstop_q", d.arm_bandstop_q, {"band-stop quality factor (choice)", "", positive(), false, choice()});
   m.set("arm_hold_samples", static_cast<int64_t>(d.arm_hold_samples),
         {"a missing/NaN arm sample holds the last angle this many samples, then the arm is dropped (choice)",
-         "samples", closed(0, std::numeric_limits<int>::max()), false});
-  m.set("arm_inertia", d.arm_inertia, {"J_zz of an arm (001 eq. 2, Sec. V-A2)", "kg m^2", positive(), false});
-  m.set("arm_damping", d.arm_damping, {"b of an arm (001 eq. 2, Sec. V-A2)", "N m s/rad", at_least(0.0), false});
-  m.set("arm_stiffness", d.arm_stiffness, {"k of an arm (001 eq. 2, Sec. V-A2)", "N m/rad", positive(), false});
+         "samples", closed(0, std::numeric_limits<int>::max()), false, choice()});
+  m.set("arm_inertia", d.arm_inertia, {"J_zz of an arm (001 eq. 2, Sec. V-A2)", "kg m^2", positive(), false,
+        paper("001 eq. 2, Sec. V-A2 system identification")});
+  m.set("arm_damping", d.arm_damping, {"b of an arm (001 eq. 2, Sec. V-A2)", "N m s/rad", at_least(0.0), false,
+        paper("001 eq. 2, Sec. V-A2 system identification")});
+  m.set("arm_stiffness", d.arm_stiffness, {"k of an arm (001 eq. 2, Sec. V-A2)", "N m/rad", positive(), false,
+        paper("001 eq. 2, Sec. V-A2 system identification")});
   m.set("lever_arm", d.lever_arm,
         {"l of 001 eq. 2, not given by 001: 0.15 m x cos^2(45 deg) (calibration choice, README)", "m", positive(),
-         false});
+         false, choice("calibration: 0.15 m x cos^2(45 deg), 001 gives no l (README)")});
   m.set("observer_gain", d.observer_gain,
-        {"K_I of 001 eq. 3 (choice); < arm_rate_hz (stable discrete observer)", "1/s", positive(), false});
+        {"K_I of 001 eq. 3 (choice); < arm_rate_hz (stable discrete observer)", "1/s", positive(), false, choice()});
   m.set("arm_directions", std::vector<double>(d.arm_directions.begin(), d.arm_directions.end()),
         {"undeflected arm directions in the body frame, arms counter-clockwise from the front-right one "
-         "(ArmImu.arm_id); 4 finite values", "rad", {}, false});
-  m.set("mass", d.mass, {"vehicle mass (001 Sec. V-A1)", "kg", positive(), false});
+         "(ArmImu.arm_id); 4 finite values", "rad", {}, false, choice("the X frame's arms at +-45 and +-135 deg")});
+  m.set("mass", d.mass, {"vehicle mass (001 Sec. V-A1)", "kg", positive(), false, paper("001 Sec. V-A1")});
   m.set("thrust_scale", d.thrust_scale,
-        {"thrust = normalised command x this (001 Sec. V-A3: 32.5 N)", "N", positive(), false});
-  m.set("gravity", d.gravity, {"gravitational acceleration of 001 eq. 5", "m/s^2", positive(), false});
+        {"thrust = normalised command x this (001 Sec. V-A3: 32.5 N)", "N", positive(), false,
+         paper("001 Sec. V-A3: 32.5 N")});
+  m.set("gravity", d.gravity, {"gravitational acceleration of 001 eq. 5", "m/s^2", positive(), false,
+        paper("001 eq. 5")});
   m.set("com_median_window", static_cast<int64_t>(d.com_median_window),
         {"median filter of the CoM estimate at imu_rate_hz, odd (choice)", "samples",
-         closed(1, MedianFilter::kMaxWindow), false});
+         closed(1, MedianFilter::kMaxWindow), false, choice()});
   m.set("com_lowpass_hz", d.com_lowpass_hz,
         {"low-pass cut-off of the CoM estimate (choice: 001 Fig. 4 converges slower than the arms); "
-         "< imu_rate_hz / 2", "Hz", positive(), false});
+         "< imu_rate_hz / 2", "Hz", positive(), false, choice("slower than the arm estimate, as 001 Fig. 4")});
   m.set("contact_threshold", d.contact_threshold,
         {"theta_th on sum |theta_i| of 001 eq. 6 (choice; a 1 N face push gives ~0.08)", "rad", positive(),
-         false});
+         false, choice("a 1 N face push gives ~0.08 rad")});
   m.set("xi_f", d.xi_f,
-        {"xi_f of 001 eq. 7 (choice): [s/N] in rate mode, [1/N] in magnitude mode", "", at_least(0.0), false});
+        {"xi_f of 001 eq. 7 (choice): [s/N] in rate mode, [1/N] in magnitude mode", "", at_least(0.0), false,
+         choice("001 eq. 7 gives no value")});
   m.set("kappa_mode", std::string(to_string(d.kappa_mode)),
-        {"kappa of 001 eq. 7 from the rate or the magnitude of the force: rate or magnitude", "", {}, false});
+        {"kappa of 001 eq. 7 from the rate or the magnitude of the force: rate or magnitude", "", {}, false,
+         paper("001 Sec. III-A3 text (rate); eq. 7 as printed (magnitude)")});
   m.set("yaw_inertia", d.yaw_inertia,
         {"I_zz of the yaw-torque observer (001 Sec. III-A3; estimate, the SITL vehicle's)", "kg m^2", positive(),
-         false});
+         false, choice("the SITL vehicle's I_zz")});
   m.set("yaw_observer_gain", d.yaw_observer_gain,
-        {"K_o of the yaw-torque observer (choice); < imu_rate_hz", "1/s", positive(), false});
+        {"K_o of the yaw-torque observer (choice); < imu_rate_hz", "1/s", positive(), false, choice()});
   m.set("torque_coefficient", d.torque_coefficient,
-        {"rotor drag torque per thrust (choice, 5\" propeller)", "m", at_least(0.0), false});
+        {"rotor drag torque per thrust (choice, 5\" propeller)", "m", at_least(0.0), false,
+         choice("5-inch propeller")});
   m.set("spin_sign", std::vector<double>(d.spin_sign.begin(), d.spin_sign.end()),
-        {"yaw torque sign per rotor: 4 values, each +1 or -1", "", {}, false});
+        {"yaw torque sign per rotor: 4 values, each +1 or -1", "", {}, false,
+         choice("the SITL vehicle's rotor directions")});
   m.set("world_frame", n.world_frame,
-        {"frame of the IMU attitude that rotates the force (REP 105); not empty", "", {}, false});
-  m.set("body_frame", n.body_frame, {"frame of the body wrench; not empty", "", {}, false});
+        {"frame of the IMU attitude that rotates the force (REP 105); not empty", "", {}, false, choice("REP 105")});
+  m.set("body_frame", n.body_frame, {"frame of the body wrench; not empty", "", {}, false, choice("REP 105")});
   m.set("max_sample_gap_s", n.max_sample_gap_s,
         {"a larger stamp gap on the arm or IMU stream resets the filters; an arm set this long after the last "
-         "IMU sample publishes no wrench (choice: 25 arm samples)", "s", positive(), false});
+         "IMU sample publishes no wrench (choice: 25 arm samples)", "s", positive(), false, choice("25 arm samples")});
   m.set("max_arm_angle", n.max_arm_angle,
         {"|arm_angle| above this is not a deflection (arms stop at 30 deg, 001 Sec. II): missing (choice)", "rad",
-         positive(), false});
+         positive(), false, choice("beyond the 30 deg end stops of 001 Sec. II")});
   return m;
 }
 

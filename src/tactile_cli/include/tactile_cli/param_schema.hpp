@@ -49,13 +49,13 @@ const NodeSchema& node_schema(const std::string& name);
 std::string yaml_value(const tactile_common::ParamValue& value);
 
 /// The node's parameters as a markdown table (key, type, default, range, unit,
-/// live/read-only, description), one row per key in `ros2 param list` order, after a
+/// live/read-only, source as "paper: 000 eq. 8" / "choice" / "tuned: <evidence>", description), one row per key in `ros2 param list` order, after a
 /// line naming the node, the count and how the table is made.
 std::string schema_markdown(const NodeSchema& node);
 
 /// The node's parameters as a ROS 2 parameter file: a /**/<node> section with every key
-/// at its default, each after a comment with its description, unit, range and whether it
-/// is live. `load_node_parameters` reads it back to the defaults.
+/// at its default, each after a comment with its description, unit, range, whether it
+/// is live, and "source: paper|choice|tuned" with "evidence: ..." (when it has any). `load_node_parameters` reads it back to the defaults.
 std::string schema_yaml(const NodeSchema& node);
 
 /// A shipped value (config/<file>) that is not the key's default_parameters() default.

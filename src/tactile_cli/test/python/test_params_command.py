@@ -41,7 +41,9 @@ def test_markdown_is_one_table_row_per_parameter():
     assert r.returncode == 0, r.stderr
     rows = [line for line in r.stdout.splitlines() if line.startswith("| `")]
     assert len(rows) == nodes["tdorc_filter"]
-    assert "| key | type | default | range | unit | live | description |" in r.stdout
+    assert "| key | type | default | range | unit | live | source | description |" in r.stdout
+    # where the value comes from: "paper: <paper and equation>", "choice" or "tuned: <measurement>"
+    assert "| read-only | paper: 000 eq. 6-7, Methods: sliding window n = 100 | n, samples" in r.stdout
 
 
 def test_yaml_is_a_parameter_file_of_every_key_at_its_default():
@@ -56,6 +58,7 @@ def test_yaml_is_a_parameter_file_of_every_key_at_its_default():
     assert tdorc["contact_threshold"] == 20.0 and isinstance(tdorc["contact_threshold"], float)
     assert tdorc["mode"] == "tdorc"
     assert "    # n, samples in the least-squares drift window" in r.stdout
+    assert "    # source: paper\n    # evidence: 000 eq. 6-7, Methods: sliding window n = 100\n    window: 100\n" in r.stdout
 
 
 def test_every_nodes_yaml_reads_back_in_the_declared_types():

@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <string>
 #include <type_traits>
+#include <utility>
 #include <variant>
 #include <vector>
 
@@ -51,9 +52,51 @@ inline ParamRange closed(double lo, double hi) { return {lo, hi, false, false}; 
 inline ParamRange positive() { return {0.0, std::numeric_limits<double>::infinity(), true, true}; }
 inline ParamRange at_least(double lo) { return {lo, std::numeric_limits<double>::infinity(), false, true}; }
 
+/// Where a parameter's value comes from (issue 33 item 4):
+///  - kPaper: one of the four papers gives the value or the rule it implements (000 Ye et al.
+///    whiskers, 001 XPLORER, 002 whisker localization, 004 ducted-rotor wall effect);
+///  - kTuned: chosen by measurement on the SITL families or bags (docs/tuning/*.md rounds, a
+///    README's measurement, the issue 17 rules);
+///  - kChoice: an engineering choice without such a measurement (units, topics, frames, rates,
+///    safety margins, file paths, modes);
+///  - kUnset: not classified yet (tactile_cli's ParamSources test lists the nodes allowed to
+///    have such keys; it is empty once every node is done).
+enum class ParamSource { kUnset, kPaper, kChoice, kTuned };
+
+/// "paper", "choice", "tuned" ("unset" for kUnset).
+const char* to_string(ParamSource s);
+
+/// The source of a value and its evidence: for paper, the paper and equation / section /
+/// table ("000 eq. 8, Methods n = 100"); for tuned, the measurement ("docs/tuning/tactile_fsm.md
+/// Round 4"); for choice, a short why ("" when the description says it).
+struct ParamOrigin {
+  ParamSource kind = ParamSource::kUnset;
+  std::string evidence;
+  /// "paper: 000 eq. 8", "choice", "tuned: docs/tuning/x.md Round 2"; "" when unset.
+  std::string text() const;
+};
+
+/// The last member of a ParamInfo, one short argument per m.set(...):
+///   m.set("window", 100, {"n, samples in the drift window", "samples", closed(2, 100000), false,
+///                         paper("000 Methods, n = 100")});
+inline ParamOrigin paper(std::string evidence) { return {ParamSource::kPaper, std::move(evidence)}; }
+inline ParamOrigin choice(std::string why = "") { return {ParamSource::kChoice, std::move(why)}; }
+inline ParamOrigin tuned(std::string evidence) { return {ParamSource::kTuned, std::move(evidence)}; }
+
 /// What a key means, for people and ROS tools (`ros2 param describe`): the one place
 /// per node is its logic's default_parameters(), next to the default value.
 struct ParamInfo {
+  ParamInfo() = default;
+  /// {description, unit, range, live, source}: the form every default_parameters() writes.
+  /// A constructor rather than an aggregate so that a call without its source (a node not
+  /// converted yet) compiles without -Wmissing-field-initializers.
+  ParamInfo(std::string what, std::string unit_text = "", std::optional<ParamRange> accepted = std::nullopt,
+            bool applied_live = false, ParamOrigin origin = {})
+      : description(std::move(what)),
+        unit(std::move(unit_text)),
+        range(std::move(accepted)),
+        live(applied_live),
+        source(std::move(origin)) {}
   /// What the key does (from the Params struct comment), with its source (paper, README).
   std::string description;
   /// SI unit or count ("Pa", "s", "m", "mm^2", "samples", "V"); "" when dimensionless.
@@ -63,6 +106,8 @@ struct ParamInfo {
   /// true: the node applies a new value while running (`ros2 param set`) through
   /// params_from() + validate(); false: read at start only (read-only in ROS).
   bool live = false;
+  /// paper / choice / tuned, with the evidence.
+  ParamOrigin source;
 };
 
 /// The parameters of one node. Every key a node reads is declared in its

@@ -206,8 +206,8 @@ std::string parameter_source(const NodeT& node) {
          (files.empty() ? std::string(" (launch or -p overrides)") : " (" + files + ")");
 }
 
-/// The descriptor `ros2 param describe` shows for `key`: its ParamInfo's description and
-/// unit, its range as a FloatingPointRange / IntegerRange (closed hull; an open end and the
+/// The descriptor `ros2 param describe` shows for `key`: its ParamInfo's description, unit
+/// and source ("[paper: 000 eq. 8]"), its range as a FloatingPointRange / IntegerRange (closed hull; an open end and the
 /// live/read-only rule in additional_constraints), read_only unless `live`.
 /// dynamic_typing stays on: a YAML integer for a double key is widened, and a value of a
 /// wrong type is refused with a message that names the key (declare_parameters, and the
@@ -220,7 +220,9 @@ inline rcl_interfaces::msg::ParameterDescriptor parameter_descriptor(const std::
   d.read_only = !live;
   std::string constraints;
   if (info != nullptr) {
-    d.description = info->description + (info->unit.empty() ? std::string() : " [" + info->unit + "]");
+    // "... [Pa] [paper: 000 Results: 20]": the unit, then where the value comes from.
+    d.description = info->description + (info->unit.empty() ? std::string() : " [" + info->unit + "]") +
+                    (info->source.kind == ParamSource::kUnset ? std::string() : " [" + info->source.text() + "]");
     if (info->range) {
       const ParamRange& r = *info->range;
       if (std::holds_alternative<double>(value)) {

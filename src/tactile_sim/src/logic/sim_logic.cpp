@@ -816,13 +816,13 @@ tactile_common::ParamMap SimLogic::default_parameters() {
   tactile_common::ParamMap p(kNodeName, "defaults");
   // Read at start (the world is built from them): read-only under ROS.
   p.set("scenario", std::string(""),
-        {"scenario file to simulate (config/scenarios/*.yaml); required", "", {}, false});
+        {"scenario file to simulate (config/scenarios/*.yaml); required", "", {}, false, tactile_common::choice()});
   p.set("seed", int64_t{-1},
         {"random seed of the run; -1: the scenario's own seed", "",
-         tactile_common::at_least(-1), false});
+         tactile_common::at_least(-1), false, tactile_common::choice()});
   p.set("frame_prefix", std::string(""),
         {"prefix of every frame but map, for several vehicles (cf1/: cf1/odom, cf1/base_link, cf1/ground_truth/odom)",
-         "", {}, false});
+         "", {}, false, tactile_common::choice()});
   return p;
 }
 
@@ -831,13 +831,14 @@ tactile_common::ParamMap SimLogic::component_parameters() {
   // 1000x: a bound of ours (the wall timer's period is the physics step divided by it).
   p.set("real_time_factor", 1.0,
         {"simulated seconds per wall-clock second (1: real time; a container that cannot keep up advances "
-         "simulated time slower)", "", tactile_common::ParamRange{0.0, 1000.0, true, false}, false});
+         "simulated time slower)", "", tactile_common::ParamRange{0.0, 1000.0, true, false}, false,
+         tactile_common::choice()});
   p.set("wait_for_publisher", std::string(""),
         {"the clock starts once this topic (relative: in the node's namespace) has a publisher; \"\": at once", "",
-         {}, false});
+         {}, false, tactile_common::choice()});
   p.set("wait_for_subscribers", std::string(""),
         {"comma-separated topics of the simulator's; it holds t = 0 until each has a subscriber in another "
-         "process; \"\": none", "", {}, false});
+         "process; \"\": none", "", {}, false, tactile_common::choice()});
   return p;
 }
 
