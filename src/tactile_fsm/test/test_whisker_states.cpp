@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "tactile_fsm/whisker_wall_follower.hpp"
+#include "wall_follower_input.hpp"
 
 using tactile_fsm::FsmState;
 using tactile_fsm::SafetyReason;
@@ -54,20 +55,7 @@ WhiskerSample free_whisker() {
   return s;
 }
 
-// Fresh input at time t, drone at (x, y, yaw), no contact, target (2, 0).
-WallFollowerInput input(double t, double x = 0.0, double y = 0.0, double yaw = 0.0) {
-  WallFollowerInput in;
-  in.t = t;
-  in.depth_stamp = t;
-  in.odom_stamp = t;
-  in.x = x;
-  in.y = y;
-  in.yaw = yaw;
-  in.has_target = true;
-  in.target_x = 2.0;
-  in.target_y = 0.0;
-  return in;
-}
+using tactile_fsm::test::input;
 
 WhiskerReading contact_reading(double depth) {
   WhiskerReading r;

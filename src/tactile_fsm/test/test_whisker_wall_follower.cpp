@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "tactile_fsm/whisker_wall_follower.hpp"
+#include "wall_follower_input.hpp"
 
 using tactile_fsm::FsmState;
 using tactile_fsm::Setpoint;
@@ -53,20 +54,7 @@ WallFollowerParams rules_off() {
 constexpr double kDt = 0.02;  // 50 Hz
 constexpr double kDeg = M_PI / 180.0;
 
-// Fresh input at time t, drone at (x, y, yaw), no contact, target (2, 0).
-WallFollowerInput input(double t, double x = 0.0, double y = 0.0, double yaw = 0.0) {
-  WallFollowerInput in;
-  in.t = t;
-  in.depth_stamp = t;
-  in.odom_stamp = t;
-  in.x = x;
-  in.y = y;
-  in.yaw = yaw;
-  in.has_target = true;
-  in.target_x = 2.0;
-  in.target_y = 0.0;
-  return in;
-}
+using tactile_fsm::test::input;
 
 void set_depths(WallFollowerInput& in, double dl, double dr) {
   in.left_valid = in.right_valid = true;
