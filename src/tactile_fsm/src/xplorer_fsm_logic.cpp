@@ -121,7 +121,8 @@ ParamMap XplorerFsmLogic::default_parameters() {
         {"the face pose is taken this long before the yaw-rate trigger (choice)", "s", at_least(0.0), false,
          tactile_common::tuned("docs/xplorer_fsm.md \"Rules beyond 001\": corner pivot, the paper's box 4/5 -> 5/5 loops")});
   m.set("contact_force", f.contact_force,
-        {"|delta_f_des|, desired contact force in Tactile-traversal (001: 1.25 N)", "N", positive(), false,
+        {"|delta_f_des|, desired contact force in Tactile-traversal (choice: 001 gives no value; its delta_0 is "
+         "limited to 1.5 N)", "N", positive(), false,
          tactile_common::choice("001 takes delta_map slightly above f_des, gives no value")});
   m.set("reshape_gain", f.reshape_gain,
         {"r* along C_n reshaped by the force error, r*_n += gain (delta_f - delta_f_des).n dt (001 Sec. III-B1; "

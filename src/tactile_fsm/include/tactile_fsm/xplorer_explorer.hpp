@@ -147,7 +147,7 @@ struct XplorerParams {
   double turn_backoff = 0.2;         ///< [m] (choice)
   double turn_backoff_tau = 1.5;     ///< [s] (choice)
   double corner_lookback = 0.6;      ///< the face pose is taken this long before the yaw-rate trigger [s] (choice)
-  double contact_force = 1.25;       ///< |delta_f_des| in traversal [N] (001)
+  double contact_force = 1.25;       ///< |delta_f_des| in traversal [N] (choice: 001 gives no value)
   /// r* along C_n is "reshaped according to the external wrench" (001 Sec.
   /// III-B1): r*_n += reshape_gain (delta_f - delta_f_des).n dt, so the force
   /// error integrates to zero whatever the contact stiffness [m/(N s)] (choice).
