@@ -459,8 +459,8 @@ GpisExplorerLogic::Outputs GpisExplorerLogic::on_timer(int64_t now_ns) {
   // The wall follower's staleness rule and threshold (one definition).
   const double age = params_.sequencer.wall.max_input_age_s;
   in_.t = tactile_common::to_seconds(now_ns);
-  in_.pose_valid = tactile_fsm::input_fresh(in_.t, odom_t_, age);
-  in_.depth_valid = tactile_fsm::input_fresh(in_.t, depth_t_, age);
+  in_.pose_valid = tactile_fsm::input_is_fresh(in_.t, odom_t_, age);
+  in_.depth_valid = tactile_fsm::input_is_fresh(in_.t, depth_t_, age);
   if (!in_.pose_valid || !in_.depth_valid) ++stats_.stale_ticks;
   const SequencerOutput so = seq_.step(in_);
   auto& sp = out.setpoint;

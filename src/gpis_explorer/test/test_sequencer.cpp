@@ -632,7 +632,7 @@ TEST(Sequencer, AWallLineEndsTheSlideIntoACornersOtherWall) {
 
 // ---------------------------------------------------------------------------
 // Stale inputs (issue 33). The node logic calls depth / odometry fresh with
-// tactile_fsm::input_fresh and wall.max_input_age_s; here the sequencer gets
+// tactile_fsm::input_is_fresh and wall.max_input_age_s; here the sequencer gets
 // depth_valid / pose_valid false directly (what the node logic passes once
 // the last message is older than that). The wall follower goes to
 // FAILSAFE_HOVER in that case; the sequencer kept flying its probe blind and

@@ -454,36 +454,37 @@ ParamMap load_node_parameters_from_string(const std::string& yaml, const std::st
   return load_sections(yaml, source, node_name, defaults, true);
 }
 
-ParamMap load_node_parameters(const std::string& path, const std::string& node_name,
-                              const ParamMap& defaults) {
-  // Missing, a directory (which std::ifstream opens and reads as empty) or
-  // another non-file: an error naming the path and the reason, never the defaults.
+namespace {
+
+// The text of a parameter file or profile: missing, a directory (which std::ifstream opens
+// and reads as empty) or another non-file is an error naming the path, `what` it is and the
+// reason, never an empty text.
+std::string read_parameter_text(const std::string& path, const std::string& what) {
   std::error_code ec;
   const auto status = std::filesystem::status(path, ec);
-  if (!std::filesystem::exists(status)) {
-    throw ParamError(path + ": parameter file of node " + fully_qualified(node_name) + " missing (no such file)");
-  }
+  if (!std::filesystem::exists(status)) throw ParamError(path + ": " + what + " missing (no such file)");
   if (!std::filesystem::is_regular_file(status)) {
-    throw ParamError(path + ": parameter file of node " + fully_qualified(node_name) + " is not a file (" +
+    throw ParamError(path + ": " + what + " is not a file (" +
                      (std::filesystem::is_directory(status) ? "a directory" : "not a regular file") + ")");
   }
   std::ifstream in(path);
-  if (!in) throw ParamError(path + ": cannot open parameter file");
+  if (!in) throw ParamError(path + ": cannot open " + what);
   std::stringstream ss;
   ss << in.rdbuf();
-  return load_node_parameters_from_string(ss.str(), path, node_name, defaults);
+  return ss.str();
+}
+
+}  // namespace
+
+ParamMap load_node_parameters(const std::string& path, const std::string& node_name,
+                              const ParamMap& defaults) {
+  const std::string text = read_parameter_text(path, "parameter file of node " + fully_qualified(node_name));
+  return load_node_parameters_from_string(text, path, node_name, defaults);
 }
 
 ParamMap load_profile_overlay(const std::string& path, const std::string& node_name, const ParamMap& params) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(std::filesystem::status(path, ec))) {
-    throw ParamError(path + ": parameter profile missing or not a regular file");
-  }
-  std::ifstream in(path);
-  if (!in) throw ParamError(path + ": cannot open parameter profile");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const ParamMap merged = load_sections(ss.str(), path, node_name, params, false);
+  const std::string text = read_parameter_text(path, "parameter profile");
+  const ParamMap merged = load_sections(text, path, node_name, params, false);
   const std::string fqn = fully_qualified(node_name);
   ParamMap overlay(fqn.substr(fqn.rfind('/') + 1), path);
   // The keys the profile changes (a key it sets to the value the node has already changes nothing).

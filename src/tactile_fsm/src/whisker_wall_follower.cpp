@@ -637,9 +637,9 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
 
   // 1. Input gates: each Whisker's reading (validity, phantom gate, low-pass,
   // pressed cap), then the wall angle from the two.
-  const bool depth_fresh = input_fresh(t, in.depth_stamp, p_.max_input_age_s);
+  const bool depth_fresh = input_is_fresh(t, in.depth_stamp, p_.max_input_age_s);
   const bool pose_ok =
-      input_fresh(t, in.odom_stamp, p_.max_input_age_s) && std::isfinite(in.x) && std::isfinite(in.y);
+      input_is_fresh(t, in.odom_stamp, p_.max_input_age_s) && std::isfinite(in.x) && std::isfinite(in.y);
   const WhiskerReading& wl = left_.update(sample_of(in, depth_fresh, true), t, dt, pose_ok, in.x, in.y);
   const WhiskerReading& wr = right_.update(sample_of(in, depth_fresh, false), t, dt, pose_ok, in.x, in.y);
   // Wall angle, 000 eq. 21: theta = atan((d_l - d_r) / s), filtered as the

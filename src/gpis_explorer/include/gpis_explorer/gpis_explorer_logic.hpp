@@ -47,7 +47,7 @@ class GpisExplorerLogic {
     /// Input staleness: sequencer.wall.max_input_age_s and
     /// sequencer.wall.failsafe_land_after_s (keys max_input_age_s,
     /// failsafe_land_after_s), the wall follower's parameters and rule
-    /// (tactile_fsm::input_fresh): stale depth or odometry -> FAILSAFE_HOVER.
+    /// (tactile_fsm::input_is_fresh): stale depth or odometry -> FAILSAFE_HOVER.
     SequencerParams sequencer;
     void validate() const;
   };

@@ -18,7 +18,7 @@
 // skipped, and approaching a corner centroid aborts the leg (retreat, refit).
 //
 // Every phase that moves needs fresh inputs: with the tactile depth or the
-// odometry stale (tactile_fsm::input_fresh, WallFollowerParams::max_input_age_s)
+// odometry stale (tactile_fsm::input_is_fresh, WallFollowerParams::max_input_age_s)
 // the sequencer enters FAILSAFE_HOVER (zero velocity, flight height) as the
 // whisker wall follower does, records nothing, resumes the interrupted phase
 // when both are fresh again, and lands (outcome inputs_stale) after
@@ -178,7 +178,7 @@ struct SequencerParams {
   ExplorerParams explorer;
   /// Wall-following band and speeds (000 Fig. S4e; tactile_fsm's defaults);
   /// also the input staleness of every phase: wall.max_input_age_s (the node
-  /// logic's freshness of depth and odometry, tactile_fsm::input_fresh) and
+  /// logic's freshness of depth and odometry, tactile_fsm::input_is_fresh) and
   /// wall.failsafe_land_after_s (FAILSAFE_HOVER -> LANDING), as the wall follower.
   tactile_fsm::WallFollowerParams wall;
   int probe_directions = 4;             ///< 000: "four orthogonal directions (90 deg apart)"
@@ -386,7 +386,7 @@ const char* to_string(CheckDecision d);
 CheckDecision check_ahead_decision(const std::vector<Eigen::Vector2d>& touched, const Eigen::Vector2d& pos,
                                    double heading, const PathRules& rules, double follow_min_forward);
 
-/// One control tick of input (odometry frame). Fresh: tactile_fsm::input_fresh
+/// One control tick of input (odometry frame). Fresh: tactile_fsm::input_is_fresh
 /// with wall.max_input_age_s (the node logic decides it from the stamps).
 struct SequencerInput {
   double t = 0.0;

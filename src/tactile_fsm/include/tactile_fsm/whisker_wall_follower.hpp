@@ -338,7 +338,7 @@ struct Setpoint {
 
 /// One whisker's side of a WallFollowerInput.
 struct WhiskerSample {
-  bool depth_fresh = false;       ///< the TactileDepth message is fresh (input_fresh)
+  bool depth_fresh = false;       ///< the TactileDepth message is fresh (input_is_fresh, safety_runner.hpp)
   bool valid = false;             ///< its depth measured (whisker in contact)
   double depth = NAN;             ///< [m]
   bool tdorc_contact = false;     ///< TDORC contact flag (000 eq. 4-11)
@@ -412,15 +412,6 @@ struct WallFollowerOutput {
 /// it from the depths (000 eq. 21).
 WallSubState wall_sub_state(double d_l, bool l_valid, double d_r, bool r_valid, Side side, bool both_touched,
                             WallSubState current, const WallFollowerParams& p, double theta = NAN);
-
-/// The staleness rule of the behaviours that fly on whisker depth and
-/// odometry (this wall follower, gpis_explorer's sequencer): an input stamped
-/// `stamp` (NaN = never received) is fresh at time t when it is at most
-/// max_age old (WallFollowerParams::max_input_age_s), 1 ns of tolerance for
-/// stamps converted from integer nanoseconds. A flying state with a stale
-/// input goes to its fail-safe hover.
-/// The SafetyRunner's rule (input_is_fresh), kept under this name for its callers.
-inline bool input_fresh(double t, double stamp, double max_age) { return input_is_fresh(t, stamp, max_age); }
 
 /// |(vx, vy)| <= v_max (scaled, direction kept), |yaw_rate| <= omega_max,
 /// non-finite values -> 0.
