@@ -435,7 +435,7 @@ XplorerFsmLogic::Outputs XplorerFsmLogic::on_timer(int64_t now_ns) {
   }
   const auto& o = *odom_;
   XplorerInput in;
-  in.t = t;
+  in.t = fsm_clock(t);  // the FSM's timers do not run in a fail-safe hover
   in.position = XVec3(o.pose.pose.position.x, o.pose.pose.position.y, o.pose.pose.position.z);
   in.yaw = tactile_common::yaw_of(o.pose.pose.orientation);
   in.yaw_rate = o.twist.twist.angular.z;  // body z rate ~ yaw rate near hover

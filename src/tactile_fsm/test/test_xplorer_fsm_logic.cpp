@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -251,6 +252,47 @@ TEST(XplorerFsmLogic, StaleForceHoversThenResumes) {
   EXPECT_EQ(logic.stats().failsafe_hovers, 1u);
   EXPECT_EQ(logic.stats().failsafe_landings, 0u);
   EXPECT_EQ(logic.safety().state(), SafetyState::kNominal);
+}
+
+// The FSM's timers are paused in FAILSAFE_HOVER: a contact starts Tactile-traversal
+// with contact_backoff_time (0.3 s) of holding the position of the contact; the
+// odometry stops at that contact and comes back 0.5 s later. 0.2 s of the back-off
+// run before the hover (the odometry still fresh), ~0.3 s are held; on the resumed
+// ticks the back-off still has ~0.1 s to run, so the setpoint is still the
+// back-off's. With the flight's clock it would have ended in the hover.
+TEST(XplorerFsmLogic, FailsafeHoverPausesTheFsmTimers) {
+  XplorerFsmLogic logic(XplorerFsmLogic::params_from(XplorerFsmLogic::default_parameters()));
+  ASSERT_NEAR(logic.params().fsm.contact_backoff_time, 0.3, 1e-12);
+  int64_t ns = 1'000'000'000;
+  fly_to_exploration(logic, ns);
+  std::optional<geometry_msgs::msg::PoseStamped> backoff;
+  for (ns += kTick; ns <= 3'000'000'000 && !backoff; ns += kTick) {
+    logic.on_odometry(odom(ns, 0.0, 0.0, 0.7));
+    logic.on_wrench(wrench(ns, 3.0));
+    const auto out = logic.on_timer(ns);
+    if (logic.fsm().state() == XplorerState::kTactileTraversal) backoff = out.setpoint;
+  }
+  ASSERT_TRUE(backoff) << "no contact";
+  const int64_t contact = ns - kTick, back = contact + 500'000'000;
+  bool held = false;
+  std::optional<geometry_msgs::msg::PoseStamped> first_resumed;
+  for (; ns <= back + 400'000'000; ns += kTick) {
+    if (ns >= back) logic.on_odometry(odom(ns, 0.0, 0.0, 0.7));
+    logic.on_wrench(wrench(ns, 3.0));
+    const auto out = logic.on_timer(ns);
+    held = held || logic.safety().state() == SafetyState::kFailsafeHover;
+    if (ns == back) first_resumed = out.setpoint;
+  }
+  ASSERT_TRUE(held);
+  ASSERT_TRUE(first_resumed);
+  EXPECT_EQ(logic.safety().state(), SafetyState::kNominal);
+  EXPECT_NEAR(logic.safety().held_s(), 0.3 - 0.02, 2.5 * tactile_common::to_seconds(kTick));
+  EXPECT_EQ(logic.fsm().state(), XplorerState::kTactileTraversal);
+  // Still the back-off's setpoint on resuming: the position at the contact.
+  EXPECT_DOUBLE_EQ(first_resumed->pose.position.x, backoff->pose.position.x);
+  EXPECT_DOUBLE_EQ(first_resumed->pose.position.y, backoff->pose.position.y);
+  // ... and no longer once the FSM's clock passed it.
+  EXPECT_FALSE(logic.fsm().backing_off(logic.fsm_clock(tactile_common::to_seconds(ns - kTick))));
 }
 
 // The wrench stops for good: FAILSAFE_HOVER (force) then FAILSAFE_LAND exactly

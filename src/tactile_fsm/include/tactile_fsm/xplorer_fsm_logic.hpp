@@ -105,6 +105,11 @@ class XplorerFsmLogic {
   }
 
   const XplorerExplorer& fsm() const { return fsm_; }
+  /// The FSM's clock at time t [s]: t less the time held in FAILSAFE_HOVER, so
+  /// its timers (release_time, settle_time, recovery_time, ...) are paused
+  /// while the runner holds the vehicle (as the GPIS sequencer's are): a
+  /// resumed state goes on with the time it had left.
+  double fsm_clock(double t) const { return t - safety_.held_s(); }
   const SafetyRunner& safety() const { return safety_; }
   const Stats& stats() const { return stats_; }
   const Params& params() const { return params_; }
