@@ -35,10 +35,18 @@ static_assert(static_cast<uint8_t>(SequencerReason::kTargetViaStaging) == FsmSta
 static_assert(static_cast<uint8_t>(SequencerReason::kTargetChosen) == FsmState::REASON_GPIS_TARGET_CHOSEN);
 static_assert(static_cast<uint8_t>(SequencerReason::kAtStaging) == FsmState::REASON_GPIS_AT_STAGING);
 static_assert(static_cast<uint8_t>(SequencerReason::kTargetReached) == FsmState::REASON_GPIS_TARGET_REACHED);
-static_assert(static_cast<uint8_t>(SequencerReason::kDepthStale) == FsmState::REASON_GPIS_DEPTH_STALE);
-static_assert(static_cast<uint8_t>(SequencerReason::kOdometryStale) == FsmState::REASON_GPIS_ODOMETRY_STALE);
-static_assert(static_cast<uint8_t>(SequencerReason::kInputsFreshAgain) == FsmState::REASON_GPIS_INPUTS_FRESH_AGAIN);
-static_assert(static_cast<uint8_t>(SequencerReason::kInputsStaleLand) == FsmState::REASON_GPIS_INPUTS_STALE_LAND);
+static_assert(static_cast<uint8_t>(SequencerReason::kFailsafeDepthStale) == FsmState::REASON_FAILSAFE_DEPTH_STALE);
+static_assert(static_cast<uint8_t>(SequencerReason::kFailsafeOdometryStale) == FsmState::REASON_FAILSAFE_ODOMETRY_STALE);
+static_assert(static_cast<uint8_t>(SequencerReason::kFailsafeInputsFresh) == FsmState::REASON_FAILSAFE_INPUTS_FRESH);
+static_assert(static_cast<uint8_t>(SequencerReason::kFailsafeStaleTooLong) == FsmState::REASON_FAILSAFE_STALE_TOO_LONG);
+static_assert(static_cast<uint8_t>(SequencerReason::kFailsafeDepthStale) ==
+              static_cast<uint8_t>(tactile_fsm::SafetyReason::kDepthStale));
+static_assert(static_cast<uint8_t>(SequencerReason::kFailsafeOdometryStale) ==
+              static_cast<uint8_t>(tactile_fsm::SafetyReason::kOdometryStale));
+static_assert(static_cast<uint8_t>(SequencerReason::kFailsafeInputsFresh) ==
+              static_cast<uint8_t>(tactile_fsm::SafetyReason::kInputsFresh));
+static_assert(static_cast<uint8_t>(SequencerReason::kFailsafeStaleTooLong) ==
+              static_cast<uint8_t>(tactile_fsm::SafetyReason::kStaleTooLong));
 static_assert(static_cast<uint8_t>(SequencerReason::kUpdateLimit) == FsmState::REASON_GPIS_UPDATE_LIMIT);
 static_assert(static_cast<uint8_t>(SequencerReason::kNoTarget) == FsmState::REASON_GPIS_NO_TARGET);
 static_assert(static_cast<uint8_t>(SequencerReason::kOpenSpace) == FsmState::REASON_GPIS_OPEN_SPACE);

@@ -110,6 +110,10 @@ const char* to_string(ExitKind k) {
 const char* to_string(SequencerReason r) {
   switch (r) {
     case SequencerReason::kNone: return "none";
+    case SequencerReason::kFailsafeDepthStale: return "failsafe_depth_stale";
+    case SequencerReason::kFailsafeOdometryStale: return "failsafe_odometry_stale";
+    case SequencerReason::kFailsafeInputsFresh: return "failsafe_inputs_fresh";
+    case SequencerReason::kFailsafeStaleTooLong: return "failsafe_stale_too_long";
     case SequencerReason::kHoverDone: return "hover_done";
     case SequencerReason::kAligned: return "aligned";
     case SequencerReason::kProbeFoundNoWall: return "probe_found_no_wall";
@@ -130,10 +134,6 @@ const char* to_string(SequencerReason r) {
     case SequencerReason::kTargetChosen: return "target_chosen";
     case SequencerReason::kAtStaging: return "at_staging";
     case SequencerReason::kTargetReached: return "target_reached";
-    case SequencerReason::kDepthStale: return "depth_stale";
-    case SequencerReason::kOdometryStale: return "odometry_stale";
-    case SequencerReason::kInputsFreshAgain: return "inputs_fresh_again";
-    case SequencerReason::kInputsStaleLand: return "inputs_stale_land";
     case SequencerReason::kUpdateLimit: return "update_limit";
     case SequencerReason::kNoTarget: return "no_target";
     case SequencerReason::kOpenSpace: return "open_space";
@@ -147,6 +147,12 @@ const char* to_string(SequencerReason r) {
 const char* reason_text(SequencerReason r, Phase from) {
   switch (r) {
     case SequencerReason::kNone: return "start";
+    case SequencerReason::kFailsafeDepthStale:
+      return from == Phase::kHoverInit ? "tactile depth stale at end of hover" : "tactile depth stale";
+    case SequencerReason::kFailsafeOdometryStale:
+      return from == Phase::kHoverInit ? "odometry stale at end of hover" : "odometry stale";
+    case SequencerReason::kFailsafeInputsFresh: return "inputs fresh again";
+    case SequencerReason::kFailsafeStaleTooLong: return "inputs stale for failsafe_land_after_s";
     case SequencerReason::kHoverDone: return "hover done: first probe";
     case SequencerReason::kAligned: return "aligned";
     case SequencerReason::kProbeFoundNoWall: return "probe found no wall";
@@ -167,12 +173,6 @@ const char* reason_text(SequencerReason r, Phase from) {
     case SequencerReason::kTargetChosen: return "target chosen";
     case SequencerReason::kAtStaging: return "at the staging point: face the wall";
     case SequencerReason::kTargetReached: return "target reached without contact";
-    case SequencerReason::kDepthStale:
-      return from == Phase::kHoverInit ? "tactile depth stale at end of hover" : "tactile depth stale";
-    case SequencerReason::kOdometryStale:
-      return from == Phase::kHoverInit ? "odometry stale at end of hover" : "odometry stale";
-    case SequencerReason::kInputsFreshAgain: return "inputs fresh again";
-    case SequencerReason::kInputsStaleLand: return "inputs stale for failsafe_land_after_s";
     case SequencerReason::kUpdateLimit: return "GPIS update limit";
     case SequencerReason::kNoTarget: return "no reachable target";
     case SequencerReason::kOpenSpace: return "no contact in any probe direction";
@@ -270,8 +270,19 @@ void SequencerParams::validate() const {
   positive("landing_duration_s", landing_duration_s);
 }
 
+namespace {
+tactile_fsm::SafetyParams safety_params(const tactile_fsm::WallFollowerParams& w) {
+  tactile_fsm::SafetyParams s;
+  s.max_input_age_s = w.max_input_age_s;
+  s.failsafe_land_after_s = w.failsafe_land_after_s;
+  return s;  // no time limit: max_time_s is the sequencer's own (an outcome, see step())
+}
+}  // namespace
+
 ExplorationSequencer::ExplorationSequencer(const SequencerParams& params)
-    : p_(params), explorer_((params.validate(), params.explorer)) {}
+    : p_(params),
+      explorer_((params.validate(), params.explorer)),
+      safety_(safety_params(params.wall), {tactile_fsm::SafetyInput::kDepth, tactile_fsm::SafetyInput::kOdometry}) {}
 
 std::string ExplorationSequencer::sub_state() const {
   switch (phase_) {
@@ -279,7 +290,7 @@ std::string ExplorationSequencer::sub_state() const {
     case Phase::kReturn: return to_string(return_leg_);
     case Phase::kRetreat: return to_string(retreat_kind_);
     case Phase::kExitThrough: return to_string(exit_kind_);
-    case Phase::kFollowWall: return tactile_fsm::to_string(sub_);
+    case Phase::kFollowWall: return tactile_fsm::to_string(wall_.sub_state());
     case Phase::kTurn: return to_string(after_turn_);
     default: return "";
   }
@@ -297,25 +308,61 @@ void ExplorationSequencer::enter(Phase p, SequencerReason why, double t) {
   ++transitions_;
 }
 
-void ExplorationSequencer::enter_failsafe(SequencerReason why, double t) {
-  failsafe_from_ = phase_;
-  failsafe_from_entered_ = entered_;
-  ++failsafe_hovers_;
-  enter(Phase::kFailsafeHover, why, t);
+bool ExplorationSequencer::apply_safety(const SequencerInput& in, SequencerOutput* out) {
+  // HOVER_INIT only hovers: guarded from its end, as the wall follower's.
+  const bool guarded = phase_ != Phase::kHoverInit || in.t - entered_ >= p_.wall.hover_init_s;
+  const double stale = std::numeric_limits<double>::quiet_NaN();
+  const tactile_fsm::SafetyVerdict v =
+      safety_.step(in.t, {in.depth_valid ? in.t : stale, in.pose_valid ? in.t : stale}, guarded);
+  const auto why = static_cast<SequencerReason>(v.reason);  // same values (static_asserts in the node logic)
+  switch (v.state) {
+    case tactile_fsm::SafetyState::kFailsafeHover:
+      if (v.entered) {
+        failsafe_from_ = phase_;
+        failsafe_from_entered_ = entered_;
+        enter(Phase::kFailsafeHover, why, in.t);
+      } else {
+        hold_tick(in);
+      }
+      return true;
+    case tactile_fsm::SafetyState::kFailsafeLand:
+    case tactile_fsm::SafetyState::kTimeLimitLand:  // not reached: no time limit (safety_params)
+      hold_tick(in);
+      finish(Outcome::kInputsStale, why, in.t);
+      out->setpoint.height = 0.0;  // landing from this tick (as the wall follower's FAILSAFE_LAND)
+      out->setpoint.land = true;
+      return true;
+    case tactile_fsm::SafetyState::kNominal:
+      break;
+  }
+  if (v.resumed) {
+    // Back to the interrupted phase as it was, its clocks moved on by the time
+    // held: a 2 s wall follow still follows for 2 s of fresh input, a check
+    // dwells its full time. Not enter(): the phase is resumed, not re-entered.
+    // Moved while held (drift under a zero-velocity setpoint): not a
+    // contact-free part of the leg.
+    if (have_last_pose_) leg_blind_ += (Eigen::Vector2d(in.x, in.y) - last_pose_).norm();
+    const double held = in.t - entered_;
+    previous_ = phase_;
+    phase_ = failsafe_from_;
+    reason_code_ = why;
+    entered_ = failsafe_from_entered_ + held;
+    check_t_ += held;
+    check_started_ += held;
+    ++transitions_;
+  }
+  return false;
 }
 
-void ExplorationSequencer::resume_after_failsafe(double t) {
-  // Back to the interrupted phase as it was, its clocks moved on by the time
-  // held: a 2 s wall follow still follows for 2 s of fresh input, a check
-  // dwells its full time. Not enter(): the phase is resumed, not re-entered.
-  const double held = t - entered_;
-  previous_ = phase_;
-  phase_ = failsafe_from_;
-  reason_code_ = SequencerReason::kInputsFreshAgain;
-  entered_ = failsafe_from_entered_ + held;
-  check_t_ += held;
-  check_started_ += held;
-  ++transitions_;
+void ExplorationSequencer::hold_tick(const SequencerInput& in) {
+  if (!in.pose_valid) return;
+  const Eigen::Vector2d held_at(in.x, in.y);
+  if (have_last_pose_) {
+    travel_ += (held_at - last_pose_).norm();
+    leg_blind_ += (held_at - last_pose_).norm();
+  }
+  last_pose_ = held_at;
+  have_last_pose_ = true;
 }
 
 void ExplorationSequencer::finish(Outcome o, SequencerReason why, double t) {
@@ -577,7 +624,7 @@ void ExplorationSequencer::check_ahead(const SequencerInput& in, tactile_fsm::Se
   ++whisk_jambs_;
   if (round_ == Round::kTargets && has_target_ && visited_.size() < 1000) visited_.push_back(target_);
   follow_points_ = check_points_;
-  both_touched_ = false;
+  wall_.begin(wall_.side());  // no wall followed: align_to_wall() finds no both-touched heading
   enter(Phase::kRetreat, SequencerReason::kTooNearTheGuard, in.t);
 }
 
@@ -617,7 +664,7 @@ void ExplorationSequencer::align_to_wall(const SequencerInput& in) {
     if (nrm.dot(f.mean - Eigen::Vector2d(in.x, in.y)) < 0.0) nrm = -nrm;
     facing = std::atan2(nrm.y(), nrm.x());
   }
-  if (!std::isfinite(facing) && both_touched_) facing = in.yaw;
+  if (!std::isfinite(facing) && wall_.both_touched()) facing = in.yaw;
   if (!std::isfinite(facing)) return;
   start_yaw_ = facing - 2.0 * M_PI * probe_ / p_.probe_directions;
   aligned_ = true;
@@ -638,24 +685,23 @@ void ExplorationSequencer::begin_return(const Eigen::Vector2d& pos, const Eigen:
 void ExplorationSequencer::start_follow(const SequencerInput& in) {
   const bool probing = round_ == Round::kProbes;
   follow_points_.clear();
-  both_touched_ = false;
-  sub_ = tactile_fsm::WallSubState::kNone;
-  side_ = p_.wall.follow_side;
+  tactile_fsm::Side side = p_.wall.follow_side;
   // Slide toward the side where the wall is nearer (the whisker that touched
   // first, or the smaller depth): along an oblique wall that is toward the
   // foot of the perpendicular from the drone, away from the nearer corner.
   // Workspace rule; 000 does not say which way the 2 s wall follow goes.
   if (in.contact_left != in.contact_right) {
-    side_ = in.contact_left ? tactile_fsm::Side::kLeft : tactile_fsm::Side::kRight;
+    side = in.contact_left ? tactile_fsm::Side::kLeft : tactile_fsm::Side::kRight;
   } else if (in.contact_left && in.contact_right && std::abs(in.depth_left - in.depth_right) > 0.005) {
-    side_ = in.depth_left < in.depth_right ? tactile_fsm::Side::kLeft : tactile_fsm::Side::kRight;
+    side = in.depth_left < in.depth_right ? tactile_fsm::Side::kLeft : tactile_fsm::Side::kRight;
   }
   if (!probing && has_target_) {
     // Follow toward the target's side (as tactile_fsm's side_toward_target).
     const Eigen::Vector2d d = target_ - Eigen::Vector2d(in.x, in.y);
     const double lateral = -std::sin(in.yaw) * d.x() + std::cos(in.yaw) * d.y();  // body y (left)
-    if (std::abs(lateral) > p_.wall.side_deadband) side_ = lateral > 0 ? tactile_fsm::Side::kLeft : tactile_fsm::Side::kRight;
+    if (std::abs(lateral) > p_.wall.side_deadband) side = lateral > 0 ? tactile_fsm::Side::kLeft : tactile_fsm::Side::kRight;
   }
+  wall_.begin(side);
   if (!probing && has_target_ && visited_.size() < 1000) visited_.push_back(target_);
   follow_start_ = Eigen::Vector2d(in.x, in.y);
   enter(Phase::kFollowWall, SequencerReason::kContact, in.t);
@@ -829,40 +875,11 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
     out.transitioned = transitions_ != tr;
     return out;
   }
-  // Fail-safe (tactile_fsm's FAILSAFE_HOVER, same threshold and bound): a
-  // phase that moves needs fresh depth and odometry. With stale depth a leg
-  // would fly blind and a probe end as "no wall" (issue 33); with stale
-  // odometry every leg, turn and distance is wrong. Hover, record nothing,
-  // resume when both are fresh, land after failsafe_land_after_s. HOVER_INIT
-  // only hovers: checked at its end, as the wall follower does.
-  const bool fresh = in.pose_valid && in.depth_valid;
-  if (phase_ == Phase::kFailsafeHover) {
-    if (!fresh) {
-      if (in.pose_valid) {
-        const Eigen::Vector2d held_at(in.x, in.y);
-        if (have_last_pose_) {
-          travel_ += (held_at - last_pose_).norm();
-          leg_blind_ += (held_at - last_pose_).norm();
-        }
-        last_pose_ = held_at;
-        have_last_pose_ = true;
-      }
-      if (in.t - entered_ >= p_.wall.failsafe_land_after_s - 1e-9) {
-        finish(Outcome::kInputsStale, SequencerReason::kInputsStaleLand, in.t);
-        out.setpoint.height = 0.0;  // landing from this tick (as the wall follower's FAILSAFE_LAND)
-        out.setpoint.land = true;
-      }
-      out.transitioned = transitions_ != tr;
-      return out;
-    }
-    // Moved while held (drift under a zero-velocity setpoint): not a
-    // contact-free part of the leg.
-    if (have_last_pose_) leg_blind_ += (Eigen::Vector2d(in.x, in.y) - last_pose_).norm();
-    resume_after_failsafe(in.t);
-  } else if (!fresh && (phase_ != Phase::kHoverInit || in.t - entered_ >= p_.wall.hover_init_s)) {
-    // reason_text() adds "at end of hover" when the phase left is HOVER_INIT.
-    enter_failsafe(in.depth_valid ? SequencerReason::kOdometryStale : SequencerReason::kDepthStale, in.t);
-    out.transitioned = true;
+  // The shared fail-safe: a phase that moves needs fresh depth and odometry.
+  // With stale depth a leg would fly blind and a probe end as "no wall"
+  // (issue 33); with stale odometry every leg, turn and distance is wrong.
+  if (apply_safety(in, &out)) {
+    out.transitioned = transitions_ != tr;
     return out;
   }
   if (!in.pose_valid) return out;  // HOVER_INIT without odometry: hover in place (counted by the node logic)
@@ -975,31 +992,26 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       }
       const bool lv = in.depth_valid && in.contact_left && std::isfinite(in.depth_left);
       const bool rv = in.depth_valid && in.contact_right && std::isfinite(in.depth_right);
-      both_touched_ = both_touched_ || (lv && rv);
-      // 000 Fig. S4e rule (tactile_fsm) and its velocities: V_sideway = V_max,
-      // V_forward = V_backward = V_max / 2, turn at omega_max.
-      sub_ = tactile_fsm::wall_sub_state(in.depth_left, lv, in.depth_right, rv, side_, both_touched_, sub_, p_.wall);
-      const double sideways = side_ == tactile_fsm::Side::kLeft ? v : -v;
-      if (!both_touched_ && lv != rv) {
-        // One whisker on an oblique wall: turn toward it until both touch
-        // instead of the approach's forward flight, which at a steep angle
-        // brings the frame's corner to the wall first (workspace rule).
+      // The shared wall following (tactile_fsm::WallFollowing): the 000 Fig. S4e
+      // sub-state rule and its motion, V_sideway = V_max, V_forward =
+      // V_backward = V_max / 2, turns at omega_max.
+      wall_.touched(lv, rv);
+      wall_.set_sub_state(wall_.rule(in.depth_left, lv, in.depth_right, rv, p_.wall));
+      if (!wall_.both_touched() && lv != rv) {
+        // The sequencer's own rule, one whisker on an oblique wall: turn toward
+        // it until both touch instead of the approach's forward flight, which at
+        // a steep angle brings the frame's corner to the wall first (workspace
+        // rule; the whisker FSM meets walls head-on from FLY_FORWARD).
         const double d = lv ? in.depth_left : in.depth_right;
         sp.yaw_rate = lv ? p_.wall.omega_max : -p_.wall.omega_max;
         if (d < p_.wall.t_min) sp.vx = -0.5 * v;
       } else {
-      switch (sub_) {
-        case tactile_fsm::WallSubState::kFlySideways: sp.vy = sideways; break;
-        case tactile_fsm::WallSubState::kFlyForward: sp.vx = 0.5 * v; break;
-        case tactile_fsm::WallSubState::kFlyBackward: sp.vx = -0.5 * v; break;
-        case tactile_fsm::WallSubState::kTurnLeft: sp.yaw_rate = p_.wall.omega_max; break;
-        case tactile_fsm::WallSubState::kTurnRight: sp.yaw_rate = -p_.wall.omega_max; break;
-        case tactile_fsm::WallSubState::kNone: break;
-      }
+        wall_.motion(p_.wall, &sp);
       }
       if (in.t - entered_ >= p_.follow_time_s) {
         enter(Phase::kRetreat, SequencerReason::kWallFollowed, in.t);
-      } else if (sub_ == tactile_fsm::WallSubState::kFlySideways && rules().side_blocked(pos, in.yaw, side_)) {
+      } else if (wall_.sub_state() == tactile_fsm::WallSubState::kFlySideways &&
+                 rules().side_blocked(pos, in.yaw, wall_.side())) {
         ++side_stops_;
         sp.vy = 0.0;
         enter(Phase::kRetreat, SequencerReason::kSurfaceBeside, in.t);

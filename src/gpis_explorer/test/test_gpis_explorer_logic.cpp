@@ -249,9 +249,11 @@ TEST(GpisExplorerLogic, PublishesTheSequencersReasonCodes) {
   }
   const std::vector<uint8_t> stale = codes_of(3.0);
   ASSERT_GE(stale.size(), 3u);
-  EXPECT_EQ(stale[stale.size() - 2], FsmState::REASON_GPIS_DEPTH_STALE);
-  EXPECT_EQ(stale.back(), FsmState::REASON_GPIS_INPUTS_STALE_LAND);
-  EXPECT_STREQ(gpis_explorer::to_string(gpis_explorer::SequencerReason::kInputsStaleLand), "inputs_stale_land");
+  // The shared fail-safe's codes, as every behaviour publishes them.
+  EXPECT_EQ(stale[stale.size() - 2], FsmState::REASON_FAILSAFE_DEPTH_STALE);
+  EXPECT_EQ(stale.back(), FsmState::REASON_FAILSAFE_STALE_TOO_LONG);
+  EXPECT_STREQ(gpis_explorer::to_string(gpis_explorer::SequencerReason::kFailsafeStaleTooLong),
+               "failsafe_stale_too_long");
 }
 
 // Issue 33: odometry fresh, tactile depth stopped at t = 3 s in the first

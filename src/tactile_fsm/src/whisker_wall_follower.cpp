@@ -185,6 +185,17 @@ WallSubState wall_sub_state(double d_l, bool l_valid, double d_r, bool r_valid, 
   return WallSubState::kFlySideways;
 }
 
+void WallFollowing::motion(const WallFollowerParams& p, Setpoint* sp) const {
+  switch (sub_) {  // 000 Fig. S4e: V_sideway = V_max, V_forward = V_backward = V_max/2, omega_max
+    case WallSubState::kFlySideways: sp->vy = side_ == Side::kLeft ? p.v_max : -p.v_max; break;  // vy > 0: left
+    case WallSubState::kFlyForward: sp->vx = 0.5 * p.v_max; break;
+    case WallSubState::kFlyBackward: sp->vx = -0.5 * p.v_max; break;
+    case WallSubState::kTurnLeft: sp->yaw_rate = p.omega_max; break;
+    case WallSubState::kTurnRight: sp->yaw_rate = -p.omega_max; break;
+    case WallSubState::kNone: break;
+  }
+}
+
 Setpoint saturate(const Setpoint& s, const WallFollowerParams& p) {
   Setpoint o = s;
   if (!std::isfinite(o.vx)) o.vx = 0.0;
@@ -478,15 +489,13 @@ WhiskerWallFollower::WhiskerWallFollower(const WallFollowerParams& params)
 
 void WhiskerWallFollower::reset() {
   state_ = previous_ = FsmState::kHoverInit;
-  sub_ = WallSubState::kNone;
   reason_ = "start";
   reason_code_ = code_of(WhiskerReason::kNone);
   reason_composed_ = false;
   started_ = false;
   entered_ = last_t_ = 0.0;
   transitions_ = 0;
-  side_ = p_.follow_side;
-  both_touched_ = false;
+  wall_.begin(p_.follow_side);
   last_contact_t_ = 0.0;
   left_.reset();
   right_.reset();
@@ -515,7 +524,7 @@ void WhiskerWallFollower::enter(FsmState s, const char* reason, uint8_t code, do
   reason_composed_ = false;
   entered_ = t;
   ++transitions_;
-  sub_ = WallSubState::kNone;
+  wall_.set_sub_state(WallSubState::kNone);
 }
 
 void WhiskerWallFollower::set_origin(const WallFollowerInput& in) {
@@ -527,8 +536,8 @@ void WhiskerWallFollower::set_origin(const WallFollowerInput& in) {
 
 void WhiskerWallFollower::fill_snapshot(TickSnapshot& snap) const {
   snap.state = state_;
-  snap.current = sub_;
-  snap.side = side_;
+  snap.current = wall_.sub_state();
+  snap.side = wall_.side();
   snap.left = left_.reading();
   snap.right = right_.reading();
   snap.l_valid = snap.left.valid;
@@ -568,23 +577,22 @@ void WhiskerWallFollower::on_entry(FsmState s, const TickSnapshot& snap, uint8_t
     case FsmState::kWallFollowing:
       last_contact_t_ = in.t;
       if (code == code_of(WhiskerReason::kContactWhileClearing)) {
-        both_touched_ = true;  // the same obstacle's end: passing the edge (rule 2)
+        wall_.begin(wall_.side(), true);  // the same obstacle's end: passing the edge (rule 2)
       } else if (code == code_of(WhiskerReason::kContactSameObstacle)) {
-        both_touched_ = false;  // the side kept
+        wall_.begin(wall_.side());  // the side kept
       } else if (code == code_of(WhiskerReason::kContactBaffleEnd)) {
         // Pass the end on the other side, as an edge (rule 2).
-        side_ = guards::end_contact_offset(snap, p_) > 0.0 ? Side::kRight : Side::kLeft;
-        both_touched_ = true;
+        wall_.begin(guards::end_contact_offset(snap, p_) > 0.0 ? Side::kRight : Side::kLeft, true);
       } else {
         // A new obstacle. Side: toward the target's lateral offset in the body
         // frame when it is clear, else the configured side.
-        side_ = p_.follow_side;
+        Side side = p_.follow_side;
         if (p_.side_toward_target && in.has_target) {
           const double lateral = -std::sin(in.yaw) * (in.target_x - in.x) + std::cos(in.yaw) * (in.target_y - in.y);
-          if (lateral > p_.side_deadband) side_ = Side::kLeft;
-          if (lateral < -p_.side_deadband) side_ = Side::kRight;
+          if (lateral > p_.side_deadband) side = Side::kLeft;
+          if (lateral < -p_.side_deadband) side = Side::kRight;
         }
-        both_touched_ = false;
+        wall_.begin(side);
       }
       break;
     case FsmState::kResumeForward:
@@ -603,7 +611,7 @@ void WhiskerWallFollower::on_entry(FsmState s, const TickSnapshot& snap, uint8_t
 void WhiskerWallFollower::on_tick(const TickSnapshot& snap) {
   if (state_ != FsmState::kWallFollowing) return;
   if (guards::contact(snap, p_)) last_contact_t_ = snap.in.t;
-  if (snap.left.valid && snap.right.valid) both_touched_ = true;
+  wall_.touched(snap.left.valid, snap.right.valid);
 }
 
 void WhiskerWallFollower::for_test_enter(FsmState s, const WallFollowerInput& in, WhiskerReason code) {
@@ -626,7 +634,7 @@ void WhiskerWallFollower::for_test_enter(FsmState s, const WallFollowerInput& in
 WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
   const double t = in.t;
   const FsmState state_before = state_;
-  const WallSubState sub_before = sub_;
+  const WallSubState sub_before = wall_.sub_state();
   if (!started_) {
     started_ = true;
     entered_ = t;
@@ -702,8 +710,7 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
   override_started_ = false;
   fill_snapshot(snap);
   snap.sub_state = state_ == FsmState::kWallFollowing
-                       ? wall_sub_state(snap.d_left, snap.l_valid, snap.d_right, snap.r_valid, side_, both_touched_,
-                                        sub_, p_, theta_)
+                       ? wall_.rule(snap.d_left, snap.l_valid, snap.d_right, snap.r_valid, p_, theta_)
                        : WallSubState::kNone;
   const WallSubState rule_sub = snap.sub_state;
   const char* sub_reason = nullptr;
@@ -719,7 +726,7 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
     sub_reason = TurnAnchorRule::kReason;
     sub_code = WhiskerReason::kTurnAnchor;
   }
-  if (snap.sub_state != sub_ && !top) {
+  if (snap.sub_state != wall_.sub_state() && !top) {
     // A sub-state change: the Fig. S4e rule's, or the override's that made it.
     if (sub_reason == nullptr) {
       reason_ = "sub-state rule (000 Fig. S4e)";
@@ -731,13 +738,13 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
       reason_composed_ = false;
     }
   }
-  sub_ = snap.sub_state;
+  wall_.set_sub_state(snap.sub_state);
 
   // 4. The state's setpoint and the setpoint rules.
   WallFollowerOutput out;
   out.state = state_;
-  out.sub_state = sub_;
-  out.transitioned = state_ != state_before || sub_ != sub_before;
+  out.sub_state = wall_.sub_state();
+  out.transitioned = state_ != state_before || wall_.sub_state() != sub_before;
   if (state_ == FsmState::kWallFollowing) contacted_ = true;
   snap.contacted = contacted_;
   snap.setpoint = saturate(command(in), p_);
@@ -751,7 +758,7 @@ WallFollowerOutput WhiskerWallFollower::step(const WallFollowerInput& in) {
 Setpoint WhiskerWallFollower::command(const WallFollowerInput& in) const {
   Setpoint s;
   s.height = p_.flight_height;
-  const double sideways = side_ == Side::kLeft ? p_.v_max : -p_.v_max;  // vy > 0 is left
+  const double sideways = wall_.side() == Side::kLeft ? p_.v_max : -p_.v_max;  // vy > 0 is left
   switch (state_) {
     case FsmState::kHoverInit:
     case FsmState::kFailsafeHover:
@@ -765,14 +772,7 @@ Setpoint WhiskerWallFollower::command(const WallFollowerInput& in) const {
       s.yaw_rate = realign(in);
       break;
     case FsmState::kWallFollowing:
-      switch (sub_) {  // 000 Fig. S4e: V_sideway = V_max, V_forward = V_backward = V_max/2, omega_max
-        case WallSubState::kFlySideways: s.vy = sideways; break;
-        case WallSubState::kFlyForward: s.vx = 0.5 * p_.v_max; break;
-        case WallSubState::kFlyBackward: s.vx = -0.5 * p_.v_max; break;
-        case WallSubState::kTurnLeft: s.yaw_rate = p_.omega_max; break;
-        case WallSubState::kTurnRight: s.yaw_rate = -p_.omega_max; break;
-        case WallSubState::kNone: break;
-      }
+      wall_.motion(p_, &s);  // the shared wall following's (000 Fig. S4e)
       break;
     case FsmState::kLanding:
     case FsmState::kLanded:

@@ -154,6 +154,67 @@ TEST(Whisker, PressedDepthCappedAtPressDepth) {
 
 // --- Guards ---------------------------------------------------------------------
 
+// The wall following both behaviours run (whisker FSM WALL_FOLLOWING, GPIS
+// FOLLOW_WALL): an episode's side and both-touched memory, the rule on them, and
+// the sub-state's motion (000 Fig. S4e: sideways V_max, forward / backward
+// V_max / 2, turns omega_max).
+TEST(WallFollowing, EpisodeMemoryRuleAndMotion) {
+  const WallFollowerParams p;
+  tactile_fsm::WallFollowing w;
+  w.begin(Side::kLeft);
+  EXPECT_EQ(w.side(), Side::kLeft);
+  EXPECT_FALSE(w.both_touched());
+  EXPECT_EQ(w.sub_state(), WallSubState::kNone);
+  // Right whisker only, at 0.08 m, before both touched: the approach rule (the
+  // missing left depth beyond T_max) turns toward the wall.
+  EXPECT_EQ(w.rule(NAN, false, 0.08, true, p), WallSubState::kTurnRight);
+  w.touched(true, false);
+  EXPECT_FALSE(w.both_touched());
+  w.touched(true, true);
+  EXPECT_TRUE(w.both_touched());
+  // After both touched the leading (left, sliding left) whisker lost: passing the
+  // edge, sideways -- the memory changed the rule's answer.
+  EXPECT_EQ(w.rule(NAN, false, 0.08, true, p), WallSubState::kFlySideways);
+  EXPECT_EQ(w.rule(NAN, false, 0.08, true, p),
+            tactile_fsm::wall_sub_state(NAN, false, 0.08, true, Side::kLeft, true, WallSubState::kNone, p));
+  // The rule does not change the episode; set_sub_state() does.
+  EXPECT_EQ(w.sub_state(), WallSubState::kNone);
+  w.set_sub_state(WallSubState::kTurnLeft);
+  EXPECT_EQ(w.sub_state(), WallSubState::kTurnLeft);
+  // A new episode forgets both; begin(side, true) starts as an edge being passed.
+  w.begin(Side::kRight);
+  EXPECT_FALSE(w.both_touched());
+  EXPECT_EQ(w.sub_state(), WallSubState::kNone);
+  w.begin(Side::kRight, true);
+  EXPECT_TRUE(w.both_touched());
+
+  const struct {
+    Side side;
+    WallSubState sub;
+    double vx, vy, yaw_rate;
+  } motions[] = {
+      {Side::kLeft, WallSubState::kFlySideways, 0.0, p.v_max, 0.0},
+      {Side::kRight, WallSubState::kFlySideways, 0.0, -p.v_max, 0.0},
+      {Side::kRight, WallSubState::kFlyForward, 0.5 * p.v_max, 0.0, 0.0},
+      {Side::kRight, WallSubState::kFlyBackward, -0.5 * p.v_max, 0.0, 0.0},
+      {Side::kRight, WallSubState::kTurnLeft, 0.0, 0.0, p.omega_max},
+      {Side::kLeft, WallSubState::kTurnRight, 0.0, 0.0, -p.omega_max},
+      {Side::kLeft, WallSubState::kNone, 0.0, 0.0, 0.0},
+  };
+  for (const auto& m : motions) {
+    SCOPED_TRACE(tactile_fsm::to_string(m.sub));
+    w.begin(m.side);
+    w.set_sub_state(m.sub);
+    tactile_fsm::Setpoint sp;
+    sp.height = 0.4;
+    w.motion(p, &sp);
+    EXPECT_DOUBLE_EQ(sp.vx, m.vx);
+    EXPECT_DOUBLE_EQ(sp.vy, m.vy);
+    EXPECT_DOUBLE_EQ(sp.yaw_rate, m.yaw_rate);
+    EXPECT_DOUBLE_EQ(sp.height, 0.4);  // only the motion's field is set
+  }
+}
+
 TEST(Guards, HoverDoneAndLandingDoneAtTheirDuration) {
   WallFollowerParams p;
   TickSnapshot s;

@@ -17,15 +17,17 @@
 // excluded (GpisExplorer), targets whose straight path passes a corner are
 // skipped, and approaching a corner centroid aborts the leg (retreat, refit).
 //
-// Every phase that moves needs fresh inputs: with the tactile depth or the
-// odometry stale (tactile_fsm::input_is_fresh, WallFollowerParams::max_input_age_s)
-// the sequencer enters FAILSAFE_HOVER (zero velocity, flight height) as the
-// whisker wall follower does, records nothing, resumes the interrupted phase
-// when both are fresh again, and lands (outcome inputs_stale) after
-// WallFollowerParams::failsafe_land_after_s.
+// Every phase that moves needs fresh inputs. The shared fail-safe
+// (tactile_fsm::SafetyRunner, the one every behaviour runs) watches the tactile
+// depth and the odometry (wall.max_input_age_s): one stale -> FAILSAFE_HOVER
+// (zero velocity, flight height, nothing recorded); both fresh again -> the
+// interrupted phase, its timers paused; stale for wall.failsafe_land_after_s
+// -> LANDING (outcome inputs_stale). Its reason codes are the runner's
+// REASON_FAILSAFE_*, as the other behaviours publish.
 //
-// Core layer: no ROS, no messages. The wall-following sub-state rule is
-// tactile_fsm's (000 Fig. S4e) through its public wall_sub_state().
+// Core layer: no ROS, no messages. The wall follow is tactile_fsm's wall
+// following component (tactile_fsm::WallFollowing, 000 Fig. S4e), the one the
+// whisker FSM's WALL_FOLLOWING runs.
 #pragma once
 
 #include <cstddef>
@@ -37,6 +39,7 @@
 
 #include "gpis_explorer/explorer.hpp"
 #include "gpis_explorer/path_rules.hpp"
+#include "tactile_fsm/safety_runner.hpp"
 #include "tactile_fsm/whisker_wall_follower.hpp"
 
 namespace gpis_explorer {
@@ -57,10 +60,10 @@ enum class Phase : uint8_t {
   /// a step is never REFIT; FsmState's previous_state is). Entered after the
   /// last probe's return and after every retreat of the target round.
   kRefit,
-  /// Tactile depth or odometry stale: hover (zero velocity, flight height),
-  /// record nothing; inputs fresh again -> the interrupted phase (its timers
-  /// paused), stale for wall.failsafe_land_after_s -> LANDING (inputs_stale).
-  /// As tactile_fsm's FAILSAFE_HOVER / FAILSAFE_LAND.
+  /// The shared fail-safe's FAILSAFE_HOVER (tactile_fsm::SafetyRunner): tactile
+  /// depth or odometry stale: hover (zero velocity, flight height), record
+  /// nothing; inputs fresh again -> the interrupted phase (its timers paused),
+  /// stale for wall.failsafe_land_after_s -> LANDING (inputs_stale).
   kFailsafeHover,
   kLanding,     ///< land (exit flown through, open space, or gave up)
   kDone,        ///< terminal
@@ -123,9 +126,16 @@ const char* to_string(ExitKind k);
 
 /// Why the last transition happened (reason() is the text for people; this is
 /// what programs key on). The values are tactile_msgs/msg/FsmState's
-/// REASON_GPIS_* (block 50-79; the node logic checks that at compile time).
+/// REASON_FAILSAFE_* (1-6, the shared fail-safe's) and REASON_GPIS_* (block
+/// 50-79); the node logic checks both at compile time.
 enum class SequencerReason : uint8_t {
   kNone = 0,  ///< no transition yet
+  // The shared fail-safe's (tactile_fsm::SafetyReason, REASON_FAILSAFE_*):
+  kFailsafeDepthStale = 1,     ///< -> FAILSAFE_HOVER: tactile depth older than wall.max_input_age_s
+  kFailsafeOdometryStale = 2,  ///< -> FAILSAFE_HOVER: odometry older than wall.max_input_age_s
+  kFailsafeInputsFresh = 5,    ///< FAILSAFE_HOVER -> the interrupted phase (resumed, its clocks paused)
+  kFailsafeStaleTooLong = 6,   ///< FAILSAFE_HOVER -> LANDING (inputs_stale)
+  // The sequencer's own (REASON_GPIS_*):
   kHoverDone = 50,  ///< HOVER_INIT -> TURN: hover_init_s hovered, the first probe
   kAligned = 51,  ///< TURN -> PROBE / GO_TO_STAGING / GO_TO_TARGET / EXIT_THROUGH: heading within yaw_tolerance
   kProbeFoundNoWall = 52,  ///< PROBE -> RETURN: probe_max_distance flown with fresh depth, no contact
@@ -146,10 +156,6 @@ enum class SequencerReason : uint8_t {
   kTargetChosen = 67,  ///< REFIT -> TURN: a target flown at directly (or from its staging point)
   kAtStaging = 68,  ///< GO_TO_STAGING -> TURN: at the staging point, face the target's normal
   kTargetReached = 69,  ///< GO_TO_TARGET -> EXIT_THROUGH: target reached or passed, no contact
-  kDepthStale = 70,  ///< -> FAILSAFE_HOVER: tactile depth older than wall.max_input_age_s
-  kOdometryStale = 71,  ///< -> FAILSAFE_HOVER: odometry older than wall.max_input_age_s
-  kInputsFreshAgain = 72,  ///< FAILSAFE_HOVER -> the interrupted phase (resumed, its clocks paused)
-  kInputsStaleLand = 73,  ///< FAILSAFE_HOVER -> LANDING (inputs_stale)
   kUpdateLimit = 74,  ///< REFIT -> LANDING (update_limit): max_updates
   kNoTarget = 75,  ///< REFIT -> LANDING (no_target)
   kOpenSpace = 76,  ///< REFIT -> LANDING (open_space)
@@ -460,7 +466,7 @@ class ExplorationSequencer {
   /// Retreats held in place (a known surface point behind).
   std::size_t retreats_held() const { return retreats_held_; }
   /// FAILSAFE_HOVER entries (stale depth or odometry) and the phase the last one interrupted.
-  std::size_t failsafe_hovers() const { return failsafe_hovers_; }
+  std::size_t failsafe_hovers() const { return safety_.failsafe_hovers(); }
   Phase failsafe_from() const { return failsafe_from_; }
   /// The current phase's sub-state ("" for a phase without one), the
   /// sequencer's own in snake case:
@@ -476,10 +482,14 @@ class ExplorationSequencer {
 
  private:
   void enter(Phase p, SequencerReason why, double t);
-  /// FAILSAFE_HOVER from the current phase; resume_after_failsafe() returns to
-  /// it with its timers shifted by the time held (the hover does not count).
-  void enter_failsafe(SequencerReason why, double t);
-  void resume_after_failsafe(double t);
+  /// The shared fail-safe's verdict on this tick, applied to the phases:
+  /// FAILSAFE_HOVER from the current phase, held, resumed (the interrupted
+  /// phase with its timers shifted by the time held: the hover does not
+  /// count) or LANDING. True when the tick ends here (hover or landing).
+  bool apply_safety(const SequencerInput& in, SequencerOutput* out);
+  /// A tick held in FAILSAFE_HOVER: the odometry's drift counts as travel,
+  /// and not as a contact-free part of the leg (leg_blind_).
+  void hold_tick(const SequencerInput& in);
   void finish(Outcome o, SequencerReason why, double t);
   tactile_fsm::Setpoint hover() const;
   double yaw_rate_to(double heading, double yaw) const;
@@ -551,9 +561,9 @@ class ExplorationSequencer {
   Eigen::Vector2d follow_start_{0, 0};  ///< where the last wall follow began
   RetreatKind retreat_kind_ = RetreatKind::kBackOff;
   double retreat_lateral(const SequencerInput& in) const;
-  tactile_fsm::Side side_ = tactile_fsm::Side::kRight;
-  bool both_touched_ = false;
-  tactile_fsm::WallSubState sub_ = tactile_fsm::WallSubState::kNone;
+  /// The wall follow's episode: the whisker FSM's wall following component
+  /// (side, both touched, sub-state), begun by start_follow().
+  tactile_fsm::WallFollowing wall_;
   std::vector<Eigen::Vector2d> follow_points_;
   std::vector<WallLine> wall_lines_;  ///< at most 64 (the oldest dropped)
   void add_wall_line();
@@ -607,10 +617,11 @@ class ExplorationSequencer {
   /// or its confirmed ones after a choice that needed corner_confirm_radius.
   std::vector<Eigen::Vector2d> corners_;
   std::size_t direct_targets_ = 0;
-  // FAILSAFE_HOVER: the interrupted phase and its entry time.
+  // The shared fail-safe (inputs: tactile depth, then odometry) and, in
+  // FAILSAFE_HOVER, the interrupted phase and its entry time.
+  tactile_fsm::SafetyRunner safety_;
   Phase failsafe_from_ = Phase::kHoverInit;
   double failsafe_from_entered_ = 0.0;
-  std::size_t failsafe_hovers_ = 0;
   /// Odometry path length while held in FAILSAFE_HOVER since the current leg
   /// began (leg_start_ / exit_from_): a probe's "no wall" and an exit's
   /// contact-free distance count only what was flown with fresh depth. [m]

@@ -417,6 +417,48 @@ WallSubState wall_sub_state(double d_l, bool l_valid, double d_r, bool r_valid, 
 /// non-finite values -> 0.
 Setpoint saturate(const Setpoint& s, const WallFollowerParams& p);
 
+/// One wall-following episode (000 Fig. S4e), the component both behaviours
+/// that follow a wall run: the whisker wall follower in WALL_FOLLOWING and the
+/// GPIS sequencer in FOLLOW_WALL (issue 33: one wall following, not two). It
+/// holds what an episode remembers -- the side it slides toward, whether both
+/// whiskers have touched, the current sub-state -- and gives the sub-state
+/// rule on those (wall_sub_state()) and the sub-state's motion. What starts an
+/// episode (which side, on what contact) and what ends it stay the
+/// behaviour's: begin() starts one.
+class WallFollowing {
+ public:
+  /// A new episode toward `side`; both_touched: the episode counts as one in
+  /// which both whiskers already touched (an edge being passed).
+  void begin(Side side, bool both_touched = false) {
+    side_ = side;
+    both_touched_ = both_touched;
+    sub_ = WallSubState::kNone;
+  }
+  /// Both whiskers on the wall this tick: the episode's both_touched.
+  void touched(bool left, bool right) { both_touched_ = both_touched_ || (left && right); }
+  /// The sub-state rule (wall_sub_state()) on this tick's depths and the
+  /// episode's side, both_touched and current sub-state; does not change it.
+  WallSubState rule(double d_l, bool l_valid, double d_r, bool r_valid, const WallFollowerParams& p,
+                    double theta = NAN) const {
+    return wall_sub_state(d_l, l_valid, d_r, r_valid, side_, both_touched_, sub_, p, theta);
+  }
+  /// The sub-state the behaviour flies (the rule's, or an override's).
+  void set_sub_state(WallSubState s) { sub_ = s; }
+  /// The sub-state's motion (000 Fig. S4e): FLY_SIDEWAYS at V_max toward the
+  /// side, FLY_FORWARD / FLY_BACKWARD at V_max / 2, TURN_LEFT / TURN_RIGHT at
+  /// omega_max; sets that one field of *sp (kNone: none).
+  void motion(const WallFollowerParams& p, Setpoint* sp) const;
+
+  Side side() const { return side_; }
+  bool both_touched() const { return both_touched_; }
+  WallSubState sub_state() const { return sub_; }
+
+ private:
+  Side side_ = Side::kRight;
+  bool both_touched_ = false;
+  WallSubState sub_ = WallSubState::kNone;
+};
+
 // --- Override rules --------------------------------------------------------
 //
 // After the state switch and the sub-state rule, an ordered list of named
@@ -641,7 +683,7 @@ class WhiskerWallFollower {
 
   FsmState state() const { return state_; }
   FsmState previous_state() const { return previous_; }
-  WallSubState sub_state() const { return sub_; }
+  WallSubState sub_state() const { return wall_.sub_state(); }
   /// Why the last top-level transition, sub-state change or override rule's
   /// onset happened: a transition's or rule's text, or both ("<transition>;
   /// <rule>") when a rule begins on a transition's tick. Valid until the next step().
@@ -655,7 +697,7 @@ class WhiskerWallFollower {
   bool started() const { return started_; }
   double state_entered() const { return entered_; }
   uint32_t transitions() const { return transitions_; }
-  Side active_side() const { return side_; }
+  Side active_side() const { return wall_.side(); }
   /// The two Whiskers' readings of the last tick.
   const WhiskerReading& left() const { return left_.reading(); }
   const WhiskerReading& right() const { return right_.reading(); }
@@ -697,15 +739,15 @@ class WhiskerWallFollower {
   WallFollowerParams p_;
   FsmState state_ = FsmState::kHoverInit;
   FsmState previous_ = FsmState::kHoverInit;
-  WallSubState sub_ = WallSubState::kNone;
   const char* reason_ = "start";
   uint8_t reason_code_ = 0;
   bool started_ = false;
   double entered_ = 0.0;
   double last_t_ = 0.0;
   uint32_t transitions_ = 0;
-  Side side_ = Side::kRight;
-  bool both_touched_ = false;
+  /// The episode in WALL_FOLLOWING (side, both touched, sub-state; the
+  /// sub-state is kNone in every other state).
+  WallFollowing wall_;
   double last_contact_t_ = 0.0;
   Whisker left_, right_;
   SafetyRunner safety_;
