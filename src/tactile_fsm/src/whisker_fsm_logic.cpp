@@ -104,17 +104,10 @@ ParamMap WhiskerFsmLogic::default_parameters() {
   m.set("realign_gain", d.realign_gain,
         {"heading realignment to the course outside wall following; 0: off", "1/s", at_least(0.0), false,
          tactile_common::choice("heading realignment, 000 Fig. 4h")});
-  // The node's two defaults that differ from the core struct's: on in the whisker FSM
-  // node (issue 17), off in WallFollowerParams, because gpis_explorer's wall follows call
-  // wall_sub_state() with the core defaults and were not measured with these rules.
-  m.set("hold_heading_trailing_lost", true,
+  m.set("hold_heading_trailing_lost", d.hold_heading_trailing_lost,
         {"trailing whisker lost after both touched: hold the heading (issue 17)", "", {}, false,
          tactile_common::tuned("docs/tuning/tactile_fsm.md rule 1: block 1000-1049 mocap 37 -> 41 of 50")});
-  // One depth left beyond wall_end_depth after both touched = the wall ends
-  // (issue 17, round 7): on in the whisker FSM node, off in the core (above). 105 mm:
-  // tuning blocks 413 -> 415 of 450 (tied with 110 / 115 mm), seen blocks
-  // 5000-8000 1068 -> 1088 of 1200 (docs/tuning/tactile_fsm.md "Round 7").
-  m.set("wall_end_depth", 0.105,
+  m.set("wall_end_depth", d.wall_end_depth,
         {"one depth beyond this after both touched = the wall ends (issue 17, round 7); 0 or >= t_max", "m", {}, false,
          tactile_common::tuned("docs/tuning/tactile_fsm.md Round 7")});
   m.set("same_obstacle_distance", d.same_obstacle_distance,

@@ -395,13 +395,14 @@ TEST(WhiskerFsmLogic, StaleSignalContactIsIgnored) {
 // One default per key (issue 33): params_from(default_parameters()) is the core
 // struct's defaults except the two keys gpis_explorer reads at their core default
 // through wall_sub_state() (hold_heading_trailing_lost, wall_end_depth).
-TEST(WhiskerFsmLogic, NodeDefaultsAreTheCoreDefaultsButTwo) {
+TEST(WhiskerFsmLogic, NodeDefaultsAreTheCoreDefaults) {
   const WhiskerFsmLogic::Params n = WhiskerFsmLogic::params_from(WhiskerFsmLogic::default_parameters());
   const tactile_fsm::WallFollowerParams c;
   const tactile_fsm::WallFollowerParams& f = n.fsm;
-  EXPECT_TRUE(f.hold_heading_trailing_lost && !c.hold_heading_trailing_lost);
+  EXPECT_TRUE(f.hold_heading_trailing_lost);
+  EXPECT_EQ(f.hold_heading_trailing_lost, c.hold_heading_trailing_lost);
   EXPECT_DOUBLE_EQ(f.wall_end_depth, 0.105);
-  EXPECT_EQ(c.wall_end_depth, 0.0);
+  EXPECT_EQ(f.wall_end_depth, c.wall_end_depth);
   EXPECT_EQ(f.turn_anchor_tolerance, c.turn_anchor_tolerance);
   EXPECT_EQ(f.turn_anchor_rate, c.turn_anchor_rate);
   EXPECT_EQ(f.press_sum_pa, c.press_sum_pa);

@@ -48,6 +48,8 @@ WallFollowerParams rules_off() {
   p.clear_yaw_release_rms = 0.0;
   p.first_whisk_amplitude = 0.0;
   p.end_contact_lateral = 0.0;
+  p.hold_heading_trailing_lost = false;
+  p.wall_end_depth = 0.0;
   return p;
 }
 
@@ -124,8 +126,8 @@ TEST(WallFollowerParams, DefaultsAreTheShippedRules) {
   EXPECT_DOUBLE_EQ(p.whisk_rate_max, 3.0);
   EXPECT_DOUBLE_EQ(p.whisk_pause_rms, 13.0);
   EXPECT_DOUBLE_EQ(p.end_contact_lateral, 0.045);          // round 10
-  EXPECT_FALSE(p.hold_heading_trailing_lost);              // gpis_explorer's rule
-  EXPECT_EQ(p.wall_end_depth, 0.0);
+  EXPECT_TRUE(p.hold_heading_trailing_lost);               // rule 1
+  EXPECT_DOUBLE_EQ(p.wall_end_depth, 0.105);               // round 7
 }
 
 TEST(WallFollowerParams, ValidateNamesFieldAndReason) {
@@ -282,8 +284,8 @@ TEST(WallSubStateRule, OneDepthBeyondWallEndDepthAfterBothTouchedPassesTheEdge) 
   };
   WallFollowerParams q = rules_off();
   q.hold_heading_trailing_lost = true;
-  EXPECT_EQ(sub_after_release(q), WallSubState::kFlyForward);  // off: the core default
-  EXPECT_EQ(WallFollowerParams{}.wall_end_depth, 0.0);
+  EXPECT_EQ(q.wall_end_depth, 0.0);
+  EXPECT_EQ(sub_after_release(q), WallSubState::kFlyForward);  // wall_end_depth off
   q.wall_end_depth = 0.10;
   EXPECT_EQ(sub_after_release(q), WallSubState::kFlySideways);
   // 0 (off) or >= t_max, finite.

@@ -180,13 +180,24 @@ enum class Outcome : uint8_t {
 };
 const char* to_string(Outcome o);
 
+/// The wall follows' parameters: the whisker FSM's (tactile_fsm defaults) with
+/// its two issue-17 rules for baffle courses off, hold_heading_trailing_lost
+/// and wall_end_depth: the GPIS rooms were tuned and measured without them
+/// (a choice; they are not node parameters of gpis_explorer).
+inline tactile_fsm::WallFollowerParams gpis_wall_params() {
+  tactile_fsm::WallFollowerParams w;
+  w.hold_heading_trailing_lost = false;
+  w.wall_end_depth = 0.0;
+  return w;
+}
+
 struct SequencerParams {
   ExplorerParams explorer;
-  /// Wall-following band and speeds (000 Fig. S4e; tactile_fsm's defaults);
+  /// Wall-following band and speeds (000 Fig. S4e; gpis_wall_params());
   /// also the input staleness of every phase: wall.max_input_age_s (the node
-  /// logic's freshness of depth and odometry, tactile_fsm::input_is_fresh) and
-  /// wall.failsafe_land_after_s (FAILSAFE_HOVER -> LANDING), as the wall follower.
-  tactile_fsm::WallFollowerParams wall;
+  /// logic's freshness of depth and odometry) and wall.failsafe_land_after_s
+  /// (FAILSAFE_HOVER -> LANDING), the shared fail-safe's.
+  tactile_fsm::WallFollowerParams wall = gpis_wall_params();
   int probe_directions = 4;             ///< 000: "four orthogonal directions (90 deg apart)"
   /// No wall within probe_max_distance in any probe direction: probe once
   /// more, turned by half the probes' spacing (the diagonals), before landing

@@ -74,7 +74,7 @@ class WhiskerFsmLogic {
     std::optional<tactile_msgs::msg::FsmState> state;   ///< on transitions and at 5 Hz
   };
 
-  /// Every parameter the node reads, with the shipped defaults (WallFollowerParams' but two).
+  /// Every parameter the node reads, with the shipped defaults (WallFollowerParams').
   static tactile_common::ParamMap default_parameters();
   /// Reads and validates; throws tactile_common::ParamError naming the source,
   /// the parameter and the reason.

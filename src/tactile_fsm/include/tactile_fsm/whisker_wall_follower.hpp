@@ -73,9 +73,9 @@ const char* to_string(Side s);
 Side side_from_string(const char* s);
 
 /// The defaults are what the whisker FSM node ships (config/tactile_fsm.yaml),
-/// one default per key, except hold_heading_trailing_lost and wall_end_depth:
-/// off here, on in the node (gpis_explorer's wall follows call
-/// wall_sub_state() with these defaults and were not measured with them).
+/// one default per key. gpis_explorer's wall follows start from
+/// gpis_explorer::gpis_wall_params(): these with hold_heading_trailing_lost
+/// and wall_end_depth off (its rooms were measured without them).
 struct WallFollowerParams {
   // --- paper 000 values ---
   double v_max = 0.2;                          ///< V_max [m/s] (000 Results: "V_max = 20 cm/s")
@@ -115,12 +115,9 @@ struct WallFollowerParams {
   /// turning toward the lost whisker. On rigid baffles TDORC can drop a pressed
   /// whisker (stick-slip) and not see it again; turning toward it then yawed the
   /// drone 40-50 deg into the wall (seeds 1001, 1043 of the tuning block). false =
-  /// the previous rule (missing depth counts as beyond T_max, turn). One of
-  /// the two keys whose core default differs from the whisker FSM node's
-  /// (with wall_end_depth): gpis_explorer's wall follows call wall_sub_state()
-  /// with the core defaults and were not re-measured with the rule; the node's
-  /// default and config/tactile_fsm.yaml turn it on.
-  bool hold_heading_trailing_lost = false;
+  /// the previous rule (missing depth counts as beyond T_max, turn).
+  /// gpis_explorer's wall follows keep it off (gpis_wall_params()).
+  bool hold_heading_trailing_lost = true;
   /// One whisker left beyond this depth after both touched: the wall ends
   /// (issue 17, docs/tuning/tactile_fsm.md "Round 7"; our choice, 000 Fig. S4e has no case for a
   /// lost depth). With one depth missing after both whiskers touched, a
@@ -133,10 +130,10 @@ struct WallFollowerParams {
   /// axis) before the phantom gate's RMS window had quietened. A wall
   /// the other whisker just lost is not ahead; if the drone had only drifted
   /// off, the next touch brings it back to the rule of both depths. 0 = off
-  /// (the previous rule); otherwise >= t_max. Core default 0, the whisker
-  /// FSM node's 0.105 m, as for hold_heading_trailing_lost (gpis_explorer's
-  /// wall follows read the core default). [m]
-  double wall_end_depth = 0.0;
+  /// (the previous rule); otherwise >= t_max. 105 mm: tuning blocks 413 ->
+  /// 415 of 450 (tied with 110 / 115 mm), seen blocks 5000-8000 1068 -> 1088
+  /// of 1200. gpis_explorer's wall follows keep it off (gpis_wall_params()). [m]
+  double wall_end_depth = 0.105;
   /// A contact in FLY_FORWARD less than this far ahead (along the course
   /// heading) of where the side-step after a clearing ended is the same
   /// obstacle: keep the side (issue 17, docs/tuning/tactile_fsm.md "Random baffle courses": on rigid
