@@ -370,6 +370,90 @@ void ExplorationSequencer::finish(Outcome o, SequencerReason why, double t) {
   enter(Phase::kLanding, why, t);
 }
 
+// --- Named guards (each phase's end; public, tested one by one) ---------------
+
+bool ExplorationSequencer::hover_done(double t) const { return t - entered_ >= p_.wall.hover_init_s; }
+
+bool ExplorationSequencer::aligned(double yaw) const { return std::abs(wrap(heading_ - yaw)) < p_.yaw_tolerance; }
+
+bool ExplorationSequencer::probe_found_no_wall(const Eigen::Vector2d& pos) const {
+  // Only what was flown with fresh depth counts (not the drift while held).
+  return (pos - leg_start_).norm() - leg_blind_ >= p_.probe_max_distance;
+}
+
+bool ExplorationSequencer::back_at_return_point(const Eigen::Vector2d& pos) const {
+  // Tighter than target_radius: the next leg starts here.
+  return return_leg_ == ReturnLeg::kAlongProbeLine && (return_to_ - pos).norm() < 0.5 * p_.target_radius;
+}
+
+bool ExplorationSequencer::wall_followed(double t) const { return t - entered_ >= p_.follow_time_s; }
+
+bool ExplorationSequencer::surface_beside(const Eigen::Vector2d& pos, double yaw) const {
+  return wall_.sub_state() == tactile_fsm::WallSubState::kFlySideways && rules().side_blocked(pos, yaw, wall_.side());
+}
+
+bool ExplorationSequencer::retreated(double t) const { return t - entered_ >= p_.retreat_time_s; }
+
+bool ExplorationSequencer::reached_or_passed(const Eigen::Vector2d& point, const Eigen::Vector2d& pos) const {
+  const Eigen::Vector2d dir(std::cos(heading_), std::sin(heading_));
+  return (point - pos).norm() < p_.target_radius || (point - pos).dot(dir) < 0.0;
+}
+
+bool ExplorationSequencer::exit_confirmed(const Eigen::Vector2d& pos) const {
+  // exit_distance_ contact-free (fresh depth) past exit_from_, and beyond every
+  // known surface along the heading, or probe_max_distance further still.
+  const double flown = (pos - exit_from_).norm() - leg_blind_;
+  return flown >= exit_distance_ &&
+         (rules().beyond_known_surface(pos, heading_) || flown >= exit_distance_ + p_.probe_max_distance);
+}
+
+void ExplorationSequencer::for_test_enter(Phase p, const SequencerInput& in, const TestEntry& e) {
+  if (p == Phase::kRefit || p == Phase::kFailsafeHover || p == Phase::kCheckAhead) {
+    throw std::invalid_argument(std::string("ExplorationSequencer::for_test_enter: ") + to_string(p) +
+                                (p == Phase::kFailsafeHover ? " is the SafetyRunner's, entered by a stale input"
+                                                            : " is entered by its guards only"));
+  }
+  const Eigen::Vector2d pos(in.x, in.y);
+  if (!started_) {
+    started_ = true;
+    start_ = pos;
+    start_yaw_ = in.yaw;
+    explorer_.centre_grid(pos.x(), pos.y());
+  }
+  round_ = e.round;
+  heading_ = std::isfinite(e.heading) ? e.heading : in.yaw;
+  leg_start_ = line_origin_ = exit_from_ = pos;
+  leg_blind_ = 0.0;
+  if (e.target) {
+    has_target_ = true;
+    target_ = *e.target;
+  }
+  last_pose_ = pos;
+  have_last_pose_ = true;
+  switch (p) {
+    case Phase::kFollowWall:
+      start_follow(in);  // its entry action: the side from the contact, as on a leg
+      return;
+    case Phase::kReturn:
+      begin_return(pos, e.return_to ? *e.return_to : start_, ReturnFor::kNextProbe, SequencerReason::kNone, in.t);
+      return;
+    case Phase::kTurn:
+      after_turn_ = e.after_turn;
+      break;
+    case Phase::kGoToStaging:
+      has_staging_ = true;
+      staging_ = e.target ? *e.target : pos;
+      break;
+    case Phase::kExitThrough:
+      exit_distance_ = p_.exit_confirm_distance;
+      exit_kind_ = ExitKind::kBeyondTarget;
+      break;
+    default:
+      break;
+  }
+  enter(p, SequencerReason::kNone, in.t);
+}
+
 tactile_fsm::Setpoint ExplorationSequencer::hover() const {
   tactile_fsm::Setpoint s;
   s.height = p_.wall.flight_height;
@@ -904,7 +988,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
   auto& sp = out.setpoint;
   switch (phase_) {
     case Phase::kHoverInit:
-      if (in.t - entered_ >= p_.wall.hover_init_s) {
+      if (hover_done(in.t)) {
         start_ = pos;
         start_yaw_ = in.yaw;
         explorer_.centre_grid(pos.x(), pos.y());
@@ -917,7 +1001,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
     case Phase::kTurn: {
       const double err = wrap(heading_ - in.yaw);
       sp.yaw_rate = p_.turn_rate > 0.0 ? fast_yaw_rate(err, p_.turn_rate) : yaw_rate_to(heading_, in.yaw);
-      if (std::abs(err) < p_.yaw_tolerance) {
+      if (aligned(in.yaw)) {
         leg_start_ = pos;
         // The leg's line: from here along the heading, except the head-on leg
         // (from the staging point along the normal) and the exit along an open
@@ -934,7 +1018,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
     case Phase::kProbe:
       if (fly_leg(in, contact, &sp)) break;
       // The end: probe_max_distance flown with fresh depth and no contact.
-      if ((pos - leg_start_).norm() - leg_blind_ >= p_.probe_max_distance) {
+      if (probe_found_no_wall(pos)) {
         add(pos, kInteriorLabel);  // free all the way (flown with fresh depth)
         if (open_probe_ < 0) {
           open_probe_ = probe_;
@@ -949,7 +1033,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         return_leg_ = ReturnLeg::kAlongProbeLine;
       }
       const Eigen::Vector2d d = (return_leg_ == ReturnLeg::kToProbeLine ? return_via_ : return_to_) - pos;
-      if (return_leg_ == ReturnLeg::kAlongProbeLine && d.norm() < 0.5 * p_.target_radius) {  // tighter: the next leg starts here
+      if (back_at_return_point(pos)) {
         ++probe_;
         if (return_for_ == ReturnFor::kOpenProbeExit) {
           // Through the opening along the probe's own line (flown without
@@ -1008,10 +1092,9 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       } else {
         wall_.motion(p_.wall, &sp);
       }
-      if (in.t - entered_ >= p_.follow_time_s) {
+      if (wall_followed(in.t)) {
         enter(Phase::kRetreat, SequencerReason::kWallFollowed, in.t);
-      } else if (wall_.sub_state() == tactile_fsm::WallSubState::kFlySideways &&
-                 rules().side_blocked(pos, in.yaw, wall_.side())) {
+      } else if (surface_beside(pos, in.yaw)) {
         ++side_stops_;
         sp.vy = 0.0;
         enter(Phase::kRetreat, SequencerReason::kSurfaceBeside, in.t);
@@ -1028,7 +1111,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
         sp.vx = -p_.retreat_speed;
         sp.vy = retreat_lateral(in);
       }
-      if (in.t - entered_ >= p_.retreat_time_s) {
+      if (retreated(in.t)) {
         const bool probing = round_ == Round::kProbes;
         if (p_.align_probes && probing && !aligned_) align_to_wall(in);
         commit_points(in);
@@ -1042,8 +1125,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
       break;
     case Phase::kGoToStaging: {
       if (fly_leg(in, contact, &sp)) break;
-      const Eigen::Vector2d dir(std::cos(heading_), std::sin(heading_));
-      if ((staging_ - pos).norm() < p_.target_radius || (staging_ - pos).dot(dir) < 0.0) {
+      if (reached_or_passed(staging_, pos)) {
         heading_ = approach_heading_;  // face the wall along its normal: head-on
         after_turn_ = Phase::kGoToTarget;
         enter(Phase::kTurn, SequencerReason::kAtStaging, in.t);
@@ -1053,8 +1135,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
     case Phase::kGoToTarget: {
       if (fly_leg(in, contact, &sp)) break;
       // Past the target along the leg (or within the radius): free space there.
-      const Eigen::Vector2d dir(std::cos(heading_), std::sin(heading_));
-      if ((target_ - pos).norm() < p_.target_radius || (target_ - pos).dot(dir) < 0.0) {
+      if (reached_or_passed(target_, pos)) {
         add(target_, kInteriorLabel);
         exit_from_ = pos;
         leg_blind_ = 0.0;
@@ -1067,9 +1148,7 @@ SequencerOutput ExplorationSequencer::step(const SequencerInput& in) {
     case Phase::kExitThrough:
       if (fly_leg(in, contact, &sp)) break;
       // The end: the exit's contact-free distance, past every known wall.
-      if ((pos - exit_from_).norm() - leg_blind_ >= exit_distance_ &&
-                 (rules().beyond_known_surface(pos, heading_) ||
-                  (pos - exit_from_).norm() - leg_blind_ >= exit_distance_ + p_.probe_max_distance)) {
+      if (exit_confirmed(pos)) {
         finish(Outcome::kExitFound, SequencerReason::kExitFlownThrough, in.t);
         out.gpis_updated = true;  // publish the final target with exit_found
       }

@@ -815,3 +815,203 @@ TEST(SequencerFailsafe, WallFollowTimePausesWhileHeld) {
   EXPECT_EQ(seq.failsafe_hovers(), 1u);
   EXPECT_NEAR(follow_ticks * 0.02, p.follow_time_s, 0.05);
 }
+
+// Each phase put directly into (for_test_enter), then the one guard that ends
+// it: true at its edge, false just short of it, and the transition it drives
+// (next phase and reason code). Issue 33: a newcomer changes one guard and
+// sees which test names it.
+namespace {
+using gpis_explorer::SequencerInput;
+using gpis_explorer::SequencerReason;
+using Entry = ExplorationSequencer::TestEntry;
+
+SequencerInput at(double t, double x, double y, double yaw) {
+  SequencerInput in;
+  in.t = t;
+  in.pose_valid = in.depth_valid = true;
+  in.x = x;
+  in.y = y;
+  in.yaw = yaw;
+  return in;
+}
+}  // namespace
+
+TEST(SequencerStates, ForTestEnterRefusesPhasesOnlyTheirGuardsEnter) {
+  ExplorationSequencer seq{SequencerParams{}};
+  for (Phase p : {Phase::kRefit, Phase::kFailsafeHover, Phase::kCheckAhead}) {
+    EXPECT_THROW(seq.for_test_enter(p, at(0.0, 0.0, 0.0, 0.0), {}), std::invalid_argument) << gpis_explorer::to_string(p);
+  }
+}
+
+TEST(SequencerStates, HoverInitEndsAfterHoverInitS) {
+  const SequencerParams p;
+  ExplorationSequencer seq(p);
+  seq.step(at(0.0, 0.0, 0.0, 0.3));
+  EXPECT_FALSE(seq.hover_done(p.wall.hover_init_s - 0.01));
+  EXPECT_TRUE(seq.hover_done(p.wall.hover_init_s));
+  seq.step(at(p.wall.hover_init_s - 0.02, 0.0, 0.0, 0.3));
+  EXPECT_EQ(seq.phase(), Phase::kHoverInit);
+  seq.step(at(p.wall.hover_init_s, 0.0, 0.0, 0.3));
+  EXPECT_EQ(seq.phase(), Phase::kTurn);
+  EXPECT_EQ(seq.reason_code(), SequencerReason::kHoverDone);
+}
+
+TEST(SequencerStates, TurnEndsAlignedWithinYawTolerance) {
+  const SequencerParams p;
+  ExplorationSequencer seq(p);
+  Entry e;
+  e.heading = 1.0;
+  e.after_turn = Phase::kProbe;
+  seq.for_test_enter(Phase::kTurn, at(10.0, 0.0, 0.0, 0.0), e);
+  EXPECT_FALSE(seq.aligned(1.0 - p.yaw_tolerance - 1e-3));
+  EXPECT_TRUE(seq.aligned(1.0 - 0.5 * p.yaw_tolerance));
+  EXPECT_TRUE(seq.aligned(1.0 + 0.5 * p.yaw_tolerance + 2.0 * M_PI));  // wrapped
+  const auto out = seq.step(at(10.02, 0.0, 0.0, 0.0));
+  EXPECT_EQ(seq.phase(), Phase::kTurn);
+  EXPECT_GT(out.setpoint.yaw_rate, 0.0);  // toward the heading
+  seq.step(at(10.04, 0.0, 0.0, 1.0));
+  EXPECT_EQ(seq.phase(), Phase::kProbe);
+  EXPECT_EQ(seq.reason_code(), SequencerReason::kAligned);
+}
+
+TEST(SequencerStates, ProbeEndsAfterProbeMaxDistanceWithoutContact) {
+  const SequencerParams p;
+  ExplorationSequencer seq(p);
+  seq.for_test_enter(Phase::kProbe, at(10.0, 0.0, 0.0, 0.0), {});
+  const double d = p.probe_max_distance;
+  EXPECT_FALSE(seq.probe_found_no_wall({d - 0.01, 0.0}));
+  EXPECT_TRUE(seq.probe_found_no_wall({d, 0.0}));
+  const auto out = seq.step(at(10.02, d - 0.01, 0.0, 0.0));
+  EXPECT_EQ(seq.phase(), Phase::kProbe);
+  EXPECT_GT(out.setpoint.vx, 0.0);  // forward along the probe
+  seq.step(at(10.04, d, 0.0, 0.0));
+  EXPECT_EQ(seq.phase(), Phase::kReturn);
+  EXPECT_EQ(seq.reason_code(), SequencerReason::kProbeFoundNoWall);
+}
+
+TEST(SequencerStates, UnwhiskedContactOnALegStartsTheWallFollow) {
+  SequencerParams p;
+  p.whisk_amplitude = 0.0;  // an unwhisked leg: a contact is a wall to follow
+  ExplorationSequencer seq(p);
+  seq.for_test_enter(Phase::kProbe, at(10.0, 0.0, 0.0, 0.0), {});
+  SequencerInput in = at(10.02, 0.5, 0.0, 0.0);
+  in.contact_right = true;
+  in.depth_right = 0.08;
+  in.point_right = Eigen::Vector2d(0.68, -0.025);
+  seq.step(in);
+  EXPECT_EQ(seq.phase(), Phase::kFollowWall);
+  EXPECT_EQ(seq.reason_code(), SequencerReason::kContact);
+}
+
+TEST(SequencerStates, ReturnEndsBackOnTheProbesOrigin) {
+  const SequencerParams p;
+  ExplorationSequencer seq(p);
+  Entry e;
+  e.return_to = Eigen::Vector2d(0.0, 0.0);
+  seq.for_test_enter(Phase::kReturn, at(10.0, 1.0, 0.0, 0.0), e);  // on the probe's line (heading 0)
+  EXPECT_FALSE(seq.back_at_return_point({0.5 * p.target_radius + 1e-3, 0.0}));
+  EXPECT_TRUE(seq.back_at_return_point({0.5 * p.target_radius - 1e-3, 0.0}));
+  const auto out = seq.step(at(10.02, 0.5, 0.0, 0.0));
+  EXPECT_EQ(seq.phase(), Phase::kReturn);
+  EXPECT_LT(out.setpoint.vx, 0.0);  // back toward the origin, behind
+  seq.step(at(10.04, 0.0, 0.0, 0.0));
+  EXPECT_EQ(seq.phase(), Phase::kTurn);  // the next probe
+  EXPECT_EQ(seq.reason_code(), SequencerReason::kNextProbe);
+}
+
+TEST(SequencerStates, WallFollowEndsAfterFollowTimeS) {
+  const SequencerParams p;
+  ExplorationSequencer seq(p);
+  SequencerInput in = at(10.0, 0.0, 0.0, 0.0);
+  in.contact_left = in.contact_right = true;
+  in.depth_left = in.depth_right = 0.08;
+  seq.for_test_enter(Phase::kFollowWall, in, {});
+  EXPECT_EQ(seq.phase(), Phase::kFollowWall);
+  EXPECT_FALSE(seq.wall_followed(10.0 + p.follow_time_s - 0.01));
+  EXPECT_TRUE(seq.wall_followed(10.0 + p.follow_time_s));
+  in.t = 10.02;
+  const auto out = seq.step(in);
+  EXPECT_EQ(seq.phase(), Phase::kFollowWall);
+  EXPECT_EQ(seq.sub_state(), "FLY_SIDEWAYS");  // both in the band, square: slide
+  EXPECT_NE(out.setpoint.vy, 0.0);
+  in.t = 10.0 + p.follow_time_s;
+  seq.step(in);
+  EXPECT_EQ(seq.phase(), Phase::kRetreat);
+  EXPECT_EQ(seq.reason_code(), SequencerReason::kWallFollowed);
+}
+
+TEST(SequencerStates, RetreatEndsAfterRetreatTimeS) {
+  const SequencerParams p;
+  ExplorationSequencer seq(p);
+  seq.for_test_enter(Phase::kRetreat, at(10.0, 0.0, 0.0, 0.0), {});
+  EXPECT_FALSE(seq.retreated(10.0 + p.retreat_time_s - 0.01));
+  EXPECT_TRUE(seq.retreated(10.0 + p.retreat_time_s));
+  const auto out = seq.step(at(10.02, 0.0, 0.0, 0.0));
+  EXPECT_EQ(seq.phase(), Phase::kRetreat);
+  EXPECT_LT(out.setpoint.vx, 0.0);  // backward
+  seq.step(at(10.0 + p.retreat_time_s, -0.2, 0.0, 0.0));
+  EXPECT_EQ(seq.phase(), Phase::kReturn);  // probes left: back for the next one
+  EXPECT_EQ(seq.reason_code(), SequencerReason::kRetreatedNextProbe);
+}
+
+TEST(SequencerStates, GoToTargetEndsAtOrPastTheTarget) {
+  const SequencerParams p;
+  ExplorationSequencer seq(p);
+  Entry e;
+  e.round = gpis_explorer::Round::kTargets;
+  e.heading = 0.0;
+  e.target = Eigen::Vector2d(1.0, 0.0);
+  seq.for_test_enter(Phase::kGoToTarget, at(10.0, 0.0, 0.0, 0.0), e);
+  EXPECT_FALSE(seq.reached_or_passed({1.0, 0.0}, {1.0 - p.target_radius - 1e-3, 0.0}));
+  EXPECT_TRUE(seq.reached_or_passed({1.0, 0.0}, {1.0 - p.target_radius + 1e-3, 0.0}));
+  EXPECT_TRUE(seq.reached_or_passed({1.0, 0.0}, {1.2, 1.0}));  // passed along the heading, far beside
+  seq.step(at(10.02, 0.5, 0.0, 0.0));
+  EXPECT_EQ(seq.phase(), Phase::kGoToTarget);
+  seq.step(at(10.04, 1.0, 0.0, 0.0));
+  EXPECT_EQ(seq.phase(), Phase::kExitThrough);
+  EXPECT_EQ(seq.reason_code(), SequencerReason::kTargetReached);
+}
+
+TEST(SequencerStates, ExitThroughLandsOnceTheExitIsConfirmed) {
+  const SequencerParams p;
+  ExplorationSequencer seq(p);
+  Entry e;
+  e.round = gpis_explorer::Round::kTargets;
+  e.heading = 0.0;
+  seq.for_test_enter(Phase::kExitThrough, at(10.0, 0.0, 0.0, 0.0), e);
+  // No known surface: beyond every one at once, so exit_confirm_distance decides.
+  EXPECT_FALSE(seq.exit_confirmed({p.exit_confirm_distance - 0.01, 0.0}));
+  EXPECT_TRUE(seq.exit_confirmed({p.exit_confirm_distance, 0.0}));
+  seq.step(at(10.02, p.exit_confirm_distance - 0.01, 0.0, 0.0));
+  EXPECT_EQ(seq.phase(), Phase::kExitThrough);
+  seq.step(at(10.04, p.exit_confirm_distance, 0.0, 0.0));
+  EXPECT_EQ(seq.phase(), Phase::kLanding);
+  EXPECT_EQ(seq.reason_code(), SequencerReason::kExitFlownThrough);
+  EXPECT_TRUE(seq.exit_found());
+}
+
+TEST(SequencerStates, StaleDepthInAnyMovingPhaseHoversWithTheSharedCode) {
+  const SequencerParams p;
+  for (Phase ph : {Phase::kTurn, Phase::kProbe, Phase::kReturn, Phase::kRetreat, Phase::kGoToTarget,
+                   Phase::kExitThrough}) {
+    SCOPED_TRACE(gpis_explorer::to_string(ph));
+    ExplorationSequencer seq(p);
+    Entry e;
+    e.target = Eigen::Vector2d(1.0, 0.0);
+    e.heading = ph == Phase::kTurn ? 1.0 : 0.0;
+    e.return_to = Eigen::Vector2d(-1.0, 0.0);
+    seq.for_test_enter(ph, at(10.0, 0.0, 0.0, 0.0), e);
+    SequencerInput in = at(10.02, 0.0, 0.0, 0.0);
+    make_depth_stale(in);
+    const auto out = seq.step(in);
+    EXPECT_EQ(seq.phase(), Phase::kFailsafeHover);
+    EXPECT_EQ(seq.failsafe_from(), ph);
+    EXPECT_EQ(static_cast<int>(seq.reason_code()), 1);  // REASON_FAILSAFE_DEPTH_STALE
+    EXPECT_EQ(out.setpoint.vx, 0.0);
+    EXPECT_EQ(out.setpoint.vy, 0.0);
+    EXPECT_EQ(out.setpoint.yaw_rate, 0.0);
+    seq.step(at(10.04, 0.0, 0.0, 0.0));  // fresh again: the phase resumes
+    EXPECT_EQ(seq.phase(), ph);
+    EXPECT_EQ(static_cast<int>(seq.reason_code()), 5);  // REASON_FAILSAFE_INPUTS_FRESH
+  }
+}

@@ -30,8 +30,10 @@
 // whisker FSM's WALL_FOLLOWING runs.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -487,6 +489,46 @@ class ExplorationSequencer {
   /// (tactile_fsm::to_string(WallSubState), "FLY_SIDEWAYS", ...), TURN the
   /// phase it turns for ("PROBE", ...).
   std::string sub_state() const;
+  /// Puts the sequencer directly into phase p at the input's pose, as its
+  /// transitions would leave it (tests: each phase's guards alone). The pose is
+  /// the start (first call), the leg's start and line origin; TestEntry gives the
+  /// heading (NaN: the input's yaw), the round, a target (GO_TO_TARGET's, the
+  /// staging point of GO_TO_STAGING), RETURN's point (default: the start) and
+  /// the phase after a TURN. FOLLOW_WALL and RETURN run their entry actions
+  /// (start_follow: the side; begin_return: the legs). REFIT, CHECK_AHEAD and
+  /// FAILSAFE_HOVER are refused (std::invalid_argument): their guards enter them.
+  struct TestEntry {
+    double heading = NAN;
+    Round round = Round::kProbes;
+    std::optional<Eigen::Vector2d> target;
+    std::optional<Eigen::Vector2d> return_to;
+    Phase after_turn = Phase::kProbe;
+  };
+  void for_test_enter(Phase p, const SequencerInput& in, const TestEntry& e);
+
+  // Named guards: the end of each phase, in step()'s words (public: tested one
+  // by one). Times t and positions pos in the odometry frame.
+  /// HOVER_INIT -> TURN: hover_init_s hovered.
+  bool hover_done(double t) const;
+  /// TURN -> the phase after it: heading within yaw_tolerance.
+  bool aligned(double yaw) const;
+  /// PROBE -> RETURN: probe_max_distance flown with fresh depth (leg_blind_ not counted).
+  bool probe_found_no_wall(const Eigen::Vector2d& pos) const;
+  /// RETURN -> TURN / REFIT: on the probe's line, within target_radius / 2 of its origin.
+  bool back_at_return_point(const Eigen::Vector2d& pos) const;
+  /// FOLLOW_WALL -> RETREAT: follow_time_s (000: 2 s).
+  bool wall_followed(double t) const;
+  /// FOLLOW_WALL -> RETREAT: sliding sideways into a known surface (PathRules::side_blocked).
+  bool surface_beside(const Eigen::Vector2d& pos, double yaw) const;
+  /// RETREAT -> RETURN / REFIT: retreat_time_s (000: 1 s).
+  bool retreated(double t) const;
+  /// GO_TO_STAGING / GO_TO_TARGET -> TURN / EXIT_THROUGH: within target_radius of
+  /// the point, or past it along the heading.
+  bool reached_or_passed(const Eigen::Vector2d& point, const Eigen::Vector2d& pos) const;
+  /// EXIT_THROUGH -> LANDING (exit_found): the exit's contact-free distance flown,
+  /// beyond every known surface ahead (or probe_max_distance further).
+  bool exit_confirmed(const Eigen::Vector2d& pos) const;
+
   Round round() const { return round_; }
   ProbeSet probe_set() const { return probe_set_; }
   const SequencerParams& params() const { return p_; }
