@@ -42,6 +42,8 @@ void IndiControlLogic::Params::validate() const {
   if (!(touchdown_confirm_s > 0.0) || !std::isfinite(touchdown_confirm_s)) fail("touchdown_confirm_s", touchdown_confirm_s);
   if (!(failsafe_max_descent_s > 0.0) || !std::isfinite(failsafe_max_descent_s))
     fail("failsafe_max_descent_s", failsafe_max_descent_s);
+  if (!std::isfinite(failsafe_floor_z))
+    throw std::invalid_argument("IndiControlLogic.failsafe_floor_z: must be finite, got " + std::to_string(failsafe_floor_z));
 }
 
 const char* to_string(IndiFailsafeState s) {
@@ -68,6 +70,7 @@ bool odometry_lost(const InputAges& in, double max_age_s) {
 bool touchdown(double commanded_thrust_n, const Vec3& accel_world, double mass) {
   return commanded_thrust_n < kTouchdownThrustFraction * mass * kGravity && accel_world.norm() < kRestingAccel;
 }
+bool below_floor(double height_estimate, double floor_z) { return height_estimate < floor_z - kBelowFloorMargin; }
 bool descent_timed_out(double descent_s, double max_descent_s) { return descent_s >= max_descent_s; }
 }  // namespace indi_guards
 
@@ -95,10 +98,10 @@ ParamMap IndiControlLogic::default_parameters() {
         {"control effectiveness B with the wall estimate when a wall is detected (004 eq. 36)", "", {}, false,
          paper("004 eq. 36: wall effect integrated into B")});
   m.set("max_input_age_s", d.max_input_age_s,
-        {"odometry older than this (IMU fresh): level descent on the IMU (ODOMETRY_LOST); IMU older than this: "
+        {"odometry older than this (IMU fresh): descent on the IMU (ODOMETRY_LOST); IMU older than this: "
          "motors stopped (MOTORS_STOPPED)", "s", positive(), false, choice()});
   m.set("failsafe_descent_speed", d.failsafe_descent_speed,
-        {"ODOMETRY_LOST: speed of the level descent on the IMU-integrated vertical speed", "m/s", positive(), false,
+        {"ODOMETRY_LOST: descent speed, flown on the IMU-integrated velocity", "m/s", positive(), false,
          choice("wall_effect_nav's FAILSAFE_LAND speed")});
   m.set("touchdown_confirm_s", d.touchdown_confirm_s,
         {"ODOMETRY_LOST: the land detector (thrust < m g / 2 at rest) holds this long, then the motors stop", "s",
@@ -106,6 +109,11 @@ ParamMap IndiControlLogic::default_parameters() {
   m.set("failsafe_max_descent_s", d.failsafe_max_descent_s,
         {"ODOMETRY_LOST: the motors stop after this long in the descent, touched down or not", "s", positive(), false,
          choice("a 2 m height bound at 0.25 m/s is 8 s, plus 2 s")});
+  const double inf = std::numeric_limits<double>::infinity();
+  m.set("failsafe_floor_z", d.failsafe_floor_z,
+        {"ODOMETRY_LOST: z of the floor in the odometry frame; the motors stop when the IMU dead-reckoned height "
+         "is 0.1 m below it (the land detector's fallback); finite", "m", ParamRange{-inf, inf, true, true}, false,
+         choice("the motion-capture and simulator floor")});
   m.set("k_p", v3(i.k_p), {"K_p of 004 eq. 26 per axis, each finite and >= 0 (choice)", "1/s^2", {}, false,
         choice("004 gives no gains")});
   m.set("k_d", v3(i.k_d), {"K_d of 004 eq. 26 per axis, each finite and >= 0 (choice)", "1/s", {}, false,
@@ -163,6 +171,7 @@ IndiControlLogic::Params IndiControlLogic::params_from(const ParamMap& map) {
   p.failsafe_descent_speed = map.get_double("failsafe_descent_speed");
   p.touchdown_confirm_s = map.get_double("touchdown_confirm_s");
   p.failsafe_max_descent_s = map.get_double("failsafe_max_descent_s");
+  p.failsafe_floor_z = map.get_double("failsafe_floor_z");
   i.k_p = v3("k_p");
   i.k_d = v3("k_d");
   i.k_i = v3("k_i");
@@ -235,7 +244,8 @@ void IndiControlLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
     return;
   }
   if (!msg.child_frame_id.empty()) body_frame_ = msg.child_frame_id;
-  imu_vz_since_odom_ = 0.0;
+  imu_dv_since_odom_.setZero();
+  imu_dp_since_odom_.setZero();
   pos_ = p;
   vel_ = q.normalized() * vb;  // REP-105: twist in the body frame
   odom_ns_ = tactile_common::from_stamp(msg.header.stamp);
@@ -258,12 +268,13 @@ void IndiControlLogic::on_imu(const sensor_msgs::msg::Imu& msg) {
   }
   const int64_t stamp = tactile_common::from_stamp(msg.header.stamp);
   R_ = q.normalized().toRotationMatrix();
-  // Vertical speed change since the last odometry, for the ODOMETRY_LOST descent: the world
-  // vertical specific force minus g over the time since the previous sample (at most
-  // max_input_age_s: a gap longer than that is a lost IMU anyway).
+  // Velocity change since the last odometry, for the ODOMETRY_LOST descent: the world
+  // specific force minus g e3 (004 eq. 30's measured acceleration) over the time since the
+  // previous sample (at most max_input_age_s: a longer gap is a lost IMU anyway).
   if (have_imu_ && have_odom_) {
     const double dt = std::clamp(tactile_common::to_seconds(stamp - imu_ns_), 0.0, params_.max_input_age_s);
-    imu_vz_since_odom_ += ((R_ * a).z() - kGravity) * dt;
+    imu_dv_since_odom_ += (R_ * a - kGravity * Vec3::UnitZ()) * dt;
+    imu_dp_since_odom_ += (vel_ + imu_dv_since_odom_) * dt;
   }
   acc_ = a;
   gyro_ = w;
@@ -312,7 +323,7 @@ void IndiControlLogic::update_state(int64_t now_ns) {
       if (imu_lost(in, max_age)) {
         transition(IndiFailsafeState::kMotorsStopped, "IMU stale: no attitude, flight terminated", now_ns);
       } else if (odometry_lost(in, max_age)) {
-        transition(IndiFailsafeState::kOdometryLost, "odometry stale: level descent on the IMU", now_ns);
+        transition(IndiFailsafeState::kOdometryLost, "odometry stale: descent on the IMU", now_ns);
       }
       break;
     case IndiFailsafeState::kOdometryLost: {
@@ -322,6 +333,10 @@ void IndiControlLogic::update_state(int64_t now_ns) {
       }
       if (descent_timed_out(tactile_common::to_seconds(now_ns - stats_.state_since_ns), params_.failsafe_max_descent_s)) {
         transition(IndiFailsafeState::kMotorsStopped, "descent lasted failsafe_max_descent_s", now_ns);
+        break;
+      }
+      if (below_floor(pos_.z() + imu_dp_since_odom_.z(), params_.failsafe_floor_z)) {
+        transition(IndiFailsafeState::kMotorsStopped, "dead-reckoned height below the floor", now_ns);
         break;
       }
       const Vec3 a_world = R_ * acc_ - kGravity * Vec3::UnitZ();
@@ -396,12 +411,23 @@ std::optional<tactile_msgs::msg::ThrustCommand> IndiControlLogic::nominal(int64_
 }
 
 tactile_msgs::msg::ThrustCommand IndiControlLogic::descend(int64_t now_ns) {
-  // Vertical speed: the last odometry's plus the IMU's specific force integrated since.
-  stats_.vertical_speed_estimate = vel_.z() + imu_vz_since_odom_;
+  // Velocity: the last odometry's plus the IMU's measured acceleration integrated since.
+  const Vec3 v = vel_ + imu_dv_since_odom_;
+  stats_.vertical_speed_estimate = v.z();
+  stats_.height_estimate = pos_.z() + imu_dp_since_odom_.z();
   if (ticks_ % outer_every_ == 0) {
-    // eq. 26 on the vertical velocity alone (K_d), then eq. 30/34 with a level attitude.
-    const double a_z = params_.indi.k_d.z() * (-params_.failsafe_descent_speed - stats_.vertical_speed_estimate);
-    ctl_.level(std::clamp(a_z, -0.5 * kGravity, 0.5 * kGravity), R_, acc_, outer_every_ / params_.rate_hz);
+    // 004 eq. 26 velocity-only on every axis (K_d; no position): hold the horizontal velocity
+    // at 0 (level unless a force such as the wall's pull must be held off, max_tilt) and
+    // descend at failsafe_descent_speed; eq. 30-34 unchanged.
+    IndiSetpoint sp;
+    sp.position_control = {false, false, false};
+    sp.velocity = Vec3(0.0, 0.0, -params_.failsafe_descent_speed);
+    sp.yaw = yaw_hold_;
+    IndiFeedback fb;
+    fb.velocity = v;
+    fb.R = R_;
+    fb.specific_force = acc_;
+    ctl_.outer(sp, fb, outer_every_ / params_.rate_hz);
   }
   ++ticks_;
   const Vec3 xb = R_.col(0);

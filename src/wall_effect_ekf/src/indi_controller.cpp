@@ -108,24 +108,6 @@ IndiOuterOutput IndiController::outer(const IndiSetpoint& sp, const IndiFeedback
   return o;
 }
 
-IndiOuterOutput IndiController::level(double accel_target_z, const Mat3& R, const Vec3& specific_force, double dt) {
-  if (!(dt > 0.0)) throw std::invalid_argument("IndiController::level: dt must be > 0");
-  const double m = p_.vehicle.mass;
-  integral_.setZero();
-  IndiOuterOutput o;
-  o.accel_target = Vec3(0.0, 0.0, accel_target_z);
-  const Vec3 e = o.accel_target - (R * specific_force - kGravity * Vec3::UnitZ());  // 004 eq. 30
-  o.increment = m * e;
-  const double tau = p_.attitude_time_constant > 0.0 ? p_.attitude_time_constant : dt;
-  const Vec3 up_b = R.transpose() * Vec3::UnitZ();  // level attitude target: z_B along e3
-  o.rate_x = std::clamp(-up_b.y() / tau, -p_.max_rate_xy, p_.max_rate_xy);
-  o.rate_y = std::clamp(up_b.x() / tau, -p_.max_rate_xy, p_.max_rate_xy);
-  o.thrust = std::clamp(thrust_prev_ + m * R.col(2).dot(e), 0.0, 4.0 * p_.vehicle.max_rotor_thrust);  // 004 eq. 34
-  thrust_prev_ = o.thrust;
-  out_ = o;
-  return o;
-}
-
 Vec3 IndiController::angular_accel(const Vec3& omega, double yaw, double yaw_setpoint) const {
   // 004 eq. 35.
   Vec3 wd(-p_.kappa_d.x() * (omega.x() - out_.rate_x), -p_.kappa_d.y() * (omega.y() - out_.rate_y),

@@ -272,6 +272,12 @@ TEST(IndiFailsafeGuards, TouchdownIsLowThrustAtRest) {
   EXPECT_FALSE(indi_guards::touchdown(0.0, Vec3(0, 0, 3.0), m));                       // impact spike: not rest yet
 }
 
+TEST(IndiFailsafeGuards, BelowFloorOnlyPastTheMargin) {
+  EXPECT_FALSE(indi_guards::below_floor(-0.09, 0.0));
+  EXPECT_TRUE(indi_guards::below_floor(-0.11, 0.0));
+  EXPECT_TRUE(indi_guards::below_floor(0.89, 1.0));  // a floor at z = 1 m in the odometry frame
+}
+
 TEST(IndiFailsafeGuards, DescentTimesOutAtTheBound) {
   EXPECT_FALSE(indi_guards::descent_timed_out(9.99, 10.0));
   EXPECT_TRUE(indi_guards::descent_timed_out(10.0, 10.0));
@@ -299,7 +305,7 @@ TEST(IndiFailsafe, OdometryLossFliesALevelDescentBelowHoverEveryTick) {
   IndiControlLogic l(default_params());
   const auto out = lose_odometry(l, 400 * kMs, 0.0, true);
   EXPECT_EQ(l.state(), IndiFailsafeState::kOdometryLost);
-  EXPECT_STREQ(l.stats().reason, "odometry stale: level descent on the IMU");
+  EXPECT_STREQ(l.stats().reason, "odometry stale: descent on the IMU");
   EXPECT_EQ(l.stats().published, 201u);  // every tick from t = 0 to 400 ms: never nullopt once flying
   EXPECT_GT(l.stats().ticks_odometry_lost, 0u);
   EXPECT_EQ(l.stats().ticks_nominal + l.stats().ticks_odometry_lost, 201u);
@@ -317,15 +323,24 @@ TEST(IndiFailsafe, OdometryLossFliesALevelDescentBelowHoverEveryTick) {
   EXPECT_EQ(l.stats().odometry_ignored, 1u);
 }
 
-// The descent levels the vehicle on the IMU alone: rolled right, the roll rate setpoint is negative.
-TEST(IndiFailsafe, OdometryLossLevelsTheAttitude) {
+// The descent holds the horizontal velocity at 0 on the IMU: a measured 1.5 m/s^2 along x
+// (the wall's pull, say) for 0.2 s is 0.3 m/s, braked by K_d (eq. 26 velocity-only) with a
+// pitch rate that tilts the thrust against it (eq. 33); nothing on y.
+TEST(IndiFailsafe, OdometryLossHoldsTheHorizontalVelocityOnTheImu) {
   IndiControlLogic l(default_params());
-  lose_odometry(l, 250 * kMs, 0.2, true);
+  lose_odometry(l, 100 * kMs);
+  for (int64_t t = 102 * kMs; t <= 300 * kMs; t += 2 * kMs) {
+    auto imu = imu_at(t);
+    imu.linear_acceleration.x = 1.5;
+    l.on_imu(imu);
+    l.on_timer(t);
+  }
   ASSERT_EQ(l.state(), IndiFailsafeState::kOdometryLost);
-  const auto& o = l.controller().last_outer();
-  EXPECT_NEAR(o.rate_x, -std::sin(0.2) / IndiParams().attitude_time_constant, 1e-9);
-  EXPECT_NEAR(o.rate_y, 0.0, 1e-12);
-  EXPECT_NEAR(o.accel_target.x(), 0.0, 1e-12);  // no horizontal target: no position, no velocity
+  const auto& o = l.controller().last_outer();  // the outer loop ran at 300 ms (100 Hz)
+  EXPECT_NEAR(o.accel_target.x(), -IndiParams().k_d.x() * 0.3, 1e-6);
+  EXPECT_NEAR(o.accel_target.y(), 0.0, 1e-12);
+  EXPECT_LT(o.rate_y, 0.0);
+  EXPECT_NEAR(o.rate_x, 0.0, 1e-12);
 }
 
 // The IMU integrates the vertical speed from the last odometry's: a measured 1.5 m/s^2 down
@@ -380,6 +395,28 @@ TEST(IndiFailsafe, TheDescentBoundStopsTheMotors) {
   EXPECT_EQ(l.state(), IndiFailsafeState::kMotorsStopped);
   EXPECT_STREQ(l.stats().reason, "descent lasted failsafe_max_descent_s");
   EXPECT_NEAR(tactile_common::to_seconds(l.stats().state_since_ns), 0.202 + 1.0, 0.003);
+}
+
+// The land detector's fallback: a descent the IMU dead-reckons 0.1 m below the floor (here
+// failsafe_floor_z = 0.9 m, from 1 m) stops the motors; the estimate tracks the IMU descent.
+TEST(IndiFailsafe, DeadReckonedHeightBelowTheFloorStopsTheMotors) {
+  auto p = default_params();
+  p.failsafe_floor_z = 0.9;
+  IndiControlLogic l(p);
+  lose_odometry(l, 100 * kMs);
+  double last_height = 1.0;
+  for (int64_t t = 102 * kMs; t <= 3000 * kMs && l.state() == IndiFailsafeState::kOdometryLost || t <= 202 * kMs;
+       t += 2 * kMs) {
+    l.on_imu(imu_at(t, 0.0, l.controller().last_outer().thrust / 0.28));  // in the air
+    l.on_timer(t);
+    if (l.state() == IndiFailsafeState::kOdometryLost) last_height = l.stats().height_estimate;
+  }
+  EXPECT_EQ(l.state(), IndiFailsafeState::kMotorsStopped);
+  EXPECT_STREQ(l.stats().reason, "dead-reckoned height below the floor");
+  EXPECT_NEAR(last_height, 0.8, 0.01);
+  const double descent_s = tactile_common::to_seconds(l.stats().state_since_ns) - 0.202;
+  EXPECT_GT(descent_s, 0.2 / 0.25);  // 0.2 m at no more than 0.25 m/s
+  EXPECT_LT(descent_s, 2.0);
 }
 
 // No attitude: the motors stop max_input_age_s after the last IMU sample, from NOMINAL and

@@ -51,24 +51,6 @@ TEST(Indi, OuterLoopLevelHoverByHand) {
   EXPECT_NEAR(o2.rate_y, 0.0, 1e-12);
 }
 
-// The fail-safe's outer loop (no position / velocity): eq. 30 and 34 with a vertical target,
-// rates that level the vehicle (tau = 0.5 s) whatever the horizontal acceleration.
-TEST(Indi, LevelDescentByHand) {
-  IndiController c(hand_params());
-  const double pitch = 0.1;  // nose down about y_B
-  const Mat3 R = Eigen::AngleAxisd(pitch, Vec3::UnitY()).toRotationMatrix();
-  const Vec3 a_m(0.0, 0.0, kGravity);  // thrust along z_B of m g: R a_m - g e3 = (g sin, 0, g (cos - 1))
-  const IndiOuterOutput o = c.level(-1.0, R, a_m, 0.01);
-  EXPECT_NEAR(o.accel_target.x(), 0.0, 1e-12);
-  EXPECT_NEAR(o.rate_x, 0.0, 1e-12);
-  EXPECT_NEAR(o.rate_y, -std::sin(pitch) / 0.5, 1e-12);  // pitch back up to level
-  const Vec3 e = Vec3(0, 0, -1.0) - (R * a_m - kGravity * Vec3::UnitZ());
-  EXPECT_NEAR(o.thrust, kM * kGravity + kM * R.col(2).dot(e), 1e-12);  // eq. 34
-  EXPECT_LT(o.thrust, kM * kGravity);
-  EXPECT_NEAR(c.previous_thrust(), o.thrust, 1e-12);
-  EXPECT_THROW(c.level(0.0, R, a_m, 0.0), std::invalid_argument);
-}
-
 TEST(Indi, OuterLoopTiltedWithMeasuredAccelerationByHand) {
   IndiParams p = hand_params();
   p.k_i.setZero();

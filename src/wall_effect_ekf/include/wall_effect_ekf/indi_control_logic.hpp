@@ -13,10 +13,11 @@
 //   WAITING_FOR_INPUT -> NOMINAL          inputs_ready: odometry and IMU both fresh
 //   NOMINAL -> MOTORS_STOPPED             imu_lost: no attitude, flight terminated
 //   NOMINAL -> ODOMETRY_LOST              odometry_lost: odometry stale, IMU fresh
-//   ODOMETRY_LOST -> MOTORS_STOPPED       imu_lost, touchdown (for touchdown_confirm_s)
-//                                         or descent_timed_out (failsafe_max_descent_s)
-// WAITING_FOR_INPUT sends nothing (on the ground, motors idle); ODOMETRY_LOST flies a
-// level descent on the IMU; MOTORS_STOPPED (terminal) sends zero thrusts every tick.
+//   ODOMETRY_LOST -> MOTORS_STOPPED       imu_lost, touchdown (for touchdown_confirm_s),
+//                                         below_floor or descent_timed_out
+// WAITING_FOR_INPUT sends nothing (on the ground, motors idle); ODOMETRY_LOST descends on
+// the IMU-integrated velocity (horizontal held at 0); MOTORS_STOPPED (terminal) sends zero
+// thrusts every tick.
 #pragma once
 
 #include <array>
@@ -61,6 +62,12 @@ bool odometry_lost(const InputAges& in, double max_age_s);
 constexpr double kTouchdownThrustFraction = 0.5;
 constexpr double kRestingAccel = 1.0;  ///< [m/s^2]
 bool touchdown(double commanded_thrust_n, const Vec3& accel_world, double mass);
+/// ODOMETRY_LOST -> MOTORS_STOPPED: the height dead-reckoned from the last odometry on the
+/// IMU is kBelowFloorMargin below failsafe_floor_z. The fallback of the land detector: the
+/// simulated IMU (500 Hz point samples of 1 kHz physics) misses the 1 ms impact about one
+/// landing in three, and the integrated speed then keeps reading the descent on the floor.
+constexpr double kBelowFloorMargin = 0.1;  ///< [m]
+bool below_floor(double height_estimate, double floor_z);
 /// ODOMETRY_LOST -> MOTORS_STOPPED: the descent lasted failsafe_max_descent_s.
 bool descent_timed_out(double descent_s, double max_descent_s);
 }  // namespace indi_guards
@@ -84,7 +91,7 @@ class IndiControlLogic {
     double outer_rate_hz = 100.0;  ///< outer loop (004: 100 Hz ground station)
     bool use_wall_in_allocation = true;  ///< eq. 36: B with the wall estimate when detected
     double max_input_age_s = 0.1;  ///< odometry / IMU older than this: the fail-safe (README)
-    /// ODOMETRY_LOST: vertical speed of the level descent [m/s] (choice: wall_effect_nav's
+    /// ODOMETRY_LOST: speed of the descent [m/s] (choice: wall_effect_nav's
     /// FAILSAFE_LAND speed).
     double failsafe_descent_speed = 0.25;
     /// ODOMETRY_LOST: the land detector must hold this long before the motors stop [s] (choice).
@@ -92,6 +99,9 @@ class IndiControlLogic {
     /// ODOMETRY_LOST: the motors stop after this long in the descent, touched down or not [s]
     /// (choice: a 2 m height bound at 0.25 m/s is 8 s, plus 2 s).
     double failsafe_max_descent_s = 10.0;
+    /// ODOMETRY_LOST: the floor's z in the odometry frame [m] (choice: 0, the motion-capture
+    /// and simulator floor).
+    double failsafe_floor_z = 0.0;
     void validate() const;
   };
 
@@ -104,7 +114,8 @@ class IndiControlLogic {
     IndiFailsafeState state = IndiFailsafeState::kWaitingForInput;
     const char* reason = "no odometry and IMU yet";  ///< why the last transition was taken
     int64_t state_since_ns = 0;       ///< node time of the last transition
-    double vertical_speed_estimate = 0.0;  ///< ODOMETRY_LOST: last odometry v_z + int (R a_m - g e3)_z [m/s]
+    double vertical_speed_estimate = 0.0;  ///< ODOMETRY_LOST: last odometry v_z + int (R a_m - g e3)_z dt [m/s]
+    double height_estimate = 0.0;          ///< ODOMETRY_LOST: last odometry z + int v_z dt [m]
   };
 
   static tactile_common::ParamMap default_parameters();
@@ -160,7 +171,8 @@ class IndiControlLogic {
   int64_t ticks_ = 0;
   int outer_every_ = 5;
   // Fail-safe.
-  double imu_vz_since_odom_ = 0.0;  ///< int (R a_m - g e3)_z dt over the IMU samples since the last odometry
+  Vec3 imu_dv_since_odom_ = Vec3::Zero();  ///< int (R a_m - g e3) dt over the IMU samples since the last odometry
+  Vec3 imu_dp_since_odom_ = Vec3::Zero();  ///< int (v_odom + dv) dt since the last odometry
   double yaw_hold_ = 0.0;           ///< ODOMETRY_LOST: the yaw at the loss
   int64_t resting_since_ns_ = -1;   ///< ODOMETRY_LOST: the land detector holds since then (-1: not)
   void transition(IndiFailsafeState to, const char* reason, int64_t now_ns);

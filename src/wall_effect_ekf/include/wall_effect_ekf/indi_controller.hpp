@@ -94,12 +94,6 @@ class IndiController {
   /// Eq. 26 and 30-34 over one outer-loop period dt [s].
   IndiOuterOutput outer(const IndiSetpoint& sp, const IndiFeedback& fb, double dt);
 
-  /// Fail-safe outer loop on the IMU alone (no position or velocity feedback): eq. 30 and
-  /// eq. 34 with the vertical target acceleration accel_target_z only, and, instead of
-  /// eq. 32-33, rate setpoints that level the vehicle (w_d,x = -u_y / tau, w_d,y = u_x / tau,
-  /// u = R^T e3 the world up in the body frame, tau as in eq. 32-33). Clears the integral.
-  IndiOuterOutput level(double accel_target_z, const Mat3& R, const Vec3& specific_force, double dt);
-
   /// Eq. 35: desired angular acceleration from the body rates, the rate
   /// setpoints of the last outer() and the yaw error (yaw = psi or int w_z).
   Vec3 angular_accel(const Vec3& omega, double yaw, double yaw_setpoint) const;
