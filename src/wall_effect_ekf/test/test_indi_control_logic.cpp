@@ -405,7 +405,8 @@ TEST(IndiFailsafe, DeadReckonedHeightBelowTheFloorStopsTheMotors) {
   IndiControlLogic l(p);
   lose_odometry(l, 100 * kMs);
   double last_height = 1.0;
-  for (int64_t t = 102 * kMs; t <= 3000 * kMs && l.state() == IndiFailsafeState::kOdometryLost || t <= 202 * kMs;
+  // Until the motors stop (the odometry goes stale at 202 ms).
+  for (int64_t t = 102 * kMs; t <= 3000 * kMs && (t <= 202 * kMs || l.state() == IndiFailsafeState::kOdometryLost);
        t += 2 * kMs) {
     l.on_imu(imu_at(t, 0.0, l.controller().last_outer().thrust / 0.28));  // in the air
     l.on_timer(t);
