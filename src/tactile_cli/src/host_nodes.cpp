@@ -296,7 +296,11 @@ std::shared_ptr<wall_effect_ekf::IndiControlLogic> add_indi_controller(Host& hos
     return NodeReport{std::string("/") + Logic::kNodeName,
                       {{"published", s.published},
                        {"dropped_nonfinite", s.dropped_nonfinite},
-                       {"ticks_without_input", s.ticks_without_input}}};
+                       {"ticks_without_input", s.ticks_without_input},
+                       {"ticks_nominal", s.ticks_nominal},
+                       {"ticks_odometry_lost", s.ticks_odometry_lost},
+                       {"ticks_motors_stopped", s.ticks_motors_stopped},
+                       {"odometry_ignored", s.odometry_ignored}}};
   });
   return logic;
 }

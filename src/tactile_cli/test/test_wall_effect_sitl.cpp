@@ -175,3 +175,64 @@ TEST(WallEffectSitl, StaleWallEstimateLands) {
   EXPECT_LT(g["final_z_m"].get<double>(), 0.01);  // on the floor, not hovering at 1 m
   EXPECT_LT(w["final_commanded_thrust_n"].get<double>(), 0.05);  // motors idle (hover: 0.28 kg g = 2.7 N)
 }
+
+namespace {
+
+/// ducted_track_0 with `topic` dropped from 12 s to the end (the vehicle wall following at
+/// ~1 m): INDI's own fail-safe must put it on the floor with the motors stopped.
+nlohmann::json track_with_dropout(const std::string& topic) {
+  return tactile_cli::test::run_edited_scenario(
+      "ducted_track_0.yaml", {{"duration_s: 30.0", "duration_s: 26.0"}},
+      "faults:\n  - {type: dropout, topic: " + topic + ", start_s: 12.0, duration_s: 100.0}\n");
+}
+
+void expect_on_the_floor_with_the_motors_stopped(const nlohmann::json& m, const char* first_state) {
+  const auto& i = m["wall_effect_nav"]["indi"];
+  const auto& g = m["ground_truth"];
+  const double left = i["left_nominal_s"].get<double>(), stopped = i["state_since_s"].get<double>();
+  const double z0 = i["z_at_loss_m"].get<double>(), zmax = i["max_z_after_loss_m"].get<double>();
+  std::printf("%s: left NOMINAL at %.2f s at z %.3f m, max z after %.3f m, floor reached %.2f s after, motors "
+              "stopped %.2f s after (%s), max descent speed %.3f m/s, final z %.4f m, final thrust %.3f N\n",
+              first_state, left, z0, zmax, i["floor_reached_s"].get<double>() - left, stopped - left,
+              i["reason"].get<std::string>().c_str(), i["max_descent_speed_mps"].get<double>(),
+              g["final_z_m"].get<double>(), m["wall_effect_nav"]["final_commanded_thrust_n"].get<double>());
+  EXPECT_GT(m["faults_injected"]["dropout"].get<int>(), 0);
+  EXPECT_EQ(i["first_failsafe_state"], first_state);
+  EXPECT_EQ(i["state"], "MOTORS_STOPPED");
+  EXPECT_GT(left, 12.0);
+  EXPECT_LT(left, 12.5);               // max_input_age_s after the dropout (and a tick)
+  EXPECT_GT(z0, 0.5);                  // it was flying
+  EXPECT_LT(zmax, z0 + 0.05);          // no flyaway: never above the height at the loss
+  EXPECT_LT(g["final_z_m"].get<double>(), 0.01);  // on the floor
+  EXPECT_EQ(m["wall_effect_nav"]["final_commanded_thrust_n"].get<double>(), 0.0);  // motors stopped, on purpose
+  EXPECT_EQ(m["collisions"].get<int>(), 0);
+  const auto& n = m["nodes"]["/indi_controller"];
+  EXPECT_GT(n["ticks_motors_stopped"].get<int>(), 0);
+}
+
+}  // namespace
+
+// INDI's own fail-safe (issue 33 follow-up): with the odometry gone 12 s into the 004 wall
+// tracking, INDI used to send nothing and the simulator held the last thrusts (the vehicle
+// flew on). Now ODOMETRY_LOST descends on the IMU-integrated velocity at 0.25 m/s (horizontal
+// held at 0: the wall's pull put a level descent into the wall, 5 guard contacts), and the
+// land detector stops the motors on the floor.
+TEST(WallEffectSitl, OdometryLossDescendsOnTheImuAndStopsTheMotorsOnTheFloor) {
+  const auto m = track_with_dropout("/odom");
+  expect_on_the_floor_with_the_motors_stopped(m, "ODOMETRY_LOST");
+  const auto& i = m["wall_effect_nav"]["indi"];
+  // The land detector or its dead-reckoned fallback (one landing in three: README), not the time bound.
+  EXPECT_NE(i["reason"], "descent lasted failsafe_max_descent_s");
+  EXPECT_LT(i["state_since_s"].get<double>() - i["floor_reached_s"].get<double>(), 1.0);  // stopped on the floor
+  EXPECT_LT(i["max_descent_speed_mps"].get<double>(), 0.5);  // a descent, not a fall (0.25 m/s commanded)
+  EXPECT_GT(m["nodes"]["/indi_controller"]["ticks_odometry_lost"].get<int>(), 0);
+}
+
+// Without the IMU INDI has no attitude: flight termination (motors stopped on purpose,
+// as PX4 without an attitude estimate), the vehicle falls to the floor.
+TEST(WallEffectSitl, ImuLossStopsTheMotors) {
+  const auto m = track_with_dropout("/imu");
+  expect_on_the_floor_with_the_motors_stopped(m, "MOTORS_STOPPED");
+  EXPECT_EQ(m["wall_effect_nav"]["indi"]["reason"], "IMU stale: no attitude, flight terminated");
+  EXPECT_EQ(m["nodes"]["/indi_controller"]["ticks_odometry_lost"].get<int>(), 0);
+}

@@ -37,7 +37,42 @@ void IndiControlLogic::Params::validate() const {
   if (!(outer_rate_hz > 0.0) || !std::isfinite(outer_rate_hz) || outer_rate_hz > rate_hz)
     throw std::invalid_argument("IndiControlLogic.outer_rate_hz: must be in (0, rate_hz], got " + std::to_string(outer_rate_hz));
   if (!(max_input_age_s > 0.0) || !std::isfinite(max_input_age_s)) fail("max_input_age_s", max_input_age_s);
+  if (!(failsafe_descent_speed > 0.0) || !std::isfinite(failsafe_descent_speed))
+    fail("failsafe_descent_speed", failsafe_descent_speed);
+  if (!(touchdown_confirm_s > 0.0) || !std::isfinite(touchdown_confirm_s)) fail("touchdown_confirm_s", touchdown_confirm_s);
+  if (!(failsafe_max_descent_s > 0.0) || !std::isfinite(failsafe_max_descent_s))
+    fail("failsafe_max_descent_s", failsafe_max_descent_s);
+  if (!std::isfinite(failsafe_floor_z))
+    throw std::invalid_argument("IndiControlLogic.failsafe_floor_z: must be finite, got " + std::to_string(failsafe_floor_z));
 }
+
+const char* to_string(IndiFailsafeState s) {
+  switch (s) {
+    case IndiFailsafeState::kWaitingForInput: return "WAITING_FOR_INPUT";
+    case IndiFailsafeState::kNominal: return "NOMINAL";
+    case IndiFailsafeState::kOdometryLost: return "ODOMETRY_LOST";
+    case IndiFailsafeState::kMotorsStopped: return "MOTORS_STOPPED";
+  }
+  return "?";
+}
+
+namespace indi_guards {
+namespace {
+bool fresh(bool have, double age_s, double max_age_s) { return have && age_s <= max_age_s; }
+}  // namespace
+bool inputs_ready(const InputAges& in, double max_age_s) {
+  return fresh(in.have_odometry, in.odometry_age_s, max_age_s) && fresh(in.have_imu, in.imu_age_s, max_age_s);
+}
+bool imu_lost(const InputAges& in, double max_age_s) { return !fresh(in.have_imu, in.imu_age_s, max_age_s); }
+bool odometry_lost(const InputAges& in, double max_age_s) {
+  return fresh(in.have_imu, in.imu_age_s, max_age_s) && !fresh(in.have_odometry, in.odometry_age_s, max_age_s);
+}
+bool touchdown(double commanded_thrust_n, const Vec3& accel_world, double mass) {
+  return commanded_thrust_n < kTouchdownThrustFraction * mass * kGravity && accel_world.norm() < kRestingAccel;
+}
+bool below_floor(double height_estimate, double floor_z) { return height_estimate < floor_z - kBelowFloorMargin; }
+bool descent_timed_out(double descent_s, double max_descent_s) { return descent_s >= max_descent_s; }
+}  // namespace indi_guards
 
 ParamMap IndiControlLogic::default_parameters() {
   using tactile_common::at_least;
@@ -63,8 +98,22 @@ ParamMap IndiControlLogic::default_parameters() {
         {"control effectiveness B with the wall estimate when a wall is detected (004 eq. 36)", "", {}, false,
          paper("004 eq. 36: wall effect integrated into B")});
   m.set("max_input_age_s", d.max_input_age_s,
-        {"odometry / IMU older than this: no thrust command is sent, the vehicle keeps its last one (choice)", "s",
+        {"odometry older than this (IMU fresh): descent on the IMU (ODOMETRY_LOST); IMU older than this: "
+         "motors stopped (MOTORS_STOPPED)", "s", positive(), false, choice()});
+  m.set("failsafe_descent_speed", d.failsafe_descent_speed,
+        {"ODOMETRY_LOST: descent speed, flown on the IMU-integrated velocity", "m/s", positive(), false,
+         choice("wall_effect_nav's FAILSAFE_LAND speed")});
+  m.set("touchdown_confirm_s", d.touchdown_confirm_s,
+        {"ODOMETRY_LOST: the land detector (thrust < m g / 2 at rest) holds this long, then the motors stop", "s",
          positive(), false, choice()});
+  m.set("failsafe_max_descent_s", d.failsafe_max_descent_s,
+        {"ODOMETRY_LOST: the motors stop after this long in the descent, touched down or not", "s", positive(), false,
+         choice("a 2 m height bound at 0.25 m/s is 8 s, plus 2 s")});
+  const double inf = std::numeric_limits<double>::infinity();
+  m.set("failsafe_floor_z", d.failsafe_floor_z,
+        {"ODOMETRY_LOST: z of the floor in the odometry frame; the motors stop when the IMU dead-reckoned height "
+         "is 0.1 m below it (the land detector's fallback); finite", "m", ParamRange{-inf, inf, true, true}, false,
+         choice("the motion-capture and simulator floor")});
   m.set("k_p", v3(i.k_p), {"K_p of 004 eq. 26 per axis, each finite and >= 0 (choice)", "1/s^2", {}, false,
         choice("004 gives no gains")});
   m.set("k_d", v3(i.k_d), {"K_d of 004 eq. 26 per axis, each finite and >= 0 (choice)", "1/s", {}, false,
@@ -119,6 +168,10 @@ IndiControlLogic::Params IndiControlLogic::params_from(const ParamMap& map) {
   p.outer_rate_hz = map.get_double("outer_rate_hz");
   p.use_wall_in_allocation = map.get_bool("use_wall_in_allocation");
   p.max_input_age_s = map.get_double("max_input_age_s");
+  p.failsafe_descent_speed = map.get_double("failsafe_descent_speed");
+  p.touchdown_confirm_s = map.get_double("touchdown_confirm_s");
+  p.failsafe_max_descent_s = map.get_double("failsafe_max_descent_s");
+  p.failsafe_floor_z = map.get_double("failsafe_floor_z");
   i.k_p = v3("k_p");
   i.k_d = v3("k_d");
   i.k_i = v3("k_i");
@@ -186,7 +239,13 @@ void IndiControlLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
     ++stats_.dropped_nonfinite;
     return;
   }
+  if (stats_.state == IndiFailsafeState::kOdometryLost || stats_.state == IndiFailsafeState::kMotorsStopped) {
+    ++stats_.odometry_ignored;  // the descent is terminal: odometry that comes back does not resume (README)
+    return;
+  }
   if (!msg.child_frame_id.empty()) body_frame_ = msg.child_frame_id;
+  imu_dv_since_odom_.setZero();
+  imu_dp_since_odom_.setZero();
   pos_ = p;
   vel_ = q.normalized() * vb;  // REP-105: twist in the body frame
   odom_ns_ = tactile_common::from_stamp(msg.header.stamp);
@@ -207,10 +266,19 @@ void IndiControlLogic::on_imu(const sensor_msgs::msg::Imu& msg) {
     ++stats_.dropped_nonfinite;
     return;
   }
+  const int64_t stamp = tactile_common::from_stamp(msg.header.stamp);
   R_ = q.normalized().toRotationMatrix();
+  // Velocity change since the last odometry, for the ODOMETRY_LOST descent: the world
+  // specific force minus g e3 (004 eq. 30's measured acceleration) over the time since the
+  // previous sample (at most max_input_age_s: a longer gap is a lost IMU anyway).
+  if (have_imu_ && have_odom_) {
+    const double dt = std::clamp(tactile_common::to_seconds(stamp - imu_ns_), 0.0, params_.max_input_age_s);
+    imu_dv_since_odom_ += (R_ * a - kGravity * Vec3::UnitZ()) * dt;
+    imu_dp_since_odom_ += (vel_ + imu_dv_since_odom_) * dt;
+  }
   acc_ = a;
   gyro_ = w;
-  imu_ns_ = tactile_common::from_stamp(msg.header.stamp);
+  imu_ns_ = stamp;
   have_imu_ = true;
 }
 
@@ -228,12 +296,106 @@ void IndiControlLogic::on_wall(const tactile_msgs::msg::WallEstimate& msg) {
   have_wall_ = true;
 }
 
-std::optional<tactile_msgs::msg::ThrustCommand> IndiControlLogic::on_timer(int64_t now_ns) {
-  const int64_t max_age = tactile_common::from_seconds(params_.max_input_age_s);
-  if (!have_odom_ || !have_imu_ || now_ns - odom_ns_ > max_age || now_ns - imu_ns_ > max_age) {
-    ++stats_.ticks_without_input;
-    return std::nullopt;  // the vehicle keeps its last command (the simulator holds it)
+void IndiControlLogic::transition(IndiFailsafeState to, const char* reason, int64_t now_ns) {
+  stats_.state = to;
+  stats_.reason = reason;
+  stats_.state_since_ns = now_ns;
+  if (to == IndiFailsafeState::kOdometryLost) {
+    const Vec3 xb = R_.col(0);
+    yaw_hold_ = std::atan2(xb.y(), xb.x());
+    resting_since_ns_ = -1;
   }
+}
+
+void IndiControlLogic::update_state(int64_t now_ns) {
+  using namespace indi_guards;
+  InputAges in;
+  in.have_odometry = have_odom_;
+  in.have_imu = have_imu_;
+  in.odometry_age_s = tactile_common::to_seconds(now_ns - odom_ns_);
+  in.imu_age_s = tactile_common::to_seconds(now_ns - imu_ns_);
+  const double max_age = params_.max_input_age_s;
+  switch (stats_.state) {
+    case IndiFailsafeState::kWaitingForInput:
+      if (inputs_ready(in, max_age)) transition(IndiFailsafeState::kNominal, "odometry and IMU fresh", now_ns);
+      break;
+    case IndiFailsafeState::kNominal:
+      if (imu_lost(in, max_age)) {
+        transition(IndiFailsafeState::kMotorsStopped, "IMU stale: no attitude, flight terminated", now_ns);
+      } else if (odometry_lost(in, max_age)) {
+        transition(IndiFailsafeState::kOdometryLost, "odometry stale: descent on the IMU", now_ns);
+      }
+      break;
+    case IndiFailsafeState::kOdometryLost: {
+      if (imu_lost(in, max_age)) {
+        transition(IndiFailsafeState::kMotorsStopped, "IMU stale in the descent: flight terminated", now_ns);
+        break;
+      }
+      if (descent_timed_out(tactile_common::to_seconds(now_ns - stats_.state_since_ns), params_.failsafe_max_descent_s)) {
+        transition(IndiFailsafeState::kMotorsStopped, "descent lasted failsafe_max_descent_s", now_ns);
+        break;
+      }
+      if (below_floor(pos_.z() + imu_dp_since_odom_.z(), params_.failsafe_floor_z)) {
+        transition(IndiFailsafeState::kMotorsStopped, "dead-reckoned height below the floor", now_ns);
+        break;
+      }
+      const Vec3 a_world = R_ * acc_ - kGravity * Vec3::UnitZ();
+      if (touchdown(ctl_.last_outer().thrust, a_world, params_.indi.vehicle.mass)) {
+        if (resting_since_ns_ < 0) resting_since_ns_ = now_ns;
+        if (tactile_common::to_seconds(now_ns - resting_since_ns_) >= params_.touchdown_confirm_s)
+          transition(IndiFailsafeState::kMotorsStopped, "touchdown: low thrust at rest for touchdown_confirm_s", now_ns);
+      } else {
+        resting_since_ns_ = -1;
+      }
+      break;
+    }
+    case IndiFailsafeState::kMotorsStopped:
+      break;  // terminal
+  }
+}
+
+std::optional<tactile_msgs::msg::ThrustCommand> IndiControlLogic::on_timer(int64_t now_ns) {
+  update_state(now_ns);
+  switch (stats_.state) {
+    case IndiFailsafeState::kWaitingForInput:
+      ++stats_.ticks_without_input;
+      return std::nullopt;  // on the ground, motors idle: nothing was ever commanded
+    case IndiFailsafeState::kNominal:
+      ++stats_.ticks_nominal;
+      return nominal(now_ns);
+    case IndiFailsafeState::kOdometryLost:
+      ++stats_.ticks_odometry_lost;
+      return descend(now_ns);
+    case IndiFailsafeState::kMotorsStopped:
+      break;
+  }
+  ++stats_.ticks_motors_stopped;
+  return command(now_ns, {0.0, 0.0, 0.0, 0.0});  // on purpose, every tick
+}
+
+AllocationWall IndiControlLogic::allocation_wall(int64_t now_ns) const {
+  AllocationWall wall;
+  const int64_t max_age = tactile_common::from_seconds(params_.max_input_age_s);
+  if (params_.use_wall_in_allocation && have_wall_ && wall_detected_ && now_ns - wall_ns_ <= max_age) {
+    wall.present = true;
+    wall.y = wall_distance_;
+    wall.R = wall_frame_attitude(R_, wall_direction_);
+  }
+  return wall;
+}
+
+tactile_msgs::msg::ThrustCommand IndiControlLogic::command(int64_t now_ns, const std::array<double, 4>& f) {
+  tactile_msgs::msg::ThrustCommand out;
+  tactile_common::to_stamp(now_ns, out.header.stamp);
+  out.header.frame_id = body_frame_;  // the odometry's body frame (cf1/base_link with a prefix)
+  out.normalized = std::numeric_limits<double>::quiet_NaN();
+  out.rotor_thrust.assign(f.begin(), f.end());
+  out.total_thrust = f[0] + f[1] + f[2] + f[3];
+  ++stats_.published;
+  return out;
+}
+
+std::optional<tactile_msgs::msg::ThrustCommand> IndiControlLogic::nominal(int64_t now_ns) {
   if (ticks_ % outer_every_ == 0) {
     IndiFeedback fb;
     fb.position = pos_;
@@ -243,22 +405,34 @@ std::optional<tactile_msgs::msg::ThrustCommand> IndiControlLogic::on_timer(int64
     ctl_.outer(sp_, fb, outer_every_ / params_.rate_hz);  // 004 eq. 26, 30-34
   }
   ++ticks_;
-  AllocationWall wall;
-  if (params_.use_wall_in_allocation && have_wall_ && wall_detected_ && now_ns - wall_ns_ <= max_age) {
-    wall.present = true;
-    wall.y = wall_distance_;
-    wall.R = wall_frame_attitude(R_, wall_direction_);
-  }
   const Vec3 xb = R_.col(0);
-  const auto f = ctl_.inner(gyro_, std::atan2(xb.y(), xb.x()), sp_.yaw, wall);  // 004 eq. 35-36
-  tactile_msgs::msg::ThrustCommand out;
-  tactile_common::to_stamp(now_ns, out.header.stamp);
-  out.header.frame_id = body_frame_;  // the odometry's body frame (cf1/base_link with a prefix)
-  out.normalized = std::numeric_limits<double>::quiet_NaN();
-  out.rotor_thrust.assign(f.begin(), f.end());
-  out.total_thrust = f[0] + f[1] + f[2] + f[3];
-  ++stats_.published;
-  return out;
+  const auto f = ctl_.inner(gyro_, std::atan2(xb.y(), xb.x()), sp_.yaw, allocation_wall(now_ns));  // 004 eq. 35-36
+  return command(now_ns, f);
+}
+
+tactile_msgs::msg::ThrustCommand IndiControlLogic::descend(int64_t now_ns) {
+  // Velocity: the last odometry's plus the IMU's measured acceleration integrated since.
+  const Vec3 v = vel_ + imu_dv_since_odom_;
+  stats_.vertical_speed_estimate = v.z();
+  stats_.height_estimate = pos_.z() + imu_dp_since_odom_.z();
+  if (ticks_ % outer_every_ == 0) {
+    // 004 eq. 26 velocity-only on every axis (K_d; no position): hold the horizontal velocity
+    // at 0 (level unless a force such as the wall's pull must be held off, max_tilt) and
+    // descend at failsafe_descent_speed; eq. 30-34 unchanged.
+    IndiSetpoint sp;
+    sp.position_control = {false, false, false};
+    sp.velocity = Vec3(0.0, 0.0, -params_.failsafe_descent_speed);
+    sp.yaw = yaw_hold_;
+    IndiFeedback fb;
+    fb.velocity = v;
+    fb.R = R_;
+    fb.specific_force = acc_;
+    ctl_.outer(sp, fb, outer_every_ / params_.rate_hz);
+  }
+  ++ticks_;
+  const Vec3 xb = R_.col(0);
+  const auto f = ctl_.inner(gyro_, std::atan2(xb.y(), xb.x()), yaw_hold_, allocation_wall(now_ns));  // 004 eq. 35-36
+  return command(now_ns, f);
 }
 
 }  // namespace wall_effect_ekf

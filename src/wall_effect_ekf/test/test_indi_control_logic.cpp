@@ -38,7 +38,10 @@ TEST(IndiControlLogic, HoversAtTheOdometryPoseAndCountsBadInput) {
   sp.pose.pose.orientation.w = 0.0;  // not a rotation
   logic.on_setpoint(sp);
   EXPECT_EQ(logic.stats().dropped_nonfinite, 2u);
-  EXPECT_FALSE(logic.on_timer(500'000'000).has_value());  // stale inputs
+  const auto stale = logic.on_timer(500'000'000);  // stale IMU: motors stopped on purpose, not silence
+  ASSERT_TRUE(stale.has_value());
+  EXPECT_EQ(stale->total_thrust, 0.0);
+  EXPECT_EQ(logic.state(), IndiFailsafeState::kMotorsStopped);
 }
 
 TEST(IndiControlLogic, NanPositionAxesAreVelocityOnly) {
@@ -189,4 +192,254 @@ TEST(WallTrajectory, EveryParameterIsDescribedWithTheRangeValidateAccepts) {
   EXPECT_EQ(d.info("sweep_hold_s")->range->text(), "(0, inf)");
   EXPECT_EQ(d.info("yaw_deg")->unit, "deg");
   for (const auto& [key, info] : d.infos()) EXPECT_FALSE(info.live) << key;
+}
+
+// --- The fail-safe on stale odometry / IMU ---------------------------------------------
+
+namespace {
+
+constexpr int64_t kMs = 1'000'000;
+const double kHover = 0.28 * kGravity;  // m g of the default vehicle [N]
+
+nav_msgs::msg::Odometry odometry_at(int64_t t_ns, double z = 1.0) {
+  nav_msgs::msg::Odometry o;
+  o.pose.pose.orientation.w = 1.0;
+  o.pose.pose.position.z = z;
+  tactile_common::to_stamp(t_ns, o.header.stamp);
+  return o;
+}
+
+/// Level IMU at rest / in steady flight (a_m = +g), or rolled by `roll` [rad].
+sensor_msgs::msg::Imu imu_at(int64_t t_ns, double roll = 0.0, double accel_z = kGravity) {
+  sensor_msgs::msg::Imu m;
+  m.orientation.w = std::cos(roll / 2);
+  m.orientation.x = std::sin(roll / 2);
+  m.linear_acceleration.z = accel_z;
+  tactile_common::to_stamp(t_ns, m.header.stamp);
+  return m;
+}
+
+IndiControlLogic::Params default_params() {
+  return IndiControlLogic::params_from(IndiControlLogic::default_parameters());
+}
+
+/// Hovers on odometry + IMU for 0.1 s (NOMINAL; the odometry goes stale at 202 ms), then
+/// only the IMU comes (every 2 ms) until `until_ns`: at rest on the floor (a_m = g), or in
+/// the air (`air`: the specific force of the commanded thrust, m a_m = T0); returns the last command.
+std::optional<tactile_msgs::msg::ThrustCommand> lose_odometry(IndiControlLogic& l, int64_t until_ns,
+                                                              double roll = 0.0, bool air = false) {
+  std::optional<tactile_msgs::msg::ThrustCommand> out;
+  for (int64_t t = 0; t <= until_ns; t += 2 * kMs) {
+    if (t <= 100 * kMs) l.on_odometry(odometry_at(t));
+    const bool lost = t > 100 * kMs;
+    l.on_imu(imu_at(t, lost ? roll : 0.0, lost && air ? l.controller().last_outer().thrust / 0.28 : kGravity));
+    out = l.on_timer(t);
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(IndiFailsafeGuards, InputsReadyOnlyWithBothFresh) {
+  using indi_guards::InputAges;
+  EXPECT_TRUE(indi_guards::inputs_ready(InputAges{true, true, 0.05, 0.1}, 0.1));
+  EXPECT_FALSE(indi_guards::inputs_ready(InputAges{false, true, 0.0, 0.0}, 0.1));   // no odometry yet
+  EXPECT_FALSE(indi_guards::inputs_ready(InputAges{true, false, 0.0, 0.0}, 0.1));   // no IMU yet
+  EXPECT_FALSE(indi_guards::inputs_ready(InputAges{true, true, 0.11, 0.0}, 0.1));   // stale odometry
+  EXPECT_FALSE(indi_guards::inputs_ready(InputAges{true, true, 0.0, 0.11}, 0.1));   // stale IMU
+}
+
+TEST(IndiFailsafeGuards, ImuLostWhenMissingOrStaleWhateverTheOdometry) {
+  using indi_guards::InputAges;
+  EXPECT_FALSE(indi_guards::imu_lost(InputAges{true, true, 0.0, 0.1}, 0.1));
+  EXPECT_FALSE(indi_guards::imu_lost(InputAges{true, true, 5.0, 0.0}, 0.1));  // odometry is another guard's
+  EXPECT_TRUE(indi_guards::imu_lost(InputAges{true, true, 0.0, 0.11}, 0.1));
+  EXPECT_TRUE(indi_guards::imu_lost(InputAges{true, false, 0.0, 0.0}, 0.1));
+}
+
+TEST(IndiFailsafeGuards, OdometryLostOnlyWithAFreshImu) {
+  using indi_guards::InputAges;
+  EXPECT_TRUE(indi_guards::odometry_lost(InputAges{true, true, 0.11, 0.0}, 0.1));
+  EXPECT_FALSE(indi_guards::odometry_lost(InputAges{true, true, 0.1, 0.0}, 0.1));   // still fresh
+  EXPECT_FALSE(indi_guards::odometry_lost(InputAges{true, true, 0.11, 0.11}, 0.1)); // both: the IMU guard
+}
+
+TEST(IndiFailsafeGuards, TouchdownIsLowThrustAtRest) {
+  const double m = 0.28;
+  EXPECT_TRUE(indi_guards::touchdown(0.4 * m * kGravity, Vec3(0.1, 0.0, -0.2), m));   // floor carries it
+  EXPECT_FALSE(indi_guards::touchdown(0.6 * m * kGravity, Vec3::Zero(), m));          // steady descent / hover
+  EXPECT_FALSE(indi_guards::touchdown(0.4 * m * kGravity, Vec3(0, 0, -0.6 * kGravity), m));  // falling in the air
+  EXPECT_FALSE(indi_guards::touchdown(0.0, Vec3(0, 0, 3.0), m));                       // impact spike: not rest yet
+}
+
+TEST(IndiFailsafeGuards, BelowFloorOnlyPastTheMargin) {
+  EXPECT_FALSE(indi_guards::below_floor(-0.09, 0.0));
+  EXPECT_TRUE(indi_guards::below_floor(-0.11, 0.0));
+  EXPECT_TRUE(indi_guards::below_floor(0.89, 1.0));  // a floor at z = 1 m in the odometry frame
+}
+
+TEST(IndiFailsafeGuards, DescentTimesOutAtTheBound) {
+  EXPECT_FALSE(indi_guards::descent_timed_out(9.99, 10.0));
+  EXPECT_TRUE(indi_guards::descent_timed_out(10.0, 10.0));
+}
+
+// Before the first odometry + IMU nothing is sent (on the ground, motors idle), as before.
+TEST(IndiFailsafe, NothingIsSentBeforeTheFirstFreshOdometryAndImu) {
+  IndiControlLogic l(default_params());
+  EXPECT_FALSE(l.on_timer(0).has_value());
+  l.on_odometry(odometry_at(0));
+  EXPECT_FALSE(l.on_timer(2 * kMs).has_value());  // no IMU yet
+  l.on_imu(imu_at(-500 * kMs));                   // an old IMU sample: stale
+  EXPECT_FALSE(l.on_timer(4 * kMs).has_value());
+  EXPECT_EQ(l.state(), IndiFailsafeState::kWaitingForInput);
+  EXPECT_EQ(l.stats().ticks_without_input, 3u);
+  EXPECT_EQ(l.stats().published, 0u);
+  l.on_imu(imu_at(6 * kMs));
+  EXPECT_TRUE(l.on_timer(6 * kMs).has_value());
+  EXPECT_EQ(l.state(), IndiFailsafeState::kNominal);
+  EXPECT_EQ(l.stats().ticks_nominal, 1u);
+}
+
+// Odometry stale, IMU fresh: a command every tick, a level descent below hover thrust.
+TEST(IndiFailsafe, OdometryLossFliesALevelDescentBelowHoverEveryTick) {
+  IndiControlLogic l(default_params());
+  const auto out = lose_odometry(l, 400 * kMs, 0.0, true);
+  EXPECT_EQ(l.state(), IndiFailsafeState::kOdometryLost);
+  EXPECT_STREQ(l.stats().reason, "odometry stale: descent on the IMU");
+  EXPECT_EQ(l.stats().published, 201u);  // every tick from t = 0 to 400 ms: never nullopt once flying
+  EXPECT_GT(l.stats().ticks_odometry_lost, 0u);
+  EXPECT_EQ(l.stats().ticks_nominal + l.stats().ticks_odometry_lost, 201u);
+  ASSERT_TRUE(out.has_value());
+  EXPECT_LT(out->total_thrust, kHover);  // descending: the estimate (0 m/s) is slower than 0.25 m/s down
+  EXPECT_GT(out->total_thrust, 0.0);
+  for (double f : out->rotor_thrust) EXPECT_NEAR(f, out->total_thrust / 4, 1e-9);  // level, no torque
+  EXPECT_LT(l.stats().vertical_speed_estimate, -0.05);  // descending, not yet at 0.25 m/s
+  EXPECT_GT(l.stats().vertical_speed_estimate, -0.25);
+  // Odometry again before touchdown: the descent is terminal (README).
+  l.on_odometry(odometry_at(402 * kMs));
+  l.on_imu(imu_at(402 * kMs));
+  l.on_timer(402 * kMs);
+  EXPECT_EQ(l.state(), IndiFailsafeState::kOdometryLost);
+  EXPECT_EQ(l.stats().odometry_ignored, 1u);
+}
+
+// The descent holds the horizontal velocity at 0 on the IMU: a measured 1.5 m/s^2 along x
+// (the wall's pull, say) for 0.2 s is 0.3 m/s, braked by K_d (eq. 26 velocity-only) with a
+// pitch rate that tilts the thrust against it (eq. 33); nothing on y.
+TEST(IndiFailsafe, OdometryLossHoldsTheHorizontalVelocityOnTheImu) {
+  IndiControlLogic l(default_params());
+  lose_odometry(l, 100 * kMs);
+  for (int64_t t = 102 * kMs; t <= 300 * kMs; t += 2 * kMs) {
+    auto imu = imu_at(t);
+    imu.linear_acceleration.x = 1.5;
+    l.on_imu(imu);
+    l.on_timer(t);
+  }
+  ASSERT_EQ(l.state(), IndiFailsafeState::kOdometryLost);
+  const auto& o = l.controller().last_outer();  // the outer loop ran at 300 ms (100 Hz)
+  EXPECT_NEAR(o.accel_target.x(), -IndiParams().k_d.x() * 0.3, 1e-6);
+  EXPECT_NEAR(o.accel_target.y(), 0.0, 1e-12);
+  EXPECT_LT(o.rate_y, 0.0);
+  EXPECT_NEAR(o.rate_x, 0.0, 1e-12);
+}
+
+// The IMU integrates the vertical speed from the last odometry's: a measured 1.5 m/s^2 down
+// for 0.3 s is 0.45 m/s down, and the descent loop then asks for an upward acceleration.
+TEST(IndiFailsafe, OdometryLossIntegratesTheVerticalSpeedFromTheImu) {
+  IndiControlLogic l(default_params());
+  lose_odometry(l, 100 * kMs);
+  for (int64_t t = 102 * kMs; t <= 400 * kMs; t += 2 * kMs) {
+    l.on_imu(imu_at(t, 0.0, kGravity - 1.5));
+    l.on_timer(t);
+  }
+  EXPECT_EQ(l.state(), IndiFailsafeState::kOdometryLost);
+  EXPECT_NEAR(l.stats().vertical_speed_estimate, -0.45, 1e-6);
+  EXPECT_GT(l.controller().last_outer().accel_target.z(), 0.0);  // faster than 0.25 m/s: brake
+}
+
+// On the floor the IMU measures rest while the loop asks for the descent: the thrust winds
+// down below m g / 2, and after touchdown_confirm_s the motors stop (zeros, every tick, terminal).
+TEST(IndiFailsafe, TouchdownStopsTheMotors) {
+  IndiControlLogic l(default_params());
+  lose_odometry(l, 2000 * kMs);
+  EXPECT_EQ(l.state(), IndiFailsafeState::kMotorsStopped);
+  EXPECT_STREQ(l.stats().reason, "touchdown: low thrust at rest for touchdown_confirm_s");
+  const double since = tactile_common::to_seconds(l.stats().state_since_ns);
+  EXPECT_GT(since, 0.202 + 0.5);  // the land detector held touchdown_confirm_s
+  EXPECT_LT(since, 1.0);
+  for (int64_t t = 2002 * kMs; t < 2010 * kMs; t += 2 * kMs) {
+    l.on_odometry(odometry_at(t));  // fresh inputs again: still stopped
+    l.on_imu(imu_at(t));
+    const auto out = l.on_timer(t);
+    ASSERT_TRUE(out.has_value());
+    ASSERT_EQ(out->rotor_thrust.size(), 4u);
+    for (double f : out->rotor_thrust) EXPECT_EQ(f, 0.0);
+    EXPECT_EQ(out->total_thrust, 0.0);
+  }
+  EXPECT_EQ(l.state(), IndiFailsafeState::kMotorsStopped);
+  EXPECT_GT(l.stats().ticks_motors_stopped, 4u);
+}
+
+// In the air the land detector never holds (the IMU measures the descent's acceleration):
+// the descent bound stops the motors.
+TEST(IndiFailsafe, TheDescentBoundStopsTheMotors) {
+  auto p = default_params();
+  p.failsafe_max_descent_s = 1.0;
+  IndiControlLogic l(p);
+  lose_odometry(l, 100 * kMs);
+  for (int64_t t = 102 * kMs; t <= 1300 * kMs; t += 2 * kMs) {
+    // The specific force the commanded thrust gives in the air (m a_m = T).
+    l.on_imu(imu_at(t, 0.0, l.controller().last_outer().thrust / 0.28));
+    l.on_timer(t);
+  }
+  EXPECT_EQ(l.state(), IndiFailsafeState::kMotorsStopped);
+  EXPECT_STREQ(l.stats().reason, "descent lasted failsafe_max_descent_s");
+  EXPECT_NEAR(tactile_common::to_seconds(l.stats().state_since_ns), 0.202 + 1.0, 0.003);
+}
+
+// The land detector's fallback: a descent the IMU dead-reckons 0.1 m below the floor (here
+// failsafe_floor_z = 0.9 m, from 1 m) stops the motors; the estimate tracks the IMU descent.
+TEST(IndiFailsafe, DeadReckonedHeightBelowTheFloorStopsTheMotors) {
+  auto p = default_params();
+  p.failsafe_floor_z = 0.9;
+  IndiControlLogic l(p);
+  lose_odometry(l, 100 * kMs);
+  double last_height = 1.0;
+  // Until the motors stop (the odometry goes stale at 202 ms).
+  for (int64_t t = 102 * kMs; t <= 3000 * kMs && (t <= 202 * kMs || l.state() == IndiFailsafeState::kOdometryLost);
+       t += 2 * kMs) {
+    l.on_imu(imu_at(t, 0.0, l.controller().last_outer().thrust / 0.28));  // in the air
+    l.on_timer(t);
+    if (l.state() == IndiFailsafeState::kOdometryLost) last_height = l.stats().height_estimate;
+  }
+  EXPECT_EQ(l.state(), IndiFailsafeState::kMotorsStopped);
+  EXPECT_STREQ(l.stats().reason, "dead-reckoned height below the floor");
+  EXPECT_NEAR(last_height, 0.8, 0.01);
+  const double descent_s = tactile_common::to_seconds(l.stats().state_since_ns) - 0.202;
+  EXPECT_GT(descent_s, 0.2 / 0.25);  // 0.2 m at no more than 0.25 m/s
+  EXPECT_LT(descent_s, 2.0);
+}
+
+// No attitude: the motors stop max_input_age_s after the last IMU sample, from NOMINAL and
+// from the descent; zeros are published every tick.
+TEST(IndiFailsafe, ImuLossStopsTheMotors) {
+  for (const bool in_descent : {false, true}) {
+    SCOPED_TRACE(in_descent ? "ODOMETRY_LOST" : "NOMINAL");
+    IndiControlLogic l(default_params());
+    lose_odometry(l, in_descent ? 300 * kMs : 50 * kMs);
+    ASSERT_EQ(l.state(), in_descent ? IndiFailsafeState::kOdometryLost : IndiFailsafeState::kNominal);
+    const int64_t last_imu = in_descent ? 300 * kMs : 50 * kMs;
+    std::optional<tactile_msgs::msg::ThrustCommand> out;
+    for (int64_t t = last_imu + 2 * kMs; t <= last_imu + 100 * kMs; t += 2 * kMs) {
+      if (!in_descent) l.on_odometry(odometry_at(t));
+      out = l.on_timer(t);
+    }
+    EXPECT_EQ(l.state(), in_descent ? IndiFailsafeState::kOdometryLost : IndiFailsafeState::kNominal);
+    out = l.on_timer(last_imu + 102 * kMs);
+    EXPECT_EQ(l.state(), IndiFailsafeState::kMotorsStopped);
+    ASSERT_TRUE(out.has_value());
+    EXPECT_EQ(out->total_thrust, 0.0);
+    for (double f : out->rotor_thrust) EXPECT_EQ(f, 0.0);
+    EXPECT_NE(std::string(l.stats().reason).find("IMU stale"), std::string::npos) << l.stats().reason;
+  }
 }

@@ -5,7 +5,9 @@
 // sets the node's goal itself. Metrics: goal reached, collisions (simulator),
 // wall-tracking error |y - d*| while wall following (004: 0.4 cm RMS at
 // psi_d = 0), speed along the wall, minimum wall distance, estimation RMSE.
+#include <Eigen/Geometry>
 #include <cmath>
+#include <string>
 
 #include "graphs.hpp"
 #include "tactile_cli/host_nodes.hpp"
@@ -22,7 +24,8 @@ class WallEffectNavGraph : public SimGraph {
  public:
   explicit WallEffectNavGraph(GraphContext& ctx) {
     ekf_ = add_wall_effect_ekf(ctx.host, ctx.overrides("wall_effect_ekf"));
-    add_indi_controller(ctx.host, ctx.overrides("indi_controller"));
+    indi_ = add_indi_controller(ctx.host, ctx.overrides("indi_controller"));
+    floor_z_ = ctx.sim ? ctx.sim->arena().floor_z() : 0.0;
     tactile_common::ParamMap extra;
     if (auto t = ctx.target()) {
       extra.set("goal_x", t->x());
@@ -48,6 +51,7 @@ class WallEffectNavGraph : public SimGraph {
       }
     });
     bus.subscribe<nav_msgs::msg::Odometry>("/ground_truth/odom", [this](const nav_msgs::msg::Odometry& m) {
+      on_truth_for_failsafe(m);
       if (nav_->navigator().state() == tactile_fsm::NavState::kWallFollowing) {
         follow_time_ += 0.01;
         speed_sum_ += std::hypot(m.twist.twist.linear.x, m.twist.twist.linear.y);
@@ -68,6 +72,27 @@ class WallEffectNavGraph : public SimGraph {
     });
   }
 
+  /// INDI's fail-safe from the truth: the height when it left NOMINAL, the highest point and
+  /// fastest descent after that, and when the vehicle reached the floor.
+  void on_truth_for_failsafe(const nav_msgs::msg::Odometry& m) {
+    using wall_effect_ekf::IndiFailsafeState;
+    const IndiFailsafeState st = indi_->state();
+    if (st == IndiFailsafeState::kWaitingForInput || st == IndiFailsafeState::kNominal) return;
+    const double t = tactile_common::to_seconds(tactile_common::from_stamp(m.header.stamp));
+    const double z = m.pose.pose.position.z - floor_z_;
+    const auto& q = m.pose.pose.orientation;
+    const auto& v = m.twist.twist.linear;  // body frame (REP 105)
+    const double vz = (Eigen::Quaterniond(q.w, q.x, q.y, q.z) * Eigen::Vector3d(v.x, v.y, v.z)).z();
+    if (std::isnan(fs_left_nominal_s_)) {
+      fs_left_nominal_s_ = tactile_common::to_seconds(indi_->stats().state_since_ns);
+      fs_first_state_ = wall_effect_ekf::to_string(st);
+      fs_z_at_loss_ = z;
+    }
+    fs_max_z_ = std::max(fs_max_z_, z);
+    fs_max_descent_ = std::max(fs_max_descent_, -vz);
+    if (std::isnan(fs_floor_s_) && z < 0.005) fs_floor_s_ = t;
+  }
+
   nlohmann::json metrics() const override {
     nlohmann::json m;
     const auto& np = nav_->params();
@@ -86,6 +111,19 @@ class WallEffectNavGraph : public SimGraph {
     m["rmse_distance_cm"] = est_n_ ? finite_or_null(100.0 * std::sqrt(est_d2_ / static_cast<double>(est_n_))) : nullptr;
     m["rmse_direction_deg"] = est_n_ ? finite_or_null(std::sqrt(est_a2_ / static_cast<double>(est_n_)) * 180.0 / M_PI) : nullptr;
     m["ekf_reacquisitions"] = ekf_->ekf().stats().reacquisitions;
+    // INDI's own fail-safe (stale odometry / IMU): its state, and from the truth the height at
+    // the loss, the highest point and fastest descent after it, and the floor reached.
+    const auto& is = indi_->stats();
+    m["indi"] = {{"state", wall_effect_ekf::to_string(is.state)},
+                 {"reason", is.reason},
+                 {"state_since_s", tactile_common::to_seconds(is.state_since_ns)},
+                 {"first_failsafe_state", fs_first_state_},
+                 {"left_nominal_s", finite_or_null(fs_left_nominal_s_)},
+                 {"z_at_loss_m", finite_or_null(fs_z_at_loss_)},
+                 {"max_z_after_loss_m", finite_or_null(fs_max_z_)},
+                 {"max_descent_speed_mps", finite_or_null(fs_max_descent_)},
+                 {"floor_reached_s", finite_or_null(fs_floor_s_)},
+                 {"vertical_speed_estimate_mps", is.vertical_speed_estimate}};
     if (np.goal_mode != "direction") m["goal"] = {np.goal().position.x(), np.goal().position.y()};
     return m;
   }
@@ -106,6 +144,11 @@ class WallEffectNavGraph : public SimGraph {
  private:
   std::shared_ptr<wall_effect_ekf::WallEffectEkfLogic> ekf_;
   std::shared_ptr<tactile_fsm::WallEffectNavLogic> nav_;
+  std::shared_ptr<wall_effect_ekf::IndiControlLogic> indi_;
+  double floor_z_ = 0.0;
+  std::string fs_first_state_;
+  double fs_left_nominal_s_ = NAN, fs_z_at_loss_ = NAN, fs_max_z_ = -INFINITY, fs_max_descent_ = -INFINITY,
+         fs_floor_s_ = NAN;
   tactile_msgs::msg::WallEstimate truth_;
   bool have_truth_ = false;
   double min_distance_ = INFINITY, follow_start_ = NAN, follow_time_ = 0.0, last_commanded_thrust_ = NAN;

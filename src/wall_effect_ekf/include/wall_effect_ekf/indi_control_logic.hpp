@@ -7,8 +7,20 @@
 // is p_d, the yaw of pose.orientation is psi_d, twist.linear is p_dot_d
 // (world frame). A NaN position component makes that axis velocity-only
 // (004: a pilot's direction with K_p = K_i = 0).
+//
+// Fail-safe (README "INDI fail-safe"): the node never goes silent once it flies, so the
+// vehicle never keeps a stale thrust command (a simulator or an ESC holds the last one).
+//   WAITING_FOR_INPUT -> NOMINAL          inputs_ready: odometry and IMU both fresh
+//   NOMINAL -> MOTORS_STOPPED             imu_lost: no attitude, flight terminated
+//   NOMINAL -> ODOMETRY_LOST              odometry_lost: odometry stale, IMU fresh
+//   ODOMETRY_LOST -> MOTORS_STOPPED       imu_lost, touchdown (for touchdown_confirm_s),
+//                                         below_floor or descent_timed_out
+// WAITING_FOR_INPUT sends nothing (on the ground, motors idle); ODOMETRY_LOST descends on
+// the IMU-integrated velocity (horizontal held at 0); MOTORS_STOPPED (terminal) sends zero
+// thrusts every tick.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -23,6 +35,42 @@
 #include "wall_effect_ekf/indi_controller.hpp"
 
 namespace wall_effect_ekf {
+
+enum class IndiFailsafeState { kWaitingForInput, kNominal, kOdometryLost, kMotorsStopped };
+const char* to_string(IndiFailsafeState s);
+
+/// The guards of the fail-safe's transitions, each alone (tested one by one).
+namespace indi_guards {
+/// Ages of the controller's inputs at a tick (now - stamp; an input never received: have_* false).
+struct InputAges {
+  bool have_odometry = false, have_imu = false;
+  double odometry_age_s = 0.0, imu_age_s = 0.0;
+};
+/// WAITING_FOR_INPUT -> NOMINAL: odometry and IMU both received and no older than max_age_s.
+bool inputs_ready(const InputAges& in, double max_age_s);
+/// -> MOTORS_STOPPED: no IMU or an IMU older than max_age_s (no attitude: the controller cannot fly).
+bool imu_lost(const InputAges& in, double max_age_s);
+/// NOMINAL -> ODOMETRY_LOST: odometry older than max_age_s while the IMU is fresh.
+bool odometry_lost(const InputAges& in, double max_age_s);
+/// Land detector, one tick (ODOMETRY_LOST -> MOTORS_STOPPED once it held touchdown_confirm_s):
+/// the descent loop commands less than kTouchdownThrustFraction of the hover thrust m g, and
+/// yet the measured acceleration R a_m - g e3 is that of rest (|.| < kRestingAccel): in the
+/// air that thrust would accelerate the vehicle down by > g / 2, so the floor carries it.
+/// (The IMU-integrated vertical speed alone cannot tell a steady descent from rest: both
+/// measure a = 0; the descent loop winds the thrust down on the floor, where the estimate
+/// keeps asking for the descent it no longer gets.)
+constexpr double kTouchdownThrustFraction = 0.5;
+constexpr double kRestingAccel = 1.0;  ///< [m/s^2]
+bool touchdown(double commanded_thrust_n, const Vec3& accel_world, double mass);
+/// ODOMETRY_LOST -> MOTORS_STOPPED: the height dead-reckoned from the last odometry on the
+/// IMU is kBelowFloorMargin below failsafe_floor_z. The fallback of the land detector: the
+/// simulated IMU (500 Hz point samples of 1 kHz physics) misses the 1 ms impact about one
+/// landing in three, and the integrated speed then keeps reading the descent on the floor.
+constexpr double kBelowFloorMargin = 0.1;  ///< [m]
+bool below_floor(double height_estimate, double floor_z);
+/// ODOMETRY_LOST -> MOTORS_STOPPED: the descent lasted failsafe_max_descent_s.
+bool descent_timed_out(double descent_s, double max_descent_s);
+}  // namespace indi_guards
 
 /// Body -> wall-frame rotation (wall_effect_model.hpp) from the body -> world
 /// attitude and the wall direction psi-hat in the body frame.
@@ -42,14 +90,32 @@ class IndiControlLogic {
     double rate_hz = 500.0;        ///< inner loop (IMU rate of the simulated vehicle; choice)
     double outer_rate_hz = 100.0;  ///< outer loop (004: 100 Hz ground station)
     bool use_wall_in_allocation = true;  ///< eq. 36: B with the wall estimate when detected
-    double max_input_age_s = 0.1;  ///< odometry / IMU older than this: hold the last thrusts... see README
+    double max_input_age_s = 0.1;  ///< odometry / IMU older than this: the fail-safe (README)
+    /// ODOMETRY_LOST: speed of the descent [m/s] (choice: wall_effect_nav's
+    /// FAILSAFE_LAND speed).
+    double failsafe_descent_speed = 0.25;
+    /// ODOMETRY_LOST: the land detector must hold this long before the motors stop [s] (choice).
+    double touchdown_confirm_s = 0.5;
+    /// ODOMETRY_LOST: the motors stop after this long in the descent, touched down or not [s]
+    /// (choice: a 2 m height bound at 0.25 m/s is 8 s, plus 2 s).
+    double failsafe_max_descent_s = 10.0;
+    /// ODOMETRY_LOST: the floor's z in the odometry frame [m] (choice: 0, the motion-capture
+    /// and simulator floor).
+    double failsafe_floor_z = 0.0;
     void validate() const;
   };
 
   struct Stats {
     uint64_t setpoints = 0, odometry = 0, imu = 0, walls = 0, published = 0;
     uint64_t dropped_nonfinite = 0;   ///< NaN/inf where a number is required
-    uint64_t ticks_without_input = 0; ///< no odometry/IMU yet or stale: motors idle (on the ground) or hover thrust
+    uint64_t ticks_without_input = 0; ///< WAITING_FOR_INPUT: no fresh odometry + IMU yet, nothing sent (on the ground)
+    uint64_t ticks_nominal = 0, ticks_odometry_lost = 0, ticks_motors_stopped = 0;
+    uint64_t odometry_ignored = 0;    ///< odometry after the fail-safe left NOMINAL (the descent is terminal)
+    IndiFailsafeState state = IndiFailsafeState::kWaitingForInput;
+    const char* reason = "no odometry and IMU yet";  ///< why the last transition was taken
+    int64_t state_since_ns = 0;       ///< node time of the last transition
+    double vertical_speed_estimate = 0.0;  ///< ODOMETRY_LOST: last odometry v_z + int (R a_m - g e3)_z dt [m/s]
+    double height_estimate = 0.0;          ///< ODOMETRY_LOST: last odometry z + int v_z dt [m]
   };
 
   static tactile_common::ParamMap default_parameters();
@@ -85,6 +151,7 @@ class IndiControlLogic {
     });
   }
   const Stats& stats() const { return stats_; }
+  IndiFailsafeState state() const { return stats_.state; }
   const Params& params() const { return params_; }
   const IndiController& controller() const { return ctl_; }
 
@@ -103,6 +170,17 @@ class IndiControlLogic {
   double wall_distance_ = 0.0, wall_direction_ = 0.0;
   int64_t ticks_ = 0;
   int outer_every_ = 5;
+  // Fail-safe.
+  Vec3 imu_dv_since_odom_ = Vec3::Zero();  ///< int (R a_m - g e3) dt over the IMU samples since the last odometry
+  Vec3 imu_dp_since_odom_ = Vec3::Zero();  ///< int (v_odom + dv) dt since the last odometry
+  double yaw_hold_ = 0.0;           ///< ODOMETRY_LOST: the yaw at the loss
+  int64_t resting_since_ns_ = -1;   ///< ODOMETRY_LOST: the land detector holds since then (-1: not)
+  void transition(IndiFailsafeState to, const char* reason, int64_t now_ns);
+  void update_state(int64_t now_ns);
+  tactile_msgs::msg::ThrustCommand command(int64_t now_ns, const std::array<double, 4>& f);
+  std::optional<tactile_msgs::msg::ThrustCommand> nominal(int64_t now_ns);
+  tactile_msgs::msg::ThrustCommand descend(int64_t now_ns);
+  AllocationWall allocation_wall(int64_t now_ns) const;
 };
 
 }  // namespace wall_effect_ekf
