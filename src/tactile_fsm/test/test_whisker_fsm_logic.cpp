@@ -393,8 +393,7 @@ TEST(WhiskerFsmLogic, StaleSignalContactIsIgnored) {
 }
 
 // One default per key (issue 33): params_from(default_parameters()) is the core
-// struct's defaults except the two keys gpis_explorer reads at their core default
-// through wall_sub_state() (hold_heading_trailing_lost, wall_end_depth).
+// struct's defaults, the two issue-17 rules gpis_explorer turns off included.
 TEST(WhiskerFsmLogic, NodeDefaultsAreTheCoreDefaults) {
   const WhiskerFsmLogic::Params n = WhiskerFsmLogic::params_from(WhiskerFsmLogic::default_parameters());
   const tactile_fsm::WallFollowerParams c;

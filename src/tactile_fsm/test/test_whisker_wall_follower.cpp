@@ -106,9 +106,8 @@ TEST(WallFollowerParams, DefaultsArePaperValuesAndValidate) {
 }
 
 // One default per key (issue 33): the core struct's defaults are the rules the
-// whisker FSM node ships (config/tactile_fsm.yaml), except the two rules
-// gpis_explorer's wall follows read through wall_sub_state() with the core
-// defaults (not measured there): hold_heading_trailing_lost and wall_end_depth.
+// whisker FSM node ships (config/tactile_fsm.yaml); gpis_explorer turns two of
+// them off for its wall follows (gpis_wall_params()).
 TEST(WallFollowerParams, DefaultsAreTheShippedRules) {
   const WallFollowerParams p;
   EXPECT_DOUBLE_EQ(p.turn_anchor_tolerance, 10.0 * kDeg);  // round 13
@@ -207,9 +206,9 @@ TEST(WallSubStateRule, MissingDepth) {
             WallSubState::kFlyBackward);
   EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kLeft, true, WallSubState::kFlySideways, p),
             WallSubState::kFlySideways);
-  // Following right, the trailing (left) whisker lost: with the core default
-  // (hold_heading_trailing_lost off) as approach -> turn right; with it on (the
-  // whisker FSM node's default) hold the heading and translate.
+  // Following right, the trailing (left) whisker lost: with
+  // hold_heading_trailing_lost off (rules_off(); gpis_explorer's) as approach ->
+  // turn right; with it on (the default) hold the heading and translate.
   EXPECT_EQ(wall_sub_state(NAN, false, 0.08, true, Side::kRight, true, WallSubState::kFlySideways, p),
             WallSubState::kTurnRight);
   WallFollowerParams hold = p;
