@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -825,6 +826,15 @@ using gpis_explorer::SequencerInput;
 using gpis_explorer::SequencerReason;
 using Entry = ExplorationSequencer::TestEntry;
 
+/// An entry in the round of GPIS targets, heading +x (toward `target` when given).
+Entry targets_round(std::optional<Eigen::Vector2d> target = std::nullopt) {
+  Entry e;
+  e.round = gpis_explorer::Round::kTargets;
+  e.heading = 0.0;
+  e.target = target;
+  return e;
+}
+
 SequencerInput at(double t, double x, double y, double yaw) {
   SequencerInput in;
   in.t = t;
@@ -957,11 +967,7 @@ TEST(SequencerStates, RetreatEndsAfterRetreatTimeS) {
 TEST(SequencerStates, GoToTargetEndsAtOrPastTheTarget) {
   const SequencerParams p;
   ExplorationSequencer seq(p);
-  Entry e;
-  e.round = gpis_explorer::Round::kTargets;
-  e.heading = 0.0;
-  e.target = Eigen::Vector2d(1.0, 0.0);
-  seq.for_test_enter(Phase::kGoToTarget, at(10.0, 0.0, 0.0, 0.0), e);
+  seq.for_test_enter(Phase::kGoToTarget, at(10.0, 0.0, 0.0, 0.0), targets_round(Eigen::Vector2d(1.0, 0.0)));
   EXPECT_FALSE(seq.reached_or_passed({1.0, 0.0}, {1.0 - p.target_radius - 1e-3, 0.0}));
   EXPECT_TRUE(seq.reached_or_passed({1.0, 0.0}, {1.0 - p.target_radius + 1e-3, 0.0}));
   EXPECT_TRUE(seq.reached_or_passed({1.0, 0.0}, {1.2, 1.0}));  // passed along the heading, far beside
@@ -975,10 +981,7 @@ TEST(SequencerStates, GoToTargetEndsAtOrPastTheTarget) {
 TEST(SequencerStates, ExitThroughLandsOnceTheExitIsConfirmed) {
   const SequencerParams p;
   ExplorationSequencer seq(p);
-  Entry e;
-  e.round = gpis_explorer::Round::kTargets;
-  e.heading = 0.0;
-  seq.for_test_enter(Phase::kExitThrough, at(10.0, 0.0, 0.0, 0.0), e);
+  seq.for_test_enter(Phase::kExitThrough, at(10.0, 0.0, 0.0, 0.0), targets_round());
   // No known surface: beyond every one at once, so exit_confirm_distance decides.
   EXPECT_FALSE(seq.exit_confirmed({p.exit_confirm_distance - 0.01, 0.0}));
   EXPECT_TRUE(seq.exit_confirmed({p.exit_confirm_distance, 0.0}));
