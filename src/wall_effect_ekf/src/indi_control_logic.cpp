@@ -56,6 +56,16 @@ const char* to_string(IndiFailsafeState s) {
   return "?";
 }
 
+namespace {
+using tactile_msgs::msg::FsmState;
+static_assert(static_cast<uint8_t>(IndiReason::kInputsReady) == FsmState::REASON_INDI_INPUTS_READY);
+static_assert(static_cast<uint8_t>(IndiReason::kImuLost) == FsmState::REASON_INDI_IMU_LOST);
+static_assert(static_cast<uint8_t>(IndiReason::kOdometryLost) == FsmState::REASON_INDI_ODOMETRY_LOST);
+static_assert(static_cast<uint8_t>(IndiReason::kDescentTimedOut) == FsmState::REASON_INDI_DESCENT_TIMED_OUT);
+static_assert(static_cast<uint8_t>(IndiReason::kBelowFloor) == FsmState::REASON_INDI_BELOW_FLOOR);
+static_assert(static_cast<uint8_t>(IndiReason::kTouchdown) == FsmState::REASON_INDI_TOUCHDOWN);
+}  // namespace
+
 namespace indi_guards {
 namespace {
 bool fresh(bool have, double age_s, double max_age_s) { return have && age_s <= max_age_s; }
@@ -296,9 +306,12 @@ void IndiControlLogic::on_wall(const tactile_msgs::msg::WallEstimate& msg) {
   have_wall_ = true;
 }
 
-void IndiControlLogic::transition(IndiFailsafeState to, const char* reason, int64_t now_ns) {
+void IndiControlLogic::transition(IndiFailsafeState to, IndiReason code, const char* reason, int64_t now_ns) {
+  stats_.previous = stats_.state;
   stats_.state = to;
   stats_.reason = reason;
+  stats_.reason_code = code;
+  ++stats_.transitions;
   stats_.state_since_ns = now_ns;
   if (to == IndiFailsafeState::kOdometryLost) {
     const Vec3 xb = R_.col(0);
@@ -317,33 +330,39 @@ void IndiControlLogic::update_state(int64_t now_ns) {
   const double max_age = params_.max_input_age_s;
   switch (stats_.state) {
     case IndiFailsafeState::kWaitingForInput:
-      if (inputs_ready(in, max_age)) transition(IndiFailsafeState::kNominal, "odometry and IMU fresh", now_ns);
+      if (inputs_ready(in, max_age)) transition(IndiFailsafeState::kNominal, IndiReason::kInputsReady, "odometry and IMU fresh", now_ns);
       break;
     case IndiFailsafeState::kNominal:
       if (imu_lost(in, max_age)) {
-        transition(IndiFailsafeState::kMotorsStopped, "IMU stale: no attitude, flight terminated", now_ns);
+        transition(IndiFailsafeState::kMotorsStopped, IndiReason::kImuLost, "IMU stale: no attitude, flight terminated",
+                   now_ns);
       } else if (odometry_lost(in, max_age)) {
-        transition(IndiFailsafeState::kOdometryLost, "odometry stale: descent on the IMU", now_ns);
+        transition(IndiFailsafeState::kOdometryLost, IndiReason::kOdometryLost, "odometry stale: descent on the IMU",
+                   now_ns);
       }
       break;
     case IndiFailsafeState::kOdometryLost: {
       if (imu_lost(in, max_age)) {
-        transition(IndiFailsafeState::kMotorsStopped, "IMU stale in the descent: flight terminated", now_ns);
+        transition(IndiFailsafeState::kMotorsStopped, IndiReason::kImuLost, "IMU stale in the descent: flight terminated",
+                   now_ns);
         break;
       }
       if (descent_timed_out(tactile_common::to_seconds(now_ns - stats_.state_since_ns), params_.failsafe_max_descent_s)) {
-        transition(IndiFailsafeState::kMotorsStopped, "descent lasted failsafe_max_descent_s", now_ns);
+        transition(IndiFailsafeState::kMotorsStopped, IndiReason::kDescentTimedOut, "descent lasted failsafe_max_descent_s",
+                   now_ns);
         break;
       }
       if (below_floor(pos_.z() + imu_dp_since_odom_.z(), params_.failsafe_floor_z)) {
-        transition(IndiFailsafeState::kMotorsStopped, "dead-reckoned height below the floor", now_ns);
+        transition(IndiFailsafeState::kMotorsStopped, IndiReason::kBelowFloor, "dead-reckoned height below the floor",
+                   now_ns);
         break;
       }
       const Vec3 a_world = R_ * acc_ - kGravity * Vec3::UnitZ();
       if (touchdown(ctl_.last_outer().thrust, a_world, params_.indi.vehicle.mass)) {
         if (resting_since_ns_ < 0) resting_since_ns_ = now_ns;
         if (tactile_common::to_seconds(now_ns - resting_since_ns_) >= params_.touchdown_confirm_s)
-          transition(IndiFailsafeState::kMotorsStopped, "touchdown: low thrust at rest for touchdown_confirm_s", now_ns);
+          transition(IndiFailsafeState::kMotorsStopped, IndiReason::kTouchdown,
+                     "touchdown: low thrust at rest for touchdown_confirm_s", now_ns);
       } else {
         resting_since_ns_ = -1;
       }
@@ -433,6 +452,24 @@ tactile_msgs::msg::ThrustCommand IndiControlLogic::descend(int64_t now_ns) {
   const Vec3 xb = R_.col(0);
   const auto f = ctl_.inner(gyro_, std::atan2(xb.y(), xb.x()), yaw_hold_, allocation_wall(now_ns));  // 004 eq. 35-36
   return command(now_ns, f);
+}
+
+std::optional<tactile_msgs::msg::FsmState> IndiControlLogic::state_message(int64_t now_ns) {
+  const bool changed = stats_.transitions != published_transitions_;
+  if (!changed && last_state_msg_ns_ >= 0 && now_ns - last_state_msg_ns_ < kStatePeriodNs) return std::nullopt;
+  tactile_msgs::msg::FsmState s;
+  tactile_common::to_stamp(now_ns, s.header.stamp);
+  s.behaviour = "indi_failsafe";
+  s.state = to_string(stats_.state);
+  s.previous_state = stats_.transitions > 0 ? to_string(stats_.previous) : "";
+  s.reason = stats_.reason;
+  s.reason_code = static_cast<uint8_t>(stats_.reason_code);
+  s.time_in_state = tactile_common::to_seconds(now_ns - stats_.state_since_ns);
+  s.transitions = stats_.transitions;
+  published_transitions_ = stats_.transitions;
+  last_state_msg_ns_ = now_ns;
+  ++stats_.state_messages;
+  return s;
 }
 
 }  // namespace wall_effect_ekf

@@ -443,3 +443,46 @@ TEST(IndiFailsafe, ImuLossStopsTheMotors) {
     EXPECT_NE(std::string(l.stats().reason).find("IMU stale"), std::string::npos) << l.stats().reason;
   }
 }
+
+// The fail-safe's state for a ground station and bags: FsmState (behaviour
+// indi_failsafe) on the first tick, on every transition with its REASON_INDI_* code and
+// the state left, and at 1 Hz in between -- here WAITING_FOR_INPUT -> NOMINAL (80) ->
+// ODOMETRY_LOST (82) -> MOTORS_STOPPED (81, the IMU lost in the descent).
+TEST(IndiFailsafe, StateMessagesOnEveryTransitionAndAtOneHz) {
+  using tactile_msgs::msg::FsmState;
+  IndiControlLogic l(default_params());
+  std::vector<FsmState> msgs;
+  auto tick = [&](int64_t t) {
+    l.on_timer(t);
+    if (auto s = l.state_message(t)) msgs.push_back(*s);
+  };
+  tick(0);  // nothing received yet
+  for (int64_t t = 2 * kMs; t <= 2000 * kMs; t += 2 * kMs) {
+    if (t <= 100 * kMs) l.on_odometry(odometry_at(t));
+    if (t <= 1500 * kMs) l.on_imu(imu_at(t, 0.0, l.controller().last_outer().thrust / 0.28));
+    tick(t);
+  }
+  ASSERT_GE(msgs.size(), 4u);
+  EXPECT_EQ(msgs[0].behaviour, "indi_failsafe");
+  EXPECT_EQ(msgs[0].state, "WAITING_FOR_INPUT");
+  EXPECT_EQ(msgs[0].reason_code, FsmState::REASON_NONE);
+  std::vector<std::string> changes;
+  for (std::size_t i = 1; i < msgs.size(); ++i) {
+    if (msgs[i].transitions == msgs[i - 1].transitions) {
+      // Between transitions: 1 Hz, the state unchanged.
+      EXPECT_EQ(msgs[i].state, msgs[i - 1].state);
+      EXPECT_NEAR(tactile_common::to_seconds(tactile_common::from_stamp(msgs[i].header.stamp) -
+                                             tactile_common::from_stamp(msgs[i - 1].header.stamp)),
+                  1.0, 1e-9);
+      continue;
+    }
+    changes.push_back(msgs[i].previous_state + " -> " + msgs[i].state + " " + std::to_string(msgs[i].reason_code));
+  }
+  const std::vector<std::string> want = {
+      "WAITING_FOR_INPUT -> NOMINAL " + std::to_string(FsmState::REASON_INDI_INPUTS_READY),
+      "NOMINAL -> ODOMETRY_LOST " + std::to_string(FsmState::REASON_INDI_ODOMETRY_LOST),
+      "ODOMETRY_LOST -> MOTORS_STOPPED " + std::to_string(FsmState::REASON_INDI_IMU_LOST)};
+  EXPECT_EQ(changes, want);
+  EXPECT_EQ(msgs.back().state, "MOTORS_STOPPED");
+  EXPECT_EQ(l.stats().state_messages, msgs.size());
+}

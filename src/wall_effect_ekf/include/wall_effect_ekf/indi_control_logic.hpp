@@ -30,6 +30,7 @@
 #include "sensor_msgs/msg/imu.hpp"
 #include "tactile_common/parameters.hpp"
 #include "tactile_common/ports.hpp"
+#include "tactile_msgs/msg/fsm_state.hpp"
 #include "tactile_msgs/msg/thrust_command.hpp"
 #include "tactile_msgs/msg/wall_estimate.hpp"
 #include "wall_effect_ekf/indi_controller.hpp"
@@ -38,6 +39,18 @@ namespace wall_effect_ekf {
 
 enum class IndiFailsafeState { kWaitingForInput, kNominal, kOdometryLost, kMotorsStopped };
 const char* to_string(IndiFailsafeState s);
+
+/// Why the fail-safe's last transition was taken: tactile_msgs/FsmState REASON_INDI_*
+/// (block 80-89, checked at compile time), published with the state on kStateTopic.
+enum class IndiReason : uint8_t {
+  kNone = 0,             ///< no transition yet
+  kInputsReady = 80,     ///< WAITING_FOR_INPUT -> NOMINAL
+  kImuLost = 81,         ///< -> MOTORS_STOPPED: IMU stale (flight terminated)
+  kOdometryLost = 82,    ///< NOMINAL -> ODOMETRY_LOST
+  kDescentTimedOut = 83, ///< ODOMETRY_LOST -> MOTORS_STOPPED: failsafe_max_descent_s
+  kBelowFloor = 84,      ///< ODOMETRY_LOST -> MOTORS_STOPPED: dead-reckoned height below the floor
+  kTouchdown = 85,       ///< ODOMETRY_LOST -> MOTORS_STOPPED: the land detector held
+};
 
 /// The guards of the fail-safe's transitions, each alone (tested one by one).
 namespace indi_guards {
@@ -84,6 +97,10 @@ class IndiControlLogic {
   static constexpr const char* kImuTopic = "imu";                        // sensor_msgs/msg/Imu (with orientation)
   static constexpr const char* kWallTopic = "wall_effect/estimate";      // tactile_msgs/msg/WallEstimate
   static constexpr const char* kOutputTopic = "cmd_rotor_thrust";        // tactile_msgs/msg/ThrustCommand
+  /// The fail-safe's state for a ground station and bags (behaviour "indi_failsafe"):
+  /// on every transition and at 1 Hz.
+  static constexpr const char* kStateTopic = "indi/fsm_state";            // tactile_msgs/msg/FsmState
+  static constexpr int64_t kStatePeriodNs = 1'000'000'000;
 
   struct Params {
     IndiParams indi;
@@ -113,6 +130,10 @@ class IndiControlLogic {
     uint64_t odometry_ignored = 0;    ///< odometry after the fail-safe left NOMINAL (the descent is terminal)
     IndiFailsafeState state = IndiFailsafeState::kWaitingForInput;
     const char* reason = "no odometry and IMU yet";  ///< why the last transition was taken
+    IndiReason reason_code = IndiReason::kNone;      ///< the same for programs (FsmState.reason_code)
+    IndiFailsafeState previous = IndiFailsafeState::kWaitingForInput;
+    uint32_t transitions = 0;
+    uint64_t state_messages = 0;
     int64_t state_since_ns = 0;       ///< node time of the last transition
     double vertical_speed_estimate = 0.0;  ///< ODOMETRY_LOST: last odometry v_z + int (R a_m - g e3)_z dt [m/s]
     double height_estimate = 0.0;          ///< ODOMETRY_LOST: last odometry z + int v_z dt [m]
@@ -127,6 +148,9 @@ class IndiControlLogic {
   void on_imu(const sensor_msgs::msg::Imu& msg);
   void on_wall(const tactile_msgs::msg::WallEstimate& msg);
   std::optional<tactile_msgs::msg::ThrustCommand> on_timer(int64_t now_ns);
+  /// The fail-safe's FsmState when there is one to publish at now_ns: after a transition
+  /// not yet published, or kStatePeriodNs after the last message.
+  std::optional<tactile_msgs::msg::FsmState> state_message(int64_t now_ns);
 
   int64_t period_ns() const;
 
@@ -146,8 +170,10 @@ class IndiControlLogic {
                                                 [&l](const sensor_msgs::msg::Imu& m) { l.on_imu(m); });
     p.template subscribe<tactile_msgs::msg::WallEstimate>(kWallTopic, Sub::kSensorData,
                                                           [&l](const tactile_msgs::msg::WallEstimate& m) { l.on_wall(m); });
-    p.timer(l.period_ns(), [&l, thrust](int64_t now_ns) {
+    auto state = p.template publisher<tactile_msgs::msg::FsmState>(kStateTopic, Pub::kData);
+    p.timer(l.period_ns(), [&l, thrust, state](int64_t now_ns) {
       if (auto out = l.on_timer(now_ns)) thrust(std::move(*out));
+      if (auto s = l.state_message(now_ns)) state(std::move(*s));
     });
   }
   const Stats& stats() const { return stats_; }
@@ -175,7 +201,9 @@ class IndiControlLogic {
   Vec3 imu_dp_since_odom_ = Vec3::Zero();  ///< int (v_odom + dv) dt since the last odometry
   double yaw_hold_ = 0.0;           ///< ODOMETRY_LOST: the yaw at the loss
   int64_t resting_since_ns_ = -1;   ///< ODOMETRY_LOST: the land detector holds since then (-1: not)
-  void transition(IndiFailsafeState to, const char* reason, int64_t now_ns);
+  void transition(IndiFailsafeState to, IndiReason code, const char* reason, int64_t now_ns);
+  int64_t last_state_msg_ns_ = -1;
+  uint32_t published_transitions_ = 0;
   void update_state(int64_t now_ns);
   tactile_msgs::msg::ThrustCommand command(int64_t now_ns, const std::array<double, 4>& f);
   std::optional<tactile_msgs::msg::ThrustCommand> nominal(int64_t now_ns);
