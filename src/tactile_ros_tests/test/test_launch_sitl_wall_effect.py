@@ -18,7 +18,9 @@ RATE_TOPICS = {
     '/wall_effect/setpoint': ('nav_msgs/msg/Odometry', 100.0, 'stamp'),
 }
 EVENT_TOPICS = {'/cmd_rotor_thrust': 'tactile_msgs/msg/ThrustCommand',
-                '/thrust_command': 'tactile_msgs/msg/ThrustCommand'}
+                '/thrust_command': 'tactile_msgs/msg/ThrustCommand',
+                # The INDI fail-safe's state (WAITING_FOR_INPUT / NOMINAL / ...), 1 Hz and on change.
+                '/indi/fsm_state': 'tactile_msgs/msg/FsmState'}
 
 
 def test_sitl_wall_effect_navigation(tmp_path):
