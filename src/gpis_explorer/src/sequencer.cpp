@@ -420,6 +420,7 @@ void ExplorationSequencer::for_test_enter(Phase p, const SequencerInput& in, con
     start_yaw_ = in.yaw;
     explorer_.centre_grid(pos.x(), pos.y());
   }
+  safety_.reset();  // a nominal phase: the fail-safe's state with it
   round_ = e.round;
   heading_ = std::isfinite(e.heading) ? e.heading : in.yaw;
   leg_start_ = line_origin_ = exit_from_ = pos;

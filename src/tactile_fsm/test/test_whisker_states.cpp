@@ -175,8 +175,6 @@ TEST(WallFollowing, EpisodeMemoryRuleAndMotion) {
   // After both touched the leading (left, sliding left) whisker lost: passing the
   // edge, sideways -- the memory changed the rule's answer.
   EXPECT_EQ(w.rule(NAN, false, 0.08, true, p), WallSubState::kFlySideways);
-  EXPECT_EQ(w.rule(NAN, false, 0.08, true, p),
-            tactile_fsm::wall_sub_state(NAN, false, 0.08, true, Side::kLeft, true, WallSubState::kNone, p));
   // The rule does not change the episode; set_sub_state() does.
   EXPECT_EQ(w.sub_state(), WallSubState::kNone);
   w.set_sub_state(WallSubState::kTurnLeft);

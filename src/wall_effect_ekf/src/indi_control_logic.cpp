@@ -68,7 +68,9 @@ static_assert(static_cast<uint8_t>(IndiReason::kTouchdown) == FsmState::REASON_I
 
 namespace indi_guards {
 namespace {
-bool fresh(bool have, double age_s, double max_age_s) { return have && age_s <= max_age_s; }
+// 1 ns of tolerance: ages come from integer nanoseconds (to_seconds(3e8 ns) > 0.3),
+// as tactile_fsm::input_is_fresh.
+bool fresh(bool have, double age_s, double max_age_s) { return have && age_s <= max_age_s + 1e-9; }
 }  // namespace
 bool inputs_ready(const InputAges& in, double max_age_s) {
   return fresh(in.have_odometry, in.odometry_age_s, max_age_s) && fresh(in.have_imu, in.imu_age_s, max_age_s);
@@ -464,7 +466,9 @@ std::optional<tactile_msgs::msg::FsmState> IndiControlLogic::state_message(int64
   s.previous_state = stats_.transitions > 0 ? to_string(stats_.previous) : "";
   s.reason = stats_.reason;
   s.reason_code = static_cast<uint8_t>(stats_.reason_code);
-  s.time_in_state = tactile_common::to_seconds(now_ns - stats_.state_since_ns);
+  // Before the first transition: since the first tick (the node clock may not start at 0).
+  if (first_tick_ns_ < 0) first_tick_ns_ = now_ns;
+  s.time_in_state = tactile_common::to_seconds(now_ns - (stats_.transitions > 0 ? stats_.state_since_ns : first_tick_ns_));
   s.transitions = stats_.transitions;
   published_transitions_ = stats_.transitions;
   last_state_msg_ns_ = now_ns;

@@ -247,6 +247,10 @@ TEST(IndiFailsafeGuards, InputsReadyOnlyWithBothFresh) {
   EXPECT_FALSE(indi_guards::inputs_ready(InputAges{true, false, 0.0, 0.0}, 0.1));   // no IMU yet
   EXPECT_FALSE(indi_guards::inputs_ready(InputAges{true, true, 0.11, 0.0}, 0.1));   // stale odometry
   EXPECT_FALSE(indi_guards::inputs_ready(InputAges{true, true, 0.0, 0.11}, 0.1));   // stale IMU
+  // An age of exactly max_input_age_s is fresh, also through integer nanoseconds
+  // (to_seconds(300 ms) = 0.30000000000000004).
+  const double age = tactile_common::to_seconds(300'000'000);
+  EXPECT_TRUE(indi_guards::inputs_ready(InputAges{true, true, age, age}, 0.3));
 }
 
 TEST(IndiFailsafeGuards, ImuLostWhenMissingOrStaleWhateverTheOdometry) {
@@ -452,20 +456,22 @@ TEST(IndiFailsafe, StateMessagesOnEveryTransitionAndAtOneHz) {
   using tactile_msgs::msg::FsmState;
   IndiControlLogic l(default_params());
   std::vector<FsmState> msgs;
+  const int64_t t0 = 1'700'000'000'000'000'000;  // a system clock's nanoseconds, not 0
   auto tick = [&](int64_t t) {
-    l.on_timer(t);
-    if (auto s = l.state_message(t)) msgs.push_back(*s);
+    l.on_timer(t0 + t);
+    if (auto s = l.state_message(t0 + t)) msgs.push_back(*s);
   };
   tick(0);  // nothing received yet
   for (int64_t t = 2 * kMs; t <= 2000 * kMs; t += 2 * kMs) {
-    if (t <= 100 * kMs) l.on_odometry(odometry_at(t));
-    if (t <= 1500 * kMs) l.on_imu(imu_at(t, 0.0, l.controller().last_outer().thrust / 0.28));
+    if (t <= 100 * kMs) l.on_odometry(odometry_at(t0 + t));
+    if (t <= 1500 * kMs) l.on_imu(imu_at(t0 + t, 0.0, l.controller().last_outer().thrust / 0.28));
     tick(t);
   }
   ASSERT_GE(msgs.size(), 4u);
   EXPECT_EQ(msgs[0].behaviour, "indi_failsafe");
   EXPECT_EQ(msgs[0].state, "WAITING_FOR_INPUT");
   EXPECT_EQ(msgs[0].reason_code, FsmState::REASON_NONE);
+  EXPECT_EQ(msgs[0].time_in_state, 0.0);  // since the first tick, not since the clock's 0
   std::vector<std::string> changes;
   for (std::size_t i = 1; i < msgs.size(); ++i) {
     if (msgs[i].transitions == msgs[i - 1].transitions) {

@@ -203,6 +203,7 @@ class IndiControlLogic {
   int64_t resting_since_ns_ = -1;   ///< ODOMETRY_LOST: the land detector holds since then (-1: not)
   void transition(IndiFailsafeState to, IndiReason code, const char* reason, int64_t now_ns);
   int64_t last_state_msg_ns_ = -1;
+  int64_t first_tick_ns_ = -1;  ///< state_message()'s first call (time in WAITING_FOR_INPUT)
   uint32_t published_transitions_ = 0;
   void update_state(int64_t now_ns);
   tactile_msgs::msg::ThrustCommand command(int64_t now_ns, const std::array<double, 4>& f);
