@@ -389,6 +389,22 @@ XVec3 XplorerExplorer::turning_setpoint(const XplorerInput& in, double* yaw) con
   return out;
 }
 
+XplorerOutput XplorerExplorer::for_test_enter(XplorerState s, const XplorerInput& in, BodyDirection contact) {
+  initialised_ = true;
+  hold_ = in.position;
+  hold_yaw_ = yaw_enter_ = last_yaw_ = in.yaw;
+  last_p_ = in.position.head<2>();
+  t_enter_ = in.t;
+  state_ = XplorerState::kExploration;  // the state the contact states are entered from
+  explore_dir_ = rot(in.yaw, XVec2(1, 0));
+  contact_ = contact;
+  move_ = right_hand(contact);
+  if (s == XplorerState::kTactileTurning) plan_turn(1.0, in.yaw, in.position.head<2>(), in);
+  XplorerOutput out;
+  enter(s, XplorerReason::kNone, in, out);
+  return out;
+}
+
 XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
   // Body force (001 Sec. IV-A: b_delta = w_R_b^T delta) and its 50-sample moving average (Sec. V-C).
   const XVec2 fb = rot(-in.yaw, in.force.head<2>());

@@ -883,3 +883,96 @@ TEST(XplorerExplorer, ReasonCodesOfTheTransitionsOfAnExploration) {
   EXPECT_STREQ(to_string(XplorerReason::kContactLostTurn), "contact_lost_turn");
   EXPECT_STREQ(to_string(XplorerReason::kYawRatePeak), "yaw_rate_peak");
 }
+
+// Each state put directly into (for_test_enter), then its transitions alone, at their
+// thresholds (issue 33): a newcomer changing one guard sees which test names it.
+namespace {
+constexpr double kTick = 0.02;  // 50 Hz
+XplorerInput at(double t, double z = 0.7, double fx = 0.0, double fy = 0.0) {
+  XplorerInput in;
+  in.t = t;
+  in.position = XVec3(0.0, 0.0, z);
+  in.yaw = 0.0;
+  in.force = XVec3(fx, fy, 0.0);
+  return in;
+}
+}  // namespace
+
+TEST(XplorerStates, TakeoffEndsWithinTakeoffToleranceOfTheHoverHeight) {
+  const XplorerParams p;
+  XplorerExplorer fsm(p);
+  fsm.for_test_enter(XplorerState::kTakeoff, at(0.0, 0.0));
+  fsm.update(at(kTick, p.hover_height - p.takeoff_tolerance - 0.001), kTick);
+  EXPECT_EQ(fsm.state(), XplorerState::kTakeoff);
+  fsm.update(at(2 * kTick, p.hover_height - p.takeoff_tolerance + 0.001), kTick);
+  EXPECT_EQ(fsm.state(), XplorerState::kExploration);
+  EXPECT_EQ(fsm.reason_code(), XplorerReason::kHoverHeightReached);
+}
+
+/// Steps the FSM at 50 Hz from t = 0 with a constant body force fx until it leaves `from`
+/// (at most max_s); returns the time of the tick it left on (NaN: never).
+double leaves_at(XplorerExplorer& fsm, XplorerState from, double fx, double max_s, double t0 = 0.0) {
+  for (int k = 1; t0 + k * kTick <= max_s; ++k) {
+    const double t = t0 + k * kTick;
+    fsm.update(at(t, 0.7, fx), kTick);
+    if (fsm.state() != from) return t;
+  }
+  return NAN;
+}
+
+TEST(XplorerStates, ExplorationEndsWhenTheAveragedForceExceedsDelta0) {
+  const XplorerParams p;
+  XplorerExplorer fsm(p);
+  fsm.for_test_enter(XplorerState::kExploration, at(0.0));
+  // The moving average full of free flight (one window of zero force), then a 2 N push
+  // from ahead: the 50-sample average crosses delta_0 = 1.5 N at the 38th sample.
+  const double window_s = p.force_average_samples * kTick;
+  ASSERT_TRUE(std::isnan(leaves_at(fsm, XplorerState::kExploration, 0.0, window_s)));
+  const double f = -2.0;
+  const double left = leaves_at(fsm, XplorerState::kExploration, f, window_s + 4.0, window_s);
+  const int expected = static_cast<int>(std::floor(p.delta_0 / std::abs(f) * p.force_average_samples)) + 1;
+  EXPECT_NEAR(left - window_s, expected * kTick, 1e-9);
+  EXPECT_EQ(fsm.state(), XplorerState::kTactileTraversal);
+  EXPECT_EQ(fsm.contact(), BodyDirection::kPlusX);  // C_n: toward the face ahead
+  EXPECT_TRUE(fsm.reason_code() == XplorerReason::kContact || fsm.reason_code() == XplorerReason::kContactSquareUp);
+}
+
+TEST(XplorerStates, TraversalEndsWhenTheForceStaysBelowReleaseForceForReleaseTime) {
+  const XplorerParams p;
+  XplorerExplorer fsm(p);
+  fsm.for_test_enter(XplorerState::kTactileTraversal, at(0.0), BodyDirection::kPlusX);
+  EXPECT_TRUE(fsm.backing_off(0.0));
+  // No force: the release timer starts once the back-off has ended, and the contact is
+  // lost release_time later (a short traversal: Exploration, not a turn about the end).
+  const double left = leaves_at(fsm, XplorerState::kTactileTraversal, 0.0, 5.0);
+  EXPECT_EQ(fsm.state(), XplorerState::kExploration);
+  EXPECT_EQ(fsm.reason_code(), XplorerReason::kContactLost);
+  // The first tick after the back-off starts the timer; the release fires release_time after it.
+  EXPECT_NEAR(left, p.contact_backoff_time + p.release_time + kTick, kTick + 1e-9);
+}
+
+TEST(XplorerStates, TurningEndsOnAReContactAboveDeltaPsi0AfterSettleTime) {
+  const XplorerParams p;
+  XplorerExplorer fsm(p);
+  fsm.for_test_enter(XplorerState::kTactileTurning, at(0.0), BodyDirection::kPlusX);
+  ASSERT_EQ(fsm.state(), XplorerState::kTactileTurning);
+  // A push well above delta_psi0 from the start: no re-contact within settle_time, then
+  // on the first tick past it.
+  const double left = leaves_at(fsm, XplorerState::kTactileTurning, -2.0 * p.delta_psi0, 5.0);
+  EXPECT_GT(left, p.settle_time);
+  EXPECT_LE(left - kTick, p.settle_time + 1e-9);
+  EXPECT_EQ(fsm.state(), XplorerState::kTactileTraversal);
+  EXPECT_EQ(fsm.reason_code(), XplorerReason::kReContact);
+}
+
+TEST(XplorerStates, TurningWithoutAReContactEndsAtTheTurnLimit) {
+  const XplorerParams p;
+  XplorerExplorer fsm(p);
+  fsm.for_test_enter(XplorerState::kTactileTurning, at(0.0), BodyDirection::kPlusX);
+  const double limit_s = p.turn_limit / p.turn_rate + 3.0;
+  const double left = leaves_at(fsm, XplorerState::kTactileTurning, 0.0, limit_s + 1.0);
+  EXPECT_GT(left, limit_s);
+  EXPECT_LE(left - kTick, limit_s + 1e-9);
+  EXPECT_EQ(fsm.state(), XplorerState::kExploration);
+  EXPECT_EQ(fsm.reason_code(), XplorerReason::kTurnLimit);
+}

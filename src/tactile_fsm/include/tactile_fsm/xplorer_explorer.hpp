@@ -276,6 +276,14 @@ class XplorerExplorer {
  public:
   explicit XplorerExplorer(const XplorerParams& p);
   XplorerOutput update(const XplorerInput& in, double dt);
+  /// Puts the FSM directly into state s at the input's pose and runs its entry action, as
+  /// its transitions would (tests: each state's transitions alone). `contact` is C_n for
+  /// Tactile-traversal, Tactile-turning and the static wrench (lambda its right-hand
+  /// move direction); a Tactile-turning turns counter-clockwise about the corner of a
+  /// face at the input's pose. Entered as from Exploration, so a traversal or static
+  /// wrench starts with its contact back-off (contact_backoff_time) as after a first
+  /// contact. Returns the entry tick's output.
+  XplorerOutput for_test_enter(XplorerState s, const XplorerInput& in, BodyDirection contact = BodyDirection::kPlusX);
 
   XplorerState state() const { return state_; }
   BodyDirection contact() const { return contact_; }
