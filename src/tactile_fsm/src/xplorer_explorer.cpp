@@ -389,6 +389,53 @@ XVec3 XplorerExplorer::turning_setpoint(const XplorerInput& in, double* yaw) con
   return out;
 }
 
+// --- Named guards (public, tested alone) -------------------------------------
+
+bool XplorerExplorer::at_hover_height(const XplorerInput& in) const {
+  return std::abs(in.position.z() - p_.hover_height) < p_.takeoff_tolerance;
+}
+
+BodyDirection XplorerExplorer::contact_detected() const { return contact_direction(f_body_avg_, p_.delta_0); }
+
+bool XplorerExplorer::yaw_rate_peak(double t) const {
+  return t - t_quiet_ > p_.settle_time && std::abs(yaw_rate_f_) > p_.yaw_rate_trigger;
+}
+
+bool XplorerExplorer::peak_against_the_traversal() const {
+  return yaw_rate_f_ < 0.0 && clockwise_in_a_row_ >= p_.max_clockwise_turns_in_a_row;
+}
+
+bool XplorerExplorer::released(double t) const {
+  return low_force_since_ >= 0.0 && t - low_force_since_ > p_.release_time;
+}
+
+bool XplorerExplorer::turns_about_the_faces_end(double t) const {
+  return released(t) && p_.turn_on_contact_lost && p_.turn_pivot && t - t_enter_ >= p_.contact_lost_turn_min_s;
+}
+
+bool XplorerExplorer::re_contact(double t) const {
+  return t - t_enter_ > p_.settle_time &&
+         (std::abs(f_body_avg_.x()) > p_.delta_psi0 || std::abs(f_body_avg_.y()) > p_.delta_psi0);
+}
+
+bool XplorerExplorer::turn_limit_passed(double t) const { return t - t_enter_ > p_.turn_limit / p_.turn_rate + 3.0; }
+
+bool XplorerExplorer::recovered(double t) const { return collision_peak_ > 0.0 && t - t_quiet_ > p_.recovery_time; }
+
+bool XplorerExplorer::goal_passed(const XVec2& p2) const {
+  const XVec2 dir = (p_.goal - hold_.head<2>()).normalized();
+  return (p2 - hold_.head<2>()).dot(dir) > (p_.goal - hold_.head<2>()).norm() + 0.3;
+}
+
+bool XplorerExplorer::loop_closes(const XVec2& p2) const {
+  const bool closure_state =
+      state_ == XplorerState::kTactileTraversal ||
+      (state_ == XplorerState::kTactileTurning && p_.loop_turn_min_winding > 0.0 &&
+       winding_ >= p_.loop_turn_min_winding);
+  return started_path_ && !loop_closed_ && closure_state && path_ > p_.loop_min_path &&
+         winding_ >= p_.loop_min_winding && (p2 - first_contact_p_).norm() < p_.loop_closure_radius;
+}
+
 XplorerOutput XplorerExplorer::for_test_enter(XplorerState s, const XplorerInput& in, BodyDirection contact) {
   initialised_ = true;
   hold_ = in.position;
@@ -442,12 +489,7 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
   // Once round the object: the heading has wound by ~2 pi counter-clockwise (right-hand
   // traversal); wobbling round one corner back to the first contact point has not.
   // Optionally also inside a turn, once (nearly) round (loop_turn_min_winding).
-  const bool closure_state =
-      state_ == XplorerState::kTactileTraversal ||
-      (state_ == XplorerState::kTactileTurning && p_.loop_turn_min_winding > 0.0 &&
-       winding_ >= p_.loop_turn_min_winding);
-  if (started_path_ && !loop_closed_ && closure_state && path_ > p_.loop_min_path &&
-      winding_ >= p_.loop_min_winding && (p2 - first_contact_p_).norm() < p_.loop_closure_radius) {
+  if (loop_closes(p2)) {
     loop_closed_ = true;
     loop_closure_t_ = in.t;
     enter(XplorerState::kDone, XplorerReason::kLoopClosed, in, out);
@@ -475,7 +517,7 @@ XplorerOutput XplorerExplorer::update(const XplorerInput& in, double dt) {
 void XplorerExplorer::tick_takeoff(const XplorerInput& in, XplorerOutput& out) {
   out.position = XVec3(hold_.x(), hold_.y(), p_.hover_height);
   out.yaw = hold_yaw_;
-  if (!(std::abs(in.position.z() - p_.hover_height) < p_.takeoff_tolerance)) return;
+  if (!at_hover_height(in)) return;
   switch (p_.mission) {
     case XplorerMission::kExplore:
     case XplorerMission::kStaticWrench:
@@ -489,7 +531,7 @@ void XplorerExplorer::tick_takeoff(const XplorerInput& in, XplorerOutput& out) {
 
 void XplorerExplorer::tick_exploration(const XplorerInput& in, XplorerOutput& out) {
   const XVec2 p2 = in.position.head<2>();
-  const BodyDirection c = contact_direction(f_body_avg_, p_.delta_0);
+  const BodyDirection c = contact_detected();
   if (c != BodyDirection::kNone) {  // 001 Sec. IV-A: contact
     contact_ = c;
     if (p_.mission == XplorerMission::kStaticWrench) {
@@ -524,7 +566,7 @@ bool XplorerExplorer::tick_squaring(const XplorerInput& in, double dt, XplorerOu
   const XVec2 n = rot(square_yaw_, unit(contact_));
   if (f_body_avg_.norm() < p_.release_force) {
     if (low_force_since_ < 0) low_force_since_ = in.t;
-    if (in.t - low_force_since_ > p_.release_time) {  // the face went: Exploration towards it
+    if (released(in.t)) {  // the face went: Exploration towards it
       explore_dir_ = n;
       enter(XplorerState::kExploration, XplorerReason::kContactLostSquaring, in, out);
       return true;
@@ -569,8 +611,8 @@ void XplorerExplorer::tick_traversal(const XplorerInput& in, double dt, XplorerO
   // A clockwise peak may turn once (re-aligning after an oblique contact); a second
   // clockwise turn before a counter-clockwise one would cycle round one corner point,
   // so that peak leaves the traversal going on (C_n follows the yaw).
-  const bool against = yaw_rate_f_ < 0.0 && clockwise_in_a_row_ >= p_.max_clockwise_turns_in_a_row;
-  const bool peak = in.t - t_quiet_ > p_.settle_time && std::abs(yaw_rate_f_) > p_.yaw_rate_trigger;
+  const bool against = peak_against_the_traversal();
+  const bool peak = yaw_rate_peak(in.t);
   if (peak && against) {
     if (!peak_against_) ++turns_against_;
     peak_against_ = true;
@@ -603,8 +645,7 @@ void XplorerExplorer::tick_traversal(const XplorerInput& in, double dt, XplorerO
       lost_p_ = p2;  // the face as it was when the force went
       lost_yaw_ = in.yaw;
     }
-    if (in.t - low_force_since_ > p_.release_time && p_.turn_on_contact_lost && p_.turn_pivot &&
-        in.t - t_enter_ >= p_.contact_lost_turn_min_s) {
+    if (turns_about_the_faces_end(in.t)) {
       // The face ended without a yaw-rate peak (an obtuse convex corner the yaw followed
       // slowly): right-hand traversal round a convex object goes on round the corner,
       // so turn counter-clockwise about it instead of flying off along the lost C_n.
@@ -613,7 +654,7 @@ void XplorerExplorer::tick_traversal(const XplorerInput& in, double dt, XplorerO
       enter(XplorerState::kTactileTurning, XplorerReason::kContactLostTurn, in, out);
       return;
     }
-    if (in.t - low_force_since_ > p_.release_time) {
+    if (released(in.t)) {
       explore_dir_ = rot(in.yaw, unit(contact_));
       enter(XplorerState::kExploration, XplorerReason::kContactLost, in, out);
       return;
@@ -635,14 +676,13 @@ void XplorerExplorer::tick_traversal(const XplorerInput& in, double dt, XplorerO
 void XplorerExplorer::tick_turning(const XplorerInput& in, XplorerOutput& out) {
   // Re-contact (|b_delta_f_x| or |b_delta_f_y| > delta_psi0), once the moving
   // average no longer holds the force of the face just left.
-  if (in.t - t_enter_ > p_.settle_time &&
-      (std::abs(f_body_avg_.x()) > p_.delta_psi0 || std::abs(f_body_avg_.y()) > p_.delta_psi0)) {
+  if (re_contact(in.t)) {
     contact_ = contact_direction(f_body_avg_, p_.delta_psi0);
     move_ = right_hand(contact_);
     enter(XplorerState::kTactileTraversal, XplorerReason::kReContact, in, out);
     return;
   }
-  if (in.t - t_enter_ > p_.turn_limit / p_.turn_rate + 3.0) {
+  if (turn_limit_passed(in.t)) {
     explore_dir_ = rot(in.yaw, unit(contact_));
     enter(XplorerState::kExploration, XplorerReason::kTurnLimit, in, out);
     return;
@@ -685,14 +725,14 @@ void XplorerExplorer::tick_ricochet(const XplorerInput& in, XplorerOutput& out) 
     collision_peak_ = std::max(collision_peak_, fmag);
     recovery_sp_ = XVec3(p2.x(), p2.y(), p_.hover_height);
     recovery_sp_.head<2>() += p_.recovery_gain * collision_peak_ * collision_normal_;
-    if (in.t - t_quiet_ > p_.recovery_time) {
+    if (recovered(in.t)) {
       enter(XplorerState::kGoTo, XplorerReason::kCollisionRecovered, in, out);
       return;
     }
     out.position = recovery_sp_;
   } else {
     // Well past the goal without a collision (no wall there): regulate at the goal.
-    if ((p2 - hold_.head<2>()).dot(dir) > (p_.goal - hold_.head<2>()).norm() + 0.3) {
+    if (goal_passed(p2)) {
       enter(XplorerState::kGoTo, XplorerReason::kGoalPassed, in, out);
       return;
     }

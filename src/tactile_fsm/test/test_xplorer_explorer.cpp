@@ -976,3 +976,27 @@ TEST(XplorerStates, TurningWithoutAReContactEndsAtTheTurnLimit) {
   EXPECT_EQ(fsm.state(), XplorerState::kExploration);
   EXPECT_EQ(fsm.reason_code(), XplorerReason::kTurnLimit);
 }
+
+// The named guards alone, at their edges.
+TEST(XplorerGuards, EachAtItsEdge) {
+  const XplorerParams p;
+  XplorerExplorer fsm(p);
+  fsm.for_test_enter(XplorerState::kTactileTurning, at(0.0), BodyDirection::kPlusX);
+  EXPECT_TRUE(fsm.at_hover_height(at(0.0, p.hover_height + p.takeoff_tolerance - 1e-6)));
+  EXPECT_FALSE(fsm.at_hover_height(at(0.0, p.hover_height + p.takeoff_tolerance)));
+  const double limit_s = p.turn_limit / p.turn_rate + 3.0;
+  EXPECT_FALSE(fsm.turn_limit_passed(limit_s));
+  EXPECT_TRUE(fsm.turn_limit_passed(limit_s + 1e-6));
+  // No force averaged yet: no contact, no re-contact, no release timer running.
+  EXPECT_EQ(fsm.contact_detected(), BodyDirection::kNone);
+  EXPECT_FALSE(fsm.re_contact(10.0));
+  EXPECT_FALSE(fsm.released(10.0));
+  EXPECT_FALSE(fsm.yaw_rate_peak(10.0));
+  EXPECT_FALSE(fsm.recovered(10.0));  // no collision
+  // A push of 2 delta_psi0 fills the average (within settle_time: still turning).
+  for (int k = 1; k <= p.force_average_samples; ++k) fsm.update(at(k * kTick, 0.7, -2.0 * p.delta_psi0), kTick);
+  ASSERT_EQ(fsm.state(), XplorerState::kTactileTurning);
+  EXPECT_FALSE(fsm.re_contact(p.settle_time));
+  EXPECT_TRUE(fsm.re_contact(p.settle_time + 1e-6));
+  EXPECT_EQ(fsm.contact_detected(), BodyDirection::kPlusX);
+}

@@ -285,6 +285,37 @@ class XplorerExplorer {
   /// contact. Returns the entry tick's output.
   XplorerOutput for_test_enter(XplorerState s, const XplorerInput& in, BodyDirection contact = BodyDirection::kPlusX);
 
+  // Named guards: the conditions of the transitions, in update()'s order within each
+  // state (public: tested alone). t is the FSM's clock [s].
+  /// Takeoff -> the mission's first state: |z - hover_height| < takeoff_tolerance.
+  bool at_hover_height(const XplorerInput& in) const;
+  /// Exploration -> Tactile-traversal / static wrench (001 Sec. IV-A): the averaged body
+  /// force's direction beyond delta_0, BodyDirection::kNone below it.
+  BodyDirection contact_detected() const;
+  /// Tactile-traversal -> Tactile-turning (001 Sec. IV-A): |low-passed yaw rate| >
+  /// yaw_rate_trigger, settle_time after the last contact or turn ...
+  bool yaw_rate_peak(double t) const;
+  /// ... unless it is a clockwise peak after max_clockwise_turns_in_a_row of them.
+  bool peak_against_the_traversal() const;
+  /// Contact lost (Tactile-traversal, squaring up): the averaged force below
+  /// release_force for more than release_time.
+  bool released(double t) const;
+  /// ... in a traversal of at least contact_lost_turn_min_s with turn_on_contact_lost
+  /// and turn_pivot: turn about the face's end instead of exploring on.
+  bool turns_about_the_faces_end(double t) const;
+  /// Tactile-turning -> Tactile-traversal (001 Sec. IV-A): |b_delta_f_x| or |b_delta_f_y| >
+  /// delta_psi0, settle_time after the turn began.
+  bool re_contact(double t) const;
+  /// Tactile-turning -> Exploration: turn_limit / turn_rate + 3 s without a re-contact.
+  bool turn_limit_passed(double t) const;
+  /// Ricocheting -> GoTo (001 Sec. IV-C): recovery_time after the collision's peak began.
+  bool recovered(double t) const;
+  /// Ricocheting -> GoTo: 0.3 m past the goal along the line from the start, no collision.
+  bool goal_passed(const XVec2& p2) const;
+  /// Tactile-traversal (or a late turn) -> Done (001 Sec. V-C2): back within
+  /// loop_closure_radius of the first contact after loop_min_path and the heading wound.
+  bool loop_closes(const XVec2& p2) const;
+
   XplorerState state() const { return state_; }
   BodyDirection contact() const { return contact_; }
   BodyDirection move() const { return move_; }
