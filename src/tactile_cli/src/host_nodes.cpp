@@ -180,12 +180,9 @@ void add_tactile_sim(Host& host, std::shared_ptr<tactile_sim::SimLogic> sim) {
   using Sim = tactile_sim::SimLogic;
   Host* h = &host;
   Sim* s = sim.get();
-  host.bus().subscribe<tactile_msgs::msg::HoverSetpoint>(
-      Sim::kHoverSetpointTopic, [s](const tactile_msgs::msg::HoverSetpoint& m) { s->on_hover_setpoint(m); });
-  host.bus().subscribe<geometry_msgs::msg::PoseStamped>(
-      Sim::kPositionSetpointTopic, [s](const geometry_msgs::msg::PoseStamped& m) { s->on_position_setpoint(m); });
-  host.bus().subscribe<tactile_msgs::msg::ThrustCommand>(
-      Sim::kRotorThrustTopic, [s](const tactile_msgs::msg::ThrustCommand& m) { s->on_rotor_thrust(m); });
+  // The inputs through the component's wire; the world's steps and outputs are the host's own.
+  HostPorts ports(host, "");
+  Sim::wire_setpoints(ports, *s, [](const auto& /*stamp*/) {});
   auto out = std::make_shared<Sim::Outputs>();
   host.executor().add_timer(
       sim->period_ns(),
