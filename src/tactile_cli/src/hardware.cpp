@@ -18,6 +18,7 @@
 #include "crazyflie_bridge/sitl_endpoint.hpp"
 #include "tactile_cli/host.hpp"
 #include "tactile_cli/host_nodes.hpp"
+#include "tactile_cli/host_ports.hpp"
 #include "tactile_cli/sim_graph.hpp"
 #include "tactile_cli/whisker_eval.hpp"
 #include "tactile_sim/scenario.hpp"
@@ -211,19 +212,16 @@ nlohmann::json run_fly(const FlyOptions& o) {
   }
 
   t0 = Clock::now();
-  host.bus().subscribe<tactile_msgs::msg::HoverSetpoint>(
-      CrazyflieBridgeLogic::kSetpointTopic,
-      [&](const tactile_msgs::msg::HoverSetpoint& m) {
+  // The bridge's ports, as its rclcpp component wires them (BridgeRunner::wire), on the
+  // host clock: messages keep the bridge's stamps; the bag time is the host clock.
+  HostPorts bridge_ports(host, "", {}, now_ns);
+  const crazyflie_bridge::BridgeRunner::Sinks sinks =
+      crazyflie_bridge::BridgeRunner::wire(bridge_ports, [&](const tactile_msgs::msg::HoverSetpoint& m) {
         // The FSM steps on each depth's arrival, also while the shutdown landing pumps the
         // link: after the run its setpoints no longer reach the bridge (as none did when
         // it stepped on the host's timer, which stops with the pipeline).
         if (pipeline_on) runner.on_hover_setpoint(m, now_ns());
       });
-  crazyflie_bridge::BridgeRunner::Sinks sinks;
-  // Messages keep the bridge's stamps; the bag time is the host clock.
-  sinks.left = [&](const auto& m) { host.bus().publish(CrazyflieBridgeLogic::kLeftPressureTopic, m, now_ns()); };
-  sinks.right = [&](const auto& m) { host.bus().publish(CrazyflieBridgeLogic::kRightPressureTopic, m, now_ns()); };
-  sinks.odom = [&](const auto& m) { host.bus().publish(CrazyflieBridgeLogic::kOdomTopic, m, now_ns()); };
 
   // Operator commands and their answers, in metrics.json and on the console.
   nlohmann::json commands = nlohmann::json::array();

@@ -1,7 +1,6 @@
 #include "tactile_cli/host_nodes.hpp"
 
-#include <algorithm>
-#include <limits>
+#include <utility>
 
 #include "tactile_cli/host_ports.hpp"
 #include "tactile_common/event_tick.hpp"
@@ -102,38 +101,20 @@ std::shared_ptr<tactile_fsm::WhiskerFsmLogic> add_whisker_fsm(Host& host, const 
                                                                std::function<int64_t()> arrival_clock) {
   using Logic = tactile_fsm::WhiskerFsmLogic;
   auto logic = add_logic<Logic>(host, "", over);
-  Host* h = &host;
   Logic* l = logic.get();
-  // Steps never go back in time: a real-time host's executor may fire an overdue
-  // watchdog with its due time after a depth arrival stepped the FSM later.
-  auto last_ns = std::make_shared<int64_t>(std::numeric_limits<int64_t>::min());
-  auto step = [h, l, last_ns](int64_t t_ns) {
-    const int64_t now_ns = *last_ns = std::max(t_ns, *last_ns);
-    auto out = l->on_timer(now_ns);
-    h->bus().publish(Logic::kSetpointTopic, out.setpoint, now_ns);
-    if (out.state) h->bus().publish(Logic::kStateTopic, *out.state, now_ns);
-  };
+  Logic::Stepping stepping;
   // Event driven only with a real-time clock (see the header).
   auto tick = arrival_clock ? std::make_shared<tactile_common::EventTick>(Logic::kTimerPeriodNs) : nullptr;
-  host.bus().subscribe<tactile_msgs::msg::TactileDepth>(
-      Logic::kDepthTopic, [l, tick, step, arrival_clock](const tactile_msgs::msg::TactileDepth& m) {
-        l->on_depth(m);
-        if (!tick) return;
-        const int64_t now_ns = arrival_clock();
-        if (tick->on_event(now_ns)) step(now_ns);
-      });
-  host.bus().subscribe<tactile_msgs::msg::WhiskerSignal>(
-      Logic::kLeftSignalTopic, [l](const tactile_msgs::msg::WhiskerSignal& m) { l->on_left_signal(m); });
-  host.bus().subscribe<tactile_msgs::msg::WhiskerSignal>(
-      Logic::kRightSignalTopic, [l](const tactile_msgs::msg::WhiskerSignal& m) { l->on_right_signal(m); });
-  host.bus().subscribe<nav_msgs::msg::Odometry>(Logic::kOdomTopic,
-                                                [l](const nav_msgs::msg::Odometry& m) { l->on_odometry(m); });
-  host.executor().add_timer(
-      Logic::kTimerPeriodNs,
-      [tick, step](int64_t now_ns) {
-        if (!tick || tick->on_watchdog()) step(now_ns);
-      },
-      host.executor().now_ns());
+  if (tick) host.keep(tick);
+  stepping.tick = tick.get();
+  // Steps never go back in time: a real-time host's executor may fire an overdue
+  // watchdog with its due time after a depth arrival stepped the FSM later (a no-op
+  // when the timer alone steps it).
+  stepping.monotonic = true;
+  // The arrival clock is the node's clock: a depth's receive time (the event step's
+  // time) and the stamps of what it publishes.
+  HostPorts ports(host, "", {}, std::move(arrival_clock));
+  Logic::wire(ports, *l, stepping);
   host.add_reporter([l, tick] {
     const auto& s = l->stats();
     NodeReport r{std::string("/") + Logic::kNodeName,
@@ -199,12 +180,9 @@ void add_tactile_sim(Host& host, std::shared_ptr<tactile_sim::SimLogic> sim) {
   using Sim = tactile_sim::SimLogic;
   Host* h = &host;
   Sim* s = sim.get();
-  host.bus().subscribe<tactile_msgs::msg::HoverSetpoint>(
-      Sim::kHoverSetpointTopic, [s](const tactile_msgs::msg::HoverSetpoint& m) { s->on_hover_setpoint(m); });
-  host.bus().subscribe<geometry_msgs::msg::PoseStamped>(
-      Sim::kPositionSetpointTopic, [s](const geometry_msgs::msg::PoseStamped& m) { s->on_position_setpoint(m); });
-  host.bus().subscribe<tactile_msgs::msg::ThrustCommand>(
-      Sim::kRotorThrustTopic, [s](const tactile_msgs::msg::ThrustCommand& m) { s->on_rotor_thrust(m); });
+  // The inputs through the component's wire; the world's steps and outputs are the host's own.
+  HostPorts ports(host, "");
+  Sim::wire_setpoints(ports, *s, [](const auto& /*stamp*/) {});
   auto out = std::make_shared<Sim::Outputs>();
   host.executor().add_timer(
       sim->period_ns(),

@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <regex>
 #include <string>
@@ -293,4 +294,45 @@ TEST(HostWhiskerFsm, StepsOnDepthArrivalWithARealTimeClockAndOnItsTimerWithout) 
     EXPECT_GE(setpoints.size() - n, 10u);
     EXPECT_LE(setpoints.size() - n, 11u);
   }
+}
+
+// `tactile fly` delivers a depth between the executor's runs: the executor's clock lags the
+// arrival clock. The event step runs at the arrival clock (the depth's receive time, not the
+// executor's), and an overdue watchdog that steps after it never goes back in time.
+TEST(HostWhiskerFsm, RealTimeStepsRunAtTheArrivalClockAndNeverGoBack) {
+  using Logic = tactile_fsm::WhiskerFsmLogic;
+  constexpr int64_t kMs = 1'000'000;
+  struct StampTap : tactile_cli::BusTap {
+    std::vector<int64_t> stamps;  // bus (bag) stamps of /cmd_hover
+    void on_message(const tactile_cli::TapTopic& t, int64_t stamp_ns,
+                    const std::function<void(std::vector<uint8_t>&)>&) override {
+      if (t.name == "/cmd_hover") stamps.push_back(stamp_ns);
+    }
+  } tap;
+  tactile_cli::Host host(TACTILE_CONFIG_DIR);
+  host.bus().add_tap(&tap);
+  int64_t clock_ns = 0;
+  tactile_cli::add_whisker_fsm(host, tactile_common::ParamMap(), [&clock_ns] { return clock_ns; });
+  std::vector<int64_t> setpoints;  // message stamps: the step's time
+  host.bus().subscribe<tactile_msgs::msg::HoverSetpoint>(Logic::kSetpointTopic, [&](const auto& m) {
+    setpoints.push_back(static_cast<int64_t>(m.header.stamp.sec) * 1'000'000'000 + m.header.stamp.nanosec);
+  });
+  host.executor().run_until(0);  // the watchdog's first call, at 0
+  ASSERT_EQ(setpoints.size(), 1u);
+  auto depth_at = [&](int64_t t_ns) {
+    clock_ns = t_ns;
+    tactile_msgs::msg::TactileDepth d;
+    tactile_common::to_stamp(t_ns, d.header.stamp);
+    host.bus().publish(Logic::kDepthTopic, d, host.executor().now_ns());
+  };
+  depth_at(35 * kMs);  // the executor is still at 0
+  ASSERT_EQ(setpoints.size(), 2u);
+  EXPECT_EQ(setpoints.back(), 35 * kMs);
+  EXPECT_EQ(tap.stamps.back(), 35 * kMs);
+  depth_at(36 * kMs);  // within T/2 of the last event step: held back for the watchdog
+  EXPECT_EQ(setpoints.size(), 2u);
+  // The overdue watchdog due at 20 ms steps for the held-back depth, at 35 ms, not 20.
+  host.executor().run_until(20 * kMs);
+  ASSERT_EQ(setpoints.size(), 3u);
+  EXPECT_EQ(setpoints.back(), 35 * kMs);
 }

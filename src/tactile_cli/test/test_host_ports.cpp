@@ -2,11 +2,13 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "crazyflie_bridge/bridge_runner.hpp"
 #include "std_msgs/msg/float64.hpp"
 #include "tactile_cli/host.hpp"
 #include "tactile_cli/host_ports.hpp"
@@ -89,6 +91,63 @@ TEST(HostPorts, LogicReceivesAndPublishesOnItsDeclaredTopicsInItsNamespace) {
   const auto counts = host.bus().published_counts();
   EXPECT_EQ(counts.at("/whisker/left/out"), 4u);
   EXPECT_EQ(counts.count("/out"), 0u);
+}
+
+// A real-time host delivers between the executor's runs: with a clock given, receive times
+// and publish stamps are that clock's; the timer still runs on the executor.
+TEST(HostPorts, AGivenClockIsTheNodesClockForReceiveTimesAndPublishStamps) {
+  tactile_cli::Host host(TACTILE_CONFIG_DIR);
+  int64_t wall_ns = 5'000'000;
+  EchoLogic logic;
+  tactile_cli::HostPorts ports(host, "", {}, [&wall_ns] { return wall_ns; });
+  EchoLogic::wire(ports, logic);
+  std::vector<int64_t> bag_stamps;
+  struct Tap : tactile_cli::BusTap {
+    std::vector<int64_t>* stamps;
+    void on_message(const tactile_cli::TapTopic& t, int64_t stamp_ns,
+                    const std::function<void(std::vector<uint8_t>&)>&) override {
+      if (t.name == "/out") stamps->push_back(stamp_ns);
+    }
+  } tap;
+  tap.stamps = &bag_stamps;
+  host.bus().add_tap(&tap);
+  host.executor().run_until(0);  // the timer's first call: at the executor's 0, stamped on the clock
+  ASSERT_EQ(bag_stamps.size(), 1u);
+  EXPECT_EQ(bag_stamps[0], 5'000'000);
+  wall_ns = 7'000'000;
+  host.bus().publish("/in", value(1.0), 0);
+  ASSERT_EQ(logic.receive_ns.size(), 1u);
+  EXPECT_EQ(logic.receive_ns[0], 7'000'000);  // not the executor's 0
+  EXPECT_EQ(bag_stamps.back(), 7'000'000);
+}
+
+// The bridge's ports in `tactile fly` (BridgeRunner::wire, as its component wires them):
+// the link's sinks publish the pressures and odometry on the bus at the host clock, and a
+// setpoint on cmd_hover reaches the host's handler.
+TEST(HostPorts, BridgeWireDeclaresTheLinksOutputsAndTheSetpointInput) {
+  tactile_cli::Host host(TACTILE_CONFIG_DIR);
+  int64_t wall_ns = 3'000'000;
+  tactile_cli::HostPorts ports(host, "", {}, [&wall_ns] { return wall_ns; });
+  int setpoints = 0;
+  const auto sinks = crazyflie_bridge::BridgeRunner::wire(
+      ports, [&setpoints](const tactile_msgs::msg::HoverSetpoint&) { ++setpoints; });
+  struct Tap : tactile_cli::BusTap {
+    std::map<std::string, int64_t> last_stamp;
+    void on_message(const tactile_cli::TapTopic& t, int64_t stamp_ns,
+                    const std::function<void(std::vector<uint8_t>&)>&) override {
+      last_stamp[t.name] = stamp_ns;
+    }
+  } tap;
+  host.bus().add_tap(&tap);
+  sinks.left(tactile_msgs::msg::WhiskerPressure());
+  wall_ns = 4'000'000;
+  sinks.right(tactile_msgs::msg::WhiskerPressure());
+  sinks.odom(nav_msgs::msg::Odometry());
+  EXPECT_EQ(tap.last_stamp, (std::map<std::string, int64_t>{{"/whisker/left/pressure", 3'000'000},
+                                                            {"/whisker/right/pressure", 4'000'000},
+                                                            {"/odom", 4'000'000}}));
+  host.bus().publish("/cmd_hover", tactile_msgs::msg::HoverSetpoint(), 0);
+  EXPECT_EQ(setpoints, 1);
 }
 
 TEST(HostPorts, RemapMovesADeclaredTopic) {

@@ -21,11 +21,13 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "crazyflie_bridge/client.hpp"
 #include "crazyflie_bridge/crazyflie_bridge_logic.hpp"
 #include "tactile_common/event_tick.hpp"
+#include "tactile_common/ports.hpp"
 
 namespace crazyflie_bridge {
 
@@ -35,6 +37,29 @@ class BridgeRunner {
     std::function<void(const tactile_msgs::msg::WhiskerPressure&)> left, right;
     std::function<void(const nav_msgs::msg::Odometry&)> odom;
   };
+
+  /// The bridge's ports that its rclcpp component and `tactile fly` share
+  /// (tactile_common/ports.hpp): the log data's three outputs (Pub::kData), returned as
+  /// the Sinks pump() and land_and_stop() publish through, and the behaviour's setpoint
+  /// input (Sub::kReliable: keep last 10, reliable), handed to `on_setpoint`, the host's
+  /// own handler (the component takes the link's lock and checks it is streaming;
+  /// `tactile fly` stops forwarding at the run's end). The rest is each host's: the
+  /// component's link and status timers, operator services, TF and diagnostics; the
+  /// real-time loop of `tactile fly` that pumps the link.
+  template <class Ports, class OnSetpoint>
+  static Sinks wire(Ports& p, OnSetpoint on_setpoint) {
+    using tactile_common::ports::Pub;
+    using tactile_common::ports::Sub;
+    Sinks sinks;
+    sinks.left = p.template publisher<tactile_msgs::msg::WhiskerPressure>(CrazyflieBridgeLogic::kLeftPressureTopic,
+                                                                          Pub::kData);
+    sinks.right = p.template publisher<tactile_msgs::msg::WhiskerPressure>(CrazyflieBridgeLogic::kRightPressureTopic,
+                                                                           Pub::kData);
+    sinks.odom = p.template publisher<nav_msgs::msg::Odometry>(CrazyflieBridgeLogic::kOdomTopic, Pub::kData);
+    p.template subscribe<tactile_msgs::msg::HoverSetpoint>(CrazyflieBridgeLogic::kSetpointTopic, Sub::kReliable,
+                                                           std::move(on_setpoint));
+    return sinks;
+  }
   /// Wall-clock latency of one kind of log sample: received (the client's receive time)
   /// -> the next setpoint packet sent. Mean, max and quantiles from a fixed histogram
   /// (kBinS bins up to kBins * kBinS; longer ones in the last bin): memory does not

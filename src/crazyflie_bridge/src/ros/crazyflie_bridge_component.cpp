@@ -42,6 +42,7 @@
 #include "rclcpp_components/register_node_macro.hpp"
 #include "std_msgs/msg/string.hpp"
 #include "tactile_common/ros_parameters.hpp"
+#include "tactile_common/ros_ports.hpp"
 #include "tactile_common/ros_qos.hpp"
 #ifdef TACTILE_HAVE_TF2
 #include "tactile_common/ros_tf.hpp"
@@ -93,26 +94,21 @@ public:
     params_(CrazyflieBridgeLogic::params_from(parameters_.values())),
     health_(BridgeHealth::params_from(parameters_.values()))
   {
-    left_pub_ = tactile_common::data_publisher<tactile_msgs::msg::WhiskerPressure>(node_, CrazyflieBridgeLogic::kLeftPressureTopic);
-    right_pub_ = tactile_common::data_publisher<tactile_msgs::msg::WhiskerPressure>(node_, CrazyflieBridgeLogic::kRightPressureTopic);
-    odom_pub_ = tactile_common::data_publisher<nav_msgs::msg::Odometry>(node_, CrazyflieBridgeLogic::kOdomTopic);
-    status_pub_ = node_.template create_publisher<tactile_msgs::msg::BridgeStatus>(BridgeHealth::kStatusTopic, 10);
-    setpoint_sub_ = node_.template create_subscription<tactile_msgs::msg::HoverSetpoint>(
-      CrazyflieBridgeLogic::kSetpointTopic, rclcpp::QoS(10),
-      [this](const tactile_msgs::msg::HoverSetpoint & msg) {
+    // The log data's publishers and the setpoint subscription, as in `tactile fly`
+    // (BridgeRunner::wire).
+    sinks_ = BridgeRunner::wire(ports_, [this](const tactile_msgs::msg::HoverSetpoint & msg) {
         // In forward mode this sends at once: link I/O under io_mutex_, as the timer's.
         std::lock_guard<std::mutex> lock(io_mutex_);
         if (shut_down_ || !active_) {return;}  // the shutdown landing owns the link now
         runner_->on_hover_setpoint(msg, now_ns());
       });
-    sinks_.left = [this](const tactile_msgs::msg::WhiskerPressure & m) {left_pub_->publish(m);};
-    sinks_.right = [this](const tactile_msgs::msg::WhiskerPressure & m) {right_pub_->publish(m);};
-    sinks_.odom = [this](const nav_msgs::msg::Odometry & m) {
-        odom_pub_->publish(m);
 #ifdef TACTILE_HAVE_TF2
+    sinks_.odom = [this, publish_odom = std::move(sinks_.odom)](const nav_msgs::msg::Odometry & m) {
+        publish_odom(m);
         broadcaster_->sendTransform(tactile_common::odometry_transform(m));  // odom -> base_link
-#endif
       };
+#endif
+    status_pub_ = node_.template create_publisher<tactile_msgs::msg::BridgeStatus>(BridgeHealth::kStatusTopic, 10);
     // Frames (README "Frames"): the whiskered Crazyflie's URDF on robot_description
     // (latched; a plain publisher even in the lifecycle node, so it is there before
     // activation), /tf_static map -> odom and base_link -> its links, /tf odom -> base_link
@@ -425,8 +421,6 @@ private:
   std::mutex io_mutex_;  ///< the link's receive side, the runner's lifetime and the shutdown landing
   bool shut_down_ = false;
   std::atomic<bool> active_{false};  ///< streaming: timers run, services and setpoints are taken
-  PublisherPtr<tactile_msgs::msg::WhiskerPressure> left_pub_, right_pub_;
-  PublisherPtr<nav_msgs::msg::Odometry> odom_pub_;
   PublisherPtr<tactile_msgs::msg::BridgeStatus> status_pub_;
   static constexpr const char * kRobotDescriptionTopic = "robot_description";
   rclcpp::Publisher<std_msgs::msg::String>::SharedPtr description_pub_;
@@ -434,7 +428,6 @@ private:
   std::unique_ptr<tf2_ros::StaticTransformBroadcaster> static_broadcaster_;
   std::unique_ptr<tf2_ros::TransformBroadcaster> broadcaster_;
 #endif
-  rclcpp::Subscription<tactile_msgs::msg::HoverSetpoint>::SharedPtr setpoint_sub_;
   rclcpp::Service<tactile_msgs::srv::Takeoff>::SharedPtr takeoff_srv_;
   rclcpp::Service<tactile_msgs::srv::Land>::SharedPtr land_srv_;
   rclcpp::Service<tactile_msgs::srv::GoTo>::SharedPtr go_to_srv_;
@@ -447,6 +440,9 @@ private:
 #ifdef CRAZYFLIE_BRIDGE_HAVE_DIAGNOSTIC_UPDATER
   std::unique_ptr<diagnostic_updater::Updater> updater_;
 #endif
+  /// The setpoint subscription (BridgeRunner::wire). Declared last: it goes first, no
+  /// callback outlives the members it uses.
+  tactile_common::RosPorts<NodeT> ports_{node_};
 };
 
 #ifdef CRAZYFLIE_BRIDGE_LIFECYCLE

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <set>
@@ -30,8 +31,16 @@ class HostPorts {
   /// @param ns    the node's namespace: relative topics resolve in it (resolve_topic()).
   /// @param remap the node's remappings; every one must name a topic the node declares
   ///              (check_remaps_used()).
-  HostPorts(Host& host, std::string ns, Remap remap = {})
-      : bus_(&host.bus()), executor_(&host.executor()), ns_(std::move(ns)), remap_(std::move(remap)) {}
+  /// @param clock the node's clock for receive times and publish stamps, when it is not
+  ///              the executor's: a real-time host (`tactile fly`) delivers messages
+  ///              between the executor's runs, at a wall clock the executor lags. Timers
+  ///              run on the executor either way (their handler gets the due time).
+  HostPorts(Host& host, std::string ns, Remap remap = {}, std::function<int64_t()> clock = {})
+      : bus_(&host.bus()),
+        executor_(&host.executor()),
+        ns_(std::move(ns)),
+        remap_(std::move(remap)),
+        clock_(std::move(clock)) {}
 
   /// The bus name of a topic the node declares: resolved in the namespace, then remapped.
   std::string name(std::string_view topic) {
@@ -46,24 +55,25 @@ class HostPorts {
   template <class Msg, class Handler>
   void subscribe(std::string_view topic, tactile_common::ports::Sub /*qos*/, Handler handler) {
     Executor* ex = executor_;
-    bus_->subscribe<Msg>(name(topic), [ex, handler = std::move(handler)](const Msg& msg) {
-      // Receive time: the host's clock when the message is delivered.
-      tactile_common::ports::deliver(handler, msg, [ex] { return ex->now_ns(); });
+    bus_->subscribe<Msg>(name(topic), [ex, clock = clock_, handler = std::move(handler)](const Msg& msg) {
+      // Receive time: the node's clock (the host's unless given) when the message is delivered.
+      tactile_common::ports::deliver(handler, msg, [&] { return clock ? clock() : ex->now_ns(); });
     });
   }
 
-  /// Publishes on the bus at the host's clock (the bag timestamp).
+  /// Publishes on the bus at the node's clock (the host's unless given): the bag timestamp.
   template <class Msg>
   struct Publish {
     Bus* bus;
     const Executor* executor;
     std::string topic;
-    void operator()(const Msg& msg) const { bus->publish(topic, msg, executor->now_ns()); }
+    std::function<int64_t()> clock;
+    void operator()(const Msg& msg) const { bus->publish(topic, msg, clock ? clock() : executor->now_ns()); }
   };
 
   template <class Msg>
   Publish<Msg> publisher(std::string_view topic, tactile_common::ports::Pub /*qos*/) {
-    return Publish<Msg>{bus_, executor_, name(topic)};
+    return Publish<Msg>{bus_, executor_, name(topic), clock_};
   }
 
   /// First call now, then every period_ns of the host's clock (either Clock kind).
@@ -88,6 +98,7 @@ class HostPorts {
   Executor* executor_;
   std::string ns_;
   Remap remap_;
+  std::function<int64_t()> clock_;  ///< empty: the executor's
   std::set<std::string> used_;
 };
 

@@ -1,16 +1,23 @@
 // Node logic of the whisker wall-following FSM (paper 000, Methods "Whisker-based
 // aerial tactile navigation strategy", Fig. S4e): TactileDepth, the two
-// WhiskerSignals and Odometry in; a 50 Hz timer publishes HoverSetpoint and
-// FsmState. No rclcpp: the rclcpp component and the standalone host use this class.
+// WhiskerSignals and Odometry in; each step publishes HoverSetpoint and FsmState, on
+// a 50 Hz timer or on a depth's arrival (wire()). No rclcpp: the rclcpp component and
+// the standalone host use this class, both through wire().
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
+#include <limits>
+#include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "nav_msgs/msg/odometry.hpp"
+#include "tactile_common/event_tick.hpp"
 #include "tactile_common/parameters.hpp"
+#include "tactile_common/ports.hpp"
 #include "tactile_fsm/whisker_wall_follower.hpp"
 #include "tactile_msgs/msg/fsm_state.hpp"
 #include "tactile_msgs/msg/hover_setpoint.hpp"
@@ -88,6 +95,56 @@ class WhiskerFsmLogic {
   void on_odometry(const nav_msgs::msg::Odometry& msg);
   /// 50 Hz control tick at now_ns (same clock as the message stamps).
   Outputs on_timer(int64_t now_ns);
+
+  /// How the node steps: the one thing its hosts choose (tactile_common/event_tick.hpp).
+  struct Stepping {
+    /// Event driven: each TactileDepth steps the FSM at its receive time (unless `tick`
+    /// rate-limits it) and the 50 Hz timer is tick's watchdog, stepping it once depth
+    /// stops. Null: the 50 Hz timer steps it every 20 ms and a depth is only stored (the
+    /// simulated hosts: the simulator's timer fires first at each tick, so the step sees
+    /// the depth of that tick's pressure and the order of a run is fixed). Not owned.
+    tactile_common::EventTick* tick = nullptr;
+    /// A step never goes back in time: one due before the previous step runs at the
+    /// previous step's time. For a host whose timer clock lags its receive clock
+    /// (`tactile fly`: the executor fires an overdue watchdog with its due time, after a
+    /// depth stepped the FSM at the wall clock). Off in rclcpp, where both are the node's
+    /// clock and a clock that goes back (a bag played again) starts the FSM's time over.
+    bool monotonic = false;
+  };
+
+  /// The node's ports (tactile_common/ports.hpp), for its rclcpp component and the
+  /// `tactile` host: depth, the two signals and odometry in (in that order), HoverSetpoint
+  /// and FsmState out on each step, the 50 Hz timer.
+  template <class Ports>
+  static void wire(Ports& p, WhiskerFsmLogic& l, Stepping stepping = {}) {
+    using tactile_common::ports::Pub;
+    using tactile_common::ports::Sub;
+    auto setpoint = p.template publisher<tactile_msgs::msg::HoverSetpoint>(kSetpointTopic, Pub::kData);
+    auto state = p.template publisher<tactile_msgs::msg::FsmState>(kStateTopic, Pub::kData);
+    auto last_ns = stepping.monotonic ? std::make_shared<int64_t>(std::numeric_limits<int64_t>::min()) : nullptr;
+    auto step = [&l, setpoint, state, last_ns](int64_t now_ns) {
+      if (last_ns) now_ns = *last_ns = std::max(now_ns, *last_ns);
+      auto out = l.on_timer(now_ns);
+      setpoint(std::move(out.setpoint));
+      if (out.state) state(std::move(*out.state));
+    };
+    tactile_common::EventTick* tick = stepping.tick;
+    p.template subscribe<tactile_msgs::msg::TactileDepth>(
+        kDepthTopic, Sub::kSensorData,
+        [&l, tick, step](const tactile_msgs::msg::TactileDepth& m, int64_t receive_ns) {
+          l.on_depth(m);
+          if (tick && tick->on_event(receive_ns)) step(receive_ns);
+        });
+    p.template subscribe<tactile_msgs::msg::WhiskerSignal>(
+        kLeftSignalTopic, Sub::kSensorData, [&l](const tactile_msgs::msg::WhiskerSignal& m) { l.on_left_signal(m); });
+    p.template subscribe<tactile_msgs::msg::WhiskerSignal>(
+        kRightSignalTopic, Sub::kSensorData, [&l](const tactile_msgs::msg::WhiskerSignal& m) { l.on_right_signal(m); });
+    p.template subscribe<nav_msgs::msg::Odometry>(kOdomTopic, Sub::kSensorData,
+                                                  [&l](const nav_msgs::msg::Odometry& m) { l.on_odometry(m); });
+    p.timer(kTimerPeriodNs, [tick, step](int64_t now_ns) {
+      if (!tick || tick->on_watchdog()) step(now_ns);
+    });
+  }
 
   const Stats& stats() const { return stats_; }
   const Params& params() const { return params_; }

@@ -79,6 +79,7 @@
 #include "std_msgs/msg/bool.hpp"
 #include "std_msgs/msg/string.hpp"
 #include "tactile_common/ros_parameters.hpp"
+#include "tactile_common/ros_ports.hpp"
 #include "tactile_common/ros_qos.hpp"
 #include "tactile_common/time.hpp"
 #include "tactile_sim/logic/sim_logic.hpp"
@@ -145,28 +146,11 @@ class TactileSimComponent : public rclcpp::Node {
 #else
     RCLCPP_WARN(get_logger(), "tactile_sim: built without tf2_ros: no /tf, /tf_static");
 #endif
-    // Best effort matches reliable and best-effort publishers alike: the INDI
-    // controller publishes its rotor thrusts best effort (SensorDataQoS), the FSMs reliable;
-    // a reliable subscription would never match the former.
-    const auto setpoint_qos = rclcpp::QoS(10).best_effort();
-    hover_subscription_ = create_subscription<tactile_msgs::msg::HoverSetpoint>(
-      SimLogic::kHoverSetpointTopic, setpoint_qos,
-      [this](const tactile_msgs::msg::HoverSetpoint & msg) {
-        count_setpoint(msg.header.stamp);
-        logic_->on_hover_setpoint(msg);
-      });
-    position_subscription_ = create_subscription<geometry_msgs::msg::PoseStamped>(
-      SimLogic::kPositionSetpointTopic, setpoint_qos,
-      [this](const geometry_msgs::msg::PoseStamped & msg) {
-        count_setpoint(msg.header.stamp);
-        logic_->on_position_setpoint(msg);
-      });
-    thrust_subscription_ = create_subscription<tactile_msgs::msg::ThrustCommand>(
-      SimLogic::kRotorThrustTopic, setpoint_qos,
-      [this](const tactile_msgs::msg::ThrustCommand & msg) {
-        count_setpoint(msg.header.stamp);
-        logic_->on_rotor_thrust(msg);
-      });
+    // The setpoint inputs, wired as in the standalone host (SimLogic::wire_setpoints): best
+    // effort, which matches reliable and best-effort publishers alike (a controller's
+    // setpoints with a qos_overrides reliability of best_effort too).
+    SimLogic::wire_setpoints(
+      ports_, *logic_, [this](const builtin_interfaces::msg::Time & stamp) {count_setpoint(stamp);});
     const auto period = std::max<int64_t>(
       1, static_cast<int64_t>(static_cast<double>(logic_->period_ns()) / real_time_factor_));
     timer_ = create_wall_timer(std::chrono::nanoseconds(period), [this]() {tick();});
@@ -387,10 +371,10 @@ class TactileSimComponent : public rclcpp::Node {
   std::unique_ptr<tf2_ros::TransformBroadcaster> broadcaster_;
   std::vector<geometry_msgs::msg::TransformStamped> transforms_;
 #endif
-  rclcpp::Subscription<tactile_msgs::msg::HoverSetpoint>::SharedPtr hover_subscription_;
-  rclcpp::Subscription<geometry_msgs::msg::PoseStamped>::SharedPtr position_subscription_;
-  rclcpp::Subscription<tactile_msgs::msg::ThrustCommand>::SharedPtr thrust_subscription_;
   rclcpp::TimerBase::SharedPtr timer_;
+  /// The setpoint subscriptions (SimLogic::wire_setpoints). Declared after logic_: they go
+  /// first, no callback outlives the logic.
+  tactile_common::RosPorts<> ports_{*this};
 };
 
 }  // namespace tactile_sim

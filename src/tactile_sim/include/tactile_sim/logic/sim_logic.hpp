@@ -26,6 +26,7 @@
 #include "tactile_msgs/msg/whisker_ground_truth.hpp"
 #include "tactile_msgs/msg/whisker_pressure.hpp"
 #include "tactile_common/frames.hpp"
+#include "tactile_common/ports.hpp"
 #include "tactile_sim/arena.hpp"
 #include "tactile_sim/logic/faults.hpp"
 #include "tactile_sim/scenario.hpp"
@@ -126,6 +127,34 @@ class SimLogic {
   void on_hover_setpoint(const tactile_msgs::msg::HoverSetpoint& msg);
   void on_position_setpoint(const geometry_msgs::msg::PoseStamped& msg);
   void on_rotor_thrust(const tactile_msgs::msg::ThrustCommand& msg);
+
+  /// The simulator's inputs, the ports its rclcpp component and the `tactile` host share
+  /// (tactile_common/ports.hpp): the three setpoint topics, best effort (Sub::kSensorData:
+  /// a controller's reliable or best-effort setpoints both match). on_setpoint(stamp) is
+  /// called with each setpoint's header stamp before it is applied (the component's
+  /// setpoint latency; the host passes a no-op). The rest is each host's own: the
+  /// outputs' topics are known only at each step (Outputs), and the component paces the
+  /// world on a wall timer scaled by real_time_factor, publishes /clock, TF, the URDF and
+  /// sim/done, while the host steps it on its executor.
+  template <class Ports, class OnSetpoint>
+  static void wire_setpoints(Ports& p, SimLogic& l, OnSetpoint on_setpoint) {
+    using tactile_common::ports::Sub;
+    p.template subscribe<tactile_msgs::msg::HoverSetpoint>(
+        kHoverSetpointTopic, Sub::kSensorData, [&l, on_setpoint](const tactile_msgs::msg::HoverSetpoint& m) {
+          on_setpoint(m.header.stamp);
+          l.on_hover_setpoint(m);
+        });
+    p.template subscribe<geometry_msgs::msg::PoseStamped>(
+        kPositionSetpointTopic, Sub::kSensorData, [&l, on_setpoint](const geometry_msgs::msg::PoseStamped& m) {
+          on_setpoint(m.header.stamp);
+          l.on_position_setpoint(m);
+        });
+    p.template subscribe<tactile_msgs::msg::ThrustCommand>(
+        kRotorThrustTopic, Sub::kSensorData, [&l, on_setpoint](const tactile_msgs::msg::ThrustCommand& m) {
+          on_setpoint(m.header.stamp);
+          l.on_rotor_thrust(m);
+        });
+  }
 
   /// Called every period_ns() from now_ns = 0: advances the world to now_ns
   /// (the first call only samples the initial state) and appends the
