@@ -83,6 +83,10 @@ bool touchdown(double commanded_thrust_n, const Vec3& accel_world, double mass) 
   return commanded_thrust_n < kTouchdownThrustFraction * mass * kGravity && accel_world.norm() < kRestingAccel;
 }
 bool below_floor(double height_estimate, double floor_z) { return height_estimate < floor_z - kBelowFloorMargin; }
+double floor_probe_thrust(double start_thrust_n, double probe_s) {
+  return std::max(0.0, start_thrust_n * (1.0 - probe_s / kFloorProbeRampS));
+}
+bool airborne_in_probe(const Vec3& accel_world) { return accel_world.z() < kAirborneAccel; }
 bool descent_timed_out(double descent_s, double max_descent_s) { return descent_s >= max_descent_s; }
 }  // namespace indi_guards
 
@@ -123,8 +127,8 @@ ParamMap IndiControlLogic::default_parameters() {
          choice("a 2 m height bound at 0.25 m/s is 8 s, plus 2 s")});
   const double inf = std::numeric_limits<double>::infinity();
   m.set("failsafe_floor_z", d.failsafe_floor_z,
-        {"ODOMETRY_LOST: z of the floor in the odometry frame; the motors stop when the IMU dead-reckoned height "
-         "is 0.1 m below it (the land detector's fallback); finite", "m", ParamRange{-inf, inf, true, true}, false,
+        {"ODOMETRY_LOST: z of the floor in the odometry frame; when the IMU dead-reckoned height is 0.1 m below "
+         "it a floor probe ramps the thrust down (the land detector's fallback); finite", "m", ParamRange{-inf, inf, true, true}, false,
          choice("the motion-capture and simulator floor")});
   m.set("k_p", v3(i.k_p), {"K_p of 004 eq. 26 per axis, each finite and >= 0 (choice)", "1/s^2", {}, false,
         choice("004 gives no gains")});
@@ -319,6 +323,10 @@ void IndiControlLogic::transition(IndiFailsafeState to, IndiReason code, const c
     const Vec3 xb = R_.col(0);
     yaw_hold_ = std::atan2(xb.y(), xb.x());
     resting_since_ns_ = -1;
+    probe_since_ns_ = -1;
+    floor_bound_off_ = false;
+    stats_.floor_probe = false;
+    stats_.commanded_thrust = ctl_.last_outer().thrust;
   }
 }
 
@@ -354,13 +362,22 @@ void IndiControlLogic::update_state(int64_t now_ns) {
                    now_ns);
         break;
       }
-      if (below_floor(pos_.z() + imu_dp_since_odom_.z(), params_.failsafe_floor_z)) {
-        transition(IndiFailsafeState::kMotorsStopped, IndiReason::kBelowFloor, "dead-reckoned height below the floor",
-                   now_ns);
-        break;
-      }
       const Vec3 a_world = R_ * acc_ - kGravity * Vec3::UnitZ();
-      if (touchdown(ctl_.last_outer().thrust, a_world, params_.indi.vehicle.mass)) {
+      if (probe_since_ns_ < 0 && !floor_bound_off_ &&
+          below_floor(pos_.z() + imu_dp_since_odom_.z(), params_.failsafe_floor_z)) {
+        probe_since_ns_ = now_ns;  // no transition: the probe only lowers the thrust (README)
+        probe_start_thrust_ = stats_.commanded_thrust;
+        stats_.floor_probe = true;
+        ++stats_.floor_probes;
+      } else if (probe_since_ns_ >= 0 && airborne_in_probe(a_world)) {
+        probe_since_ns_ = -1;  // in the air: back to the descent loop, from hover thrust
+        floor_bound_off_ = true;
+        stats_.floor_probe = false;
+        ++stats_.floor_probes_aborted;
+        ctl_.reset();
+        stats_.commanded_thrust = ctl_.previous_thrust();
+      }
+      if (touchdown(stats_.commanded_thrust, a_world, params_.indi.vehicle.mass)) {
         if (resting_since_ns_ < 0) resting_since_ns_ = now_ns;
         if (tactile_common::to_seconds(now_ns - resting_since_ns_) >= params_.touchdown_confirm_s)
           transition(IndiFailsafeState::kMotorsStopped, IndiReason::kTouchdown,
@@ -451,8 +468,14 @@ tactile_msgs::msg::ThrustCommand IndiControlLogic::descend(int64_t now_ns) {
     ctl_.outer(sp, fb, outer_every_ / params_.rate_hz);
   }
   ++ticks_;
+  // The floor probe (README): the collective thrust ramps down, the attitude loop runs on.
+  double thrust = ctl_.last_outer().thrust;
+  if (probe_since_ns_ >= 0)
+    thrust = indi_guards::floor_probe_thrust(probe_start_thrust_, tactile_common::to_seconds(now_ns - probe_since_ns_));
+  stats_.commanded_thrust = thrust;
   const Vec3 xb = R_.col(0);
-  const auto f = ctl_.inner(gyro_, std::atan2(xb.y(), xb.x()), yaw_hold_, allocation_wall(now_ns));  // 004 eq. 35-36
+  const auto f = ctl_.allocate(ctl_.angular_accel(gyro_, std::atan2(xb.y(), xb.x()), yaw_hold_), gyro_, thrust,
+                               allocation_wall(now_ns));  // 004 eq. 35-36
   return command(now_ns, f);
 }
 

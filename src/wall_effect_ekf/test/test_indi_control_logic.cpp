@@ -282,6 +282,20 @@ TEST(IndiFailsafeGuards, BelowFloorOnlyPastTheMargin) {
   EXPECT_TRUE(indi_guards::below_floor(0.89, 1.0));  // a floor at z = 1 m in the odometry frame
 }
 
+TEST(IndiFailsafeGuards, FloorProbeRampsTheThrustLinearlyToZero) {
+  EXPECT_DOUBLE_EQ(indi_guards::floor_probe_thrust(2.0, 0.0), 2.0);
+  EXPECT_DOUBLE_EQ(indi_guards::floor_probe_thrust(2.0, indi_guards::kFloorProbeRampS / 2), 1.0);
+  EXPECT_DOUBLE_EQ(indi_guards::floor_probe_thrust(2.0, indi_guards::kFloorProbeRampS), 0.0);
+  EXPECT_DOUBLE_EQ(indi_guards::floor_probe_thrust(2.0, 2.0 * indi_guards::kFloorProbeRampS), 0.0);  // stays 0
+}
+
+TEST(IndiFailsafeGuards, AirborneInProbeOnlyOnAClearDownwardAcceleration) {
+  EXPECT_TRUE(indi_guards::airborne_in_probe(Vec3(0, 0, -2.1)));
+  EXPECT_FALSE(indi_guards::airborne_in_probe(Vec3(0, 0, -1.9)));
+  EXPECT_FALSE(indi_guards::airborne_in_probe(Vec3(0, 0, 0.0)));   // at rest on the floor
+  EXPECT_FALSE(indi_guards::airborne_in_probe(Vec3(5.0, 0, 3.0)));  // horizontal or impact: not a fall
+}
+
 TEST(IndiFailsafeGuards, DescentTimesOutAtTheBound) {
   EXPECT_FALSE(indi_guards::descent_timed_out(9.99, 10.0));
   EXPECT_TRUE(indi_guards::descent_timed_out(10.0, 10.0));
@@ -401,27 +415,70 @@ TEST(IndiFailsafe, TheDescentBoundStopsTheMotors) {
   EXPECT_NEAR(tactile_common::to_seconds(l.stats().state_since_ns), 0.202 + 1.0, 0.003);
 }
 
-// The land detector's fallback: a descent the IMU dead-reckons 0.1 m below the floor (here
-// failsafe_floor_z = 0.9 m, from 1 m) stops the motors; the estimate tracks the IMU descent.
-TEST(IndiFailsafe, DeadReckonedHeightBelowTheFloorStopsTheMotors) {
+// The land detector's fallback when the IMU missed the impact: the odometry's last velocity
+// (-0.25 m/s) keeps the estimate descending while the vehicle rests on the floor (IMU at
+// rest), so the descent loop holds hover thrust. Past the bound (failsafe_floor_z = 0.9 m,
+// from 1 m) the floor probe ramps the thrust down, and the motors stop by touchdown.
+TEST(IndiFailsafe, FloorProbeOnTheFloorStopsTheMotorsByTouchdown) {
   auto p = default_params();
   p.failsafe_floor_z = 0.9;
   IndiControlLogic l(p);
-  lose_odometry(l, 100 * kMs);
-  double last_height = 1.0;
-  // Until the motors stop (the odometry goes stale at 202 ms).
-  for (int64_t t = 102 * kMs; t <= 3000 * kMs && (t <= 202 * kMs || l.state() == IndiFailsafeState::kOdometryLost);
-       t += 2 * kMs) {
-    l.on_imu(imu_at(t, 0.0, l.controller().last_outer().thrust / 0.28));  // in the air
+  double probe_start_thrust = -1.0, last_thrust = 0.0;
+  bool ramp_down = true;
+  for (int64_t t = 0; t <= 4000 * kMs && l.state() != IndiFailsafeState::kMotorsStopped; t += 2 * kMs) {
+    if (t <= 100 * kMs) {
+      auto o = odometry_at(t);
+      o.twist.twist.linear.z = -0.25;  // the descent the estimate keeps reading on the floor
+      l.on_odometry(o);
+    }
+    l.on_imu(imu_at(t));  // at rest
+    const bool probing_before = l.stats().floor_probe;
     l.on_timer(t);
-    if (l.state() == IndiFailsafeState::kOdometryLost) last_height = l.stats().height_estimate;
+    if (l.state() != IndiFailsafeState::kOdometryLost || !l.stats().floor_probe) continue;
+    if (!probing_before) {
+      probe_start_thrust = l.stats().commanded_thrust;
+      EXPECT_LT(l.stats().height_estimate, 0.8);
+      EXPECT_GT(probe_start_thrust, 0.5 * kHover);  // before: the loop held the thrust up
+    } else if (l.stats().commanded_thrust > last_thrust) {
+      ramp_down = false;
+    }
+    last_thrust = l.stats().commanded_thrust;
   }
+  EXPECT_GT(probe_start_thrust, 0.0);
+  EXPECT_TRUE(ramp_down);
   EXPECT_EQ(l.state(), IndiFailsafeState::kMotorsStopped);
-  EXPECT_STREQ(l.stats().reason, "dead-reckoned height below the floor");
-  EXPECT_NEAR(last_height, 0.8, 0.01);
-  const double descent_s = tactile_common::to_seconds(l.stats().state_since_ns) - 0.202;
-  EXPECT_GT(descent_s, 0.2 / 0.25);  // 0.2 m at no more than 0.25 m/s
-  EXPECT_LT(descent_s, 2.0);
+  EXPECT_EQ(l.stats().reason_code, IndiReason::kTouchdown);
+  EXPECT_EQ(l.stats().floor_probes, 1u);
+  EXPECT_EQ(l.stats().floor_probes_aborted, 0u);
+}
+
+// A biased accelerometer (0.5 m/s^2 down) runs the estimate ahead of the vehicle, which is
+// in the air (the IMU reads the specific force of the thrust sent, m a_m = T, plus the bias):
+// past the bound the probe lowers the thrust, the vehicle accelerates down, airborne_in_probe
+// aborts it and the descent goes on with the floor bound off (no second probe, no stop).
+TEST(IndiFailsafe, FloorProbeInTheAirAbortsAndTheDescentGoesOn) {
+  auto p = default_params();
+  p.failsafe_floor_z = 0.9;
+  IndiControlLogic l(p);
+  constexpr double kBias = 0.5;
+  auto out = lose_odometry(l, 100 * kMs);
+  double min_thrust_after_abort = 1e9, lowest_estimate = 1.0;
+  for (int64_t t = 102 * kMs; t <= 5000 * kMs; t += 2 * kMs) {
+    const double thrust = out ? out->total_thrust : kHover;
+    l.on_imu(imu_at(t, 0.0, thrust / 0.28 - (t > 202 * kMs ? kBias : 0.0)));
+    out = l.on_timer(t);
+    ASSERT_EQ(l.state() == IndiFailsafeState::kMotorsStopped, false) << "stopped in the air at t = " << t;
+    if (l.stats().floor_probes_aborted > 0 && !l.stats().floor_probe) {
+      min_thrust_after_abort = std::min(min_thrust_after_abort, l.stats().commanded_thrust);
+      lowest_estimate = std::min(lowest_estimate, l.stats().height_estimate);
+    }
+  }
+  EXPECT_EQ(l.state(), IndiFailsafeState::kOdometryLost);
+  EXPECT_EQ(l.stats().floor_probes, 1u);
+  EXPECT_EQ(l.stats().floor_probes_aborted, 1u);
+  EXPECT_FALSE(l.stats().floor_probe);
+  EXPECT_GT(min_thrust_after_abort, 0.5 * kHover);  // the descent loop flies again
+  EXPECT_LT(lowest_estimate, 0.8);                   // past the bound, and no second probe
 }
 
 // No attitude: the motors stop max_input_age_s after the last IMU sample, from NOMINAL and

@@ -13,8 +13,11 @@
 //   WAITING_FOR_INPUT -> NOMINAL          inputs_ready: odometry and IMU both fresh
 //   NOMINAL -> MOTORS_STOPPED             imu_lost: no attitude, flight terminated
 //   NOMINAL -> ODOMETRY_LOST              odometry_lost: odometry stale, IMU fresh
-//   ODOMETRY_LOST -> MOTORS_STOPPED       imu_lost, touchdown (for touchdown_confirm_s),
-//                                         below_floor or descent_timed_out
+//   ODOMETRY_LOST -> MOTORS_STOPPED       imu_lost, touchdown (for touchdown_confirm_s)
+//                                         or descent_timed_out
+// Inside ODOMETRY_LOST, below_floor starts a floor probe (no transition): the collective
+// thrust ramps down; touchdown then stops the motors on the floor, airborne_in_probe aborts
+// it in the air (the descent goes on, the floor bound off for the rest of it).
 // WAITING_FOR_INPUT sends nothing (on the ground, motors idle); ODOMETRY_LOST descends on
 // the IMU-integrated velocity (horizontal held at 0); MOTORS_STOPPED (terminal) sends zero
 // thrusts every tick.
@@ -48,7 +51,7 @@ enum class IndiReason : uint8_t {
   kImuLost = 81,         ///< -> MOTORS_STOPPED: IMU stale (flight terminated)
   kOdometryLost = 82,    ///< NOMINAL -> ODOMETRY_LOST
   kDescentTimedOut = 83, ///< ODOMETRY_LOST -> MOTORS_STOPPED: failsafe_max_descent_s
-  kBelowFloor = 84,      ///< ODOMETRY_LOST -> MOTORS_STOPPED: dead-reckoned height below the floor
+  kBelowFloor = 84,      ///< no longer taken: below_floor starts the floor probe inside ODOMETRY_LOST
   kTouchdown = 85,       ///< ODOMETRY_LOST -> MOTORS_STOPPED: the land detector held
 };
 
@@ -75,12 +78,29 @@ bool odometry_lost(const InputAges& in, double max_age_s);
 constexpr double kTouchdownThrustFraction = 0.5;
 constexpr double kRestingAccel = 1.0;  ///< [m/s^2]
 bool touchdown(double commanded_thrust_n, const Vec3& accel_world, double mass);
-/// ODOMETRY_LOST -> MOTORS_STOPPED: the height dead-reckoned from the last odometry on the
-/// IMU is kBelowFloorMargin below failsafe_floor_z. The fallback of the land detector: the
+/// ODOMETRY_LOST, starts the floor probe: the height dead-reckoned from the last odometry on
+/// the IMU is kBelowFloorMargin below failsafe_floor_z. The fallback of the land detector: the
 /// simulated IMU (500 Hz point samples of 1 kHz physics) misses the 1 ms impact about one
-/// landing in three, and the integrated speed then keeps reading the descent on the floor.
+/// landing in three, and the integrated speed then keeps reading the descent on the floor at
+/// hover thrust. The estimate drifts with an accelerometer bias or attitude error, so it does
+/// not stop the motors itself: the probe ramps the collective thrust from its value at the
+/// start to 0 over kFloorProbeRampS (attitude loop running). On the floor the IMU reads rest
+/// and touchdown holds once the thrust is below m g / 2; in the air the vehicle accelerates
+/// down and airborne_in_probe aborts the probe.
 constexpr double kBelowFloorMargin = 0.1;  ///< [m]
 bool below_floor(double height_estimate, double floor_z);
+/// Ramp of the floor probe [s] (choice: in the air the guard below trips once the thrust
+/// lost 2 m / (m g) = 20 % of hover, 0.1 s into the ramp, about 1 cm of extra fall; on the
+/// floor the thrust is below m g / 2 after 0.25 s, so touchdown stops the motors
+/// touchdown_confirm_s later).
+constexpr double kFloorProbeRampS = 0.5;
+/// Collective thrust of the floor probe, probe_s after its start from start_thrust_n [N].
+double floor_probe_thrust(double start_thrust_n, double probe_s);
+/// Aborts the floor probe: the measured vertical acceleration (R a_m - g e3)_z is below
+/// kAirborneAccel, clearly not resting on a floor; back to the descent loop (thrust from
+/// hover, the integrated speed kept) with the floor bound off for the rest of the descent.
+constexpr double kAirborneAccel = -2.0;  ///< [m/s^2]
+bool airborne_in_probe(const Vec3& accel_world);
 /// ODOMETRY_LOST -> MOTORS_STOPPED: the descent lasted failsafe_max_descent_s.
 bool descent_timed_out(double descent_s, double max_descent_s);
 }  // namespace indi_guards
@@ -137,6 +157,9 @@ class IndiControlLogic {
     int64_t state_since_ns = 0;       ///< node time of the last transition
     double vertical_speed_estimate = 0.0;  ///< ODOMETRY_LOST: last odometry v_z + int (R a_m - g e3)_z dt [m/s]
     double height_estimate = 0.0;          ///< ODOMETRY_LOST: last odometry z + int v_z dt [m]
+    double commanded_thrust = 0.0;         ///< ODOMETRY_LOST: collective thrust sent (the probe's ramp) [N]
+    bool floor_probe = false;              ///< ODOMETRY_LOST: the floor probe is running
+    uint64_t floor_probes = 0, floor_probes_aborted = 0;  ///< started / aborted by airborne_in_probe
   };
 
   static tactile_common::ParamMap default_parameters();
@@ -201,6 +224,9 @@ class IndiControlLogic {
   Vec3 imu_dp_since_odom_ = Vec3::Zero();  ///< int (v_odom + dv) dt since the last odometry
   double yaw_hold_ = 0.0;           ///< ODOMETRY_LOST: the yaw at the loss
   int64_t resting_since_ns_ = -1;   ///< ODOMETRY_LOST: the land detector holds since then (-1: not)
+  int64_t probe_since_ns_ = -1;     ///< ODOMETRY_LOST: the floor probe runs since then (-1: not)
+  double probe_start_thrust_ = 0.0; ///< ODOMETRY_LOST: the collective thrust at the probe's start [N]
+  bool floor_bound_off_ = false;    ///< ODOMETRY_LOST: a probe was aborted in the air
   void transition(IndiFailsafeState to, IndiReason code, const char* reason, int64_t now_ns);
   int64_t last_state_msg_ns_ = -1;
   int64_t first_tick_ns_ = -1;  ///< state_message()'s first call (time in WAITING_FOR_INPUT)
