@@ -62,7 +62,6 @@ static_assert(static_cast<uint8_t>(IndiReason::kInputsReady) == FsmState::REASON
 static_assert(static_cast<uint8_t>(IndiReason::kImuLost) == FsmState::REASON_INDI_IMU_LOST);
 static_assert(static_cast<uint8_t>(IndiReason::kOdometryLost) == FsmState::REASON_INDI_ODOMETRY_LOST);
 static_assert(static_cast<uint8_t>(IndiReason::kDescentTimedOut) == FsmState::REASON_INDI_DESCENT_TIMED_OUT);
-static_assert(static_cast<uint8_t>(IndiReason::kBelowFloor) == FsmState::REASON_INDI_BELOW_FLOOR);
 static_assert(static_cast<uint8_t>(IndiReason::kTouchdown) == FsmState::REASON_INDI_TOUCHDOWN);
 }  // namespace
 

@@ -51,8 +51,7 @@ enum class IndiReason : uint8_t {
   kImuLost = 81,         ///< -> MOTORS_STOPPED: IMU stale (flight terminated)
   kOdometryLost = 82,    ///< NOMINAL -> ODOMETRY_LOST
   kDescentTimedOut = 83, ///< ODOMETRY_LOST -> MOTORS_STOPPED: failsafe_max_descent_s
-  kBelowFloor = 84,      ///< no longer taken: below_floor starts the floor probe inside ODOMETRY_LOST
-  kTouchdown = 85,       ///< ODOMETRY_LOST -> MOTORS_STOPPED: the land detector held
+  kTouchdown = 84,       ///< ODOMETRY_LOST -> MOTORS_STOPPED: the land detector held
 };
 
 /// The guards of the fail-safe's transitions, each alone (tested one by one).
