@@ -168,6 +168,13 @@ class TactileSimComponent : public rclcpp::Node {
     for (const auto & m : messages) {
       auto it = publishers.find(m.topic);
       if (it == publishers.end()) {
+        // A topic's first message (a collision, a later sensor): its publisher now. Not
+        // after shutdown began (Ctrl-C between the context's shutdown and the executor's
+        // last timer): creating one then throws, and the container aborted without the
+        // other nodes' shutdown work (the XPLORER map's PLY).
+        if (!rclcpp::ok(get_node_base_interface()->get_context())) {
+          return;
+        }
         const std::string topic(m.topic);
         it = publishers.emplace(topic, tactile_common::data_publisher<T>(*this, topic)).first;
       }
@@ -244,8 +251,8 @@ class TactileSimComponent : public rclcpp::Node {
 
   void tick()
   {
-    if (done_) {
-      return;
+    if (done_ || !rclcpp::ok(get_node_base_interface()->get_context())) {
+      return;  // finished, or shutting down (nothing is published any more)
     }
     if (logic_->finished(now_ns_)) {
       finish();
