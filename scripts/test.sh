@@ -10,6 +10,13 @@ scripts/setup.sh
 # shellcheck disable=SC1091
 source .venv/bin/activate
 export MAKEFLAGS="-j$(nproc)"
+# ccache (installed by setup.sh), keyed relative to the workspace as the ROS and fuzz builds
+# are, so a fresh clone (CI after CI) rebuilds in ~2 minutes instead of ~20 on 2 cores.
+if command -v ccache >/dev/null 2>&1; then
+  export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$here}" CCACHE_NOHASHDIR=1
+  export CMAKE_C_COMPILER_LAUNCHER="${CMAKE_C_COMPILER_LAUNCHER:-ccache}"
+  export CMAKE_CXX_COMPILER_LAUNCHER="${CMAKE_CXX_COMPILER_LAUNCHER:-ccache}"
+fi
 
 colcon build --event-handlers console_cohesion- summary+
 

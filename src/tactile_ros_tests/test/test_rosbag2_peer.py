@@ -319,7 +319,9 @@ def fly_sitl(launch_file: str, scenario: Path, out: Path, recorders: dict, topic
              extra_args=()):
     """Starts the recorders, then the launch (the simulator holds t = 0 until a recorder
     matched its topics); stops at /sim/done (the recorders by SIGINT, as Ctrl-C); the
-    recorder 'killed' (if any) gets SIGKILL once the simulator's /clock passed kill_at_sim_s."""
+    recorder 'killed' (if any) gets SIGKILL once a message of the first topic stamped after
+    kill_at_sim_s (simulated time) arrived: the simulator's own samples, which a /clock of
+    another process in the domain (a test's `ros2 bag play` still ending) cannot advance."""
     from launch_check import Launch
     launch = None
     procs = {}
@@ -356,8 +358,9 @@ def fly_sitl(launch_file: str, scenario: Path, out: Path, recorders: dict, topic
                                           f'wait_for_subscribers:={next(iter(topics))}', *extra_args],
                             out / 'launch.log')
             sim_ns = [0]
-            g.node.create_subscription(Clock, '/clock', lambda m: sim_ns.__setitem__(
-                0, max(sim_ns[0], m.clock.sec * 1_000_000_000 + m.clock.nanosec)), qos_profile_sensor_data)
+            first_topic = next(iter(topics))
+            g.node.create_subscription(message_class(topics[first_topic]), first_topic, lambda m: sim_ns.__setitem__(
+                0, max(sim_ns[0], m.header.stamp.sec * 1_000_000_000 + m.header.stamp.nanosec)), qos_profile_sensor_data)
             killed = False
             deadline = time.monotonic() + 60.0 + 4.0 * SITL_SECONDS / SITL_FACTOR
             while not done and time.monotonic() < deadline and launch.running():
@@ -365,7 +368,7 @@ def fly_sitl(launch_file: str, scenario: Path, out: Path, recorders: dict, topic
                 if kill_at_sim_s is not None and not killed and sim_ns[0] > kill_at_sim_s * 1e9:
                     stop(procs['killed'], signal.SIGKILL)
                     killed = True
-            assert kill_at_sim_s is None or killed, f'the simulator\'s /clock never passed {kill_at_sim_s} s'
+            assert kill_at_sim_s is None or killed, f'no {first_topic} stamped after {kill_at_sim_s} s'
             assert done, f'no /sim/done from {launch_file}; launch output:\n{launch.output()[-3000:]}'
             g.spin(0.5)  # the last messages reach the recorders
     finally:
