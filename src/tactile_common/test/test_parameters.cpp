@@ -11,7 +11,6 @@
 
 #include "tactile_common/parameter_testing.hpp"
 #include "tactile_common/parameters.hpp"
-#include "tactile_common/time.hpp"
 
 using tactile_common::load_node_parameters_from_string;
 using tactile_common::ParamError;
@@ -38,11 +37,6 @@ std::string error_of(const std::string& yaml) {
   }
   return "";
 }
-
-struct Stamp {
-  int32_t sec = 0;
-  uint32_t nanosec = 0;
-};
 
 }  // namespace
 
@@ -199,15 +193,6 @@ TEST(Parameters, ErrorsNameTheOriginOfEachKey) {
   EXPECT_EQ(p.origin("mode"), "launch overrides");
   EXPECT_NE(std::string(p.error("window", "bad").what()).find("file.yaml:"), std::string::npos);
   EXPECT_NE(std::string(p.error("mode", "bad").what()).find("launch overrides:"), std::string::npos);
-}
-
-TEST(Time, StampRoundTrip) {
-  Stamp s;
-  tactile_common::to_stamp(3'250'000'001LL, s);
-  EXPECT_EQ(s.sec, 3);
-  EXPECT_EQ(s.nanosec, 250'000'001u);
-  EXPECT_EQ(tactile_common::from_stamp(s), 3'250'000'001LL);
-  EXPECT_EQ(tactile_common::from_seconds(0.02), 20'000'000LL);
 }
 
 TEST(Parameters, ErrorFromValidateMessageNamesTheField) {

@@ -39,13 +39,6 @@ SafetyRunner held_at(double t, double depth_stamp = 0.0, const SafetyParams& p =
 
 }  // namespace
 
-TEST(SafetyGuards, FreshIsAtMostMaxAgeOldAndStamped) {
-  EXPECT_TRUE(tactile_fsm::input_is_fresh(1.0, 0.8, 0.2));   // exactly max age
-  EXPECT_FALSE(tactile_fsm::input_is_fresh(1.0, 0.79, 0.2));
-  EXPECT_FALSE(tactile_fsm::input_is_fresh(1.0, NAN, 0.2));  // never received
-  EXPECT_TRUE(tactile_fsm::input_is_fresh(1.0, 1.5, 0.2));   // stamped ahead: not stale
-}
-
 TEST(SafetyGuards, FirstStaleNamesTheFirstStaleInputInTheGivenOrder) {
   SafetyRunner r = depth_and_odometry();
   const double both_fresh[] = {0.95, 0.95};

@@ -67,9 +67,8 @@ static_assert(static_cast<uint8_t>(IndiReason::kTouchdown) == FsmState::REASON_I
 
 namespace indi_guards {
 namespace {
-// 1 ns of tolerance: ages come from integer nanoseconds (to_seconds(3e8 ns) > 0.3),
-// as tactile_fsm::input_is_fresh.
-bool fresh(bool have, double age_s, double max_age_s) { return have && age_s <= max_age_s + 1e-9; }
+// The workspace's one staleness rule (tactile_common/time.hpp), on a received input's age.
+bool fresh(bool have, double age_s, double max_age_s) { return have && tactile_common::age_is_fresh(age_s, max_age_s); }
 }  // namespace
 bool inputs_ready(const InputAges& in, double max_age_s) {
   return fresh(in.have_odometry, in.odometry_age_s, max_age_s) && fresh(in.have_imu, in.imu_age_s, max_age_s);

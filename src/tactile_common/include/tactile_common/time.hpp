@@ -2,6 +2,7 @@
 // Templates, so they work with the ROS-free generated types and with rosidl's.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 
 namespace tactile_common {
@@ -29,5 +30,16 @@ int64_t from_stamp(const Stamp& stamp) {
 
 constexpr double to_seconds(int64_t ns) { return static_cast<double>(ns) * 1e-9; }
 constexpr int64_t from_seconds(double s) { return static_cast<int64_t>(s * 1e9 + (s >= 0 ? 0.5 : -0.5)); }
+
+/// The staleness rule of every behaviour and controller (their fail-safes): an input is
+/// fresh when it is at most max_age old, with 1 ns of tolerance for ages computed from
+/// integer nanoseconds (to_seconds(300000000) - 0.3 > 0). An age that is NaN (never
+/// received) is stale; a negative age (stamped ahead of the tick's clock) is fresh.
+inline bool age_is_fresh(double age, double max_age) { return age <= max_age + 1e-9; }
+
+/// The same rule on a stamp: fresh at time t when stamped (finite) and at most max_age old.
+inline bool input_is_fresh(double t, double stamp, double max_age) {
+  return std::isfinite(stamp) && age_is_fresh(t - stamp, max_age);
+}
 
 }  // namespace tactile_common

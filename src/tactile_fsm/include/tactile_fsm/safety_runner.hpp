@@ -28,6 +28,8 @@
 #include <string>
 #include <vector>
 
+#include "tactile_common/time.hpp"
+
 namespace tactile_fsm {
 
 /// An input a behaviour flies on. Its value is also the offset of its
@@ -85,11 +87,9 @@ struct SafetyVerdict {
   bool landing() const { return state == SafetyState::kFailsafeLand || state == SafetyState::kTimeLimitLand; }
 };
 
-/// Fresh at time t: stamped (finite) and at most max_age old; 1 ns of
-/// tolerance for stamps converted from integer nanoseconds.
-inline bool input_is_fresh(double t, double stamp, double max_age) {
-  return std::isfinite(stamp) && t - stamp <= max_age + 1e-9;
-}
+/// Fresh at time t: stamped (finite) and at most max_age old (the one staleness
+/// rule of the workspace, tactile_common/time.hpp; the INDI controller's uses it too).
+using tactile_common::input_is_fresh;
 
 class SafetyRunner {
  public:
