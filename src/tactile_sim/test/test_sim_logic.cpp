@@ -12,6 +12,7 @@
 #include "tactile_sim/scenario.hpp"
 
 using tactile_sim::SimLogic;
+using tactile_sim::Vec3;
 
 namespace {
 const std::string kSweep = std::string(TACTILE_CONFIG_DIR) + "/scenarios/whisker_sweep.yaml";
@@ -185,6 +186,44 @@ TEST(SimLogic, XplorerArmParametersFromTheScenario) {
             std::string::npos);
   EXPECT_NE(construct_error("{arm_max_deflection_deg: 95}").find("arm_max_deflection"), std::string::npos);
   EXPECT_EQ(construct_error("{rigid_arms: false, arm_damping: 0.02, arm_inertia: 0.002, mass: 1.2}"), "");
+}
+
+// The ducted quadrotor's IMU bias from the scenario (accel_bias_sigma, per seed): the truth
+// in the summary (zero by default), the same for the same seed, another for another seed;
+// a negative sigma or an unknown key refused naming the file and the field.
+TEST(SimLogic, DuctedQuadrotorAccelerometerBiasFromTheScenario) {
+  const auto scenario = [](const std::string& params) {
+    return tactile_sim::load_scenario_from_string(
+        "name: d\nduration_s: 5\narena:\n  walls:\n    - points: [[1, -1], [1, 1]]\n"
+        "vehicle:\n  type: ducted_quadrotor\n  params: " + params + "\n"
+        "graph: wall_effect_nav\n",
+        "d.yaml", ".");
+  };
+  const auto bias = [&](const std::string& params, uint64_t seed) {
+    SimLogic sim(scenario(params), seed);
+    const auto s = sim.summary();
+    return Vec3(s.at("imu_accel_bias_x"), s.at("imu_accel_bias_y"), s.at("imu_accel_bias_z"));
+  };
+  EXPECT_EQ(bias("{}", 1), Vec3::Zero());
+  const Vec3 b1 = bias("{accel_bias_sigma: 0.1}", 1);
+  EXPECT_GT(b1.norm(), 0.01);
+  EXPECT_LT(b1.cwiseAbs().maxCoeff(), 0.5);  // 5 sigma
+  EXPECT_EQ(bias("{accel_bias_sigma: 0.1}", 1), b1);
+  EXPECT_NE(bias("{accel_bias_sigma: 0.1}", 2), b1);
+  const auto error = [&](const std::string& params) -> std::string {
+    try {
+      SimLogic sim(scenario(params), 1);
+    } catch (const tactile_sim::ScenarioError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(error("{accel_bias_sigma: -0.1}").find("d.yaml: vehicle.params: ImuParams.accel_bias_initial_sigma: must be >= 0"),
+            std::string::npos)
+      << error("{accel_bias_sigma: -0.1}");
+  EXPECT_NE(error("{accel_bias: 0.1}").find("unknown parameter of ducted_quadrotor (settable: mass, accel_bias_sigma)"),
+            std::string::npos)
+      << error("{accel_bias: 0.1}");
 }
 
 // Issue 32 item 6: a fault on a channel its message does not have (channel 99 of a
