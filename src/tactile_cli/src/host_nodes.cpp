@@ -278,7 +278,11 @@ std::shared_ptr<wall_effect_ekf::IndiControlLogic> add_indi_controller(Host& hos
                        {"ticks_nominal", s.ticks_nominal},
                        {"ticks_odometry_lost", s.ticks_odometry_lost},
                        {"ticks_motors_stopped", s.ticks_motors_stopped},
-                       {"odometry_ignored", s.odometry_ignored}}};
+                       {"odometry_ignored", s.odometry_ignored},
+                       {"floor_probes", s.floor_probes},
+                       {"floor_probes_aborted", s.floor_probes_aborted},
+                       {"accel_bias_updates", s.accel_bias_updates},
+                       {"accel_bias_gated", s.accel_bias_gated}}};
   });
   return logic;
 }

@@ -232,6 +232,44 @@ TEST(WallEffectSitl, OdometryLossDescendsOnTheImuAndStopsTheMotorsOnTheFloor) {
   EXPECT_GT(m["nodes"]["/indi_controller"]["ticks_odometry_lost"].get<int>(), 0);
 }
 
+// The same loss with an accelerometer of residual turn-on bias (accel_bias_sigma 0.1 m/s^2,
+// seed 3: bias (-0.09, +0.10, +0.08) m/s^2 in the body frame). Without a bias estimate the
+// integrated velocity drifted with it: the descent loop drove the vehicle up to 4.4 m and
+// the 10 s bound stopped the motors there (seeds 1-20: 4 such climbs, 1.4-6.4 m). INDI
+// now learns the bias while the odometry flows and subtracts it: a descent at 0.25 m/s and a
+// touchdown stop, as without a bias. (The nominal flight with this bias touches the wall
+// with its guard; those contacts precede the loss and are not asserted here.)
+TEST(WallEffectSitl, OdometryLossWithAnAccelerometerBiasLandsOnTheLearnedBias) {
+  const auto m = tactile_cli::test::run_edited_scenario(
+      "ducted_track_0.yaml",
+      {{"duration_s: 30.0", "duration_s: 26.0"},
+       {"seed: 1\n", "seed: 3\n"},
+       {"  initial: {x: -1.0, y: 0.5, z: 0.0, yaw_deg: 0}\n",
+        "  initial: {x: -1.0, y: 0.5, z: 0.0, yaw_deg: 0}\n  params: {accel_bias_sigma: 0.1}\n"}},
+      "faults:\n  - {type: dropout, topic: /odom, start_s: 12.0, duration_s: 100.0}\n");
+  const auto& i = m["wall_effect_nav"]["indi"];
+  const auto& g = m["ground_truth"];
+  const double truth[3] = {g["imu_accel_bias_x"].get<double>(), g["imu_accel_bias_y"].get<double>(),
+                           g["imu_accel_bias_z"].get<double>()};
+  std::printf("bias truth (%.3f, %.3f, %.3f), estimate (%.3f, %.3f, %.3f) m/s^2; %s %.2f s after the floor\n",
+              truth[0], truth[1], truth[2], i["accel_bias_estimate"][0].get<double>(),
+              i["accel_bias_estimate"][1].get<double>(), i["accel_bias_estimate"][2].get<double>(),
+              i["reason"].get<std::string>().c_str(),
+              i["state_since_s"].get<double>() - i["floor_reached_s"].get<double>());
+  EXPECT_GT(std::abs(truth[2]), 0.05);  // a bias the old dead reckoning flew away on
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(i["accel_bias_estimate"][k].get<double>(), truth[k], 0.01) << k;
+  EXPECT_EQ(i["first_failsafe_state"], "ODOMETRY_LOST");
+  EXPECT_EQ(i["reason"], "touchdown: low thrust at rest for touchdown_confirm_s");
+  const double z0 = i["z_at_loss_m"].get<double>();
+  EXPECT_GT(z0, 0.5);
+  EXPECT_LT(i["max_z_after_loss_m"].get<double>(), z0 + 0.05);
+  EXPECT_LT(i["max_descent_speed_mps"].get<double>(), 0.35);
+  EXPECT_LT(g["final_z_m"].get<double>(), 0.01);
+  EXPECT_EQ(m["wall_effect_nav"]["final_commanded_thrust_n"].get<double>(), 0.0);
+  for (const auto& c : m["collision_events"]) EXPECT_LT(c["t"].get<double>(), i["left_nominal_s"].get<double>()) << c.dump();
+  EXPECT_GT(m["nodes"]["/indi_controller"]["accel_bias_updates"].get<int>(), 1000);
+}
+
 // Without the IMU INDI has no attitude: flight termination (motors stopped on purpose,
 // as PX4 without an attitude estimate), the vehicle falls to the floor.
 TEST(WallEffectSitl, ImuLossStopsTheMotors) {

@@ -44,6 +44,8 @@ void IndiControlLogic::Params::validate() const {
     fail("failsafe_max_descent_s", failsafe_max_descent_s);
   if (!std::isfinite(failsafe_floor_z))
     throw std::invalid_argument("IndiControlLogic.failsafe_floor_z: must be finite, got " + std::to_string(failsafe_floor_z));
+  if (!(accel_bias_time_constant_s > 0.0) || !std::isfinite(accel_bias_time_constant_s))
+    fail("accel_bias_time_constant_s", accel_bias_time_constant_s);
 }
 
 const char* to_string(IndiFailsafeState s) {
@@ -63,6 +65,7 @@ static_assert(static_cast<uint8_t>(IndiReason::kImuLost) == FsmState::REASON_IND
 static_assert(static_cast<uint8_t>(IndiReason::kOdometryLost) == FsmState::REASON_INDI_ODOMETRY_LOST);
 static_assert(static_cast<uint8_t>(IndiReason::kDescentTimedOut) == FsmState::REASON_INDI_DESCENT_TIMED_OUT);
 static_assert(static_cast<uint8_t>(IndiReason::kTouchdown) == FsmState::REASON_INDI_TOUCHDOWN);
+static_assert(static_cast<uint8_t>(IndiReason::kCrashed) == FsmState::REASON_INDI_CRASHED);
 }  // namespace
 
 namespace indi_guards {
@@ -86,12 +89,16 @@ double floor_probe_thrust(double start_thrust_n, double probe_s) {
 }
 bool airborne_in_probe(const Vec3& accel_world) { return accel_world.z() < kAirborneAccel; }
 bool descent_timed_out(double descent_s, double max_descent_s) { return descent_s >= max_descent_s; }
+// R(2,2) = e3 . R e3: the cosine of the body z axis's angle from the vertical (NaN: not a crash).
+bool crash_attitude(const Mat3& R_world_body) { return R_world_body(2, 2) < std::cos(kCrashTilt); }
+bool crashed_before_loss(double since_crash_attitude_s) { return since_crash_attitude_s <= kCrashMemoryS; }
 }  // namespace indi_guards
 
 ParamMap IndiControlLogic::default_parameters() {
   using tactile_common::at_least;
   using tactile_common::choice;
   using tactile_common::paper;
+  using tactile_common::tuned;
   using tactile_common::ParamRange;
   using tactile_common::positive;
   const Params d;
@@ -128,6 +135,10 @@ ParamMap IndiControlLogic::default_parameters() {
         {"ODOMETRY_LOST: z of the floor in the odometry frame; when the IMU dead-reckoned height is 0.1 m below "
          "it a floor probe ramps the thrust down (the land detector's fallback); finite", "m", ParamRange{-inf, inf, true, true}, false,
          choice("the motion-capture and simulator floor")});
+  m.set("accel_bias_time_constant_s", d.accel_bias_time_constant_s,
+        {"time constant of the accelerometer bias estimate (IMU minus odometry velocity change, while odometry "
+         "flows), subtracted in ODOMETRY_LOST's dead reckoning", "s", positive(), false,
+         tuned("SITL ducted_track_0, odometry lost at 12 s, accel_bias_sigma 0.1: seeds 1-20 (docs/tuning/wall_effect_ekf.md)")});
   m.set("k_p", v3(i.k_p), {"K_p of 004 eq. 26 per axis, each finite and >= 0 (choice)", "1/s^2", {}, false,
         choice("004 gives no gains")});
   m.set("k_d", v3(i.k_d), {"K_d of 004 eq. 26 per axis, each finite and >= 0 (choice)", "1/s", {}, false,
@@ -186,6 +197,7 @@ IndiControlLogic::Params IndiControlLogic::params_from(const ParamMap& map) {
   p.touchdown_confirm_s = map.get_double("touchdown_confirm_s");
   p.failsafe_max_descent_s = map.get_double("failsafe_max_descent_s");
   p.failsafe_floor_z = map.get_double("failsafe_floor_z");
+  p.accel_bias_time_constant_s = map.get_double("accel_bias_time_constant_s");
   i.k_p = v3("k_p");
   i.k_d = v3("k_d");
   i.k_i = v3("k_i");
@@ -258,17 +270,48 @@ void IndiControlLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
     return;
   }
   if (!msg.child_frame_id.empty()) body_frame_ = msg.child_frame_id;
+  const Vec3 v = q.normalized() * vb;  // REP-105: twist in the body frame
+  const int64_t stamp = tactile_common::from_stamp(msg.header.stamp);
+  update_accel_bias(v, stamp);
   imu_dv_since_odom_.setZero();
   imu_dp_since_odom_.setZero();
+  imu_dt_since_odom_ = 0.0;
   pos_ = p;
-  vel_ = q.normalized() * vb;  // REP-105: twist in the body frame
-  odom_ns_ = tactile_common::from_stamp(msg.header.stamp);
+  vel_ = v;
+  odom_ns_ = stamp;
   if (!have_odom_ && !have_sp_) {  // hold where we are until a setpoint comes
     sp_.position = p;
     const Vec3 x = q.normalized() * Vec3::UnitX();
     sp_.yaw = std::atan2(x.y(), x.x());
   }
   have_odom_ = true;
+}
+
+// The accelerometer bias from one odometry interval: what the IMU integrated (bias
+// subtracted) minus what the odometry measured is the remaining bias, plus noise and the
+// misalignment of the two windows (zero on average). Only over an interval the IMU covered
+// (half to twice its length) and no longer than max_input_age_s.
+std::optional<Vec3> accel_bias_update(const Vec3& bias, const Vec3& imu_dv, const Vec3& odometry_dv, double dt,
+                                      const Mat3& R, double time_constant_s) {
+  const Vec3 residual_body = R.transpose() * ((imu_dv - odometry_dv) / dt);
+  if (!(residual_body.cwiseAbs().maxCoeff() <= kAccelResidualGate)) return std::nullopt;  // NaN too
+  const Vec3 b = bias + std::min(1.0, dt / time_constant_s) * residual_body;
+  return b.cwiseMax(-kMaxAccelBias).cwiseMin(kMaxAccelBias);
+}
+
+void IndiControlLogic::update_accel_bias(const Vec3& velocity, int64_t stamp_ns) {
+  if (!have_odom_ || !have_imu_) return;
+  const double dt = tactile_common::to_seconds(stamp_ns - odom_ns_);
+  if (!(dt > 0.0) || dt > params_.max_input_age_s) return;
+  if (imu_dt_since_odom_ < 0.5 * dt || imu_dt_since_odom_ > 2.0 * dt) return;
+  const auto b = accel_bias_update(stats_.accel_bias, imu_dv_since_odom_, velocity - vel_, dt, R_,
+                                   params_.accel_bias_time_constant_s);
+  if (!b) {
+    ++stats_.accel_bias_gated;
+    return;
+  }
+  stats_.accel_bias = *b;
+  ++stats_.accel_bias_updates;
 }
 
 void IndiControlLogic::on_imu(const sensor_msgs::msg::Imu& msg) {
@@ -287,8 +330,9 @@ void IndiControlLogic::on_imu(const sensor_msgs::msg::Imu& msg) {
   // previous sample (at most max_input_age_s: a longer gap is a lost IMU anyway).
   if (have_imu_ && have_odom_) {
     const double dt = std::clamp(tactile_common::to_seconds(stamp - imu_ns_), 0.0, params_.max_input_age_s);
-    imu_dv_since_odom_ += (R_ * a - kGravity * Vec3::UnitZ()) * dt;
+    imu_dv_since_odom_ += (R_ * (a - stats_.accel_bias) - kGravity * Vec3::UnitZ()) * dt;
     imu_dp_since_odom_ += (vel_ + imu_dv_since_odom_) * dt;
+    imu_dt_since_odom_ += dt;
   }
   acc_ = a;
   gyro_ = w;
@@ -321,6 +365,9 @@ void IndiControlLogic::transition(IndiFailsafeState to, IndiReason code, const c
     const Vec3 xb = R_.col(0);
     yaw_hold_ = std::atan2(xb.y(), xb.x());
     resting_since_ns_ = -1;
+    tilted_since_ns_ = -1;
+    crash_before_loss_ = crash_attitude_ns_ >= 0 &&
+                         indi_guards::crashed_before_loss(tactile_common::to_seconds(now_ns - crash_attitude_ns_));
     probe_since_ns_ = -1;
     floor_bound_off_ = false;
     stats_.floor_probe = false;
@@ -336,6 +383,7 @@ void IndiControlLogic::update_state(int64_t now_ns) {
   in.odometry_age_s = tactile_common::to_seconds(now_ns - odom_ns_);
   in.imu_age_s = tactile_common::to_seconds(now_ns - imu_ns_);
   const double max_age = params_.max_input_age_s;
+  if (have_imu_ && crash_attitude(R_)) crash_attitude_ns_ = now_ns;
   switch (stats_.state) {
     case IndiFailsafeState::kWaitingForInput:
       if (inputs_ready(in, max_age)) transition(IndiFailsafeState::kNominal, IndiReason::kInputsReady, "odometry and IMU fresh", now_ns);
@@ -350,17 +398,32 @@ void IndiControlLogic::update_state(int64_t now_ns) {
       }
       break;
     case IndiFailsafeState::kOdometryLost: {
+      if (crash_before_loss_) {  // checked at the loss, taken on the state's first tick
+        transition(IndiFailsafeState::kMotorsStopped, IndiReason::kCrashed,
+                   "crash: tilted beyond 60 deg in the second before the loss", now_ns);
+        break;
+      }
       if (imu_lost(in, max_age)) {
         transition(IndiFailsafeState::kMotorsStopped, IndiReason::kImuLost, "IMU stale in the descent: flight terminated",
                    now_ns);
         break;
+      }
+      if (crash_attitude(R_)) {
+        if (tilted_since_ns_ < 0) tilted_since_ns_ = now_ns;
+        if (tactile_common::to_seconds(now_ns - tilted_since_ns_) >= kCrashConfirmS - 1e-9) {
+          transition(IndiFailsafeState::kMotorsStopped, IndiReason::kCrashed,
+                     "crash: tilted beyond 60 deg for 0.3 s in the descent", now_ns);
+          break;
+        }
+      } else {
+        tilted_since_ns_ = -1;
       }
       if (descent_timed_out(tactile_common::to_seconds(now_ns - stats_.state_since_ns), params_.failsafe_max_descent_s)) {
         transition(IndiFailsafeState::kMotorsStopped, IndiReason::kDescentTimedOut, "descent lasted failsafe_max_descent_s",
                    now_ns);
         break;
       }
-      const Vec3 a_world = R_ * acc_ - kGravity * Vec3::UnitZ();
+      const Vec3 a_world = R_ * (acc_ - stats_.accel_bias) - kGravity * Vec3::UnitZ();
       if (probe_since_ns_ < 0 && !floor_bound_off_ &&
           below_floor(pos_.z() + imu_dp_since_odom_.z(), params_.failsafe_floor_z)) {
         probe_since_ns_ = now_ns;  // no transition: the probe only lowers the thrust (README)
@@ -462,7 +525,7 @@ tactile_msgs::msg::ThrustCommand IndiControlLogic::descend(int64_t now_ns) {
     IndiFeedback fb;
     fb.velocity = v;
     fb.R = R_;
-    fb.specific_force = acc_;
+    fb.specific_force = acc_ - stats_.accel_bias;
     ctl_.outer(sp, fb, outer_every_ / params_.rate_hz);
   }
   ++ticks_;

@@ -301,6 +301,23 @@ TEST(IndiFailsafeGuards, DescentTimesOutAtTheBound) {
   EXPECT_TRUE(indi_guards::descent_timed_out(10.0, 10.0));
 }
 
+TEST(IndiFailsafeGuards, CrashedBeforeLossWithinTheMemory) {
+  EXPECT_TRUE(indi_guards::crashed_before_loss(0.0));
+  EXPECT_TRUE(indi_guards::crashed_before_loss(1.0));
+  EXPECT_FALSE(indi_guards::crashed_before_loss(1.01));
+}
+
+TEST(IndiFailsafeGuards, CrashAttitudeBeyondSixtyDegreesFromTheVertical) {
+  auto rolled = [](double deg) { return Mat3(Eigen::AngleAxisd(deg * M_PI / 180.0, Vec3::UnitX())); };
+  EXPECT_FALSE(indi_guards::crash_attitude(Mat3::Identity()));
+  EXPECT_FALSE(indi_guards::crash_attitude(rolled(59.0)));
+  EXPECT_TRUE(indi_guards::crash_attitude(rolled(61.0)));
+  EXPECT_TRUE(indi_guards::crash_attitude(rolled(180.0)));  // upside down
+  // Pitch 45 deg and roll 45 deg together: the body z axis 60 deg from the vertical (cos = 1/2).
+  const Mat3 both = Mat3(Eigen::AngleAxisd(M_PI / 4, Vec3::UnitY())) * Mat3(Eigen::AngleAxisd(M_PI / 4.0 + 0.02, Vec3::UnitX()));
+  EXPECT_TRUE(indi_guards::crash_attitude(both));
+}
+
 // Before the first odometry + IMU nothing is sent (on the ground, motors idle), as before.
 TEST(IndiFailsafe, NothingIsSentBeforeTheFirstFreshOdometryAndImu) {
   IndiControlLogic l(default_params());
@@ -375,6 +392,79 @@ TEST(IndiFailsafe, OdometryLossIntegratesTheVerticalSpeedFromTheImu) {
   EXPECT_GT(l.controller().last_outer().accel_target.z(), 0.0);  // faster than 0.25 m/s: brake
 }
 
+// The accelerometer bias update of one odometry interval, by hand: the IMU integrated
+// 0.002 m/s more than the odometry saw over 10 ms, a residual of 0.2 m/s^2 on world z; gain
+// 0.01 s / 2 s = 0.005. Rolled -90 deg about x, world z is body -y (R^T e_z = (0, -1, 0)).
+TEST(IndiAccelBias, UpdateBlendsTheBodyFrameResidualWithGainDtOverTau) {
+  const Vec3 b0(0.01, 0.0, 0.0);
+  const auto b = accel_bias_update(b0, Vec3(0, 0, 0.102), Vec3(0, 0, 0.1), 0.01, Mat3::Identity(), 2.0);
+  ASSERT_TRUE(b);
+  EXPECT_NEAR(b->x(), 0.01, 1e-12);
+  EXPECT_NEAR(b->z(), 0.005 * 0.2, 1e-12);
+  const Mat3 roll = Eigen::AngleAxisd(-M_PI / 2, Vec3::UnitX()).toRotationMatrix();
+  const auto br = accel_bias_update(Vec3::Zero(), Vec3(0, 0, 0.002), Vec3::Zero(), 0.01, roll, 2.0);
+  ASSERT_TRUE(br);
+  EXPECT_NEAR(br->y(), -0.005 * 0.2, 1e-12);
+  EXPECT_NEAR(br->z(), 0.0, 1e-12);
+  // dt longer than tau: the residual replaces the estimate (gain 1), within the bound.
+  const auto bl = accel_bias_update(b0, Vec3(0.3, 0, 0), Vec3::Zero(), 1.0, Mat3::Identity(), 0.5);
+  ASSERT_TRUE(bl);
+  EXPECT_NEAR(bl->x(), 0.31, 1e-12);
+}
+
+TEST(IndiAccelBias, TheEstimateIsBoundedAndAResidualBeyondTheGateIsSkipped) {
+  // A residual within the gate pushing past the bound: clamped to +-kMaxAccelBias.
+  const auto b = accel_bias_update(Vec3(0.99, -0.99, 0), Vec3(0.019, -0.019, 0), Vec3::Zero(), 0.01,
+                                   Mat3::Identity(), 0.01);
+  ASSERT_TRUE(b);
+  EXPECT_EQ(b->x(), kMaxAccelBias);
+  EXPECT_EQ(b->y(), -kMaxAccelBias);
+  // A 1 ms wall contact the IMU missed: 0.05 m/s in 10 ms is 5 m/s^2, beyond the gate.
+  EXPECT_FALSE(accel_bias_update(Vec3::Zero(), Vec3::Zero(), Vec3(0.05, 0, 0), 0.01, Mat3::Identity(), 2.0));
+  EXPECT_FALSE(accel_bias_update(Vec3::Zero(), Vec3(NAN, 0, 0), Vec3::Zero(), 0.01, Mat3::Identity(), 2.0));
+  EXPECT_TRUE(accel_bias_update(Vec3::Zero(), Vec3(0.0199, 0, 0), Vec3::Zero(), 0.01, Mat3::Identity(), 2.0));
+}
+
+// The logic learns a constant accelerometer bias while the odometry flows (vehicle at rest:
+// odometry velocity 0, the IMU reads g + 0.3 m/s^2 on z), and the ODOMETRY_LOST dead
+// reckoning subtracts it: over 0.3 s without odometry the vertical speed estimate stays
+// ~0 (without the estimate it would read +0.09 m/s: the loop would descend 0.09 m/s faster).
+TEST(IndiAccelBias, ALearnedBiasIsSubtractedInTheDescent) {
+  IndiControlLogic::Params p = default_params();
+  IndiControlLogic l(p);
+  constexpr double kBias = 0.3;
+  int64_t t = 0;
+  for (; t <= 20'000 * kMs; t += 2 * kMs) {  // 20 s of odometry at 100 Hz, IMU at 500 Hz
+    if (t % (10 * kMs) == 0) l.on_odometry(odometry_at(t));
+    l.on_imu(imu_at(t, 0.0, kGravity + kBias));
+    l.on_timer(t);
+  }
+  EXPECT_NEAR(l.stats().accel_bias.z(), kBias, 1e-3);  // 20 s = 10 tau
+  EXPECT_NEAR(l.stats().accel_bias.x(), 0.0, 1e-9);
+  EXPECT_GT(l.stats().accel_bias_updates, 1900u);
+  EXPECT_EQ(l.stats().accel_bias_gated, 0u);
+  const int64_t lost_at = t;
+  for (; t <= lost_at + 400 * kMs; t += 2 * kMs) {
+    l.on_imu(imu_at(t, 0.0, kGravity + kBias));
+    l.on_timer(t);
+  }
+  ASSERT_EQ(l.state(), IndiFailsafeState::kOdometryLost);
+  EXPECT_NEAR(l.stats().vertical_speed_estimate, 0.0, 1e-3);
+}
+
+// An odometry interval the IMU did not cover (no IMU sample in it) teaches nothing: the
+// residual would be the odometry's whole velocity change.
+TEST(IndiAccelBias, NoUpdateOnAnIntervalWithoutImuSamples) {
+  IndiControlLogic l(default_params());
+  l.on_imu(imu_at(0));
+  l.on_odometry(odometry_at(0));
+  auto o = odometry_at(10 * kMs);
+  o.twist.twist.linear.x = 0.5;  // 50 m/s^2 if the IMU had integrated nothing
+  l.on_odometry(o);
+  EXPECT_EQ(l.stats().accel_bias_updates, 0u);
+  EXPECT_EQ(l.stats().accel_bias, Vec3::Zero());
+}
+
 // On the floor the IMU measures rest while the loop asks for the descent: the thrust winds
 // down below m g / 2, and after touchdown_confirm_s the motors stop (zeros, every tick, terminal).
 TEST(IndiFailsafe, TouchdownStopsTheMotors) {
@@ -400,6 +490,57 @@ TEST(IndiFailsafe, TouchdownStopsTheMotors) {
 
 // In the air the land detector never holds (the IMU measures the descent's acceleration):
 // the descent bound stops the motors.
+// A crash in the descent: the IMU's attitude 70 deg from the vertical. Held 0.3 s, the
+// motors stop (reason 85); a tilt that comes back under 60 deg before that does not.
+TEST(IndiFailsafe, ACrashAttitudeHeldInTheDescentStopsTheMotors) {
+  IndiControlLogic l(default_params());
+  lose_odometry(l, 300 * kMs, 0.0, true);
+  ASSERT_EQ(l.state(), IndiFailsafeState::kOdometryLost);
+  const double tilt = 70.0 * M_PI / 180.0;
+  int64_t t = 302 * kMs;
+  for (; t <= 500 * kMs; t += 2 * kMs) {  // 0.2 s tilted, then level again
+    l.on_imu(imu_at(t, tilt, kGravity));
+    l.on_timer(t);
+  }
+  for (; t <= 600 * kMs; t += 2 * kMs) {
+    l.on_imu(imu_at(t));
+    l.on_timer(t);
+  }
+  ASSERT_EQ(l.state(), IndiFailsafeState::kOdometryLost);
+  const int64_t tilted_at = t;
+  for (; t <= tilted_at + 400 * kMs; t += 2 * kMs) {
+    l.on_imu(imu_at(t, tilt, kGravity));
+    l.on_timer(t);
+  }
+  EXPECT_EQ(l.state(), IndiFailsafeState::kMotorsStopped);
+  EXPECT_EQ(l.stats().reason_code, IndiReason::kCrashed);
+  EXPECT_NEAR(tactile_common::to_seconds(l.stats().state_since_ns - tilted_at), indi_guards::kCrashConfirmS, 0.003);
+}
+
+// A crash just before the loss (NOMINAL, 70 deg for 20 ms at 150 ms, then upright): the
+// descent would start from a fall's velocity; ODOMETRY_LOST stops the motors on its first
+// tick (82 then 85). The same crash 1.15 s before the loss: the descent flies.
+TEST(IndiFailsafe, ACrashInTheSecondBeforeTheLossStopsTheMotorsAtTheLoss) {
+  auto fly = [](int64_t crash_at_ns, int64_t lost_after) {  // odometry until lost_after, stale 0.1 s later
+    IndiControlLogic l(default_params());
+    for (int64_t t = 0; t <= lost_after + 200 * kMs; t += 2 * kMs) {
+      if (t <= lost_after && t % (10 * kMs) == 0) l.on_odometry(odometry_at(t));
+      const bool tilted = t >= crash_at_ns && t < crash_at_ns + 20 * kMs;
+      l.on_imu(imu_at(t, tilted ? 70.0 * M_PI / 180.0 : 0.0));
+      l.on_timer(t);
+    }
+    return l.stats();
+  };
+  const auto recent = fly(150 * kMs, 200 * kMs);
+  EXPECT_EQ(recent.state, IndiFailsafeState::kMotorsStopped);
+  EXPECT_EQ(recent.reason_code, IndiReason::kCrashed);
+  EXPECT_EQ(recent.previous, IndiFailsafeState::kOdometryLost);
+  EXPECT_EQ(recent.ticks_odometry_lost, 1u);  // the transition's tick, then the stop
+  const auto earlier = fly(150 * kMs, 1200 * kMs);  // the loss 1.15 s after the crash attitude
+  EXPECT_EQ(earlier.state, IndiFailsafeState::kOdometryLost);
+  EXPECT_GT(earlier.ticks_odometry_lost, 0u);
+}
+
 TEST(IndiFailsafe, TheDescentBoundStopsTheMotors) {
   auto p = default_params();
   p.failsafe_max_descent_s = 1.0;

@@ -123,7 +123,8 @@ class WallEffectNavGraph : public SimGraph {
                  {"max_z_after_loss_m", finite_or_null(fs_max_z_)},
                  {"max_descent_speed_mps", finite_or_null(fs_max_descent_)},
                  {"floor_reached_s", finite_or_null(fs_floor_s_)},
-                 {"vertical_speed_estimate_mps", is.vertical_speed_estimate}};
+                 {"vertical_speed_estimate_mps", is.vertical_speed_estimate},
+                 {"accel_bias_estimate", {is.accel_bias.x(), is.accel_bias.y(), is.accel_bias.z()}}};
     if (np.goal_mode != "direction") m["goal"] = {np.goal().position.x(), np.goal().position.y()};
     return m;
   }

@@ -52,6 +52,7 @@ enum class IndiReason : uint8_t {
   kOdometryLost = 82,    ///< NOMINAL -> ODOMETRY_LOST
   kDescentTimedOut = 83, ///< ODOMETRY_LOST -> MOTORS_STOPPED: failsafe_max_descent_s
   kTouchdown = 84,       ///< ODOMETRY_LOST -> MOTORS_STOPPED: the land detector held
+  kCrashed = 85,         ///< ODOMETRY_LOST -> MOTORS_STOPPED: crash_attitude held, or just before the loss
 };
 
 /// The guards of the fail-safe's transitions, each alone (tested one by one).
@@ -102,7 +103,42 @@ constexpr double kAirborneAccel = -2.0;  ///< [m/s^2]
 bool airborne_in_probe(const Vec3& accel_world);
 /// ODOMETRY_LOST -> MOTORS_STOPPED: the descent lasted failsafe_max_descent_s.
 bool descent_timed_out(double descent_s, double max_descent_s);
+/// ODOMETRY_LOST -> MOTORS_STOPPED once it held kCrashConfirmS: the body z axis more than
+/// kCrashTilt from the vertical, a crash (as PX4's failure detector: FD_FAIL_R / FD_FAIL_P
+/// 60 deg for FD_FAIL_R_TTRI 0.3 s). The descent flies on the IMU-integrated velocity; the
+/// impact that ends a crash lasts ~1 ms and the 500 Hz IMU misses it, so the estimate keeps
+/// the fall's speed and the loop brakes a fall that is over: in the SITL (accelerometer bias
+/// 0.1 m/s^2, held-out seed 103) a crash into the wall 0.3 s after the loss became a climb at
+/// 3.9 m/s to 35 m. In NOMINAL the odometry recovers the vehicle (the same seed without the
+/// loss took off again from the floor), so the guard is the descent's only.
+constexpr double kCrashTilt = 60.0 * M_PI / 180.0;  ///< [rad]
+constexpr double kCrashConfirmS = 0.3;              ///< [s]
+bool crash_attitude(const Mat3& R_world_body);
+/// ODOMETRY_LOST -> MOTORS_STOPPED on its first tick: crash_attitude held within
+/// kCrashMemoryS before the loss (in NOMINAL). The last odometry's velocity is then a fall's
+/// and the impact after it unmeasured: the same flyaway (SITL, tuned seed 18: a crash into
+/// the wall 0.4 s before the loss, upright on the floor at the loss, a climb to 40 m).
+constexpr double kCrashMemoryS = 1.0;  ///< [s] (choice)
+bool crashed_before_loss(double since_crash_attitude_s);
 }  // namespace indi_guards
+
+/// Bound of each component of the accelerometer bias estimate [m/s^2] (choice: 5x a
+/// BMI088-class zero-g offset of 20 mg; an odometry that disagrees more with the IMU is not
+/// a bias to learn).
+constexpr double kMaxAccelBias = 1.0;
+/// Gate of one interval's residual [m/s^2] (choice): a residual component beyond it is not a
+/// bias but an event the 500 Hz IMU samples missed and the odometry saw, such as a 1 ms
+/// contact with the wall (SITL: the guard's touches moved the z estimate by 0.25 m/s^2
+/// without it); the interval is skipped. Twice the bias bound, so a bias at the bound is
+/// still learned; above the residuals of flight (0.02 m/s^2 of noise per 10 ms interval).
+constexpr double kAccelResidualGate = 2.0;
+/// The bias update of one odometry interval (pure, tested alone): the residual, the
+/// IMU-integrated velocity change imu_dv (bias already subtracted) minus the odometry's over
+/// dt, in the body frame R^T (.) / dt, blended in with gain min(1, dt / time_constant_s),
+/// each component clamped to +-kMaxAccelBias. nullopt when a residual component is beyond
+/// kAccelResidualGate (the bias unchanged).
+std::optional<Vec3> accel_bias_update(const Vec3& bias, const Vec3& imu_dv, const Vec3& odometry_dv, double dt,
+                                      const Mat3& R, double time_constant_s);
 
 /// Body -> wall-frame rotation (wall_effect_model.hpp) from the body -> world
 /// attitude and the wall direction psi-hat in the body frame.
@@ -138,6 +174,11 @@ class IndiControlLogic {
     /// ODOMETRY_LOST: the floor's z in the odometry frame [m] (choice: 0, the motion-capture
     /// and simulator floor).
     double failsafe_floor_z = 0.0;
+    /// Time constant of the accelerometer bias estimate [s] (choice): while odometry flows,
+    /// the IMU-integrated velocity change minus the odometry's, per second, is the bias (and
+    /// noise); a first-order filter of this time constant averages it. ODOMETRY_LOST dead
+    /// reckons on the IMU minus the estimate (README "Fail-safe").
+    double accel_bias_time_constant_s = 2.0;
     void validate() const;
   };
 
@@ -159,6 +200,11 @@ class IndiControlLogic {
     double commanded_thrust = 0.0;         ///< ODOMETRY_LOST: collective thrust sent (the probe's ramp) [N]
     bool floor_probe = false;              ///< ODOMETRY_LOST: the floor probe is running
     uint64_t floor_probes = 0, floor_probes_aborted = 0;  ///< started / aborted by airborne_in_probe
+    /// The accelerometer bias estimate (body frame) [m/s^2], frozen when odometry is lost,
+    /// and the odometry intervals it was updated on.
+    Vec3 accel_bias = Vec3::Zero();
+    uint64_t accel_bias_updates = 0;
+    uint64_t accel_bias_gated = 0;    ///< intervals skipped by kAccelResidualGate
   };
 
   static tactile_common::ParamMap default_parameters();
@@ -219,10 +265,15 @@ class IndiControlLogic {
   int64_t ticks_ = 0;
   int outer_every_ = 5;
   // Fail-safe.
-  Vec3 imu_dv_since_odom_ = Vec3::Zero();  ///< int (R a_m - g e3) dt over the IMU samples since the last odometry
+  Vec3 imu_dv_since_odom_ = Vec3::Zero();  ///< int (R (a_m - b) - g e3) dt over the IMU samples since the last odometry
   Vec3 imu_dp_since_odom_ = Vec3::Zero();  ///< int (v_odom + dv) dt since the last odometry
+  double imu_dt_since_odom_ = 0.0;         ///< the IMU time those integrals cover [s]
+  void update_accel_bias(const Vec3& velocity, int64_t stamp_ns);
   double yaw_hold_ = 0.0;           ///< ODOMETRY_LOST: the yaw at the loss
   int64_t resting_since_ns_ = -1;   ///< ODOMETRY_LOST: the land detector holds since then (-1: not)
+  int64_t tilted_since_ns_ = -1;    ///< ODOMETRY_LOST: crash_attitude holds since then (-1: not)
+  int64_t crash_attitude_ns_ = -1;  ///< the last tick with crash_attitude (any state; -1: never)
+  bool crash_before_loss_ = false;  ///< ODOMETRY_LOST: crashed_before_loss held at the loss
   int64_t probe_since_ns_ = -1;     ///< ODOMETRY_LOST: the floor probe runs since then (-1: not)
   double probe_start_thrust_ = 0.0; ///< ODOMETRY_LOST: the collective thrust at the probe's start [N]
   bool floor_bound_off_ = false;    ///< ODOMETRY_LOST: a probe was aborted in the air
