@@ -274,6 +274,7 @@ std::shared_ptr<wall_effect_ekf::IndiControlLogic> add_indi_controller(Host& hos
     return NodeReport{std::string("/") + Logic::kNodeName,
                       {{"published", s.published},
                        {"dropped_nonfinite", s.dropped_nonfinite},
+                       {"dropped_out_of_order", s.dropped_out_of_order},
                        {"ticks_without_input", s.ticks_without_input},
                        {"ticks_nominal", s.ticks_nominal},
                        {"ticks_odometry_lost", s.ticks_odometry_lost},

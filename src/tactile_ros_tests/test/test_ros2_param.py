@@ -161,7 +161,7 @@ VEHICLE_GRAPHS = {
     }),
     'wall_effect': ('sitl_wall_effect.launch.py',
                     [f"scenario:={CONFIG_DIR / 'scenarios' / 'ducted_estimation.yaml'}", 'behaviour:=trajectory'], {
-        '/indi_controller': ('max_tilt', '0.5', ['no rate setpoint tilts further', '[rad]', 'range (0, 1.4)']),
+        '/indi_controller': ('max_tilt', '0.5', ['no rate setpoint tilts further', '[rad]', 'range (0, 1)']),
         '/wall_trajectory': ('sweep_hold_s', '60.0', ['hold of each sweep segment (004: 60 s)', '[s]']),
         '/wall_effect_ekf': ('proximity.b1', '0.5', ['b1 of gamma_h = a1 b1^d_bar (004 eq. 4', 'Min value: 0.0',
                                                      'Max value: 1.0', 'range (0, 1)']),

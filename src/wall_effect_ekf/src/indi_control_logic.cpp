@@ -157,7 +157,8 @@ ParamMap IndiControlLogic::default_parameters() {
          "(004's Delta t)", "s", at_least(0.0), false,
          choice("004's Delta t oscillates with a first-order rate loop (README)")});
   m.set("max_rate_xy", i.max_rate_xy, {"|w_d,x|, |w_d,y| limit", "rad/s", positive(), false, choice()});
-  m.set("max_tilt", i.max_tilt, {"no rate setpoint tilts further than this", "rad", ParamRange{0.0, 1.4, true, true},
+  m.set("max_tilt", i.max_tilt, {"no rate setpoint tilts further than this; below the fail-safe's crash tilt "
+                                  "(60 deg = 1.047 rad)", "rad", ParamRange{0.0, 1.0, true, true},
                                  false, choice()});
   m.set("kappa_d", v3(i.kappa_d), {"kappa_d of 004 eq. 35 per axis, each finite and >= 0 (choice)", "1/s", {},
                                    false, choice("004 gives no gains")});
@@ -269,9 +270,13 @@ void IndiControlLogic::on_odometry(const nav_msgs::msg::Odometry& msg) {
     ++stats_.odometry_ignored;  // the descent is terminal: odometry that comes back does not resume (README)
     return;
   }
+  const int64_t stamp = tactile_common::from_stamp(msg.header.stamp);
+  if (have_odom_ && stamp <= odom_ns_) {
+    ++stats_.dropped_out_of_order;  // a duplicate or an older one would restart the IMU integrals
+    return;
+  }
   if (!msg.child_frame_id.empty()) body_frame_ = msg.child_frame_id;
   const Vec3 v = q.normalized() * vb;  // REP-105: twist in the body frame
-  const int64_t stamp = tactile_common::from_stamp(msg.header.stamp);
   update_accel_bias(v, stamp);
   imu_dv_since_odom_.setZero();
   imu_dp_since_odom_.setZero();
@@ -366,8 +371,6 @@ void IndiControlLogic::transition(IndiFailsafeState to, IndiReason code, const c
     yaw_hold_ = std::atan2(xb.y(), xb.x());
     resting_since_ns_ = -1;
     tilted_since_ns_ = -1;
-    crash_before_loss_ = crash_attitude_ns_ >= 0 &&
-                         indi_guards::crashed_before_loss(tactile_common::to_seconds(now_ns - crash_attitude_ns_));
     probe_since_ns_ = -1;
     floor_bound_off_ = false;
     stats_.floor_probe = false;
@@ -392,17 +395,16 @@ void IndiControlLogic::update_state(int64_t now_ns) {
       if (imu_lost(in, max_age)) {
         transition(IndiFailsafeState::kMotorsStopped, IndiReason::kImuLost, "IMU stale: no attitude, flight terminated",
                    now_ns);
+      } else if (odometry_lost(in, max_age) && crash_attitude_ns_ >= 0 &&
+                 crashed_before_loss(tactile_common::to_seconds(now_ns - crash_attitude_ns_))) {
+        transition(IndiFailsafeState::kMotorsStopped, IndiReason::kCrashed,
+                   "odometry stale within 1 s of a crash (tilt beyond 60 deg): no velocity to descend on", now_ns);
       } else if (odometry_lost(in, max_age)) {
         transition(IndiFailsafeState::kOdometryLost, IndiReason::kOdometryLost, "odometry stale: descent on the IMU",
                    now_ns);
       }
       break;
     case IndiFailsafeState::kOdometryLost: {
-      if (crash_before_loss_) {  // checked at the loss, taken on the state's first tick
-        transition(IndiFailsafeState::kMotorsStopped, IndiReason::kCrashed,
-                   "crash: tilted beyond 60 deg in the second before the loss", now_ns);
-        break;
-      }
       if (imu_lost(in, max_age)) {
         transition(IndiFailsafeState::kMotorsStopped, IndiReason::kImuLost, "IMU stale in the descent: flight terminated",
                    now_ns);

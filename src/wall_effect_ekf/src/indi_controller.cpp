@@ -39,7 +39,8 @@ void IndiParams::validate() const {
   positive("max_accel_xy", max_accel_xy);
   non_negative("attitude_time_constant", attitude_time_constant);
   positive("max_rate_xy", max_rate_xy);
-  if (!(max_tilt > 0.0 && max_tilt < 1.4)) bad("max_tilt", "must be in (0, 1.4) rad", max_tilt);
+  // Below the fail-safe's crash tilt (60 deg, IndiControlLogic), so that no commanded tilt is taken for a crash.
+  if (!(max_tilt > 0.0 && max_tilt < 1.0)) bad("max_tilt", "must be in (0, 1.0) rad", max_tilt);
   non_negative3("kappa_d", kappa_d);
   non_negative("kappa_p_yaw", kappa_p_yaw);
   positive("max_yaw_accel", max_yaw_accel);

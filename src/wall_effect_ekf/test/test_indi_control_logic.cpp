@@ -168,7 +168,7 @@ TEST(IndiControlLogic, EveryParameterIsDescribedWithTheRangeValidateAccepts) {
     ADD_FAILURE() << inf.key << " = " << inf.value << " is accepted, its described range says finite";
   }
   ASSERT_NE(d.info("max_tilt"), nullptr);
-  EXPECT_EQ(d.info("max_tilt")->range->text(), "(0, 1.4)");
+  EXPECT_EQ(d.info("max_tilt")->range->text(), "(0, 1)");
   EXPECT_EQ(d.info("max_tilt")->unit, "rad");
   EXPECT_EQ(d.info("vehicle.max_rotor_thrust")->unit, "N");
   for (const auto& [key, info] : d.infos()) EXPECT_FALSE(info.live) << key;
@@ -406,7 +406,7 @@ TEST(IndiAccelBias, UpdateBlendsTheBodyFrameResidualWithGainDtOverTau) {
   ASSERT_TRUE(br);
   EXPECT_NEAR(br->y(), -0.005 * 0.2, 1e-12);
   EXPECT_NEAR(br->z(), 0.0, 1e-12);
-  // dt longer than tau: the residual replaces the estimate (gain 1), within the bound.
+  // dt longer than tau: gain 1, the whole residual is added to the estimate, within the bound.
   const auto bl = accel_bias_update(b0, Vec3(0.3, 0, 0), Vec3::Zero(), 1.0, Mat3::Identity(), 0.5);
   ASSERT_TRUE(bl);
   EXPECT_NEAR(bl->x(), 0.31, 1e-12);
@@ -427,8 +427,9 @@ TEST(IndiAccelBias, TheEstimateIsBoundedAndAResidualBeyondTheGateIsSkipped) {
 
 // The logic learns a constant accelerometer bias while the odometry flows (vehicle at rest:
 // odometry velocity 0, the IMU reads g + 0.3 m/s^2 on z), and the ODOMETRY_LOST dead
-// reckoning subtracts it: over 0.3 s without odometry the vertical speed estimate stays
-// ~0 (without the estimate it would read +0.09 m/s: the loop would descend 0.09 m/s faster).
+// reckoning subtracts it: over the 0.4 s from the last odometry the vertical speed estimate
+// stays ~0 (without the estimate it would read +0.12 m/s: the loop would descend 0.12 m/s
+// faster). Odometry coming back in the descent is ignored and leaves the estimate as it was.
 TEST(IndiAccelBias, ALearnedBiasIsSubtractedInTheDescent) {
   IndiControlLogic::Params p = default_params();
   IndiControlLogic l(p);
@@ -450,19 +451,34 @@ TEST(IndiAccelBias, ALearnedBiasIsSubtractedInTheDescent) {
   }
   ASSERT_EQ(l.state(), IndiFailsafeState::kOdometryLost);
   EXPECT_NEAR(l.stats().vertical_speed_estimate, 0.0, 1e-3);
+  const Vec3 frozen = l.stats().accel_bias;
+  auto back = odometry_at(t);
+  back.twist.twist.linear.z = 1.0;  // would be a residual of -100 m/s^2
+  l.on_odometry(back);
+  EXPECT_EQ(l.stats().odometry_ignored, 1u);
+  EXPECT_EQ(l.stats().accel_bias, frozen);
 }
 
-// An odometry interval the IMU did not cover (no IMU sample in it) teaches nothing: the
-// residual would be the odometry's whole velocity change.
-TEST(IndiAccelBias, NoUpdateOnAnIntervalWithoutImuSamples) {
+// An odometry interval the IMU did not cover (no IMU sample in it, or an IMU window more
+// than twice the interval) teaches nothing: the residual would be the odometry's whole
+// velocity change (1 m/s^2 here, within the gate). A duplicate or older odometry is dropped
+// and counted (it would restart the IMU integrals).
+TEST(IndiAccelBias, NoUpdateOnAnIntervalTheImuDidNotCover) {
   IndiControlLogic l(default_params());
   l.on_imu(imu_at(0));
   l.on_odometry(odometry_at(0));
   auto o = odometry_at(10 * kMs);
-  o.twist.twist.linear.x = 0.5;  // 50 m/s^2 if the IMU had integrated nothing
-  l.on_odometry(o);
+  o.twist.twist.linear.x = 0.01;
+  l.on_odometry(o);  // no IMU sample since the last odometry
+  for (int64_t t = 2 * kMs; t <= 30 * kMs; t += 2 * kMs) l.on_imu(imu_at(t));  // 30 ms of IMU
+  l.on_odometry(odometry_at(20 * kMs));  // a 10 ms interval, 30 ms integrated
   EXPECT_EQ(l.stats().accel_bias_updates, 0u);
+  EXPECT_EQ(l.stats().accel_bias_gated, 0u);
   EXPECT_EQ(l.stats().accel_bias, Vec3::Zero());
+  l.on_odometry(odometry_at(20 * kMs));  // duplicate
+  l.on_odometry(odometry_at(15 * kMs));  // older
+  EXPECT_EQ(l.stats().dropped_out_of_order, 2u);
+  EXPECT_EQ(l.stats().odometry, 5u);
 }
 
 // On the floor the IMU measures rest while the loop asks for the descent: the thrust winds
@@ -488,8 +504,6 @@ TEST(IndiFailsafe, TouchdownStopsTheMotors) {
   EXPECT_GT(l.stats().ticks_motors_stopped, 4u);
 }
 
-// In the air the land detector never holds (the IMU measures the descent's acceleration):
-// the descent bound stops the motors.
 // A crash in the descent: the IMU's attitude 70 deg from the vertical. Held 0.3 s, the
 // motors stop (reason 85); a tilt that comes back under 60 deg before that does not.
 TEST(IndiFailsafe, ACrashAttitudeHeldInTheDescentStopsTheMotors) {
@@ -518,8 +532,9 @@ TEST(IndiFailsafe, ACrashAttitudeHeldInTheDescentStopsTheMotors) {
 }
 
 // A crash just before the loss (NOMINAL, 70 deg for 20 ms at 150 ms, then upright): the
-// descent would start from a fall's velocity; ODOMETRY_LOST stops the motors on its first
-// tick (82 then 85). The same crash 1.15 s before the loss: the descent flies.
+// descent would start from a fall's velocity, so the loss stops the motors instead
+// (NOMINAL -> MOTORS_STOPPED, 85; no descent tick). The same crash 1.15 s before the loss:
+// the descent flies.
 TEST(IndiFailsafe, ACrashInTheSecondBeforeTheLossStopsTheMotorsAtTheLoss) {
   auto fly = [](int64_t crash_at_ns, int64_t lost_after) {  // odometry until lost_after, stale 0.1 s later
     IndiControlLogic l(default_params());
@@ -534,13 +549,15 @@ TEST(IndiFailsafe, ACrashInTheSecondBeforeTheLossStopsTheMotorsAtTheLoss) {
   const auto recent = fly(150 * kMs, 200 * kMs);
   EXPECT_EQ(recent.state, IndiFailsafeState::kMotorsStopped);
   EXPECT_EQ(recent.reason_code, IndiReason::kCrashed);
-  EXPECT_EQ(recent.previous, IndiFailsafeState::kOdometryLost);
-  EXPECT_EQ(recent.ticks_odometry_lost, 1u);  // the transition's tick, then the stop
+  EXPECT_EQ(recent.previous, IndiFailsafeState::kNominal);
+  EXPECT_EQ(recent.ticks_odometry_lost, 0u);
   const auto earlier = fly(150 * kMs, 1200 * kMs);  // the loss 1.15 s after the crash attitude
   EXPECT_EQ(earlier.state, IndiFailsafeState::kOdometryLost);
   EXPECT_GT(earlier.ticks_odometry_lost, 0u);
 }
 
+// In the air the land detector never holds (the IMU measures the descent's acceleration):
+// the descent bound stops the motors.
 TEST(IndiFailsafe, TheDescentBoundStopsTheMotors) {
   auto p = default_params();
   p.failsafe_max_descent_s = 1.0;

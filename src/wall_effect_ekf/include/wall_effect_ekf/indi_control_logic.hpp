@@ -52,7 +52,7 @@ enum class IndiReason : uint8_t {
   kOdometryLost = 82,    ///< NOMINAL -> ODOMETRY_LOST
   kDescentTimedOut = 83, ///< ODOMETRY_LOST -> MOTORS_STOPPED: failsafe_max_descent_s
   kTouchdown = 84,       ///< ODOMETRY_LOST -> MOTORS_STOPPED: the land detector held
-  kCrashed = 85,         ///< ODOMETRY_LOST -> MOTORS_STOPPED: crash_attitude held, or just before the loss
+  kCrashed = 85,         ///< -> MOTORS_STOPPED: crash_attitude held in the descent, or odometry lost just after it
 };
 
 /// The guards of the fail-safe's transitions, each alone (tested one by one).
@@ -114,10 +114,11 @@ bool descent_timed_out(double descent_s, double max_descent_s);
 constexpr double kCrashTilt = 60.0 * M_PI / 180.0;  ///< [rad]
 constexpr double kCrashConfirmS = 0.3;              ///< [s]
 bool crash_attitude(const Mat3& R_world_body);
-/// ODOMETRY_LOST -> MOTORS_STOPPED on its first tick: crash_attitude held within
-/// kCrashMemoryS before the loss (in NOMINAL). The last odometry's velocity is then a fall's
-/// and the impact after it unmeasured: the same flyaway (SITL, tuned seed 18: a crash into
-/// the wall 0.4 s before the loss, upright on the floor at the loss, a climb to 40 m).
+/// NOMINAL -> MOTORS_STOPPED instead of ODOMETRY_LOST: the odometry is lost within
+/// kCrashMemoryS of a crash_attitude. The last odometry may then be the fall's and the impact
+/// after it is unmeasured: the same flyaway (SITL, tuned seed 18: tilted 90 deg into the wall
+/// at 11.7 s, the last odometry at 12.0 s taken falling, the floor hit before the loss was
+/// seen at 12.09 s; the descent braked the fall it still believed in and climbed to 40 m).
 constexpr double kCrashMemoryS = 1.0;  ///< [s] (choice)
 bool crashed_before_loss(double since_crash_attitude_s);
 }  // namespace indi_guards
@@ -185,6 +186,7 @@ class IndiControlLogic {
   struct Stats {
     uint64_t setpoints = 0, odometry = 0, imu = 0, walls = 0, published = 0;
     uint64_t dropped_nonfinite = 0;   ///< NaN/inf where a number is required
+    uint64_t dropped_out_of_order = 0;  ///< odometry stamped at or before the last one used
     uint64_t ticks_without_input = 0; ///< WAITING_FOR_INPUT: no fresh odometry + IMU yet, nothing sent (on the ground)
     uint64_t ticks_nominal = 0, ticks_odometry_lost = 0, ticks_motors_stopped = 0;
     uint64_t odometry_ignored = 0;    ///< odometry after the fail-safe left NOMINAL (the descent is terminal)
@@ -273,7 +275,6 @@ class IndiControlLogic {
   int64_t resting_since_ns_ = -1;   ///< ODOMETRY_LOST: the land detector holds since then (-1: not)
   int64_t tilted_since_ns_ = -1;    ///< ODOMETRY_LOST: crash_attitude holds since then (-1: not)
   int64_t crash_attitude_ns_ = -1;  ///< the last tick with crash_attitude (any state; -1: never)
-  bool crash_before_loss_ = false;  ///< ODOMETRY_LOST: crashed_before_loss held at the loss
   int64_t probe_since_ns_ = -1;     ///< ODOMETRY_LOST: the floor probe runs since then (-1: not)
   double probe_start_thrust_ = 0.0; ///< ODOMETRY_LOST: the collective thrust at the probe's start [N]
   bool floor_bound_off_ = false;    ///< ODOMETRY_LOST: a probe was aborted in the air
