@@ -66,6 +66,17 @@ static_assert(static_cast<uint8_t>(IndiReason::kOdometryLost) == FsmState::REASO
 static_assert(static_cast<uint8_t>(IndiReason::kDescentTimedOut) == FsmState::REASON_INDI_DESCENT_TIMED_OUT);
 static_assert(static_cast<uint8_t>(IndiReason::kTouchdown) == FsmState::REASON_INDI_TOUCHDOWN);
 static_assert(static_cast<uint8_t>(IndiReason::kCrashed) == FsmState::REASON_INDI_CRASHED);
+
+// A guard that must hold for hold_s (the land detector, the crash tilt): since_ns is the tick
+// it began (-1: not holding), set on its first tick and cleared on the first tick without it.
+bool held(bool guard, int64_t& since_ns, int64_t now_ns, double hold_s) {
+  if (!guard) {
+    since_ns = -1;
+    return false;
+  }
+  if (since_ns < 0) since_ns = now_ns;
+  return tactile_common::to_seconds(now_ns - since_ns) >= hold_s;
+}
 }  // namespace
 
 namespace indi_guards {
@@ -373,7 +384,6 @@ void IndiControlLogic::transition(IndiFailsafeState to, IndiReason code, const c
     tilted_since_ns_ = -1;
     probe_since_ns_ = -1;
     floor_bound_off_ = false;
-    stats_.floor_probe = false;
     stats_.commanded_thrust = ctl_.last_outer().thrust;
   }
 }
@@ -410,15 +420,10 @@ void IndiControlLogic::update_state(int64_t now_ns) {
                    now_ns);
         break;
       }
-      if (crash_attitude(R_)) {
-        if (tilted_since_ns_ < 0) tilted_since_ns_ = now_ns;
-        if (tactile_common::to_seconds(now_ns - tilted_since_ns_) >= kCrashConfirmS - 1e-9) {
-          transition(IndiFailsafeState::kMotorsStopped, IndiReason::kCrashed,
-                     "crash: tilted beyond 60 deg for 0.3 s in the descent", now_ns);
-          break;
-        }
-      } else {
-        tilted_since_ns_ = -1;
+      if (held(crash_attitude(R_), tilted_since_ns_, now_ns, kCrashConfirmS - 1e-9)) {
+        transition(IndiFailsafeState::kMotorsStopped, IndiReason::kCrashed,
+                   "crash: tilted beyond 60 deg for 0.3 s in the descent", now_ns);
+        break;
       }
       if (descent_timed_out(tactile_common::to_seconds(now_ns - stats_.state_since_ns), params_.failsafe_max_descent_s)) {
         transition(IndiFailsafeState::kMotorsStopped, IndiReason::kDescentTimedOut, "descent lasted failsafe_max_descent_s",
@@ -430,24 +435,18 @@ void IndiControlLogic::update_state(int64_t now_ns) {
           below_floor(pos_.z() + imu_dp_since_odom_.z(), params_.failsafe_floor_z)) {
         probe_since_ns_ = now_ns;  // no transition: the probe only lowers the thrust (README)
         probe_start_thrust_ = stats_.commanded_thrust;
-        stats_.floor_probe = true;
         ++stats_.floor_probes;
       } else if (probe_since_ns_ >= 0 && airborne_in_probe(a_world)) {
         probe_since_ns_ = -1;  // in the air: back to the descent loop, from hover thrust
         floor_bound_off_ = true;
-        stats_.floor_probe = false;
         ++stats_.floor_probes_aborted;
         ctl_.reset();
         stats_.commanded_thrust = ctl_.previous_thrust();
       }
-      if (touchdown(stats_.commanded_thrust, a_world, params_.indi.vehicle.mass)) {
-        if (resting_since_ns_ < 0) resting_since_ns_ = now_ns;
-        if (tactile_common::to_seconds(now_ns - resting_since_ns_) >= params_.touchdown_confirm_s)
-          transition(IndiFailsafeState::kMotorsStopped, IndiReason::kTouchdown,
-                     "touchdown: low thrust at rest for touchdown_confirm_s", now_ns);
-      } else {
-        resting_since_ns_ = -1;
-      }
+      if (held(touchdown(stats_.commanded_thrust, a_world, params_.indi.vehicle.mass), resting_since_ns_, now_ns,
+               params_.touchdown_confirm_s))
+        transition(IndiFailsafeState::kMotorsStopped, IndiReason::kTouchdown,
+                   "touchdown: low thrust at rest for touchdown_confirm_s", now_ns);
       break;
     }
     case IndiFailsafeState::kMotorsStopped:

@@ -590,9 +590,9 @@ TEST(IndiFailsafe, FloorProbeOnTheFloorStopsTheMotorsByTouchdown) {
       l.on_odometry(o);
     }
     l.on_imu(imu_at(t));  // at rest
-    const bool probing_before = l.stats().floor_probe;
+    const bool probing_before = l.floor_probe();
     l.on_timer(t);
-    if (l.state() != IndiFailsafeState::kOdometryLost || !l.stats().floor_probe) continue;
+    if (l.state() != IndiFailsafeState::kOdometryLost || !l.floor_probe()) continue;
     if (!probing_before) {
       probe_start_thrust = l.stats().commanded_thrust;
       EXPECT_LT(l.stats().height_estimate, 0.8);
@@ -626,7 +626,7 @@ TEST(IndiFailsafe, FloorProbeInTheAirAbortsAndTheDescentGoesOn) {
     l.on_imu(imu_at(t, 0.0, thrust / 0.28 - (t > 202 * kMs ? kBias : 0.0)));
     out = l.on_timer(t);
     ASSERT_EQ(l.state() == IndiFailsafeState::kMotorsStopped, false) << "stopped in the air at t = " << t;
-    if (l.stats().floor_probes_aborted > 0 && !l.stats().floor_probe) {
+    if (l.stats().floor_probes_aborted > 0 && !l.floor_probe()) {
       min_thrust_after_abort = std::min(min_thrust_after_abort, l.stats().commanded_thrust);
       lowest_estimate = std::min(lowest_estimate, l.stats().height_estimate);
     }
@@ -634,7 +634,7 @@ TEST(IndiFailsafe, FloorProbeInTheAirAbortsAndTheDescentGoesOn) {
   EXPECT_EQ(l.state(), IndiFailsafeState::kOdometryLost);
   EXPECT_EQ(l.stats().floor_probes, 1u);
   EXPECT_EQ(l.stats().floor_probes_aborted, 1u);
-  EXPECT_FALSE(l.stats().floor_probe);
+  EXPECT_FALSE(l.floor_probe());
   EXPECT_GT(min_thrust_after_abort, 0.5 * kHover);  // the descent loop flies again
   EXPECT_LT(lowest_estimate, 0.8);                   // past the bound, and no second probe
 }

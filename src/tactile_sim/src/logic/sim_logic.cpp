@@ -192,6 +192,15 @@ class ParamOverrides {
       throw ScenarioError(s_.source + ": vehicle.params." + name + ": expected true or false");
     }
   }
+  /// Each model's validate(); its std::invalid_argument is rethrown naming the scenario file.
+  template <class... Models>
+  void validate(const Models&... models) const {
+    try {
+      (models.validate(), ...);
+    } catch (const std::invalid_argument& e) {
+      throw ScenarioError(s_.source + ": vehicle.params: " + e.what());
+    }
+  }
   /// Every override must have been used: unknown names are typos.
   void check_all_used(const std::string& known) const {
     for (const auto& [k, v] : s_.vehicle_params) {
@@ -223,11 +232,10 @@ PositionSetpoint position_setpoint(const Vec3& position, double yaw) {
 /// Hold the initial pose: the position vehicles' setpoint before the pilot's first.
 PositionSetpoint hold_initial(const Scenario& s) { return position_setpoint(s.initial_position, s.initial_yaw); }
 
-/// Parameters of a vehicle whose only scenario override is its mass.
 /// The ducted quadrotor (004) and its IMU from the scenario's vehicle.params: the mass, and
 /// accel_bias_sigma, the accelerometer's residual turn-on bias after calibration (1 sigma per
 /// axis, drawn per seed; default 0 as ImuParams'), which INDI's dead-reckoned fail-safe
-/// descent must tolerate (wall_effect_ekf README, "Fail-safe").
+/// descent must tolerate (wall_effect_ekf README, "INDI fail-safe").
 struct DuctedSetup {
   DuctedQuadParams vehicle;
   ImuParams imu;
@@ -239,12 +247,7 @@ DuctedSetup ducted_setup(const Scenario& s, double imu_hz) {
   d.imu = imu_at(imu_hz);
   o.number("accel_bias_sigma", d.imu.accel_bias_initial_sigma);
   o.check_all_used("mass, accel_bias_sigma");
-  try {
-    d.vehicle.validate();
-    d.imu.validate();
-  } catch (const std::invalid_argument& e) {
-    throw ScenarioError(s.source + ": vehicle.params: " + e.what());
-  }
+  o.validate(d.vehicle, d.imu);
   return d;
 }
 
@@ -280,12 +283,7 @@ XplorerSetup xplorer_setup(const Scenario& s, double imu_hz) {
   o.check_all_used(
       "mass, arm_inertia, arm_damping, arm_stiffness, arm_max_deflection_deg, rigid_arms, thrust_curve_factor, "
       "accel_noise_density, accel_bias_sigma");
-  try {
-    p.validate();
-    x.imu.validate();
-  } catch (const std::invalid_argument& e) {
-    throw ScenarioError(s.source + ": vehicle.params: " + e.what());
-  }
+  o.validate(p, x.imu);
   return x;
 }
 
@@ -626,11 +624,7 @@ class WhiskerStageVehicle : public SimLogic::Vehicle {
     o.check_all_used(
         "whisker_length, youngs_modulus, moment_of_inertia, taper_ratio, speed, yaw_rate, sample_rate_hz, "
         "noise_relative, noise_absolute, noise_bounded, pin_radius");
-    try {
-      p.validate();
-    } catch (const std::invalid_argument& e) {
-      throw ScenarioError(s.source + ": vehicle.params: " + e.what());
-    }
+    o.validate(p);
     return p;
   }
 

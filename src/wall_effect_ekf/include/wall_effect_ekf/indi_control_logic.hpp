@@ -178,7 +178,7 @@ class IndiControlLogic {
     /// Time constant of the accelerometer bias estimate [s] (choice): while odometry flows,
     /// the IMU-integrated velocity change minus the odometry's, per second, is the bias (and
     /// noise); a first-order filter of this time constant averages it. ODOMETRY_LOST dead
-    /// reckons on the IMU minus the estimate (README "Fail-safe").
+    /// reckons on the IMU minus the estimate (README "INDI fail-safe").
     double accel_bias_time_constant_s = 2.0;
     void validate() const;
   };
@@ -200,7 +200,6 @@ class IndiControlLogic {
     double vertical_speed_estimate = 0.0;  ///< ODOMETRY_LOST: last odometry v_z + int (R a_m - g e3)_z dt [m/s]
     double height_estimate = 0.0;          ///< ODOMETRY_LOST: last odometry z + int v_z dt [m]
     double commanded_thrust = 0.0;         ///< ODOMETRY_LOST: collective thrust sent (the probe's ramp) [N]
-    bool floor_probe = false;              ///< ODOMETRY_LOST: the floor probe is running
     uint64_t floor_probes = 0, floor_probes_aborted = 0;  ///< started / aborted by airborne_in_probe
     /// The accelerometer bias estimate (body frame) [m/s^2], frozen when odometry is lost,
     /// and the odometry intervals it was updated on.
@@ -248,6 +247,8 @@ class IndiControlLogic {
   }
   const Stats& stats() const { return stats_; }
   IndiFailsafeState state() const { return stats_.state; }
+  /// ODOMETRY_LOST: the floor probe is running.
+  bool floor_probe() const { return probe_since_ns_ >= 0; }
   const Params& params() const { return params_; }
   const IndiController& controller() const { return ctl_; }
 
